@@ -1,0 +1,56 @@
+"""User errors: problems a user can cause, reported as ``file:line:col: message (hint)``.
+
+Every loader collects :class:`Problem` s and raises one :class:`UserError` holding all of them, so
+a student sees every mistake of a file at once. The CLI prints them and exits with code 2.
+"""
+
+from __future__ import annotations
+
+import difflib
+from dataclasses import dataclass
+from typing import Iterable
+
+
+@dataclass(frozen=True, slots=True)
+class Problem:
+    """One problem at one place of a file (line and column are 1-based; 0 when unknown)."""
+
+    message: str
+    file: str = "<input>"
+    line: int = 0
+    column: int = 0
+    path: str = ""
+    hint: str = ""
+
+    def __str__(self) -> str:
+        where = self.file
+        if self.line:
+            where += f":{self.line}:{self.column or 1}"
+        text = f"{where}: {self.message}"
+        if self.path:
+            text += f" [at {self.path}]"
+        if self.hint:
+            text += f"\n    hint: {self.hint}"
+        return text
+
+
+class UserError(Exception):
+    """One or more problems the user can fix; never a bug of thymio-bt."""
+
+    def __init__(self, problems: Iterable[Problem] | Problem | str):
+        if isinstance(problems, str):
+            problems = [Problem(problems)]
+        elif isinstance(problems, Problem):
+            problems = [problems]
+        self.problems: list[Problem] = list(problems)
+        super().__init__("\n".join(str(p) for p in self.problems))
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """A 'did you mean X?' hint for a misspelt name, or a list of the valid names."""
+    options = sorted(set(choices))
+    close = difflib.get_close_matches(word, options, n=1, cutoff=0.6)
+    if close:
+        return f"did you mean '{close[0]}'?"
+    shown = ", ".join(options[:12]) + (", ..." if len(options) > 12 else "")
+    return f"expected one of: {shown}"

@@ -1,0 +1,141 @@
+"""Author mazes of square cells quickly as ASCII art.
+
+Corners are ``+``, horizontal walls ``-`` runs between corners, vertical walls ``|`` on corner
+columns; a cell may hold ``>``, ``<``, ``^`` or ``v`` to add a ``start`` spawn with base_link at the
+cell centre facing that way (the course's convention). The bottom-left corner is ``origin``.
+
+Example::
+
+    maze = maze_from_grid('''
+    +--+--+
+    |>    |
+    +--+  +
+       |  |
+       +--+
+    ''', cell=0.2)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from ..errors import Problem, UserError
+from .model import Maze, Spawn, Wall
+
+_HEADINGS = {">": 0.0, "^": math.pi / 2, "<": math.pi, "v": -math.pi / 2}
+
+
+def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (0.0, 0.0),
+                   thickness: float = 0.01, name: str = "grid", filename: str = "<grid>",
+                   first_line: int = 1) -> Maze:
+    """Build a :class:`Maze` from ASCII art; bad art is a :class:`UserError` pointing at the line."""
+    lines = [ln.rstrip() for ln in text.splitlines()]
+    while lines and not lines[0].strip():
+        lines.pop(0)
+        first_line += 1
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if len(lines) < 3 or len(lines) % 2 == 0:
+        raise UserError(Problem("a grid needs an odd number of lines (corner lines around cell lines)",
+                                filename, first_line, 1, hint="start and end with a '+--+' line"))
+    corner_cols = sorted({i for ln in lines[::2] for i, ch in enumerate(ln) if ch == "+"})
+    if len(corner_cols) < 2:
+        raise UserError(Problem("no '+' corners found", filename, first_line, 1))
+    widths = {b - a for a, b in zip(corner_cols, corner_cols[1:])}
+    if len(widths) != 1:
+        raise UserError(Problem("corners '+' must be evenly spaced", filename, first_line, 1,
+                                hint="every cell must be drawn the same width, e.g. '+--+--+'"))
+    width = widths.pop()
+    base = corner_cols[0]
+    n_rows = (len(lines) - 1) // 2
+
+    def at(line: str, col: int) -> str:
+        return line[col] if col < len(line) else " "
+
+    walls: list[Wall] = []
+    spawns: dict[str, Spawn] = {}
+    ox, oy = origin
+    for r, line in enumerate(lines):
+        y_corner = round(oy + (n_rows - r // 2) * cell, 9)
+        if r % 2 == 0:  # corner line: horizontal walls
+            for i, col in enumerate(corner_cols[:-1]):
+                seg = line[col + 1: col + width] if col + 1 < len(line) else ""
+                if seg.strip("-") == "" and seg.count("-") == width - 1:
+                    x0 = round(ox + (col - base) // width * cell, 9)
+                    walls.append(Wall(start=(x0, y_corner), end=(round(x0 + cell, 9), y_corner), thickness=thickness))
+                elif seg.strip():
+                    raise UserError(Problem(f"unexpected '{seg.strip()}' in a corner line", filename,
+                                            first_line + r, col + 2, hint="use '-' for walls, spaces for gaps"))
+        else:  # cell line: vertical walls and start arrows
+            y0 = round(oy + (n_rows - 1 - r // 2) * cell, 9)
+            for col in corner_cols:
+                ch = at(line, col)
+                if ch == "|":
+                    x = round(ox + (col - base) // width * cell, 9)
+                    walls.append(Wall(start=(x, y0), end=(x, round(y0 + cell, 9)), thickness=thickness))
+                elif ch not in " ":
+                    raise UserError(Problem(f"unexpected '{ch}' on a wall column", filename,
+                                            first_line + r, col + 1, hint="use '|' for a wall or a space"))
+            for i, col in enumerate(corner_cols[:-1]):
+                inside = line[col + 1: col + width]
+                marks = [ch for ch in inside if ch in _HEADINGS]
+                if marks:
+                    cx, cy = round(ox + (i + 0.5) * cell, 9), round(y0 + cell / 2, 9)
+                    spawns["start"] = Spawn(x=cx, y=cy, yaw=_HEADINGS[marks[0]])
+    return Maze(name=name, walls=_merge(walls), spawns=spawns)
+
+
+def _merge(walls: list[Wall]) -> list[Wall]:
+    """Join collinear walls that touch end to end, so long walls are one box (as in Gazebo)."""
+    horizontal: dict[float, list[tuple[float, float]]] = {}
+    vertical: dict[float, list[tuple[float, float]]] = {}
+    thickness = walls[0].thickness if walls else 0.01
+    for w in walls:
+        (x0, y0), (x1, y1) = w.start, w.end
+        if abs(y0 - y1) < 1e-12:
+            horizontal.setdefault(round(y0, 9), []).append((min(x0, x1), max(x0, x1)))
+        else:
+            vertical.setdefault(round(x0, 9), []).append((min(y0, y1), max(y0, y1)))
+    merged: list[Wall] = []
+    for table, make in ((horizontal, lambda c, a, b: Wall(start=(a, c), end=(b, c), thickness=thickness)),
+                        (vertical, lambda c, a, b: Wall(start=(c, a), end=(c, b), thickness=thickness))):
+        for coord in sorted(table):
+            spans = sorted(table[coord])
+            a, b = spans[0]
+            for s, e in spans[1:]:
+                if s <= b + 1e-9:
+                    b = max(b, e)
+                else:
+                    merged.append(make(coord, a, b))
+                    a, b = s, e
+            merged.append(make(coord, a, b))
+    return merged
+
+
+def maze_from_grid_data(data: dict[str, Any], filename: str) -> Maze:
+    """A maze file whose ``grid:`` key holds ASCII art (plus optional cell, origin, spawns)."""
+    from ..validation import validate
+
+    allowed = {"name", "description", "grid", "cell", "origin", "thickness", "spawns"}
+    unknown = [k for k in data if k not in allowed]
+    if unknown:
+        from ..errors import did_you_mean
+        line, col = data.marks[unknown[0]]
+        raise UserError(Problem(f"unknown key '{unknown[0]}'", filename, line, col,
+                                hint=did_you_mean(str(unknown[0]), allowed)))
+    grid = data["grid"]
+    if not isinstance(grid, str):
+        raise UserError(Problem("'grid' must be a block of text (use 'grid: |')", filename,
+                                *data.value_marks["grid"]))
+    line = data.value_marks["grid"][0] + (1 if "\n" in grid else 0)
+    maze = maze_from_grid(grid, cell=float(data.get("cell", 0.2)),
+                          origin=tuple(data.get("origin", (0.0, 0.0))),  # type: ignore[arg-type]
+                          thickness=float(data.get("thickness", 0.01)),
+                          name=str(data.get("name", "grid")), filename=filename, first_line=line)
+    extra = {k: data[k] for k in ("spawns", "description") if k in data}
+    if extra:
+        checked = validate(Maze, {"walls": [], **extra}, filename)
+        maze = maze.model_copy(update={"spawns": {**maze.spawns, **checked.spawns},
+                                       "description": checked.description})
+    return maze

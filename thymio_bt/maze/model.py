@@ -1,0 +1,182 @@
+"""The maze format: walls as from/to segments with a thickness, and named spawn poses.
+
+A wall is a box ``thickness`` wide that extends ``thickness/2`` past both ends, so the course's
+0.61 m Gazebo boxes are 0.6 m segments on a 0.2 m grid. Values accept units (``20cm``, ``pi/2``).
+
+Example (``mazes/corridor.yaml``)::
+
+    name: corridor
+    walls:
+      - {from: [0, 0], to: [1, 0]}
+      - {from: [0, 0.2], to: [1, 0.2], thickness: 0.01}
+    spawns:
+      start: {x: 0.1, y: 0.1, yaw: 0}
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+
+from ..errors import Problem, UserError, did_you_mean
+from ..robot import Pose
+from ..units import UnitError, check_kind, parse_value
+from ..validation import validate
+from ..yamlio import load_yaml
+
+#: The project's mazes/ folder when running from a checkout.
+MAZE_DIR = Path(__file__).resolve().parents[2] / "mazes"
+
+
+def maze_dirs() -> list[Path]:
+    """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the checkout's."""
+    dirs = [Path.cwd() / "mazes", MAZE_DIR]
+    return [d for i, d in enumerate(dirs) if d.is_dir() and d not in dirs[:i]]
+
+
+def _quantity(kind: str):
+    def parse(value: Any) -> float:
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return float(value)
+        if not isinstance(value, str):
+            raise ValueError(f"expected a number, got {type(value).__name__}")
+        try:
+            quantity = parse_value(value)
+        except UnitError as exc:
+            raise ValueError(str(exc)) from None
+        error = check_kind(quantity, kind)
+        if error:
+            raise ValueError(error)
+        return quantity.value
+    return BeforeValidator(parse)
+
+
+Length = Annotated[float, _quantity("length")]
+Angle = Annotated[float, _quantity("angle")]
+Point = tuple[Length, Length]
+
+
+class Wall(BaseModel):
+    """A straight wall: a box from ``from`` to ``to``, ``thickness`` wide, extended by half of it."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, frozen=True)
+    start: Point = Field(alias="from")
+    end: Point = Field(alias="to")
+    thickness: Annotated[Length, Field(gt=0, le=1.0)] = 0.01
+    name: str | None = None
+
+    @model_validator(mode="after")
+    def _not_degenerate(self) -> "Wall":
+        if self.start == self.end:
+            raise ValueError("a wall needs two different end points")
+        return self
+
+    @property
+    def length(self) -> float:
+        return math.dist(self.start, self.end)
+
+    def corners(self) -> list[tuple[float, float]]:
+        """The 4 corners of the wall's box, counter-clockwise."""
+        (x0, y0), (x1, y1) = self.start, self.end
+        ux, uy = (x1 - x0) / self.length, (y1 - y0) / self.length
+        h = self.thickness / 2.0
+        ex, ey = ux * h, uy * h          # extension past the ends
+        nx, ny = -uy * h, ux * h         # half thickness across
+        return [(x0 - ex - nx, y0 - ey - ny), (x1 + ex - nx, y1 + ey - ny),
+                (x1 + ex + nx, y1 + ey + ny), (x0 - ex + nx, y0 - ey + ny)]
+
+
+class Spawn(BaseModel):
+    """A named pose of base_link where the robot may start or be spawned."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    x: Length
+    y: Length
+    yaw: Angle = 0.0
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_list(cls, value: Any) -> Any:
+        if isinstance(value, (list, tuple)) and len(value) == 3:
+            return {"x": value[0], "y": value[1], "yaw": value[2]}
+        return value
+
+    def pose(self) -> Pose:
+        return Pose(self.x, self.y, self.yaw)
+
+
+class Maze(BaseModel):
+    """Static walls and named spawn poses, in world metres."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = "maze"
+    description: str = ""
+    source: str = ""
+    walls: list[Wall] = Field(default_factory=list)
+    spawns: dict[str, Spawn] = Field(default_factory=dict)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of all wall boxes; an empty maze has no bounds (all zero)."""
+        corners = [c for wall in self.walls for c in wall.corners()]
+        if not corners:
+            return (0.0, 0.0, 0.0, 0.0)
+        xs, ys = [c[0] for c in corners], [c[1] for c in corners]
+        return (min(xs), min(ys), max(xs), max(ys))
+
+    def spawn(self, name: str) -> Pose:
+        """The pose of a named spawn; an unknown name is a :class:`UserError` with a hint."""
+        if name not in self.spawns:
+            raise UserError(Problem(f"maze '{self.name}' has no spawn named '{name}'",
+                                    hint=did_you_mean(name, self.spawns) if self.spawns else
+                                    "this maze defines no spawns: give a pose [x, y, yaw] instead"))
+        return self.spawns[name].pose()
+
+    def to_yaml_dict(self) -> dict[str, Any]:
+        """A plain dict in the file format, with values rounded to 0.1 mm."""
+        def r(v: float) -> float:
+            return round(v, 6) + 0.0
+
+        out: dict[str, Any] = {"name": self.name}
+        if self.description:
+            out["description"] = self.description
+        if self.source:
+            out["source"] = self.source
+        out["walls"] = [{**({"name": w.name} if w.name else {}),
+                         "from": [r(w.start[0]), r(w.start[1])], "to": [r(w.end[0]), r(w.end[1])],
+                         "thickness": r(w.thickness)} for w in self.walls]
+        if self.spawns:
+            out["spawns"] = {k: {"x": r(s.x), "y": r(s.y), "yaw": r(s.yaw)} for k, s in self.spawns.items()}
+        return out
+
+
+def load_maze(path: str | Path) -> Maze:
+    """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
+    from .grid import maze_from_grid_data
+
+    data = load_yaml(path)
+    if not isinstance(data, dict):
+        raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path), 1, 1))
+    if "grid" in data:
+        return maze_from_grid_data(data, str(path))
+    return validate(Maze, data, str(path))
+
+
+def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
+    """Find a maze by path (relative to ``relative_to``) or by name in the project's mazes/."""
+    candidates = []
+    ref_path = Path(ref)
+    if relative_to is not None and not ref_path.is_absolute():
+        candidates.append(relative_to / ref_path)
+    candidates.append(ref_path)
+    if ref_path.suffix == "" and len(ref_path.parts) == 1:
+        candidates += [d / f"{ref}.yaml" for d in maze_dirs()]
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate
+    known = sorted({p.stem for d in maze_dirs() for p in d.glob("*.yaml")})
+    raise UserError(Problem(f"maze not found: '{ref}'",
+                            hint=("a path relative to the mission file, or a named maze: "
+                                  + (did_you_mean(ref, known) if known else "none installed"))))

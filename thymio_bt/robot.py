@@ -1,0 +1,132 @@
+"""The abstract robot: what behaviours may use, and what a backend must provide.
+
+Behaviours talk to the robot only through these interfaces, so the same mission can drive the
+pymunk simulation (:mod:`thymio_bt.sim`) or, later, a real Thymio. Units are metres, seconds and
+radians; the pose is the course's ``base_link`` in the world frame (0.0243 m ahead of the wheel
+axle the robot turns about).
+
+Example::
+
+    robot.drive(0.1, 0.0)          # held until changed, like cmd_vel
+    scan = robot.proximity()       # {"front_center": 0.05, ...}, inf when nothing in range
+    pose = robot.pose()            # Pose(x, y, yaw), or None while the robot does not exist
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from enum import Enum
+from typing import Mapping
+
+#: The 7 proximity sensors, front (left to right) then rear, as in the course URDF.
+SENSOR_NAMES: tuple[str, ...] = (
+    "front_left",
+    "front_center_left",
+    "front_center",
+    "front_center_right",
+    "front_right",
+    "rear_left",
+    "rear_right",
+)
+
+#: The entity name of the robot, as in the course's spawn service calls.
+ROBOT_ENTITY = "thymio"
+
+
+def wrap_angle(angle: float) -> float:
+    """Normalise an angle to [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    """A planar pose: position in metres, yaw in radians (counter-clockwise from +x)."""
+
+    x: float
+    y: float
+    yaw: float
+
+    def as_dict(self) -> dict[str, float]:
+        return {"x": self.x, "y": self.y, "yaw": self.yaw}
+
+    def distance_to(self, other: "Pose") -> float:
+        return math.hypot(other.x - self.x, other.y - self.y)
+
+
+@dataclass(frozen=True, slots=True)
+class Twist:
+    """A planar velocity: linear along the robot's heading (m/s), angular (rad/s, left positive)."""
+
+    linear: float = 0.0
+    angular: float = 0.0
+
+
+Scan = Mapping[str, float]
+"""Proximity ranges by sensor name, in metres; ``math.inf`` when nothing is in range."""
+
+
+class Robot(ABC):
+    """A differential-drive robot with 7 proximity sensors and odometry."""
+
+    @abstractmethod
+    def drive(self, linear: float, angular: float) -> None:
+        """Command a velocity; it is held until the next command (no timeout, like cmd_vel)."""
+
+    @abstractmethod
+    def exists(self) -> bool:
+        """Whether the robot entity currently exists (it does not between delete and spawn)."""
+
+    @abstractmethod
+    def proximity(self) -> Scan | None:
+        """The latest proximity scan (refreshed at 10 Hz), or None while the robot does not exist."""
+
+    @abstractmethod
+    def pose(self) -> Pose | None:
+        """The odometry pose of base_link, or None while the robot does not exist."""
+
+    @abstractmethod
+    def velocity(self) -> Twist:
+        """The measured velocity (zero while the robot does not exist)."""
+
+    @abstractmethod
+    def command(self) -> Twist:
+        """The drive command currently held."""
+
+    @abstractmethod
+    def time(self) -> float:
+        """The backend's clock in seconds (simulated time in the simulator)."""
+
+
+class RequestState(Enum):
+    PENDING = "pending"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+
+
+@dataclass(slots=True)
+class Request:
+    """An asynchronous entity request (like a ROS service call): poll ``state`` every tick."""
+
+    kind: str
+    entity: str
+    pose: Pose | None = None
+    state: RequestState = RequestState.PENDING
+    reason: str | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.state is not RequestState.PENDING
+
+
+class Entities(ABC):
+    """Delete and spawn entities; requests complete over later ticks with success or a reason."""
+
+    @abstractmethod
+    def request_delete(self, name: str) -> Request:
+        """Ask to remove an entity; refused (FAILED) when no entity has that name."""
+
+    @abstractmethod
+    def request_spawn(self, name: str, pose: Pose) -> Request:
+        """Ask for a fresh robot at ``pose``; refused when the name is taken or the pose is not free."""

@@ -1,0 +1,163 @@
+"""Safe YAML loading that remembers where every key and item came from.
+
+``load_yaml`` returns plain dicts and lists (subclasses :class:`MarkedDict` and :class:`MarkedList`)
+whose ``.marks`` give the (line, column) of each key or item, so later validation can point at the
+exact place of a problem. It never constructs Python objects (only standard tags), rejects
+duplicate keys, and limits aliases so that "billion laughs" files cannot blow up time or memory.
+
+Example::
+
+    data = load_yaml(path)
+    line, col = data.marks["tree"]
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
+
+from .errors import Problem, UserError
+
+#: Most alias uses accepted in one file; generous for hand-written missions.
+MAX_ALIASES = 200
+
+Mark = tuple[int, int]
+
+
+class MarkedDict(dict):
+    """A dict that knows the (line, column) of its own start and of each of its keys."""
+
+    mark: Mark = (0, 0)
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.marks: dict[Any, Mark] = {}
+        self.value_marks: dict[Any, Mark] = {}
+
+
+class MarkedList(list):
+    """A list that knows the (line, column) of its own start and of each item."""
+
+    mark: Mark = (0, 0)
+
+    def __init__(self, *args: Any) -> None:
+        super().__init__(*args)
+        self.marks: list[Mark] = []
+
+
+def _mark(node: Node) -> Mark:
+    return node.start_mark.line + 1, node.start_mark.column + 1
+
+
+class _Loader(yaml.SafeLoader):
+    """SafeLoader that records marks, rejects duplicate keys and counts aliases."""
+
+    def __init__(self, stream: str, filename: str) -> None:
+        super().__init__(stream)
+        self.filename = filename
+        self.alias_count = 0
+        self.problems: list[Problem] = []
+
+    def compose_node(self, parent: Node | None, index: Any) -> Node:  # type: ignore[override]
+        if self.check_event(yaml.AliasEvent):
+            self.alias_count += 1
+            if self.alias_count > MAX_ALIASES:
+                event = self.peek_event()
+                raise UserError(Problem(
+                    f"too many aliases (more than {MAX_ALIASES})", self.filename,
+                    event.start_mark.line + 1, event.start_mark.column + 1,
+                    hint="use subtrees: or include: to reuse parts of a mission"))
+        return super().compose_node(parent, index)
+
+    def construct_mapping(self, node: MappingNode, deep: bool = False) -> MarkedDict:  # type: ignore[override]
+        self.flatten_mapping(node)
+        result = MarkedDict()
+        result.mark = _mark(node)
+        for key_node, value_node in node.value:
+            key = self.construct_object(key_node, deep=True)
+            try:
+                hash(key)
+            except TypeError:
+                self.problems.append(Problem("a mapping key must be a plain value", self.filename,
+                                             *_mark(key_node)))
+                continue
+            if key in result:
+                first = result.marks[key]
+                self.problems.append(Problem(
+                    f"duplicate key '{key}'", self.filename, *_mark(key_node),
+                    hint=f"'{key}' is already given at line {first[0]}; YAML would silently keep only one"))
+                continue
+            result[key] = self.construct_object(value_node, deep=True)
+            result.marks[key] = _mark(key_node)
+            result.value_marks[key] = _mark(value_node)
+        return result
+
+    def construct_sequence(self, node: SequenceNode, deep: bool = False) -> MarkedList:  # type: ignore[override]
+        result = MarkedList(self.construct_object(child, deep=True) for child in node.value)
+        result.mark = _mark(node)
+        result.marks = [_mark(child) for child in node.value]
+        return result
+
+    def construct_undefined(self, node: Node) -> Any:
+        raise UserError(Problem(
+            f"the tag {node.tag} is not allowed", self.filename, *_mark(node),
+            hint="mission and maze files are plain data: remove the '!' tag"))
+
+
+_Loader.add_constructor("tag:yaml.org,2002:map", _Loader.construct_mapping)
+_Loader.add_constructor("tag:yaml.org,2002:seq", _Loader.construct_sequence)
+_Loader.add_constructor(None, _Loader.construct_undefined)
+
+
+def _scalar_is_recursive(node: Node, seen: set[int]) -> bool:
+    if id(node) in seen:
+        return True
+    if isinstance(node, ScalarNode):
+        return False
+    seen = seen | {id(node)}
+    children = node.value if isinstance(node, SequenceNode) else [v for kv in node.value for v in kv]
+    return any(_scalar_is_recursive(child, seen) for child in children)
+
+
+def loads_yaml(text: str, filename: str = "<input>") -> Any:
+    """Parse YAML text safely; raise :class:`UserError` with file:line:col on any problem."""
+    loader = _Loader(text, filename)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        if _scalar_is_recursive(node, set()):
+            raise UserError(Problem("an alias refers to the node that contains it", filename,
+                                    *_mark(node), hint="recursive YAML structures are not allowed"))
+        data = loader.construct_document(node)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (0, 0)
+        message = f"invalid YAML: {exc.problem or exc.context}"
+        raise UserError(Problem(message, filename, line, col,
+                                hint="check indentation, colons and quotes on this line")) from None
+    except yaml.YAMLError as exc:
+        raise UserError(Problem(f"invalid YAML: {exc}", filename)) from None
+    except RecursionError:
+        raise UserError(Problem("the YAML nesting is too deep", filename)) from None
+    finally:
+        loader.dispose()
+    if loader.problems:
+        raise UserError(loader.problems)
+    return data
+
+
+def load_yaml(path: str | Path) -> Any:
+    """Read and parse a YAML file; a missing or unreadable file is a :class:`UserError`."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UserError(Problem(f"file not found: {path}", str(path),
+                                hint="check the path; relative paths start from the current directory")) from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UserError(Problem(f"cannot read {path}: {exc}", str(path))) from None
+    return loads_yaml(text, str(path))
