@@ -1,0 +1,369 @@
+"""The pymunk backend: the course's Thymio in a maze, implementing :class:`Robot` and :class:`Entities`.
+
+Physics, in metres:
+
+- walls are static boxes (``Wall.corners``), the robot a dynamic convex hull (``thymio.HULL``)
+  whose centre of gravity sits on the wheel axle, so spinning keeps the axle fixed;
+- the robot is pulled by a kinematic control body through a pivot joint at the axle and a gear
+  joint (pymunk's top-down "tank" recipe): it follows (v, ω) exactly in free space, while walls
+  push back instead of being tunnelled (a kinematic robot, or a dynamic one whose velocity is
+  overwritten every step, goes through walls);
+- ``collision_slop`` is 0.2 mm (pymunk's default 0.1 would be 10 cm in metres).
+
+Example::
+
+    sim = Simulation(load_maze("mazes/two_parts_maze.yaml"), spawn=Pose(0.1, 0.1, 0.0))
+    sim.drive(0.1, 0.0)
+    sim.advance(1.0)            # 1 s of simulated time in 100 Hz sub-steps
+    sim.pose()                  # Pose(x=0.2, y=0.1, yaw=0.0)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import pymunk
+
+from ..maze import Maze
+from ..robot import ROBOT_ENTITY, Entities, Pose, Request, RequestState, Robot, Scan, Twist
+from . import thymio
+from .noise import NoiseConfig, NoiseSource
+
+_ROBOT_TYPE = 1
+_WALL_TYPE = 2
+#: How far from a wall the clearance is measured exactly; farther counts as "clear".
+_CLEARANCE_HORIZON = 0.05
+#: The hull point farthest from the axle is this far from it (the front arc, 0.080 m).
+_HULL_REACH = max(math.hypot(x - thymio.AXLE_X, y) for x, y in thymio.HULL)
+_HULL_FROM_AXLE = tuple((x - thymio.AXLE_X, y) for x, y in thymio.HULL)
+
+
+@dataclass(frozen=True, slots=True)
+class SimConfig:
+    """Simulation settings; the defaults are the course's Gazebo model (noise-free)."""
+
+    physics_hz: float = 100.0
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+    seed: int = 0
+    max_wheel_speed: float = thymio.MAX_WHEEL_SPEED
+
+
+@dataclass(frozen=True, slots=True)
+class Collision:
+    """The start of one contact episode between the robot and a wall."""
+
+    t: float
+    x: float
+    y: float
+
+
+class _Body:
+    """One robot entity in the space: the hull body, its control body and joints."""
+
+    def __init__(self, space: pymunk.Space, pose: Pose, group: int) -> None:
+        self.body = pymunk.Body(thymio.MASS, pymunk.moment_for_poly(thymio.MASS, thymio.HULL))
+        self.body.center_of_gravity = (thymio.AXLE_X, 0.0)
+        self.shape = pymunk.Poly(self.body, thymio.HULL)
+        self.shape.friction = 0.1          # the skid's mu in the URDF
+        self.shape.collision_type = _ROBOT_TYPE
+        self.shape.filter = pymunk.ShapeFilter(group=group)
+        self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (thymio.AXLE_X, 0.0))
+        pivot.max_bias = 0.0               # a pure velocity constraint: drift is not corrected
+        pivot.max_force = 10.0             # traction: walls win against the wheels
+        gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
+        gear.max_bias = 0.0
+        gear.max_force = 0.1
+        self.joints = (pivot, gear)
+        self.body.angle = pose.yaw
+        self.body.position = (pose.x, pose.y)
+        self.control.position = self.body.local_to_world((thymio.AXLE_X, 0.0))
+        self.control.angle = pose.yaw
+        space.add(self.body, self.shape, self.control, *self.joints)
+
+    def remove(self, space: pymunk.Space) -> None:
+        space.remove(self.body, self.shape, self.control, *self.joints)
+
+    def pose(self) -> Pose:
+        x, y = self.body.position
+        return Pose(x, y, (self.body.angle + math.pi) % (2.0 * math.pi) - math.pi)
+
+
+class Simulation(Robot, Entities):
+    """A 2D simulation of one Thymio in a maze; advance it with :meth:`advance`."""
+
+    def __init__(self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None,
+                 robot_name: str = ROBOT_ENTITY) -> None:
+        self.maze = maze
+        self.config = config or SimConfig()
+        self.robot_name = robot_name
+        self.space = pymunk.Space()
+        self.space.collision_slop = 0.0002
+        self.space.iterations = 10
+        self._wall_frames: dict[pymunk.Shape, tuple[float, ...]] = {}
+        for wall in maze.walls:
+            shape = pymunk.Poly(self.space.static_body, wall.corners())
+            shape.collision_type = _WALL_TYPE
+            shape.friction = 1.0
+            self.space.add(shape)
+            (x0, y0), (x1, y1) = wall.start, wall.end
+            ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
+            self._wall_frames[shape] = ((x0 + x1) / 2, (y0 + y1) / 2, ux, uy,
+                                        (wall.length + wall.thickness) / 2, wall.thickness / 2)
+        self.bounds = maze.bounds()
+        self._dt = 1.0 / self.config.physics_hz
+        self._steps = 0
+        self._noise = NoiseSource(self.config.noise, self.config.seed)
+        self._entities: dict[str, _Body] = {}
+        self._requests: list[Request] = []
+        self._cmd = Twist()
+        self._applied = (0.0, 0.0)
+        self._steer = False
+        self._scan: dict[str, float] | None = None
+        self._odom: Pose | None = None
+        self._contacts = 0
+        self.collisions: list[Collision] = []
+        self.min_clearance = math.inf
+        self._sensor_every = max(1, round(self.config.physics_hz / thymio.SENSOR_RATE_HZ))
+        self._rays = [(name, (x, y), (x + thymio.RANGE_MAX * math.cos(a), y + thymio.RANGE_MAX * math.sin(a)))
+                      for name, x, y, a in thymio.SENSORS]
+        self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
+        if spawn is not None:
+            problem = self.spawn_problem(robot_name, spawn)
+            if problem:
+                raise ValueError(problem)
+            self._add_robot(robot_name, spawn)
+
+    # ----------------------------------------------------------------- Robot
+    def drive(self, linear: float, angular: float) -> None:
+        if self.robot_name not in self._entities:
+            return
+        self._cmd = Twist(float(linear), float(angular))
+        self._apply_command()
+
+    def exists(self) -> bool:
+        return self.robot_name in self._entities
+
+    def proximity(self) -> Scan | None:
+        return self._scan if self.exists() else None
+
+    def pose(self) -> Pose | None:
+        if self.config.noise.odometry:
+            return self._odom if self.exists() else None
+        return self.true_pose()
+
+    def true_pose(self) -> Pose | None:
+        """The ground-truth pose (equal to :meth:`pose` unless odometry drift is on)."""
+        entity = self._entities.get(self.robot_name)
+        return entity.pose() if entity else None
+
+    def velocity(self) -> Twist:
+        entity = self._entities.get(self.robot_name)
+        if entity is None:
+            return Twist()
+        body = entity.body
+        return Twist(body.velocity.dot(body.rotation_vector), body.angular_velocity)
+
+    def command(self) -> Twist:
+        return self._cmd
+
+    def time(self) -> float:
+        return self._steps * self._dt
+
+    # -------------------------------------------------------------- Entities
+    def request_delete(self, name: str) -> Request:
+        request = Request("delete", name)
+        self._requests.append(request)
+        return request
+
+    def request_spawn(self, name: str, pose: Pose) -> Request:
+        request = Request("spawn", name, pose)
+        self._requests.append(request)
+        return request
+
+    def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why a robot cannot be spawned at ``pose`` (None when it can)."""
+        if name in self._entities:
+            return f"an entity named '{name}' already exists: delete it first"
+        if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):
+            return "the pose must be finite numbers"
+        cos, sin = math.cos(pose.yaw), math.sin(pose.yaw)
+        hull = [(pose.x + x * cos - y * sin, pose.y + x * sin + y * cos) for x, y in thymio.HULL]
+        xmin, ymin, xmax, ymax = self.bounds
+        if self.maze.walls and not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
+            return (f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
+                    f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])")
+        probe = pymunk.Poly(None, hull)
+        probe.filter = pymunk.ShapeFilter(group=1_000_000)
+        body = pymunk.Body(body_type=pymunk.Body.STATIC)
+        probe.body = body
+        probe.cache_bb()
+        hits = [h for h in self.space.shape_query(probe) if h.shape.collision_type in (_WALL_TYPE, _ROBOT_TYPE)]
+        if hits:
+            return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps a wall"
+        return None
+
+    # ------------------------------------------------------------- stepping
+    def advance(self, duration: float) -> None:
+        """Run the physics for ``duration`` seconds of simulated time, then serve pending requests."""
+        steps = max(1, round(duration / self._dt))
+        for _ in range(steps):
+            self._substep()
+        self._serve_requests()
+
+    def _substep(self) -> None:
+        entity = self._entities.get(self.robot_name)
+        if entity is not None and (self._steer or self._contacts):
+            # keep the control body's velocity along the heading while the heading changes
+            v, w = self._applied
+            rot = entity.body.rotation_vector
+            entity.control.velocity = (v * rot.x, v * rot.y)
+            entity.control.angular_velocity = w
+            self._steer = w != 0.0
+        self.space.step(self._dt)
+        self._steps += 1
+        if entity is not None:
+            if self.config.noise.odometry:
+                self._integrate_odometry(entity)
+            if self._steps % self._sensor_every == 0:
+                self._refresh_sensors(entity)
+
+    def _apply_command(self) -> None:
+        """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
+        left, right = thymio.wheel_speeds(*thymio.limit_command(self._cmd.linear, self._cmd.angular,
+                                                                self.config.max_wheel_speed))
+        fl, fr = self._noise.wheel_factors()
+        v, w = thymio.body_velocity(left * fl, right * fr)
+        self._applied = (v, w)
+        self._steer = True
+        entity = self._entities.get(self.robot_name)
+        if entity is not None and self._contacts == 0:
+            # Chipmunk moves bodies before solving joints: seed the velocity so motion starts now.
+            body = entity.body
+            rot = body.rotation_vector
+            body.velocity = (v * rot.x, v * rot.y)
+            body.angular_velocity = w
+
+    def _integrate_odometry(self, entity: _Body) -> None:
+        body = entity.body
+        v = body.velocity.dot(body.rotation_vector)
+        left, right = thymio.wheel_speeds(v, body.angular_velocity)
+        fl, fr = self._noise.encoder_factors()
+        v, w = thymio.body_velocity(left * fl, right * fr)
+        odom = self._odom or entity.pose()
+        # integrate the axle (the rotation centre), then express base_link
+        ax = odom.x + thymio.AXLE_X * math.cos(odom.yaw)
+        ay = odom.y + thymio.AXLE_X * math.sin(odom.yaw)
+        mid = odom.yaw + w * self._dt / 2.0
+        ax += v * self._dt * math.cos(mid)
+        ay += v * self._dt * math.sin(mid)
+        yaw = (odom.yaw + w * self._dt + math.pi) % (2.0 * math.pi) - math.pi
+        self._odom = Pose(ax - thymio.AXLE_X * math.cos(yaw), ay - thymio.AXLE_X * math.sin(yaw), yaw)
+
+    def _refresh_sensors(self, entity: _Body) -> None:
+        body = entity.body
+        flt = entity.shape.filter
+        query = self.space.segment_query_first
+        cos, sin = body.rotation_vector
+        bx, by = body.position
+        noise = self._noise
+        scan: dict[str, float] = {}
+        for name, (sx, sy), (ex, ey) in self._rays:
+            hit = query((bx + sx * cos - sy * sin, by + sx * sin + sy * cos),
+                        (bx + ex * cos - ey * sin, by + ex * sin + ey * cos), 0.0, flt)
+            if hit is None:
+                scan[name] = math.inf
+                continue
+            value = max(hit.alpha * thymio.RANGE_MAX, thymio.RANGE_MIN)
+            scan[name] = noise.range(value, thymio.RANGE_MIN, thymio.RANGE_MAX)
+        self._scan = scan
+        self._update_clearance(entity, bx, by, cos, sin)
+
+    def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
+        """Track the smallest hull-to-wall gap.
+
+        A cheap lower bound comes first: the wall's closest point q to the axle, minus the hull's
+        extent towards q. It is exact when a wall faces a side or the nose, and only when it could
+        beat the record is the exact polygon distance computed.
+        """
+        ax, ay = bx + thymio.AXLE_X * cos, by + thymio.AXLE_X * sin
+        record = min(self.min_clearance, _CLEARANCE_HORIZON)
+        candidates = []
+        for info in self.space.point_query((ax, ay), _HULL_REACH + record, entity.shape.filter):
+            if info.shape.collision_type != _WALL_TYPE or info.distance <= 0.0:
+                if info.shape.collision_type == _WALL_TYPE:
+                    candidates.append(info.shape)
+                continue
+            qx, qy = (info.point.x - ax) / info.distance, (info.point.y - ay) / info.distance
+            lx, ly = qx * cos + qy * sin, qy * cos - qx * sin      # direction in the body frame
+            extent = max(x * lx + y * ly for x, y in _HULL_FROM_AXLE)
+            if info.distance - extent < record - 1e-6:
+                candidates.append(info.shape)
+        if candidates:
+            gap = self._exact_gap(entity, candidates, bx, by, cos, sin)
+            if gap < self.min_clearance:
+                self.min_clearance = max(gap, 0.0)
+
+    def _exact_gap(self, entity: _Body, walls: list[pymunk.Shape], bx: float, by: float,
+                   cos: float, sin: float) -> float:
+        """The exact distance between the hull and the nearest of ``walls`` (convex polygons)."""
+        hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in thymio.HULL]
+        gap = math.inf
+        for wall in walls:
+            cx, cy, ux, uy, hl, ht = self._wall_frames[wall]
+            for px, py in hull:
+                dx, dy = px - cx, py - cy
+                ex = abs(dx * ux + dy * uy) - hl
+                ey = abs(dy * ux - dx * uy) - ht
+                d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
+                gap = min(gap, d)
+            for corner in wall.get_vertices():
+                gap = min(gap, entity.shape.point_query(corner).distance)
+        return gap
+
+    # -------------------------------------------------------------- entities
+    def _add_robot(self, name: str, pose: Pose) -> None:
+        entity = _Body(self.space, pose, group=1 + len(self._entities))
+        self._entities[name] = entity
+        self._odom = entity.pose()
+        self._steer = True
+        if name == self.robot_name:
+            self._cmd = Twist()
+            self._applied = (0.0, 0.0)
+            self._refresh_sensors(entity)
+
+    def _serve_requests(self) -> None:
+        pending, self._requests = self._requests, []
+        for request in pending:
+            if request.kind == "delete":
+                entity = self._entities.pop(request.entity, None)
+                if entity is None:
+                    known = ", ".join(sorted(self._entities)) or "none"
+                    request.reason = f"no entity named '{request.entity}' (existing: {known})"
+                    request.state = RequestState.FAILED
+                    continue
+                entity.remove(self.space)
+                if request.entity == self.robot_name:
+                    self._scan, self._odom, self._cmd, self._contacts = None, None, Twist(), 0
+                request.state = RequestState.SUCCEEDED
+            else:
+                assert request.pose is not None
+                problem = self.spawn_problem(request.entity, request.pose)
+                if problem:
+                    request.reason = problem
+                    request.state = RequestState.FAILED
+                    continue
+                self._add_robot(request.entity, request.pose)
+                request.state = RequestState.SUCCEEDED
+
+    # ------------------------------------------------------------ collisions
+    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self._contacts += 1
+        if self._contacts == 1:
+            points = arbiter.contact_point_set.points
+            x, y = points[0].point_a if points else arbiter.shapes[0].body.position
+            self.collisions.append(Collision(self.time(), x, y))
+
+    def _on_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self._contacts = max(0, self._contacts - 1)
