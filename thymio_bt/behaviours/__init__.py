@@ -1,0 +1,17 @@
+"""The built-in behaviours, one family per module (motion, maze, entities, control)."""
+
+from .base import Context, EventLog, FailureCode, RobotBehaviour
+from .control import RepeatUntil, SimTimeout
+from .entities import DeleteEntity, SpawnEntity
+from .maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
+from .motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
+
+#: Every built-in robot behaviour, in the order ``thymio-bt behaviours`` lists them.
+BUILTIN: tuple[type[RobotBehaviour], ...] = (
+    MoveUntilWall, MoveDistance, TurnAngle, Stop, Wait,
+    DeleteEntity, SpawnEntity,
+    ChooseTurn, WallAhead, SideOpen, IsDeadEnd, WallFollow,
+)
+
+__all__ = ["BUILTIN", "Context", "EventLog", "FailureCode", "RobotBehaviour", "RepeatUntil",
+           "SimTimeout", *(cls.__name__ for cls in BUILTIN)]

@@ -1,0 +1,223 @@
+"""What every thymio-bt behaviour shares: the robot context, events, failure codes, time limits.
+
+A behaviour is a :class:`py_trees.behaviour.Behaviour` built from a pydantic ``Params`` model and a
+:class:`Context`. Subclasses implement :meth:`RobotBehaviour.start` and :meth:`RobotBehaviour.step`;
+the base class handles the simulated-time limit, a deleted robot, collisions, stopping the robot
+when the behaviour ends or is interrupted, and the ``behaviour_start``/``behaviour_end`` events.
+
+Example::
+
+    class Creep(RobotBehaviour):
+        yaml_name = "Creep"
+        Params = CreepParams
+        def step(self):
+            self.robot.drive(0.01, 0.0)
+            return Status.RUNNING
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, Callable, ClassVar
+
+import py_trees
+from py_trees.common import Access, Status
+from pydantic import BaseModel, ConfigDict, Field
+
+from ..robot import Entities, Pose, Robot
+
+
+class FailureCode(str, Enum):
+    """Why a behaviour failed, in the style of Nav2's error codes."""
+
+    TIMEOUT = "TIMEOUT"
+    COLLISION = "COLLISION"
+    NO_ROBOT = "NO_ROBOT"
+    NO_WALL = "NO_WALL"
+    INVALID_INPUT = "INVALID_INPUT"
+    ENTITY_ERROR = "ENTITY_ERROR"
+    FAILED = "FAILED"
+
+
+class EventLog(list):
+    """The run's events, in time order: dicts with at least ``t`` and ``kind``."""
+
+    def emit(self, t: float, kind: str, **fields: Any) -> None:
+        self.append({"t": round(t, 6), "kind": kind, **fields})
+
+
+@dataclass
+class Context:
+    """Everything a behaviour may use: the robot interfaces, the clock, events and the map bounds."""
+
+    robot: Robot
+    entities: Entities
+    events: EventLog = field(default_factory=EventLog)
+    tick_period: float = 0.1
+    #: (xmin, ymin, xmax, ymax) of the known map, for "leave the maze" stop conditions.
+    bounds: tuple[float, float, float, float] | None = None
+    #: How many collisions the backend has counted so far (a backend without a bumper returns 0).
+    collision_count: Callable[[], int] = lambda: 0
+
+    def now(self) -> float:
+        return self.robot.time()
+
+
+class BehaviourParams(BaseModel):
+    """Parameters every robot behaviour accepts."""
+
+    model_config = ConfigDict(extra="forbid")
+    timeout: float = Field(60.0, gt=0, le=3600, description="time limit in simulated seconds",
+                           json_schema_extra={"unit": "s"})
+
+
+def snapshot(robot: Robot) -> dict[str, Any]:
+    """The robot's pose and proximity for an event (None when the robot does not exist)."""
+    pose = robot.pose()
+    scan = robot.proximity()
+    return {
+        "pose": None if pose is None else {k: round(v, 6) for k, v in pose.as_dict().items()},
+        "proximity": None if scan is None else {k: (None if math.isinf(v) else round(v, 6))
+                                                for k, v in scan.items()},
+    }
+
+
+def node_path(node: py_trees.behaviour.Behaviour) -> str:
+    """The slash-separated names from the root to ``node``."""
+    names = []
+    current: py_trees.behaviour.Behaviour | None = node
+    while current is not None:
+        names.append(current.name)
+        current = current.parent
+    return "/".join(reversed(names))
+
+
+class RobotBehaviour(py_trees.behaviour.Behaviour):
+    """Base of the behaviours that act on or sense the robot."""
+
+    #: The name used in mission YAML and in events.
+    yaml_name: ClassVar[str] = ""
+    #: The pydantic model of the parameters.
+    Params: ClassVar[type[BaseModel]] = BehaviourParams
+    #: Whether the behaviour commands motion (and so stops the robot when it ends).
+    moves: ClassVar[bool] = False
+    #: Whether it emits behaviour_start/behaviour_end events (conditions, ticked often, do not).
+    emits_events: ClassVar[bool] = True
+    #: Whether it needs the robot to exist (fails with NO_ROBOT otherwise).
+    needs_robot: ClassVar[bool] = True
+    #: Whether it fails with COLLISION when the robot hits a wall while it runs.
+    fails_on_collision: ClassVar[bool] = True
+
+    def __init__(self, name: str, params: BaseModel, ctx: Context,
+                 blackboard_refs: dict[str, str] | None = None) -> None:
+        super().__init__(name=name)
+        self.declared = params
+        self.params: Any = params
+        self.ctx = ctx
+        self.robot = ctx.robot
+        self.failure: tuple[FailureCode, str] | None = None
+        self.extra: dict[str, Any] = {}
+        self._refs = dict(blackboard_refs or {})
+        self._reader = None
+        if self._refs:
+            self._reader = self.attach_blackboard_client(name=f"{name}_reads")
+            for key in self._refs.values():
+                self._reader.register_key(key, access=Access.READ)
+        self._start_time = 0.0
+        self._collisions_at_start = 0
+        self._path: str | None = None
+
+    # ---------------------------------------------------------------- hooks
+    def start(self) -> None:
+        """Called when the behaviour starts (after parameters are resolved)."""
+
+    def step(self) -> Status:
+        """One tick of work; return RUNNING, SUCCESS, or ``self.fail(...)``."""
+        return Status.SUCCESS
+
+    # ---------------------------------------------------------- machinery
+    @property
+    def path(self) -> str:
+        if self._path is None:
+            self._path = node_path(self)
+        return self._path
+
+    def elapsed(self) -> float:
+        return self.ctx.now() - self._start_time
+
+    def fail(self, code: FailureCode, reason: str) -> Status:
+        """Record why the behaviour fails and return FAILURE."""
+        self.failure = (code, reason)
+        self.feedback_message = f"{code.value}: {reason}"
+        return Status.FAILURE
+
+    def initialise(self) -> None:
+        self.failure = None
+        self.extra = {}
+        self.feedback_message = ""
+        self._start_time = self.ctx.now()
+        self._collisions_at_start = self.ctx.collision_count()
+        self._resolution_error = self._resolve_refs()
+        if self.emits_events:
+            self.ctx.events.emit(self._start_time, "behaviour_start", name=self.yaml_name, path=self.path)
+        if self._resolution_error is None and (self.robot.exists() or not self.needs_robot):
+            self.start()
+
+    def _resolve_refs(self) -> str | None:
+        if not self._refs:
+            return None
+        values = {}
+        assert self._reader is not None
+        for param, key in self._refs.items():
+            if not self._reader.exists(key):
+                return f"blackboard key '{key}' (for '{param}') has not been written yet"
+            values[param] = self._reader.get(key)
+        try:
+            self.params = type(self.declared).model_validate({**self.declared.model_dump(), **values})
+        except Exception as exc:  # pydantic ValidationError: a bad value on the blackboard
+            return f"blackboard value for {', '.join(values)} is invalid: {exc}"
+        return None
+
+    def update(self) -> Status:
+        if self._resolution_error is not None:
+            return self.fail(FailureCode.INVALID_INPUT, self._resolution_error)
+        if self.needs_robot and not self.robot.exists():
+            return self.fail(FailureCode.NO_ROBOT, "the robot does not exist (was it deleted?)")
+        if self.fails_on_collision and self.ctx.collision_count() > self._collisions_at_start:
+            return self.fail(FailureCode.COLLISION, "the robot hit a wall")
+        status = self.step()
+        if status is Status.RUNNING and self.elapsed() >= self.params.timeout - 1e-9:
+            return self.on_timeout()
+        return status
+
+    def on_timeout(self) -> Status:
+        """What running out of time means; subclasses may give a more precise code."""
+        return self.fail(FailureCode.TIMEOUT, f"not done after {self.params.timeout:g} s")
+
+    def terminate(self, new_status: Status) -> None:
+        if self.moves and not getattr(self.params, "keep_moving", False) and self.robot.exists():
+            self.robot.drive(0.0, 0.0)
+        if not self.emits_events:
+            return
+        event: dict[str, Any] = {"name": self.yaml_name, "path": self.path, "status": new_status.name}
+        if self.failure is not None:
+            event["code"], event["reason"] = self.failure[0].value, self.failure[1]
+        event.update(self.extra)
+        event.update(snapshot(self.robot))
+        self.ctx.events.emit(self.ctx.now(), "behaviour_end", **event)
+
+
+class ConditionBehaviour(RobotBehaviour):
+    """A check that answers SUCCESS or FAILURE at once, without events (guards tick them often)."""
+
+    emits_events = False
+    fails_on_collision = False
+
+
+def current_pose(robot: Robot) -> Pose:
+    """The pose, for behaviours that already checked that the robot exists."""
+    pose = robot.pose()
+    assert pose is not None
+    return pose

@@ -1,0 +1,92 @@
+"""Control nodes that py_trees lacks or only has in wall-clock time.
+
+py_trees' own ``Timeout`` and ``Timer`` read the wall clock, which is wrong when the simulation
+runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock instead.
+:class:`RepeatUntil` is a do-while loop: run the body, and after each success check a condition.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Iterator
+
+import py_trees
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+
+class SimTimeout(py_trees.decorators.Decorator):
+    """Fail (and stop the child) when the child runs longer than ``duration`` simulated seconds.
+
+    Example::
+
+        SimTimeout("limit", child, duration=30.0, clock=ctx.now)
+    """
+
+    def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
+        super().__init__(name=name, child=child)
+        self.duration = duration
+        self.clock = clock
+        self.finish_time = 0.0
+        self.failure: tuple[str, str] | None = None
+
+    def initialise(self) -> None:
+        self.finish_time = self.clock() + self.duration
+        self.feedback_message = ""
+        self.failure = None
+
+    def update(self) -> Status:
+        now = self.clock()
+        if self.decorated.status == Status.RUNNING and now >= self.finish_time - 1e-9:
+            self.decorated.stop(Status.INVALID)
+            self.failure = ("TIMEOUT", f"'{self.decorated.name}' did not finish within {self.duration:g} s")
+            self.feedback_message = f"TIMEOUT: {self.failure[1]}"
+            return Status.FAILURE
+        if self.decorated.status == Status.RUNNING:
+            self.feedback_message = f"{self.finish_time - now:.1f} s left"
+        return self.decorated.status
+
+
+class RepeatUntil(py_trees.composites.Composite):
+    """Run ``body``; after each success tick ``condition``: SUCCESS ends the loop, else go again.
+
+    A body failure ends the loop with FAILURE, so real errors are never masked.
+
+    Example::
+
+        RepeatUntil("to the dead end", body=leg, condition=is_dead_end)
+    """
+
+    def __init__(self, name: str, body: Behaviour, condition: Behaviour) -> None:
+        super().__init__(name=name, children=[body, condition])
+        self.iterations = 0
+
+    def tick(self) -> Iterator[Behaviour]:
+        body, condition = self.children
+        if self.status != Status.RUNNING:
+            for child in self.children:
+                if child.status != Status.INVALID:
+                    child.stop(Status.INVALID)
+            self.current_child = body
+            self.iterations = 0
+            self.initialise()
+        if self.current_child is body:
+            yield from body.tick()
+            if body.status == Status.RUNNING:
+                self.status = Status.RUNNING
+                yield self
+                return
+            if body.status == Status.FAILURE:
+                self.stop(Status.FAILURE)
+                yield self
+                return
+            self.iterations += 1
+            self.current_child = condition
+        yield from condition.tick()
+        if condition.status == Status.SUCCESS:
+            self.stop(Status.SUCCESS)
+        else:
+            if condition.status == Status.FAILURE:
+                self.current_child = body
+            self.status = Status.RUNNING
+            self.feedback_message = f"iteration {self.iterations + 1}"
+        yield self

@@ -1,0 +1,97 @@
+"""Entity behaviours: delete the robot and spawn it elsewhere, like the course's Gazebo services."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from py_trees.common import Status
+from pydantic import BeforeValidator, Field
+
+from ..robot import ROBOT_ENTITY, Pose, Request, RequestState
+from ..units import UnitError, parse_pose
+from .base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
+
+
+def _pose(value: Any) -> Any:
+    if isinstance(value, str):
+        try:
+            return parse_pose(value)
+        except UnitError as exc:
+            raise ValueError(str(exc)) from None
+    return value
+
+
+class DeleteEntityParams(BehaviourParams):
+    """Remove an entity from the world."""
+
+    entity: str = Field(ROBOT_ENTITY, description="the entity's name")
+    timeout: float = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds",
+                           json_schema_extra={"unit": "s"})
+
+
+class DeleteEntity(RobotBehaviour):
+    """Ask the backend to delete ``entity``; RUNNING until it is gone, FAILURE with its reason.
+
+    Emits a ``delete_entity`` event with the robot's pose and proximity just before deletion.
+
+    Example (YAML)::
+
+        - DeleteEntity: {entity: thymio}
+    """
+
+    yaml_name = "DeleteEntity"
+    Params = DeleteEntityParams
+    needs_robot = False
+    fails_on_collision = False
+
+    def start(self) -> None:
+        self.before = snapshot(self.robot)
+        self.request: Request = self.ctx.entities.request_delete(self.params.entity)
+
+    def step(self) -> Status:
+        if self.request.state is RequestState.PENDING:
+            self.feedback_message = f"deleting '{self.params.entity}'"
+            return Status.RUNNING
+        if self.request.state is RequestState.FAILED:
+            return self.fail(FailureCode.ENTITY_ERROR, self.request.reason or "delete refused")
+        self.ctx.events.emit(self.ctx.now(), "delete_entity", entity=self.params.entity, **self.before)
+        return Status.SUCCESS
+
+
+class SpawnEntityParams(BehaviourParams):
+    """Put a fresh robot at a pose."""
+
+    entity: str = Field(ROBOT_ENTITY, description="the entity's name")
+    pose: Annotated[tuple[float, float, float], BeforeValidator(_pose)] = Field(
+        description="x, y (m) and yaw (rad) of base_link, e.g. [0.5, 0.3, pi/2] or a named spawn of the maze")
+    timeout: float = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds",
+                           json_schema_extra={"unit": "s"})
+
+
+class SpawnEntity(RobotBehaviour):
+    """Ask the backend to spawn ``entity`` at ``pose``; fails clearly while the name still exists.
+
+    Example (YAML)::
+
+        - SpawnEntity: {pose: [0.5, 0.3, pi/2]}
+        - SpawnEntity: {pose: part2}          # a named spawn of the mission's maze
+    """
+
+    yaml_name = "SpawnEntity"
+    Params = SpawnEntityParams
+    needs_robot = False
+    fails_on_collision = False
+
+    def start(self) -> None:
+        self.target = Pose(*self.params.pose)
+        self.request: Request = self.ctx.entities.request_spawn(self.params.entity, self.target)
+
+    def step(self) -> Status:
+        if self.request.state is RequestState.PENDING:
+            self.feedback_message = f"spawning '{self.params.entity}'"
+            return Status.RUNNING
+        if self.request.state is RequestState.FAILED:
+            return self.fail(FailureCode.ENTITY_ERROR, self.request.reason or "spawn refused")
+        self.ctx.events.emit(self.ctx.now(), "spawn_entity", entity=self.params.entity,
+                             pose={k: round(v, 6) for k, v in self.target.as_dict().items()})
+        return Status.SUCCESS

@@ -1,0 +1,339 @@
+"""Maze behaviours: sensing walls and openings, choosing a turn, and following a wall.
+
+They rely on the geometry of the course's sensors: the ±38° front rays cross a corridor side
+0.12 m ahead of the axle, so they see the side walls of the cell ahead but never a wall exactly
+beside the robot. A decision is therefore taken when the wall ahead first comes into range, and
+an opening is found by its edge and then reached by odometry.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from py_trees.common import Access, Status
+from pydantic import Field, model_validator
+
+from ..robot import Pose, wrap_angle
+from ..sim.thymio import AXLE_X, RANGE_MAX, SENSORS
+from .base import (BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour,
+                   current_pose)
+from .motion import approach_speed
+
+Side = Literal["left", "right"]
+_SENSOR = {name: (x, y, yaw) for name, x, y, yaw in SENSORS}
+
+
+def side_ray(side: str) -> str:
+    return "front_left" if side == "left" else "front_right"
+
+
+# ----------------------------------------------------------------- conditions
+class WallAheadParams(BehaviourParams):
+    """Is a wall ahead?"""
+
+    distance: float = Field(RANGE_MAX, gt=0, le=RANGE_MAX, description="closer than this counts",
+                            json_schema_extra={"unit": "m"})
+    sensor: Literal["front_center", "front_center_left", "front_center_right"] = "front_center"
+
+
+class WallAhead(ConditionBehaviour):
+    """SUCCESS when the front sensor reads at most ``distance``, FAILURE otherwise.
+
+    Example (YAML)::
+
+        - guard: {condition: {invert: WallAhead}, do: {MoveDistance: {distance: 1}}}
+    """
+
+    yaml_name = "WallAhead"
+    Params = WallAheadParams
+
+    def step(self) -> Status:
+        scan = self.robot.proximity()
+        assert scan is not None
+        reading = scan[self.params.sensor]
+        self.feedback_message = f"{self.params.sensor} reads {reading:.4f}"
+        return Status.SUCCESS if reading <= self.params.distance else Status.FAILURE
+
+
+class SideOpenParams(BehaviourParams):
+    """Is there an opening on one side ahead?"""
+
+    side: Side = Field(description="left or right")
+
+
+class SideOpen(ConditionBehaviour):
+    """SUCCESS when the ±38° ray on ``side`` sees nothing (the side of the cell ahead is open).
+
+    Example (YAML)::
+
+        - SideOpen: {side: left}
+    """
+
+    yaml_name = "SideOpen"
+    Params = SideOpenParams
+
+    def step(self) -> Status:
+        scan = self.robot.proximity()
+        assert scan is not None
+        return Status.SUCCESS if math.isinf(scan[side_ray(self.params.side)]) else Status.FAILURE
+
+
+class IsDeadEndParams(BehaviourParams):
+    """Read ChooseTurn's decision."""
+
+    key: str = Field("turn", description="the blackboard key ChooseTurn wrote")
+
+
+class IsDeadEnd(ConditionBehaviour):
+    """SUCCESS when the last ChooseTurn decided ``dead_end``.
+
+    Example (YAML)::
+
+        - IsDeadEnd: {}
+    """
+
+    yaml_name = "IsDeadEnd"
+    Params = IsDeadEndParams
+    needs_robot = False
+
+    def __init__(self, name: str, params: IsDeadEndParams, ctx: Context, **kwargs: object) -> None:
+        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
+        self.board = self.attach_blackboard_client(name=f"{name}_decision")
+        self.board.register_key(params.key, access=Access.READ)
+
+    def step(self) -> Status:
+        if not self.board.exists(self.params.key):
+            self.feedback_message = "no decision yet"
+            return Status.FAILURE
+        decision = self.board.get(self.params.key)
+        self.feedback_message = f"decision: {decision}"
+        return Status.SUCCESS if decision == "dead_end" else Status.FAILURE
+
+
+# ---------------------------------------------------------------- ChooseTurn
+class ChooseTurnParams(BehaviourParams):
+    """Decide the turn at the next wall."""
+
+    key: str = Field("turn", description="blackboard key for the decision; the angle goes to KEY_angle")
+    prefer: Side = Field("left", description="the side chosen when both sides are open")
+
+
+class ChooseTurn(RobotBehaviour):
+    """Decide left / right / dead end the moment the wall ahead first comes into range.
+
+    Run it beside MoveUntilWall (in a parallel): it waits until ``front_center`` first reads a
+    finite range, then reads the ±38° rays, which at that moment cross the sides of the last cell.
+    It writes ``turn`` (``left``, ``right`` or ``dead_end``) and ``turn_angle`` (+pi/2, -pi/2, 0).
+
+    Example (YAML)::
+
+        - parallel:
+            policy: success_on_all
+            children:
+              - MoveUntilWall: {distance: 1.5cm}
+              - ChooseTurn: {}
+        - TurnAngle: {angle: bb:turn_angle}
+    """
+
+    yaml_name = "ChooseTurn"
+    Params = ChooseTurnParams
+    fails_on_collision = False
+
+    def __init__(self, name: str, params: ChooseTurnParams, ctx: Context, **kwargs: object) -> None:
+        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
+        self.board = self.attach_blackboard_client(name=f"{name}_decision")
+        self.board.register_key(params.key, access=Access.WRITE)
+        self.board.register_key(f"{params.key}_angle", access=Access.WRITE)
+
+    def step(self) -> Status:
+        scan = self.robot.proximity()
+        assert scan is not None
+        if math.isinf(scan["front_center"]):
+            self.feedback_message = "waiting for the wall ahead to come into range"
+            return Status.RUNNING
+        left_open, right_open = math.isinf(scan["front_left"]), math.isinf(scan["front_right"])
+        if left_open and right_open:
+            decision = self.params.prefer
+        elif left_open:
+            decision = "left"
+        elif right_open:
+            decision = "right"
+        else:
+            decision = "dead_end"
+        angle = {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision]
+        self.board.set(self.params.key, decision)
+        self.board.set(f"{self.params.key}_angle", angle)
+        self.extra = {"decision": decision}
+        self.feedback_message = f"decided {decision}"
+        return Status.SUCCESS
+
+
+# ---------------------------------------------------------------- WallFollow
+class WallFollowParams(BehaviourParams):
+    """Follow one wall through a maze of square cells."""
+
+    side: Side = Field("left", description="the wall to keep on the robot's side")
+    speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
+    turn_speed: float = Field(1.0, gt=0, le=4.0, description="fastest turn rate",
+                              json_schema_extra={"unit": "rad/s"})
+    cell: float = Field(0.2, ge=0.17, le=1.0, description="the maze's grid pitch (wall centre to centre)",
+                        json_schema_extra={"unit": "m"})
+    wall_thickness: float = Field(0.01, gt=0, le=0.05, description="the maze's wall thickness",
+                                  json_schema_extra={"unit": "m"})
+    until: Literal["exit", "goal"] = Field("exit", description="stop when leaving the maze's bounding "
+                                           "box, or on reaching the goal")
+    goal: tuple[float, float] | None = Field(None, description="goal position [x, y] for until: goal")
+    goal_radius: float = Field(0.05, gt=0, le=1.0, description="how close to the goal counts",
+                               json_schema_extra={"unit": "m"})
+    timeout: float = Field(600.0, gt=0, le=36000, description="time limit in simulated seconds",
+                           json_schema_extra={"unit": "s"})
+
+    @model_validator(mode="after")
+    def _goal_given(self) -> "WallFollowParams":
+        if self.until == "goal" and self.goal is None:
+            raise ValueError("until: goal needs a goal: [x, y]")
+        return self
+
+
+class WallFollow(RobotBehaviour):
+    """Follow the wall on ``side`` until leaving the maze (or reaching a goal): the hand-on-wall rule.
+
+    In a simply-connected maze of square cells this reaches every exit. The robot drives along
+    the corridor holding its heading; when the side ray loses the wall it locates the wall's end
+    (between the last hit and the ray's current crossing point), drives on by odometry to the
+    middle of the opening and turns into it. At a wall ahead it stops with the axle in the cell
+    centre and turns away from its side; if a wall is still ahead (a dead end) it turns again.
+
+    Example (YAML)::
+
+        - WallFollow: {side: left}
+    """
+
+    yaml_name = "WallFollow"
+    Params = WallFollowParams
+    moves = True
+
+    def start(self) -> None:
+        p = self.params
+        sx, sy, syaw = _SENSOR[side_ray(p.side)]
+        self.sign = 1.0 if p.side == "left" else -1.0
+        self.corridor = p.cell - p.wall_thickness
+        ahead, lateral = sx - AXLE_X, abs(sy)
+        # where the side ray meets a side wall, measured ahead of the axle
+        self.probe = ahead + (self.corridor / 2 - lateral) / math.tan(abs(syaw))
+        self.ray_ahead, self.ray_cos = ahead, math.cos(syaw)
+        self.stop_distance = self.corridor / 2 - (_SENSOR["front_center"][0] - AXLE_X)
+        self.heading = current_pose(self.robot).yaw
+        self.turns: list[str] = []
+        self.mode = "forward"
+        self.aligned = False
+        self._new_segment()
+        if p.until == "exit" and self.ctx.bounds is None:
+            self._bad_input = "until: exit needs the maze's bounds, and this backend has none"
+        else:
+            self._bad_input = None
+
+    def _new_segment(self) -> None:
+        self.origin = self._axle(current_pose(self.robot))
+        self.wall_seen = False
+        self.last_hit = 0.0
+        self.target: float | None = None
+
+    @staticmethod
+    def _axle(pose: Pose) -> tuple[float, float]:
+        return pose.x + AXLE_X * math.cos(pose.yaw), pose.y + AXLE_X * math.sin(pose.yaw)
+
+    def _done(self, pose: Pose) -> bool:
+        p = self.params
+        if p.until == "goal":
+            assert p.goal is not None
+            return math.hypot(pose.x - p.goal[0], pose.y - p.goal[1]) <= p.goal_radius
+        assert self.ctx.bounds is not None
+        xmin, ymin, xmax, ymax = self.ctx.bounds
+        return not (xmin <= pose.x <= xmax and ymin <= pose.y <= ymax)
+
+    def step(self) -> Status:
+        if self._bad_input:
+            return self.fail(FailureCode.INVALID_INPUT, self._bad_input)
+        pose = current_pose(self.robot)
+        self.extra = {"turns": "".join(self.turns)}
+        if self._done(pose):
+            self.robot.drive(0.0, 0.0)
+            self.feedback_message = "left the maze" if self.params.until == "exit" else "reached the goal"
+            return Status.SUCCESS
+        if self.mode == "turn":
+            return self._turn(pose)
+        return self._forward(pose)
+
+    def _forward(self, pose: Pose) -> Status:
+        p = self.params
+        scan = self.robot.proximity()
+        assert scan is not None
+        ax, ay = self._axle(pose)
+        s = (ax - self.origin[0]) * math.cos(self.heading) + (ay - self.origin[1]) * math.sin(self.heading)
+        side = scan[side_ray(p.side)]
+        if self.target is None:
+            if math.isfinite(side):
+                self.wall_seen = True
+                self.last_hit = s + self.ray_ahead + side * self.ray_cos
+            elif self.wall_seen:       # the side wall just ended: the opening starts in between
+                edge = (self.last_hit + s + self.probe) / 2
+                self.target = edge + self.corridor / 2
+            elif self.aligned:         # open from the cell centre on: the opening is the next cell
+                self.target = p.cell
+        front = scan["front_center"]
+        front_left = front - self.stop_distance
+        tol = 0.0005
+        if self.target is not None and (self.target - s <= tol or
+                                        (front_left <= tol and self.target - s < p.cell / 2)):
+            return self._begin_turn(self.sign, "opening")
+        if front_left <= tol:
+            return self._begin_turn(-self.sign, "wall")
+        limit = p.speed
+        if math.isfinite(front):
+            limit = approach_speed(front_left, limit, 5.0, 0.005, self.ctx.tick_period)
+        if self.target is not None:
+            limit = min(limit, approach_speed(self.target - s, p.speed, 5.0, 0.005, self.ctx.tick_period))
+        self.robot.drive(limit, self._steer(pose, scan))
+        self.feedback_message = (f"following the {p.side} wall" if self.target is None
+                                 else f"opening on the {p.side} in {self.target - s:.3f} m")
+        return Status.RUNNING
+
+    def _steer(self, pose: Pose, scan: dict[str, float] | object) -> float:
+        """Hold the corridor's heading, nudged towards the centre line when both sides are seen."""
+        heading = self.heading
+        left, right, front = scan["front_left"], scan["front_right"], scan["front_center"]  # type: ignore[index]
+        if math.isfinite(left) and math.isfinite(right) and math.isinf(front):
+            x, y, yaw = _SENSOR["front_left"]
+            reach = math.sin(yaw)
+            offset = ((y + left * reach) - (y + right * reach)) / -2.0  # > 0: robot left of centre
+            if abs(offset) < 0.02:
+                heading -= max(-0.1, min(0.1, 5.0 * offset))
+        error = wrap_angle(heading - pose.yaw)
+        return max(-0.5, min(0.5, 3.0 * error))
+
+    def _begin_turn(self, direction: float, why: str) -> Status:
+        self.robot.drive(0.0, 0.0)
+        self.mode = "turn"
+        self.heading = wrap_angle(self.heading + direction * math.pi / 2)
+        self.turn_reason = why
+        self.turns.append("L" if direction > 0 else "R")
+        return Status.RUNNING
+
+    def _turn(self, pose: Pose) -> Status:
+        error = wrap_angle(self.heading - pose.yaw)
+        if abs(error) > math.radians(0.1):
+            rate = approach_speed(abs(error), self.params.turn_speed, 5.0, 0.02, self.ctx.tick_period)
+            self.robot.drive(0.0, math.copysign(rate, error))
+            self.feedback_message = f"turning, {math.degrees(error):.1f} deg to go"
+            return Status.RUNNING
+        self.robot.drive(0.0, 0.0)
+        scan = self.robot.proximity()
+        assert scan is not None
+        if self.turn_reason == "wall" and scan["front_center"] <= RANGE_MAX:
+            return self._begin_turn(-self.sign, "wall")   # still a wall ahead: a dead end
+        self.mode = "forward"
+        self.aligned = True
+        self._new_segment()
+        return Status.RUNNING

@@ -1,0 +1,269 @@
+"""Motion behaviours: drive to a wall, drive a distance, turn, stop, wait.
+
+All of them use odometry and the proximity scan only through :class:`~thymio_bt.robot.Robot`,
+slow down near their goal so that a 10 Hz controller stops within a millimetre or a tenth of a
+degree, and never command more than the goal needs in one tick (no overshoot).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from py_trees.common import Status
+from pydantic import Field
+
+from ..robot import SENSOR_NAMES, wrap_angle
+from ..sim.thymio import RANGE_MAX, RANGE_MIN
+from .base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
+
+SensorName = Literal["front_left", "front_center_left", "front_center", "front_center_right",
+                     "front_right", "rear_left", "rear_right"]
+assert set(SensorName.__args__) == set(SENSOR_NAMES)  # type: ignore[attr-defined]
+
+#: Distance between the two rear sensors (robot.md: y = ±0.0305).
+REAR_SENSOR_SPACING = 0.061
+
+
+def approach_speed(remaining: float, cruise: float, gain: float, minimum: float, period: float) -> float:
+    """Speed towards a goal ``remaining`` away: cruise, then proportional, never past it in one tick."""
+    if remaining <= 0.0:
+        return 0.0
+    return min(cruise, max(gain * remaining, minimum), remaining / period)
+
+
+class MoveUntilWallParams(BehaviourParams):
+    """Drive forward until a proximity sensor reads ``distance``."""
+
+    speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
+    distance: float = Field(0.05, ge=RANGE_MIN, le=RANGE_MAX, description="stop when the sensor reads this",
+                            json_schema_extra={"unit": "m"})
+    sensor: SensorName = Field("front_center", description="the sensor that watches the wall")
+    approach_gain: float = Field(5.0, gt=0, le=10, description="slow-down gain once the wall is in range",
+                                 json_schema_extra={"unit": "1/s"})
+    min_speed: float = Field(0.005, gt=0, le=0.05, description="slowest approach speed",
+                             json_schema_extra={"unit": "m/s"})
+    tolerance: float = Field(0.0005, gt=0, le=0.01, description="stop when within this of distance",
+                             json_schema_extra={"unit": "m"})
+    hold_heading: bool = Field(True, description="steer to keep the heading the robot had at the start")
+    keep_moving: bool = Field(False, description="do not stop the robot when done")
+
+
+class MoveUntilWall(RobotBehaviour):
+    """Cruise at ``speed``, slow down once the wall is in range, stop when the sensor reads ``distance``.
+
+    Fails with NO_WALL when no wall comes into range within the time limit.
+
+    Example (YAML)::
+
+        - MoveUntilWall: {speed: 10cm/s, distance: 5cm}
+    """
+
+    yaml_name = "MoveUntilWall"
+    Params = MoveUntilWallParams
+    moves = True
+
+    def start(self) -> None:
+        self.heading = current_pose(self.robot).yaw
+        self.wall_seen = False
+
+    def step(self) -> Status:
+        p = self.params
+        scan = self.robot.proximity()
+        assert scan is not None
+        reading = scan[p.sensor]
+        if math.isfinite(reading):
+            self.wall_seen = True
+        remaining = reading - p.distance
+        self.extra = {"range": None if math.isinf(reading) else round(reading, 6)}
+        if remaining <= p.tolerance:
+            self.robot.drive(0.0, 0.0)
+            self.feedback_message = f"stopped at {reading:.4f} m"
+            return Status.SUCCESS
+        speed = p.speed if math.isinf(reading) else approach_speed(
+            remaining, p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
+        self.robot.drive(speed, heading_hold(self, self.heading) if p.hold_heading else 0.0)
+        self.feedback_message = ("no wall in range" if math.isinf(reading)
+                                 else f"{p.sensor} {reading:.4f} m, {speed:.3f} m/s")
+        return Status.RUNNING
+
+    def on_timeout(self) -> Status:
+        if not self.wall_seen:
+            return self.fail(FailureCode.NO_WALL, f"no wall came within {RANGE_MAX} m of "
+                             f"{self.params.sensor} in {self.params.timeout:g} s")
+        return super().on_timeout()
+
+
+def heading_hold(behaviour: RobotBehaviour, heading: float, gain: float = 3.0) -> float:
+    """An angular velocity that steers back to ``heading`` (zero when already on it)."""
+    error = wrap_angle(heading - current_pose(behaviour.robot).yaw)
+    return max(-0.5, min(0.5, gain * error))
+
+
+class MoveDistanceParams(BehaviourParams):
+    """Drive straight by odometry; a negative distance drives backwards."""
+
+    distance: float = Field(description="signed distance along the heading at the start",
+                            json_schema_extra={"unit": "m"}, ge=-10, le=10)
+    speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
+    approach_gain: float = Field(5.0, gt=0, le=10, description="slow-down gain near the goal",
+                                 json_schema_extra={"unit": "1/s"})
+    min_speed: float = Field(0.005, gt=0, le=0.05, description="slowest approach speed",
+                             json_schema_extra={"unit": "m/s"})
+    tolerance: float = Field(0.0005, gt=0, le=0.01, description="done when within this of the goal",
+                             json_schema_extra={"unit": "m"})
+    keep_moving: bool = Field(False, description="do not stop the robot when done")
+
+
+class MoveDistance(RobotBehaviour):
+    """Drive ``distance`` forwards (or backwards) by odometry, holding the start heading.
+
+    Example (YAML)::
+
+        - MoveDistance: {distance: 30cm}
+    """
+
+    yaml_name = "MoveDistance"
+    Params = MoveDistanceParams
+    moves = True
+
+    def start(self) -> None:
+        self.origin = current_pose(self.robot)
+
+    def travelled(self) -> float:
+        pose = current_pose(self.robot)
+        o = self.origin
+        return (pose.x - o.x) * math.cos(o.yaw) + (pose.y - o.y) * math.sin(o.yaw)
+
+    def step(self) -> Status:
+        p = self.params
+        done = self.travelled()
+        remaining = p.distance - done
+        self.extra = {"distance": round(done, 6)}
+        if abs(remaining) <= p.tolerance:
+            self.robot.drive(0.0, 0.0)
+            return Status.SUCCESS
+        speed = approach_speed(abs(remaining), p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
+        self.robot.drive(math.copysign(speed, remaining), heading_hold(self, self.origin.yaw))
+        self.feedback_message = f"{done:.3f} of {p.distance:.3f} m"
+        return Status.RUNNING
+
+
+class TurnAngleParams(BehaviourParams):
+    """Turn in place by a relative angle."""
+
+    angle: float = Field(description="relative angle, left positive (may come from the blackboard)",
+                         json_schema_extra={"unit": "rad"}, ge=-2 * math.pi, le=2 * math.pi)
+    mode: Literal["odometry", "rear_sensors"] = Field(
+        "odometry", description="end by odometry, or when the two rear rays read equal")
+    speed: float = Field(1.0, gt=0, le=4.3, description="fastest turn rate",
+                         json_schema_extra={"unit": "rad/s"})
+    tolerance: float = Field(math.radians(0.1), gt=0, le=0.2,
+                             description="odometry: done within this angle; rear_sensors: "
+                                         "done when the rear rays differ by less than spacing*tan(tolerance)",
+                             json_schema_extra={"unit": "rad"})
+    snap: float = Field(0.0, ge=0, le=math.pi, description="if > 0, round the target heading to a multiple "
+                        "of this (e.g. 90deg) so errors do not add up turn after turn",
+                        json_schema_extra={"unit": "rad"})
+    keep_moving: bool = Field(False, description="do not stop the robot when done")
+
+
+class TurnAngle(RobotBehaviour):
+    """Turn in place about the wheel axle by ``angle`` (left positive).
+
+    ``mode: rear_sensors`` turns by odometry to within 10° and then squares the robot to the wall
+    behind it until the two rear rays read the same; it fails with NO_WALL when no wall is behind.
+
+    Example (YAML)::
+
+        - TurnAngle: {angle: 90deg}
+        - TurnAngle: {angle: bb:turn_angle}     # written by ChooseTurn
+    """
+
+    yaml_name = "TurnAngle"
+    Params = TurnAngleParams
+    moves = True
+    FINE_WINDOW = math.radians(10.0)
+
+    def start(self) -> None:
+        yaw = current_pose(self.robot).yaw
+        target = yaw + self.params.angle
+        if self.params.snap:
+            target = round(target / self.params.snap) * self.params.snap
+        self.goal = target - yaw          # the signed angle to turn, unwrapped (may exceed pi)
+        self.last_yaw = yaw
+        self.turned = 0.0
+
+    def step(self) -> Status:
+        yaw = current_pose(self.robot).yaw
+        delta = wrap_angle(yaw - self.last_yaw)
+        self.last_yaw = yaw
+        self.turned += delta
+        self.extra = {"angle": round(self.turned, 6)}
+        p = self.params
+        error = self.goal - self.turned
+        if p.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
+            scan = self.robot.proximity()
+            assert scan is not None
+            left, right = scan["rear_left"], scan["rear_right"]
+            if math.isinf(left) or math.isinf(right):
+                return self.fail(FailureCode.NO_WALL, "the rear sensors see no wall behind the robot")
+            # turning left moves the rear-left sensor away from the wall behind
+            error = -math.atan2(left - right, REAR_SENSOR_SPACING)
+        if abs(error) <= p.tolerance:
+            self.robot.drive(0.0, 0.0)
+            self.feedback_message = f"turned {math.degrees(self.turned):.2f} deg"
+            return Status.SUCCESS
+        rate = approach_speed(abs(error), p.speed, 5.0, 0.02, self.ctx.tick_period)
+        self.robot.drive(0.0, math.copysign(rate, error))
+        self.feedback_message = f"{math.degrees(error):.2f} deg to go"
+        return Status.RUNNING
+
+
+class StopParams(BehaviourParams):
+    """No parameters besides the time limit."""
+
+
+class Stop(RobotBehaviour):
+    """Stop the robot at once (SUCCESS).
+
+    Example (YAML)::
+
+        - Stop: {}
+    """
+
+    yaml_name = "Stop"
+    Params = StopParams
+    moves = True
+
+    def step(self) -> Status:
+        self.robot.drive(0.0, 0.0)
+        return Status.SUCCESS
+
+
+class WaitParams(BehaviourParams):
+    """Wait in simulated time."""
+
+    seconds: float = Field(description="how long to wait", ge=0, le=3600, json_schema_extra={"unit": "s"})
+    timeout: float = Field(3600.0, gt=0, le=3600, description="time limit in simulated seconds",
+                           json_schema_extra={"unit": "s"})
+
+
+class Wait(RobotBehaviour):
+    """RUNNING for ``seconds`` of simulated time, then SUCCESS; the robot keeps its command.
+
+    Example (YAML)::
+
+        - Wait: {seconds: 2}
+    """
+
+    yaml_name = "Wait"
+    Params = WaitParams
+    needs_robot = False
+    fails_on_collision = False
+
+    def step(self) -> Status:
+        if self.elapsed() >= self.params.seconds - 1e-9:
+            return Status.SUCCESS
+        self.feedback_message = f"{self.params.seconds - self.elapsed():.1f} s left"
+        return Status.RUNNING

@@ -1,0 +1,276 @@
+"""Import a Gazebo classic SDF ``.world`` of box walls as a :class:`Maze`.
+
+Every box ``<collision>`` of the wall model(s) becomes one wall named after its link. Poses are
+composed as Gazebo does on load: a ``<state>`` block wins over the definitions (its model *and*
+link poses are world poses, applied by ``World::SetState``), else model pose ∘ link pose; then the
+collision's own ``<pose>`` offset. The box's long horizontal side gives the segment direction, the
+short one the thickness, and the segment is ``length - thickness`` long (walls extend thickness/2
+past both ends). Segments point towards +x (or +y), values are rounded to 1e-6 m and walls are
+sorted by name in natural order (Wall_2 before Wall_10).
+
+Spawns are not part of a world (the launch file places the robot): pass them as ``spawns=``
+(the CLI's ``maze import`` may add them later, as ``mazes/*.yaml`` do).
+
+Example::
+
+    maze = import_world("two_parts_maze.world", spawns={"part1": (0.1, 0.1, 0)})
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+from xml.parsers import expat
+
+from pydantic import ValidationError
+
+from ..errors import Problem, UserError, did_you_mean
+from .model import Maze, Spawn, Wall
+
+Vec = tuple[float, float, float]
+Mat = tuple[Vec, Vec, Vec]
+#: |z component| of a box axis above which it counts as vertical (about 0.8 degrees of tilt).
+_UPRIGHT = 0.9999
+
+
+@dataclass(frozen=True)
+class _Pose:
+    """A rigid transform: position ``p`` and rotation matrix ``r`` (rows)."""
+
+    p: Vec = (0.0, 0.0, 0.0)
+    r: Mat = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
+
+    def __mul__(self, child: "_Pose") -> "_Pose":
+        """``self ∘ child``: the child's pose expressed in self's parent frame."""
+        a, b = self.r, child.r
+        p = tuple(self.p[i] + sum(a[i][k] * child.p[k] for k in range(3)) for i in range(3))
+        r = tuple(tuple(sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)) for i in range(3))
+        return _Pose(p, r)  # type: ignore[arg-type]
+
+
+def _rpy(x: float, y: float, z: float, roll: float, pitch: float, yaw: float) -> _Pose:
+    """SDF's ``x y z roll pitch yaw``: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return _Pose((x, y, z), ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
+                             (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
+                             (-sp, cp * sr, cp * cr)))
+
+
+@dataclass
+class _Doc:
+    """A parsed file that remembers the (line, column) of every element."""
+
+    file: str
+    root: ET.Element
+    marks: dict[ET.Element, tuple[int, int]]
+
+    def error(self, message: str, el: ET.Element | None, hint: str = "") -> UserError:
+        line, col = self.marks.get(el, (0, 0)) if el is not None else (0, 0)
+        return UserError(Problem(message, self.file, line, col, hint=hint))
+
+    def floats(self, el: ET.Element, count: int, what: str) -> list[float]:
+        words = (el.text or "").split()
+        try:
+            values = [float(w) for w in words]
+        except ValueError:
+            values = []
+        if len(values) != count or not all(map(math.isfinite, values)):
+            raise self.error(f"<{el.tag}> must hold {count} numbers ({what}), got '{(el.text or '').strip()}'", el)
+        return values
+
+    def pose(self, el: ET.Element | None) -> _Pose:
+        """The transform of a ``<pose>`` element (identity when absent or empty)."""
+        if el is None or not (el.text or "").strip():
+            return _Pose()
+        if el.get("relative_to") or el.get("frame"):
+            raise self.error("poses relative to a named frame are not supported", el,
+                             hint="save the world from Gazebo classic, which writes plain poses")
+        if el.get("rotation_format", "euler_rpy") != "euler_rpy":
+            raise self.error("only 'x y z roll pitch yaw' poses are supported", el)
+        v = self.floats(el, 6, "x y z roll pitch yaw")
+        if el.get("degrees", "false").strip().lower() in ("true", "1"):
+            v[3:] = [math.radians(a) for a in v[3:]]
+        return _rpy(*v)
+
+
+def _parse(path: Path) -> _Doc:
+    """Parse XML with line numbers; DOCTYPE/ENTITY declarations are refused (billion laughs)."""
+    file = str(path)
+    try:
+        data = path.read_bytes()
+    except FileNotFoundError:
+        raise UserError(Problem(f"world file not found: '{path}'", file)) from None
+    except OSError as exc:
+        raise UserError(Problem(f"cannot read the world file: {exc.strerror or exc}", file)) from None
+    builder = ET.TreeBuilder()
+    parser = expat.ParserCreate()
+    marks: dict[ET.Element, tuple[int, int]] = {}
+
+    def start(tag: str, attrs: dict[str, str]) -> None:
+        marks[builder.start(tag, attrs)] = (parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+
+    def refuse(*_: Any) -> None:
+        raise UserError(Problem("DOCTYPE and ENTITY declarations are not allowed in a world file",
+                                file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1,
+                                hint="SDF files never need them; remove the <!DOCTYPE ...> block"))
+
+    parser.buffer_text = True
+    parser.StartElementHandler = start
+    parser.EndElementHandler = builder.end
+    parser.CharacterDataHandler = builder.data
+    parser.StartDoctypeDeclHandler = refuse
+    parser.EntityDeclHandler = refuse
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise UserError(Problem(f"not a valid XML file: {expat.ErrorString(exc.code)}", file,
+                                exc.lineno, exc.offset + 1,
+                                hint="a Gazebo .world file is SDF (XML) starting with <sdf version=...>")) from None
+    root = builder.close()
+    doc = _Doc(file, root, marks)
+    if root.tag != "sdf":
+        raise doc.error(f"not an SDF file: the root element is <{root.tag}>, expected <sdf>", root)
+    return doc
+
+
+@dataclass
+class _State:
+    """What ``<state>`` blocks say about one model: its world pose, link world poses, sub-models."""
+
+    pose: ET.Element | None = None
+    scale: ET.Element | None = None
+    links: dict[str, ET.Element] = field(default_factory=dict)
+    models: dict[str, "_State"] = field(default_factory=dict)
+
+    def merge(self, el: ET.Element) -> None:
+        self.pose = el.find("pose") if el.find("pose") is not None else self.pose
+        self.scale = el.find("scale") if el.find("scale") is not None else self.scale
+        for link in el.findall("link"):
+            if link.find("pose") is not None:
+                self.links[link.get("name", "")] = link.find("pose")  # type: ignore[assignment]
+        for sub in el.findall("model"):
+            self.models.setdefault(sub.get("name", ""), _State()).merge(sub)
+
+
+def _has_box(model: ET.Element) -> bool:
+    return any(c.find("geometry/box") is not None for c in model.iter("collision"))
+
+
+def _walls(doc: _Doc, model: ET.Element, parent: _Pose, state: _State | None,
+           prefix: str) -> list[Wall]:
+    """The walls of one model (and its nested models), in world coordinates."""
+    if state is not None and state.scale is not None and doc.floats(state.scale, 3, "x y z") != [1, 1, 1]:
+        raise doc.error(f"model '{model.get('name')}' is scaled in <state>; scaling is not supported",
+                        state.scale)
+    if state is not None and state.pose is not None:
+        pose = doc.pose(state.pose)                     # a world pose
+    else:
+        pose = parent * doc.pose(model.find("pose"))
+    walls: list[Wall] = []
+    for link in model.findall("link"):
+        name = link.get("name", "")
+        link_state = state.links.get(name) if state is not None else None
+        link_pose = doc.pose(link_state) if link_state is not None else pose * doc.pose(link.find("pose"))
+        collisions = link.findall("collision")
+        for col in collisions:
+            geometry = col.find("geometry")
+            shape = geometry[0] if geometry is not None and len(geometry) else None
+            if shape is None or shape.tag != "box":
+                raise doc.error(f"link '{name}' has a {'<' + shape.tag + '>' if shape is not None else 'missing'}"
+                                " collision geometry; only boxes can become walls",
+                                shape if shape is not None else col,
+                                hint="import only the wall model with model=..., or make it a <box>")
+            size = shape.find("size")
+            if size is None:
+                raise doc.error(f"the <box> of link '{name}' has no <size>", shape)
+            wall_name = prefix + name + (f"/{col.get('name')}" if len(collisions) > 1 else "")
+            walls.append(_box_wall(doc, size, link_pose * doc.pose(col.find("pose")), wall_name))
+    for sub in model.findall("model"):
+        sub_state = state.models.get(sub.get("name", "")) if state is not None else None
+        walls += _walls(doc, sub, pose, sub_state, f"{prefix}{sub.get('name')}::")
+    return walls
+
+
+def _box_wall(doc: _Doc, size_el: ET.Element, pose: _Pose, name: str) -> Wall:
+    """The wall segment of an upright box of ``size`` at world ``pose``."""
+    size = doc.floats(size_el, 3, "x y z")
+    if min(size) <= 0:
+        raise doc.error(f"box of '{name}' must have positive sizes", size_el)
+    r = pose.r
+    upright = [k for k in range(3) if abs(r[2][k]) > _UPRIGHT]
+    if not upright:
+        raise doc.error(f"box of '{name}' is tilted; only upright boxes can become walls", size_el)
+    a, b = [k for k in range(3) if k != upright[0]]
+    long, short = (a, b) if size[a] >= size[b] else (b, a)
+    length, thickness = size[long], size[short]
+    if length - thickness < 1e-9:
+        raise doc.error(f"box of '{name}' is square in plan ({length} x {thickness}); its direction is unknown",
+                        size_el, hint="a wall box is longer than it is thick")
+    ux, uy = r[0][long], r[1][long]
+    norm = math.hypot(ux, uy)
+    ux, uy = ux / norm, uy / norm
+    if (ux if abs(ux) >= abs(uy) else uy) < 0:  # point towards +x (mostly horizontal) or +y
+        ux, uy = -ux, -uy
+    half = (length - thickness) / 2.0
+    cx, cy = pose.p[0], pose.p[1]
+
+    def rnd(v: float) -> float:
+        return round(v, 6) + 0.0
+
+    try:
+        return Wall(start=(rnd(cx - ux * half), rnd(cy - uy * half)),
+                    end=(rnd(cx + ux * half), rnd(cy + uy * half)), thickness=rnd(thickness), name=name)
+    except ValidationError as exc:
+        raise doc.error(f"box of '{name}' cannot be a wall: {exc.errors()[0]['msg']}", size_el) from None
+
+
+def _natural(name: str | None) -> list[Any]:
+    return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", name or "")]
+
+
+def import_world(path: str | Path, model: str | None = None, *,
+                 spawns: Mapping[str, Spawn | Mapping[str, Any] | tuple[Any, Any, Any]] | None = None,
+                 name: str | None = None, description: str = "") -> Maze:
+    """Read the box walls of a Gazebo classic world into a :class:`Maze`.
+
+    ``model`` picks one model by name; by default every model with a box collision is imported
+    (link names get a ``model::`` prefix when there are several). ``name`` defaults to the file's
+    stem, ``source`` is the file name. Any user mistake is a :class:`UserError` with file:line.
+    """
+    path = Path(path)
+    doc = _parse(path)
+    worlds = doc.root.findall("world")
+    models = [m for w in worlds for m in w.findall("model")] + doc.root.findall("model")
+    state: dict[str, _State] = {}
+    for st in (s for w in worlds for s in w.findall("state")):  # later blocks win, as on load
+        for m in st.findall("model"):
+            state.setdefault(m.get("name", ""), _State()).merge(m)
+    names = [m.get("name", "") for m in models]
+    if model is not None:
+        chosen = [m for m in models if m.get("name") == model]
+        if not chosen:
+            raise UserError(Problem(f"no model named '{model}' in the world", doc.file,
+                                    hint=did_you_mean(model, names) if names else "the world has no <model>"))
+    else:
+        chosen = [m for m in models if _has_box(m)]
+    walls: list[Wall] = []
+    for m in chosen:
+        prefix = f"{m.get('name')}::" if len(chosen) > 1 else ""
+        walls += _walls(doc, m, _Pose(), state.get(m.get("name", "")), prefix)
+    if not walls:
+        includes = doc.root.find(".//include") is not None
+        raise doc.error(f"no box walls found in {'model ' + repr(model) if model else 'the world'}",
+                        worlds[0] if worlds else doc.root,
+                        hint="<include>d models are not followed: paste their <model> into the world"
+                        if includes else "walls are <link>s with a <collision><geometry><box>")
+    walls.sort(key=lambda w: _natural(w.name))
+    try:
+        checked = {k: v if isinstance(v, Spawn) else Spawn.model_validate(v) for k, v in (spawns or {}).items()}
+    except ValidationError as exc:
+        raise UserError(Problem(f"bad spawn: {exc.errors()[0]['msg']}", "<spawns>")) from None
+    return Maze(name=name or path.stem, description=description, source=path.name, walls=walls, spawns=checked)

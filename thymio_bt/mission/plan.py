@@ -1,0 +1,61 @@
+"""The validated form of a mission: plain data, no py_trees objects, no robot.
+
+Loading a mission produces a :class:`Mission` whose ``tree`` is a :class:`NodePlan`; only
+:func:`thymio_bt.mission.build.build_tree` turns it into py_trees behaviours bound to a robot.
+So validating a file never leaves state behind (py_trees' blackboard is global).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel
+
+from ..maze import Maze
+from ..robot import Pose
+from ..sim.noise import NoiseConfig
+
+
+@dataclass
+class NodePlan:
+    """One node of the tree to build.
+
+    ``kind`` is ``behaviour``, a composite (``sequence``, ``reactive_sequence``, ``selector``,
+    ``reactive_selector``, ``parallel``) or a decorator (``repeat``, ``retry``, ``timeout``, ...).
+    """
+
+    kind: str
+    name: str
+    path: str
+    behaviour: str | None = None
+    params: BaseModel | None = None
+    blackboard_refs: dict[str, str] = field(default_factory=dict)
+    options: dict[str, Any] = field(default_factory=dict)
+    children: list["NodePlan"] = field(default_factory=list)
+    where: tuple[str, int, int] = ("", 0, 0)
+
+    def walk(self):
+        yield self
+        for child in self.children:
+            yield from child.walk()
+
+
+@dataclass
+class Mission:
+    """A loaded, validated mission."""
+
+    name: str
+    description: str
+    file: Path
+    maze: Maze
+    maze_file: Path | None
+    start: Pose
+    tick_hz: float
+    time_limit: float
+    seed: int
+    noise: NoiseConfig
+    parameters: dict[str, Any]
+    tree: NodePlan
+    registry: Any = None

@@ -1,0 +1,135 @@
+"""The behaviour registry: YAML name → behaviour class and its pydantic parameter model.
+
+Validation, ``thymio-bt behaviours`` and the JSON Schema all read from here. Users add their own
+behaviours through the ``thymio_bt.behaviours`` entry-point group, or a ``plugins:`` list in a
+mission (``module:Class``, or a ``.py`` file path relative to the mission).
+
+Example::
+
+    registry = default_registry()
+    cls = registry["MoveUntilWall"]
+    cls.Params.model_fields["distance"].default   # 0.05
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import inspect
+import sys
+from pathlib import Path
+from typing import Any, Iterator
+
+from ..behaviours import BUILTIN, RobotBehaviour
+from ..errors import Problem, UserError
+
+ENTRY_POINT_GROUP = "thymio_bt.behaviours"
+
+
+class Registry:
+    """A mapping from YAML names to behaviour classes."""
+
+    def __init__(self, classes: tuple[type[RobotBehaviour], ...] = ()) -> None:
+        self._classes: dict[str, type[RobotBehaviour]] = {}
+        for cls in classes:
+            self.register(cls)
+
+    def register(self, cls: type[RobotBehaviour]) -> None:
+        """Add a behaviour class; its ``yaml_name`` (or class name) is the YAML name."""
+        if not (inspect.isclass(cls) and issubclass(cls, RobotBehaviour)):
+            raise TypeError(f"{cls!r} is not a RobotBehaviour subclass")
+        name = cls.yaml_name or cls.__name__
+        existing = self._classes.get(name)
+        if existing is not None and existing is not cls:
+            raise ValueError(f"two behaviours are named '{name}': {existing.__module__} and {cls.__module__}")
+        if not cls.yaml_name:
+            cls.yaml_name = name
+        self._classes[name] = cls
+
+    def copy(self) -> "Registry":
+        other = Registry()
+        other._classes = dict(self._classes)
+        return other
+
+    def __getitem__(self, name: str) -> type[RobotBehaviour]:
+        return self._classes[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._classes
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._classes)
+
+    def items(self) -> Iterator[tuple[str, type[RobotBehaviour]]]:
+        return iter(self._classes.items())
+
+    def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
+        """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours."""
+        file, line, col = where
+        target, _, attr = ref.partition(":")
+        try:
+            if target.endswith(".py"):
+                path = (base_dir / target).resolve()
+                if not path.is_file():
+                    raise UserError(Problem(f"plugin file not found: {target}", file, line, col,
+                                            hint="plugin paths are relative to the mission file"))
+                name = f"thymio_bt_plugin_{abs(hash(str(path)))}"
+                module = sys.modules.get(name)
+                if module is None:
+                    spec = importlib.util.spec_from_file_location(name, path)
+                    assert spec and spec.loader
+                    module = importlib.util.module_from_spec(spec)
+                    sys.modules[name] = module
+                    spec.loader.exec_module(module)
+            else:
+                module = importlib.import_module(target)
+        except UserError:
+            raise
+        except Exception as exc:  # the plugin's own import error: report it, do not crash
+            raise UserError(Problem(f"cannot import plugin '{ref}': {type(exc).__name__}: {exc}",
+                                    file, line, col,
+                                    hint="check the module name, or give a .py path relative to the mission")) from None
+        if attr:
+            cls = getattr(module, attr, None)
+            if cls is None:
+                raise UserError(Problem(f"plugin '{target}' has no attribute '{attr}'", file, line, col))
+            candidates = [cls]
+        else:
+            candidates = [c for _, c in inspect.getmembers(module, inspect.isclass)
+                          if issubclass(c, RobotBehaviour) and c.__module__ == module.__name__]
+            if not candidates:
+                raise UserError(Problem(f"plugin '{ref}' defines no RobotBehaviour subclass", file, line, col))
+        for cls in candidates:
+            try:
+                self.register(cls)
+            except (TypeError, ValueError) as exc:
+                raise UserError(Problem(f"plugin '{ref}': {exc}", file, line, col)) from None
+
+
+def _entry_point_classes() -> list[Any]:
+    from importlib.metadata import entry_points
+
+    classes = []
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            classes.append(ep.load())
+        except Exception as exc:  # a broken third-party plugin must not break thymio-bt
+            print(f"warning: behaviour plugin '{ep.name}' failed to load: {exc}", file=sys.stderr)
+    return classes
+
+
+_DEFAULT: Registry | None = None
+
+
+def default_registry() -> Registry:
+    """The built-in behaviours plus those installed through the entry-point group."""
+    global _DEFAULT
+    if _DEFAULT is None:
+        registry = Registry(BUILTIN)
+        for cls in _entry_point_classes():
+            try:
+                registry.register(cls)
+            except (TypeError, ValueError) as exc:
+                print(f"warning: behaviour plugin {cls!r} ignored: {exc}", file=sys.stderr)
+        _DEFAULT = registry
+    return _DEFAULT
