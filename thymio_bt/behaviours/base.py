@@ -197,6 +197,8 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         return self.fail(FailureCode.TIMEOUT, f"not done after {self.params.timeout:g} s")
 
     def terminate(self, new_status: Status) -> None:
+        if self.status != Status.RUNNING and new_status == Status.INVALID:
+            return  # a parent resetting a behaviour that already ended (or never started)
         if self.moves and not getattr(self.params, "keep_moving", False) and self.robot.exists():
             self.robot.drive(0.0, 0.0)
         if not self.emits_events:

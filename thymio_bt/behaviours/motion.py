@@ -158,7 +158,7 @@ class TurnAngleParams(BehaviourParams):
         "odometry", description="end by odometry, or when the two rear rays read equal")
     speed: float = Field(1.0, gt=0, le=4.3, description="fastest turn rate",
                          json_schema_extra={"unit": "rad/s"})
-    tolerance: float = Field(math.radians(0.1), gt=0, le=0.2,
+    tolerance: float = Field(0.0005, gt=0, le=0.2,
                              description="odometry: done within this angle; rear_sensors: "
                                          "done when the rear rays differ by less than spacing*tan(tolerance)",
                              json_schema_extra={"unit": "rad"})

@@ -59,3 +59,5 @@ class Mission:
     parameters: dict[str, Any]
     tree: NodePlan
     registry: Any = None
+    #: where the start pose was given (file, line, column), for error messages
+    start_where: tuple[str, int, int] = ("", 0, 0)

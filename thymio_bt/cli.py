@@ -1,0 +1,206 @@
+"""The ``thymio-bt`` command line (click). Heavy imports live inside the commands that need them.
+
+Exit codes: 0 success, 1 mission FAILURE or time limit, 2 user error (one clear message, no traceback).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any, NoReturn
+
+import click
+
+from .errors import UserError
+
+
+def _fail(exc: UserError) -> NoReturn:
+    for problem in exc.problems:
+        click.echo(f"error: {problem}", err=True)
+    if len(exc.problems) > 1:
+        click.echo(f"{len(exc.problems)} problems", err=True)
+    sys.exit(2)
+
+
+def _overrides(values: tuple[str, ...]) -> dict[str, str]:
+    out = {}
+    for item in values:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise UserError(f"--set expects NAME=VALUE, got '{item}' (hint: --set cruise=0.15)")
+        out[name.strip()] = value.strip()
+    return out
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="thymio-bt")
+def main() -> None:
+    """YAML behaviour-tree missions for a simulated Thymio II (no ROS, no Gazebo)."""
+
+
+def _write_json(path: Path, data: Any) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_suffix(path.suffix + ".tmp")
+        tmp.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n")
+        tmp.replace(path)
+    except OSError as exc:
+        raise UserError(f"cannot write {path}: {exc}") from None
+
+
+@main.command()
+@click.argument("mission", type=click.Path(path_type=Path))
+@click.option("--seed", type=int, default=None, help="Random seed (noise models); default: the mission's.")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
+              help="Override a mission parameter, e.g. --set cruise=0.15 or --set noise.wheel=0.03.")
+@click.option("--maze", type=click.Path(path_type=Path), default=None, help="Run in another maze file.")
+@click.option("--start", default=None, metavar="X,Y,YAW", help="Override the start pose, e.g. 0.5,0.3,pi/2.")
+@click.option("--report", type=click.Path(path_type=Path), default=None, help="Write the run report (JSON).")
+@click.option("--quiet", "-q", is_flag=True, help="Print nothing; use the exit code.")
+@click.option("--realtime", type=float, default=None, metavar="FACTOR",
+              help="Pace the run against the wall clock (1 = real time).")
+def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | None, start: str | None,
+        report: Path | None, quiet: bool, realtime: float | None) -> None:
+    """Run MISSION (a YAML file) and print a summary."""
+    try:
+        from .mission import load_mission
+        from .runner import Run
+
+        spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
+        runner = Run(spec, seed)
+        progress = _Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty())
+        result = runner.run(on_tick=progress, realtime=realtime)
+        progress.done()
+        if report is not None:
+            _write_json(report, result.report())
+    except UserError as exc:
+        _fail(exc)
+    if not quiet:
+        _summary(result)
+    sys.exit(0 if result.status == "SUCCESS" else 1)
+
+
+class _Progress:
+    """A one-line progress indicator on stderr for runs that take more than a second."""
+
+    def __init__(self, limit: float, enabled: bool) -> None:
+        self.limit, self.enabled = limit, enabled
+        self.start = time.perf_counter()
+        self.shown = False
+
+    def __call__(self, run: Any) -> None:
+        if self.enabled and run.ticks % 20 == 0 and time.perf_counter() - self.start > 1.0:
+            t = run.sim.time()
+            click.echo(f"\r  simulated {t:7.1f} s of at most {self.limit:g} s", err=True, nl=False)
+            self.shown = True
+
+    def done(self) -> None:
+        if self.shown:
+            click.echo("\r" + " " * 60 + "\r", err=True, nl=False)
+
+
+def _summary(result: Any) -> None:
+    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow"}[result.status]
+    rtf = result.real_time_factor
+    click.echo(f"{result.mission}: " + click.style(result.status, fg=colour, bold=True)
+               + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
+               f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)")
+    pose = result.final_pose
+    if pose:
+        click.echo(f"  final pose: x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg")
+    else:
+        click.echo("  final pose: no robot")
+    clearance = f"{result.min_clearance:.4f} m" if result.min_clearance is not None else "n/a"
+    click.echo(f"  collisions: {result.collisions}   min clearance: {clearance}")
+    if result.status != "SUCCESS":
+        click.echo(f"  failed at: {result.failed_path}", err=True)
+        click.echo(f"  reason: [{result.code}] {result.reason}", err=True)
+
+
+@main.command()
+@click.argument("missions", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check with these overrides.")
+def validate(missions: tuple[Path, ...], sets: tuple[str, ...]) -> None:
+    """Check MISSIONS (and the mazes they name) without running them."""
+    from .mission import load_mission
+    from .sim import Simulation
+
+    bad = 0
+    for path in missions:
+        try:
+            spec = load_mission(path, _overrides(sets))
+            problem = Simulation(spec.maze).spawn_problem("thymio", spec.start)
+            if problem:
+                raise UserError(f"{path}: impossible start pose: {problem}")
+            nodes = sum(1 for _ in spec.tree.walk())
+            click.echo(f"ok: {path} ({nodes} nodes, maze {spec.maze.name})")
+        except UserError as exc:
+            bad += 1
+            for problem in exc.problems:
+                click.echo(f"error: {problem}", err=True)
+    sys.exit(2 if bad else 0)
+
+
+@main.command()
+@click.argument("name", required=False)
+def behaviours(name: str | None) -> None:
+    """List the behaviours, or document one (its parameters, units, defaults, ranges)."""
+    from .docs import behaviour_help, behaviour_list
+    from .mission import default_registry
+
+    registry = default_registry()
+    if name is None:
+        click.echo(behaviour_list(registry))
+        return
+    if name not in registry:
+        from .errors import did_you_mean
+        _fail(UserError(f"no behaviour named '{name}' (hint: {did_you_mean(name, registry)})"))
+    click.echo(behaviour_help(registry[name]))
+
+
+@main.command()
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="Write to a file.")
+def schema(output: Path | None) -> None:
+    """Print the JSON Schema of mission files (for editors with yaml-language-server)."""
+    from .mission.schema import mission_schema
+
+    text = json.dumps(mission_schema(), indent=1)
+    if output is None:
+        click.echo(text)
+    else:
+        output.write_text(text + "\n")
+
+
+@main.group()
+def maze() -> None:
+    """Maze tools."""
+
+
+@maze.command("import")
+@click.argument("world", type=click.Path(path_type=Path))
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="Maze YAML to write.")
+@click.option("--model", default=None, help="Import only this model of the world.")
+def maze_import(world: Path, output: Path | None, model: str | None) -> None:
+    """Convert a Gazebo classic WORLD file of box walls into a maze file."""
+    import yaml
+
+    from .maze.gazebo import import_world
+
+    try:
+        result = import_world(world, model)
+    except UserError as exc:
+        _fail(exc)
+    text = (f"# Made by: thymio-bt maze import {world}" + (f" -o {output}" if output else "") + "\n"
+            + yaml.safe_dump(result.to_yaml_dict(), sort_keys=False))
+    if output is None:
+        click.echo(text, nl=False)
+    else:
+        output.write_text(text)
+        click.echo(f"wrote {output}: {len(result.walls)} walls", err=True)
+
+
+if __name__ == "__main__":
+    main()

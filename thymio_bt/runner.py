@@ -1,0 +1,181 @@
+"""The tick loop: tick the tree at the mission's rate in simulated time, advance the backend between
+ticks, stop on SUCCESS, FAILURE or the time limit, and produce a :class:`RunResult`.
+
+Example::
+
+    mission = load_mission("missions/maze_part1_2.yaml")
+    result = Run(mission).run()
+    result.status, round(result.sim_time, 1)        # ('SUCCESS', 61.3)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import py_trees
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from .behaviours import Context, EventLog
+from .behaviours.base import snapshot
+from .errors import Problem, UserError
+from .mission import Mission, build_tree
+from .sim import SimConfig, Simulation
+
+
+@dataclass
+class RunResult:
+    """What a run produced; :meth:`report` gives the run report JSON of DESIGN.md."""
+
+    mission: str
+    maze: str
+    status: str
+    reason: str | None
+    code: str | None
+    failed_path: str | None
+    sim_time: float
+    ticks: int
+    wall_time: float
+    seed: int
+    final_pose: dict[str, float] | None
+    final_proximity: dict[str, float | None] | None
+    events: list[dict[str, Any]]
+    collisions: int
+    min_clearance: float | None
+    trajectory: list[tuple[float, float, float, float]] = field(default_factory=list)
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+    def report(self) -> dict[str, Any]:
+        return {
+            "mission": self.mission,
+            "maze": self.maze,
+            "status": self.status,
+            "reason": self.reason,
+            "code": self.code,
+            "failed_path": self.failed_path,
+            "sim_time": round(self.sim_time, 6),
+            "ticks": self.ticks,
+            "wall_time": round(self.wall_time, 6),
+            "real_time_factor": round(self.real_time_factor, 1) if math.isfinite(self.real_time_factor) else None,
+            "seed": self.seed,
+            "final_pose": self.final_pose,
+            "final_proximity": self.final_proximity,
+            "collisions": self.collisions,
+            "min_clearance": None if self.min_clearance is None else round(self.min_clearance, 6),
+            "events": self.events,
+            "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
+        }
+
+
+TickHook = Callable[["Run"], None]
+
+
+class Run:
+    """One prepared run of a mission in the pymunk simulation."""
+
+    def __init__(self, mission: Mission, seed: int | None = None) -> None:
+        self.mission = mission
+        self.seed = mission.seed if seed is None else seed
+        config = SimConfig(noise=mission.noise, seed=self.seed)
+        self.sim = Simulation(mission.maze, config=config)
+        problem = self.sim.spawn_problem(self.sim.robot_name, mission.start)
+        if problem:
+            raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",
+                                    "pick a free pose inside the maze, e.g. a named spawn of the maze"))
+        self.sim.request_spawn(self.sim.robot_name, mission.start)
+        self.sim.advance(0.0)
+        self.period = 1.0 / mission.tick_hz
+        self.events = EventLog()
+        self.ctx = Context(robot=self.sim, entities=self.sim, events=self.events, tick_period=self.period,
+                           bounds=mission.maze.bounds() if mission.maze.walls else None,
+                           collision_count=lambda: len(self.sim.collisions))
+        py_trees.blackboard.Blackboard.clear()
+        self.root = build_tree(mission.tree, self.ctx, mission.registry)
+        self.tree = py_trees.trees.BehaviourTree(self.root)
+        self.ticks = 0
+        self.trajectory: list[tuple[float, float, float, float]] = []
+
+    def run(self, on_tick: TickHook | None = None, realtime: float | None = None) -> RunResult:
+        """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time)."""
+        sim, tree, root = self.sim, self.tree, self.root
+        limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
+        seen_collisions = 0
+        wall_start = time.perf_counter()
+        status = "TIMEOUT"
+        self._record()
+        while self.ticks < limit_ticks:
+            tree.tick()
+            self.ticks += 1
+            if on_tick is not None:
+                on_tick(self)
+            if root.status in (Status.SUCCESS, Status.FAILURE):
+                status = root.status.name
+                break
+            sim.advance(self.period)
+            for c in sim.collisions[seen_collisions:]:
+                self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
+            seen_collisions = len(sim.collisions)
+            self._record()
+            if realtime:
+                lag = sim.time() / realtime - (time.perf_counter() - wall_start)
+                if lag > 0:
+                    time.sleep(lag)  # realtime: pacing asked for with --realtime
+        reason = code = failed_path = None
+        if status == "TIMEOUT":
+            running = tree.tip()
+            failed_path = _path(running) if running is not None else None
+            reason = f"time limit of {self.mission.time_limit:g} s reached"
+            code = "TIMEOUT"
+            tree.interrupt()
+        elif status == "FAILURE":
+            failed_path, code, reason = failing_branch(root)
+        wall = time.perf_counter() - wall_start
+        final = snapshot(sim)
+        true_pose = sim.true_pose()
+        return RunResult(
+            mission=self.mission.name, maze=self.mission.maze.name, status=status, reason=reason, code=code,
+            failed_path=failed_path, sim_time=sim.time(), ticks=self.ticks, wall_time=wall, seed=self.seed,
+            final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
+            final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
+            min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
+            trajectory=self.trajectory)
+
+    def _record(self) -> None:
+        pose = self.sim.true_pose()
+        if pose is not None:
+            self.trajectory.append((self.sim.time(), pose.x, pose.y, pose.yaw))
+
+
+def _path(node: Behaviour) -> str:
+    names = []
+    current: Behaviour | None = node
+    while current is not None:
+        names.append(current.name)
+        current = current.parent
+    return "/".join(reversed(names))
+
+
+def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
+    """Follow FAILURE down from the root to the node that caused it: (path, code, reason)."""
+    node = root
+    while True:
+        failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
+        if not failed or getattr(node, "failure", None):
+            break
+        node = failed[-1]
+    failure = getattr(node, "failure", None)
+    if failure:
+        code, reason = failure
+        return _path(node), getattr(code, "value", code), reason
+    return _path(node), "FAILED", node.feedback_message or f"'{node.name}' returned FAILURE"
+
+
+def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> RunResult:
+    """Build and run ``mission`` once."""
+    return Run(mission, seed).run(**kwargs)
