@@ -16,7 +16,7 @@ class Problem:
     """One problem at one place of a file (line and column are 1-based; 0 when unknown)."""
 
     message: str
-    file: str = "<input>"
+    file: str = ""
     line: int = 0
     column: int = 0
     path: str = ""
@@ -24,9 +24,9 @@ class Problem:
 
     def __str__(self) -> str:
         where = self.file
-        if self.line:
+        if self.file and self.line:
             where += f":{self.line}:{self.column or 1}"
-        text = f"{where}: {self.message}"
+        text = f"{where}: {self.message}" if where else self.message
         if self.path:
             text += f" [at {self.path}]"
         if self.hint:

@@ -208,8 +208,8 @@ class TurnAngle(RobotBehaviour):
             left, right = scan["rear_left"], scan["rear_right"]
             if math.isinf(left) or math.isinf(right):
                 return self.fail(FailureCode.NO_WALL, "the rear sensors see no wall behind the robot")
-            # turning left moves the rear-left sensor away from the wall behind
-            error = -math.atan2(left - right, REAR_SENSOR_SPACING)
+            # the rear-left sensor reads farther when the robot must still turn left to be square
+            error = math.atan2(left - right, REAR_SENSOR_SPACING)
         if abs(error) <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             self.feedback_message = f"turned {math.degrees(self.turned):.2f} deg"

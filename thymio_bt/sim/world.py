@@ -207,7 +207,7 @@ class Simulation(Robot, Entities):
     # ------------------------------------------------------------- stepping
     def advance(self, duration: float) -> None:
         """Run the physics for ``duration`` seconds of simulated time, then serve pending requests."""
-        steps = max(1, round(duration / self._dt))
+        steps = round(duration / self._dt)
         for _ in range(steps):
             self._substep()
         self._serve_requests()

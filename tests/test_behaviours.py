@@ -1,0 +1,217 @@
+"""Each behaviour on small generated worlds, with numbers (thymio_bt.testing helpers)."""
+
+import math
+
+import pytest
+
+from thymio_bt.maze.generate import perfect_maze
+from thymio_bt.sim.thymio import AXLE_X
+from thymio_bt.testing import run_tree, world
+
+MIRRORED_L = """
++--+--+--+
+|       <|
++  +--+--+
+|  |
++--+
+"""
+
+
+def ends(result, name):
+    return [e for e in result.events if e["kind"] == "behaviour_end" and e["name"] == name]
+
+
+def axle(pose):
+    return pose["x"] + AXLE_X * math.cos(pose["yaw"]), pose["y"] + AXLE_X * math.sin(pose["yaw"])
+
+
+@pytest.mark.parametrize("distance", [0.05, 0.015, 0.08])
+def test_move_until_wall_stops_within_a_millimetre(distance):
+    result = run_tree({"MoveUntilWall": {"speed": "10cm/s", "distance": distance}}, world("corridor"), seconds=20)
+    assert result.status == "SUCCESS"
+    assert result.final_proximity["front_center"] == pytest.approx(distance, abs=0.001)
+    assert result.collisions == 0
+
+
+def test_stopping_at_1_5_cm_then_turning_centres_the_axle_in_the_next_corridor():
+    tree = {"sequence": [{"MoveUntilWall": {"distance": "1.5cm"}}, {"TurnAngle": {"angle": "-90deg"}}]}
+    result = run_tree(tree, world("L"), seconds=30)
+    x, y = axle(result.final_pose)
+    assert result.status == "SUCCESS"
+    assert x == pytest.approx(0.5, abs=0.005)           # the centre line of the corridor going down
+    assert result.final_pose["yaw"] == pytest.approx(-math.pi / 2, abs=math.radians(0.5))
+
+
+def test_move_until_wall_fails_with_no_wall_when_nothing_comes_into_range():
+    open_corridor = world("""
++--+--+--+--+--+--+--+--+--+--+
+ >
++--+--+--+--+--+--+--+--+--+--+
+""")
+    result = run_tree({"MoveUntilWall": {"speed": "5cm/s", "timeout": 5}}, open_corridor, seconds=20)
+    assert result.status == "FAILURE" and result.code == "NO_WALL"
+    assert "no wall came within" in result.reason
+    assert result.sim_time == pytest.approx(5.0, abs=0.11)
+
+
+def test_deleting_the_robot_mid_move_fails_with_no_robot():
+    tree = {"parallel": {"policy": "success_on_all", "children": [
+        {"MoveUntilWall": {"speed": "2cm/s"}},
+        {"sequence": [{"Wait": {"seconds": 1}}, {"DeleteEntity": {}}]}]}}
+    result = run_tree(tree, world("corridor"), seconds=20)
+    assert result.status == "FAILURE" and result.code == "NO_ROBOT"
+    assert result.failed_path.endswith("MoveUntilWall")
+    assert result.final_pose is None
+
+
+def test_hitting_a_wall_fails_with_collision():
+    result = run_tree({"MoveDistance": {"distance": 1.0}}, world("corridor"), seconds=20)
+    assert result.status == "FAILURE" and result.code == "COLLISION"
+    assert result.collisions == 1
+    assert [e["kind"] for e in result.events].count("collision") == 1
+
+
+@pytest.mark.parametrize("distance", [0.3, -0.2, 0.0123])
+def test_move_distance_within_two_millimetres(distance):
+    start = [0.6, 0.6, 0.3]
+    result = run_tree({"MoveDistance": {"distance": distance}}, world("arena"), start=start, seconds=20)
+    moved = math.hypot(result.final_pose["x"] - 0.6, result.final_pose["y"] - 0.6)
+    assert result.status == "SUCCESS"
+    assert moved == pytest.approx(abs(distance), abs=0.002)
+    assert ends(result, "MoveDistance")[0]["distance"] == pytest.approx(distance, abs=0.002)
+
+
+@pytest.mark.parametrize("angle", ["90deg", "-90deg", "pi", "-45 deg", "2*pi", "10deg"])
+def test_turn_angle_within_half_a_degree_about_the_axle(angle):
+    from thymio_bt.units import parse_value
+
+    target = parse_value(angle).value
+    result = run_tree({"TurnAngle": {"angle": angle}}, world("arena"), start=[0.6, 0.6, 0.2], seconds=20)
+    end = ends(result, "TurnAngle")[0]
+    assert result.status == "SUCCESS"
+    assert end["angle"] == pytest.approx(target, abs=math.radians(0.5))
+    error = (result.final_pose["yaw"] - (0.2 + target) + math.pi) % (2 * math.pi) - math.pi
+    assert abs(error) < math.radians(0.5)
+    assert axle(result.final_pose) == pytest.approx(axle({"x": 0.6, "y": 0.6, "yaw": 0.2}), abs=1e-6)
+
+
+def test_turn_with_snap_lands_on_the_grid_heading():
+    result = run_tree({"TurnAngle": {"angle": "90deg", "snap": "90deg"}}, world("arena"),
+                      start=[0.6, 0.6, 0.03], seconds=20)
+    assert result.final_pose["yaw"] == pytest.approx(math.pi / 2, abs=1e-3)
+
+
+def test_turn_by_rear_sensors_squares_the_robot_to_the_wall_behind():
+    tree = {"sequence": [{"MoveUntilWall": {"distance": "3cm"}},
+                         {"TurnAngle": {"angle": "pi", "mode": "rear_sensors", "tolerance": "0.2deg"}}]}
+    result = run_tree(tree, world("corridor"), start=[0.4, 0.1, 0.04], seconds=30)
+    assert result.status == "SUCCESS"
+    scan = result.final_proximity
+    assert scan["rear_left"] == pytest.approx(scan["rear_right"], abs=0.061 * math.tan(math.radians(0.2)) + 1e-6)
+    assert abs(abs(result.final_pose["yaw"]) - math.pi) < math.radians(0.3)
+
+
+def test_turn_by_rear_sensors_fails_without_a_wall_behind():
+    result = run_tree({"TurnAngle": {"angle": "90deg", "mode": "rear_sensors"}}, world("arena"),
+                      start=[0.6, 0.6, 0], seconds=20)
+    assert result.status == "FAILURE" and result.code == "NO_WALL"
+    assert "rear sensors" in result.reason
+
+
+@pytest.mark.parametrize("grid, start, decision", [
+    ("L", "start", "right"),
+    (MIRRORED_L, "start", "left"),
+    ("pocket", "start", "dead_end"),
+])
+def test_choose_turn_decides_when_the_wall_first_comes_into_range(grid, start, decision):
+    tree = {"parallel": {"policy": "success_on_all", "children": [
+        {"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}]}}
+    result = run_tree(tree, world(grid), start=start, seconds=20)
+    choose = ends(result, "ChooseTurn")[0]
+    assert result.status == "SUCCESS"
+    assert choose["decision"] == decision
+    assert choose["proximity"]["front_center"] is not None       # decided with the wall in range
+    assert choose["proximity"]["front_center"] > 0.085
+
+
+def test_turn_angle_reads_its_angle_from_the_blackboard():
+    tree = {"sequence": [
+        {"parallel": {"children": [{"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}]}},
+        {"TurnAngle": {"angle": "bb:turn_angle"}}]}
+    result = run_tree(tree, world("L"), seconds=30)
+    assert result.status == "SUCCESS"
+    assert ends(result, "TurnAngle")[0]["angle"] == pytest.approx(-math.pi / 2, abs=1e-3)
+
+
+def test_a_missing_blackboard_value_fails_with_invalid_input():
+    result = run_tree({"TurnAngle": {"angle": "bb:nothing_here"}}, world("arena"), start="start", seconds=5)
+    assert result.status == "FAILURE" and result.code == "INVALID_INPUT"
+    assert "nothing_here" in result.reason
+
+
+def test_conditions():
+    wall_ahead = run_tree({"WallAhead": {}}, world("pocket"), start=[0.3, 0.1, 0], seconds=1)
+    no_wall = run_tree({"WallAhead": {}}, world("arena"), start="start", seconds=1)
+    side_open = run_tree({"SideOpen": {"side": "right"}}, world("L"), start=[0.4, 0.3, 0], seconds=1)
+    side_closed = run_tree({"SideOpen": {"side": "left"}}, world("L"), start=[0.4, 0.3, 0], seconds=1)
+    assert (wall_ahead.status, no_wall.status) == ("SUCCESS", "FAILURE")
+    assert (side_open.status, side_closed.status) == ("SUCCESS", "FAILURE")
+
+
+def test_wait_and_timeout_use_simulated_time():
+    waited = run_tree({"Wait": {"seconds": 2.5}}, world("arena"), seconds=10)
+    assert waited.status == "SUCCESS" and waited.sim_time == pytest.approx(2.5, abs=0.11)
+    slow = {"timeout": {"seconds": 2, "do": {"MoveDistance": {"distance": 0.3, "speed": "1cm/s"}}}}
+    timed_out = run_tree(slow, world("arena"), seconds=10)
+    assert timed_out.status == "FAILURE" and timed_out.code == "TIMEOUT"
+    assert timed_out.sim_time == pytest.approx(2.0, abs=0.11)
+    limit = run_tree({"Wait": {"seconds": 100}}, world("arena"), seconds=3)
+    assert limit.status == "TIMEOUT" and limit.sim_time == pytest.approx(3.0, abs=0.11)
+
+
+def test_spawn_fails_clearly_while_the_name_exists_and_after_delete_succeeds():
+    taken = run_tree({"SpawnEntity": {"pose": [0.3, 0.3, 0]}}, world("arena"), seconds=5)
+    assert taken.status == "FAILURE" and taken.code == "ENTITY_ERROR" and "already exists" in taken.reason
+    moved = run_tree({"sequence": [{"DeleteEntity": {}}, {"SpawnEntity": {"pose": "0.3, 0.3, pi/2"}}]},
+                     world("arena"), seconds=5)
+    kinds = [e["kind"] for e in moved.events if e["kind"] in ("delete_entity", "spawn_entity")]
+    assert moved.status == "SUCCESS" and kinds == ["delete_entity", "spawn_entity"]
+    assert moved.final_pose == pytest.approx({"x": 0.3, "y": 0.3, "yaw": round(math.pi / 2, 6)})
+
+
+def test_stop_and_events_carry_pose_and_proximity():
+    result = run_tree({"sequence": [{"MoveDistance": {"distance": 0.1}}, {"Stop": {}}]}, world("arena"), seconds=5)
+    end = ends(result, "Stop")[0]
+    assert end["status"] == "SUCCESS" and set(end["pose"]) == {"x", "y", "yaw"}
+    assert set(end["proximity"]) == {"front_left", "front_center_left", "front_center", "front_center_right",
+                                     "front_right", "rear_left", "rear_right"}
+    starts = [e for e in result.events if e["kind"] == "behaviour_start"]
+    assert [e["name"] for e in starts] == ["MoveDistance", "Stop"]
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_wall_follow_leaves_generated_perfect_mazes(side, seed):
+    maze = perfect_maze(5, 4, seed=seed)
+    result = run_tree({"WallFollow": {"side": side}}, maze, seconds=600)
+    xmin, ymin, xmax, ymax = maze.bounds()
+    assert result.status == "SUCCESS", result.reason
+    assert result.collisions == 0
+    assert result.final_pose["y"] > ymax                 # out through the gap in the top wall
+    follow = ends(result, "WallFollow")[0]
+    assert "LL" in follow["turns"] or "RR" in follow["turns"] or len(follow["turns"]) > 3
+
+
+def test_wall_follow_turns_around_in_dead_ends():
+    dead_end_first = world("""
++--+--+--+
+|        |
++--+--+  +
+|        |
++--+--+--+
+""")
+    # start facing a dead end (west): it must turn around (two turns away from the wall side)
+    result = run_tree({"WallFollow": {"side": "left", "until": "goal", "goal": [0.5, 0.1]}},
+                      dead_end_first, start=[0.3, 0.3, "pi"], seconds=120)
+    assert result.status == "SUCCESS", result.reason
+    assert ends(result, "WallFollow")[0]["turns"].startswith("RR")

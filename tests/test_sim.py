@@ -1,0 +1,173 @@
+"""The simulated Thymio against the course's numbers (robot.md, mazes.md)."""
+
+import math
+
+import pytest
+
+from thymio_bt.maze import Maze, Wall, load_maze
+from thymio_bt.robot import SENSOR_NAMES, Pose
+from thymio_bt.sim import NoiseConfig, SimConfig, Simulation
+from thymio_bt.sim import thymio
+from thymio_bt.testing import world
+
+COURSE = load_maze("mazes/two_parts_maze.yaml")
+
+
+def test_front_ray_reads_the_course_stop_distance():
+    sim = Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0))
+    assert sim.proximity()["front_center"] == pytest.approx(0.0500, abs=0.0002)
+    sim = Simulation(COURSE, spawn=Pose(0.4793, 0.1, 0.0))        # 1 cm further back
+    assert sim.proximity()["front_center"] == pytest.approx(0.0600, abs=0.0002)
+    sim = Simulation(COURSE, spawn=Pose(0.4893 - 0.048, 0.1, 0.0))  # gap 0.098 > range 0.0975
+    assert sim.proximity()["front_center"] == math.inf
+
+
+def test_scan_has_the_seven_named_sensors_and_inf_when_nothing_is_in_range():
+    sim = Simulation(world("arena"), spawn=Pose(0.6, 0.6, 0.0))
+    assert tuple(sim.proximity()) == SENSOR_NAMES
+    assert all(v == math.inf for v in sim.proximity().values())
+
+
+def test_centred_in_a_corridor_the_38_degree_rays_read_0_074():
+    sim = Simulation(COURSE, spawn=Pose(0.2243, 0.1, 0.0))  # axle at x = 0.2, centred in y
+    scan = sim.proximity()
+    assert scan["front_left"] == pytest.approx(0.0742, abs=0.0005)
+    assert scan["front_right"] == pytest.approx(scan["front_left"], abs=1e-9)
+
+
+def test_rear_rays_read_equal_when_square_to_a_wall_behind():
+    sim = Simulation(COURSE, spawn=Pose(0.5, 0.1, math.pi))         # rear faces Wall_4 at x = 0.6
+    scan = sim.proximity()
+    assert math.isfinite(scan["rear_left"])
+    # Gazebo's wall yaw is 1.5708, not pi/2: the wall is tilted by 3.7e-6 rad, i.e. 0.2 um here
+    assert scan["rear_left"] == pytest.approx(scan["rear_right"], abs=1e-6)
+    assert scan["rear_left"] == pytest.approx(0.595 - 0.5 - 0.0543, abs=0.0002)
+    tilted = Simulation(COURSE, spawn=Pose(0.5, 0.1, math.pi + 0.05)).proximity()
+    assert abs(tilted["rear_left"] - tilted["rear_right"]) > 0.002
+
+
+def test_one_second_at_0_1_m_per_s_moves_0_1_m():
+    sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0))
+    sim.drive(0.1, 0.0)
+    sim.advance(1.0)
+    assert sim.pose().x - 0.1 == pytest.approx(0.100, abs=0.001)
+    assert sim.pose().y == pytest.approx(0.1, abs=1e-6)
+    assert sim.time() == pytest.approx(1.0)
+
+
+def test_spinning_keeps_the_axle_fixed_and_base_link_on_a_0_0243_circle():
+    sim = Simulation(COURSE, spawn=Pose(0.3, 0.1, 0.0))
+    axle = (0.3 + thymio.AXLE_X, 0.1)
+    sim.drive(0.0, math.pi / 2)
+    for _ in range(10):
+        sim.advance(0.1)
+        p = sim.pose()
+        assert math.hypot(p.x - axle[0], p.y - axle[1]) == pytest.approx(0.0243, abs=1e-6)
+    assert sim.pose().yaw == pytest.approx(math.pi / 2, abs=1e-6)
+
+
+def test_command_is_held_and_limited_to_the_wheel_speed_keeping_the_radius():
+    assert thymio.limit_command(0.3, 0.0) == pytest.approx((0.2, 0.0))
+    v, w = thymio.limit_command(0.2, 2.0)
+    left, right = thymio.wheel_speeds(v, w)
+    assert max(abs(left), abs(right)) == pytest.approx(0.2)
+    assert v / w == pytest.approx(0.2 / 2.0)           # same turn radius
+    sim = Simulation(world("arena"), spawn=Pose(0.3, 0.6, 0.0))
+    sim.drive(1.0, 0.0)
+    sim.advance(1.0)
+    assert sim.pose().x - 0.3 == pytest.approx(0.2, abs=0.001)
+
+
+@pytest.mark.parametrize("speed", [0.05, 0.2, 5.0])
+def test_driving_into_a_wall_stops_without_tunnelling_and_counts_one_collision(speed):
+    sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0))
+    sim.drive(speed, 0.0)
+    sim.advance(12.0)
+    nose = sim.pose().x + 0.0557
+    assert nose == pytest.approx(0.595, abs=0.001)       # the face of Wall_4
+    assert len(sim.collisions) == 1
+    assert sim.collisions[0].x == pytest.approx(0.595, abs=0.001)
+    assert sim.min_clearance == 0.0
+
+
+def test_a_collision_episode_is_counted_once_per_contact():
+    sim = Simulation(COURSE, spawn=Pose(0.45, 0.1, 0.0))
+    for _ in range(3):
+        sim.drive(0.1, 0.0)
+        sim.advance(2.0)
+        sim.drive(-0.1, 0.0)
+        sim.advance(1.0)
+    assert len(sim.collisions) == 3
+
+
+def test_clearance_is_the_hull_to_wall_gap():
+    sim = Simulation(COURSE, spawn=Pose(0.2243, 0.1, 0.0))
+    assert sim.min_clearance == pytest.approx(0.095 - 0.0559, abs=1e-6)   # sides, centred
+    sim.drive(0.1, 0.0)
+    sim.advance(3.0)                                  # nose from 0.280 to 0.580: 15 mm from Wall_4
+    assert sim.min_clearance == pytest.approx(0.015, abs=1e-4)
+
+
+@pytest.mark.parametrize("pose, why", [
+    (Pose(0.6, 0.1, 0.0), "overlaps a wall"),
+    (Pose(0.05, 0.1, 0.0), "overlaps a wall"),
+    (Pose(2.5, 0.1, 0.0), "outside the maze"),
+    (Pose(0.1, 0.1, math.nan), "finite"),
+])
+def test_impossible_spawns_are_refused_and_change_nothing(pose, why):
+    sim = Simulation(COURSE)
+    request = sim.request_spawn("thymio", pose)
+    sim.advance(0.1)
+    assert request.state.value == "failed" and why in request.reason
+    assert not sim.exists() and sim.pose() is None and sim.proximity() is None
+
+
+def test_delete_and_spawn_complete_over_ticks_and_names_are_checked():
+    sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0))
+    taken = sim.request_spawn("thymio", Pose(0.5, 0.3, math.pi / 2))
+    unknown = sim.request_delete("robot2")
+    delete = sim.request_delete("thymio")
+    assert not delete.done and sim.exists()
+    sim.advance(0.1)
+    assert "already exists" in taken.reason and "no entity named 'robot2'" in unknown.reason
+    assert delete.state.value == "succeeded" and not sim.exists()
+    sim.drive(0.1, 0.0)                                   # dropped while no robot exists
+    assert sim.command().linear == 0.0
+    spawn = sim.request_spawn("thymio", Pose(0.5, 0.3, math.pi / 2))
+    sim.advance(0.1)
+    assert spawn.state.value == "succeeded"
+    assert sim.pose() == Pose(0.5, 0.3, math.pi / 2)
+
+
+def _trajectory(seed, noise):
+    sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0), config=SimConfig(noise=noise, seed=seed))
+    out = []
+    for i in range(50):
+        sim.drive(0.1, 0.3 if i % 10 < 5 else -0.3)
+        sim.advance(0.1)
+        out.append((sim.true_pose(), tuple(sim.proximity().values())))
+    return out
+
+
+def test_same_seed_same_trajectory_bit_for_bit_and_noise_is_opt_in():
+    noise = NoiseConfig(range_sd=0.001, wheel=0.03, odometry=0.02)
+    assert _trajectory(3, noise) == _trajectory(3, noise)
+    assert _trajectory(3, noise) != _trajectory(4, noise)
+    assert _trajectory(3, NoiseConfig()) == _trajectory(4, NoiseConfig())
+
+
+def test_drifting_odometry_differs_from_the_true_pose_only_when_enabled():
+    sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0),
+                     config=SimConfig(noise=NoiseConfig(odometry=0.05), seed=1))
+    sim.drive(0.1, 0.2)
+    sim.advance(3.0)
+    odo, true = sim.pose(), sim.true_pose()
+    assert 1e-5 < math.hypot(odo.x - true.x, odo.y - true.y) < 0.05
+
+
+def test_walls_are_boxes_that_extend_half_their_thickness_past_each_end():
+    wall = Wall(start=(0, 0), end=(0.6, 0), thickness=0.01)
+    xs = sorted(c[0] for c in wall.corners())
+    assert xs[0] == pytest.approx(-0.005) and xs[-1] == pytest.approx(0.605)
+    maze = Maze(walls=[wall])
+    assert maze.bounds() == pytest.approx((-0.005, -0.005, 0.605, 0.005))

@@ -1,0 +1,115 @@
+"""Helpers to test behaviours and subtrees on small worlds (also a pytest plugin: see ``conftest``).
+
+Example::
+
+    from thymio_bt.testing import run_tree, world
+
+    def test_stops_five_cm_from_the_wall():
+        result = run_tree({"MoveUntilWall": {"distance": "5cm"}}, world("corridor"), seconds=20)
+        assert result.status == "SUCCESS"
+        assert abs(result.final_proximity["front_center"] - 0.05) < 0.001
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Any, Iterator
+
+import py_trees
+import yaml
+
+from .maze import Maze, maze_from_grid
+from .runner import Run, RunResult
+
+#: Small worlds of 0.2 m cells; ``>`` marks the start (base_link at the cell centre).
+PRESETS: dict[str, str] = {
+    "corridor": """
++--+--+--+--+
+|>          |
++--+--+--+--+
+""",
+    "L": """
++--+--+--+
+|>       |
++--+--+  +
+      |  |
+      +--+
+""",
+    "T": """
++--+--+--+
+|        |
++--+  +--+
+   |^ |
+   +--+
+""",
+    "pocket": """
++--+--+--+
+|>    |  |
++--+--+--+
+""",
+    "arena": """
++--+--+--+--+--+--+
+|                 |
++  +  +  +  +  +  +
+|                 |
++  +  +  +  +  +  +
+|                 |
++  +  +  +  +  +  +
+|         >       |
++  +  +  +  +  +  +
+|                 |
++  +  +  +  +  +  +
+|                 |
++--+--+--+--+--+--+
+""",
+}
+
+
+def world(preset_or_grid: str, cell: float = 0.2) -> Maze:
+    """A preset world (corridor, L, T, pocket, arena) or a grid drawn in ASCII (see maze.grid)."""
+    text = PRESETS.get(preset_or_grid, preset_or_grid)
+    return maze_from_grid(text, cell=cell, name=preset_or_grid if preset_or_grid in PRESETS else "grid")
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return value
+
+
+def mission_text(tree: Any, maze_file: str, start: Any = "start", seconds: float = 60.0,
+                 **settings: Any) -> str:
+    """The YAML text of a one-tree mission (useful to test the loader too)."""
+    doc = {"name": "test", "maze": maze_file, "start": _plain(start), "time_limit": seconds,
+           **{k: _plain(v) for k, v in settings.items() if v is not None}, "tree": _plain(tree)}
+    return yaml.safe_dump(doc, sort_keys=False)
+
+
+def run_tree(tree: Any, maze: Maze, start: Any = "start", seconds: float = 60.0, seed: int = 0,
+             **settings: Any) -> RunResult:
+    """Run ``tree`` (a node as written in mission YAML, as a dict or YAML text) for at most
+    ``seconds`` of simulated time in ``maze``; returns the run report's :class:`RunResult`.
+
+    ``settings`` are more mission keys: ``parameters``, ``subtrees``, ``noise``, ``tick_hz``.
+    """
+    from .mission import load_mission
+
+    if isinstance(tree, str):
+        tree = yaml.safe_load(tree)
+    with tempfile.TemporaryDirectory(prefix="thymio-bt-test-") as tmp:
+        maze_file = Path(tmp) / "maze.yaml"
+        maze_file.write_text(yaml.safe_dump(maze.to_yaml_dict(), sort_keys=False))
+        mission_file = Path(tmp) / "mission.yaml"
+        mission_file.write_text(mission_text(tree, maze_file.name, start, seconds, **settings))
+        mission = load_mission(mission_file)
+    return Run(mission, seed).run()
+
+
+def clear_blackboard() -> Iterator[None]:
+    """A fixture body: clear py_trees' global blackboard before and after a test."""
+    py_trees.blackboard.Blackboard.clear()
+    yield
+    py_trees.blackboard.Blackboard.clear()
