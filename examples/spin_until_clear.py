@@ -1,0 +1,37 @@
+"""A user-defined behaviour, loaded by a mission's ``plugins:`` list (see spin_until_clear.yaml).
+
+It turns in place until nothing is in front of the robot. Like the built-ins it has a pydantic
+parameter model (validated, documented, in the JSON Schema) and gets the time limit, NO_ROBOT,
+COLLISION, events and stopping for free from RobotBehaviour.
+"""
+
+import math
+
+from py_trees.common import Status
+from pydantic import Field
+
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
+
+
+class SpinUntilClearParams(BehaviourParams):
+    """Turn until the front sensors see nothing."""
+
+    rate: float = Field(1.0, gt=0, le=4, description="turn rate, left positive",
+                        json_schema_extra={"unit": "rad/s"})
+
+
+class SpinUntilClear(RobotBehaviour):
+    """Turn in place until all five front sensors read nothing (inf)."""
+
+    yaml_name = "SpinUntilClear"
+    Params = SpinUntilClearParams
+    moves = True
+
+    def step(self) -> Status:
+        scan = self.robot.proximity()
+        front = [v for k, v in scan.items() if k.startswith("front")]
+        if all(math.isinf(v) for v in front):
+            return Status.SUCCESS
+        self.robot.drive(0.0, self.params.rate)
+        self.feedback_message = "something ahead, turning"
+        return Status.RUNNING

@@ -1,0 +1,39 @@
+"""User behaviours through a mission's plugins: list, validated and documented like built-ins."""
+
+from pathlib import Path
+
+import pytest
+
+from thymio_bt.errors import UserError
+from thymio_bt.mission import load_mission
+from thymio_bt.runner import Run
+
+
+def test_a_plugin_behaviour_runs_in_a_mission():
+    mission = load_mission("examples/spin_until_clear.yaml")
+    result = Run(mission).run()
+    assert result.status == "SUCCESS"
+    assert all(v is None for k, v in result.final_proximity.items() if k.startswith("front"))
+    assert [e["name"] for e in result.events if e["kind"] == "behaviour_end"] == ["MoveUntilWall", "SpinUntilClear"]
+
+
+def test_plugin_parameters_are_validated_like_builtins(tmp_path):
+    plugin = Path("examples/spin_until_clear.py").resolve()
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"maze: {Path('mazes/arena.yaml').resolve()}\nstart: centre\nplugins: [{plugin}]\n"
+                       "tree:\n  SpinUntilClear: {rate: 9 m}\n")
+    with pytest.raises(UserError) as err:
+        load_mission(mission)
+    problem = err.value.problems[0]
+    assert (problem.line, problem.column) == (5, 26)
+    assert "expected angular speed" in problem.message
+
+
+def test_a_missing_plugin_is_a_user_error(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: two_parts_maze\nstart: part1\nplugins: [nope.py, no_such_module:X]\ntree: Stop\n")
+    with pytest.raises(UserError) as err:
+        load_mission(mission)
+    problems = err.value.problems
+    assert "plugin file not found: nope.py" in problems[0].message and problems[0].line == 3
+    assert "cannot import plugin 'no_such_module:X'" in problems[1].message
