@@ -62,8 +62,17 @@ def _write_json(path: Path, data: Any) -> None:
 @click.option("--quiet", "-q", is_flag=True, help="Print nothing; use the exit code.")
 @click.option("--realtime", type=float, default=None, metavar="FACTOR",
               help="Pace the run against the wall clock (1 = real time).")
+@click.option("--plot", type=click.Path(path_type=Path), default=None, help="Draw the path in the maze (PNG).")
+@click.option("--plot-signals", type=click.Path(path_type=Path), default=None,
+              help="Draw pose, speeds and proximity over time (PNG).")
+@click.option("--gif", type=click.Path(path_type=Path), default=None, help="Animate the run (.gif, or .mp4 with ffmpeg).")
+@click.option("--speedup", type=float, default=4.0, show_default=True, help="Animation speed-up.")
+@click.option("--log", "log", type=click.Path(path_type=Path), default=None,
+              help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
+@click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
 def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | None, start: str | None,
-        report: Path | None, quiet: bool, realtime: float | None) -> None:
+        report: Path | None, quiet: bool, realtime: float | None, plot: Path | None, plot_signals: Path | None,
+        gif: Path | None, speedup: float, log: Path | None, live_tree: bool) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     try:
         from .mission import load_mission
@@ -71,16 +80,87 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
 
         spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
         runner = Run(spec, seed)
-        progress = _Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty())
-        result = runner.run(on_tick=progress, realtime=realtime)
-        progress.done()
+        hooks: list[Any] = [_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty())]
+        recorder = None
+        if plot or plot_signals or gif or log:
+            from .recording import Recorder
+            recorder = Recorder(log_path=log, keep=bool(plot or plot_signals or gif))
+            hooks.append(recorder)
+        if live_tree:
+            from .viz.terminal import LiveTree
+            hooks.append(LiveTree())
+        result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
+        hooks[0].done()
         if report is not None:
             _write_json(report, result.report())
+        if recorder is not None:
+            recording = recorder.finish(result)
+            _pictures(recording, plot, plot_signals, gif, speedup, quiet)
     except UserError as exc:
         _fail(exc)
     if not quiet:
         _summary(result)
+        if result.status != "SUCCESS":
+            from .viz.terminal import failing_tree
+            click.echo(failing_tree(runner), err=True)
     sys.exit(0 if result.status == "SUCCESS" else 1)
+
+
+def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif: Path | None,
+              speedup: float, quiet: bool) -> None:
+    if not (plot or plot_signals or gif):
+        return
+    from .viz import plots
+
+    for path, draw in ((plot, plots.plot_run), (plot_signals, plots.plot_signals)):
+        if path is not None:
+            draw(recording, path)
+            if not quiet:
+                click.echo(f"wrote {path}", err=True)
+    if gif is not None:
+        plots.animate(recording, gif, speedup=speedup)
+        if not quiet:
+            click.echo(f"wrote {gif}", err=True)
+
+
+@main.command()
+@click.argument("log", type=click.Path(path_type=Path))
+@click.option("--plot", type=click.Path(path_type=Path), default=None, help="Draw the path in the maze (PNG).")
+@click.option("--plot-signals", type=click.Path(path_type=Path), default=None, help="Draw the signals (PNG).")
+@click.option("--gif", type=click.Path(path_type=Path), default=None, help="Animate the run.")
+@click.option("--speedup", type=float, default=4.0, show_default=True, help="Animation speed-up.")
+def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | None, speedup: float) -> None:
+    """Redraw a run from its --log FILE.jsonl without re-running it."""
+    from .recording import read_log
+
+    try:
+        recording = read_log(log)
+        end = recording.end
+        click.echo(f"{recording.mission}: {end.get('status')} after {end.get('sim_time', 0):.1f} s simulated, "
+                   f"{len(recording.samples)} ticks; final pose {end.get('final_pose')}")
+        if not (plot or plot_signals or gif):
+            click.echo("nothing to draw (hint: --plot FILE.png, --plot-signals FILE.png or --gif FILE.gif)", err=True)
+        _pictures(recording, plot, plot_signals, gif, speedup, quiet=False)
+    except UserError as exc:
+        _fail(exc)
+
+
+@main.command()
+@click.argument("mission", type=click.Path(path_type=Path))
+@click.option("--dot", "fmt", flag_value="dot", default=True, help="Write a Graphviz .dot file (default).")
+@click.option("--svg", "fmt", flag_value="svg", help="Write an SVG (needs Graphviz's dot program).")
+@click.option("--png", "fmt", flag_value="png", help="Write a PNG (needs Graphviz's dot program).")
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="File to write.")
+def tree(mission: Path, fmt: str, output: Path | None) -> None:
+    """Draw the tree of MISSION (text on the terminal, and a .dot/.svg/.png file)."""
+    try:
+        from .viz.terminal import export_tree, tree_text
+
+        click.echo(tree_text(mission))
+        written, note = export_tree(mission, fmt, output)
+        click.echo(f"wrote {written}" + (f" ({note})" if note else ""), err=True)
+    except UserError as exc:
+        _fail(exc)
 
 
 class _Progress:

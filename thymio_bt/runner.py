@@ -99,6 +99,7 @@ class Run:
         self.root = build_tree(mission.tree, self.ctx, mission.registry)
         self.tree = py_trees.trees.BehaviourTree(self.root)
         self.ticks = 0
+        self.final_tree = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
 
     def run(self, on_tick: TickHook | None = None, realtime: float | None = None) -> RunResult:
@@ -127,12 +128,13 @@ class Run:
                 if lag > 0:
                     time.sleep(lag)  # realtime: pacing asked for with --realtime
         reason = code = failed_path = None
+        self.final_tree = py_trees.display.unicode_tree(root, show_status=True)
         if status == "TIMEOUT":
             running = tree.tip()
             failed_path = _path(running) if running is not None else None
             reason = f"time limit of {self.mission.time_limit:g} s reached"
             code = "TIMEOUT"
-            tree.interrupt()
+            root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped
         elif status == "FAILURE":
             failed_path, code, reason = failing_branch(root)
         wall = time.perf_counter() - wall_start

@@ -55,6 +55,7 @@ class DeleteEntity(RobotBehaviour):
         if self.request.state is RequestState.FAILED:
             return self.fail(FailureCode.ENTITY_ERROR, self.request.reason or "delete refused")
         self.ctx.events.emit(self.ctx.now(), "delete_entity", entity=self.params.entity, **self.before)
+        self.feedback_message = f"deleted '{self.params.entity}'"
         return Status.SUCCESS
 
 
@@ -94,4 +95,5 @@ class SpawnEntity(RobotBehaviour):
             return self.fail(FailureCode.ENTITY_ERROR, self.request.reason or "spawn refused")
         self.ctx.events.emit(self.ctx.now(), "spawn_entity", entity=self.params.entity,
                              pose={k: round(v, 6) for k, v in self.target.as_dict().items()})
+        self.feedback_message = f"spawned '{self.params.entity}' at ({self.target.x:g}, {self.target.y:g})"
         return Status.SUCCESS

@@ -1,0 +1,1 @@
+"""Plots, animations and terminal views of a run (matplotlib is imported only when used)."""

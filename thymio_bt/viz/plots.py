@@ -1,0 +1,262 @@
+"""Pictures of a run for lab reports: the path in the maze, the signals over time, an animation.
+
+matplotlib is imported only here (it is the optional ``viz`` extra), with the Agg backend, so
+plots work headless and a run that asks for none pays nothing.
+
+Example::
+
+    plot_run(recording, "run.png")
+    plot_signals(recording, "signals.png")
+    animate(recording, "run.gif", speedup=4)
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from ..errors import UserError
+from ..recording import Recording
+from ..sim.thymio import HULL, RANGE_MAX, SENSORS
+
+KEY_EVENTS = {"delete_entity": ("tab:red", "deleted"), "spawn_entity": ("tab:green", "spawned")}
+
+
+def _pyplot() -> Any:
+    try:
+        import matplotlib
+    except ImportError:
+        raise UserError("plots need matplotlib (hint: pip install 'thymio-bt[viz]')") from None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _outline(pose: dict[str, float]) -> list[tuple[float, float]]:
+    c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
+    return [(pose["x"] + x * c - y * s, pose["y"] + x * s + y * c) for x, y in HULL]
+
+
+def _draw_maze(ax: Any, recording: Recording) -> None:
+    from matplotlib.patches import Polygon
+
+    for wall in recording.maze.walls:
+        ax.add_patch(Polygon(wall.corners(), closed=True, color="0.25", lw=0))
+    xmin, ymin, xmax, ymax = recording.maze.bounds()
+    xs = [s["pose"]["x"] for s in recording.samples if s["pose"]]
+    ys = [s["pose"]["y"] for s in recording.samples if s["pose"]]
+    pad = 0.08
+    ax.set_xlim(min([xmin, *xs]) - pad, max([xmax, *xs]) + pad)
+    ax.set_ylim(min([ymin, *ys]) - pad, max([ymax, *ys]) + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, lw=0.3, alpha=0.5)
+
+
+def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None = None, alpha: float = 0.9) -> Any:
+    from matplotlib.patches import Polygon
+
+    patch = Polygon(_outline(pose), closed=True, fill=False, ec=colour, lw=1.2, alpha=alpha, label=label)
+    ax.add_patch(patch)
+    return patch
+
+
+def _rays(pose: dict[str, float], prox: dict[str, float | None]) -> list[tuple[tuple[float, float], tuple[float, float], bool]]:
+    c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
+    out = []
+    for name, x, y, a in SENSORS:
+        reading = prox.get(name)
+        length = RANGE_MAX if reading is None else reading
+        ox, oy = pose["x"] + x * c - y * s, pose["y"] + x * s + y * c
+        out.append(((ox, oy), (ox + length * math.cos(pose["yaw"] + a), oy + length * math.sin(pose["yaw"] + a)),
+                    reading is not None))
+    return out
+
+
+def _segments(recording: Recording) -> list[list[dict[str, Any]]]:
+    """The trajectory split where the robot was deleted and respawned."""
+    parts: list[list[dict[str, Any]]] = [[]]
+    for sample in recording.samples:
+        if sample["pose"] is None:
+            if parts[-1]:
+                parts.append([])
+            continue
+        if parts[-1] and math.dist((parts[-1][-1]["pose"]["x"], parts[-1][-1]["pose"]["y"]),
+                                   (sample["pose"]["x"], sample["pose"]["y"])) > 0.05:
+            parts.append([])
+        parts[-1].append(sample)
+    return [p for p in parts if p]
+
+
+def plot_run(recording: Recording, path: str | Path, title: str | None = None) -> Path:
+    """The maze, the trajectory, the robot at key events (delete, spawn, turns, end) and the final rays."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(9, 5.5), dpi=110)
+    _draw_maze(ax, recording)
+    for i, part in enumerate(_segments(recording)):
+        ax.plot([s["pose"]["x"] for s in part], [s["pose"]["y"] for s in part], color="tab:blue", lw=1.4,
+                label="trajectory (base_link)" if i == 0 else None)
+    labelled: set[str] = set()
+    for event in recording.events:
+        kind = event["kind"]
+        pose = event.get("pose")
+        if kind in KEY_EVENTS and pose:
+            colour, label = KEY_EVENTS[kind]
+        elif kind == "behaviour_end" and event.get("name") == "TurnAngle" and event.get("status") == "SUCCESS" and pose:
+            colour, label = "tab:orange", "after a turn"
+        elif kind == "collision":
+            ax.plot(event["x"], event["y"], "x", color="red", ms=9, mew=2, label=None if "collision" in labelled else "collision")
+            labelled.add("collision")
+            continue
+        else:
+            continue
+        _draw_robot(ax, pose, colour, None if label in labelled else label, alpha=0.7)
+        labelled.add(label)
+    last = next((s for s in reversed(recording.samples) if s["pose"]), None)
+    if last is not None:
+        _draw_robot(ax, last["pose"], "black", "end")
+        for start, end, hit in _rays(last["pose"], last["prox"] or {}):
+            ax.plot([start[0], end[0]], [start[1], end[1]], color="tab:red" if hit else "0.6",
+                    lw=1.0, ls="-" if hit else ":")
+    status = recording.end.get("status", "")
+    ax.set_title(title or f"{recording.mission}: {status}, {recording.end.get('sim_time', 0):.1f} s simulated")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
+def _save(fig: Any, plt: Any, path: str | Path) -> Path:
+    path = Path(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path)
+    except (OSError, ValueError) as exc:
+        raise UserError(f"cannot write {path}: {exc}") from None
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _behaviour_spans(recording: Recording) -> list[tuple[float, float, str]]:
+    """(start, end, name) of every robot behaviour that ran, from the start/end events."""
+    open_: dict[str, tuple[float, str]] = {}
+    spans = []
+    for event in recording.events:
+        if event["kind"] == "behaviour_start":
+            open_[event["path"]] = (event["t"], event["name"])
+        elif event["kind"] == "behaviour_end" and event["path"] in open_:
+            start, name = open_.pop(event["path"])
+            spans.append((start, event["t"], name))
+    end = recording.end.get("sim_time", 0.0)
+    spans += [(start, end, name) for start, name in open_.values()]
+    return sorted(spans)
+
+
+def plot_signals(recording: Recording, path: str | Path) -> Path:
+    """Pose, commanded and actual speeds, and proximity over simulated time, behaviours shaded."""
+    plt = _pyplot()
+    samples = recording.samples
+    t = [s["t"] for s in samples]
+    fig, axes = plt.subplots(4, 1, figsize=(10, 9), dpi=100, sharex=True)
+
+    def series(get: Any) -> list[float]:
+        return [get(s) if s["pose"] else math.nan for s in samples]
+
+    ax = axes[0]
+    ax.plot(t, series(lambda s: s["pose"]["x"]), label="x [m]")
+    ax.plot(t, series(lambda s: s["pose"]["y"]), label="y [m]")
+    ax.plot(t, series(lambda s: s["pose"]["yaw"]), label="yaw [rad]")
+    ax.set_ylabel("pose")
+    ax = axes[1]
+    ax.plot(t, [s["cmd"][0] for s in samples], label="commanded v", drawstyle="steps-post")
+    ax.plot(t, [s["vel"][0] for s in samples], label="actual v", ls="--")
+    ax.set_ylabel("linear [m/s]")
+    ax = axes[2]
+    ax.plot(t, [s["cmd"][1] for s in samples], label="commanded ω", drawstyle="steps-post")
+    ax.plot(t, [s["vel"][1] for s in samples], label="actual ω", ls="--")
+    ax.set_ylabel("angular [rad/s]")
+    ax = axes[3]
+    for name, *_ in SENSORS:
+        values = [(s["prox"] or {}).get(name) for s in samples]
+        ax.plot(t, [math.nan if v is None else v for v in values], label=name, lw=1)
+    ax.set_ylabel("range [m]")
+    ax.set_ylim(0, RANGE_MAX * 1.05)
+    ax.set_xlabel("simulated time [s]")
+    colours = plt.get_cmap("tab20").colors
+    names = sorted({name for *_, name in _behaviour_spans(recording)})
+    for start, end, name in _behaviour_spans(recording):
+        colour = colours[names.index(name) % len(colours)]
+        for a in axes:
+            a.axvspan(start, end, color=colour, alpha=0.15, lw=0)
+        axes[0].text((start + end) / 2, 1.0, name, transform=axes[0].get_xaxis_transform(), fontsize=6,
+                     rotation=90, va="bottom", ha="center")
+    for a in axes:
+        a.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
+        a.grid(True, lw=0.3, alpha=0.5)
+    fig.suptitle(f"{recording.mission}: signals (shaded: the behaviour running)", y=0.995)
+    fig.tight_layout()
+    return _save(fig, plt, path)
+
+
+def animate(recording: Recording, path: str | Path, speedup: float = 4.0, fps: int = 10) -> Path:
+    """A GIF (or MP4 when ffmpeg is installed) of the run at ``speedup`` times real time."""
+    plt = _pyplot()
+    from matplotlib import animation
+    from matplotlib.patches import Polygon
+
+    path = Path(path)
+    samples = recording.samples
+    if not samples:
+        raise UserError("nothing to animate: the run has no ticks")
+    step = max(1, round(speedup / fps * _rate(samples)))
+    frames = samples[::step] + ([samples[-1]] if (len(samples) - 1) % step else [])
+    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=80)
+    _draw_maze(ax, recording)
+    (trail,) = ax.plot([], [], color="tab:blue", lw=1.2)
+    body = Polygon([(0, 0)] * len(HULL), closed=True, fc="tab:blue", ec="black", alpha=0.6)
+    ax.add_patch(body)
+    rays = [ax.plot([], [], lw=0.8)[0] for _ in SENSORS]
+    label = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8)
+    xs: list[float] = []
+    ys: list[float] = []
+
+    def draw(sample: dict[str, Any]) -> list[Any]:
+        pose = sample["pose"]
+        if pose is None:
+            body.set_visible(False)
+            for ray in rays:
+                ray.set_data([], [])
+        else:
+            body.set_visible(True)
+            body.set_xy(_outline(pose))
+            xs.append(pose["x"])
+            ys.append(pose["y"])
+            trail.set_data(xs, ys)
+            for ray, (start, end, hit) in zip(rays, _rays(pose, sample["prox"] or {})):
+                ray.set_data([start[0], end[0]], [start[1], end[1]])
+                ray.set_color("tab:red" if hit else "0.7")
+        label.set_text(f"t = {sample['t']:.1f} s   {', '.join(sample.get('running', []))}")
+        return [trail, body, label, *rays]
+
+    anim = animation.FuncAnimation(fig, draw, frames=frames, blit=False)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if path.suffix.lower() == ".mp4":
+            if not animation.writers.is_available("ffmpeg"):
+                raise UserError(f"cannot write {path}: ffmpeg is not installed (hint: write a .gif instead)")
+            anim.save(path, writer=animation.FFMpegWriter(fps=fps))
+        else:
+            anim.save(path, writer=animation.PillowWriter(fps=fps))
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _rate(samples: list[dict[str, Any]]) -> float:
+    if len(samples) < 2:
+        return 10.0
+    dt = samples[1]["t"] - samples[0]["t"]
+    return 1.0 / dt if dt > 0 else 10.0
