@@ -157,12 +157,22 @@ def test_same_seed_same_trajectory_bit_for_bit_and_noise_is_opt_in():
 
 
 def test_drifting_odometry_differs_from_the_true_pose_only_when_enabled():
-    sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0),
+    sim = Simulation(world("arena"), spawn=Pose(0.6, 0.6, 0.0),
                      config=SimConfig(noise=NoiseConfig(odometry=0.05), seed=1))
-    sim.drive(0.1, 0.2)
-    sim.advance(3.0)
+    for _ in range(30):
+        sim.drive(0.1, 0.2)
+        sim.advance(0.1)
     odo, true = sim.pose(), sim.true_pose()
     assert 1e-5 < math.hypot(odo.x - true.x, odo.y - true.y) < 0.05
+
+
+def test_wheels_slipping_against_a_wall_make_odometry_drift():
+    sim = Simulation(COURSE, spawn=Pose(0.5, 0.1, 0.0),
+                     config=SimConfig(noise=NoiseConfig(odometry=1e-6), seed=1))
+    sim.drive(0.1, 0.0)
+    sim.advance(1.0)                     # blocked by Wall_4 after 3.9 cm; the wheels keep turning
+    assert sim.true_pose().x == pytest.approx(0.5393, abs=0.001)
+    assert sim.pose().x == pytest.approx(0.6, abs=0.001)
 
 
 def test_walls_are_boxes_that_extend_half_their_thickness_past_each_end():

@@ -201,6 +201,51 @@ def _summary(result: Any) -> None:
 
 
 @main.command()
+@click.argument("mission", type=click.Path(path_type=Path))
+@click.option("--runs", type=click.IntRange(1, 1_000_000), default=100, show_default=True, help="Number of runs.")
+@click.option("--seed-start", type=click.IntRange(0), default=0, show_default=True, help="Seed of the first run.")
+@click.option("--out", type=click.Path(path_type=Path), default=None, help="Write the sweep JSON here.")
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
+              help="Override a parameter or a noise model (e.g. --set noise.wheel=0.05).")
+@click.option("--maze", type=click.Path(path_type=Path), default=None, help="Run in another maze file.")
+@click.option("--start", default=None, metavar="X,Y,YAW", help="Override the start pose.")
+@click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
+def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tuple[str, ...],
+          maze: Path | None, start: str | None, workers: int | None) -> None:
+    """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
+    from .sweep import LocalPool, sweep as run_sweep
+
+    try:
+        with click.progressbar(length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr,
+                               show_pos=True) as bar:
+            result = run_sweep(mission, runs, seed_start, _overrides(sets), str(maze) if maze else None, start,
+                               executor=LocalPool(workers), progress=lambda _: bar.update(1))
+        data = result.to_json()
+        if out is not None:
+            _write_json(out, data)
+    except UserError as exc:
+        _fail(exc)
+    _sweep_table(data)
+
+
+def _sweep_table(data: dict[str, Any]) -> None:
+    click.echo(f"{data['mission']}: {data['successes']}/{data['runs']} succeeded "
+               f"({100 * data['success_rate']:.1f} %), seeds {data['seed_start']}..{data['seed_start'] + data['runs'] - 1}, "
+               f"noise {', '.join(f'{k}={v:g}' for k, v in data['noise'].items())}")
+    click.echo(f"  {data['wall_time']:.2f} s wall, {data['aggregate_real_time_factor']:,.0f}x real time in aggregate")
+    rows = [("mission time [s]", data["sim_time"], 1.0), ("first stop error [mm]", data["first_stop_error"], 1000.0)]
+    click.echo(f"  {'':22} {'min':>8} {'p5':>8} {'median':>8} {'p95':>8} {'max':>8}")
+    for label, dist, scale in rows:
+        if dist:
+            click.echo(f"  {label:22} " + " ".join(f"{dist[k] * scale:8.2f}" for k in ("min", "p5", "median", "p95", "max")))
+    for code, count in data["failures"].items():
+        click.echo(f"  failures {code}: {count}")
+    for r in data["results"]:
+        if r["status"] != "SUCCESS":
+            click.echo(f"  seed {r['seed']}: {r['status']} [{r['code']}] {r['failed_path']}: {r['reason']}")
+
+
+@main.command()
 @click.argument("missions", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check with these overrides.")
 def validate(missions: tuple[Path, ...], sets: tuple[str, ...]) -> None:

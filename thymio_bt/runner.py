@@ -46,6 +46,8 @@ class RunResult:
     collisions: int
     min_clearance: float | None
     trajectory: list[tuple[float, float, float, float]] = field(default_factory=list)
+    #: per node path: ticks, successes, failures, running_time (only with ``node_stats=True``)
+    node_stats: dict[str, dict[str, float]] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -79,7 +81,8 @@ TickHook = Callable[["Run"], None]
 class Run:
     """One prepared run of a mission in the pymunk simulation."""
 
-    def __init__(self, mission: Mission, seed: int | None = None) -> None:
+    def __init__(self, mission: Mission, seed: int | None = None, substitutions: dict[str, Any] | None = None,
+                 node_stats: bool = False) -> None:
         self.mission = mission
         self.seed = mission.seed if seed is None else seed
         config = SimConfig(noise=mission.noise, seed=self.seed)
@@ -96,8 +99,11 @@ class Run:
                            bounds=mission.maze.bounds() if mission.maze.walls else None,
                            collision_count=lambda: len(self.sim.collisions))
         py_trees.blackboard.Blackboard.clear()
-        self.root = build_tree(mission.tree, self.ctx, mission.registry)
+        self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
         self.tree = py_trees.trees.BehaviourTree(self.root)
+        self.stats = NodeStats(self.sim.time, self.period) if node_stats else None
+        if self.stats is not None:
+            self.tree.visitors.append(self.stats)
         self.ticks = 0
         self.final_tree = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
@@ -146,12 +152,32 @@ class Run:
             final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
             final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
             min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
-            trajectory=self.trajectory)
+            trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None)
 
     def _record(self) -> None:
         pose = self.sim.true_pose()
         if pose is not None:
             self.trajectory.append((self.sim.time(), pose.x, pose.y, pose.yaw))
+
+
+class NodeStats(py_trees.visitors.VisitorBase):
+    """Per-node statistics (like BehaviorTree.CPP's TreeObserver): ticks, successes, failures, and
+    simulated time spent RUNNING, keyed by the node's path."""
+
+    def __init__(self, clock: Callable[[], float], period: float) -> None:
+        super().__init__(full=False)
+        self.clock, self.period = clock, period
+        self.table: dict[str, dict[str, float]] = {}
+
+    def run(self, behaviour: Behaviour) -> None:
+        row = self.table.setdefault(_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0})
+        row["ticks"] += 1
+        if behaviour.status == Status.SUCCESS:
+            row["successes"] += 1
+        elif behaviour.status == Status.FAILURE:
+            row["failures"] += 1
+        elif behaviour.status == Status.RUNNING:
+            row["running_time"] = round(row["running_time"] + self.period, 9)
 
 
 def _path(node: Behaviour) -> str:

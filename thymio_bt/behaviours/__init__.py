@@ -1,7 +1,7 @@
 """The built-in behaviours, one family per module (motion, maze, entities, control)."""
 
 from .base import Context, EventLog, FailureCode, RobotBehaviour
-from .control import RepeatUntil, SimTimeout
+from .control import RepeatUntil, ScriptedStub, SimTimeout
 from .entities import DeleteEntity, SpawnEntity
 from .maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
 from .motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
@@ -14,4 +14,4 @@ BUILTIN: tuple[type[RobotBehaviour], ...] = (
 )
 
 __all__ = ["BUILTIN", "Context", "EventLog", "FailureCode", "RobotBehaviour", "RepeatUntil",
-           "SimTimeout", *(cls.__name__ for cls in BUILTIN)]
+           "ScriptedStub", "SimTimeout", *(cls.__name__ for cls in BUILTIN)]

@@ -7,7 +7,7 @@ runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock in
 
 from __future__ import annotations
 
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -90,3 +90,43 @@ class RepeatUntil(py_trees.composites.Composite):
             self.status = Status.RUNNING
             self.feedback_message = f"iteration {self.iterations + 1}"
         yield self
+
+
+class ScriptedStub(Behaviour):
+    """A test double that replaces a node: a scripted list of statuses, or a duration then a status.
+
+    ``script`` is a status (``"success"``), a list of statuses returned one per tick (the last one
+    repeats), or ``{"status": "success", "seconds": 2.0}`` (RUNNING for that long in simulated time).
+
+    Example::
+
+        ScriptedStub("fake delete", ["running", "running", "success"], ctx)
+    """
+
+    def __init__(self, name: str, script: Any, ctx: Any) -> None:
+        super().__init__(name=name)
+        self.ctx = ctx
+        if isinstance(script, dict):
+            self.queue = [Status[str(script.get("status", "success")).upper()]]
+            self.seconds = float(script.get("seconds", 0.0))
+        else:
+            items = script if isinstance(script, (list, tuple)) else [script]
+            self.queue = [Status[str(item).upper()] for item in items]
+            self.seconds = 0.0
+        if not self.queue:
+            raise ValueError(f"the script for '{name}' is empty")
+        self.index = 0
+        self.started = 0.0
+
+    def initialise(self) -> None:
+        self.index = 0
+        self.started = self.ctx.now()
+
+    def update(self) -> Status:
+        if self.ctx.now() - self.started < self.seconds - 1e-9:
+            self.feedback_message = "scripted: running"
+            return Status.RUNNING
+        status = self.queue[min(self.index, len(self.queue) - 1)]
+        self.index += 1
+        self.feedback_message = f"scripted: {status.name.lower()}"
+        return status

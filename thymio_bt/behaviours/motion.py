@@ -75,7 +75,7 @@ class MoveUntilWall(RobotBehaviour):
         if math.isfinite(reading):
             self.wall_seen = True
         remaining = reading - p.distance
-        self.extra = {"range": None if math.isinf(reading) else round(reading, 6)}
+        self.extra = {"range": None if math.isinf(reading) else round(reading, 6), "distance": p.distance}
         if remaining <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             self.feedback_message = f"stopped at {reading:.4f} m"

@@ -1,20 +1,33 @@
-"""Turn a validated :class:`NodePlan` into a py_trees tree bound to a robot :class:`Context`."""
+"""Turn a validated :class:`NodePlan` into a py_trees tree bound to a robot :class:`Context`.
+
+``substitutions`` replace nodes whose path (names from the root, joined by ``/``) matches a
+glob pattern by a scripted stub, so a mission can be tested with parts of it replaced (like
+BehaviorTree.CPP's substitution rules).
+"""
 
 from __future__ import annotations
+
+from fnmatch import fnmatchcase
+from typing import Any, Mapping
 
 import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, ParallelPolicy, Status
 
-from ..behaviours import Context, RepeatUntil, SimTimeout
+from ..behaviours import Context, RepeatUntil, ScriptedStub, SimTimeout
 from .plan import NodePlan
 from .registry import Registry, default_registry
 
 
-def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None) -> Behaviour:
+def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
+               substitutions: Mapping[str, Any] | None = None, parent: str = "") -> Behaviour:
     """Instantiate the behaviours of ``plan`` (recursively) against ``ctx``."""
     registry = registry or default_registry()
-    children = [build_tree(child, ctx, registry) for child in plan.children]
+    path = f"{parent}/{plan.name}" if parent else plan.name
+    for pattern, script in (substitutions or {}).items():
+        if fnmatchcase(path, pattern):
+            return ScriptedStub(plan.name, script, ctx)
+    children = [build_tree(child, ctx, registry, substitutions, path) for child in plan.children]
     name, o = plan.name, plan.options
     kind = plan.kind
     if kind == "behaviour":

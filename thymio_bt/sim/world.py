@@ -121,7 +121,7 @@ class Simulation(Robot, Entities):
         self._applied = (0.0, 0.0)
         self._steer = False
         self._scan: dict[str, float] | None = None
-        self._odom: Pose | None = None
+        self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._contacts = 0
         self.collisions: list[Collision] = []
         self.min_clearance = math.inf
@@ -150,7 +150,7 @@ class Simulation(Robot, Entities):
 
     def pose(self) -> Pose | None:
         if self.config.noise.odometry:
-            return self._odom if self.exists() else None
+            return self._odometry_pose() if self.exists() else None
         return self.true_pose()
 
     def true_pose(self) -> Pose | None:
@@ -207,27 +207,25 @@ class Simulation(Robot, Entities):
     # ------------------------------------------------------------- stepping
     def advance(self, duration: float) -> None:
         """Run the physics for ``duration`` seconds of simulated time, then serve pending requests."""
-        steps = round(duration / self._dt)
-        for _ in range(steps):
-            self._substep()
-        self._serve_requests()
-
-    def _substep(self) -> None:
         entity = self._entities.get(self.robot_name)
-        if entity is not None and (self._steer or self._contacts):
-            # keep the control body's velocity along the heading while the heading changes
-            v, w = self._applied
-            rot = entity.body.rotation_vector
-            entity.control.velocity = (v * rot.x, v * rot.y)
-            entity.control.angular_velocity = w
-            self._steer = w != 0.0
-        self.space.step(self._dt)
-        self._steps += 1
-        if entity is not None:
-            if self.config.noise.odometry:
-                self._integrate_odometry(entity)
-            if self._steps % self._sensor_every == 0:
-                self._refresh_sensors(entity)
+        step, dt = self.space.step, self._dt
+        steps = round(duration / dt)
+        if entity is not None and self.config.noise.odometry:
+            self._integrate_odometry(steps * dt)
+        for _ in range(steps):
+            if entity is not None and (self._steer or self._contacts):
+                # keep the control body's velocity along the heading while the heading changes
+                v, w = self._applied
+                rot = entity.body.rotation_vector
+                entity.control.velocity = (v * rot.x, v * rot.y)
+                entity.control.angular_velocity = w
+                self._steer = w != 0.0
+            step(dt)
+            self._steps += 1
+            if entity is not None:
+                if self._steps % self._sensor_every == 0:
+                    self._refresh_sensors(entity)
+        self._serve_requests()
 
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
@@ -245,21 +243,29 @@ class Simulation(Robot, Entities):
             body.velocity = (v * rot.x, v * rot.y)
             body.angular_velocity = w
 
-    def _integrate_odometry(self, entity: _Body) -> None:
-        body = entity.body
-        v = body.velocity.dot(body.rotation_vector)
-        left, right = thymio.wheel_speeds(v, body.angular_velocity)
+    def _integrate_odometry(self, duration: float) -> None:
+        """Dead-reckon the axle from the wheel speeds as encoders measure them (with a per-call error).
+
+        Encoders count wheel turns, not body motion: a robot whose wheels slip against a wall
+        believes it moves, as a real Thymio does. The arc is integrated exactly for the held command.
+        """
+        left, right = thymio.wheel_speeds(*self._applied)
         fl, fr = self._noise.encoder_factors()
         v, w = thymio.body_velocity(left * fl, right * fr)
-        odom = self._odom or entity.pose()
-        # integrate the axle (the rotation centre), then express base_link
-        ax = odom.x + thymio.AXLE_X * math.cos(odom.yaw)
-        ay = odom.y + thymio.AXLE_X * math.sin(odom.yaw)
-        mid = odom.yaw + w * self._dt / 2.0
-        ax += v * self._dt * math.cos(mid)
-        ay += v * self._dt * math.sin(mid)
-        yaw = (odom.yaw + w * self._dt + math.pi) % (2.0 * math.pi) - math.pi
-        self._odom = Pose(ax - thymio.AXLE_X * math.cos(yaw), ay - thymio.AXLE_X * math.sin(yaw), yaw)
+        ax, ay, yaw = self._odo
+        turn = w * duration
+        if abs(turn) < 1e-9:
+            dx, dy = v * duration * math.cos(yaw), v * duration * math.sin(yaw)
+        else:
+            radius = v / w
+            dx = radius * (math.sin(yaw + turn) - math.sin(yaw))
+            dy = -radius * (math.cos(yaw + turn) - math.cos(yaw))
+        self._odo = (ax + dx, ay + dy, yaw + turn)
+
+    def _odometry_pose(self) -> Pose:
+        ax, ay, yaw = self._odo
+        return Pose(ax - thymio.AXLE_X * math.cos(yaw), ay - thymio.AXLE_X * math.sin(yaw),
+                    (yaw + math.pi) % (2.0 * math.pi) - math.pi)
 
     def _refresh_sensors(self, entity: _Body) -> None:
         body = entity.body
@@ -326,7 +332,9 @@ class Simulation(Robot, Entities):
     def _add_robot(self, name: str, pose: Pose) -> None:
         entity = _Body(self.space, pose, group=1 + len(self._entities))
         self._entities[name] = entity
-        self._odom = entity.pose()
+        if name == self.robot_name:
+            self._odo = (pose.x + thymio.AXLE_X * math.cos(pose.yaw), pose.y + thymio.AXLE_X * math.sin(pose.yaw),
+                         pose.yaw)
         self._steer = True
         if name == self.robot_name:
             self._cmd = Twist()
@@ -345,7 +353,7 @@ class Simulation(Robot, Entities):
                     continue
                 entity.remove(self.space)
                 if request.entity == self.robot_name:
-                    self._scan, self._odom, self._cmd, self._contacts = None, None, Twist(), 0
+                    self._scan, self._cmd, self._contacts = None, Twist(), 0
                 request.state = RequestState.SUCCEEDED
             else:
                 assert request.pose is not None

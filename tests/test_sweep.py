@@ -1,0 +1,53 @@
+"""thymio-bt sweep: the DESIGN.md JSON contract, determinism, and the executor boundary."""
+
+import json
+
+from click.testing import CliRunner
+
+from thymio_bt.cli import main
+from thymio_bt.sweep import LocalPool, run_job, sweep
+
+
+def test_sweep_json_contract_and_noise_on_by_default(tmp_path):
+    out = tmp_path / "sweep.json"
+    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "6", "--seed-start", "10",
+                                       "--out", str(out), "--workers", "2"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(out.read_text())
+    assert data["runs"] == 6 and data["successes"] == 6 and data["success_rate"] == 1.0
+    assert [r["seed"] for r in data["results"]] == list(range(10, 16))
+    assert set(data["results"][0]) >= {"seed", "status", "sim_time", "final_pose"}
+    assert data["noise"]["wheel"] > 0 and data["noise"]["range_sd"] > 0
+    assert len({json.dumps(r["final_pose"]) for r in data["results"]}) == 6     # the noise did something
+    assert "6/6 succeeded" in result.output
+
+
+def test_the_same_sweep_gives_the_same_results_serial_or_parallel():
+    serial = sweep("missions/square.yaml", 4, executor=LocalPool(1)).to_json()
+    parallel = sweep("missions/square.yaml", 4, executor=LocalPool(2)).to_json()
+    for data in (serial, parallel):
+        data.pop("wall_time"), data.pop("aggregate_real_time_factor")
+    assert serial == parallel
+
+
+def test_any_pool_with_imap_unordered_can_run_a_sweep():
+    class Reversed:                        # stands for Ray's or Dask's pool: results out of order
+        def imap_unordered(self, fn, jobs):
+            return iter([fn(job) for job in reversed(list(jobs))])
+
+    result = sweep("missions/square.yaml", 3, executor=Reversed())
+    assert [r["seed"] for r in result.results] == [0, 1, 2]
+
+
+def test_noise_can_be_switched_off_with_set():
+    result = sweep("missions/square.yaml", 2, overrides={"noise.wheel": "0", "noise.range_sd": "0",
+                                                          "noise.odometry": "0"}, executor=LocalPool(1))
+    assert result.results[0]["final_pose"] == result.results[1]["final_pose"]
+
+
+def test_run_job_reports_the_first_stop_error():
+    from thymio_bt.sweep import Job
+
+    summary = run_job(Job("missions/maze_part1_2.yaml", 0))
+    assert summary["status"] == "SUCCESS"
+    assert summary["first_stop_error"] < 0.001

@@ -1,0 +1,52 @@
+"""The testing helpers users get: worlds, run_tree, node substitution, per-node statistics, plugin."""
+
+import py_trees
+import pytest
+
+from thymio_bt.testing import PRESETS, run_mission_file, world
+
+
+@pytest.mark.parametrize("preset", sorted(PRESETS))
+def test_presets_are_closed_worlds_with_a_start(preset):
+    maze = world(preset)
+    assert "start" in maze.spawns and maze.walls
+
+
+def test_the_plugin_fixture_runs_a_behaviour_and_gives_node_statistics(thymio):
+    result = thymio.run_tree({"sequence": [{"MoveUntilWall": {"distance": "5cm"}}, {"TurnAngle": {"angle": "90deg"}}]},
+                             thymio.world("corridor"), seconds=30)
+    stats = result.node_stats
+    assert stats["sequence/MoveUntilWall"]["successes"] == 1
+    assert stats["sequence/MoveUntilWall"]["ticks"] == pytest.approx(stats["sequence/MoveUntilWall"]["running_time"] * 10 + 1)
+    assert stats["sequence/TurnAngle"]["running_time"] > 1.0
+
+
+def test_the_blackboard_starts_empty_in_every_test():
+    assert py_trees.blackboard.Blackboard.storage == {}
+    py_trees.blackboard.Blackboard.set("/left_over", 1)       # the next test must not see this
+
+
+def test_the_blackboard_was_cleared_after_the_previous_test():
+    assert "/left_over" not in py_trees.blackboard.Blackboard.storage
+
+
+def test_substitution_replaces_nodes_by_path_pattern():
+    skipped = run_mission_file("missions/maze_part1_2.yaml", substitute={"course/part 2": "success"})
+    assert skipped.status == "SUCCESS" and skipped.sim_time < 6
+    assert skipped.final_pose == pytest.approx({"x": 0.5, "y": 0.3, "yaw": 1.570796})
+
+
+def test_a_scripted_stub_runs_for_simulated_seconds_then_returns_its_status():
+    result = run_mission_file("missions/maze_part1_2.yaml",
+                              substitute={"*/DeleteEntity": {"status": "success", "seconds": 2}})
+    # the real robot was never deleted, so the real spawn must refuse the taken name
+    assert result.status == "FAILURE" and result.code == "ENTITY_ERROR"
+    assert "already exists" in result.reason
+    assert result.node_stats["course/DeleteEntity"]["running_time"] == pytest.approx(2.0)
+
+
+def test_a_status_list_is_returned_one_per_tick():
+    result = run_mission_file("missions/square.yaml",
+                              substitute={"four sides/side/TurnAngle": ["running", "running", "failure"]})
+    assert result.status == "FAILURE"
+    assert result.node_stats["four sides/side/TurnAngle"]["ticks"] == 3
