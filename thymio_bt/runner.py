@@ -196,7 +196,10 @@ def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
         failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
         if not failed or getattr(node, "failure", None):
             break
-        node = failed[-1]
+        # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)
+        explained = [c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE
+                                              for n in c.iterate())]
+        node = (explained or failed)[-1]
     failure = getattr(node, "failure", None)
     if failure:
         code, reason = failure

@@ -23,6 +23,9 @@ from .errors import Problem, UserError
 
 #: Most alias uses accepted in one file; generous for hand-written missions.
 MAX_ALIASES = 200
+#: Most nodes that aliases may add when the document is expanded (a "billion laughs" file nests
+#: aliases of aliases: few aliases, exponentially many nodes once expanded).
+MAX_ALIAS_EXPANSION = 10_000
 
 Mark = tuple[int, int]
 
@@ -112,14 +115,34 @@ _Loader.add_constructor("tag:yaml.org,2002:seq", _Loader.construct_sequence)
 _Loader.add_constructor(None, _Loader.construct_undefined)
 
 
-def _scalar_is_recursive(node: Node, seen: set[int]) -> bool:
-    if id(node) in seen:
-        return True
-    if isinstance(node, ScalarNode):
-        return False
-    seen = seen | {id(node)}
-    children = node.value if isinstance(node, SequenceNode) else [v for kv in node.value for v in kv]
-    return any(_scalar_is_recursive(child, seen) for child in children)
+def _expanded_size(root: Node) -> tuple[int, int] | None:
+    """(distinct nodes, nodes once every alias is expanded), or None when a node contains itself.
+
+    Each node is visited once (sizes are memoised), so nested aliases cost linear time.
+    """
+    size: dict[int, int] = {}
+    on_path: set[int] = set()
+    stack: list[tuple[Node, bool]] = [(root, False)]
+    while stack:
+        node, children_done = stack.pop()
+        if isinstance(node, ScalarNode):
+            size[id(node)] = 1
+            continue
+        children = node.value if isinstance(node, SequenceNode) else [v for kv in node.value for v in kv]
+        if children_done:
+            on_path.discard(id(node))
+            size[id(node)] = 1 + sum(size[id(child)] for child in children)
+            continue
+        if id(node) in size:
+            continue
+        on_path.add(id(node))
+        stack.append((node, True))
+        for child in children:
+            if id(child) in on_path:
+                return None
+            if id(child) not in size:
+                stack.append((child, False))
+    return len(size), size[id(root)]
 
 
 def loads_yaml(text: str, filename: str = "<input>") -> Any:
@@ -129,9 +152,15 @@ def loads_yaml(text: str, filename: str = "<input>") -> Any:
         node = loader.get_single_node()
         if node is None:
             return None
-        if _scalar_is_recursive(node, set()):
+        sizes = _expanded_size(node)
+        if sizes is None:
             raise UserError(Problem("an alias refers to the node that contains it", filename,
                                     *_mark(node), hint="recursive YAML structures are not allowed"))
+        if sizes[1] - sizes[0] > MAX_ALIAS_EXPANSION:
+            raise UserError(Problem(
+                f"the aliases expand to too many nodes ({sizes[1]:,} from {sizes[0]:,} written)",
+                filename, *_mark(node),
+                hint="aliases of aliases multiply; use subtrees: or include: to reuse parts of a mission"))
         data = loader.construct_document(node)
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark

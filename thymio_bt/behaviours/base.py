@@ -38,6 +38,8 @@ class FailureCode(str, Enum):
     NO_WALL = "NO_WALL"
     INVALID_INPUT = "INVALID_INPUT"
     ENTITY_ERROR = "ENTITY_ERROR"
+    #: not an error: the way is blocked, and the tree is expected to react (e.g. avoidance turns away)
+    BLOCKED = "BLOCKED"
     FAILED = "FAILED"
 
 

@@ -89,6 +89,45 @@ class Wall(BaseModel):
                 (x1 + ex + nx, y1 + ey + ny), (x0 - ex + nx, y0 - ey + ny)]
 
 
+class Obstacle(BaseModel):
+    """A static obstacle: a ``box`` (centre, size, yaw) or a convex ``polygon`` (list of points)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    name: str | None = None
+    center: Point | None = None
+    size: tuple[Length, Length] | None = None
+    yaw: Angle = 0.0
+    polygon: list[Point] | None = None
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> "Obstacle":
+        if (self.polygon is None) == (self.center is None or self.size is None):
+            raise ValueError("an obstacle is either a box (center and size) or a polygon (a list of points)")
+        if self.size is not None and min(self.size) <= 0:
+            raise ValueError("a box's size must be positive")
+        if self.polygon is not None:
+            points = self.polygon
+            if len(points) < 3:
+                raise ValueError("a polygon needs at least 3 points")
+            n = len(points)
+            turns = [(points[(i + 1) % n][0] - points[i][0]) * (points[(i + 2) % n][1] - points[(i + 1) % n][1])
+                     - (points[(i + 1) % n][1] - points[i][1]) * (points[(i + 2) % n][0] - points[(i + 1) % n][0])
+                     for i in range(n)]
+            if not (all(t > 0 for t in turns) or all(t < 0 for t in turns)):
+                raise ValueError("the polygon must be convex with no repeated points "
+                                 "(split a concave obstacle into several convex ones)")
+        return self
+
+    def corners(self) -> list[tuple[float, float]]:
+        if self.polygon is not None:
+            return [tuple(p) for p in self.polygon]  # type: ignore[misc]
+        assert self.center is not None and self.size is not None
+        (cx, cy), (w, h) = self.center, self.size
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        return [(cx + x * c - y * s, cy + x * s + y * c)
+                for x, y in ((-w / 2, -h / 2), (w / 2, -h / 2), (w / 2, h / 2), (-w / 2, h / 2))]
+
+
 class Spawn(BaseModel):
     """A named pose of base_link where the robot may start or be spawned."""
 
@@ -116,11 +155,13 @@ class Maze(BaseModel):
     description: str = ""
     source: str = ""
     walls: list[Wall] = Field(default_factory=list)
+    obstacles: list[Obstacle] = Field(default_factory=list)
     spawns: dict[str, Spawn] = Field(default_factory=dict)
 
     def bounds(self) -> tuple[float, float, float, float]:
-        """(xmin, ymin, xmax, ymax) of all wall boxes; an empty maze has no bounds (all zero)."""
+        """(xmin, ymin, xmax, ymax) of all walls and obstacles; an empty maze has all zero."""
         corners = [c for wall in self.walls for c in wall.corners()]
+        corners += [c for obstacle in self.obstacles for c in obstacle.corners()]
         if not corners:
             return (0.0, 0.0, 0.0, 0.0)
         xs, ys = [c[0] for c in corners], [c[1] for c in corners]
@@ -147,6 +188,8 @@ class Maze(BaseModel):
         out["walls"] = [{**({"name": w.name} if w.name else {}),
                          "from": [r(w.start[0]), r(w.start[1])], "to": [r(w.end[0]), r(w.end[1])],
                          "thickness": r(w.thickness)} for w in self.walls]
+        if self.obstacles:
+            out["obstacles"] = [o.model_dump(exclude_none=True, exclude_defaults=True) for o in self.obstacles]
         if self.spawns:
             out["spawns"] = {k: {"x": r(s.x), "y": r(s.y), "yaw": r(s.yaw)} for k, s in self.spawns.items()}
         return out

@@ -684,9 +684,11 @@ class MissionLoader:
             except KeyError:
                 self.problem(f"unknown parameter '{raw}'", where, path, did_you_mean(raw[1:], scope.names() or {"-"}))
                 return _INVALID
-            if isinstance(value, Quantity) or not isinstance(value, str):
-                return value.value if isinstance(value, Quantity) else value
-            raw = value            # a text parameter (e.g. a spawn name): convert it like a literal
+            if isinstance(value, Quantity):
+                return value.value
+            if not isinstance(value, (str, list)):
+                return value
+            raw = value            # a text or list parameter (e.g. a spawn name): convert it like a literal
         if _is_number(annotation):
             if isinstance(raw, bool):
                 return raw     # let pydantic say what it expects
@@ -702,9 +704,21 @@ class MissionLoader:
             if isinstance(raw, str):
                 raw = raw.split(",")
             if isinstance(raw, list):
-                kinds = ("length", "length", "angle")
-                out = [self.quantity(v, scope, where, path, kinds[i] if i < 3 else None) for i, v in enumerate(raw)]
+                kinds = [UNIT_KIND.get(unit or "")] * len(raw) if unit else ["length", "length", "angle"]
+                out = [self.quantity(v, scope, where, path, kinds[i] if i < len(kinds) else None)
+                       for i, v in enumerate(raw)]
                 return _INVALID if any(v is None for v in out) else tuple(out)
+        if _is_list_of_tuples(annotation) and isinstance(raw, list):
+            items = []
+            for i, item in enumerate(raw):
+                if not isinstance(item, list):
+                    self.problem("expected a list of [x, y] points", where, f"{path}[{i}]")
+                    return _INVALID
+                values = [self.quantity(v, scope, where, f"{path}[{i}]", UNIT_KIND.get(unit or "")) for v in item]
+                if any(v is None for v in values):
+                    return _INVALID
+                items.append(tuple(values))
+            return items
         return raw
 
 
@@ -734,6 +748,11 @@ def _is_tuple(annotation: Any) -> bool:
     base = _strip_optional(annotation)
     base = typing.get_args(base)[0] if typing.get_origin(base) is typing.Annotated else base
     return typing.get_origin(base) is tuple
+
+
+def _is_list_of_tuples(annotation: Any) -> bool:
+    base = _strip_optional(annotation)
+    return typing.get_origin(base) is list and any(typing.get_origin(a) is tuple for a in typing.get_args(base))
 
 
 def _is_number_text(text: str) -> bool:

@@ -101,7 +101,13 @@ class Simulation(Robot, Entities):
         self.space = pymunk.Space()
         self.space.collision_slop = 0.0002
         self.space.iterations = 10
-        self._wall_frames: dict[pymunk.Shape, tuple[float, ...]] = {}
+        self._wall_frames: dict[pymunk.Shape, tuple[float, ...] | None] = {}
+        for obstacle in maze.obstacles:
+            shape = pymunk.Poly(self.space.static_body, obstacle.corners())
+            shape.collision_type = _WALL_TYPE
+            shape.friction = 1.0
+            self.space.add(shape)
+            self._wall_frames[shape] = None
         for wall in maze.walls:
             shape = pymunk.Poly(self.space.static_body, wall.corners())
             shape.collision_type = _WALL_TYPE
@@ -317,7 +323,13 @@ class Simulation(Robot, Entities):
         hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in thymio.HULL]
         gap = math.inf
         for wall in walls:
-            cx, cy, ux, uy, hl, ht = self._wall_frames[wall]
+            frame = self._wall_frames[wall]
+            if frame is None:                  # a polygon obstacle: ask pymunk
+                gap = min(gap, min(wall.point_query(p).distance for p in hull))
+                for corner in wall.get_vertices():
+                    gap = min(gap, entity.shape.point_query(corner).distance)
+                continue
+            cx, cy, ux, uy, hl, ht = frame
             for px, py in hull:
                 dx, dy = px - cx, py - cy
                 ex = abs(dx * ux + dy * uy) - hl

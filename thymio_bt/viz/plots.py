@@ -44,6 +44,8 @@ def _draw_maze(ax: Any, recording: Recording) -> None:
 
     for wall in recording.maze.walls:
         ax.add_patch(Polygon(wall.corners(), closed=True, color="0.25", lw=0))
+    for obstacle in recording.maze.obstacles:
+        ax.add_patch(Polygon(obstacle.corners(), closed=True, color="tab:blue", alpha=0.6, lw=0))
     xmin, ymin, xmax, ymax = recording.maze.bounds()
     xs = [s["pose"]["x"] for s in recording.samples if s["pose"]]
     ys = [s["pose"]["y"] for s in recording.samples if s["pose"]]

@@ -1,0 +1,364 @@
+"""The student report's navigation: PID waypoint following (Algorithm 2) and the Pledge-style
+left-wall obstacle avoidance (Algorithm 3), split into behaviours so the state machine is a tree:
+
+- ``turning_left``  → :class:`TurnUntilClear` (adds the angle turned to a counter),
+- ``going_forward`` → ``MoveDistance``,
+- ``turning_right`` → :class:`TurnBack` (turns the counter back to zero; fails if blocked).
+
+``missions/lib/navigation.yaml`` composes them; see ``missions/waypoints_obstacles.yaml``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from py_trees.common import Access, Status
+from pydantic import Field
+
+from ..pid import PID
+from ..robot import Pose, wrap_angle
+from .base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
+from .motion import approach_speed
+
+FRONT = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")
+#: The report's simulation thresholds for the 5 front sensors (Table 2), metres.
+REPORT_THRESHOLDS = (0.025, 0.03, 0.03, 0.03, 0.025)
+
+Thresholds = tuple[float, float, float, float, float]
+
+
+class PIDGains(BehaviourParams):
+    """Gains and limits of the two controllers (the report's Table 2 by default)."""
+
+    heading_kp: float = Field(3.0, ge=0, le=100, description="heading PID: proportional gain")
+    heading_ki: float = Field(0.0, ge=0, le=100, description="heading PID: integral gain")
+    heading_kd: float = Field(0.0, ge=0, le=100, description="heading PID: derivative gain")
+    distance_kp: float = Field(2.0, ge=0, le=100, description="distance PID: proportional gain")
+    distance_ki: float = Field(0.0, ge=0, le=100, description="distance PID: integral gain")
+    distance_kd: float = Field(0.0, ge=0, le=100, description="distance PID: derivative gain")
+    max_speed: float = Field(0.05, gt=0, le=0.2, description="forward speed limit", json_schema_extra={"unit": "m/s"})
+    max_turn: float = Field(math.pi, gt=0, le=4.3, description="turn rate limit", json_schema_extra={"unit": "rad/s"})
+    turn_in_place_above: float = Field(math.pi / 90, gt=0, le=math.pi,
+                                       description="turn in place while the heading error exceeds this",
+                                       json_schema_extra={"unit": "rad"})
+    tolerance: float = Field(0.01, gt=0, le=0.5, description="a goal counts as reached within this distance",
+                             json_schema_extra={"unit": "m"})
+    timeout: float = Field(300.0, gt=0, le=36000, description="time limit in simulated seconds",
+                           json_schema_extra={"unit": "s"})
+
+
+class _Navigator:
+    """Algorithm 2 for one goal: heading PID and distance PID; turn in place on large heading errors."""
+
+    def __init__(self, p: PIDGains) -> None:
+        self.p = p
+        self.heading = PID(p.heading_kp, p.heading_ki, p.heading_kd, p.max_turn)
+        self.distance = PID(p.distance_kp, p.distance_ki, p.distance_kd, p.max_speed)
+
+    def command(self, pose: Pose, goal: tuple[float, float], dt: float) -> tuple[float, float] | None:
+        """(v, ω) towards ``goal``, or None when it is reached (the PIDs are then reset)."""
+        dx, dy = goal[0] - pose.x, goal[1] - pose.y
+        distance = math.hypot(dx, dy)
+        if distance <= self.p.tolerance:
+            self.heading.reset()
+            self.distance.reset()
+            return None
+        error = wrap_angle(math.atan2(dy, dx) - pose.yaw)
+        omega = self.heading(error, dt)
+        if abs(error) > self.p.turn_in_place_above:
+            return 0.0, omega
+        return max(0.0, self.distance(distance, dt)), omega
+
+
+class GoToPoseParams(PIDGains):
+    """Drive to a point with the report's two PID controllers."""
+
+    goal: tuple[float, float] = Field(description="the point [x, y] to reach", json_schema_extra={"unit": "m"})
+
+
+class GoToPose(RobotBehaviour):
+    """Drive base_link to ``goal`` (Algorithm 2): turn in place while the heading error is large,
+    else heading PID and distance PID together; SUCCESS within ``tolerance``.
+
+    Example (YAML)::
+
+        - GoToPose: {goal: [0.5, 0.3], max_speed: 5cm/s}
+    """
+
+    yaml_name = "GoToPose"
+    Params = GoToPoseParams
+    moves = True
+
+    def start(self) -> None:
+        self.nav = _Navigator(self.params)
+
+    def step(self) -> Status:
+        command = self.nav.command(current_pose(self.robot), self.params.goal, self.ctx.tick_period)
+        if command is None:
+            self.robot.drive(0.0, 0.0)
+            return Status.SUCCESS
+        self.robot.drive(*command)
+        return Status.RUNNING
+
+
+class FollowWaypointsParams(PIDGains):
+    """Visit waypoints in order with the report's PID controllers."""
+
+    waypoints: list[tuple[float, float]] = Field(min_length=1, description="the points [[x, y], ...] to visit",
+                                                 json_schema_extra={"unit": "m"})
+    key: str = Field("waypoint", description="blackboard key holding the index of the next waypoint, so the "
+                     "behaviour resumes where it was after an interruption (e.g. by obstacle avoidance)")
+
+
+class FollowWaypoints(RobotBehaviour):
+    """Visit ``waypoints`` in order (Algorithm 2 for each); SUCCESS after the last one.
+
+    Progress is kept on the blackboard (``waypoint``: index of the next one, ``waypoint_left``:
+    how many remain), so when obstacle avoidance interrupts it, it resumes at the same waypoint.
+    Emits a ``waypoint_reached`` event with the pose for each.
+
+    Example (YAML)::
+
+        - FollowWaypoints: {waypoints: [[0.5, -0.4], [0.5, 0.4]]}
+    """
+
+    yaml_name = "FollowWaypoints"
+    Params = FollowWaypointsParams
+    moves = True
+
+    def __init__(self, name: str, params: FollowWaypointsParams, ctx: Context, **kwargs: object) -> None:
+        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
+        self.board = self.attach_blackboard_client(name=f"{name}_progress")
+        self.board.register_key(params.key, access=Access.WRITE)
+        self.board.register_key(f"{params.key}_left", access=Access.WRITE)
+
+    def start(self) -> None:
+        self.nav = _Navigator(self.params)
+        self.index = self.board.get(self.params.key) if self.board.exists(self.params.key) else 0
+        self._publish()
+
+    def _publish(self) -> None:
+        self.board.set(self.params.key, self.index)
+        self.board.set(f"{self.params.key}_left", len(self.params.waypoints) - self.index)
+
+    def step(self) -> Status:
+        waypoints = self.params.waypoints
+        while self.index < len(waypoints):
+            pose = current_pose(self.robot)
+            command = self.nav.command(pose, waypoints[self.index], self.ctx.tick_period)
+            if command is not None:
+                self.robot.drive(*command)
+                self.feedback_message = f"to waypoint {self.index + 1}/{len(waypoints)} {waypoints[self.index]}"
+                self.extra = {"waypoint": self.index}
+                return Status.RUNNING
+            self.ctx.events.emit(self.ctx.now(), "waypoint_reached", index=self.index,
+                                 pose={k: round(v, 6) for k, v in pose.as_dict().items()})
+            self.index += 1
+            self._publish()
+        self.robot.drive(0.0, 0.0)
+        self.extra = {"waypoint": self.index}
+        return Status.SUCCESS
+
+
+class WaypointsDoneParams(BehaviourParams):
+    """Have all waypoints been visited?"""
+
+    key: str = Field("waypoint", description="the FollowWaypoints progress key")
+
+
+class WaypointsDone(ConditionBehaviour):
+    """SUCCESS once FollowWaypoints has no waypoint left.
+
+    Example (YAML)::
+
+        - repeat: {until: WaypointsDone, do: ...}
+    """
+
+    yaml_name = "WaypointsDone"
+    Params = WaypointsDoneParams
+    needs_robot = False
+
+    def __init__(self, name: str, params: WaypointsDoneParams, ctx: Context, **kwargs: object) -> None:
+        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
+        self.board = self.attach_blackboard_client(name=f"{name}_progress")
+        self.board.register_key(f"{params.key}_left", access=Access.READ)
+
+    def step(self) -> Status:
+        key = f"{self.params.key}_left"
+        left = self.board.get(key) if self.board.exists(key) else None
+        self.feedback_message = "not started" if left is None else f"{left} left"
+        return Status.SUCCESS if left == 0 else Status.FAILURE
+
+
+# ------------------------------------------------------------ avoidance
+def _blocked(scan: dict[str, float], thresholds: Thresholds) -> bool:
+    return any(scan[name] < limit for name, limit in zip(FRONT, thresholds))
+
+
+class ObstacleAheadParams(BehaviourParams):
+    """Is an obstacle closer than a threshold to any front sensor?"""
+
+    thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right",
+                                   json_schema_extra={"unit": "m"})
+
+
+class ObstacleAhead(ConditionBehaviour):
+    """SUCCESS when any front sensor reads less than its threshold (the report's 0.025/0.03 m).
+
+    Example (YAML)::
+
+        - ObstacleAhead: {thresholds: [0.025, 0.03, 0.03, 0.03, 0.025]}
+    """
+
+    yaml_name = "ObstacleAhead"
+    Params = ObstacleAheadParams
+
+    def step(self) -> Status:
+        scan = self.robot.proximity()
+        assert scan is not None
+        return Status.SUCCESS if _blocked(scan, self.params.thresholds) else Status.FAILURE
+
+
+class _CounterParams(BehaviourParams):
+    thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right",
+                                   json_schema_extra={"unit": "m"})
+    counter: str = Field("avoid_turn", description="blackboard key of the angle turned since avoidance began")
+    speed: float = Field(1.0, gt=0, le=4.3, description="turn rate", json_schema_extra={"unit": "rad/s"})
+
+
+class _CountingTurn(RobotBehaviour):
+    """A turn in place that adds what it turns to a blackboard counter (the Pledge counter)."""
+
+    moves = True
+
+    def __init__(self, name: str, params: _CounterParams, ctx: Context, **kwargs: object) -> None:
+        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
+        self.board = self.attach_blackboard_client(name=f"{name}_counter")
+        self.board.register_key(params.counter, access=Access.WRITE)
+
+    def start(self) -> None:
+        self.last_yaw = current_pose(self.robot).yaw
+        if not self.board.exists(self.params.counter):
+            self.board.set(self.params.counter, 0.0)
+
+    def count(self) -> float:
+        yaw = current_pose(self.robot).yaw
+        total = self.board.get(self.params.counter) + wrap_angle(yaw - self.last_yaw)
+        self.last_yaw = yaw
+        self.board.set(self.params.counter, total)
+        self.extra = {"counter": round(total, 6)}
+        return total
+
+
+class TurnUntilClearParams(_CounterParams):
+    """turning_left: turn until no front sensor is below its threshold."""
+
+    direction: Literal["left", "right"] = Field("left", description="which way to turn")
+    margin: float = Field(0.0, ge=0, le=math.pi / 2, description="keep turning this much more once clear, so "
+                          "the body (which the angled sensors do not see) clears a corner too",
+                          json_schema_extra={"unit": "rad"})
+
+
+class TurnUntilClear(_CountingTurn):
+    """Turn (left by default) until the way ahead is clear; the angle goes to the Pledge counter.
+
+    Example (YAML)::
+
+        - TurnUntilClear: {direction: left}
+    """
+
+    yaml_name = "TurnUntilClear"
+    Params = TurnUntilClearParams
+
+    def start(self) -> None:
+        super().start()
+        self.clear_at: float | None = None
+
+    def step(self) -> Status:
+        counter = self.count()
+        scan = self.robot.proximity()
+        assert scan is not None
+        sign = 1.0 if self.params.direction == "left" else -1.0
+        if self.clear_at is None and not _blocked(scan, self.params.thresholds):
+            self.clear_at = counter
+        if self.clear_at is not None:
+            remaining = self.params.margin - abs(counter - self.clear_at)
+            if remaining <= 0.002:
+                self.robot.drive(0.0, 0.0)
+                return Status.SUCCESS
+            rate = approach_speed(remaining, self.params.speed, 5.0, 0.02, self.ctx.tick_period)
+            self.robot.drive(0.0, sign * rate)
+            self.feedback_message = "clear: turning the margin"
+            return Status.RUNNING
+        self.robot.drive(0.0, sign * self.params.speed)
+        self.feedback_message = "blocked ahead: turning"
+        return Status.RUNNING
+
+
+class TurnBackParams(_CounterParams):
+    """turning_right: turn the Pledge counter back to zero."""
+
+    tolerance: float = Field(0.01, gt=0, le=0.5, description="back on course within this angle",
+                             json_schema_extra={"unit": "rad"})
+
+
+class TurnBack(_CountingTurn):
+    """Turn back towards the heading avoidance started from (the counter back to zero): SUCCESS
+    there; FAILURE as soon as an obstacle is ahead (so the avoidance turns left again).
+
+    Example (YAML)::
+
+        - TurnBack: {}
+    """
+
+    yaml_name = "TurnBack"
+    Params = TurnBackParams
+
+    def step(self) -> Status:
+        counter = self.count()
+        if abs(counter) <= self.params.tolerance:
+            self.robot.drive(0.0, 0.0)
+            self.board.set(self.params.counter, 0.0)
+            self.feedback_message = "back on course"
+            return Status.SUCCESS
+        scan = self.robot.proximity()
+        assert scan is not None
+        if _blocked(scan, self.params.thresholds):
+            self.robot.drive(0.0, 0.0)
+            return self.fail(FailureCode.BLOCKED, "obstacle ahead: turn away again")
+        rate = approach_speed(abs(counter), self.params.speed, 5.0, 0.02, self.ctx.tick_period)
+        self.robot.drive(0.0, -math.copysign(rate, counter))
+        self.feedback_message = f"{math.degrees(counter):.1f} deg to turn back"
+        return Status.RUNNING
+
+
+class SetBlackboardParams(BehaviourParams):
+    """Write a value on the blackboard."""
+
+    key: str = Field(description="the key")
+    value: float | str | bool = Field(description="the value")
+
+
+class SetBlackboard(RobotBehaviour):
+    """Write ``value`` under ``key`` (e.g. reset a counter) and succeed.
+
+    Example (YAML)::
+
+        - SetBlackboard: {key: avoid_turn, value: 0}
+    """
+
+    yaml_name = "SetBlackboard"
+    Params = SetBlackboardParams
+    needs_robot = False
+    emits_events = False
+    fails_on_collision = False
+
+    def __init__(self, name: str, params: SetBlackboardParams, ctx: Context, **kwargs: object) -> None:
+        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
+        self.board = self.attach_blackboard_client(name=f"{name}_writer")
+        self.board.register_key(params.key, access=Access.WRITE)
+
+    def step(self) -> Status:
+        self.board.set(self.params.key, self.params.value)
+        return Status.SUCCESS
