@@ -79,12 +79,17 @@ def _tokens(text: str) -> list[tuple[str, str]]:
 
 
 class _Parser:
+    """Recursive descent over tokens; every value carries its unit kind (None for plain numbers).
+
+    A unit binds to the number or parenthesis right before it (``2*$side - 10cm`` is
+    2·side − 0.1 m); adding quantities of different kinds, or multiplying two, is an error.
+    """
+
     def __init__(self, text: str, resolve: Callable[[str], Quantity] | None) -> None:
         self.text = text
         self.toks = _tokens(text)
         self.i = 0
         self.resolve = resolve
-        self.kind: str | None = None
 
     def peek(self) -> tuple[str, str] | None:
         return self.toks[self.i] if self.i < len(self.toks) else None
@@ -97,68 +102,80 @@ class _Parser:
         return tok
 
     def parse(self) -> Quantity:
-        value = self.expr()
-        tok = self.peek()
-        kind = self.kind
-        if tok and tok[0] == "unit":
-            self.i += 1
-            unit = tok[1]
-            if unit not in UNITS:
-                raise UnitError(f"unknown unit '{unit}' in '{self.text}' (known: m, cm, mm, deg, rad, "
-                                  "s, ms, m/s, cm/s, deg/s, rad/s)")
-            factor, kind = UNITS[unit]
-            value *= factor
+        value, kind = self.expr()
         if self.peek() is not None:
             raise UnitError(f"unexpected '{self.peek()[1]}' in '{self.text}'")  # type: ignore[index]
         return Quantity(value, kind)
 
-    def expr(self) -> float:
-        value = self.term()
-        while (tok := self.peek()) and tok[1] in "+-" and tok[0] == "op":
-            self.i += 1
-            rhs = self.term()
-            value = value + rhs if tok[1] == "+" else value - rhs
-        return value
+    def _combine(self, a: str | None, b: str | None, op: str) -> str | None:
+        if a and b and (op in "*/" or a != b):
+            def named(k: str) -> str:
+                return ("an " if k[0] in "aeiou" else "a ") + k
 
-    def term(self) -> float:
-        value = self.unary()
-        while (tok := self.peek()) and tok[1] in "*/" and tok[0] == "op":
+            what = "multiply or divide two values with units" if op in "*/" else f"add {named(a)} and {named(b)}"
+            raise UnitError(f"cannot {what} in '{self.text}'".replace("_", " "))
+        return a or b
+
+    def expr(self) -> tuple[float, str | None]:
+        value, kind = self.term()
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":
             self.i += 1
-            rhs = self.unary()
+            rhs, rkind = self.term()
+            kind = self._combine(kind, rkind, tok[1])
+            value = value + rhs if tok[1] == "+" else value - rhs
+        return value, kind
+
+    def term(self) -> tuple[float, str | None]:
+        value, kind = self.unary()
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "*/":
+            self.i += 1
+            rhs, rkind = self.unary()
+            kind = self._combine(kind, rkind, tok[1])
             if tok[1] == "/":
                 if rhs == 0:
                     raise UnitError(f"division by zero in '{self.text}'")
                 value /= rhs
             else:
                 value *= rhs
-        return value
+        return value, kind
 
-    def unary(self) -> float:
+    def unary(self) -> tuple[float, str | None]:
         tok = self.peek()
         if tok and tok[0] == "op" and tok[1] in "+-":
             self.i += 1
-            value = self.unary()
-            return -value if tok[1] == "-" else value
-        return self.atom()
+            value, kind = self.unary()
+            return (-value if tok[1] == "-" else value), kind
+        return self.unit(*self.atom())
 
-    def atom(self) -> float:
+    def unit(self, value: float, kind: str | None) -> tuple[float, str | None]:
+        tok = self.peek()
+        if not tok or tok[0] != "unit" or tok[1] == "pi":
+            return value, kind
+        self.i += 1
+        if tok[1] not in UNITS:
+            raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}' (known: m, cm, mm, deg, rad, "
+                            "s, ms, m/s, cm/s, deg/s, rad/s)")
+        if kind is not None:
+            raise UnitError(f"'{tok[1]}' follows a value that already has a unit in '{self.text}'")
+        factor, unit_kind = UNITS[tok[1]]
+        return value * factor, unit_kind
+
+    def atom(self) -> tuple[float, str | None]:
         kind, text = self.take()
         if kind == "num":
-            return float(text)
+            return float(text), None
         if kind == "op" and text == "(":
             value = self.expr()
             if self.take() != ("op", ")"):
                 raise UnitError(f"missing ')' in '{self.text}'")
             return value
         if kind == "unit" and text == "pi":
-            return math.pi
+            return math.pi, None
         if kind == "ref":
             if self.resolve is None:
                 raise UnitError(f"'{text}' refers to a parameter, but none are defined here")
             quantity = self.resolve(text[1:])
-            if quantity.kind:
-                self.kind = quantity.kind
-            return quantity.value
+            return quantity.value, quantity.kind
         raise UnitError(f"expected a number in '{self.text}', found '{text}'")
 
 

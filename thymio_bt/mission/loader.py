@@ -40,6 +40,8 @@ DECORATOR_KEYS = {"repeat": ("times", "until", "do"), "retry": ("times", "do"), 
                   "invert": ("do",), "force_success": ("do",), "force_failure": ("do",)}
 UNIT_KIND = {"m": "length", "rad": "angle", "m/s": "speed", "rad/s": "angular_speed", "s": "time"}
 MAX_DEPTH = 64
+#: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
+MAX_NODES = 20_000
 
 Where = tuple[str, int, int]
 
@@ -77,6 +79,8 @@ class MissionLoader:
         self.maze: Maze | None = None
         self.root_scope = _Scope({})
         self.included_parameters: list[tuple[MarkedDict, str]] = []
+        self.node_count = 0
+        self.too_deep: set[Where] = set()
 
     # ------------------------------------------------------------ helpers
     def problem(self, message: str, where: Where, path: str = "", hint: str = "") -> None:
@@ -410,8 +414,16 @@ class MissionLoader:
              subtree_stack: tuple[str, ...]) -> NodePlan | None:
         """One tree node: ``{Type: body}``, or a bare ``Type`` string for a node without parameters."""
         file = where[0]
+        self.node_count += 1
+        if self.node_count > MAX_NODES:
+            if self.node_count == MAX_NODES + 1:
+                self.problem(f"the tree expands to more than {MAX_NODES} nodes", where, path,
+                             "subtrees that use other subtrees several times multiply; simplify the tree")
+            return None
         if depth > MAX_DEPTH:
-            self.problem(f"the tree is nested deeper than {MAX_DEPTH} levels", where, path)
+            if where not in self.too_deep:      # once per place, not once per subtree expansion
+                self.too_deep.add(where)
+                self.problem(f"the tree is nested deeper than {MAX_DEPTH} levels", where, path)
             return None
         if isinstance(value, str):
             kind, body, body_where = value, None, where
