@@ -181,3 +181,24 @@ def test_walls_are_boxes_that_extend_half_their_thickness_past_each_end():
     assert xs[0] == pytest.approx(-0.005) and xs[-1] == pytest.approx(0.605)
     maze = Maze(walls=[wall])
     assert maze.bounds() == pytest.approx((-0.005, -0.005, 0.605, 0.005))
+
+
+def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
+    import random
+
+    rng = random.Random(7)
+    maze = load_maze("mazes/maze_6x6.yaml")
+    checked = 0
+    while checked < 300:
+        pose = Pose(rng.uniform(-0.8, 0.4), rng.uniform(-1.0, 0.2), rng.uniform(-math.pi, math.pi))
+        probe = Simulation(maze)
+        if probe.spawn_problem("thymio", pose):
+            continue
+        sim = Simulation(maze, spawn=pose)               # the spawn computes the clearance once
+        walls = [s for s in sim.space.shapes if s.collision_type == 2]
+        entity = sim._entities["thymio"]
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        exact = sim._exact_gap(entity, walls, pose.x, pose.y, c, s)
+        if exact < 0.05:                                 # within the tracked horizon
+            assert sim.min_clearance == pytest.approx(exact, abs=1e-9)
+            checked += 1

@@ -51,6 +51,9 @@ class Pose:
     def as_dict(self) -> dict[str, float]:
         return {"x": self.x, "y": self.y, "yaw": self.yaw}
 
+    def as_tuple(self) -> tuple[float, float, float]:
+        return (self.x, self.y, self.yaw)
+
     def distance_to(self, other: "Pose") -> float:
         return math.hypot(other.x - self.x, other.y - self.y)
 

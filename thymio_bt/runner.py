@@ -157,7 +157,7 @@ class Run:
     def _record(self) -> None:
         pose = self.sim.true_pose()
         if pose is not None:
-            self.trajectory.append((self.sim.time(), pose.x, pose.y, pose.yaw))
+            self.trajectory.append((self.sim.time(), *pose.as_tuple()))
 
 
 class NodeStats(py_trees.visitors.VisitorBase):

@@ -147,7 +147,14 @@ def _expanded_size(root: Node) -> tuple[int, int] | None:
 
 def loads_yaml(text: str, filename: str = "<input>") -> Any:
     """Parse YAML text safely; raise :class:`UserError` with file:line:col on any problem."""
-    loader = _Loader(text, filename)
+    try:
+        loader = _Loader(text, filename)     # the reader rejects control characters right here
+    except yaml.reader.ReaderError as exc:
+        pos = exc.position
+        line, col = text.count("\n", 0, pos) + 1, pos - text.rfind("\n", 0, pos)
+        char = f"U+{exc.character:04X}" if isinstance(exc.character, int) else repr(exc.character)
+        raise UserError(Problem(f"invalid YAML: the character {char} is not allowed", filename, line, col,
+                                hint="remove it (YAML files may not hold control characters)")) from None
     try:
         node = loader.get_single_node()
         if node is None:

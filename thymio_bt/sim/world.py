@@ -37,6 +37,20 @@ _CLEARANCE_HORIZON = 0.05
 #: The hull point farthest from the axle is this far from it (the front arc, 0.080 m).
 _HULL_REACH = max(math.hypot(x - thymio.AXLE_X, y) for x, y in thymio.HULL)
 _HULL_FROM_AXLE = tuple((x - thymio.AXLE_X, y) for x, y in thymio.HULL)
+#: The hull's extent from the axle in each direction (1 degree steps), padded by the most it can
+#: grow within half a step, so it never underestimates: a cheap, safe support function.
+_EXTENT_STEP = math.radians(1.0)
+_HULL_EXTENT = tuple(
+    max(x * math.cos(i * _EXTENT_STEP) + y * math.sin(i * _EXTENT_STEP) for x, y in _HULL_FROM_AXLE)
+    + _HULL_REACH * _EXTENT_STEP / 2 for i in range(360))
+#: For each table direction, the hull vertices (from the axle) that can be its support point.
+_SUPPORT_CANDIDATES = tuple(
+    tuple(_HULL_FROM_AXLE[(k + j) % len(_HULL_FROM_AXLE)] for j in (-1, 0, 1))
+    for k in (max(range(len(_HULL_FROM_AXLE)),
+                  key=lambda v: _HULL_FROM_AXLE[v][0] * math.cos(i * _EXTENT_STEP)
+                  + _HULL_FROM_AXLE[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(360)))
+_set_velocity = pymunk.Body.velocity.fset                # skips pymunk's __setattr__ wrapper (hot path)
+_set_angular_velocity = pymunk.Body.angular_velocity.fset
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,12 +116,14 @@ class Simulation(Robot, Entities):
         self.space.collision_slop = 0.0002
         self.space.iterations = 10
         self._wall_frames: dict[pymunk.Shape, tuple[float, ...] | None] = {}
+        self._wall_corners: dict[pymunk.Shape, tuple[tuple[float, float], ...]] = {}
         for obstacle in maze.obstacles:
             shape = pymunk.Poly(self.space.static_body, obstacle.corners())
             shape.collision_type = _WALL_TYPE
             shape.friction = 1.0
             self.space.add(shape)
             self._wall_frames[shape] = None
+            self._wall_corners[shape] = tuple(obstacle.corners())
         for wall in maze.walls:
             shape = pymunk.Poly(self.space.static_body, wall.corners())
             shape.collision_type = _WALL_TYPE
@@ -117,6 +133,7 @@ class Simulation(Robot, Entities):
             ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
             self._wall_frames[shape] = ((x0 + x1) / 2, (y0 + y1) / 2, ux, uy,
                                         (wall.length + wall.thickness) / 2, wall.thickness / 2)
+            self._wall_corners[shape] = tuple(wall.corners())
         self.bounds = maze.bounds()
         self._dt = 1.0 / self.config.physics_hz
         self._steps = 0
@@ -125,7 +142,6 @@ class Simulation(Robot, Entities):
         self._requests: list[Request] = []
         self._cmd = Twist()
         self._applied = (0.0, 0.0)
-        self._steer = False
         self._scan: dict[str, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._contacts = 0
@@ -218,19 +234,19 @@ class Simulation(Robot, Entities):
         steps = round(duration / dt)
         if entity is not None and self.config.noise.odometry:
             self._integrate_odometry(steps * dt)
+        v, w = self._applied
+        aim = entity is not None and v != 0.0 and w != 0.0
         for _ in range(steps):
-            if entity is not None and (self._steer or self._contacts):
+            if entity is not None and (aim or self._contacts):
                 # keep the control body's velocity along the heading while the heading changes
-                v, w = self._applied
-                rot = entity.body.rotation_vector
-                entity.control.velocity = (v * rot.x, v * rot.y)
-                entity.control.angular_velocity = w
-                self._steer = w != 0.0
+                angle = entity.body.angle
+                _set_velocity(entity.control, (v * math.cos(angle), v * math.sin(angle)))
+                if self._contacts:
+                    _set_angular_velocity(entity.control, w)
             step(dt)
             self._steps += 1
-            if entity is not None:
-                if self._steps % self._sensor_every == 0:
-                    self._refresh_sensors(entity)
+            if entity is not None and self._steps % self._sensor_every == 0:
+                self._refresh_sensors(entity)
         self._serve_requests()
 
     def _apply_command(self) -> None:
@@ -240,8 +256,11 @@ class Simulation(Robot, Entities):
         fl, fr = self._noise.wheel_factors()
         v, w = thymio.body_velocity(left * fl, right * fr)
         self._applied = (v, w)
-        self._steer = True
         entity = self._entities.get(self.robot_name)
+        if entity is not None:
+            angle = entity.body.angle
+            _set_velocity(entity.control, (v * math.cos(angle), v * math.sin(angle)))
+            _set_angular_velocity(entity.control, w)
         if entity is not None and self._contacts == 0:
             # Chipmunk moves bodies before solving joints: seed the velocity so motion starts now.
             body = entity.body
@@ -277,7 +296,8 @@ class Simulation(Robot, Entities):
         body = entity.body
         flt = entity.shape.filter
         query = self.space.segment_query_first
-        cos, sin = body.rotation_vector
+        angle = body.angle
+        cos, sin = math.cos(angle), math.sin(angle)
         bx, by = body.position
         noise = self._noise
         scan: dict[str, float] = {}
@@ -293,51 +313,72 @@ class Simulation(Robot, Entities):
         self._update_clearance(entity, bx, by, cos, sin)
 
     def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
-        """Track the smallest hull-to-wall gap.
+        """Track the smallest hull-to-wall gap, exactly, cheaply in the common case.
 
-        A cheap lower bound comes first: the wall's closest point q to the axle, minus the hull's
-        extent towards q. It is exact when a wall faces a side or the nose, and only when it could
-        beat the record is the exact polygon distance computed.
+        For each wall near the axle, q is its closest point and n the direction to it. When q lies
+        on a long face of a wall box, the face's line is at distance d from the axle and the hull's
+        support point in direction n is nearest to it: if that point projects onto the face, the
+        gap is exactly d - extent(n). Otherwise (wall ends, corners, polygons) d - extent(n) is a
+        lower bound, and the polygon distance is computed only if the bound could beat the record.
         """
         ax, ay = bx + thymio.AXLE_X * cos, by + thymio.AXLE_X * sin
         record = min(self.min_clearance, _CLEARANCE_HORIZON)
+        best = math.inf
         candidates = []
         for info in self.space.point_query((ax, ay), _HULL_REACH + record, entity.shape.filter):
-            if info.shape.collision_type != _WALL_TYPE or info.distance <= 0.0:
-                if info.shape.collision_type == _WALL_TYPE:
-                    candidates.append(info.shape)
+            shape = info.shape
+            if shape.collision_type != _WALL_TYPE:
                 continue
-            qx, qy = (info.point.x - ax) / info.distance, (info.point.y - ay) / info.distance
-            lx, ly = qx * cos + qy * sin, qy * cos - qx * sin      # direction in the body frame
-            extent = max(x * lx + y * ly for x, y in _HULL_FROM_AXLE)
-            if info.distance - extent < record - 1e-6:
-                candidates.append(info.shape)
+            d = info.distance
+            if d <= 0.0:
+                candidates.append(shape)
+                continue
+            qx, qy = info.point.x, info.point.y
+            nx, ny = (qx - ax) / d, (qy - ay) / d
+            lx, ly = nx * cos + ny * sin, ny * cos - nx * sin      # n in the body frame
+            index = round(math.atan2(ly, lx) / _EXTENT_STEP) % len(_HULL_EXTENT)
+            frame = self._wall_frames[shape]
+            if frame is not None:
+                cx, cy, ux, uy, hl, _ = frame
+                if abs((qx - cx) * ux + (qy - cy) * uy) < hl - 1e-9:          # q on a long face
+                    vx, vy = max(_SUPPORT_CANDIDATES[index], key=lambda v: v[0] * lx + v[1] * ly)
+                    extent = vx * lx + vy * ly
+                    px = ax + vx * cos - vy * sin                              # the support point
+                    py = ay + vx * sin + vy * cos
+                    if abs((px - cx) * ux + (py - cy) * uy) <= hl:
+                        best = min(best, d - extent)
+                        continue
+            if d - _HULL_EXTENT[index] < record - 1e-6:
+                candidates.append(shape)
         if candidates:
-            gap = self._exact_gap(entity, candidates, bx, by, cos, sin)
-            if gap < self.min_clearance:
-                self.min_clearance = max(gap, 0.0)
+            best = min(best, self._exact_gap(entity, candidates, bx, by, cos, sin))
+        if best < self.min_clearance:
+            self.min_clearance = max(best, 0.0)
 
     def _exact_gap(self, entity: _Body, walls: list[pymunk.Shape], bx: float, by: float,
                    cos: float, sin: float) -> float:
-        """The exact distance between the hull and the nearest of ``walls`` (convex polygons)."""
+        """The exact distance between the hull and the nearest of ``walls`` (convex polygons):
+        hull vertices to each wall, then the wall corners that could be nearer than that to the hull."""
         hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in thymio.HULL]
+        ax, ay = bx + thymio.AXLE_X * cos, by + thymio.AXLE_X * sin
         gap = math.inf
         for wall in walls:
             frame = self._wall_frames[wall]
             if frame is None:                  # a polygon obstacle: ask pymunk
                 gap = min(gap, min(wall.point_query(p).distance for p in hull))
-                for corner in wall.get_vertices():
-                    gap = min(gap, entity.shape.point_query(corner).distance)
-                continue
-            cx, cy, ux, uy, hl, ht = frame
-            for px, py in hull:
-                dx, dy = px - cx, py - cy
-                ex = abs(dx * ux + dy * uy) - hl
-                ey = abs(dy * ux - dx * uy) - ht
-                d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
-                gap = min(gap, d)
-            for corner in wall.get_vertices():
-                gap = min(gap, entity.shape.point_query(corner).distance)
+            else:
+                cx, cy, ux, uy, hl, ht = frame
+                for px, py in hull:
+                    dx, dy = px - cx, py - cy
+                    ex = abs(dx * ux + dy * uy) - hl
+                    ey = abs(dy * ux - dx * uy) - ht
+                    d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
+                    if d < gap:
+                        gap = d
+        for wall in walls:
+            for cx, cy in self._wall_corners[wall]:
+                if math.hypot(cx - ax, cy - ay) - _HULL_REACH < gap:    # could this corner be nearer?
+                    gap = min(gap, entity.shape.point_query((cx, cy)).distance)
         return gap
 
     # -------------------------------------------------------------- entities
@@ -347,7 +388,6 @@ class Simulation(Robot, Entities):
         if name == self.robot_name:
             self._odo = (pose.x + thymio.AXLE_X * math.cos(pose.yaw), pose.y + thymio.AXLE_X * math.sin(pose.yaw),
                          pose.yaw)
-        self._steer = True
         if name == self.robot_name:
             self._cmd = Twist()
             self._applied = (0.0, 0.0)
