@@ -202,3 +202,48 @@ def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
         if exact < 0.05:                                 # within the tracked horizon
             assert sim.min_clearance == pytest.approx(exact, abs=1e-9)
             checked += 1
+
+
+def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
+    """fastpath calls pymunk's C step and ray query directly; the public API must agree bit for bit,
+    through collisions, a delete and a respawn (the course mission) and with noise on."""
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+    from thymio_bt.sim import world as world_module
+
+    class PublicRays:
+        def __init__(self, space):
+            self.space = space
+
+        def alpha(self, start, end, shape_filter):
+            hit = self.space.segment_query_first(start, end, 0.0, shape_filter)
+            return None if hit is None else hit.alpha
+
+    mission = load_mission("missions/maze_part1_2.yaml", overrides={"noise.wheel": "0.027", "noise.range_sd": "0.001"})
+
+    def run(seed):
+        result = Run(mission, seed=seed).run()
+        return result.trajectory, result.events, result.collisions
+
+    fast = [run(seed) for seed in (0, 7)]
+    monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
+    monkeypatch.setattr(world_module, "RayCaster", PublicRays)
+    assert [run(seed) for seed in (0, 7)] == fast
+
+
+def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatch):
+    from thymio_bt.sim import world as world_module
+
+    def crash():
+        sim = Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0))
+        sim.drive(0.2, 0.3)
+        trace = []
+        for _ in range(40):
+            sim.advance(0.1)
+            trace.append((sim.true_pose(), dict(sim.proximity())))
+        return trace, sim.collisions
+
+    fast = crash()
+    assert fast[1], "the robot must hit a wall in this world"
+    monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
+    assert crash() == fast

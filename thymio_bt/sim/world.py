@@ -28,6 +28,7 @@ import pymunk
 from ..maze import Maze
 from ..robot import ROBOT_ENTITY, Entities, Pose, Request, RequestState, Robot, Scan, Twist
 from . import thymio
+from .fastpath import RayCaster, stepper
 from .noise import NoiseConfig, NoiseSource
 
 _ROBOT_TYPE = 1
@@ -81,7 +82,8 @@ class _Body:
         self.shape = pymunk.Poly(self.body, thymio.HULL)
         self.shape.friction = 0.1          # the skid's mu in the URDF
         self.shape.collision_type = _ROBOT_TYPE
-        self.shape.filter = pymunk.ShapeFilter(group=group)
+        self.filter = pymunk.ShapeFilter(group=group)     # rays and queries skip the robot's own shape
+        self.shape.filter = self.filter
         self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (thymio.AXLE_X, 0.0))
         pivot.max_bias = 0.0               # a pure velocity constraint: drift is not corrected
@@ -136,6 +138,8 @@ class Simulation(Robot, Entities):
             self._wall_corners[shape] = tuple(wall.corners())
         self.bounds = maze.bounds()
         self._dt = 1.0 / self.config.physics_hz
+        self._step = stepper(self.space)
+        self._ray = RayCaster(self.space)
         self._steps = 0
         self._noise = NoiseSource(self.config.noise, self.config.seed)
         self._entities: dict[str, _Body] = {}
@@ -230,7 +234,7 @@ class Simulation(Robot, Entities):
     def advance(self, duration: float) -> None:
         """Run the physics for ``duration`` seconds of simulated time, then serve pending requests."""
         entity = self._entities.get(self.robot_name)
-        step, dt = self.space.step, self._dt
+        step, dt = self._step, self._dt
         steps = round(duration / dt)
         if entity is not None and self.config.noise.odometry:
             self._integrate_odometry(steps * dt)
@@ -294,20 +298,20 @@ class Simulation(Robot, Entities):
 
     def _refresh_sensors(self, entity: _Body) -> None:
         body = entity.body
-        flt = entity.shape.filter
-        query = self.space.segment_query_first
+        flt = entity.filter
+        query = self._ray.alpha
         angle = body.angle
         cos, sin = math.cos(angle), math.sin(angle)
         bx, by = body.position
         noise = self._noise
         scan: dict[str, float] = {}
         for name, (sx, sy), (ex, ey) in self._rays:
-            hit = query((bx + sx * cos - sy * sin, by + sx * sin + sy * cos),
-                        (bx + ex * cos - ey * sin, by + ex * sin + ey * cos), 0.0, flt)
-            if hit is None:
+            alpha = query((bx + sx * cos - sy * sin, by + sx * sin + sy * cos),
+                          (bx + ex * cos - ey * sin, by + ex * sin + ey * cos), flt)
+            if alpha is None:
                 scan[name] = math.inf
                 continue
-            value = max(hit.alpha * thymio.RANGE_MAX, thymio.RANGE_MIN)
+            value = max(alpha * thymio.RANGE_MAX, thymio.RANGE_MIN)
             scan[name] = noise.range(value, thymio.RANGE_MIN, thymio.RANGE_MAX)
         self._scan = scan
         self._update_clearance(entity, bx, by, cos, sin)
@@ -325,7 +329,7 @@ class Simulation(Robot, Entities):
         record = min(self.min_clearance, _CLEARANCE_HORIZON)
         best = math.inf
         candidates = []
-        for info in self.space.point_query((ax, ay), _HULL_REACH + record, entity.shape.filter):
+        for info in self.space.point_query((ax, ay), _HULL_REACH + record, entity.filter):
             shape = info.shape
             if shape.collision_type != _WALL_TYPE:
                 continue
