@@ -246,27 +246,51 @@ def _sweep_table(data: dict[str, Any]) -> None:
 
 
 @main.command()
-@click.argument("missions", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check with these overrides.")
-def validate(missions: tuple[Path, ...], sets: tuple[str, ...]) -> None:
-    """Check MISSIONS (and the mazes they name) without running them."""
-    from .mission import load_mission
-    from .sim import Simulation
-
+@click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check missions with these overrides.")
+def validate(files: tuple[Path, ...], sets: tuple[str, ...]) -> None:
+    """Check mission FILES (and the mazes they name) or maze files without running anything."""
     bad = 0
-    for path in missions:
+    for path in files:
         try:
-            spec = load_mission(path, _overrides(sets))
-            problem = Simulation(spec.maze).spawn_problem("thymio", spec.start)
-            if problem:
-                raise UserError(f"{path}: impossible start pose: {problem}")
-            nodes = sum(1 for _ in spec.tree.walk())
-            click.echo(f"ok: {path} ({nodes} nodes, maze {spec.maze.name})")
+            click.echo(f"ok: {path} ({_check_file(path, _overrides(sets))})")
         except UserError as exc:
             bad += 1
             for problem in exc.problems:
                 click.echo(f"error: {problem}", err=True)
     sys.exit(2 if bad else 0)
+
+
+def _check_file(path: Path, overrides: dict[str, str]) -> str:
+    """Validate one mission or maze file (a maze has ``walls:`` or ``grid:`` and no ``tree:``)."""
+    from .errors import Problem
+    from .sim import Simulation
+    from .yamlio import load_yaml
+
+    data = load_yaml(path)
+    if isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
+        from .maze import load_maze
+
+        maze = load_maze(path)
+        sim = Simulation(maze)
+        spawns = data.get("spawns") if "grid" not in data else None
+        problems = [Problem(f"spawn '{name}' is impossible: {why}", str(path),
+                            *(getattr(spawns, "marks", {}).get(name, (0, 0))), f"spawns.{name}",
+                            "move it into a free cell, away from the walls")
+                    for name, spawn in maze.spawns.items()
+                    if (why := sim.spawn_problem("thymio", spawn.pose()))]
+        if problems:
+            raise UserError(problems)
+        return f"maze: {len(maze.walls)} walls, {len(maze.obstacles)} obstacles, spawns {', '.join(maze.spawns) or 'none'}"
+    from .mission import load_mission
+
+    spec = load_mission(path, overrides)
+    problem = Simulation(spec.maze).spawn_problem("thymio", spec.start)
+    if problem:
+        raise UserError(Problem(f"impossible start pose: {problem}", *spec.start_where, "start",
+                                "pick a free pose inside the maze, e.g. a named spawn of the maze"))
+    nodes = sum(1 for _ in spec.tree.walk())
+    return f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
 
 
 @main.command()

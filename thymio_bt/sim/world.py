@@ -33,8 +33,6 @@ from .noise import NoiseConfig, NoiseSource
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
-#: How far from a wall the clearance is measured exactly; farther counts as "clear".
-_CLEARANCE_HORIZON = 0.05
 #: The hull point farthest from the axle is this far from it (the front arc, 0.080 m).
 _HULL_REACH = max(math.hypot(x - thymio.AXLE_X, y) for x, y in thymio.HULL)
 _HULL_FROM_AXLE = tuple((x - thymio.AXLE_X, y) for x, y in thymio.HULL)
@@ -137,6 +135,8 @@ class Simulation(Robot, Entities):
                                         (wall.length + wall.thickness) / 2, wall.thickness / 2)
             self._wall_corners[shape] = tuple(wall.corners())
         self.bounds = maze.bounds()
+        xmin, ymin, xmax, ymax = self.bounds
+        self._farthest_gap = math.hypot(xmax - xmin, ymax - ymin)     # no gap inside the maze exceeds it
         self._dt = 1.0 / self.config.physics_hz
         self._step = stepper(self.space)
         self._ray = RayCaster(self.space)
@@ -326,7 +326,7 @@ class Simulation(Robot, Entities):
         lower bound, and the polygon distance is computed only if the bound could beat the record.
         """
         ax, ay = bx + thymio.AXLE_X * cos, by + thymio.AXLE_X * sin
-        record = min(self.min_clearance, _CLEARANCE_HORIZON)
+        record = min(self.min_clearance, self._farthest_gap)
         best = math.inf
         candidates = []
         for info in self.space.point_query((ax, ay), _HULL_REACH + record, entity.filter):

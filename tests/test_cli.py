@@ -1,0 +1,79 @@
+"""The CLI contract of DESIGN.md: exit codes, the run report's fields, --maze/--start, and validate."""
+
+import json
+import math
+
+from click.testing import CliRunner
+
+from thymio_bt.cli import main
+from thymio_bt.robot import SENSOR_NAMES
+
+
+def invoke(*args):
+    return CliRunner().invoke(main, [str(a) for a in args])
+
+
+def test_run_writes_the_report_of_the_contract_and_exits_0(tmp_path):
+    out = tmp_path / "report.json"
+    result = invoke("run", "missions/square.yaml", "--report", out, "--quiet", "--seed", 3)
+    assert result.exit_code == 0 and result.output == ""
+    report = json.loads(out.read_text())
+    assert report["status"] == "SUCCESS" and report["reason"] is None and report["seed"] == 3
+    assert report["ticks"] == round(report["sim_time"] * 10) + 1 and report["wall_time"] > 0   # ticks at 0 and at the end
+    assert set(report["final_pose"]) == {"x", "y", "yaw"}
+    assert set(report["final_proximity"]) == set(SENSOR_NAMES)
+    assert report["collisions"] == 0 and report["min_clearance"] > 0
+    times = [e["t"] for e in report["events"]]
+    assert times == sorted(times)
+    ends = [e for e in report["events"] if e["kind"] == "behaviour_end"]
+    assert ends and all({"name", "path", "status", "pose", "proximity"} <= set(e) for e in ends)
+    turns = [e for e in ends if e["name"] == "TurnAngle"]
+    assert [round(e["angle"], 3) for e in turns] == [round(math.pi / 2, 3)] * len(turns) and turns
+
+
+def test_a_run_that_hits_its_time_limit_exits_1_and_names_the_running_node(tmp_path):
+    out = tmp_path / "report.json"
+    result = invoke("run", "missions/maze_part1_2.yaml", "--set", "time_limit=3", "--report", out)
+    assert result.exit_code == 1
+    report = json.loads(out.read_text())
+    assert report["status"] == "TIMEOUT" and "time limit" in report["reason"]
+    assert report["failed_path"] == "course/part 1"      # the MoveUntilWall named 'part 1'
+    assert report["code"] == "TIMEOUT"
+    assert "failed at:" in result.output
+
+
+def test_maze_and_start_override_the_mission(tmp_path):
+    out = tmp_path / "report.json"
+    result = invoke("run", "missions/square.yaml", "--maze", "mazes/report_arena.yaml", "--start=-0.3,-0.3,pi/2",
+                    "--report", out, "-q")
+    assert result.exit_code == 0, result.output
+    report = json.loads(out.read_text())
+    t, x, y, yaw = report["trajectory"][0]
+    assert (t, x, y) == (0.0, -0.3, -0.3) and math.isclose(yaw, math.pi / 2, abs_tol=1e-6)
+    assert report["final_pose"]["x"] == -0.3 or abs(report["final_pose"]["x"] + 0.3) < 0.01
+
+
+def test_validate_checks_missions_and_maze_files():
+    result = invoke("validate", "missions/maze_part1_2.yaml", "mazes/two_parts_maze.yaml", "mazes/arena.yaml")
+    assert result.exit_code == 0, result.output
+    assert "ok: mazes/two_parts_maze.yaml (maze: 21 walls, 0 obstacles, spawns part1, part2, bonus)" in result.output
+    assert "ok: missions/maze_part1_2.yaml (15 nodes, maze two_parts_maze)" in result.output
+
+
+def test_validate_reports_every_impossible_spawn_of_a_maze_with_its_line(tmp_path):
+    maze = tmp_path / "maze.yaml"
+    maze.write_text("name: box\nwalls:\n  - {from: [0, 0], to: [0.4, 0]}\n  - {from: [0, 0.4], to: [0.4, 0.4]}\n"
+                    "spawns:\n  inside: [0.2, 0.2, 0]\n  in_wall: [0.2, 0.01, 0]\n  outside: [0.9, 0.2, 0]\n")
+    result = invoke("validate", maze)
+    assert result.exit_code == 2
+    assert f"{maze}:7:3: spawn 'in_wall' is impossible" in result.output
+    assert f"{maze}:8:3: spawn 'outside' is impossible" in result.output
+    assert "'inside'" not in result.output and "Traceback" not in result.output
+
+
+def test_validate_gives_the_line_of_an_impossible_start_pose(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text("name: m\nmaze: arena\nstart: [0.0, 0.0, 0]\ntree:\n  Stop: {}\n")
+    result = invoke("validate", mission)
+    assert result.exit_code == 2
+    assert f"{mission}:3:8: impossible start pose" in result.output
