@@ -26,7 +26,7 @@ def test_plugin_parameters_are_validated_like_builtins(tmp_path):
         load_mission(mission)
     problem = err.value.problems[0]
     assert (problem.line, problem.column) == (5, 26)
-    assert "expected angular speed" in problem.message
+    assert "angular speed" in problem.message and "got a length" in problem.message
 
 
 def test_a_missing_plugin_is_a_user_error(tmp_path):
