@@ -153,6 +153,7 @@ class FollowWaypoints(RobotBehaviour):
                 self.extra = {"waypoint": self.index}
                 return Status.RUNNING
             self.ctx.events.emit(self.ctx.now(), "waypoint_reached", index=self.index,
+                                 target=list(waypoints[self.index]),
                                  pose={k: round(v, 6) for k, v in pose.as_dict().items()})
             self.index += 1
             self._publish()

@@ -113,6 +113,12 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
             ax.plot(event["x"], event["y"], "x", color="red", ms=9, mew=2, label=None if "collision" in labelled else "collision")
             labelled.add("collision")
             continue
+        elif kind == "waypoint_reached" and "target" in event:
+            x, y = event["target"]
+            ax.plot(x, y, "*", color="tab:green", ms=11, label=None if "waypoint" in labelled else "waypoint reached")
+            ax.annotate(str(event["index"] + 1), (x, y), textcoords="offset points", xytext=(6, 6), fontsize=9)
+            labelled.add("waypoint")
+            continue
         else:
             continue
         _draw_robot(ax, pose, colour, None if label in labelled else label, alpha=0.7)
