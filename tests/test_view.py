@@ -1,0 +1,149 @@
+"""The live window (run --view, replay --view), offscreen through SDL's dummy video driver."""
+
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from thymio_bt.errors import UserError
+from thymio_bt.maze import Maze
+from thymio_bt.mission import load_mission
+from thymio_bt.recording import Recorder, read_log
+from thymio_bt.runner import Run
+from thymio_bt.testing import world
+from thymio_bt.viz import window
+from thymio_bt.viz.window import Frame, Viewer, ViewerClosed, live_hook, replay
+
+FAST = 1e9          # a speed-up at which the pacing never waits
+
+
+@pytest.fixture
+def pg(monkeypatch):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
+    return pytest.importorskip("pygame")
+
+
+def _key(pg, key):
+    pg.event.post(pg.event.Event(pg.KEYDOWN, key=key))
+
+
+def _colours(pg, path):
+    pixels = pg.surfarray.array3d(pg.image.load(str(path))).reshape(-1, 3).astype(np.int64)
+    packed = np.unique(pixels @ np.array([1 << 16, 1 << 8, 1]))
+    return {(int(c) >> 16, (int(c) >> 8) & 255, int(c) & 255) for c in packed}
+
+
+def test_a_live_view_draws_every_tick_and_leaves_the_run_unchanged(pg, tmp_path):
+    plain = Run(load_mission("missions/square.yaml")).run()
+    run = Run(load_mission("missions/square.yaml"))
+    view = live_hook(run, FAST, max_fps=None)
+    screenshot = tmp_path / "frame.png"
+
+    def hook(r):
+        view(r)
+        if r.ticks == 60:
+            view.viewer.save(screenshot)
+
+    result = run.run(on_tick=hook)
+    view.finish(result)
+    assert view.viewer.frames == result.ticks + 1                     # every tick, and the outcome
+    assert result.final_pose == plain.final_pose and result.trajectory == plain.trajectory
+    colours = _colours(pg, screenshot)
+    assert len(colours) > 5 and {window.WALL, window.ROBOT_FILL, window.TRAIL} <= colours
+
+
+def test_frames_come_no_earlier_than_their_time_divided_by_the_speedup(pg):
+    with_view = Viewer(Maze(), speedup=20, max_fps=None)
+    began = time.perf_counter()
+    for tick in range(6):
+        with_view.show(Frame(tick * 0.1, {"x": 0.0, "y": 0.0, "yaw": 0.0}, {}))
+    with_view.close()
+    assert 0.5 / 20 <= time.perf_counter() - began < 1.0
+
+
+def test_rays_are_drawn_at_the_pose_hit_ones_in_red_with_y_up(pg, tmp_path):
+    viewer = Viewer(world("corridor"), FAST, max_fps=None)
+    assert viewer.to_screen(0.0, 0.2)[1] < viewer.to_screen(0.0, 0.0)[1]      # y up
+    pose = {"x": 0.1, "y": 0.1, "yaw": 0.0}
+    viewer.show(Frame(0.0, pose, {"front_center": None}))
+    assert window.RAY_HIT not in _colours(pg, viewer.save(tmp_path / "free.png"))
+    viewer.show(Frame(0.1, pose, {"front_center": 0.05}))
+    hit = viewer.to_screen(0.1 + 0.0557 + 0.05, 0.1)
+    assert tuple(viewer.screen.get_at((round(hit[0]), round(hit[1]))))[:3] == window.RAY_HIT
+    viewer.close()
+
+
+def test_the_view_grows_when_the_robot_leaves_the_maze(pg):
+    viewer = Viewer(world("corridor"), FAST, max_fps=None)
+    viewer.show(Frame(0.0, {"x": 2.0, "y": -1.0, "yaw": 0.0}, {}))
+    x, y = viewer.to_screen(2.0, -1.0)
+    width, height = viewer.screen.get_size()
+    assert 0 < x < width and window.BAR_HEIGHT < y < height
+    viewer.close()
+
+
+def test_replay_of_a_log_draws_its_frames(pg, tmp_path):
+    run = Run(load_mission("missions/square.yaml"))
+    recorder = Recorder(log_path=tmp_path / "run.jsonl", keep=False)
+    recorder.finish(run.run(on_tick=recorder))
+    recording = read_log(tmp_path / "run.jsonl")
+    viewer = replay(recording, FAST, max_fps=None)
+    assert viewer.shown == len(recording.samples) and viewer.frames == len(recording.samples) + 1
+
+
+def test_pause_waits_and_single_step_advances_one_tick(pg):
+    viewer = Viewer(Maze(), FAST, max_fps=None)
+    pose = {"x": 0.0, "y": 0.0, "yaw": 0.0}
+    for key in (pg.K_SPACE, pg.K_n, pg.K_RIGHT):
+        _key(pg, key)
+    viewer.show(Frame(0.0, pose, {}))           # SPACE pauses, N steps past this tick
+    viewer.show(Frame(0.1, pose, {}))           # RIGHT steps past this one
+    assert viewer.paused and viewer.shown == 2
+    pg.time.set_timer(pg.event.Event(pg.KEYDOWN, key=pg.K_SPACE), 150, 1)
+    began = time.perf_counter()
+    viewer.show(Frame(0.2, pose, {}))           # no key queued: waits, paused, until SPACE resumes
+    assert time.perf_counter() - began >= 0.1 and not viewer.paused
+    viewer.close()
+
+
+def test_plus_and_minus_change_the_speedup(pg):
+    viewer = Viewer(Maze(), 100.0, max_fps=None)
+    for key in (pg.K_PLUS, pg.K_EQUALS, pg.K_MINUS):
+        _key(pg, key)
+    viewer.show(Frame(0.0, None, {}))
+    assert viewer.speedup == 200.0
+    viewer.close()
+
+
+@pytest.mark.parametrize("close", ["q", "escape", "window"])
+def test_closing_the_window_stops_a_live_run(pg, close):
+    run = Run(load_mission("missions/square.yaml"))
+    view = live_hook(run, FAST)
+    if close == "window":
+        pg.event.post(pg.event.Event(pg.QUIT))
+    else:
+        _key(pg, {"q": pg.K_q, "escape": pg.K_ESCAPE}[close])
+    with pytest.raises(ViewerClosed):
+        run.run(on_tick=view)
+    assert run.ticks == 1
+
+
+def test_a_replay_closed_early_just_ends(pg, tmp_path):
+    run = Run(load_mission("missions/square.yaml"))
+    recorder = Recorder()
+    recording = recorder.finish(run.run(on_tick=recorder))
+    pg.display.init()                           # to queue the key before replay opens its window
+    _key(pg, pg.K_q)
+    assert replay(recording, FAST).shown == 1
+
+
+def test_without_pygame_the_error_says_how_to_install_it(monkeypatch):
+    monkeypatch.setitem(sys.modules, "pygame", None)
+    with pytest.raises(UserError, match=r"pygame is not installed \(hint: pip install 'thymio-bt\[viz\]'\)"):
+        Viewer(Maze())
+
+
+def test_a_speedup_must_be_positive():
+    with pytest.raises(UserError, match="speed-up must be > 0"):
+        Viewer(Maze(), speedup=0)

@@ -1,0 +1,367 @@
+"""A live pygame window of a run (``thymio-bt run --view``) or of a log (``thymio-bt replay --view``):
+the maze, the robot, its seven rays, the trajectory so far and the running node, paced at a chosen
+speed-up of simulated time, with pause and single-step keys.
+
+pygame is imported only when a window is opened (it is in the optional ``viz`` extra). The window
+only reads the simulation, so a run with a window ends exactly as one without. With
+``SDL_VIDEODRIVER=dummy`` it draws offscreen, which is how the tests run it.
+
+Keys: SPACE pause/resume, N or RIGHT one tick (and pause), + / - double/halve the speed-up,
+Q or ESC close. Closing the window of a live run raises :class:`ViewerClosed` out of
+:meth:`thymio_bt.runner.Run.run`, which has no other way to be stopped by a tick hook: the CLI
+catches it and ends the run there.
+
+Example::
+
+    view = live_hook(run, speedup=4)
+    try:
+        result = run.run(on_tick=view)
+        view.finish(result)
+    except ViewerClosed:
+        ...                                    # the user closed the window: the run stopped
+    replay(read_log("run.jsonl"), speedup=10)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..errors import UserError
+from ..maze import Maze
+from ..recording import Recording, _num
+from ..runner import Run, RunResult, _path
+from ..sim.thymio import RANGE_MAX
+from .plots import _outline, _rays
+
+#: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
+BACKGROUND = (250, 250, 250)
+WALL = (64, 64, 64)
+OBSTACLE = (31, 119, 180)
+TRAIL = (31, 119, 180)
+ROBOT_FILL = (174, 199, 232)
+ROBOT_EDGE = (0, 0, 0)
+RAY_HIT = (214, 39, 40)
+RAY_FREE = (180, 180, 180)
+BAR = (40, 40, 40)
+BAR_TEXT = (235, 235, 235)
+PAUSED_TEXT = (255, 190, 60)
+
+#: Height of the status bar (pixels), margin around the world (metres), and the largest jump of
+#: the base_link between ticks still drawn as one line (a larger one is a respawn, as in plots.py).
+BAR_HEIGHT = 26
+WORLD_MARGIN = 0.06
+TRAIL_JUMP = 0.05
+#: While waiting (paced or paused), look at the keyboard at least this often (milliseconds).
+IDLE_MS = 20
+KEYS_HELP = "SPACE pause   N step   + / - speed   Q quit"
+
+
+class ViewerClosed(Exception):
+    """The user closed the window (Q, ESC or the window's close button): end the run there."""
+
+
+@dataclass(frozen=True)
+class Frame:
+    """What one frame shows: simulated time, base_link pose (None while the robot is deleted),
+    proximity readings by sensor (None: nothing in range) and the running node's text."""
+
+    t: float
+    pose: dict[str, float] | None
+    prox: dict[str, float | None]
+    node: str = ""
+
+
+def _pygame() -> Any:
+    """pygame, imported on first use, or a :class:`UserError` telling how to install it."""
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")   # no banner on stdout
+    try:
+        import pygame
+    except ImportError:
+        raise UserError("pygame is not installed (hint: pip install 'thymio-bt[viz]')") from None
+    return pygame
+
+
+class Viewer:
+    """A pygame window drawing :class:`Frame` s of one run at ``speedup`` times real time.
+
+    :meth:`show` paces: the frame for simulated time ``t`` is shown no earlier than ``t / speedup``
+    seconds of wall time after the first frame (pauses and speed changes move that origin). Frames
+    that come faster than ``max_fps`` are added to the trail but not drawn (``None``: draw all).
+    ``hold`` keeps the window open after :meth:`finish` until it is closed; by default it does
+    unless the video driver is ``dummy`` or ``offscreen`` (nobody could close it).
+    """
+
+    def __init__(self, maze: Maze, speedup: float = 1.0, title: str = "thymio-bt",
+                 size: tuple[int, int] = (1000, 640), include: Iterable[tuple[float, float]] = (),
+                 max_fps: float | None = 60.0, hold: bool | None = None) -> None:
+        if not speedup > 0:
+            raise UserError(f"the speed-up must be > 0, got {speedup:g} (hint: --speedup 4)")
+        self.pg = pg = _pygame()
+        try:
+            pg.display.init()
+            self.screen = pg.display.set_mode(size, pg.RESIZABLE)
+        except pg.error as exc:
+            raise UserError(f"cannot open a window: {exc} (hint: run where there is a display, "
+                            "or set SDL_VIDEODRIVER=dummy to draw offscreen)") from None
+        pg.font.init()
+        pg.display.set_caption(title)
+        self.font = pg.font.Font(None, 22)
+        self.small = pg.font.Font(None, 18)
+        self.maze = maze
+        self.speedup = float(speedup)
+        self.paused = False
+        self.frames = 0            # frames drawn
+        self.shown = 0             # frames given to show()
+        self.outcome = ""
+        self.hold = pg.display.get_driver() not in ("dummy", "offscreen") if hold is None else hold
+        self._min_interval = 1.0 / max_fps if max_fps else 0.0
+        self._last_draw = -math.inf
+        self._anchor: tuple[float, float] | None = None   # (simulated t, wall time) of the pacing origin
+        self._frame: Frame | None = None
+        self._trail: list[list[tuple[float, float]]] = []
+        self._open = True
+        empty = (math.inf, math.inf, -math.inf, -math.inf)
+        xmin, ymin, xmax, ymax = maze.bounds() if maze.walls or maze.obstacles else empty
+        for x, y in include:
+            xmin, ymin, xmax, ymax = min(xmin, x), min(ymin, y), max(xmax, x), max(ymax, y)
+        if not math.isfinite(xmin):
+            xmin = ymin = xmax = ymax = 0.0
+        self._box = (xmin - WORLD_MARGIN, ymin - WORLD_MARGIN, xmax + WORLD_MARGIN, ymax + WORLD_MARGIN)
+        self._fit()
+
+    # ------------------------------------------------------------------ geometry
+    def _fit(self) -> None:
+        """The world→screen transform fitting the world box under the status bar, y up."""
+        width, height = self.screen.get_size()
+        x0, y0, x1, y1 = self._box
+        span_x, span_y = max(x1 - x0, 0.3), max(y1 - y0, 0.3)
+        self.scale = max(min(width / span_x, (height - BAR_HEIGHT) / span_y), 1e-6)
+        self._origin = (width / 2 - (x0 + x1) / 2 * self.scale,
+                        BAR_HEIGHT + (height - BAR_HEIGHT) / 2 + (y0 + y1) / 2 * self.scale)
+        self._background = self._draw_background()
+
+    def to_screen(self, x: float, y: float) -> tuple[float, float]:
+        """Pixel coordinates of the world point (x, y) (metres, y up)."""
+        return self._origin[0] + x * self.scale, self._origin[1] - y * self.scale
+
+    def _grow(self, pose: dict[str, float]) -> None:
+        """Widen the world box when the robot or its rays leave it (e.g. out of a maze's exit)."""
+        reach = RANGE_MAX + 0.06
+        x0, y0, x1, y1 = self._box
+        if x0 <= pose["x"] - reach and pose["x"] + reach <= x1 and y0 <= pose["y"] - reach and pose["y"] + reach <= y1:
+            return
+        self._box = (min(x0, pose["x"] - reach), min(y0, pose["y"] - reach),
+                     max(x1, pose["x"] + reach), max(y1, pose["y"] + reach))
+        self._fit()
+
+    # ------------------------------------------------------------------ drawing
+    def _draw_background(self) -> Any:
+        """The maze and the trail so far on a surface of the window's size; new trail is added to it."""
+        pg = self.pg
+        surface = pg.Surface(self.screen.get_size())
+        surface.fill(BACKGROUND)
+        for wall in self.maze.walls:
+            pg.draw.polygon(surface, WALL, [self.to_screen(*c) for c in wall.corners()])
+        for obstacle in self.maze.obstacles:
+            pg.draw.polygon(surface, OBSTACLE, [self.to_screen(*c) for c in obstacle.corners()])
+        for part in self._trail:
+            if len(part) > 1:
+                pg.draw.lines(surface, TRAIL, False, [self.to_screen(*p) for p in part], 2)
+        return surface
+
+    def _extend_trail(self, pose: dict[str, float] | None) -> None:
+        """Add the pose to the trail; a deletion or a jump (respawn) starts a new part."""
+        if pose is None:
+            if self._trail and self._trail[-1]:
+                self._trail.append([])
+            return
+        point = (pose["x"], pose["y"])
+        if not self._trail or (self._trail[-1] and math.dist(self._trail[-1][-1], point) > TRAIL_JUMP):
+            self._trail.append([])
+        part = self._trail[-1]
+        if part:
+            self.pg.draw.line(self._background, TRAIL, self.to_screen(*part[-1]), self.to_screen(*point), 2)
+        part.append(point)
+
+    def draw(self) -> None:
+        """Draw the current frame: maze and trail, rays, robot, status bar; flip the display."""
+        pg, screen, frame = self.pg, self.screen, self._frame
+        screen.blit(self._background, (0, 0))
+        if frame is not None and frame.pose is not None:
+            for start, end, hit in _rays(frame.pose, frame.prox):
+                pg.draw.line(screen, RAY_HIT if hit else RAY_FREE, self.to_screen(*start), self.to_screen(*end), 1)
+                if hit:
+                    pg.draw.circle(screen, RAY_HIT, self.to_screen(*end), 3)
+            outline = [self.to_screen(*p) for p in _outline(frame.pose)]
+            pg.draw.polygon(screen, ROBOT_FILL, outline)
+            pg.draw.polygon(screen, ROBOT_EDGE, outline, 2)
+        self._draw_status(frame)
+        pg.display.flip()
+        self.frames += 1
+        self._last_draw = time.perf_counter()
+
+    def _draw_status(self, frame: Frame | None) -> None:
+        width, height = self.screen.get_size()
+        self.pg.draw.rect(self.screen, BAR, (0, 0, width, BAR_HEIGHT))
+        if frame is not None:
+            robot = "" if frame.pose is not None else "   (no robot)"
+            text = f"t = {frame.t:6.1f} s   x{self.speedup:g}   {frame.node}{robot}"
+            self.screen.blit(self.font.render(text, True, BAR_TEXT), (8, 5))
+        right = "PAUSED" if self.paused else self.outcome
+        if right:               # over the end of a long node path
+            label = self.font.render(right, True, PAUSED_TEXT, BAR)
+            self.screen.blit(label, (width - label.get_width() - 8, 5))
+        help_ = self.small.render(KEYS_HELP, True, WALL)
+        self.screen.blit(help_, (width - help_.get_width() - 6, height - help_.get_height() - 4))
+
+    def save(self, path: str | Path) -> Path:
+        """Write what the window shows as an image (PNG by the suffix)."""
+        path = Path(path)
+        try:
+            self.pg.image.save(self.screen, str(path))
+        except (OSError, self.pg.error) as exc:
+            raise UserError(f"cannot write {path}: {exc}") from None
+        return path
+
+    # ------------------------------------------------------------------ pacing and keys
+    def show(self, frame: Frame) -> None:
+        """Add ``frame`` to the trail and show it once its wall time has come, handling keys while
+        waiting; returns after it, or after a single step while paused. Raises :class:`ViewerClosed`."""
+        if not self._open:
+            raise ViewerClosed()
+        self.shown += 1
+        self._frame = frame
+        if frame.pose is not None:
+            self._grow(frame.pose)
+        self._extend_trail(frame.pose)
+        if self._anchor is None:
+            self._anchor = (frame.t, time.perf_counter())
+        stale = True
+        while True:
+            event = self.pg.event.poll()
+            if event.type == self.pg.NOEVENT:
+                if self.paused:
+                    if stale:
+                        self.draw()
+                        stale = False
+                    event = self.pg.event.wait(IDLE_MS)
+                    if event.type == self.pg.NOEVENT:
+                        continue
+                else:
+                    lag = self._due(frame.t) - time.perf_counter()
+                    if lag <= 0:
+                        break
+                    # wall-clock waiting is the viewer's job: the simulation stays in simulated time
+                    time.sleep(min(lag, IDLE_MS / 1000))
+                    continue
+            if event.type in (self.pg.KEYDOWN, self.pg.QUIT, self.pg.VIDEORESIZE, self.pg.WINDOWSIZECHANGED):
+                stale = True
+                if self._handle(event, frame.t):
+                    break
+        if stale and (self.paused or time.perf_counter() - self._last_draw >= self._min_interval):
+            self.draw()
+
+    def _due(self, t: float) -> float:
+        """Wall time (perf_counter) at which the frame of simulated time ``t`` may be shown."""
+        assert self._anchor is not None
+        t0, wall0 = self._anchor
+        return wall0 + (t - t0) / self.speedup
+
+    def _handle(self, event: Any, t: float) -> bool:
+        """React to one event; True when it asks for a single step (the frame at ``t`` is shown)."""
+        pg = self.pg
+        if event.type == pg.QUIT or (event.type == pg.KEYDOWN and event.key in (pg.K_q, pg.K_ESCAPE)):
+            self.close()
+            raise ViewerClosed()
+        if event.type in (pg.VIDEORESIZE, pg.WINDOWSIZECHANGED):
+            self._fit()
+        elif event.type == pg.KEYDOWN:
+            if event.key in (pg.K_n, pg.K_RIGHT):
+                self.paused = True
+                return True
+            if event.key == pg.K_SPACE:
+                self.paused = not self.paused
+            elif event.key in (pg.K_PLUS, pg.K_EQUALS, pg.K_KP_PLUS):
+                self.speedup *= 2
+            elif event.key in (pg.K_MINUS, pg.K_KP_MINUS):
+                self.speedup /= 2
+            else:
+                return False
+            self._anchor = (t, time.perf_counter())    # resumed or new speed: pace from here
+        return False
+
+    def finish(self, outcome: str = "") -> None:
+        """Draw the last frame with the outcome; with ``hold``, wait until the window is closed."""
+        if not self._open:
+            return
+        self.outcome = f"{outcome}   (Q closes)" if self.hold else outcome
+        self.paused = False
+        self.draw()
+        while self.hold:
+            event = self.pg.event.wait()
+            if event.type == self.pg.QUIT or (event.type == self.pg.KEYDOWN
+                                              and event.key in (self.pg.K_q, self.pg.K_ESCAPE)):
+                break
+            if event.type in (self.pg.VIDEORESIZE, self.pg.WINDOWSIZECHANGED):
+                self._fit()
+                self.draw()
+        self.close()
+
+    def close(self) -> None:
+        """Close the window (idempotent)."""
+        if self._open:
+            self._open = False
+            self.pg.display.quit()
+
+
+def _node_text(run: Run) -> str:
+    """The path of the deepest running node and its feedback message."""
+    tip = run.root.tip()
+    if tip is None:
+        return ""
+    feedback = tip.feedback_message
+    return _path(tip) + (f" — {feedback}" if feedback else "")
+
+
+class LiveView:
+    """The ``on_tick`` hook of ``run --view``: shows the simulation after every tree tick."""
+
+    def __init__(self, run: Run, speedup: float, **options: Any) -> None:
+        start = run.mission.start
+        self.viewer = Viewer(run.mission.maze, speedup, title=f"thymio-bt: {run.mission.name}",
+                             include=[(start.x, start.y)], **options)
+
+    def __call__(self, run: Run) -> None:
+        sim = run.sim
+        pose = sim.true_pose()
+        scan = sim.proximity() or {}
+        self.viewer.show(Frame(sim.time(), None if pose is None else pose.as_dict(),
+                               {name: _num(value) for name, value in scan.items()}, _node_text(run)))
+
+    def finish(self, result: RunResult) -> None:
+        """Show the run's outcome; with ``hold``, wait until the window is closed."""
+        self.viewer.finish(result.status if result.code is None else f"{result.status} [{result.code}]")
+
+
+def live_hook(run: Run, speedup: float, **options: Any) -> LiveView:
+    """A tick hook showing ``run`` live at ``speedup`` times real time (options: see :class:`Viewer`)."""
+    return LiveView(run, speedup, **options)
+
+
+def replay(recording: Recording, speedup: float, **options: Any) -> Viewer:
+    """Show a recorded run (e.g. from :func:`~thymio_bt.recording.read_log`) at ``speedup`` times
+    real time; closing the window just ends the replay. Returns the (closed) viewer."""
+    points = [(s["pose"]["x"], s["pose"]["y"]) for s in recording.samples if s["pose"]]
+    viewer = Viewer(recording.maze, speedup, title=f"thymio-bt replay: {recording.mission}", include=points, **options)
+    try:
+        for sample in recording.samples:
+            viewer.show(Frame(sample["t"], sample["pose"], sample["prox"] or {}, ", ".join(sample.get("running", []))))
+        viewer.finish(recording.end.get("status", ""))
+    except ViewerClosed:
+        pass
+    return viewer
