@@ -1,0 +1,200 @@
+"""The real Thymio II's proximity readings (``prox.horizontal``) against distance, both ways.
+
+A real Thymio reports integers: 0 when nothing is seen, rising as an obstacle nears (about 3400 at
+3 cm, as the course report measured). Behaviours work in metres, so the simulator's ``raw`` sensor
+model and the real-robot backend both go distance → reading → distance through one table, and a
+mission written for the metric simulator runs unchanged against raw readings.
+
+The table
+    Webots' Thymio II model, ``lookupTable`` of ``projects/robots/mobsya/thymio/protos/
+    Thymio2DistanceSensor.proto`` (cyberbotics/webots @ 08f0a117; summarised in
+    ../shared/research/sim_anchors.md, section 2.2). It has 29 rows at 1/3 cm steps; its 1 cm rows
+    (4279, 4139, 3515, 2965, 2570, 2248, 1941, 1597, 1195 at 1..9 cm) are the table usually quoted.
+    The full table is used rather than those 9 rows because it is the source itself, and the
+    3.3 mm rows bend the curve where it changes fastest (2-3 cm: 3857 at 2.5 cm against 3827 from the
+    1 cm rows). It agrees with the independent ROS driver fit within about 150 between 3 and 8 cm,
+    and with the course report's ≈3400 at 3 cm within 4 %.
+
+Choices
+    - The 0 m row (4235) is left out: it is lower than the 3.3 mm row (4308), so the curve would not
+      be invertible. Closer than 3.33 mm reads 4308, and 4308 or more converts back to 3.33 mm.
+    - Webots interpolates linearly between 1195 at 9 cm and 0 at 9.333 cm; so does this table, so
+      any reading above 0 converts to a finite distance and 0 to ``math.inf``.
+    - Range: the course's simulated rays reach 0.0975 m, the table only 0.09333 m. Through the raw
+      model an obstacle between 9.33 and 9.75 cm is not seen (reads 0, converts to inf). The table is
+      not stretched to 0.0975 m, since that would change the calibration.
+    - A real robot's first non-zero reading is already about 800-1200 (a firmware offset, see
+      sim_anchors 2.2), and its range depends on the surface: the table stands for a light wall.
+
+Thymio Suite's simulator
+    Its robots (Enki, in Aseba Playground) follow another curve, ``F(x) = m(c - x0²)/(x² - 2·x0·x + c)``
+    with m = 4505, x0 = 0.03 cm, c = 73 (``enki/robots/thymio2/Thymio2.cpp``, sim_anchors 1.2): 600-900
+    higher than Webots at 4-9 cm, and 1226 at 14 cm before dropping to 0. :data:`ENKI_THYMIO2` is that
+    curve at 1 cm steps, for trying the real-robot backend on a simulated Thymio.
+
+Noise
+    Webots' third column gives a Gaussian sd of 1 % of the reading (``0.01`` on every row), which is
+    :class:`RawProximityModel`'s default. Enki (the Thymio Suite simulator) adds an absolute sd of
+    2.87 instead (``IRSensor`` ``noiseSd``); both can be set.
+
+Example::
+
+    >>> round(metres_to_raw(0.03))
+    3515
+    >>> round(raw_to_metres(2570), 4)
+    0.05
+    >>> raw_to_metres(0)
+    inf
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+
+@dataclass(frozen=True, slots=True)
+class CalibrationTable:
+    """A monotone response curve: readings (strictly decreasing, ending at 0) at distances (increasing, m)."""
+
+    distances: tuple[float, ...]
+    readings: tuple[float, ...]
+    source: str = ""
+    _ascending: tuple[float, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        d, r = self.distances, self.readings
+        if len(d) != len(r) or len(d) < 2:
+            raise ValueError("a calibration table needs at least two (distance, reading) rows")
+        if any(b <= a for a, b in zip(d, d[1:])) or any(b >= a for a, b in zip(r, r[1:])):
+            raise ValueError("distances must increase and readings decrease strictly")
+        if r[-1] != 0 or d[0] < 0:
+            raise ValueError("the last reading must be 0 (nothing seen) and distances non-negative")
+        object.__setattr__(self, "_ascending", r[::-1])
+
+    @property
+    def min_distance(self) -> float:
+        """Closer than this, the reading saturates at :attr:`max_reading`."""
+        return self.distances[0]
+
+    @property
+    def max_distance(self) -> float:
+        """From this distance on, nothing is seen (reading 0): the sensor's range."""
+        return self.distances[-1]
+
+    @property
+    def max_reading(self) -> float:
+        return self.readings[0]
+
+    def to_raw(self, distance: float) -> float:
+        """The noise-free reading at ``distance`` metres (0 at or beyond the range, inf included)."""
+        d, r = self.distances, self.readings
+        if distance <= d[0]:
+            return float(r[0])
+        if distance >= d[-1]:
+            return 0.0
+        i = bisect_right(d, distance)
+        t = (distance - d[i - 1]) / (d[i] - d[i - 1])
+        return r[i - 1] + t * (r[i] - r[i - 1])
+
+    def to_metres(self, reading: float) -> float:
+        """The distance a reading means: inf for 0 (nothing seen), :attr:`min_distance` at saturation."""
+        d, r = self.distances, self.readings
+        if reading <= 0:
+            return math.inf
+        if reading >= r[0]:
+            return float(d[0])
+        i = len(r) - bisect_right(self._ascending, reading)      # first row reading ``reading`` or less
+        t = (reading - r[i - 1]) / (r[i] - r[i - 1])
+        return d[i - 1] + t * (d[i] - d[i - 1])
+
+
+_WEBOTS_ROWS = (
+    (0.00333, 4308), (0.00666, 4298), (0.01, 4279), (0.01333, 4253), (0.01666, 4201), (0.02, 4139),
+    (0.02333, 3981), (0.02666, 3733), (0.03, 3515), (0.03333, 3326), (0.03666, 3141), (0.04, 2965),
+    (0.04333, 2860), (0.04666, 2696), (0.05, 2570), (0.05333, 2475), (0.05666, 2344), (0.06, 2248),
+    (0.06333, 2182), (0.06666, 2044), (0.07, 1941), (0.07333, 1835), (0.07666, 1689), (0.08, 1597),
+    (0.08333, 1473), (0.08666, 1345), (0.09, 1195), (0.09333, 0),
+)
+
+#: The default table: Webots' Thymio II proximity lookup table without its 0 m row (see above).
+WEBOTS_THYMIO2 = CalibrationTable(
+    distances=tuple(d for d, _ in _WEBOTS_ROWS),
+    readings=tuple(float(r) for _, r in _WEBOTS_ROWS),
+    source="cyberbotics/webots projects/robots/mobsya/thymio/protos/Thymio2DistanceSensor.proto @ 08f0a117",
+)
+
+
+_ENKI_ROWS = (
+    (0.0, 4505), (0.01, 4448), (0.02, 4278), (0.03, 4019), (0.04, 3705), (0.05, 3366), (0.06, 3027),
+    (0.07, 2705), (0.08, 2409), (0.09, 2143), (0.10, 1908), (0.11, 1701), (0.12, 1521), (0.13, 1363),
+    (0.139999, 1226), (0.14, 0),
+)
+
+#: Enki's (Thymio Suite's simulator) response at 1 cm steps; the Playground reads 0 from 14 cm on.
+ENKI_THYMIO2 = CalibrationTable(
+    distances=tuple(d for d, _ in _ENKI_ROWS),
+    readings=tuple(float(r) for _, r in _ENKI_ROWS),
+    source="enki-community/enki enki/robots/thymio2/Thymio2.cpp @ bb486bfb (IRSensor m=4505, x0=0.03, c=73)",
+)
+
+
+def metres_to_raw(distance: float, table: CalibrationTable = WEBOTS_THYMIO2) -> float:
+    """The noise-free ``prox.horizontal`` reading for an obstacle ``distance`` metres away."""
+    return table.to_raw(distance)
+
+
+def raw_to_metres(reading: float, table: CalibrationTable = WEBOTS_THYMIO2) -> float:
+    """The distance in metres a ``prox.horizontal`` reading means (``math.inf`` for 0)."""
+    return table.to_metres(reading)
+
+
+def raw_scan_to_metres(readings: Mapping[str, float], table: CalibrationTable = WEBOTS_THYMIO2) -> dict[str, float]:
+    """A scan of readings by sensor name as the metric scan behaviours use."""
+    return {name: table.to_metres(value) for name, value in readings.items()}
+
+
+@dataclass(slots=True)
+class RawProximityModel:
+    """What a real sensor reports for a true distance: the table's reading plus Gaussian noise,
+    rounded to an integer and clipped at 0. Nothing in range reads exactly 0, without noise.
+
+    The noise sd is ``hypot(absolute_sd, relative_sd * reading)``: Webots' 1 % by default, Enki's
+    2.87 with ``absolute_sd=2.87, relative_sd=0``. A normal draw is made for every sensor on every
+    reading, seen or not, so a seed gives the same stream whatever the robot sees.
+
+    Example::
+
+        model = RawProximityModel(np.random.default_rng(0))
+        raw = model.measure_scan({"front_center": 0.05, "rear_left": math.inf})   # {..: 2571, ..: 0}
+        scan = raw_scan_to_metres(raw)                                            # back in metres
+    """
+
+    rng: np.random.Generator
+    table: CalibrationTable = WEBOTS_THYMIO2
+    relative_sd: float = 0.01
+    absolute_sd: float = 0.0
+
+    def measure(self, distance: float) -> int:
+        """One noisy integer reading for an obstacle ``distance`` metres away (inf: nothing)."""
+        return self._reading(self.table.to_raw(distance), float(self.rng.standard_normal()))
+
+    def measure_scan(self, scan: Mapping[str, float]) -> dict[str, int]:
+        """Noisy readings for a scan in metres (by sensor name, inf when nothing is in range)."""
+        draws = self.rng.standard_normal(len(scan))
+        return {name: self._reading(self.table.to_raw(distance), float(z))
+                for (name, distance), z in zip(scan.items(), draws)}
+
+    def through_raw(self, scan: Mapping[str, float]) -> dict[str, float]:
+        """A metric scan as a real robot would see it: measured as readings, converted back to metres."""
+        return raw_scan_to_metres(self.measure_scan(scan), self.table)
+
+    def _reading(self, ideal: float, z: float) -> int:
+        if ideal <= 0.0:
+            return 0
+        sd = math.hypot(self.absolute_sd, self.relative_sd * ideal)
+        return max(0, round(ideal + sd * z))
