@@ -147,3 +147,25 @@ def test_without_pygame_the_error_says_how_to_install_it(monkeypatch):
 def test_a_speedup_must_be_positive():
     with pytest.raises(UserError, match="speed-up must be > 0"):
         Viewer(Maze(), speedup=0)
+
+
+def test_run_and_replay_with_view_run_offscreen(pg, tmp_path):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    log = tmp_path / "run.jsonl"
+    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view", "--speedup", "1e9", "--log", str(log)])
+    assert result.exit_code == 0, result.output
+    result = CliRunner().invoke(main, ["replay", str(log), "--view", "--speedup", "1e9"])
+    assert result.exit_code == 0 and "nothing to draw" not in result.output
+
+
+def test_view_without_pygame_is_a_user_error(monkeypatch):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    monkeypatch.setitem(sys.modules, "pygame", None)
+    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view"])
+    assert result.exit_code == 2 and "pip install 'thymio-bt[viz]'" in result.output

@@ -66,17 +66,21 @@ def _write_json(path: Path, data: Any) -> None:
 @click.option("--plot-signals", type=click.Path(path_type=Path), default=None,
               help="Draw pose, speeds and proximity over time (PNG).")
 @click.option("--gif", type=click.Path(path_type=Path), default=None, help="Animate the run (.gif, or .mp4 with ffmpeg).")
-@click.option("--speedup", type=float, default=4.0, show_default=True, help="Animation speed-up.")
+@click.option("--view", is_flag=True,
+              help="Watch the run in a window (pygame): SPACE pause, N step, +/- speed, Q quit.")
+@click.option("--speedup", type=float, default=None,
+              help="Speed-up of --view (default 1: real time) and --gif (default 4).")
 @click.option("--log", "log", type=click.Path(path_type=Path), default=None,
               help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
 @click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
 def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | None, start: str | None,
         report: Path | None, quiet: bool, realtime: float | None, plot: Path | None, plot_signals: Path | None,
-        gif: Path | None, speedup: float, log: Path | None, live_tree: bool) -> None:
+        gif: Path | None, view: bool, speedup: float | None, log: Path | None, live_tree: bool) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     try:
         from .mission import load_mission
         from .runner import Run
+        from .viz.window import ViewerClosed
 
         spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
         runner = Run(spec, seed)
@@ -89,13 +93,23 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
         if live_tree:
             from .viz.terminal import LiveTree
             hooks.append(LiveTree())
-        result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
+        window = None
+        if view:
+            from .viz.window import live_hook
+            window = live_hook(runner, 1.0 if speedup is None else speedup)
+            hooks.append(window)
+        try:
+            result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
+        except ViewerClosed:
+            hooks[0].done()
+            click.echo(f"stopped: the window was closed at t = {runner.sim.time():.1f} s", err=True)
+            sys.exit(1)
         hooks[0].done()
         if report is not None:
             _write_json(report, result.report())
         if recorder is not None:
             recording = recorder.finish(result)
-            _pictures(recording, plot, plot_signals, gif, speedup, quiet)
+            _pictures(recording, plot, plot_signals, gif, 4.0 if speedup is None else speedup, quiet)
     except UserError as exc:
         _fail(exc)
     if not quiet:
@@ -103,6 +117,8 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
         if result.status != "SUCCESS":
             from .viz.terminal import failing_tree
             click.echo(failing_tree(runner), err=True)
+    if window is not None:
+        window.finish(result)            # with a display: stays open on the last frame until closed
     sys.exit(0 if result.status == "SUCCESS" else 1)
 
 
@@ -128,8 +144,12 @@ def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif:
 @click.option("--plot", type=click.Path(path_type=Path), default=None, help="Draw the path in the maze (PNG).")
 @click.option("--plot-signals", type=click.Path(path_type=Path), default=None, help="Draw the signals (PNG).")
 @click.option("--gif", type=click.Path(path_type=Path), default=None, help="Animate the run.")
-@click.option("--speedup", type=float, default=4.0, show_default=True, help="Animation speed-up.")
-def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | None, speedup: float) -> None:
+@click.option("--view", is_flag=True,
+              help="Watch the run in a window (pygame): SPACE pause, N step, +/- speed, Q quit.")
+@click.option("--speedup", type=float, default=None,
+              help="Speed-up of --view (default 1: real time) and --gif (default 4).")
+def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | None, view: bool,
+           speedup: float | None) -> None:
     """Redraw a run from its --log FILE.jsonl without re-running it."""
     from .recording import read_log
 
@@ -138,9 +158,13 @@ def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | 
         end = recording.end
         click.echo(f"{recording.mission}: {end.get('status')} after {end.get('sim_time', 0):.1f} s simulated, "
                    f"{len(recording.samples)} ticks; final pose {end.get('final_pose')}")
-        if not (plot or plot_signals or gif):
-            click.echo("nothing to draw (hint: --plot FILE.png, --plot-signals FILE.png or --gif FILE.gif)", err=True)
-        _pictures(recording, plot, plot_signals, gif, speedup, quiet=False)
+        if not (plot or plot_signals or gif or view):
+            click.echo("nothing to draw (hint: --view, --plot FILE.png, --plot-signals FILE.png or --gif FILE.gif)",
+                       err=True)
+        _pictures(recording, plot, plot_signals, gif, 4.0 if speedup is None else speedup, quiet=False)
+        if view:
+            from .viz.window import replay as replay_in_window
+            replay_in_window(recording, 1.0 if speedup is None else speedup)
     except UserError as exc:
         _fail(exc)
 
