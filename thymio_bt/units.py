@@ -21,6 +21,8 @@ import re
 from dataclasses import dataclass
 from typing import Callable, Mapping
 
+from .errors import did_you_mean
+
 #: unit -> (factor to SI, kind)
 UNITS: dict[str, tuple[float, str]] = {
     "m": (1.0, "length"),
@@ -53,8 +55,20 @@ _TOKEN = re.compile(
 )
 
 
+#: How a value of each kind is written, for hints.
+EXAMPLES = {"length": "5cm, 0.05 m or 50mm", "angle": "90deg, pi/2 or 1.57 rad", "time": "2 s, 500ms or 1 min",
+            "speed": "10cm/s or 0.1 m/s", "angular_speed": "90deg/s or 1.5 rad/s", "frequency": "10 Hz"}
+
+#: Deepest nesting of parentheses accepted (a guard against pathological input, not a style rule).
+MAX_NESTING = 50
+
+
 class UnitError(ValueError):
-    """A value that does not parse; the message says what was expected."""
+    """A value that does not parse; the message says what was expected, ``hint`` how to fix it."""
+
+    def __init__(self, message: str, hint: str = "") -> None:
+        super().__init__(message)
+        self.hint = hint
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,6 +103,7 @@ class _Parser:
         self.text = text
         self.toks = _tokens(text)
         self.i = 0
+        self.depth = 0
         self.resolve = resolve
 
     def peek(self) -> tuple[str, str] | None:
@@ -109,11 +124,10 @@ class _Parser:
 
     def _combine(self, a: str | None, b: str | None, op: str) -> str | None:
         if a and b and (op in "*/" or a != b):
-            def named(k: str) -> str:
-                return ("an " if k[0] in "aeiou" else "a ") + k
-
-            what = "multiply or divide two values with units" if op in "*/" else f"add {named(a)} and {named(b)}"
-            raise UnitError(f"cannot {what} in '{self.text}'".replace("_", " "))
+            what = "multiply or divide two values with units" if op in "*/" else f"add {_named(a)} and {_named(b)}"
+            raise UnitError(f"cannot {what} in '{self.text}'",
+                            "a unit binds to the number before it: write 2*$side - 10cm, not 2cm*3cm"
+                            if op in "*/" else "both sides of + and - need the same kind of unit")
         return a or b
 
     def expr(self) -> tuple[float, str | None]:
@@ -140,12 +154,12 @@ class _Parser:
         return value, kind
 
     def unary(self) -> tuple[float, str | None]:
-        tok = self.peek()
-        if tok and tok[0] == "op" and tok[1] in "+-":
+        sign = 1.0
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":     # a loop: '-----5' nests nothing
             self.i += 1
-            value, kind = self.unary()
-            return (-value if tok[1] == "-" else value), kind
-        return self.unit(*self.atom())
+            sign = -sign if tok[1] == "-" else sign
+        value, kind = self.unit(*self.atom())
+        return sign * value, kind
 
     def unit(self, value: float, kind: str | None) -> tuple[float, str | None]:
         tok = self.peek()
@@ -153,8 +167,8 @@ class _Parser:
             return value, kind
         self.i += 1
         if tok[1] not in UNITS:
-            raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}' (known: m, cm, mm, deg, rad, "
-                            "s, ms, m/s, cm/s, deg/s, rad/s)")
+            raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}'",
+                            did_you_mean(tok[1], [u for u in UNITS if u != "hz"]))
         if kind is not None:
             raise UnitError(f"'{tok[1]}' follows a value that already has a unit in '{self.text}'")
         factor, unit_kind = UNITS[tok[1]]
@@ -165,9 +179,14 @@ class _Parser:
         if kind == "num":
             return float(text), None
         if kind == "op" and text == "(":
+            self.depth += 1
+            if self.depth > MAX_NESTING:
+                raise UnitError(f"more than {MAX_NESTING} nested parentheses in '{self.text[:40]}...'")
             value = self.expr()
-            if self.take() != ("op", ")"):
+            if self.peek() != ("op", ")"):
                 raise UnitError(f"missing ')' in '{self.text}'")
+            self.i += 1
+            self.depth -= 1
             return value
         if kind == "unit" and text == "pi":
             return math.pi, None
@@ -184,6 +203,8 @@ def parse_value(text: str | int | float, resolve: Callable[[str], Quantity] | No
     if isinstance(text, bool):
         raise UnitError(f"expected a number, found {text!r}")
     if isinstance(text, (int, float)):
+        if not math.isfinite(text):
+            raise UnitError(f"{text!r} is not a finite number")
         return Quantity(float(text))
     quantity = _Parser(str(text), resolve).parse()
     if not math.isfinite(quantity.value):
@@ -208,8 +229,20 @@ def check_kind(quantity: Quantity, expected: str | None) -> str | None:
     """An error message when a value's unit does not fit the parameter, else None."""
     if expected is None or quantity.kind is None or quantity.kind == expected:
         return None
-    return (f"expected {expected.replace('_', ' ')} (in {SI_UNIT.get(expected, '?')}), "
-            f"but the unit is a {quantity.kind.replace('_', ' ')}")
+    return f"expected {_named(expected)} (in {SI_UNIT.get(expected, '?')}), got {_named(quantity.kind)}"
+
+
+def kind_hint(kind: str | None) -> str:
+    """How a value of ``kind`` is written, e.g. 'write a length: 5cm, 0.05 m or 50mm'."""
+    if kind is None or kind not in EXAMPLES:
+        return ""
+    return f"write {_named(kind)}: {EXAMPLES[kind]}"
+
+
+def _named(kind: str) -> str:
+    """'a length', 'an angle', 'an angular speed'."""
+    words = kind.replace("_", " ")
+    return ("an " if words[0] in "aeiou" else "a ") + words
 
 
 ParamResolver = Callable[[str], Quantity]

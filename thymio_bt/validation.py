@@ -8,6 +8,7 @@ from __future__ import annotations
 from typing import Any, Sequence, TypeVar
 
 from pydantic import BaseModel, ValidationError
+from pydantic.fields import FieldInfo
 
 from .errors import Problem, UserError, did_you_mean
 from .yamlio import Mark, MarkedDict, MarkedList
@@ -44,13 +45,18 @@ def key_mark(data: Any, loc: Sequence[Any]) -> Mark:
     return locate(data, loc)
 
 
+def _field(model: type[BaseModel], name: str) -> FieldInfo | None:
+    """The field of ``model`` called ``name`` (or with that alias)."""
+    fields = model.model_fields
+    return fields.get(name) or next((f for f in fields.values() if f.alias == name), None)
+
+
 def _model_at(model: type[BaseModel], loc: Sequence[Any]) -> type[BaseModel] | None:
     current: Any = model
     for step in loc:
         if isinstance(step, int) or current is None:
             continue
-        fields = getattr(current, "model_fields", {})
-        field = fields.get(step) or next((f for f in fields.values() if f.alias == step), None)
+        field = _field(current, step) if isinstance(current, type) and issubclass(current, BaseModel) else None
         if field is None:
             return None
         annotation = field.annotation
@@ -77,13 +83,16 @@ def problems_from(exc: ValidationError, data: Any, filename: str, model: type[Ba
             line, col = key_mark(data, loc)
         elif kind == "missing":
             message = f"missing required key '{loc[-1]}'"
+            owner = _model_at(model, loc[:-1])
+            field = _field(owner, str(loc[-1])) if owner else None
+            hint = (field.description or "") if field else ""
             line, col = locate(data, loc[:-1])
         else:
-            message = err["msg"]
-            if message.startswith("Value error, "):
-                message = message[len("Value error, "):]
+            message = err["msg"].removeprefix("Value error, ")
             ctx = err.get("ctx") or {}
-            if "ge" in ctx or "le" in ctx or "gt" in ctx or "lt" in ctx:
+            if "hint" in ctx:
+                hint = str(ctx["hint"])
+            elif "ge" in ctx or "le" in ctx or "gt" in ctx or "lt" in ctx:
                 hint = "allowed range: " + ", ".join(f"{k} {v}" for k, v in ctx.items())
             line, col = locate(data, loc)
         problems.append(Problem(message, filename, line, col, path, hint))

@@ -26,6 +26,10 @@ MAX_ALIASES = 200
 #: Most nodes that aliases may add when the document is expanded (a "billion laughs" file nests
 #: aliases of aliases: few aliases, exponentially many nodes once expanded).
 MAX_ALIAS_EXPANSION = 10_000
+#: Deepest nesting of mappings and lists (far beyond any mission; keeps recursion bounded).
+MAX_NESTING = 200
+
+_STANDARD_TAG = "tag:yaml.org,2002:"
 
 Mark = tuple[int, int]
 
@@ -63,23 +67,53 @@ class _Loader(yaml.SafeLoader):
         self.filename = filename
         self.alias_count = 0
         self.problems: list[Problem] = []
+        self._open_anchors: list[str] = []     # anchors of the nodes being composed, outermost first
+
+    def _event_problem(self, message: str, hint: str) -> UserError:
+        event = self.peek_event()
+        return UserError(Problem(message, self.filename, event.start_mark.line + 1,
+                                 event.start_mark.column + 1, hint=hint))
 
     def compose_node(self, parent: Node | None, index: Any) -> Node:  # type: ignore[override]
-        if self.check_event(yaml.AliasEvent):
+        event = self.peek_event()
+        if isinstance(event, yaml.AliasEvent):
             self.alias_count += 1
             if self.alias_count > MAX_ALIASES:
-                event = self.peek_event()
-                raise UserError(Problem(
-                    f"too many aliases (more than {MAX_ALIASES})", self.filename,
-                    event.start_mark.line + 1, event.start_mark.column + 1,
-                    hint="use subtrees: or include: to reuse parts of a mission"))
-        return super().compose_node(parent, index)
+                raise self._event_problem(f"too many aliases (more than {MAX_ALIASES})",
+                                          "use subtrees: or include: to reuse parts of a mission")
+            if event.anchor in self._open_anchors:
+                raise self._event_problem(f"the alias *{event.anchor} refers to the node that contains it",
+                                          "recursive YAML structures are not allowed")
+            return super().compose_node(parent, index)
+        if len(self._open_anchors) >= MAX_NESTING:
+            raise self._event_problem(f"the YAML nesting is deeper than {MAX_NESTING} levels",
+                                      "flatten the structure; use subtrees: to split a deep tree")
+        self._open_anchors.append(getattr(event, "anchor", None) or "")
+        try:
+            return super().compose_node(parent, index)
+        finally:
+            self._open_anchors.pop()
+
+    def construct_object(self, node: Node, deep: bool = False) -> Any:
+        """Construct one node; a value its standard tag cannot hold is a problem at its place."""
+        try:
+            return super().construct_object(node, deep)
+        except (ValueError, TypeError, AttributeError, OverflowError) as exc:
+            raise UserError(Problem(f"invalid {_tag_name(node.tag)} value: {exc}", self.filename,
+                                    *_mark(node), hint="quote the value to keep it as text")) from None
+
+    def construct_timestamp_as_text(self, node: ScalarNode) -> str:
+        """Dates and times stay text: missions have no use for them, and bad dates must not crash."""
+        return str(self.construct_scalar(node))
 
     def construct_mapping(self, node: MappingNode, deep: bool = False) -> MarkedDict:  # type: ignore[override]
-        self.flatten_mapping(node)
+        own = sum(1 for key_node, _ in node.value if key_node.tag != _STANDARD_TAG + "merge")
+        self.flatten_mapping(node)          # merged pairs ('<<: *base') first, then the mapping's own
+        merged = len(node.value) - own
         result = MarkedDict()
         result.mark = _mark(node)
-        for key_node, value_node in node.value:
+        written: set[Any] = set()
+        for i, (key_node, value_node) in enumerate(node.value):
             key = self.construct_object(key_node, deep=True)
             try:
                 hash(key)
@@ -87,12 +121,14 @@ class _Loader(yaml.SafeLoader):
                 self.problems.append(Problem("a mapping key must be a plain value", self.filename,
                                              *_mark(key_node)))
                 continue
-            if key in result:
+            if i >= merged and key in written:
                 first = result.marks[key]
                 self.problems.append(Problem(
                     f"duplicate key '{key}'", self.filename, *_mark(key_node),
                     hint=f"'{key}' is already given at line {first[0]}; YAML would silently keep only one"))
                 continue
+            if i >= merged:
+                written.add(key)        # a key of its own overrides a merged one; twice is a mistake
             result[key] = self.construct_object(value_node, deep=True)
             result.marks[key] = _mark(key_node)
             result.value_marks[key] = _mark(value_node)
@@ -106,12 +142,18 @@ class _Loader(yaml.SafeLoader):
 
     def construct_undefined(self, node: Node) -> Any:
         raise UserError(Problem(
-            f"the tag {node.tag} is not allowed", self.filename, *_mark(node),
+            f"the tag {_tag_name(node.tag)} is not allowed", self.filename, *_mark(node),
             hint="mission and maze files are plain data: remove the '!' tag"))
 
 
-_Loader.add_constructor("tag:yaml.org,2002:map", _Loader.construct_mapping)
-_Loader.add_constructor("tag:yaml.org,2002:seq", _Loader.construct_sequence)
+def _tag_name(tag: str) -> str:
+    """A tag as it is written: ``!!python/object`` rather than ``tag:yaml.org,2002:python/object``."""
+    return "!!" + tag[len(_STANDARD_TAG):] if tag.startswith(_STANDARD_TAG) else tag
+
+
+_Loader.add_constructor(_STANDARD_TAG + "map", _Loader.construct_mapping)
+_Loader.add_constructor(_STANDARD_TAG + "seq", _Loader.construct_sequence)
+_Loader.add_constructor(_STANDARD_TAG + "timestamp", _Loader.construct_timestamp_as_text)
 _Loader.add_constructor(None, _Loader.construct_undefined)
 
 
@@ -160,7 +202,7 @@ def loads_yaml(text: str, filename: str = "<input>") -> Any:
         if node is None:
             return None
         sizes = _expanded_size(node)
-        if sizes is None:
+        if sizes is None:       # composing already refuses an alias inside its own anchor; kept as a guard
             raise UserError(Problem("an alias refers to the node that contains it", filename,
                                     *_mark(node), hint="recursive YAML structures are not allowed"))
         if sizes[1] - sizes[0] > MAX_ALIAS_EXPANSION:
@@ -170,20 +212,28 @@ def loads_yaml(text: str, filename: str = "<input>") -> Any:
                 hint="aliases of aliases multiply; use subtrees: or include: to reuse parts of a mission"))
         data = loader.construct_document(node)
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (0, 0)
-        message = f"invalid YAML: {exc.problem or exc.context}"
-        raise UserError(Problem(message, filename, line, col,
-                                hint="check indentation, colons and quotes on this line")) from None
+        raise UserError(_syntax_problem(exc, filename)) from None
     except yaml.YAMLError as exc:
         raise UserError(Problem(f"invalid YAML: {exc}", filename)) from None
-    except RecursionError:
-        raise UserError(Problem("the YAML nesting is too deep", filename)) from None
     finally:
         loader.dispose()
     if loader.problems:
         raise UserError(loader.problems)
     return data
+
+
+def _syntax_problem(exc: yaml.MarkedYAMLError, filename: str) -> Problem:
+    """A YAML syntax error at its place; where the parser was inside something, the hint says so."""
+    mark = exc.problem_mark or exc.context_mark
+    line, col = (mark.line + 1, mark.column + 1) if mark else (0, 0)
+    hint = "check indentation, colons and quotes on this line"
+    if "'\\t'" in str(exc.problem):
+        hint = "indent with spaces: YAML does not allow tabs for indentation"
+    context = exc.context_mark
+    if exc.context and context is not None and (context.line + 1, context.column + 1) != (line, col):
+        what = exc.context.removeprefix("while ")
+        hint = f"{what} that starts at line {context.line + 1}, column {context.column + 1}: {hint}"
+    return Problem(f"invalid YAML: {exc.problem or exc.context}", filename, line, col, hint=hint)
 
 
 def load_yaml(path: str | Path) -> Any:

@@ -20,12 +20,13 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic_core import PydanticCustomError
 
-from ..errors import Problem, UserError, did_you_mean
+from ..errors import Problem, UserError, did_you_mean, type_name
 from ..robot import Pose
-from ..units import UnitError, check_kind, parse_value
+from ..units import UnitError, check_kind, kind_hint, parse_value
 from ..validation import validate
-from ..yamlio import load_yaml
+from ..yamlio import MarkedDict, load_yaml
 
 #: The project's mazes/ folder when running from a checkout.
 MAZE_DIR = Path(__file__).resolve().parents[2] / "mazes"
@@ -37,19 +38,23 @@ def maze_dirs() -> list[Path]:
     return [d for i, d in enumerate(dirs) if d.is_dir() and d not in dirs[:i]]
 
 
-def _quantity(kind: str):
+def _problem(message: str, hint: str) -> PydanticCustomError:
+    """A validation error whose hint :func:`thymio_bt.validation.problems_from` shows."""
+    return PydanticCustomError("maze", "{message}", {"message": message, "hint": hint})
+
+
+def _quantity(kind: str) -> BeforeValidator:
+    """Accept a number or a text with units (``20cm``, ``pi/2``) of ``kind``; errors carry a hint."""
     def parse(value: Any) -> float:
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
-        if not isinstance(value, str):
-            raise ValueError(f"expected a number, got {type(value).__name__}")
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise _problem(f"expected a number, got {type_name(value)}", kind_hint(kind))
         try:
             quantity = parse_value(value)
         except UnitError as exc:
-            raise ValueError(str(exc)) from None
+            raise _problem(str(exc), exc.hint or kind_hint(kind)) from None
         error = check_kind(quantity, kind)
         if error:
-            raise ValueError(error)
+            raise _problem(error, kind_hint(kind))
         return quantity.value
     return BeforeValidator(parse)
 
@@ -63,15 +68,16 @@ class Wall(BaseModel):
     """A straight wall: a box from ``from`` to ``to``, ``thickness`` wide, extended by half of it."""
 
     model_config = ConfigDict(extra="forbid", populate_by_name=True, frozen=True)
-    start: Point = Field(alias="from")
-    end: Point = Field(alias="to")
+    start: Point = Field(alias="from", description="one end of the wall: [x, y] in metres, e.g. from: [0, 0.2]")
+    end: Point = Field(alias="to", description="the other end of the wall: [x, y] in metres, e.g. to: [0.6, 0.2]")
     thickness: Annotated[Length, Field(gt=0, le=1.0)] = 0.01
     name: str | None = None
 
     @model_validator(mode="after")
     def _not_degenerate(self) -> "Wall":
         if self.start == self.end:
-            raise ValueError("a wall needs two different end points")
+            raise _problem("a wall needs two different end points",
+                           "a wall goes from one point to another, e.g. {from: [0, 0], to: [0.6, 0]}")
         return self
 
     @property
@@ -114,8 +120,8 @@ class Obstacle(BaseModel):
                      - (points[(i + 1) % n][1] - points[i][1]) * (points[(i + 2) % n][0] - points[(i + 1) % n][0])
                      for i in range(n)]
             if not (all(t > 0 for t in turns) or all(t < 0 for t in turns)):
-                raise ValueError("the polygon must be convex with no repeated points "
-                                 "(split a concave obstacle into several convex ones)")
+                raise _problem("the polygon must be convex with no repeated points",
+                               "split a concave obstacle into several convex ones")
         return self
 
     def corners(self) -> list[tuple[float, float]]:
@@ -132,9 +138,9 @@ class Spawn(BaseModel):
     """A named pose of base_link where the robot may start or be spawned."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
-    x: Length
-    y: Length
-    yaw: Angle = 0.0
+    x: Length = Field(description="x of base_link, e.g. x: 0.1 or x: 10cm")
+    y: Length = Field(description="y of base_link, e.g. y: 0.1 or y: 10cm")
+    yaw: Angle = Field(0.0, description="heading, e.g. yaw: 90deg or yaw: pi/2")
 
     @model_validator(mode="before")
     @classmethod
@@ -195,15 +201,33 @@ class Maze(BaseModel):
         return out
 
 
+class GridMazeFile(BaseModel):
+    """The keys of a maze file in the grid form; the art itself is read by :mod:`.grid`."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = "grid"
+    description: str = ""
+    grid: str = Field(description="the maze as ASCII art: 'grid: |' then '+--+' lines")
+    cell: Annotated[Length, Field(gt=0, le=10)] = 0.2
+    origin: Point = (0.0, 0.0)
+    thickness: Annotated[Length, Field(gt=0, le=1.0)] = 0.01
+    spawns: dict[str, Spawn] = Field(default_factory=dict)
+
+
 def load_maze(path: str | Path) -> Maze:
     """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
     from .grid import maze_from_grid_data
 
     data = load_yaml(path)
-    if not isinstance(data, dict):
-        raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path), 1, 1))
+    if not isinstance(data, MarkedDict):
+        raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path),
+                                *getattr(data, "mark", (1, 1)),
+                                hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)"))
     if "grid" in data:
-        return maze_from_grid_data(data, str(path))
+        header = validate(GridMazeFile, data, str(path))      # units and types, before the art is read
+        checked = MarkedDict({**data, "cell": header.cell, "origin": header.origin, "thickness": header.thickness})
+        checked.mark, checked.marks, checked.value_marks = data.mark, data.marks, data.value_marks
+        return maze_from_grid_data(checked, str(path))
     return validate(Maze, data, str(path))
 
 

@@ -12,17 +12,18 @@ Example::
 from __future__ import annotations
 
 import math
+import os
 import typing
 from pathlib import Path
 from typing import Any, Mapping
 
 from pydantic import BaseModel, ValidationError
 
-from ..errors import Problem, UserError, did_you_mean
+from ..errors import Problem, UserError, did_you_mean, type_name
 from ..maze import Maze, load_maze, resolve_maze
-from ..robot import Pose
+from ..robot import ROBOT_ENTITY, Pose
 from ..sim.noise import NoiseConfig
-from ..units import Quantity, UnitError, check_kind, parse_pose, parse_value
+from ..units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
 from ..validation import problems_from
 from ..yamlio import MarkedDict, MarkedList, load_yaml
 from .plan import Mission, NodePlan
@@ -81,6 +82,7 @@ class MissionLoader:
         self.included_parameters: list[tuple[MarkedDict, str]] = []
         self.node_count = 0
         self.too_deep: set[Where] = set()
+        self.included: set[Path] = set()
 
     # ------------------------------------------------------------ helpers
     def problem(self, message: str, where: Where, path: str = "", hint: str = "") -> None:
@@ -100,6 +102,13 @@ class MissionLoader:
             return (file, *data.marks[key])
         return (file, *getattr(data, "mark", (0, 0)))
 
+    @staticmethod
+    def where_item(items: Any, index: int, where: Where) -> Where:
+        """The place of ``items[index]`` when the list carries marks, else ``where`` (the list's)."""
+        if isinstance(items, MarkedList) and index < len(items.marks):
+            return (where[0], *items.marks[index])
+        return where
+
     def check_keys(self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str,
                    what: str) -> None:
         allowed = list(allowed)
@@ -112,7 +121,7 @@ class MissionLoader:
     def quantity(self, value: Any, scope: _Scope, where: Where, path: str, kind: str | None) -> float | None:
         """Parse a number-with-unit or expression in ``scope``; None (and a problem) when it fails."""
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-            self.problem(f"expected a number, got {_type_name(value)}", where, path,
+            self.problem(f"expected a number, got {type_name(value)}", where, path,
                          "write a number, optionally with a unit: 0.1, 10cm/s, pi/2, 90deg")
             return None
 
@@ -120,8 +129,7 @@ class MissionLoader:
             try:
                 raw = scope.get(name)
             except KeyError:
-                raise UnitError(f"unknown parameter '${name}'; "
-                                + did_you_mean(name, scope.names() or {"(none defined)"})) from None
+                raise UnitError(f"unknown parameter '${name}'", _parameter_hint(name, scope)) from None
             if isinstance(raw, Quantity):
                 return raw
             if isinstance(raw, (int, float)) and not isinstance(raw, bool):
@@ -131,12 +139,12 @@ class MissionLoader:
         try:
             q = parse_value(value, resolve)
         except UnitError as exc:
-            self.problem(str(exc), where, path, "numbers may carry a unit (5cm, 90deg, 0.1 m/s) "
+            self.problem(str(exc), where, path, exc.hint or "numbers may carry a unit (5cm, 90deg, 0.1 m/s) "
                          "and use + - * / ( ) pi and $parameters")
             return None
         error = check_kind(q, kind)
         if error:
-            self.problem(error, where, path)
+            self.problem(error, where, path, kind_hint(kind))
             return None
         return q.value
 
@@ -151,8 +159,8 @@ class MissionLoader:
                 return value
         if isinstance(value, bool):
             return value
-        self.problem(f"a parameter must be a number, a string or true/false, got {_type_name(value)}",
-                     where, path)
+        self.problem(f"a parameter must be a number, a string or true/false, got {type_name(value)}",
+                     where, path, "e.g. cruise: 10cm/s, side: pi/2, turn: bb:turn_angle or enabled: true")
         return None
 
     # -------------------------------------------------------------- files
@@ -162,8 +170,9 @@ class MissionLoader:
         file = str(path)
         data = load_yaml(path)
         if not isinstance(data, MarkedDict):
-            raise UserError(Problem("a mission file must be a mapping with at least 'maze:' and 'tree:'",
-                                    file, 1, 1, hint="see missions/maze_part1_2.yaml for an example"))
+            raise UserError(Problem("a mission file must be a mapping with at least 'maze:', 'start:' and 'tree:'",
+                                    file, *getattr(data, "mark", (1, 1)),
+                                    hint="see missions/maze_part1_2.yaml for an example"))
         self.check_keys(data, TOP_KEYS, file, "", "the mission")
         self._plugins(data, path)
         self._includes(data, path, [path.resolve()])
@@ -178,11 +187,12 @@ class MissionLoader:
         self.root_scope = scope
         tree = None
         if "tree" not in data:
-            self.problem("missing required key 'tree'", (file, 1, 1), "", "the tree is the mission's root node")
+            self.problem("missing required key 'tree'", (file, *data.mark), "", "the tree is the mission's root node")
         else:
             tree = self.node(data["tree"], self.where_value(data, "tree", file), "tree", scope, 0, ())
         if self.problems:
-            raise UserError(list(dict.fromkeys(self.problems)))
+            raise UserError(sorted(dict.fromkeys(self.problems),      # in reading order, this file first
+                                   key=lambda p: (p.file != file, p.file, p.line, p.column)))
         assert tree is not None and start is not None and maze is not None
         return Mission(name=str(data.get("name", path.stem)), description=str(data.get("description", "")),
                        file=path, maze=maze, maze_file=maze_file, start=start, tree=tree,
@@ -199,8 +209,7 @@ class MissionLoader:
                          self.where_value(data, "plugins", file), "plugins")
             return
         for i, ref in enumerate(plugins):
-            where = self.where_value(plugins, i, file) if isinstance(plugins, MarkedList) else \
-                self.where_value(data, "plugins", file)
+            where = self.where_item(plugins, i, self.where_value(data, "plugins", file))
             if not isinstance(ref, str):
                 self.problem("a plugin is a string: 'module:Class' or a .py path", where, f"plugins[{i}]")
                 continue
@@ -219,32 +228,44 @@ class MissionLoader:
                          self.where_value(data, "include", file), "include")
             return
         for i, ref in enumerate(includes):
-            where = self.where_value(includes, i, file) if isinstance(includes, MarkedList) else \
-                self.where_value(data, "include", file)
-            if not isinstance(ref, str):
-                self.problem("an include is a file path (relative to this file)", where, f"include[{i}]")
+            where = self.where_item(includes, i, self.where_value(data, "include", file))
+            if not isinstance(ref, str) or not ref.strip() or "\0" in ref:
+                self.problem("an include is a file path (relative to this file)", where, f"include[{i}]",
+                             "e.g. include: lib/maze_legs.yaml")
                 continue
             target = (path.parent / ref).resolve()
+            shown = Path(os.path.normpath(path.parent / ref))     # as the user would write it ...
+            if shown.resolve() != target:
+                shown = target                                     # ... unless symbolic links disagree
             if target in stack:
                 cycle = " -> ".join(p.name for p in [*stack[stack.index(target):], target])
                 self.problem(f"include cycle: {cycle}", where, f"include[{i}]",
                              "a file may not include itself, directly or through others")
                 continue
+            if target in self.included:
+                continue                    # included twice (e.g. by two included files): once is enough
+            self.included.add(target)
+            if not target.is_file():
+                self.problem(f"included file not found: {shown}", where, f"include[{i}]",
+                             "include paths are relative to the including file"
+                             + _file_suggestion(shown))
+                continue
             try:
-                included = load_yaml(target)
+                included = load_yaml(shown)
             except UserError as exc:
                 for p in exc.problems:
-                    self.problems.append(p if p.line else Problem(p.message, *where, f"include[{i}]",
-                                                                  "include paths are relative to the including file"))
+                    self.problems.append(p if p.line else Problem(p.message, *where, f"include[{i}]", p.hint))
                 continue
             if not isinstance(included, MarkedDict):
-                self.problem(f"{ref} must be a mapping with 'subtrees:'", (str(target), 1, 1))
+                self.problem("an included file must be a mapping with 'subtrees:'",
+                             (str(shown), *getattr(included, "mark", (1, 1))),
+                             "", "e.g. missions/lib/maze_legs.yaml")
                 continue
-            self.check_keys(included, INCLUDE_KEYS, str(target), "", "an included file")
-            self._plugins(included, target)
-            self._includes(included, target, [*stack, target])
-            self._subtrees(included, str(target))
-            self.included_parameters.append((included, str(target)))
+            self.check_keys(included, INCLUDE_KEYS, str(shown), "", "an included file")
+            self._plugins(included, shown)
+            self._includes(included, shown, [*stack, target])
+            self._subtrees(included, str(shown))
+            self.included_parameters.append((included, str(shown)))
 
     def _parameters(self, data: MarkedDict, file: str) -> dict[str, Any]:
         params: dict[str, Any] = {}
@@ -281,7 +302,8 @@ class MissionLoader:
         if "seed" in data:
             seed = data["seed"]
             if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-                self.problem("seed must be a whole number >= 0", self.where_value(data, "seed", file), "seed")
+                self.problem("seed must be a whole number >= 0", self.where_value(data, "seed", file), "seed",
+                             "e.g. seed: 42")
             else:
                 values["seed"] = seed
         if "noise" in data:
@@ -359,7 +381,7 @@ class MissionLoader:
         elif "maze" in data:
             ref, base, where = data["maze"], path.parent, self.where_value(data, "maze", file)
         else:
-            self.problem("missing required key 'maze'", (file, 1, 1), "",
+            self.problem("missing required key 'maze'", (file, *data.mark), "",
                          "name a maze (e.g. two_parts_maze) or give a path relative to this file")
             return None, None
         if not isinstance(ref, str):
@@ -380,10 +402,20 @@ class MissionLoader:
         elif "start" in data:
             where, raw = self.where_value(data, "start", file), data["start"]
         else:
-            self.problem("missing required key 'start'", (file, 1, 1), "",
+            self.problem("missing required key 'start'", (file, *data.mark), "",
                          "a named spawn of the maze (e.g. part1) or [x, y, yaw]")
             return None
-        return self.pose(raw, where, "start", _Scope({}), maze)
+        pose = self.pose(raw, where, "start", _Scope({}), maze)
+        if pose is not None and maze is not None:
+            from ..sim import Simulation      # pymunk's geometry, imported only when it is needed
+
+            problem = Simulation(maze).spawn_problem(ROBOT_ENTITY, pose)
+            if problem:
+                self.problem(f"impossible start pose: {problem}", where, "start",
+                             "pick a free pose inside the maze"
+                             + (f", e.g. one of its spawns: {', '.join(maze.spawns)}" if maze.spawns else ""))
+                return None
+        return pose
 
     def pose(self, raw: Any, where: Where, path: str, scope: _Scope, maze: Maze | None) -> Pose | None:
         """A pose from ``[x, y, yaw]``, ``"x,y,yaw"`` or the name of a spawn of the maze."""
@@ -402,9 +434,12 @@ class MissionLoader:
                 self.problem(str(exc), where, path)
                 return None
         if not isinstance(raw, list) or len(raw) != 3:
-            self.problem("a pose is [x, y, yaw] or the name of a maze spawn", where, path)
+            spawns = f", or one of the maze's spawns: {', '.join(maze.spawns)}" if maze and maze.spawns else ""
+            self.problem("a pose is [x, y, yaw] or the name of a maze spawn", where, path,
+                         "e.g. [0.5, 0.3, pi/2] or [50cm, 30cm, 90deg]" + spawns)
             return None
-        parts = [self.quantity(v, scope, where, path, kind) for v, kind in zip(raw, ("length", "length", "angle"))]
+        parts = [self.quantity(v, scope, self.where_item(raw, i, where), path, kind)
+                 for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle")))]
         if any(p is None for p in parts):
             return None
         return Pose(*parts)  # type: ignore[arg-type]
@@ -438,7 +473,7 @@ class MissionLoader:
                          "e.g. '- MoveUntilWall: {distance: 5cm}' or '- sequence: [...]'")
             return None
         if not isinstance(kind, str):
-            self.problem(f"a node type must be a name, got {_type_name(kind)}", where, path)
+            self.problem(f"a node type must be a name, got {type_name(kind)}", where, path)
             return None
         node_path = f"{path}.{kind}" if path else kind
         if kind in COMPOSITES:
@@ -465,7 +500,8 @@ class MissionLoader:
                   stack: tuple[str, ...]) -> list[NodePlan]:
         file = where[0]
         if not isinstance(raw, list) or not raw:
-            self.problem("children must be a non-empty list of nodes", where, path)
+            self.problem("children must be a non-empty list of nodes", where, path,
+                         "e.g. children: [{MoveUntilWall: {distance: 5cm}}, {TurnAngle: {angle: 90deg}}]")
             return []
         children = []
         for i, item in enumerate(raw):
@@ -539,8 +575,10 @@ class MissionLoader:
             elif isinstance(times, int) and not isinstance(times, bool) and times >= 1:
                 options["times"] = times
             else:
-                self.problem(f"{kind} times must be a whole number >= 1" + (" or 'forever'" if kind == "repeat" else ""),
-                             self.where_value(body, "times", file) if "times" in body else body_where, path)
+                what = "a whole number >= 1" + (" or 'forever'" if kind == "repeat" else "")
+                self.problem(f"{kind} times must be {what}",
+                             self.where_value(body, "times", file) if "times" in body else body_where, path,
+                             _DECORATOR_EXAMPLES[kind])
         elif kind == "timeout":
             seconds = self.quantity(get("seconds"), scope, self.where_value(body, "seconds", file), path, "time") \
                 if "seconds" in body else None
@@ -581,12 +619,13 @@ class MissionLoader:
         if body is None:
             body = MarkedDict()
         if not isinstance(body, MarkedDict):
-            self.problem(f"{kind} takes a mapping of parameters, got {_type_name(body)}", body_where, path,
+            self.problem(f"{kind} takes a mapping of parameters, got {type_name(body)}", body_where, path,
                          f"e.g. '{kind}: {{}}'; see 'thymio-bt behaviours {kind}'")
             return None
         fields = model.model_fields
         values: dict[str, Any] = {}
         refs: dict[str, str] = {}
+        unknown = False             # a misspelt key: the field it meant is 'missing' too, say it once
         before = len(self.problems)
         for key, raw in body.items():
             if key == "name":
@@ -595,6 +634,7 @@ class MissionLoader:
             if key not in fields:
                 self.problem(f"{kind} has no parameter '{key}'", self.where_key(body, key, file), f"{path}.{key}",
                              did_you_mean(str(key), fields))
+                unknown = True
                 continue
             if isinstance(raw, str) and raw.startswith("$") and raw[1:].isidentifier():
                 looked = scope.values.get(raw[1:]) if raw[1:] in scope.names() else None
@@ -605,25 +645,29 @@ class MissionLoader:
             if isinstance(raw, str) and raw.startswith("bb:"):
                 refs[key] = raw[3:].strip()
                 if not refs[key]:
-                    self.problem("bb: needs a blackboard key, e.g. bb:turn_angle", vwhere, f"{path}.{key}")
+                    self.problem("bb: needs a blackboard key", vwhere, f"{path}.{key}",
+                                 "e.g. bb:turn_angle (the key ChooseTurn writes)")
                 continue
             value = self.field_value(fields[key], raw, scope, vwhere, f"{path}.{key}")
             if value is not _INVALID:
                 values[key] = value
-        if len(self.problems) > before:
-            return None
+        failed = {key for key in body if key not in values and key not in refs}     # already reported
         try:
             params = model.model_validate(values)
         except ValidationError as exc:
+            # the other values are still checked, so that every problem of the node is reported at once
             errors = [e for e in exc.errors(include_url=False)
-                      if not (e["type"] == "missing" and e["loc"] and e["loc"][0] in refs)]
+                      if not (e["type"] == "missing" and e["loc"] and (e["loc"][0] in refs or e["loc"][0] in failed
+                                                                       or unknown))]
             if errors:
                 for err in errors:
                     key = err["loc"][0] if err["loc"] else None
                     vwhere = self.where_value(body, key, file) if key in body else where
                     message = err["msg"].removeprefix("Value error, ")
                     hint = ""
-                    if key in fields:
+                    if err["type"] in ("bool_parsing", "bool_type"):
+                        hint = "write true or false"
+                    elif key in fields:
                         hint = _range_hint(fields[key])
                     if err["type"] == "missing":
                         message = f"{kind} needs '{key}'"
@@ -631,6 +675,8 @@ class MissionLoader:
                     self.problem(message, vwhere, f"{path}.{key}" if key else path, hint)
                 return None
             params = model.model_construct(**{**{k: None for k in refs}, **values})
+        if len(self.problems) > before:
+            return None
         return NodePlan("behaviour", self._name(body, kind, file, path), path, behaviour=kind,
                         params=params, blackboard_refs=refs, where=where)
 
@@ -678,7 +724,7 @@ class MissionLoader:
             try:
                 return scope.get(raw[1:])
             except KeyError:
-                self.problem(f"unknown parameter '{raw}'", where, path, did_you_mean(raw[1:], scope.names() or {"-"}))
+                self.problem(f"unknown parameter '{raw}'", where, path, _parameter_hint(raw[1:], scope))
                 return None
         if isinstance(raw, (int, float)) and not isinstance(raw, bool) or (
                 isinstance(raw, str) and not raw.startswith("bb:") and _looks_numeric(raw)):
@@ -694,7 +740,7 @@ class MissionLoader:
             try:
                 value = scope.get(raw[1:])
             except KeyError:
-                self.problem(f"unknown parameter '{raw}'", where, path, did_you_mean(raw[1:], scope.names() or {"-"}))
+                self.problem(f"unknown parameter '{raw}'", where, path, _parameter_hint(raw[1:], scope))
                 return _INVALID
             if isinstance(value, Quantity):
                 return value.value
@@ -702,12 +748,10 @@ class MissionLoader:
                 return value
             raw = value            # a text or list parameter (e.g. a spawn name): convert it like a literal
         if _is_number(annotation):
-            if isinstance(raw, bool):
-                return raw     # let pydantic say what it expects
-            if isinstance(raw, (int, float, str)):
-                value = self.quantity(raw, scope, where, path, UNIT_KIND.get(unit or ""))
-                return _INVALID if value is None else value
-            return raw
+            if raw is None:
+                return raw     # an optional number left empty: pydantic says whether that is allowed
+            value = self.quantity(raw, scope, where, path, UNIT_KIND.get(unit or ""))
+            return _INVALID if value is None else value
         if _is_tuple(annotation):
             if isinstance(raw, str) and "," not in raw and self.maze is not None and len(typing.get_args(
                     _strip_optional(annotation))) == 3:
@@ -743,6 +787,22 @@ _DECORATOR_EXAMPLES = {
     "until": "e.g. 'until: {status: success, do: ...}'",
     "guard": "e.g. 'guard: {condition: {WallAhead: {}}, do: ...}'",
 }
+
+
+def _file_suggestion(missing: Path) -> str:
+    """'; did you mean 'maze_legs.yaml'?' when a YAML file of a close name sits beside a missing one."""
+    try:
+        names = [p.name for p in missing.parent.glob("*.yaml")] if missing.parent.is_dir() else []
+    except OSError:
+        return ""
+    return "; " + did_you_mean(missing.name, names) if names else ""
+
+
+def _parameter_hint(name: str, scope: _Scope) -> str:
+    names = scope.names()
+    if not names:
+        return "no parameters are defined here: declare it under 'parameters:'"
+    return did_you_mean(name, names)
 
 
 def _strip_optional(annotation: Any) -> Any:
@@ -803,11 +863,6 @@ def _range_hint(field: Any) -> str:
                 bounds.append(f"{sym} {value:g}" if isinstance(value, (int, float)) else f"{sym} {value}")
     unit = (field.json_schema_extra or {}).get("unit", "") if isinstance(field.json_schema_extra, dict) else ""
     return f"allowed: {' and '.join(bounds)}{(' ' + unit) if unit else ''}" if bounds else (field.description or "")
-
-
-def _type_name(value: Any) -> str:
-    return {dict: "a mapping", MarkedDict: "a mapping", list: "a list", MarkedList: "a list",
-            bool: "true/false", type(None): "nothing"}.get(type(value), type(value).__name__)
 
 
 def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
