@@ -475,3 +475,58 @@ def test_tdm_node_on_tdmclients_cache_node():
     assert sent_variables(tdmclient, client.packets[-2]) == {"motor.left.target": [0], "motor.right.target": [0]}
     assert sent_variables(tdmclient, client.packets[-1]) is None            # the unlock request
     assert client.disconnected
+
+
+# ------------------------------------------------------------ with the runner
+class IdealWheels(FakeNode):
+    """A robot whose wheels turn exactly at their targets and whose sensors see nothing."""
+
+    def read_wheel_speeds(self):
+        return self.writes[-1] if self.writes else (0, 0)
+
+
+def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it():
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    node = IdealWheels()
+    robot, _, clock, operator, said = make(node, spawn=None)
+    mission = load_mission("missions/square.yaml")
+    result = Run(mission, backend=robot).run()
+    assert result.status == "SUCCESS"
+    assert len(operator.prompts) == 1                       # place the robot at the start
+    start = mission.start
+    assert math.hypot(result.final_pose["x"] - start.x, result.final_pose["y"] - start.y) < 0.005
+    assert node.closed and node.writes[-1] == (0, 0)        # motors stopped, robot released
+    assert result.collisions == 0 and result.min_clearance is None
+    assert sum(clock.sleeps) == pytest.approx(result.sim_time, abs=0.2)     # it ran in real time
+
+
+def test_a_crash_inside_the_run_still_stops_the_motors():
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    node = IdealWheels()
+    robot, *_ = make(node, spawn=None)
+    run = Run(load_mission("missions/square.yaml"), backend=robot)
+
+    def interrupt(r):
+        if r.ticks == 20:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run.run(on_tick=interrupt)
+    assert node.closed and node.writes[-1] == (0, 0)
+
+
+def test_cli_backend_thymio_without_a_device_manager_is_a_user_error(monkeypatch):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    def refuse(*args, **kwargs):
+        raise UserError("cannot reach the Thymio Device Manager (hint: start Thymio Suite)")
+
+    monkeypatch.setattr(ThymioRobot, "connect", classmethod(refuse))
+    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--backend", "thymio"])
+    assert result.exit_code == 2 and "Thymio Device Manager" in result.output and "Traceback" not in result.output

@@ -73,9 +73,15 @@ def _write_json(path: Path, data: Any) -> None:
 @click.option("--log", "log", type=click.Path(path_type=Path), default=None,
               help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
 @click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
+@click.option("--backend", type=click.Choice(["sim", "thymio", "playground"]), default="sim", show_default=True,
+              help="The pymunk simulation, a real Thymio, or a Thymio Suite Playground robot (both need "
+                   "thymio-bt[thymio] and a running Thymio Device Manager).")
+@click.option("--tdm-addr", default=None, help="Thymio Device Manager host (default: found on this machine).")
+@click.option("--tdm-port", type=int, default=None, help="Thymio Device Manager TCP port.")
 def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | None, start: str | None,
         report: Path | None, quiet: bool, realtime: float | None, plot: Path | None, plot_signals: Path | None,
-        gif: Path | None, view: bool, speedup: float | None, log: Path | None, live_tree: bool) -> None:
+        gif: Path | None, view: bool, speedup: float | None, log: Path | None, live_tree: bool,
+        backend: str, tdm_addr: str | None, tdm_port: int | None) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     try:
         from .mission import load_mission
@@ -83,7 +89,7 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
         from .viz.window import ViewerClosed
 
         spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
-        runner = Run(spec, seed)
+        runner = Run(spec, seed, backend=_real_robot(backend, tdm_addr, tdm_port))
         hooks: list[Any] = [_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty())]
         recorder = None
         if plot or plot_signals or gif or log:
@@ -120,6 +126,16 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
     if window is not None:
         window.finish(result)            # with a display: stays open on the last frame until closed
     sys.exit(0 if result.status == "SUCCESS" else 1)
+
+
+def _real_robot(backend: str, tdm_addr: str | None, tdm_port: int | None) -> Any:
+    """The real-robot backend asked for, connected; None for the simulation."""
+    if backend == "sim":
+        return None
+    from .real import PLAYGROUND, RealConfig, ThymioRobot
+
+    config = PLAYGROUND if backend == "playground" else RealConfig()
+    return ThymioRobot.connect(tdm_addr, tdm_port, config=config)
 
 
 def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif: Path | None,

@@ -133,3 +133,34 @@ class Entities(ABC):
     @abstractmethod
     def request_spawn(self, name: str, pose: Pose) -> Request:
         """Ask for a fresh robot at ``pose``; refused when the name is taken or the pose is not free."""
+
+
+class Backend(Robot, Entities):
+    """A robot and its world as the runner drives them: the pymunk simulation or a real Thymio.
+
+    Besides :class:`Robot` and :class:`Entities`, the runner needs to let time pass between ticks
+    (instantly in a simulation, by waiting on a real robot), a best-known pose for the report, and
+    what the backend knows of contacts with walls (a real Thymio has no bumper: nothing).
+    """
+
+    #: the entity name of the robot
+    robot_name: str = ROBOT_ENTITY
+    #: contact episodes so far, oldest first; each has ``t``, ``x`` and ``y``
+    collisions: list
+    #: the smallest hull-to-wall gap so far in metres (inf when unknown)
+    min_clearance: float = math.inf
+
+    @abstractmethod
+    def advance(self, duration: float) -> None:
+        """Let ``duration`` seconds of backend time pass, then serve pending entity requests."""
+
+    @abstractmethod
+    def true_pose(self) -> Pose | None:
+        """The robot's real pose where the backend knows it (a simulator), else its best estimate."""
+
+    @abstractmethod
+    def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why ``name`` cannot be spawned at ``pose`` now, or None when it can."""
+
+    def close(self) -> None:
+        """Release the robot (stop its motors); called however a run ends. Nothing to do by default."""

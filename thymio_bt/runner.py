@@ -23,6 +23,7 @@ from .behaviours import Context, EventLog
 from .behaviours.base import snapshot
 from .errors import Problem, UserError
 from .mission import Mission, build_tree
+from .robot import Backend
 from .sim import SimConfig, Simulation
 
 
@@ -82,11 +83,12 @@ class Run:
     """One prepared run of a mission in the pymunk simulation."""
 
     def __init__(self, mission: Mission, seed: int | None = None, substitutions: dict[str, Any] | None = None,
-                 node_stats: bool = False) -> None:
+                 node_stats: bool = False, backend: Backend | None = None) -> None:
+        """``backend`` defaults to the pymunk simulation of the mission's maze (a real robot: see
+        :mod:`thymio_bt.real`); the robot is spawned at the mission's start either way."""
         self.mission = mission
         self.seed = mission.seed if seed is None else seed
-        config = SimConfig(noise=mission.noise, seed=self.seed)
-        self.sim = Simulation(mission.maze, config=config)
+        self.sim: Backend = backend or Simulation(mission.maze, config=SimConfig(noise=mission.noise, seed=self.seed))
         problem = self.sim.spawn_problem(self.sim.robot_name, mission.start)
         if problem:
             raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",
@@ -106,7 +108,14 @@ class Run:
         self.trajectory: list[tuple[float, float, float, float]] = []
 
     def run(self, on_tick: TickHook | None = None, realtime: float | None = None) -> RunResult:
-        """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time)."""
+        """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time).
+        The backend is closed (a real robot's motors stopped) however the run ends, even on Ctrl-C."""
+        try:
+            return self._run(on_tick, realtime)
+        finally:
+            self.sim.close()
+
+    def _run(self, on_tick: TickHook | None, realtime: float | None) -> RunResult:
         sim, root, stats = self.sim, self.root, self.stats
         limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
         seen_collisions = 0

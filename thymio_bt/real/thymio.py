@@ -41,7 +41,7 @@ from typing import Any, Callable
 
 from ..calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from ..errors import Problem, UserError
-from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Entities, Pose, Request, RequestState, Robot, Scan, Twist
+from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Request, RequestState, Scan, Twist
 from ..sim import thymio
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
@@ -175,7 +175,7 @@ class TdmNode(Node):
         self.client.disconnect()
 
 
-class ThymioRobot(Robot, Entities):
+class ThymioRobot(Backend):
     """A real Thymio as a thymio-bt backend (see the module docstring for what differs).
 
     ``clock`` and ``sleep`` (wall-clock seconds, and waiting) and ``ask`` and ``say`` (the operator's

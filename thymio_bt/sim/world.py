@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import pymunk
 
 from ..maze import Maze
-from ..robot import ROBOT_ENTITY, Entities, Pose, Request, RequestState, Robot, Scan, Twist
+from ..robot import ROBOT_ENTITY, Backend, Pose, Request, RequestState, Scan, Twist
 from . import thymio
 from .fastpath import RayCaster, stepper
 from .noise import NoiseConfig, NoiseSource
@@ -104,7 +104,7 @@ class _Body:
         return Pose(x, y, (self.body.angle + math.pi) % (2.0 * math.pi) - math.pi)
 
 
-class Simulation(Robot, Entities):
+class Simulation(Backend):
     """A 2D simulation of one Thymio in a maze; advance it with :meth:`advance`."""
 
     def __init__(self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None,
