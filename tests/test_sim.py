@@ -247,3 +247,27 @@ def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatc
     assert fast[1], "the robot must hit a wall in this world"
     monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
     assert crash() == fast
+
+
+def test_the_raw_sensor_model_reports_a_real_thymios_readings_and_their_metres():
+    config = SimConfig(sensor_model="raw", seed=4)
+    sim = Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0), config=config)     # 5 cm from the wall
+    raw = sim.proximity_raw()
+    assert set(raw) == set(SENSOR_NAMES) and all(isinstance(v, int) for v in raw.values())
+    assert 2450 < raw["front_center"] < 2700                  # Webots' table: 2570 at 5 cm, 1 % noise
+    assert sim.proximity()["front_center"] == pytest.approx(0.05, abs=0.001)
+    far = Simulation(COURSE, spawn=Pose(0.4893 - 0.0445, 0.1, 0.0), config=config)   # 9.45 cm: ray hits
+    assert far.proximity_raw()["front_center"] == 0 and far.proximity()["front_center"] == math.inf
+    assert Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0)).proximity_raw() is None   # metres by default
+
+
+def test_raw_readings_are_seeded():
+    def readings(seed):
+        sim = Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0), config=SimConfig(sensor_model="raw", seed=seed))
+        out = []
+        for _ in range(5):
+            sim.advance(0.1)
+            out.append(sim.proximity_raw()["front_center"])
+        return out
+
+    assert readings(1) == readings(1) != readings(2)

@@ -22,9 +22,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Literal
 
+import numpy as np
 import pymunk
 
+from ..calibration import RawProximityModel, raw_scan_to_metres
 from ..maze import Maze
 from ..robot import ROBOT_ENTITY, Backend, Pose, Request, RequestState, Scan, Twist
 from . import thymio
@@ -60,6 +63,9 @@ class SimConfig:
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     seed: int = 0
     max_wheel_speed: float = thymio.MAX_WHEEL_SPEED
+    #: "metres": the course's ideal rays; "raw": what a real Thymio reports (noisy integer readings
+    #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does
+    sensor_model: Literal["metres", "raw"] = "metres"
 
 
 @dataclass(frozen=True, slots=True)
@@ -142,6 +148,9 @@ class Simulation(Backend):
         self._ray = RayCaster(self.space)
         self._steps = 0
         self._noise = NoiseSource(self.config.noise, self.config.seed)
+        self._raw_model = (RawProximityModel(np.random.default_rng((self.config.seed, 1)))
+                           if self.config.sensor_model == "raw" else None)
+        self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
         self._requests: list[Request] = []
         self._cmd = Twist()
@@ -173,6 +182,10 @@ class Simulation(Backend):
 
     def proximity(self) -> Scan | None:
         return self._scan if self.exists() else None
+
+    def proximity_raw(self) -> dict[str, int] | None:
+        """The latest readings as a real Thymio's integers (``sensor_model="raw"`` only), or None."""
+        return self._raw if self.exists() else None
 
     def pose(self) -> Pose | None:
         if self.config.noise.odometry:
@@ -303,7 +316,7 @@ class Simulation(Backend):
         angle = body.angle
         cos, sin = math.cos(angle), math.sin(angle)
         bx, by = body.position
-        noise = self._noise
+        noise, raw = self._noise, self._raw_model
         scan: dict[str, float] = {}
         for name, (sx, sy), (ex, ey) in self._rays:
             alpha = query((bx + sx * cos - sy * sin, by + sx * sin + sy * cos),
@@ -312,7 +325,10 @@ class Simulation(Backend):
                 scan[name] = math.inf
                 continue
             value = max(alpha * thymio.RANGE_MAX, thymio.RANGE_MIN)
-            scan[name] = noise.range(value, thymio.RANGE_MIN, thymio.RANGE_MAX)
+            scan[name] = value if raw is not None else noise.range(value, thymio.RANGE_MIN, thymio.RANGE_MAX)
+        if raw is not None:
+            self._raw = raw.measure_scan(scan)
+            scan = raw_scan_to_metres(self._raw, raw.table)
         self._scan = scan
         self._update_clearance(entity, bx, by, cos, sin)
 
