@@ -193,13 +193,19 @@ class _Parser:
         if kind == "ref":
             if self.resolve is None:
                 raise UnitError(f"'{text}' refers to a parameter, but none are defined here")
-            quantity = self.resolve(text[1:])
+            try:
+                quantity = self.resolve(text[1:])
+            except KeyError:
+                raise UnitError(f"unknown parameter '{text}' in '{self.text}'") from None
             return quantity.value, quantity.kind
         raise UnitError(f"expected a number in '{self.text}', found '{text}'")
 
 
 def parse_value(text: str | int | float, resolve: Callable[[str], Quantity] | None = None) -> Quantity:
-    """Parse a number with an optional unit into SI; raise ``ValueError`` with a clear message."""
+    """Parse a number with an optional unit into SI; raise :class:`UnitError` (a ``ValueError``).
+
+    ``resolve`` gives the value of a ``$name``; it may raise ``KeyError`` or :class:`UnitError`.
+    """
     if isinstance(text, bool):
         raise UnitError(f"expected a number, found {text!r}")
     if isinstance(text, (int, float)):

@@ -11,8 +11,8 @@ Example::
 
 from __future__ import annotations
 
-import math
 import os
+import types
 import typing
 from pathlib import Path
 from typing import Any, Mapping
@@ -807,7 +807,7 @@ def _parameter_hint(name: str, scope: _Scope) -> str:
 
 def _strip_optional(annotation: Any) -> Any:
     args = [a for a in typing.get_args(annotation) if a is not type(None)]
-    if typing.get_origin(annotation) in (typing.Union, getattr(__import__("types"), "UnionType", None)) and len(args) == 1:
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType) and len(args) == 1:
         return args[0]
     return annotation
 
