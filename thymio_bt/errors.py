@@ -30,7 +30,7 @@ class Problem:
         if self.path:
             text += f" [at {self.path}]"
         if self.hint:
-            text += f"\n    hint: {self.hint}"
+            text += f" (hint: {self.hint})"     # one line per problem: the CLI contract
         return text
 
 
