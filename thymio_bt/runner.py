@@ -88,7 +88,8 @@ class Run:
         :mod:`thymio_bt.real`); the robot is spawned at the mission's start either way."""
         self.mission = mission
         self.seed = mission.seed if seed is None else seed
-        self.sim: Backend = backend or Simulation(mission.maze, config=SimConfig(noise=mission.noise, seed=self.seed))
+        self.sim: Backend = backend or Simulation(mission.maze, config=SimConfig(
+            noise=mission.noise, seed=self.seed, sensor_model=mission.sensor_model))
         problem = self.sim.spawn_problem(self.sim.robot_name, mission.start)
         if problem:
             raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",

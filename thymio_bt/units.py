@@ -59,6 +59,10 @@ _TOKEN = re.compile(
 EXAMPLES = {"length": "5cm, 0.05 m or 50mm", "angle": "90deg, pi/2 or 1.57 rad", "time": "2 s, 500ms or 1 min",
             "speed": "10cm/s or 0.1 m/s", "angular_speed": "90deg/s or 1.5 rad/s", "frequency": "10 Hz"}
 
+#: A proximity threshold as a real Thymio's reading ("3400 raw"), converted to the distance at which
+#: the calibration table gives that reading. Not a factor: it stands alone, never in arithmetic.
+_RAW = re.compile(r"\s*(\d+(?:\.\d*)?)\s*raw\s*")
+
 #: Deepest nesting of parentheses accepted (a guard against pathological input, not a style rule).
 MAX_NESTING = 50
 
@@ -166,6 +170,9 @@ class _Parser:
         if not tok or tok[0] != "unit" or tok[1] == "pi":
             return value, kind
         self.i += 1
+        if tok[1] == "raw":
+            raise UnitError(f"a raw reading cannot take part in arithmetic in '{self.text}'",
+                            "raw readings are not proportional to distance: write one reading alone, e.g. 3400 raw")
         if tok[1] not in UNITS:
             raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}'",
                             did_you_mean(tok[1], [u for u in UNITS if u != "hz"]))
@@ -212,10 +219,23 @@ def parse_value(text: str | int | float, resolve: Callable[[str], Quantity] | No
         if not math.isfinite(text):
             raise UnitError(f"{text!r} is not a finite number")
         return Quantity(float(text))
+    raw = _RAW.fullmatch(str(text))
+    if raw:
+        return _raw_reading(float(raw.group(1)))
     quantity = _Parser(str(text), resolve).parse()
     if not math.isfinite(quantity.value):
         raise UnitError(f"'{text}' is not a finite number")
     return quantity
+
+
+def _raw_reading(reading: float) -> Quantity:
+    """The distance at which a real Thymio's sensor gives ``reading`` (Webots' Thymio II table)."""
+    from .calibration import WEBOTS_THYMIO2 as table
+
+    if not 0 < reading <= table.max_reading:
+        raise UnitError(f"a raw reading must be between 1 and {table.max_reading:g}, got {reading:g}",
+                        "0 means nothing in range; 4308 is as close as the table goes (e.g. 3400 raw is 3.2 cm)")
+    return Quantity(table.to_metres(reading), "length")
 
 
 def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> tuple[float, float, float]:

@@ -29,8 +29,9 @@ from ..yamlio import MarkedDict, MarkedList, load_yaml
 from .plan import Mission, NodePlan
 from .registry import Registry, default_registry
 
-TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "seed", "noise",
+TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "seed", "noise", "sensor_model",
             "parameters", "subtrees", "include", "plugins", "tree")
+SENSOR_MODELS = ("metres", "raw")
 INCLUDE_KEYS = ("description", "parameters", "subtrees", "include", "plugins")
 COMPOSITES = ("sequence", "reactive_sequence", "selector", "reactive_selector", "parallel")
 DECORATORS = ("repeat", "retry", "timeout", "invert", "force_success", "force_failure", "until",
@@ -290,7 +291,7 @@ class MissionLoader:
     def _settings(self, data: MarkedDict, file: str, params: dict[str, Any],
                   overrides: Mapping[str, str]) -> dict[str, Any]:
         empty = _Scope({})
-        values: dict[str, Any] = {"tick_hz": 10.0, "time_limit": 300.0, "seed": 0}
+        values: dict[str, Any] = {"tick_hz": 10.0, "time_limit": 300.0, "seed": 0, "sensor_model": "metres"}
         noise_raw: dict[str, Any] = {}
         for key, kind, lo, hi in (("tick_hz", "frequency", 1.0, 100.0), ("time_limit", "time", 0.1, 36000.0)):
             if key in data:
@@ -306,6 +307,8 @@ class MissionLoader:
                              "e.g. seed: 42")
             else:
                 values["seed"] = seed
+        if "sensor_model" in data:
+            self._sensor_model(data["sensor_model"], self.where_value(data, "sensor_model", file), values)
         if "noise" in data:
             noise = data["noise"]
             if isinstance(noise, MarkedDict):
@@ -321,6 +324,8 @@ class MissionLoader:
                 value = self.quantity(text, empty, where, name, "frequency" if name == "tick_hz" else "time")
                 if value is not None:
                     values[name] = value
+            elif name == "sensor_model":
+                self._sensor_model(text, where, values)
             elif name == "seed":
                 try:
                     values["seed"] = int(text)
@@ -338,7 +343,7 @@ class MissionLoader:
                 params[name] = new
             else:
                 self.problem(f"--set {name}: no such parameter", where, name,
-                             did_you_mean(name, [*params, "tick_hz", "time_limit", "seed", "noise.range_sd",
+                             did_you_mean(name, [*params, "tick_hz", "time_limit", "seed", "sensor_model", "noise.range_sd",
                                                  "noise.wheel", "noise.odometry"]))
         try:
             values["noise"] = NoiseConfig.model_validate(noise_raw)
@@ -346,6 +351,13 @@ class MissionLoader:
             self.problems.extend(problems_from(exc, data.get("noise", {}), file, NoiseConfig, "noise."))
             values["noise"] = NoiseConfig()
         return values
+
+    def _sensor_model(self, value: Any, where: Where, values: dict[str, Any]) -> None:
+        if value in SENSOR_MODELS:
+            values["sensor_model"] = value
+        else:
+            self.problem(f"sensor_model must be one of {', '.join(SENSOR_MODELS)}, got {value!r}", where,
+                         "sensor_model", "raw: a real Thymio's integer readings through its calibration table")
 
     def _subtrees(self, data: MarkedDict, file: str) -> None:
         raw = data.get("subtrees") or MarkedDict()

@@ -57,6 +57,8 @@ class Mission:
     seed: int
     noise: NoiseConfig
     parameters: dict[str, Any]
+    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.calibration)
+    sensor_model: str
     tree: NodePlan
     registry: Any = None
     #: where the start pose was given (file, line, column), for error messages

@@ -110,6 +110,8 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "start": {**pose, "description": "a named spawn of the maze or [x, y, yaw]"},
             "tick_hz": _VALUE, "time_limit": _VALUE,
             "seed": {"type": "integer", "minimum": 0},
+            "sensor_model": {"enum": ["metres", "raw"],
+                             "description": "metres: the course's ideal rays; raw: a real Thymio's readings"},
             "noise": {"type": "object", "properties": noise["properties"], "additionalProperties": False},
             "parameters": {"type": "object", "additionalProperties": {"type": ["number", "string", "boolean"]}},
             "include": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]},
