@@ -18,18 +18,23 @@ Example::
 from __future__ import annotations
 
 import math
-from typing import Any
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import Problem, UserError
 from .model import Maze, Spawn, Wall
+
+if TYPE_CHECKING:
+    from .model import GridMazeFile
 
 _HEADINGS = {">": 0.0, "^": math.pi / 2, "<": math.pi, "v": -math.pi / 2}
 
 
 def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (0.0, 0.0),
                    thickness: float = 0.01, name: str = "grid", filename: str = "<grid>",
-                   first_line: int = 1) -> Maze:
-    """Build a :class:`Maze` from ASCII art; bad art is a :class:`UserError` pointing at the line."""
+                   first_line: int = 1, first_col: int = 1) -> Maze:
+    """Build a :class:`Maze` from ASCII art; bad art is a :class:`UserError` pointing at the line and
+    column (``first_line``/``first_col``: where the art starts in its file)."""
     lines = [ln.rstrip() for ln in text.splitlines()]
     while lines and not lines[0].strip():
         lines.pop(0)
@@ -38,13 +43,14 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
         lines.pop()
     if len(lines) < 3 or len(lines) % 2 == 0:
         raise UserError(Problem("a grid needs an odd number of lines (corner lines around cell lines)",
-                                filename, first_line, 1, hint="start and end with a '+--+' line"))
+                                filename, first_line, first_col, hint="start and end with a '+--+' line"))
     corner_cols = sorted({i for ln in lines[::2] for i, ch in enumerate(ln) if ch == "+"})
     if len(corner_cols) < 2:
-        raise UserError(Problem("no '+' corners found", filename, first_line, 1))
+        raise UserError(Problem("no '+' corners found", filename, first_line, first_col,
+                                hint="draw cells between '+' corners, e.g. '+--+--+'"))
     widths = {b - a for a, b in zip(corner_cols, corner_cols[1:])}
     if len(widths) != 1:
-        raise UserError(Problem("corners '+' must be evenly spaced", filename, first_line, 1,
+        raise UserError(Problem("corners '+' must be evenly spaced", filename, first_line, first_col,
                                 hint="every cell must be drawn the same width, e.g. '+--+--+'"))
     width = widths.pop()
     base = corner_cols[0]
@@ -66,7 +72,8 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
                     walls.append(Wall(start=(x0, y_corner), end=(round(x0 + cell, 9), y_corner), thickness=thickness))
                 elif seg.strip():
                     raise UserError(Problem(f"unexpected '{seg.strip()}' in a corner line", filename,
-                                            first_line + r, col + 2, hint="use '-' for walls, spaces for gaps"))
+                                            first_line + r, first_col + col + 1,
+                                            hint="use '-' for walls, spaces for gaps"))
         else:  # cell line: vertical walls and start arrows
             y0 = round(oy + (n_rows - 1 - r // 2) * cell, 9)
             for col in corner_cols:
@@ -76,9 +83,14 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
                     walls.append(Wall(start=(x, y0), end=(x, round(y0 + cell, 9)), thickness=thickness))
                 elif ch not in " ":
                     raise UserError(Problem(f"unexpected '{ch}' on a wall column", filename,
-                                            first_line + r, col + 1, hint="use '|' for a wall or a space"))
+                                            first_line + r, first_col + col, hint="use '|' for a wall or a space"))
             for i, col in enumerate(corner_cols[:-1]):
                 inside = line[col + 1: col + width]
+                stray = next((k for k, ch in enumerate(inside) if ch != " " and ch not in _HEADINGS), None)
+                if stray is not None:
+                    raise UserError(Problem(f"unexpected '{inside[stray]}' inside a cell", filename, first_line + r,
+                                            first_col + col + 1 + stray,
+                                            hint="a cell holds spaces, or one of > < ^ v for the start"))
                 marks = [ch for ch in inside if ch in _HEADINGS]
                 if marks:
                     cx, cy = round(ox + (i + 0.5) * cell, 9), round(y0 + cell / 2, 9)
@@ -113,29 +125,18 @@ def _merge(walls: list[Wall]) -> list[Wall]:
     return merged
 
 
-def maze_from_grid_data(data: dict[str, Any], filename: str) -> Maze:
-    """A maze file whose ``grid:`` key holds ASCII art (plus optional cell, origin, spawns)."""
-    from ..validation import validate
-
-    allowed = {"name", "description", "grid", "cell", "origin", "thickness", "spawns"}
-    unknown = [k for k in data if k not in allowed]
-    if unknown:
-        from ..errors import did_you_mean
-        line, col = data.marks[unknown[0]]
-        raise UserError(Problem(f"unknown key '{unknown[0]}'", filename, line, col,
-                                hint=did_you_mean(str(unknown[0]), allowed)))
-    grid = data["grid"]
-    if not isinstance(grid, str):
-        raise UserError(Problem("'grid' must be a block of text (use 'grid: |')", filename,
-                                *data.value_marks["grid"]))
-    line = data.value_marks["grid"][0] + (1 if "\n" in grid else 0)
-    maze = maze_from_grid(grid, cell=float(data.get("cell", 0.2)),
-                          origin=tuple(data.get("origin", (0.0, 0.0))),  # type: ignore[arg-type]
-                          thickness=float(data.get("thickness", 0.01)),
-                          name=str(data.get("name", "grid")), filename=filename, first_line=line)
-    extra = {k: data[k] for k in ("spawns", "description") if k in data}
-    if extra:
-        checked = validate(Maze, {"walls": [], **extra}, filename)
-        maze = maze.model_copy(update={"spawns": {**maze.spawns, **checked.spawns},
-                                       "description": checked.description})
-    return maze
+def maze_from_grid_file(header: "GridMazeFile", mark: tuple[int, int], filename: str) -> Maze:
+    """The maze of a validated grid-form file; ``mark`` is where the ``grid:`` value starts, so
+    errors in the art point at the file's own line and column (a ``grid: |`` block is indented)."""
+    line, col = mark
+    if "\n" in header.grid:                      # a block: the art starts on the next line
+        line += 1
+        try:
+            source = Path(filename).read_text(encoding="utf-8").splitlines()[line - 1:]
+        except OSError:
+            source = []
+        first = next((text for text in source if text.strip()), "")
+        col = len(first) - len(first.lstrip(" ")) + 1
+    maze = maze_from_grid(header.grid, cell=header.cell, origin=header.origin, thickness=header.thickness,
+                          name=header.name, filename=filename, first_line=line, first_col=col)
+    return maze.model_copy(update={"spawns": {**maze.spawns, **header.spawns}, "description": header.description})

@@ -216,7 +216,7 @@ class GridMazeFile(BaseModel):
 
 def load_maze(path: str | Path) -> Maze:
     """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
-    from .grid import maze_from_grid_data
+    from .grid import maze_from_grid_file
 
     data = load_yaml(path)
     if not isinstance(data, MarkedDict):
@@ -225,9 +225,7 @@ def load_maze(path: str | Path) -> Maze:
                                 hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)"))
     if "grid" in data:
         header = validate(GridMazeFile, data, str(path))      # units and types, before the art is read
-        checked = MarkedDict({**data, "cell": header.cell, "origin": header.origin, "thickness": header.thickness})
-        checked.mark, checked.marks, checked.value_marks = data.mark, data.marks, data.value_marks
-        return maze_from_grid_data(checked, str(path))
+        return maze_from_grid_file(header, data.value_marks["grid"], str(path))
     return validate(Maze, data, str(path))
 
 
