@@ -149,6 +149,18 @@ class Backend(Robot, Entities):
     collisions: list
     #: the smallest hull-to-wall gap so far in metres (inf when unknown)
     min_clearance: float = math.inf
+    #: entity requests not yet served; :meth:`advance` serves them
+    _requests: list[Request]
+
+    def request_delete(self, name: str) -> Request:
+        request = Request("delete", name)
+        self._requests.append(request)
+        return request
+
+    def request_spawn(self, name: str, pose: Pose) -> Request:
+        request = Request("spawn", name, pose)
+        self._requests.append(request)
+        return request
 
     @abstractmethod
     def advance(self, duration: float) -> None:

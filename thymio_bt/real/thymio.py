@@ -284,16 +284,6 @@ class ThymioRobot(Backend):
         return self._clock() - self._start - self._paused
 
     # -------------------------------------------------------------- Entities
-    def request_delete(self, name: str) -> Request:
-        request = Request("delete", name)
-        self._requests.append(request)
-        return request
-
-    def request_spawn(self, name: str, pose: Pose) -> Request:
-        request = Request("spawn", name, pose)
-        self._requests.append(request)
-        return request
-
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
         """Why the robot cannot be spawned at ``pose`` (None when it can; walls are the operator's job)."""
         if name != self.robot_name:

@@ -211,16 +211,6 @@ class Simulation(Backend):
         return self._steps * self._dt
 
     # -------------------------------------------------------------- Entities
-    def request_delete(self, name: str) -> Request:
-        request = Request("delete", name)
-        self._requests.append(request)
-        return request
-
-    def request_spawn(self, name: str, pose: Pose) -> Request:
-        request = Request("spawn", name, pose)
-        self._requests.append(request)
-        return request
-
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
         """Why a robot cannot be spawned at ``pose`` (None when it can)."""
         if name in self._entities:
