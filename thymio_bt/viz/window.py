@@ -256,8 +256,7 @@ class Viewer:
                     lag = self._due(frame.t) - time.perf_counter()
                     if lag <= 0:
                         break
-                    # wall-clock waiting is the viewer's job: the simulation stays in simulated time
-                    time.sleep(min(lag, IDLE_MS / 1000))
+                    time.sleep(min(lag, IDLE_MS / 1000))  # realtime: the viewer paces frames, never the simulation
                     continue
             if event.type in (self.pg.KEYDOWN, self.pg.QUIT, self.pg.VIDEORESIZE, self.pg.WINDOWSIZECHANGED):
                 stale = True
