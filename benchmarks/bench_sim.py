@@ -11,8 +11,8 @@ Measured:
      median of REPEATS -> real-time factor (target >= 2000x);
   2. where a tick's time goes, measured inside the same loop by wrapping the simulation's
      methods on the instance (µs per ``advance(0.1)``, per sensor refresh = 7 ray queries +
-     clearance bookkeeping, per ``space.step``; physics = advance - refresh), plus a bare
-     ``space.step(0.01)`` timed in isolation;
+     clearance bookkeeping, per C step; physics = advance - refresh), plus a bare step(0.01)
+     timed in isolation, through the C function and through pymunk's public ``Space.step``;
   3. an untimed check run of the same (deterministic) drive that the robot really moves and
      never tunnels: it stays inside the maze box it started in, never crosses a wall's centre
      line between two ticks, and never overlaps a wall by more than PENETRATION_LIMIT.
@@ -183,7 +183,8 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
 
     The simulation's methods are wrapped on the instance only (nothing in thymio_bt is changed):
     ``advance``, ``drive``, ``_refresh_sensors`` (the 10 Hz sensor refresh: 7 ray queries plus the
-    clearance bookkeeping), ``_update_clearance`` (that bookkeeping alone) and ``space.step``.
+    clearance bookkeeping), ``_update_clearance`` (that bookkeeping alone) and ``_step`` (pymunk's C
+    step, called through sim/fastpath.py).
     Each wrapper adds about 0.1 µs per call; the wrappers' own cost is measured and subtracted.
     Medians over ``repeats`` instrumented runs.
     """
@@ -192,10 +193,10 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
         sim = make_sim(spawn)
         timed = {"advance": _Timed(sim.advance), "drive": _Timed(sim.drive),
                  "refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
-                 "step": _Timed(sim.space.step)}
+                 "step": _Timed(sim._step)}
         sim.advance, sim.drive = timed["advance"], timed["drive"]
         sim._refresh_sensors, sim._update_clearance = timed["refresh"], timed["clearance"]
-        sim.space.step = timed["step"]
+        sim._step = timed["step"]
         t0 = perf_counter()
         drive(sim, round(seconds / TICK))
         tick = (perf_counter() - t0) / timed["advance"].calls * 1e6
@@ -217,21 +218,24 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     rays = refresh - clearance
     substep_python = (advance - refresh - steps * step) / steps
 
-    # pymunk alone: a bare space.step(0.01) of the same space, robot in free space, velocity held
+    # pymunk alone: a bare step(0.01) of the same space, robot in free space, velocity held; through
+    # the C function as the simulation calls it, and through pymunk's public Space.step for scale
     sim = make_sim(spawn)
     sim.drive(0.0, 1.0)          # turning in place: no wall contact
     sim.advance(0.1)
-    bare = sim.space.step
 
-    def steps_only(n):
-        for _ in range(n):
-            bare(0.01)
-    bare_step, _ = per_call_us(steps_only, 10000)
+    def steps_of(step):
+        def steps_only(n):
+            for _ in range(n):
+                step(0.01)
+        return per_call_us(steps_only, 10000)[0]
+    bare_step, public_step = steps_of(sim._step), steps_of(sim.space.step)
     return {"advance_0.1_us": advance, "drive_us": med["drive"] - wrap,
             "sensor_refresh_us": refresh, "rays_7_us": rays, "clearance_us": clearance,
             "space_step_in_loop_us": step, "substeps_per_advance": steps,
             "substep_python_overhead_us": substep_python,
             "physics_per_advance_us": advance - refresh, "bare_space_step_us": bare_step,
+            "bare_public_space_step_us": public_step,
             "wrapper_overhead_us": wrap, "instrumented_tick_us": med["tick"],
             "instrumented_tick_less_wrappers_us": med["tick"] - wrap * (steps + 3)}
 
@@ -295,14 +299,16 @@ def main(argv: list[str] | None = None) -> dict:
         ("    clearance tracking", f"{m['clearance_us']:.1f}", share(m["clearance_us"]), "min_clearance bookkeeping"),
         ("  physics (advance - refresh)", f"{m['physics_per_advance_us']:.1f}", share(m["physics_per_advance_us"]),
          f"= {m['physics_per_advance_us'] / steps:.2f} us per sub-step:"),
-        ("    space.step(0.01) x10", f"{m['space_step_in_loop_us'] * steps:.1f}",
+        ("    C step(0.01) x10", f"{m['space_step_in_loop_us'] * steps:.1f}",
          share(m["space_step_in_loop_us"] * steps), f"{m['space_step_in_loop_us']:.2f} us each in the loop"),
         ("    Python per sub-step x10", f"{m['substep_python_overhead_us'] * steps:.1f}",
          share(m["substep_python_overhead_us"] * steps),
          f"{m['substep_python_overhead_us']:.2f} us each (control-body update, counters)"),
         ("drive(v, w)", f"{m['drive_us']:.1f}", share(m["drive_us"]), "wheel limits + seeding the body velocity"),
         ("proximity + controller + loop", f"{rest:.1f}", share(rest), "by difference"),
-        ("bare space.step(0.01), isolated", f"{m['bare_space_step_us']:.2f}", "", "pymunk alone, robot in free space"),
+        ("bare C step(0.01), isolated", f"{m['bare_space_step_us']:.2f}", "", "pymunk alone, robot in free space"),
+        ("bare Space.step(0.01), isolated", f"{m['bare_public_space_step_us']:.2f}", "",
+         "the same through pymunk's public wrapper"),
         ("load_maze(two_parts_maze)", f"{load * 1e6:.0f}", "", "once per run, not in the loop"),
         ("Simulation(maze, spawn)", f"{build * 1e6:.0f}", "", "once per run, not in the loop"),
     ]

@@ -52,9 +52,10 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
-import numpy as np
+if TYPE_CHECKING:                      # numpy is only needed by whoever makes the generator
+    import numpy as np
 
 
 @dataclass(frozen=True, slots=True)
