@@ -215,3 +215,14 @@ def test_wall_follow_turns_around_in_dead_ends():
                       dead_end_first, start=[0.3, 0.3, "pi"], seconds=120)
     assert result.status == "SUCCESS", result.reason
     assert ends(result, "WallFollow")[0]["turns"].startswith("RR")
+
+
+def test_move_until_wall_with_centre_steers_to_the_corridor_middle():
+    start = [0.1, 0.085, 0.05]                   # 15 mm right of the centre line, heading 2.9 deg to the left
+    off = run_tree({"MoveUntilWall": {"distance": "5cm"}}, world("corridor"), start=start, seconds=20)
+    on = run_tree({"MoveUntilWall": {"distance": "5cm", "centre": True}}, world("corridor"), start=start, seconds=20)
+    assert off.status == on.status == "SUCCESS"
+    assert abs(off.final_pose["y"] - 0.1) > 0.01             # heading held: it drifts across the corridor
+    assert abs(on.final_pose["y"] - 0.1) < 0.003             # centred within 3 mm over 0.5 m
+    assert abs(on.final_pose["yaw"]) < 0.02
+    assert on.final_proximity["front_center"] == pytest.approx(0.05, abs=0.001)

@@ -109,3 +109,14 @@ def test_bonus_follows_other_corridors_of_the_same_kind(tmp_path, seed):
     assert turn_letters(result) == turns_along(path)
     last = path[-1]
     assert math.dist(axle(result.final_pose), ((last[0] + 0.5) * 0.2, (last[1] + 0.5) * 0.2)) < 0.06
+
+
+@pytest.mark.parametrize("seed", range(20, 30))
+def test_bonus_with_noise_reaches_the_last_pocket(seed):
+    """Lateral drift from odometry errors once made seed 25 turn left into a wall and stop there,
+    'successfully'; MoveUntilWall's centring keeps the robot where ChooseTurn can see both sides."""
+    noise = {"noise.range_sd": "0.001", "noise.wheel": "0.027", "noise.odometry": "0.01"}
+    result = Run(load_mission("missions/maze_bonus.yaml", noise), seed=seed).run()
+    assert result.status == "SUCCESS" and turn_letters(result) == "RRRLRLLLLLR"
+    assert result.final_pose["x"] == pytest.approx(1.7, abs=0.01)
+    assert result.final_pose["y"] == pytest.approx(0.311, abs=0.01)

@@ -46,13 +46,21 @@ class MoveUntilWallParams(BehaviourParams):
     tolerance: float = Field(0.0005, gt=0, le=0.01, description="stop when within this of distance",
                              json_schema_extra={"unit": "m"})
     hold_heading: bool = Field(True, description="steer to keep the heading the robot had at the start")
+    centre: bool = Field(False, description="steer to the middle of the corridor while both ±38° rays see its "
+                         "side walls and no wall is ahead (cancels the lateral drift odometry errors build "
+                         "up between turns)")
+    centre_gain: float = Field(5.0, gt=0, le=50, description="steering per metre of difference between the "
+                               "left and right ±38° readings", json_schema_extra={"unit": "rad/s/m"})
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
 class MoveUntilWall(RobotBehaviour):
     """Cruise at ``speed``, slow down once the wall is in range, stop when the sensor reads ``distance``.
 
-    Fails with NO_WALL when no wall comes into range within the time limit.
+    It holds its start heading by odometry; with ``centre`` it also steers towards the middle of
+    a corridor while both side walls are in view and the front ray sees nothing (near a wall ahead
+    the angled rays may see it too), and holds the heading it has when that stops. Fails with NO_WALL when no wall comes into range within the
+    time limit.
 
     Example (YAML)::
 
@@ -82,7 +90,13 @@ class MoveUntilWall(RobotBehaviour):
             return Status.SUCCESS
         speed = p.speed if math.isinf(reading) else approach_speed(
             remaining, p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
-        self.robot.drive(speed, heading_hold(self, self.heading) if p.hold_heading else 0.0)
+        left, right = scan["front_left"], scan["front_right"]
+        if p.centre and math.isfinite(left) and math.isfinite(right) and math.isinf(scan["front_center"]):
+            turn = max(-0.5, min(0.5, p.centre_gain * (left - right)))   # nearer the right wall: turn left
+            self.heading = current_pose(self.robot).yaw                   # hold this once a wall drops out
+        else:
+            turn = heading_hold(self, self.heading) if p.hold_heading else 0.0
+        self.robot.drive(speed, turn)
         self.feedback_message = ("no wall in range" if math.isinf(reading)
                                  else f"{p.sensor} {reading:.4f} m, {speed:.3f} m/s")
         return Status.RUNNING
