@@ -334,15 +334,7 @@ class ThymioRobot(Backend):
     def _integrate(self, left: float, right: float, duration: float) -> None:
         v = (left + right) / 2.0
         w = (right - left) / self.config.wheel_separation
-        ax, ay, yaw = self._axle
-        turn = w * duration
-        if abs(turn) < 1e-9:
-            dx, dy = v * duration * math.cos(yaw), v * duration * math.sin(yaw)
-        else:
-            radius = v / w
-            dx = radius * (math.sin(yaw + turn) - math.sin(yaw))
-            dy = -radius * (math.cos(yaw + turn) - math.cos(yaw))
-        self._axle = (ax + dx, ay + dy, yaw + turn)
+        self._axle = thymio.integrate_arc(*self._axle, v, w, duration)
 
     def _place(self, pose: Pose) -> None:
         """The robot now stands at ``pose``: reset odometry and the command, take fresh readings."""

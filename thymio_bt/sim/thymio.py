@@ -73,3 +73,14 @@ def limit_command(linear: float, angular: float, max_wheel: float = MAX_WHEEL_SP
         return linear, angular
     scale = max_wheel / fastest
     return linear * scale, angular * scale
+
+
+def integrate_arc(x: float, y: float, yaw: float, v: float, w: float,
+                  duration: float) -> tuple[float, float, float]:
+    """Dead reckoning: where a point moving at (v, w) for ``duration`` ends, along the exact arc."""
+    turn = w * duration
+    if abs(turn) < 1e-9:
+        return x + v * duration * math.cos(yaw), y + v * duration * math.sin(yaw), yaw + turn
+    radius = v / w
+    return (x + radius * (math.sin(yaw + turn) - math.sin(yaw)),
+            y - radius * (math.cos(yaw + turn) - math.cos(yaw)), yaw + turn)

@@ -288,15 +288,7 @@ class Simulation(Backend):
         left, right = thymio.wheel_speeds(*self._applied)
         fl, fr = self._noise.encoder_factors()
         v, w = thymio.body_velocity(left * fl, right * fr)
-        ax, ay, yaw = self._odo
-        turn = w * duration
-        if abs(turn) < 1e-9:
-            dx, dy = v * duration * math.cos(yaw), v * duration * math.sin(yaw)
-        else:
-            radius = v / w
-            dx = radius * (math.sin(yaw + turn) - math.sin(yaw))
-            dy = -radius * (math.cos(yaw + turn) - math.cos(yaw))
-        self._odo = (ax + dx, ay + dy, yaw + turn)
+        self._odo = thymio.integrate_arc(*self._odo, v, w, duration)
 
     def _odometry_pose(self) -> Pose:
         ax, ay, yaw = self._odo
