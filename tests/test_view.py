@@ -1,5 +1,6 @@
 """The live window (run --view, replay --view), offscreen through SDL's dummy video driver."""
 
+import json
 import sys
 import time
 
@@ -124,9 +125,10 @@ def test_closing_the_window_stops_a_live_run(pg, close):
         pg.event.post(pg.event.Event(pg.QUIT))
     else:
         _key(pg, {"q": pg.K_q, "escape": pg.K_ESCAPE}[close])
-    with pytest.raises(ViewerClosed):
-        run.run(on_tick=view)
+    result = run.run(on_tick=view)
     assert run.ticks == 1
+    assert (result.status, result.code, result.reason) == ("FAILURE", "STOPPED", "the viewer window was closed")
+    assert result.failed_path and not run.sim.command().linear      # the running behaviour stopped the robot
 
 
 def test_a_replay_closed_early_just_ends(pg, tmp_path):
@@ -159,6 +161,27 @@ def test_run_and_replay_with_view_run_offscreen(pg, tmp_path):
     assert result.exit_code == 0, result.output
     result = CliRunner().invoke(main, ["replay", str(log), "--view", "--speedup", "1e9"])
     assert result.exit_code == 0 and "nothing to draw" not in result.output
+
+
+def test_closing_the_window_still_writes_the_report_and_the_log(pg, tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    show = Viewer.show
+
+    def close_at_the_fifth_frame(self, frame):
+        if self.shown == 4:
+            pg.event.post(pg.event.Event(pg.QUIT))
+        return show(self, frame)
+
+    monkeypatch.setattr(Viewer, "show", close_at_the_fifth_frame)
+    report, log = tmp_path / "report.json", tmp_path / "run.jsonl"
+    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view", "--speedup", "1e9",
+                                       "--report", str(report), "--log", str(log)])
+    assert result.exit_code == 1 and "STOPPED" in result.output
+    assert json.loads(report.read_text())["code"] == "STOPPED"
+    assert read_log(log).end["code"] == "STOPPED" and len(read_log(log).samples) == 5
 
 
 def test_view_without_pygame_is_a_user_error(monkeypatch):

@@ -86,7 +86,6 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
     try:
         from .mission import load_mission
         from .runner import Run
-        from .viz.window import ViewerClosed
 
         spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
         runner = Run(spec, seed, backend=_real_robot(backend, tdm_addr, tdm_port))
@@ -104,12 +103,7 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
             from .viz.window import live_hook
             window = live_hook(runner, 1.0 if speedup is None else speedup)
             hooks.append(window)
-        try:
-            result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
-        except ViewerClosed:
-            hooks[0].done()
-            click.echo(f"stopped: the window was closed at t = {runner.sim.time():.1f} s", err=True)
-            sys.exit(1)
+        result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
         hooks[0].done()
         if report is not None:
             _write_json(report, result.report())

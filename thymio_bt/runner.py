@@ -79,6 +79,11 @@ class RunResult:
 TickHook = Callable[["Run"], None]
 
 
+class StopRun(Exception):
+    """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
+    as a FAILURE with code STOPPED and the message as its reason, with its report and log intact."""
+
+
 class Run:
     """One prepared run of a mission in the pymunk simulation."""
 
@@ -131,7 +136,11 @@ class Run:
                     stats.run(node)
             self.ticks += 1
             if on_tick is not None:
-                on_tick(self)
+                try:
+                    on_tick(self)
+                except StopRun as stop:
+                    status, stopped = "STOPPED", str(stop) or "stopped by a tick hook"
+                    break
             if root.status in (Status.SUCCESS, Status.FAILURE):
                 status = root.status.name
                 break
@@ -146,11 +155,13 @@ class Run:
                     time.sleep(lag)  # realtime: pacing asked for with --realtime
         reason = code = failed_path = None
         self.final_tree = py_trees.display.unicode_tree(root, show_status=True)
-        if status == "TIMEOUT":
+        if status in ("TIMEOUT", "STOPPED"):
             running = root.tip()
             failed_path = _path(running) if running is not None else None
-            reason = f"time limit of {self.mission.time_limit:g} s reached"
-            code = "TIMEOUT"
+            if status == "TIMEOUT":
+                reason, code = f"time limit of {self.mission.time_limit:g} s reached", "TIMEOUT"
+            else:
+                reason, code, status = stopped, "STOPPED", "FAILURE"
             root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped
         elif status == "FAILURE":
             failed_path, code, reason = failing_branch(root)

@@ -7,18 +7,15 @@ only reads the simulation, so a run with a window ends exactly as one without. W
 ``SDL_VIDEODRIVER=dummy`` it draws offscreen, which is how the tests run it.
 
 Keys: SPACE pause/resume, N or RIGHT one tick (and pause), + / - double/halve the speed-up,
-Q or ESC close. Closing the window of a live run raises :class:`ViewerClosed` out of
-:meth:`thymio_bt.runner.Run.run`, which has no other way to be stopped by a tick hook: the CLI
-catches it and ends the run there.
+Q or ESC close. Closing the window of a live run raises :class:`ViewerClosed`, a
+:class:`thymio_bt.runner.StopRun`: the run ends there as a FAILURE with code STOPPED, and its
+report, log and pictures are written as for any other ending.
 
 Example::
 
     view = live_hook(run, speedup=4)
-    try:
-        result = run.run(on_tick=view)
-        view.finish(result)
-    except ViewerClosed:
-        ...                                    # the user closed the window: the run stopped
+    result = run.run(on_tick=view)             # result.code == "STOPPED" if the window was closed
+    view.finish(result)
     replay(read_log("run.jsonl"), speedup=10)
 """
 
@@ -34,7 +31,7 @@ from typing import Any, Iterable
 from ..errors import UserError
 from ..maze import Maze
 from ..recording import Recording, _num
-from ..runner import Run, RunResult, _path
+from ..runner import Run, RunResult, StopRun, _path
 from ..sim.thymio import RANGE_MAX
 from .plots import _outline, _rays
 
@@ -61,8 +58,11 @@ IDLE_MS = 20
 KEYS_HELP = "SPACE pause   N step   + / - speed   Q quit"
 
 
-class ViewerClosed(Exception):
+class ViewerClosed(StopRun):
     """The user closed the window (Q, ESC or the window's close button): end the run there."""
+
+    def __init__(self) -> None:
+        super().__init__("the viewer window was closed")
 
 
 @dataclass(frozen=True)
