@@ -95,7 +95,7 @@ def breakdown_in_process(repeats: int) -> dict:
         run = Run(mission)
         sim = run.sim
         tick = run.root.tick            # a generator: the runner consumes it, so time it consumed
-        timed = {"tree.tick": _Timed(lambda: iter(list(tick()))), "advance": _Timed(sim.advance),
+        timed = {"tree.tick": _Timed(lambda tick=tick: iter(list(tick()))), "advance": _Timed(sim.advance),
                  "sensor refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
                  "space.step": _Timed(sim._step)}
         run.root.tick, sim.advance = timed["tree.tick"], timed["advance"]

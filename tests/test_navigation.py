@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from thymio_bt.maze import Maze, Obstacle, Spawn, Wall, load_maze
+from thymio_bt.maze import Obstacle, load_maze
 from thymio_bt.mission import load_mission
 from thymio_bt.runner import Run
 from thymio_bt.testing import run_tree, world

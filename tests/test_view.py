@@ -14,7 +14,7 @@ from thymio_bt.recording import Recorder, read_log
 from thymio_bt.runner import Run
 from thymio_bt.testing import world
 from thymio_bt.viz import window
-from thymio_bt.viz.window import Frame, Viewer, ViewerClosed, live_hook, replay
+from thymio_bt.viz.window import Frame, Viewer, live_hook, replay
 
 FAST = 1e9          # a speed-up at which the pacing never waits
 

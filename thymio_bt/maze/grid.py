@@ -65,7 +65,7 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
     for r, line in enumerate(lines):
         y_corner = round(oy + (n_rows - r // 2) * cell, 9)
         if r % 2 == 0:  # corner line: horizontal walls
-            for i, col in enumerate(corner_cols[:-1]):
+            for col in corner_cols[:-1]:
                 seg = line[col + 1: col + width] if col + 1 < len(line) else ""
                 if seg.strip("-") == "" and seg.count("-") == width - 1:
                     x0 = round(ox + (col - base) // width * cell, 9)
