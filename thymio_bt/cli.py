@@ -88,7 +88,13 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
         from .runner import Run
 
         spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
-        runner = Run(spec, seed, backend=_real_robot(backend, tdm_addr, tdm_port))
+        robot = _real_robot(backend, tdm_addr, tdm_port)
+        try:
+            runner = Run(spec, seed, backend=robot)
+        except BaseException:
+            if robot is not None:
+                robot.close()            # the run never started: release the robot now
+            raise
         hooks: list[Any] = [_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty())]
         recorder = None
         if plot or plot_signals or gif or log:
