@@ -201,11 +201,11 @@ def bench_process(runs: int) -> dict:
 def irsim_world(path: Path, shape: str, collision_mode: str, start) -> None:
     """Write an IR-SIM world YAML with the maze's walls and a Thymio-sized diff robot."""
     from thymio_bt.maze import load_maze
-    from thymio_bt.sim import thymio
+    from thymio_bt.robot_model import COURSE
 
     maze = load_maze(MAZE)
     xmin, ymin, xmax, ymax = maze.bounds()
-    step = thymio.SENSORS[1][3]                    # 0.33161 rad between neighbouring front sensors
+    step = COURSE.sensors[1].yaw                    # 0.33161 rad between neighbouring front sensors
     lines = ["world:",
              f"  width: {xmax - xmin + 0.1:.4f}", f"  height: {ymax - ymin + 0.1:.4f}",
              f"  offset: [{xmin - 0.05:.4f}, {ymin - 0.05:.4f}]",
@@ -220,7 +220,7 @@ def irsim_world(path: Path, shape: str, collision_mode: str, start) -> None:
              "    sensors:",
              "      - name: lidar2d",
              "        range_min: 0.0",
-             f"        range_max: {thymio.RANGE_MAX + ROBOT_R}",
+             f"        range_max: {COURSE.range_max + ROBOT_R}",
              f"        angle_range: {6 * step:.6f}",   # beams at 0, ±19, ±38, ±57 degrees
              "        number: 7",
              "        noise: false", "",

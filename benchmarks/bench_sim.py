@@ -37,7 +37,7 @@ from _common import ROOT, median_time, per_call_us, save_results, table, verdict
 from thymio_bt.maze import load_maze  # noqa: E402
 from thymio_bt.robot import Pose  # noqa: E402
 from thymio_bt.sim import Simulation  # noqa: E402
-from thymio_bt.sim import thymio  # noqa: E402
+from thymio_bt.robot_model import COURSE  # noqa: E402
 
 MAZE = ROOT / "mazes" / "two_parts_maze.yaml"
 TICK = 0.1                      # 10 Hz commands
@@ -64,7 +64,7 @@ class Reactive:
         self.turn = 0.0
 
     def __call__(self, scan) -> tuple[float, float]:
-        r = thymio.RANGE_MAX
+        r = COURSE.range_max
         left = min(scan["front_left"], r)
         cleft = min(scan["front_center_left"], r)
         centre = min(scan["front_center"], r)
@@ -111,7 +111,7 @@ def _segments_cross(p, q, a, b) -> bool:
 def _penetration(sim: Simulation, pose: Pose) -> float:
     """Deepest overlap (m, >= 0) of the robot's hull at ``pose`` with any wall."""
     c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-    hull = [(pose.x + x * c - y * s, pose.y + x * s + y * c) for x, y in thymio.HULL]
+    hull = [(pose.x + x * c - y * s, pose.y + x * s + y * c) for x, y in COURSE.hull]
     probe = pymunk.Poly(pymunk.Body(body_type=pymunk.Body.STATIC), hull)
     probe.cache_bb()
     deepest = 0.0

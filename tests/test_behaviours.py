@@ -5,7 +5,9 @@ import math
 import pytest
 
 from thymio_bt.maze.generate import perfect_maze
-from thymio_bt.sim.thymio import AXLE_X
+from thymio_bt.robot_model import COURSE
+
+AXLE_X = COURSE.axle_x
 from thymio_bt.testing import run_tree, world
 
 MIRRORED_L = """

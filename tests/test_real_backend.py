@@ -14,7 +14,10 @@ from thymio_bt.calibration import metres_to_raw
 from thymio_bt.errors import UserError
 from thymio_bt.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
 from thymio_bt.robot import SENSOR_NAMES, Entities, Pose, RequestState, Robot
-from thymio_bt.sim.thymio import AXLE_X, SENSORS
+from thymio_bt.robot_model import COURSE
+
+AXLE_X = COURSE.axle_x
+SENSORS = tuple((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors)
 
 START = Pose(0.1, 0.1, 0.0)
 

@@ -7,7 +7,7 @@ import pytest
 from thymio_bt.maze import Maze, Wall, load_maze
 from thymio_bt.robot import SENSOR_NAMES, Pose
 from thymio_bt.sim import NoiseConfig, SimConfig, Simulation
-from thymio_bt.sim import thymio
+from thymio_bt.robot_model import COURSE as thymio_model
 from thymio_bt.testing import world
 
 COURSE = load_maze("mazes/two_parts_maze.yaml")
@@ -57,7 +57,7 @@ def test_one_second_at_0_1_m_per_s_moves_0_1_m():
 
 def test_spinning_keeps_the_axle_fixed_and_base_link_on_a_0_0243_circle():
     sim = Simulation(COURSE, spawn=Pose(0.3, 0.1, 0.0))
-    axle = (0.3 + thymio.AXLE_X, 0.1)
+    axle = (0.3 + thymio_model.axle_x, 0.1)
     sim.drive(0.0, math.pi / 2)
     for _ in range(10):
         sim.advance(0.1)
@@ -67,9 +67,9 @@ def test_spinning_keeps_the_axle_fixed_and_base_link_on_a_0_0243_circle():
 
 
 def test_command_is_held_and_limited_to_the_wheel_speed_keeping_the_radius():
-    assert thymio.limit_command(0.3, 0.0) == pytest.approx((0.2, 0.0))
-    v, w = thymio.limit_command(0.2, 2.0)
-    left, right = thymio.wheel_speeds(v, w)
+    assert thymio_model.limit_command(0.3, 0.0) == pytest.approx((0.2, 0.0))
+    v, w = thymio_model.limit_command(0.2, 2.0)
+    left, right = thymio_model.wheel_speeds(v, w)
     assert max(abs(left), abs(right)) == pytest.approx(0.2)
     assert v / w == pytest.approx(0.2 / 2.0)           # same turn radius
     sim = Simulation(world("arena"), spawn=Pose(0.3, 0.6, 0.0))

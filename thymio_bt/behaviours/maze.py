@@ -15,13 +15,15 @@ from py_trees.common import Access, Status
 from pydantic import Field, model_validator
 
 from ..robot import Pose, wrap_angle
-from ..sim.thymio import AXLE_X, RANGE_MAX, SENSORS
+from ..robot_model import COURSE
 from .base import (BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour,
                    current_pose)
 from .motion import approach_speed
 
 Side = Literal["left", "right"]
-_SENSOR = {name: (x, y, yaw) for name, x, y, yaw in SENSORS}
+_SENSOR = {s.name: (s.x, s.y, s.yaw) for s in COURSE.sensors}
+RANGE_MAX = COURSE.range_max
+AXLE_X = COURSE.axle_x
 
 
 def side_ray(side: str) -> str:
@@ -242,7 +244,8 @@ class WallFollow(RobotBehaviour):
 
     @staticmethod
     def _axle(pose: Pose) -> tuple[float, float]:
-        return pose.x + AXLE_X * math.cos(pose.yaw), pose.y + AXLE_X * math.sin(pose.yaw)
+        x, y, _ = COURSE.axle_of(pose)
+        return x, y
 
     def _done(self, pose: Pose) -> bool:
         p = self.params

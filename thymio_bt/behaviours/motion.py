@@ -14,7 +14,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from ..robot import SENSOR_NAMES, wrap_angle
-from ..sim.thymio import RANGE_MAX, RANGE_MIN
+from ..robot_model import COURSE
 from .base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
 
 SensorName = Literal["front_left", "front_center_left", "front_center", "front_center_right",
@@ -40,7 +40,7 @@ class MoveUntilWallParams(BehaviourParams):
     """Drive forward until a proximity sensor reads ``distance``."""
 
     speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
-    distance: float = Field(0.05, ge=RANGE_MIN, le=RANGE_MAX, description="stop when the sensor reads this",
+    distance: float = Field(0.05, ge=COURSE.range_min, le=COURSE.range_max, description="stop when the sensor reads this",
                             json_schema_extra={"unit": "m"})
     sensor: SensorName = Field("front_center", description="the sensor that watches the wall")
     approach_gain: float = Field(5.0, gt=0, le=10, description="slow-down gain once the wall is in range",
@@ -108,7 +108,7 @@ class MoveUntilWall(RobotBehaviour):
 
     def on_timeout(self) -> Status:
         if not self.wall_seen:
-            return self.fail(FailureCode.NO_WALL, f"no wall came within {RANGE_MAX} m of "
+            return self.fail(FailureCode.NO_WALL, f"no wall came within {COURSE.range_max} m of "
                              f"{self.params.sensor} in {self.params.timeout:g} s")
         return super().on_timeout()
 

@@ -42,7 +42,7 @@ from typing import Any, Callable
 from ..calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from ..errors import Problem, UserError
 from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Request, RequestState, Scan, Twist
-from ..sim import thymio
+from ..robot_model import COURSE, integrate_arc
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
 #: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.
@@ -71,7 +71,7 @@ class RealConfig:
 
     metres_per_unit: float = 0.20 / 500
     max_units: int = 500
-    wheel_separation: float = thymio.WHEEL_SEPARATION
+    wheel_separation: float = COURSE.wheel_separation
     table: CalibrationTable = WEBOTS_THYMIO2
 
     @property
@@ -263,9 +263,8 @@ class ThymioRobot(Backend):
     def pose(self) -> Pose | None:
         if not self._present:
             return None
-        ax, ay, yaw = self._axle
-        return Pose(ax - thymio.AXLE_X * math.cos(yaw), ay - thymio.AXLE_X * math.sin(yaw),
-                    (yaw + math.pi) % (2.0 * math.pi) - math.pi)
+        base = COURSE.base_of(*self._axle)
+        return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
 
     def true_pose(self) -> Pose | None:
         """There is no ground truth on a real robot: the odometry pose, the best estimate there is."""
@@ -334,12 +333,11 @@ class ThymioRobot(Backend):
     def _integrate(self, left: float, right: float, duration: float) -> None:
         v = (left + right) / 2.0
         w = (right - left) / self.config.wheel_separation
-        self._axle = thymio.integrate_arc(*self._axle, v, w, duration)
+        self._axle = integrate_arc(*self._axle, v, w, duration)
 
     def _place(self, pose: Pose) -> None:
         """The robot now stands at ``pose``: reset odometry and the command, take fresh readings."""
-        self._axle = (pose.x + thymio.AXLE_X * math.cos(pose.yaw), pose.y + thymio.AXLE_X * math.sin(pose.yaw),
-                      pose.yaw)
+        self._axle = COURSE.axle_of(pose)
         self._cmd = Twist()
         self._present = True
         self._read_at = self._read_wheels()

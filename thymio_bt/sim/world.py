@@ -2,7 +2,7 @@
 
 Physics, in metres:
 
-- walls are static boxes (``Wall.corners``), the robot a dynamic convex hull (``thymio.HULL``)
+- walls are static boxes (``Wall.corners``), the robot a dynamic convex hull (``RobotModel.hull``)
   whose centre of gravity sits on the wheel axle, so spinning keeps the axle fixed;
 - the robot is pulled by a kinematic control body through a pivot joint at the axle and a gear
   joint (pymunk's top-down "tank" recipe): it follows (v, ω) exactly in free space, while walls
@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Literal
 
 import pymunk
@@ -29,27 +30,43 @@ import pymunk
 from ..calibration import RawProximityModel, raw_scan_to_metres
 from ..maze import Maze
 from ..robot import ROBOT_ENTITY, Backend, Pose, Request, RequestState, Scan, Twist
-from . import thymio
+from ..robot_model import COURSE, RobotModel, integrate_arc
 from .fastpath import RayCaster, stepper
 from .noise import NoiseConfig, NoiseSource
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
-#: The hull point farthest from the axle is this far from it (the front arc, 0.080 m).
-_HULL_REACH = max(math.hypot(x - thymio.AXLE_X, y) for x, y in thymio.HULL)
-_HULL_FROM_AXLE = tuple((x - thymio.AXLE_X, y) for x, y in thymio.HULL)
-#: The hull's extent from the axle in each direction (1 degree steps), padded by the most it can
-#: grow within half a step, so it never underestimates: a cheap, safe support function.
+#: The hull's extent tables are made in 1 degree steps.
 _EXTENT_STEP = math.radians(1.0)
-_HULL_EXTENT = tuple(
-    max(x * math.cos(i * _EXTENT_STEP) + y * math.sin(i * _EXTENT_STEP) for x, y in _HULL_FROM_AXLE)
-    + _HULL_REACH * _EXTENT_STEP / 2 for i in range(360))
-#: For each table direction, the hull vertices (from the axle) that can be its support point.
-_SUPPORT_CANDIDATES = tuple(
-    tuple(_HULL_FROM_AXLE[(k + j) % len(_HULL_FROM_AXLE)] for j in (-1, 0, 1))
-    for k in (max(range(len(_HULL_FROM_AXLE)),
-                  key=lambda v: _HULL_FROM_AXLE[v][0] * math.cos(i * _EXTENT_STEP)
-                  + _HULL_FROM_AXLE[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(360)))
+
+
+@dataclass(frozen=True, slots=True)
+class _HullTables:
+    """A hull seen from its axle, for the clearance tracker: ``reach`` is the farthest hull point
+    from the axle; ``extent`` the hull's extent in each direction (1 degree steps), padded by the
+    most it can grow within half a step so it never underestimates (a cheap, safe support
+    function); ``support`` the hull vertices that can be the support point in each direction."""
+
+    reach: float
+    extent: tuple[float, ...]
+    support: tuple[tuple[tuple[float, float], ...], ...]
+
+
+@lru_cache(maxsize=8)
+def _hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> _HullTables:
+    from_axle = tuple((x - axle_x, y) for x, y in hull)
+    reach = max(math.hypot(x, y) for x, y in from_axle)
+    extent = tuple(
+        max(x * math.cos(i * _EXTENT_STEP) + y * math.sin(i * _EXTENT_STEP) for x, y in from_axle)
+        + reach * _EXTENT_STEP / 2 for i in range(360))
+    support = tuple(
+        tuple(from_axle[(k + j) % len(from_axle)] for j in (-1, 0, 1))
+        for k in (max(range(len(from_axle)),
+                      key=lambda v, i=i: from_axle[v][0] * math.cos(i * _EXTENT_STEP)
+                      + from_axle[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(360)))
+    return _HullTables(reach, extent, support)
+
+
 _set_velocity = pymunk.Body.velocity.fset                # skips pymunk's __setattr__ wrapper (hot path)
 _set_angular_velocity = pymunk.Body.angular_velocity.fset
 
@@ -67,7 +84,10 @@ class SimConfig:
     physics_hz: float = 100.0
     noise: NoiseConfig = field(default_factory=NoiseConfig)
     seed: int = 0
-    max_wheel_speed: float = thymio.MAX_WHEEL_SPEED
+    #: the robot simulated (geometry, sensor poses and range, speed limit)
+    robot: RobotModel = COURSE
+    #: the wheel-speed limit (m/s); None: the robot's own
+    max_wheel_speed: float | None = None
     #: "metres": the course's ideal rays; "raw": what a real Thymio reports (noisy integer readings
     #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does
     sensor_model: Literal["metres", "raw"] = "metres"
@@ -85,16 +105,16 @@ class Collision:
 class _Body:
     """One robot entity in the space: the hull body, its control body and joints."""
 
-    def __init__(self, space: pymunk.Space, pose: Pose, group: int) -> None:
-        self.body = pymunk.Body(thymio.MASS, pymunk.moment_for_poly(thymio.MASS, thymio.HULL))
-        self.body.center_of_gravity = (thymio.AXLE_X, 0.0)
-        self.shape = pymunk.Poly(self.body, thymio.HULL)
+    def __init__(self, space: pymunk.Space, pose: Pose, group: int, model: RobotModel) -> None:
+        self.body = pymunk.Body(model.mass, pymunk.moment_for_poly(model.mass, model.hull))
+        self.body.center_of_gravity = (model.axle_x, 0.0)
+        self.shape = pymunk.Poly(self.body, model.hull)
         self.shape.friction = 0.1          # the skid's mu in the URDF
         self.shape.collision_type = _ROBOT_TYPE
         self.filter = pymunk.ShapeFilter(group=group)     # rays and queries skip the robot's own shape
         self.shape.filter = self.filter
         self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (thymio.AXLE_X, 0.0))
+        pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (model.axle_x, 0.0))
         pivot.max_bias = 0.0               # a pure velocity constraint: drift is not corrected
         pivot.max_force = 10.0             # traction: walls win against the wheels
         gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
@@ -103,7 +123,7 @@ class _Body:
         self.joints = (pivot, gear)
         self.body.angle = pose.yaw
         self.body.position = (pose.x, pose.y)
-        self.control.position = self.body.local_to_world((thymio.AXLE_X, 0.0))
+        self.control.position = self.body.local_to_world((model.axle_x, 0.0))
         self.control.angle = pose.yaw
         space.add(self.body, self.shape, self.control, *self.joints)
 
@@ -122,6 +142,10 @@ class Simulation(Backend):
                  robot_name: str = ROBOT_ENTITY) -> None:
         self.maze = maze
         self.config = config or SimConfig()
+        self.model = self.config.robot
+        self._hull = _hull_tables(self.model.hull, self.model.axle_x)
+        self._max_wheel = self.model.max_wheel_speed if self.config.max_wheel_speed is None \
+            else self.config.max_wheel_speed
         self.robot_name = robot_name
         self.space = pymunk.Space()
         self.space.collision_slop = 0.0002
@@ -164,9 +188,10 @@ class Simulation(Backend):
         self._contacts = 0
         self.collisions: list[Collision] = []
         self.min_clearance = math.inf
-        self._sensor_every = max(1, round(self.config.physics_hz / thymio.SENSOR_RATE_HZ))
-        self._rays = [(name, (x, y), (x + thymio.RANGE_MAX * math.cos(a), y + thymio.RANGE_MAX * math.sin(a)))
-                      for name, x, y, a in thymio.SENSORS]
+        self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
+        reach = self.model.range_max
+        self._rays = [(s.name, (s.x, s.y), (s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw)))
+                      for s in self.model.sensors]
         self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
         if spawn is not None:
             problem = self.spawn_problem(robot_name, spawn)
@@ -221,8 +246,7 @@ class Simulation(Backend):
             return f"an entity named '{name}' already exists: delete it first"
         if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):
             return "the pose must be finite numbers"
-        cos, sin = math.cos(pose.yaw), math.sin(pose.yaw)
-        hull = [(pose.x + x * cos - y * sin, pose.y + x * sin + y * cos) for x, y in thymio.HULL]
+        hull = self.model.hull_at(pose)
         xmin, ymin, xmax, ymax = self.bounds
         if self.maze.walls and not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
             return (f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
@@ -262,10 +286,10 @@ class Simulation(Backend):
 
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
-        left, right = thymio.wheel_speeds(*thymio.limit_command(self._cmd.linear, self._cmd.angular,
-                                                                self.config.max_wheel_speed))
+        model = self.model
+        left, right = model.wheel_speeds(*model.limit_command(self._cmd.linear, self._cmd.angular, self._max_wheel))
         fl, fr = self._noise.wheel_factors()
-        v, w = thymio.body_velocity(left * fl, right * fr)
+        v, w = model.body_velocity(left * fl, right * fr)
         self._applied = (v, w)
         entity = self._entities.get(self.robot_name)
         if entity is not None:
@@ -285,15 +309,14 @@ class Simulation(Backend):
         Encoders count wheel turns, not body motion: a robot whose wheels slip against a wall
         believes it moves, as a real Thymio does. The arc is integrated exactly for the held command.
         """
-        left, right = thymio.wheel_speeds(*self._applied)
+        left, right = self.model.wheel_speeds(*self._applied)
         fl, fr = self._noise.encoder_factors()
-        v, w = thymio.body_velocity(left * fl, right * fr)
-        self._odo = thymio.integrate_arc(*self._odo, v, w, duration)
+        v, w = self.model.body_velocity(left * fl, right * fr)
+        self._odo = integrate_arc(*self._odo, v, w, duration)
 
     def _odometry_pose(self) -> Pose:
-        ax, ay, yaw = self._odo
-        return Pose(ax - thymio.AXLE_X * math.cos(yaw), ay - thymio.AXLE_X * math.sin(yaw),
-                    (yaw + math.pi) % (2.0 * math.pi) - math.pi)
+        base = self.model.base_of(*self._odo)
+        return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
 
     def _refresh_sensors(self, entity: _Body) -> None:
         body = entity.body
@@ -303,6 +326,7 @@ class Simulation(Backend):
         cos, sin = math.cos(angle), math.sin(angle)
         bx, by = body.position
         noise, raw = self._noise, self._raw_model
+        lo, hi = self.model.range_min, self.model.range_max
         scan: dict[str, float] = {}
         for name, (sx, sy), (ex, ey) in self._rays:
             alpha = query((bx + sx * cos - sy * sin, by + sx * sin + sy * cos),
@@ -310,8 +334,8 @@ class Simulation(Backend):
             if alpha is None:
                 scan[name] = math.inf
                 continue
-            value = max(alpha * thymio.RANGE_MAX, thymio.RANGE_MIN)
-            scan[name] = value if raw is not None else noise.range(value, thymio.RANGE_MIN, thymio.RANGE_MAX)
+            value = max(alpha * hi, lo)
+            scan[name] = value if raw is not None else noise.range(value, lo, hi)
         if raw is not None:
             self._raw = raw.measure_scan(scan)
             scan = raw_scan_to_metres(self._raw, raw.table)
@@ -327,11 +351,12 @@ class Simulation(Backend):
         gap is exactly d - extent(n). Otherwise (wall ends, corners, polygons) d - extent(n) is a
         lower bound, and the polygon distance is computed only if the bound could beat the record.
         """
-        ax, ay = bx + thymio.AXLE_X * cos, by + thymio.AXLE_X * sin
+        tables = self._hull
+        ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
         record = min(self.min_clearance, self._farthest_gap)
         best = math.inf
         candidates = []
-        for info in self.space.point_query((ax, ay), _HULL_REACH + record, entity.filter):
+        for info in self.space.point_query((ax, ay), tables.reach + record, entity.filter):
             shape = info.shape
             if shape.collision_type != _WALL_TYPE:
                 continue
@@ -342,19 +367,19 @@ class Simulation(Backend):
             qx, qy = info.point.x, info.point.y
             nx, ny = (qx - ax) / d, (qy - ay) / d
             lx, ly = nx * cos + ny * sin, ny * cos - nx * sin      # n in the body frame
-            index = round(math.atan2(ly, lx) / _EXTENT_STEP) % len(_HULL_EXTENT)
+            index = round(math.atan2(ly, lx) / _EXTENT_STEP) % len(tables.extent)
             frame = self._wall_frames[shape]
             if frame is not None:
                 cx, cy, ux, uy, hl, _ = frame
                 if abs((qx - cx) * ux + (qy - cy) * uy) < hl - 1e-9:          # q on a long face
-                    vx, vy = max(_SUPPORT_CANDIDATES[index], key=lambda v: v[0] * lx + v[1] * ly)
+                    vx, vy = max(tables.support[index], key=lambda v: v[0] * lx + v[1] * ly)
                     extent = vx * lx + vy * ly
                     px = ax + vx * cos - vy * sin                              # the support point
                     py = ay + vx * sin + vy * cos
                     if abs((px - cx) * ux + (py - cy) * uy) <= hl:
                         best = min(best, d - extent)
                         continue
-            if d - _HULL_EXTENT[index] < record - 1e-6:
+            if d - tables.extent[index] < record - 1e-6:
                 candidates.append(shape)
         if candidates:
             best = min(best, self._exact_gap(entity, candidates, bx, by, cos, sin))
@@ -365,8 +390,8 @@ class Simulation(Backend):
                    cos: float, sin: float) -> float:
         """The exact distance between the hull and the nearest of ``walls`` (convex polygons):
         hull vertices to each wall, then the wall corners that could be nearer than that to the hull."""
-        hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in thymio.HULL]
-        ax, ay = bx + thymio.AXLE_X * cos, by + thymio.AXLE_X * sin
+        hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in self.model.hull]
+        ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
         gap = math.inf
         for wall in walls:
             frame = self._wall_frames[wall]
@@ -383,18 +408,16 @@ class Simulation(Backend):
                         gap = d
         for wall in walls:
             for cx, cy in self._wall_corners[wall]:
-                if math.hypot(cx - ax, cy - ay) - _HULL_REACH < gap:    # could this corner be nearer?
+                if math.hypot(cx - ax, cy - ay) - self._hull.reach < gap:    # could this corner be nearer?
                     gap = min(gap, entity.shape.point_query((cx, cy)).distance)
         return gap
 
     # -------------------------------------------------------------- entities
     def _add_robot(self, name: str, pose: Pose) -> None:
-        entity = _Body(self.space, pose, group=1 + len(self._entities))
+        entity = _Body(self.space, pose, group=1 + len(self._entities), model=self.model)
         self._entities[name] = entity
         if name == self.robot_name:
-            self._odo = (pose.x + thymio.AXLE_X * math.cos(pose.yaw), pose.y + thymio.AXLE_X * math.sin(pose.yaw),
-                         pose.yaw)
-        if name == self.robot_name:
+            self._odo = self.model.axle_of(pose)
             self._cmd = Twist()
             self._applied = (0.0, 0.0)
             self._refresh_sensors(entity)

@@ -18,7 +18,7 @@ from typing import Any
 
 from ..errors import UserError
 from ..recording import Recording
-from ..sim.thymio import HULL, RANGE_MAX, SENSORS
+from ..robot_model import COURSE
 
 KEY_EVENTS = {"delete_entity": ("tab:red", "deleted"), "spawn_entity": ("tab:green", "spawned")}
 
@@ -36,7 +36,7 @@ def _pyplot() -> Any:
 
 def _outline(pose: dict[str, float]) -> list[tuple[float, float]]:
     c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
-    return [(pose["x"] + x * c - y * s, pose["y"] + x * s + y * c) for x, y in HULL]
+    return [(pose["x"] + x * c - y * s, pose["y"] + x * s + y * c) for x, y in COURSE.hull]
 
 
 def _draw_maze(ax: Any, recording: Recording) -> None:
@@ -69,9 +69,9 @@ def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None 
 def _rays(pose: dict[str, float], prox: dict[str, float | None]) -> list[tuple[tuple[float, float], tuple[float, float], bool]]:
     c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
     out = []
-    for name, x, y, a in SENSORS:
+    for name, x, y, a in ((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors):
         reading = prox.get(name)
-        length = RANGE_MAX if reading is None else reading
+        length = COURSE.range_max if reading is None else reading
         ox, oy = pose["x"] + x * c - y * s, pose["y"] + x * s + y * c
         out.append(((ox, oy), (ox + length * math.cos(pose["yaw"] + a), oy + length * math.sin(pose["yaw"] + a)),
                     reading is not None))
@@ -187,11 +187,11 @@ def plot_signals(recording: Recording, path: str | Path) -> Path:
     ax.plot(t, [s["vel"][1] for s in samples], label="actual ω", ls="--")
     ax.set_ylabel("angular [rad/s]")
     ax = axes[3]
-    for name, *_ in SENSORS:
+    for name in (s.name for s in COURSE.sensors):
         values = [(s["prox"] or {}).get(name) for s in samples]
         ax.plot(t, [math.nan if v is None else v for v in values], label=name, lw=1)
     ax.set_ylabel("range [m]")
-    ax.set_ylim(0, RANGE_MAX * 1.05)
+    ax.set_ylim(0, COURSE.range_max * 1.05)
     ax.set_xlabel("simulated time [s]")
     colours = plt.get_cmap("tab20").colors
     names = sorted({name for *_, name in _behaviour_spans(recording)})
@@ -224,9 +224,9 @@ def animate(recording: Recording, path: str | Path, speedup: float = 4.0, fps: i
     fig, ax = plt.subplots(figsize=(7, 4.5), dpi=80)
     _draw_maze(ax, recording)
     (trail,) = ax.plot([], [], color="tab:blue", lw=1.2)
-    body = Polygon([(0, 0)] * len(HULL), closed=True, fc="tab:blue", ec="black", alpha=0.6)
+    body = Polygon([(0, 0)] * len(COURSE.hull), closed=True, fc="tab:blue", ec="black", alpha=0.6)
     ax.add_patch(body)
-    rays = [ax.plot([], [], lw=0.8)[0] for _ in SENSORS]
+    rays = [ax.plot([], [], lw=0.8)[0] for _ in COURSE.sensors]
     label = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8)
     xs: list[float] = []
     ys: list[float] = []

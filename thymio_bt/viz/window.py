@@ -32,7 +32,7 @@ from ..errors import UserError
 from ..maze import Maze
 from ..recording import Recording, _num
 from ..runner import Run, RunResult, StopRun, _path
-from ..sim.thymio import RANGE_MAX
+from ..robot_model import COURSE
 from .plots import _outline, _rays
 
 #: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
@@ -151,7 +151,7 @@ class Viewer:
 
     def _grow(self, pose: dict[str, float]) -> None:
         """Widen the world box when the robot or its rays leave it (e.g. out of a maze's exit)."""
-        reach = RANGE_MAX + 0.06
+        reach = COURSE.range_max + 0.06
         x0, y0, x1, y1 = self._box
         if x0 <= pose["x"] - reach and pose["x"] + reach <= x1 and y0 <= pose["y"] - reach and pose["y"] + reach <= y1:
             return
