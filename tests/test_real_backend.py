@@ -522,7 +522,7 @@ def test_a_crash_inside_the_run_still_stops_the_motors():
     assert node.closed and node.writes[-1] == (0, 0)
 
 
-def test_cli_backend_thymio_without_a_device_manager_is_a_user_error(monkeypatch):
+def test_cli_backend_tdm_without_a_device_manager_is_a_user_error(monkeypatch):
     from click.testing import CliRunner
 
     from thymio_bt.cli import main
@@ -531,5 +531,25 @@ def test_cli_backend_thymio_without_a_device_manager_is_a_user_error(monkeypatch
         raise UserError("cannot reach the Thymio Device Manager (hint: start Thymio Suite)")
 
     monkeypatch.setattr(ThymioRobot, "connect", classmethod(refuse))
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--backend", "thymio"])
+    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--backend", "tdm"])
     assert result.exit_code == 2 and "Thymio Device Manager" in result.output and "Traceback" not in result.output
+
+
+def test_the_tdm_backend_takes_the_robot_model_and_its_options(monkeypatch):
+    from thymio_bt.backends import backend_kind
+    from thymio_bt.robot_model import ENKI
+
+    seen = {}
+
+    def connect(cls, host=None, port=None, password=None, **kwargs):
+        seen.update(host=host, port=port, config=kwargs["config"])
+        return make(FakeNode())[0]
+
+    monkeypatch.setattr(ThymioRobot, "connect", classmethod(connect))
+    from thymio_bt.mission import load_mission
+
+    mission = load_mission("missions/square.yaml", {"robot": "enki"})
+    backend_kind("tdm").create(mission, 0, {"host": "127.0.0.1", "port": "8596"}).close()
+    assert seen["host"] == "127.0.0.1" and seen["port"] == 8596
+    assert seen["config"].wheel_separation == ENKI.wheel_separation
+    assert seen["config"].metres_per_unit == ENKI.metres_per_unit and seen["config"].table is ENKI.calibration

@@ -128,7 +128,7 @@ def test_closing_the_window_stops_a_live_run(pg, close):
     result = run.run(on_tick=view)
     assert run.ticks == 1
     assert (result.status, result.code, result.reason) == ("FAILURE", "STOPPED", "the viewer window was closed")
-    assert result.failed_path and not run.sim.command().linear      # the running behaviour stopped the robot
+    assert result.failed_path and not run.backend.command().linear      # the running behaviour stopped the robot
 
 
 def test_a_replay_closed_early_just_ends(pg, tmp_path):

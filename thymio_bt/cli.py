@@ -26,11 +26,16 @@ def _fail(exc: UserError) -> NoReturn:
 
 
 def _overrides(values: tuple[str, ...]) -> dict[str, str]:
+    return _pairs(values, "--set", "cruise=0.15")
+
+
+def _pairs(values: tuple[str, ...], option: str, example: str) -> dict[str, str]:
+    """``NAME=VALUE`` arguments of a repeatable option, as a dict."""
     out = {}
     for item in values:
         name, sep, value = item.partition("=")
         if not sep or not name.strip():
-            raise UserError(f"--set expects NAME=VALUE, got '{item}' (hint: --set cruise=0.15)")
+            raise UserError(f"{option} expects NAME=VALUE, got '{item}' (hint: {option} {example})")
         out[name.strip()] = value.strip()
     return out
 
@@ -73,27 +78,31 @@ def _write_json(path: Path, data: Any) -> None:
 @click.option("--log", "log", type=click.Path(path_type=Path), default=None,
               help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
 @click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
-@click.option("--backend", type=click.Choice(["sim", "thymio", "playground"]), default="sim", show_default=True,
-              help="The pymunk simulation, a real Thymio, or a Thymio Suite Playground robot (both need "
-                   "thymio-bt[thymio] and a running Thymio Device Manager).")
-@click.option("--tdm-addr", default=None, help="Thymio Device Manager host (default: found on this machine).")
-@click.option("--tdm-port", type=int, default=None, help="Thymio Device Manager TCP port.")
+@click.option("--backend", "backend", default=None, metavar="NAME",
+              help="Where the mission runs: sim (default: the pymunk simulation) or another backend "
+                   "(see 'thymio-bt backends'); default: the mission's backend: block, else sim.")
+@click.option("--backend-opt", "backend_opts", multiple=True, metavar="KEY=VALUE",
+              help="A setting of the backend, e.g. --backend-opt device=/dev/ttyACM0 (repeatable).")
+@click.option("--robot", default=None, metavar="NAME",
+              help="The robot model: course (default), enki or real (see 'thymio-bt backends').")
 def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | None, start: str | None,
         report: Path | None, quiet: bool, realtime: float | None, plot: Path | None, plot_signals: Path | None,
         gif: Path | None, view: bool, speedup: float | None, log: Path | None, live_tree: bool,
-        backend: str, tdm_addr: str | None, tdm_port: int | None) -> None:
+        backend: str | None, backend_opts: tuple[str, ...], robot: str | None) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     try:
         from .mission import load_mission
         from .runner import Run
 
-        spec = load_mission(mission, _overrides(sets), maze=maze, start=start)
-        robot = _real_robot(backend, tdm_addr, tdm_port)
+        overrides = _overrides(sets)
+        if robot is not None:
+            overrides["robot"] = robot
+        spec = load_mission(mission, overrides, maze=maze, start=start)
+        device = _backend(spec, seed, backend, backend_opts)
         try:
-            runner = Run(spec, seed, backend=robot)
+            runner = Run(spec, seed, backend=device)
         except BaseException:
-            if robot is not None:
-                robot.close()            # the run never started: release the robot now
+            device.close()               # the run never started: release the robot now
             raise
         hooks: list[Any] = [_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty())]
         recorder = None
@@ -128,14 +137,14 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
     sys.exit(0 if result.status == "SUCCESS" else 1)
 
 
-def _real_robot(backend: str, tdm_addr: str | None, tdm_port: int | None) -> Any:
-    """The real-robot backend asked for, connected; None for the simulation."""
-    if backend == "sim":
-        return None
-    from .real import PLAYGROUND, RealConfig, ThymioRobot
+def _backend(spec: Any, seed: int | None, name: str | None, opts: tuple[str, ...]) -> Any:
+    """The backend the run asked for (``--backend`` over the mission's), connected and ready."""
+    from .backends import backend_kind
 
-    config = PLAYGROUND if backend == "playground" else RealConfig()
-    return ThymioRobot.connect(tdm_addr, tdm_port, config=config)
+    options = dict(spec.backend_options) if name is None or name == spec.backend else {}
+    options.update(_pairs(opts, "--backend-opt", "device=/dev/ttyACM0"))
+    kind = backend_kind(name or spec.backend)
+    return kind.create(spec, spec.seed if seed is None else seed, options)
 
 
 def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif: Path | None,
@@ -213,7 +222,7 @@ class _Progress:
 
     def __call__(self, run: Any) -> None:
         if self.enabled and run.ticks % 20 == 0 and time.perf_counter() - self.start > 1.0:
-            t = run.sim.time()
+            t = run.backend.time()
             click.echo(f"\r  simulated {t:7.1f} s of at most {self.limit:g} s", err=True, nl=False)
             self.shown = True
 
@@ -344,6 +353,27 @@ def behaviours(name: str | None) -> None:
         from .errors import did_you_mean
         _fail(UserError(f"no behaviour named '{name}' (hint: {did_you_mean(name, registry)})"))
     click.echo(behaviour_help(registry[name]))
+
+
+@main.command("backends")
+def backends_command() -> None:
+    """List the backends (--backend NAME, with their --backend-opt settings) and robot models (--robot NAME)."""
+    from .backends import backend_kinds
+    from .robot_model import ROBOTS
+
+    try:
+        kinds = backend_kinds()
+    except UserError as exc:
+        _fail(exc)
+    click.echo("backends (--backend NAME --backend-opt KEY=VALUE):")
+    for kind in kinds.values():
+        click.echo(f"  {kind.name:10} {kind.summary}")
+        for key, field in kind.options.model_fields.items():
+            default = "" if field.default is None else f" [default {field.default}]"
+            click.echo(f"  {'':10}   {key}: {field.description}{default}")
+    click.echo("robot models (--robot NAME):")
+    for model in ROBOTS.values():
+        click.echo(f"  {model.name:10} {model.description}")
 
 
 @main.command()

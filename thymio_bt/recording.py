@@ -93,7 +93,7 @@ class Recorder:
     def __call__(self, run: Any) -> None:
         if self._run is None:
             self._open(run)
-        sim = run.sim
+        sim = run.backend
         pose = sim.true_pose()
         scan = sim.proximity()
         cmd, vel = sim.command(), sim.velocity()

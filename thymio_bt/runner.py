@@ -19,12 +19,12 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from .backends import backend_kind
 from .behaviours import Context, EventLog
 from .behaviours.base import snapshot
 from .errors import Problem, UserError
 from .mission import Mission, build_tree
 from .robot import Backend
-from .sim import SimConfig, Simulation
 
 
 @dataclass
@@ -85,27 +85,27 @@ class StopRun(Exception):
 
 
 class Run:
-    """One prepared run of a mission in the pymunk simulation."""
+    """One prepared run of a mission on a backend (by default the pymunk simulation)."""
 
     def __init__(self, mission: Mission, seed: int | None = None, substitutions: dict[str, Any] | None = None,
                  node_stats: bool = False, backend: Backend | None = None) -> None:
-        """``backend`` defaults to the pymunk simulation of the mission's maze (a real robot: see
-        :mod:`thymio_bt.real`); the robot is spawned at the mission's start either way."""
+        """``backend`` defaults to the one the mission names (:mod:`thymio_bt.backends`; the pymunk
+        simulation of its maze unless it says otherwise); the robot is spawned at the mission's start."""
         self.mission = mission
         self.seed = mission.seed if seed is None else seed
-        self.sim: Backend = backend or Simulation(mission.maze, config=SimConfig(
-            noise=mission.noise, seed=self.seed, sensor_model=mission.sensor_model))
-        problem = self.sim.spawn_problem(self.sim.robot_name, mission.start)
+        self.backend: Backend = backend or backend_kind(mission.backend).create(
+            mission, self.seed, mission.backend_options)
+        problem = self.backend.spawn_problem(self.backend.robot_name, mission.start)
         if problem:
             raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",
                                     "pick a free pose inside the maze, e.g. a named spawn of the maze"))
-        self.sim.request_spawn(self.sim.robot_name, mission.start)
-        self.sim.advance(0.0)
+        self.backend.request_spawn(self.backend.robot_name, mission.start)
+        self.backend.advance(0.0)
         self.period = 1.0 / mission.tick_hz
         self.events = EventLog()
-        self.ctx = Context(robot=self.sim, entities=self.sim, events=self.events, tick_period=self.period,
+        self.ctx = Context(robot=self.backend, entities=self.backend, events=self.events, tick_period=self.period,
                            bounds=mission.maze.bounds() if mission.maze.walls else None,
-                           collision_count=lambda: len(self.sim.collisions))
+                           collision_count=lambda: len(self.backend.collisions))
         py_trees.blackboard.Blackboard.clear()
         self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
         self.stats = NodeStats(self.period) if node_stats else None
@@ -119,10 +119,10 @@ class Run:
         try:
             return self._run(on_tick, realtime)
         finally:
-            self.sim.close()
+            self.backend.close()
 
     def _run(self, on_tick: TickHook | None, realtime: float | None) -> RunResult:
-        sim, root, stats = self.sim, self.root, self.stats
+        sim, root, stats = self.backend, self.root, self.stats
         limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
         seen_collisions = 0
         wall_start = time.perf_counter()
@@ -177,9 +177,9 @@ class Run:
             trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None)
 
     def _record(self) -> None:
-        pose = self.sim.true_pose()
+        pose = self.backend.true_pose()
         if pose is not None:
-            self.trajectory.append((self.sim.time(), *pose.as_tuple()))
+            self.trajectory.append((self.backend.time(), *pose.as_tuple()))
 
 
 class NodeStats(py_trees.visitors.VisitorBase):

@@ -30,7 +30,7 @@ from .plan import Mission, NodePlan
 from .registry import Registry, default_registry
 
 TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "seed", "noise", "sensor_model",
-            "parameters", "subtrees", "include", "plugins", "tree")
+            "robot", "backend", "parameters", "subtrees", "include", "plugins", "tree")
 SENSOR_MODELS = ("metres", "raw")
 INCLUDE_KEYS = ("description", "parameters", "subtrees", "include", "plugins")
 COMPOSITES = ("sequence", "reactive_sequence", "selector", "reactive_selector", "parallel")
@@ -309,6 +309,10 @@ class MissionLoader:
                 values["seed"] = seed
         if "sensor_model" in data:
             self._sensor_model(data["sensor_model"], self.where_value(data, "sensor_model", file), values)
+        if "robot" in data:
+            self._robot(data["robot"], self.where_value(data, "robot", file), values)
+        if "backend" in data:
+            self._backend(data["backend"], self.where_value(data, "backend", file), values)
         if "noise" in data:
             noise = data["noise"]
             if isinstance(noise, MarkedDict):
@@ -326,6 +330,8 @@ class MissionLoader:
                     values[name] = value
             elif name == "sensor_model":
                 self._sensor_model(text, where, values)
+            elif name == "robot":
+                self._robot(text, where, values)
             elif name == "seed":
                 try:
                     values["seed"] = int(text)
@@ -343,7 +349,7 @@ class MissionLoader:
                 params[name] = new
             else:
                 self.problem(f"--set {name}: no such parameter", where, name,
-                             did_you_mean(name, [*params, "tick_hz", "time_limit", "seed", "sensor_model", "noise.range_sd",
+                             did_you_mean(name, [*params, "tick_hz", "time_limit", "seed", "sensor_model", "robot", "noise.range_sd",
                                                  "noise.wheel", "noise.odometry"]))
         try:
             values["noise"] = NoiseConfig.model_validate(noise_raw)
@@ -358,6 +364,26 @@ class MissionLoader:
         else:
             self.problem(f"sensor_model must be one of {', '.join(SENSOR_MODELS)}, got {value!r}", where,
                          "sensor_model", "raw: a real Thymio's integer readings through its calibration table")
+
+    def _robot(self, value: Any, where: Where, values: dict[str, Any]) -> None:
+        from ..robot_model import ROBOTS
+
+        if value in ROBOTS:
+            values["robot"] = value
+        else:
+            self.problem(f"robot must be one of {', '.join(ROBOTS)}, got {value!r}", where, "robot",
+                         did_you_mean(str(value), ROBOTS))
+
+    def _backend(self, value: Any, where: Where, values: dict[str, Any]) -> None:
+        """``backend: NAME`` or ``backend: {name: NAME, OPTION: VALUE, ...}``; the backend checks its options."""
+        if isinstance(value, str):
+            values["backend"] = value
+        elif isinstance(value, dict) and isinstance(value.get("name"), str):
+            values["backend"] = value["name"]
+            values["backend_options"] = {k: v for k, v in value.items() if k != "name"}
+        else:
+            self.problem("backend must be a name or a mapping with 'name' and the backend's options", where,
+                         "backend", "e.g. backend: {name: aseba, device: /dev/ttyACM0}")
 
     def _subtrees(self, data: MarkedDict, file: str) -> None:
         raw = data.get("subtrees") or MarkedDict()

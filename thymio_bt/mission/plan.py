@@ -61,5 +61,10 @@ class Mission:
     sensor_model: str
     tree: NodePlan
     registry: Any = None
+    #: the robot model's name (:data:`thymio_bt.robot_model.ROBOTS`)
+    robot: str = "course"
+    #: the backend kind's name (:mod:`thymio_bt.backends`) and its settings, as written
+    backend: str = "sim"
+    backend_options: dict[str, Any] = field(default_factory=dict)
     #: where the start pose was given (file, line, column), for error messages
     start_where: tuple[str, int, int] = ("", 0, 0)

@@ -385,3 +385,13 @@ class ThymioRobot(Backend):
         if answer.strip().lower() in ("q", "quit", "n", "no"):
             return "the operator refused to place the robot"
         return None
+
+
+def create_tdm(mission: Any, seed: int, options: Any) -> ThymioRobot:
+    """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's robot model."""
+    from ..robot_model import robot_model
+
+    model = robot_model(mission.robot)
+    config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
+                        wheel_separation=model.wheel_separation, table=model.calibration)
+    return ThymioRobot.connect(options.host, options.port, options.password, config=config)

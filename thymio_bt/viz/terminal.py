@@ -30,7 +30,7 @@ class LiveTree:
         self.last = state
         text = py_trees.display.unicode_tree(run.root, show_status=True)
         prefix = "\x1b[H\x1b[2J" if self.clear else ""
-        self.stream.write(f"{prefix}t = {run.sim.time():.1f} s\n{text}\n")
+        self.stream.write(f"{prefix}t = {run.backend.time():.1f} s\n{text}\n")
         self.stream.flush()
 
 

@@ -336,7 +336,7 @@ class LiveView:
                              include=[(start.x, start.y)], **options)
 
     def __call__(self, run: Run) -> None:
-        sim = run.sim
+        sim = run.backend
         pose = sim.true_pose()
         scan = sim.proximity() or {}
         self.viewer.show(Frame(sim.time(), None if pose is None else pose.as_dict(),
