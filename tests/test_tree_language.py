@@ -109,3 +109,12 @@ def test_parameters_and_expressions():
     result = run_tree({"MoveDistance": {"distance": "2*$side - 10cm"}}, ARENA, start=[0.3, 0.6, 0], seconds=20,
                       parameters={"side": "15cm"})
     assert result.final_pose["x"] == pytest.approx(0.5, abs=0.001)
+
+
+def test_delay_waits_in_simulated_time_then_runs_the_child():
+    result = run_tree({"delay": {"seconds": 2, "do": wait(1)}}, ARENA, seconds=10)
+    assert result.status == "SUCCESS" and result.sim_time == pytest.approx(3.0, abs=0.11)
+    started = [e["t"] for e in result.events if e["kind"] == "behaviour_start" and e["name"] == "Wait"]
+    assert started == [pytest.approx(2.0, abs=0.11)]                      # the child starts after the delay
+    failing = run_tree({"delay": {"seconds": "500ms", "do": {"invert": wait(0.2)}}}, ARENA, seconds=10)
+    assert failing.status == "FAILURE"                                    # the child's result is passed on

@@ -1,4 +1,4 @@
-"""Text documentation of behaviours, generated from the registry (for ``thymio-bt behaviours``)."""
+"""Text documentation of every node, generated from the registry (for ``thymio-bt behaviours``)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import typing
 from typing import Any
 
-from .behaviours import RobotBehaviour
+from .behaviours import ControlNode
 
 
 def _type_name(annotation: Any) -> str:
@@ -43,7 +43,7 @@ def _default(field: Any) -> str:
     return "none" if value is None else str(value)
 
 
-def parameter_rows(cls: type[RobotBehaviour]) -> list[tuple[str, str, str, str, str, str]]:
+def parameter_rows(cls: Any) -> list[tuple[str, str, str, str, str, str]]:
     """(name, type, unit, default, range, description) for each parameter."""
     rows = []
     for name, field in cls.Params.model_fields.items():
@@ -53,26 +53,39 @@ def parameter_rows(cls: type[RobotBehaviour]) -> list[tuple[str, str, str, str, 
     return rows
 
 
+def _summary(cls: Any) -> str:
+    return (inspect.getdoc(cls) or "").splitlines()[0] if cls.__doc__ else ""
+
+
 def behaviour_list(registry: Any) -> str:
-    lines = ["Behaviours (thymio-bt behaviours NAME for details):", ""]
+    """Every node of ``registry``: behaviours, then composites and decorators, one line each."""
     width = max(len(n) for n in registry)
-    for name, cls in registry.items():
-        summary = (inspect.getdoc(cls) or "").splitlines()[0] if cls.__doc__ else ""
-        lines.append(f"  {name:<{width}}  {summary}")
-    lines += ["", "Composites: sequence, reactive_sequence, selector, reactive_selector, parallel",
-              "Decorators: repeat, retry, timeout, invert, force_success, force_failure, until, guard, one_shot"]
+    lines = ["Behaviours (thymio-bt behaviours NAME for details):", ""]
+    lines += [f"  {name:<{width}}  {_summary(cls)}" for name, cls in registry.behaviours()]
+    for category, title in (("composite", "Composites"), ("decorator", "Decorators")):
+        lines += ["", f"{title}:"]
+        lines += [f"  {name:<{width}}  {_summary(cls)}" for name, cls in registry.control(category)]
     return "\n".join(lines)
 
 
-def behaviour_help(cls: type[RobotBehaviour]) -> str:
+def behaviour_help(cls: Any) -> str:
+    """A node's documentation: what it does, how it is written, its parameters with units and ranges."""
     doc = inspect.getdoc(cls) or ""
     rows = parameter_rows(cls)
-    header = ("parameter", "type", "unit", "default", "range", "description")
-    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(5)]
-    lines = [f"{cls.yaml_name}", "", doc, "", "Parameters:"]
-    lines.append("  " + "  ".join(h.ljust(w) for h, w in zip(header[:5], widths)) + "  " + header[5])
-    for row in rows:
-        lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(row[:5], widths)) + "  " + row[5])
-    lines += ["", "Values accept units and expressions: 5cm, 0.1 m/s, 90deg, pi/2, $parameter; "
-              "bb:KEY reads a value from the blackboard when the behaviour starts."]
+    lines = [f"{cls.yaml_name}", "", doc]
+    if issubclass(cls, ControlNode):
+        lines += ["", f"A {cls.category}: " + ("children: [NODE, ...]" if cls.category == "composite" else
+                                                 ", ".join(f"{k}: NODE" for k in ("do", *cls.node_keys))
+                                                 + (" (or written 'NAME: NODE')" if cls.short_form else "")),
+                  cls.example]
+    if rows:
+        header = ("parameter", "type", "unit", "default", "range", "description")
+        widths = [max(len(r[i]) for r in [header, *rows]) for i in range(5)]
+        lines += ["", "Parameters:",
+                  "  " + "  ".join(h.ljust(w) for h, w in zip(header[:5], widths)) + "  " + header[5]]
+        for row in rows:
+            lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(row[:5], widths)) + "  " + row[5])
+    if not issubclass(cls, ControlNode):
+        lines += ["", "Values accept units and expressions: 5cm, 0.1 m/s, 90deg, pi/2, $parameter; "
+                  "bb:KEY reads a value from the blackboard when the behaviour starts."]
     return "\n".join(lines)

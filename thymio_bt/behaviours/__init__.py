@@ -1,7 +1,11 @@
-"""The built-in behaviours, one family per module (motion, maze, entities, control)."""
+"""The built-in nodes: robot behaviours, one family per module (motion, maze, entities, navigation),
+and the composites and decorators that arrange them."""
 
 from .base import Context, EventLog, FailureCode, RobotBehaviour
+from .composites import COMPOSITES
 from .control import RepeatUntil, ScriptedStub, SimTimeout
+from .control_node import ControlNode
+from .decorators import DECORATORS
 from .entities import DeleteEntity, SpawnEntity
 from .maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
 from .motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
@@ -16,5 +20,8 @@ BUILTIN: tuple[type[RobotBehaviour], ...] = (
     GoToPose, FollowWaypoints, WaypointsDone, ObstacleAhead, TurnUntilClear, TurnBack, SetBlackboard,
 )
 
-__all__ = ["BUILTIN", "Context", "EventLog", "FailureCode", "RobotBehaviour", "RepeatUntil",
+#: Every built-in composite and decorator.
+CONTROL: tuple[type[ControlNode], ...] = (*COMPOSITES, *DECORATORS)
+
+__all__ = ["BUILTIN", "CONTROL", "ControlNode", "Context", "EventLog", "FailureCode", "RobotBehaviour", "RepeatUntil",
            "ScriptedStub", "SimTimeout", *(cls.__name__ for cls in BUILTIN)]

@@ -26,6 +26,7 @@ from ..sim.noise import NoiseConfig
 from ..units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
 from ..validation import problems_from
 from ..yamlio import MarkedDict, MarkedList, load_yaml
+from ..behaviours import ControlNode
 from .plan import Mission, NodePlan
 from .registry import Registry, default_registry
 
@@ -33,13 +34,6 @@ TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "se
             "robot", "backend", "parameters", "subtrees", "include", "plugins", "tree")
 SENSOR_MODELS = ("metres", "raw")
 INCLUDE_KEYS = ("description", "parameters", "subtrees", "include", "plugins")
-COMPOSITES = ("sequence", "reactive_sequence", "selector", "reactive_selector", "parallel")
-DECORATORS = ("repeat", "retry", "timeout", "invert", "force_success", "force_failure", "until",
-              "guard", "one_shot")
-#: Keys each decorator's long form takes (besides ``name``).
-DECORATOR_KEYS = {"repeat": ("times", "until", "do"), "retry": ("times", "do"), "timeout": ("seconds", "do"),
-                  "until": ("status", "do"), "guard": ("condition", "do"), "one_shot": ("on", "do"),
-                  "invert": ("do",), "force_success": ("do",), "force_failure": ("do",)}
 UNIT_KIND = {"m": "length", "rad": "angle", "m/s": "speed", "rad/s": "angular_speed", "s": "time"}
 MAX_DEPTH = 64
 #: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
@@ -396,7 +390,7 @@ class MissionLoader:
             if not isinstance(name, str) or not name.isidentifier():
                 self.problem(f"subtree name {name!r} must be a plain identifier", where, "subtrees")
                 continue
-            if name in self.registry or name in COMPOSITES or name in DECORATORS:
+            if name in self.registry:
                 self.problem(f"subtree name '{name}' is already a behaviour, composite or decorator",
                              where, f"subtrees.{name}", "choose another name")
                 continue
@@ -514,16 +508,15 @@ class MissionLoader:
             self.problem(f"a node type must be a name, got {type_name(kind)}", where, path)
             return None
         node_path = f"{path}.{kind}" if path else kind
-        if kind in COMPOSITES:
-            return self._composite(kind, body, where, body_where, node_path, scope, depth, subtree_stack)
-        if kind in DECORATORS:
-            return self._decorator(kind, body, where, body_where, node_path, scope, depth, subtree_stack)
         if kind in self.registry:
+            cls = self.registry[kind]
+            if issubclass(cls, ControlNode):
+                return self._control(cls, body, where, body_where, node_path, scope, depth, subtree_stack)
             return self._behaviour(kind, body, where, body_where, node_path, scope)
         if kind in self.subtrees:
             return self._use_subtree(kind, body, where, body_where, node_path, scope, depth, subtree_stack)
         self.problem(f"unknown node type '{kind}'", where, node_path,
-                     did_you_mean(kind, [*self.registry, *COMPOSITES, *DECORATORS, *self.subtrees]))
+                     did_you_mean(kind, [*self.registry, *self.subtrees]))
         return None
 
     def _name(self, body: Any, default: str, file: str, path: str) -> str:
@@ -554,133 +547,92 @@ class MissionLoader:
                 child.name = f"{child.name}#{count}"
         return children
 
-    def _composite(self, kind: str, body: Any, where: Where, body_where: Where, path: str,
-                   scope: _Scope, depth: int, stack: tuple[str, ...]) -> NodePlan | None:
-        file = where[0]
-        options: dict[str, Any] = {}
-        if isinstance(body, MarkedDict):
-            allowed = ["name", "children"] + (["policy", "synchronise"] if kind == "parallel" else [])
-            self.check_keys(body, allowed, file, path, f"a {kind}")
-            raw_children = body.get("children")
-            children_where = self.where_value(body, "children", file) if "children" in body else body_where
-            if kind == "parallel":
-                policy = body.get("policy", "success_on_all")
-                if policy not in ("success_on_all", "success_on_one"):
-                    self.problem(f"unknown parallel policy '{policy}'", self.where_value(body, "policy", file),
-                                 path, "success_on_all (every child must succeed) or success_on_one")
-                sync = body.get("synchronise", True)
-                if not isinstance(sync, bool):
-                    self.problem("synchronise must be true or false", self.where_value(body, "synchronise", file), path)
-                options = {"policy": policy, "synchronise": sync is not False}
-        else:
-            raw_children, children_where = body, body_where
-            if kind == "parallel":
-                options = {"policy": "success_on_all", "synchronise": True}
-        children = self._children(raw_children, children_where, path, scope, depth, stack)
-        return NodePlan(kind, self._name(body, kind, file, path), path, options=options,
-                        children=children, where=where)
-
-    def _decorator(self, kind: str, body: Any, where: Where, body_where: Where, path: str,
-                   scope: _Scope, depth: int, stack: tuple[str, ...]) -> NodePlan | None:
-        file = where[0]
-        keys = DECORATOR_KEYS[kind]
-        long_form = isinstance(body, MarkedDict) and "do" in body
-        if not long_form and keys != ("do",) and kind != "one_shot":
-            self.problem(f"{kind} needs a mapping with {', '.join(keys)}", body_where, path,
-                         _DECORATOR_EXAMPLES[kind])
+    def _control(self, cls: type[ControlNode], body: Any, where: Where, body_where: Where, path: str,
+                 scope: _Scope, depth: int, stack: tuple[str, ...]) -> NodePlan | None:
+        """A composite (``children``) or decorator (``do`` and its other node keys), with its parameters."""
+        file, kind = where[0], cls.yaml_name
+        composite = cls.category == "composite"
+        long_form = isinstance(body, MarkedDict) and ("children" in body if composite else "do" in body)
+        if composite and isinstance(body, MarkedDict):
+            long_form = True
+        elif not composite and not long_form and not cls.short_form:
+            self.problem(f"{kind} needs a mapping with {', '.join(cls.keys())}", body_where, path, cls.example)
             return None
         if long_form:
-            self.check_keys(body, ("name", *keys), file, path, f"a {kind}")
-            child = self.node(body["do"], self.where_value(body, "do", file), f"{path}.do", scope, depth + 1, stack)
+            self.check_keys(body, ("name", *cls.keys()), file, path, f"a {kind}")
+        fields = cls.Params.model_fields
+        params, _ = self._params(kind, cls.Params, body if long_form else MarkedDict(),
+                                 [k for k in body if k in fields] if long_form else [], where, path, scope,
+                                 allow_refs=False, missing_hint=cls.example)
+        if composite:
+            raw_children = body.get("children") if long_form else body
+            children_where = self.where_value(body, "children", file) if long_form and "children" in body \
+                else body_where
+            children = self._children(raw_children, children_where, path, scope, depth, stack)
         else:
-            child = self.node(body, body_where, f"{path}.do", scope, depth + 1, stack)
-        options: dict[str, Any] = {}
-        extra: list[NodePlan] = []
-        get = body.get if long_form else (lambda k, d=None: d)
-        if kind in ("repeat", "retry"):
-            times = get("times", "forever" if kind == "repeat" else None)
-            until = get("until")
-            if kind == "repeat" and until is not None:
-                if "times" in body:
-                    self.problem("repeat takes either times or until, not both", body_where, path)
-                cond = self.node(until, self.where_value(body, "until", file), f"{path}.until", scope,
-                                 depth + 1, stack)
-                if cond is not None:
-                    extra.append(cond)
-                options["until"] = True
-            elif times == "forever" and kind == "repeat":
-                options["times"] = -1
-            elif isinstance(times, int) and not isinstance(times, bool) and times >= 1:
-                options["times"] = times
-            else:
-                what = "a whole number >= 1" + (" or 'forever'" if kind == "repeat" else "")
-                self.problem(f"{kind} times must be {what}",
-                             self.where_value(body, "times", file) if "times" in body else body_where, path,
-                             _DECORATOR_EXAMPLES[kind])
-        elif kind == "timeout":
-            seconds = self.quantity(get("seconds"), scope, self.where_value(body, "seconds", file), path, "time") \
-                if "seconds" in body else None
-            if "seconds" not in body:
-                self.problem("timeout needs seconds", body_where, path, _DECORATOR_EXAMPLES[kind])
-            elif seconds is not None and seconds <= 0:
-                self.problem("timeout seconds must be > 0", self.where_value(body, "seconds", file), path)
-            options["seconds"] = seconds
-        elif kind == "until":
-            status = get("status")
-            if status not in ("success", "failure"):
-                self.problem("until status must be success or failure",
-                             self.where_value(body, "status", file) if "status" in body else body_where, path)
-            options["status"] = status
-        elif kind == "guard":
-            if "condition" not in body:
-                self.problem("guard needs a condition", body_where, path, _DECORATOR_EXAMPLES[kind])
-            else:
-                cond = self.node(body["condition"], self.where_value(body, "condition", file),
-                                 f"{path}.condition", scope, depth + 1, stack)
-                if cond is not None:
-                    extra.append(cond)
-        elif kind == "one_shot":
-            on = get("on", "success")
-            if on not in ("success", "completion"):
-                self.problem("one_shot on must be success or completion", self.where_value(body, "on", file), path)
-            options["on"] = on
-        if child is None:
+            child = self.node(body["do"], self.where_value(body, "do", file), f"{path}.do", scope, depth + 1, stack) \
+                if long_form else self.node(body, body_where, f"{path}.do", scope, depth + 1, stack)
+            children = [child] if child is not None else []
+            for key in cls.node_keys:
+                if long_form and key in body:
+                    extra = self.node(body[key], self.where_value(body, key, file), f"{path}.{key}", scope,
+                                      depth + 1, stack)
+                    if extra is not None:
+                        children.append(extra)
+                elif key in cls.required_nodes:
+                    self.problem(f"{kind} needs a {key}", body_where, path, cls.example)
+                    return None
+            for first, second in cls.exclusive:
+                if long_form and first in body and second in body:
+                    self.problem(f"{kind} takes either {first} or {second}, not both", body_where, path)
+            if child is None:
+                return None
+        if params is None:
             return None
-        return NodePlan(kind, self._name(body, kind, file, path), path, options=options,
-                        children=[child, *extra], where=where)
+        return NodePlan(kind, self._name(body, kind, file, path), path, params=params,
+                        options=params.model_dump(), children=children, where=where)
 
     def _behaviour(self, kind: str, body: Any, where: Where, body_where: Where, path: str,
                    scope: _Scope) -> NodePlan | None:
         file = where[0]
-        cls = self.registry[kind]
-        model: type[BaseModel] = cls.Params
         if body is None:
             body = MarkedDict()
         if not isinstance(body, MarkedDict):
             self.problem(f"{kind} takes a mapping of parameters, got {type_name(body)}", body_where, path,
                          f"e.g. '{kind}: {{}}'; see 'thymio-bt behaviours {kind}'")
             return None
+        params, refs = self._params(kind, self.registry[kind].Params, body, [k for k in body if k != "name"],
+                                    where, path, scope, allow_refs=True)
+        if params is None:
+            return None
+        return NodePlan("behaviour", self._name(body, kind, file, path), path, behaviour=kind,
+                        params=params, blackboard_refs=refs, where=where)
+
+    def _params(self, kind: str, model: type[BaseModel], body: MarkedDict, keys: list[Any], where: Where,
+                path: str, scope: _Scope, allow_refs: bool, missing_hint: str = "") -> tuple[Any, dict[str, str]]:
+        """A node's parameter model from ``keys`` of ``body`` (units, $parameters, bb: references when
+        ``allow_refs``), with every problem reported at its place; (None, refs) when there is one."""
+        file = where[0]
         fields = model.model_fields
         values: dict[str, Any] = {}
         refs: dict[str, str] = {}
         unknown = False             # a misspelt key: the field it meant is 'missing' too, say it once
         before = len(self.problems)
-        for key, raw in body.items():
-            if key == "name":
-                continue
+        for key in keys:
+            raw = body[key]
             vwhere = self.where_value(body, key, file)
             if key not in fields:
                 self.problem(f"{kind} has no parameter '{key}'", self.where_key(body, key, file), f"{path}.{key}",
                              did_you_mean(str(key), fields))
                 unknown = True
                 continue
-            if isinstance(raw, str) and raw.startswith("$") and raw[1:].isidentifier():
+            if allow_refs and isinstance(raw, str) and raw.startswith("$") and raw[1:].isidentifier():
                 looked = scope.values.get(raw[1:]) if raw[1:] in scope.names() else None
                 if looked is None and raw[1:] in scope.names():
                     looked = scope.get(raw[1:])
                 if isinstance(looked, str) and looked.startswith("bb:"):
                     raw = looked
-            if isinstance(raw, str) and raw.startswith("bb:"):
+            if allow_refs and isinstance(raw, str) and raw.startswith("bb:"):
                 refs[key] = raw[3:].strip()
                 if not refs[key]:
                     self.problem("bb: needs a blackboard key", vwhere, f"{path}.{key}",
@@ -689,7 +641,7 @@ class MissionLoader:
             value = self.field_value(fields[key], raw, scope, vwhere, f"{path}.{key}")
             if value is not _INVALID:
                 values[key] = value
-        failed = {key for key in body if key not in values and key not in refs}     # already reported
+        failed = {key for key in keys if key not in values and key not in refs}     # already reported
         try:
             params = model.model_validate(values)
         except ValidationError as exc:
@@ -702,21 +654,20 @@ class MissionLoader:
                     key = err["loc"][0] if err["loc"] else None
                     vwhere = self.where_value(body, key, file) if key in body else where
                     message = err["msg"].removeprefix("Value error, ")
-                    hint = ""
-                    if err["type"] in ("bool_parsing", "bool_type"):
+                    hint = str((err.get("ctx") or {}).get("hint", ""))
+                    if not hint and err["type"] in ("bool_parsing", "bool_type"):
                         hint = "write true or false"
-                    elif key in fields:
+                    elif not hint and key in fields:
                         hint = _range_hint(fields[key])
                     if err["type"] == "missing":
                         message = f"{kind} needs '{key}'"
-                        hint = fields[key].description or ""
+                        hint = missing_hint or fields[key].description or ""
                     self.problem(message, vwhere, f"{path}.{key}" if key else path, hint)
-                return None
+                return None, refs
             params = model.model_construct(**{**{k: None for k in refs}, **values})
         if len(self.problems) > before:
-            return None
-        return NodePlan("behaviour", self._name(body, kind, file, path), path, behaviour=kind,
-                        params=params, blackboard_refs=refs, where=where)
+            return None, refs
+        return params, refs
 
     def _use_subtree(self, kind: str, body: Any, where: Where, body_where: Where, path: str,
                      scope: _Scope, depth: int, stack: tuple[str, ...]) -> NodePlan | None:
@@ -817,15 +768,6 @@ class MissionLoader:
 
 
 _INVALID = object()
-
-_DECORATOR_EXAMPLES = {
-    "repeat": "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'",
-    "retry": "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'",
-    "timeout": "e.g. 'timeout: {seconds: 30, do: {WallFollow: {}}}'",
-    "until": "e.g. 'until: {status: success, do: ...}'",
-    "guard": "e.g. 'guard: {condition: {WallAhead: {}}, do: ...}'",
-}
-
 
 def _file_suggestion(missing: Path) -> str:
     """'; did you mean 'maze_legs.yaml'?' when a YAML file of a close name sits beside a missing one."""

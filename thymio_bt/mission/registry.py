@@ -1,8 +1,10 @@
-"""The behaviour registry: YAML name → behaviour class and its pydantic parameter model.
+"""The node registry: YAML name → node class and its pydantic parameter model.
 
-Validation, ``thymio-bt behaviours`` and the JSON Schema all read from here. Users add their own
-behaviours through the ``thymio_bt.behaviours`` entry-point group, or a ``plugins:`` list in a
-mission (``module:Class``, or a ``.py`` file path relative to the mission).
+Robot behaviours, conditions, composites and decorators are all registered here, so validation,
+``thymio-bt behaviours``, the JSON Schema and the docs read from one place. Users add their own
+nodes (a :class:`RobotBehaviour` or a :class:`ControlNode`) through the ``thymio_bt.behaviours``
+entry-point group, or a ``plugins:`` list in a mission (``module:Class``, or a ``.py`` file path
+relative to the mission).
 
 Example::
 
@@ -20,28 +22,37 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator
 
-from ..behaviours import BUILTIN, RobotBehaviour
+from ..behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
 from ..errors import Problem, UserError
 
 ENTRY_POINT_GROUP = "thymio_bt.behaviours"
 
 
-class Registry:
-    """A mapping from YAML names to behaviour classes."""
+Node = type[RobotBehaviour] | type[ControlNode]
 
-    def __init__(self, classes: tuple[type[RobotBehaviour], ...] = ()) -> None:
-        self._classes: dict[str, type[RobotBehaviour]] = {}
+
+def is_node(cls: Any) -> bool:
+    """Whether ``cls`` can be registered: a robot behaviour or a composite/decorator kind."""
+    return inspect.isclass(cls) and issubclass(cls, (RobotBehaviour, ControlNode)) and bool(
+        getattr(cls, "Params", None))
+
+
+class Registry:
+    """A mapping from YAML names to node classes."""
+
+    def __init__(self, classes: tuple[Node, ...] = ()) -> None:
+        self._classes: dict[str, Node] = {}
         for cls in classes:
             self.register(cls)
 
-    def register(self, cls: type[RobotBehaviour]) -> None:
-        """Add a behaviour class; its ``yaml_name`` (or class name) is the YAML name."""
-        if not (inspect.isclass(cls) and issubclass(cls, RobotBehaviour)):
-            raise TypeError(f"{cls!r} is not a RobotBehaviour subclass")
+    def register(self, cls: Node) -> None:
+        """Add a node class; its ``yaml_name`` (or class name) is the YAML name."""
+        if not is_node(cls):
+            raise TypeError(f"{cls!r} is not a RobotBehaviour or ControlNode subclass")
         name = cls.yaml_name or cls.__name__
         existing = self._classes.get(name)
         if existing is not None and existing is not cls:
-            raise ValueError(f"two behaviours are named '{name}': {existing.__module__} and {cls.__module__}")
+            raise ValueError(f"two nodes are named '{name}': {existing.__module__} and {cls.__module__}")
         if not cls.yaml_name:
             cls.yaml_name = name
         self._classes[name] = cls
@@ -51,7 +62,7 @@ class Registry:
         other._classes = dict(self._classes)
         return other
 
-    def __getitem__(self, name: str) -> type[RobotBehaviour]:
+    def __getitem__(self, name: str) -> Node:
         return self._classes[name]
 
     def __contains__(self, name: object) -> bool:
@@ -60,8 +71,16 @@ class Registry:
     def __iter__(self) -> Iterator[str]:
         return iter(self._classes)
 
-    def items(self) -> Iterator[tuple[str, type[RobotBehaviour]]]:
+    def items(self) -> Iterator[tuple[str, Node]]:
         return iter(self._classes.items())
+
+    def behaviours(self) -> Iterator[tuple[str, type[RobotBehaviour]]]:
+        """The robot behaviours and conditions (no composites or decorators)."""
+        return ((n, c) for n, c in self._classes.items() if issubclass(c, RobotBehaviour))
+
+    def control(self, category: str) -> Iterator[tuple[str, type[ControlNode]]]:
+        """The composites (``category="composite"``) or decorators."""
+        return ((n, c) for n, c in self._classes.items() if issubclass(c, ControlNode) and c.category == category)
 
     def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
         """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours."""
@@ -96,9 +115,10 @@ class Registry:
             candidates = [cls]
         else:
             candidates = [c for _, c in inspect.getmembers(module, inspect.isclass)
-                          if issubclass(c, RobotBehaviour) and c.__module__ == module.__name__]
+                          if is_node(c) and c.__module__ == module.__name__]
             if not candidates:
-                raise UserError(Problem(f"plugin '{ref}' defines no RobotBehaviour subclass", file, line, col))
+                raise UserError(Problem(f"plugin '{ref}' defines no RobotBehaviour or ControlNode subclass",
+                                        file, line, col))
         for cls in candidates:
             try:
                 self.register(cls)
@@ -125,7 +145,7 @@ def default_registry() -> Registry:
     """The built-in behaviours plus those installed through the entry-point group."""
     global _DEFAULT
     if _DEFAULT is None:
-        registry = Registry(BUILTIN)
+        registry = Registry((*BUILTIN, *CONTROL))
         for cls in _entry_point_classes():
             try:
                 registry.register(cls)

@@ -9,8 +9,9 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+from ..behaviours import ControlNode
+from ..robot_model import ROBOTS
 from ..sim.noise import NoiseConfig
-from .loader import COMPOSITES, DECORATOR_KEYS
 from .registry import Registry, default_registry
 
 _VALUE = {"anyOf": [{"type": "number"}, {"type": "string"}],
@@ -39,53 +40,60 @@ def _loosen(prop: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def behaviour_schema(cls: Any) -> dict[str, Any]:
-    model = cls.Params.model_json_schema()
-    props = {name: _loosen(p) for name, p in model.get("properties", {}).items()}
-    for name, field in cls.Params.model_fields.items():
+def _parameters(model: Any, loosen: Any) -> tuple[dict[str, Any], list[str]]:
+    """The JSON Schema properties of a parameter model (each through ``loosen``) and its required keys."""
+    schema = model.model_json_schema()
+    props = {name: loosen(p) for name, p in schema.get("properties", {}).items()}
+    for name, field in model.model_fields.items():
         unit = (field.json_schema_extra or {}).get("unit") if isinstance(field.json_schema_extra, dict) else None
         if unit and name in props:
             props[name]["description"] = f"{props[name].get('description', '')} [{unit}]".strip()
     props["name"] = {"type": "string", "description": "the node's name in the tree"}
+    return props, list(schema.get("required", []))
+
+
+def _summary(cls: Any) -> str:
+    return (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
+
+
+def behaviour_schema(cls: Any) -> dict[str, Any]:
+    props, required = _parameters(cls.Params, _loosen)
     body: dict[str, Any] = {"type": "object", "properties": props, "additionalProperties": False}
-    required = [r for r in model.get("required", [])]
     if required:
         body["required"] = required
-    body["description"] = (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
+    body["description"] = _summary(cls)
     return {"anyOf": [body, {"type": "null"}]} if not required else body
+
+
+def _units_only(prop: dict[str, Any]) -> dict[str, Any]:
+    """A composite's or decorator's parameter: numbers may carry units, other values are as declared."""
+    is_number = prop.get("type") == "number"
+    return {"anyOf": [prop, _VALUE], "description": prop.get("description", "")} if is_number else prop
+
+
+def control_schema(cls: type[ControlNode], node_ref: dict[str, Any]) -> dict[str, Any]:
+    """A composite's or decorator's body: its long form, and its short form where it has one."""
+    props, required = _parameters(cls.Params, _units_only)
+    if cls.category == "composite":
+        props["children"] = {"type": "array", "items": node_ref, "minItems": 1}
+        long_form = {"type": "object", "properties": props, "required": ["children", *required],
+                     "additionalProperties": False}
+        return {"anyOf": [{"type": "array", "items": node_ref, "minItems": 1}, long_form],
+                "description": _summary(cls)}
+    props.update({key: node_ref for key in (*cls.node_keys, "do")})
+    long_form = {"type": "object", "properties": props, "additionalProperties": False,
+                 "required": ["do", *cls.required_nodes, *required]}
+    if cls.short_form:
+        return {"anyOf": [long_form, node_ref], "description": _summary(cls)}
+    return {**long_form, "description": _summary(cls)}
 
 
 def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     registry = registry or default_registry()
     node_ref = {"$ref": "#/$defs/node"}
-    node_props: dict[str, Any] = {}
-    for name, cls in registry.items():
-        node_props[name] = behaviour_schema(cls)
-    composite_body = {"anyOf": [
-        {"type": "array", "items": node_ref, "minItems": 1},
-        {"type": "object", "properties": {"name": {"type": "string"},
-                                          "children": {"type": "array", "items": node_ref, "minItems": 1},
-                                          "policy": {"enum": ["success_on_all", "success_on_one"]},
-                                          "synchronise": {"type": "boolean"}},
-         "required": ["children"], "additionalProperties": False}]}
-    for name in COMPOSITES:
-        node_props[name] = composite_body
-    for name, keys in DECORATOR_KEYS.items():
-        props: dict[str, Any] = {"name": {"type": "string"}, "do": node_ref}
-        if "times" in keys:
-            props["times"] = {"anyOf": [{"type": "integer", "minimum": 1}, {"const": "forever"}]}
-        if "until" in keys:
-            props["until"] = node_ref
-        if "seconds" in keys:
-            props["seconds"] = _VALUE
-        if "status" in keys:
-            props["status"] = {"enum": ["success", "failure"]}
-        if "condition" in keys:
-            props["condition"] = node_ref
-        if "on" in keys:
-            props["on"] = {"enum": ["success", "completion"]}
-        long_form = {"type": "object", "properties": props, "required": ["do"], "additionalProperties": False}
-        node_props[name] = long_form if keys != ("do",) and name != "one_shot" else {"anyOf": [long_form, node_ref]}
+    node_props: dict[str, Any] = {
+        name: control_schema(cls, node_ref) if issubclass(cls, ControlNode) else behaviour_schema(cls)
+        for name, cls in registry.items()}
     node = {
         "anyOf": [
             {"type": "string", "description": "a behaviour or subtree without parameters"},
@@ -112,6 +120,10 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "seed": {"type": "integer", "minimum": 0},
             "sensor_model": {"enum": ["metres", "raw"],
                              "description": "metres: the course's ideal rays; raw: a real Thymio's readings"},
+            "robot": {"enum": list(ROBOTS), "description": "the robot model (thymio-bt backends lists them)"},
+            "backend": {"anyOf": [{"type": "string"}, {"type": "object", "required": ["name"],
+                                                         "properties": {"name": {"type": "string"}}}],
+                        "description": "where the mission runs: a backend name, or {name: NAME, OPTION: VALUE}"},
             "noise": {"type": "object", "properties": noise["properties"], "additionalProperties": False},
             "parameters": {"type": "object", "additionalProperties": {"type": ["number", "string", "boolean"]}},
             "include": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]},

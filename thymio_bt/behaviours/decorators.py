@@ -1,0 +1,249 @@
+"""The decorators of the mission language: one child under ``do``, changed in one way.
+
+Written ``repeat: {times: 4, do: CHILD}``; those without parameters also as ``invert: CHILD``.
+
+- ``repeat``: run the child ``times`` times (or ``forever``), or ``until`` a condition succeeds
+  after a success of the child (a do-while loop); a failure of the child ends it with FAILURE.
+- ``retry``: run the child again after a failure, at most ``times`` times.
+- ``timeout``: fail the child when it runs longer than ``seconds`` of simulated time.
+- ``delay``: wait ``seconds`` of simulated time, then run the child.
+- ``invert``: swap SUCCESS and FAILURE; ``force_success`` / ``force_failure``: report that status
+  whatever the child ends with (RUNNING stays RUNNING).
+- ``until``: RUNNING until the child returns ``status`` (success or failure), then SUCCESS.
+- ``guard``: run the child while ``condition`` succeeds (checked every tick); fail when it does not.
+- ``one_shot``: once the child succeeded (``on: success``) or finished (``on: completion``), return
+  that result without ticking it again.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+import py_trees
+from py_trees.behaviour import Behaviour
+from py_trees.common import OneShotPolicy, Status
+from pydantic import Field, field_validator
+
+from .control import RepeatUntil, SimTimeout
+from .control_node import ControlNode, ControlParams, refuse, whole
+
+_REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"
+_RETRY_EXAMPLE = "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'"
+
+
+class RepeatParams(ControlParams):
+    times: Annotated[int, Field(ge=1)] | Literal["forever"] = Field(
+        "forever", description="how many successes of the child end the loop, or forever")
+
+    @field_validator("times", mode="before")
+    @classmethod
+    def _count(cls, value: Any) -> Any:
+        if value == "forever":
+            return value
+        count = whole(value)
+        if count is None or count < 1:
+            raise refuse("repeat times must be a whole number >= 1 or 'forever'", _REPEAT_EXAMPLE)
+        return count
+
+
+class Repeat(ControlNode):
+    """Run the child again after each success: ``times`` times, forever, or ``until`` a condition succeeds."""
+
+    yaml_name = "repeat"
+    Params = RepeatParams
+    node_keys = ("until",)
+    exclusive = (("times", "until"),)
+    example = _REPEAT_EXAMPLE
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        if len(children) == 2:
+            return RepeatUntil(name, body=children[0], condition=children[1])
+        times = -1 if params.times == "forever" else params.times
+        return py_trees.decorators.Repeat(name=name, child=children[0], num_success=times)
+
+
+class RetryParams(ControlParams):
+    times: Annotated[int, Field(ge=1)] = Field(description="how many failures of the child end it with FAILURE")
+
+    @field_validator("times", mode="before")
+    @classmethod
+    def _count(cls, value: Any) -> Any:
+        count = whole(value)
+        if count is None or count < 1:
+            raise refuse("retry times must be a whole number >= 1", _RETRY_EXAMPLE)
+        return count
+
+
+class Retry(ControlNode):
+    """Run the child again after a failure, at most ``times`` failures in all."""
+
+    yaml_name = "retry"
+    Params = RetryParams
+    example = _RETRY_EXAMPLE
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        return py_trees.decorators.Retry(name=name, child=children[0], num_failures=params.times)
+
+
+class SecondsParams(ControlParams):
+    seconds: float = Field(gt=0, le=36000, description="simulated seconds", json_schema_extra={"unit": "s"})
+
+
+class Timeout(ControlNode):
+    """Fail (stopping the child) when the child runs longer than ``seconds`` of simulated time."""
+
+    yaml_name = "timeout"
+    Params = SecondsParams
+    example = "e.g. 'timeout: {seconds: 30, do: {WallFollow: {}}}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        return SimTimeout(name, children[0], duration=params.seconds, clock=ctx.now)
+
+
+class Delay(py_trees.decorators.Decorator, ControlNode):
+    """Wait ``seconds`` of simulated time (RUNNING), then run the child and return what it returns."""
+
+    yaml_name = "delay"
+    Params = SecondsParams
+    example = "e.g. 'delay: {seconds: 2, do: {MoveDistance: {distance: 10cm}}}'"
+
+    def __init__(self, name: str, child: Behaviour, seconds: float, clock: Any) -> None:
+        super().__init__(name=name, child=child)
+        self.seconds, self.clock = seconds, clock
+        self.start = 0.0
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        return cls(name, children[0], params.seconds, ctx.now)
+
+    def initialise(self) -> None:
+        self.start = self.clock()
+
+    def tick(self):  # type: ignore[override]
+        """Tick the child only once the delay is over (a Decorator ticks its child first otherwise)."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        if self.clock() - self.start < self.seconds - 1e-9:
+            self.status = Status.RUNNING
+            self.feedback_message = f"{self.seconds - (self.clock() - self.start):.1f} s to wait"
+            yield self
+            return
+        yield from super().tick()
+
+    def update(self) -> Status:
+        self.feedback_message = self.decorated.feedback_message
+        return self.decorated.status
+
+
+class Invert(ControlNode):
+    """Swap SUCCESS and FAILURE of the child (RUNNING stays RUNNING)."""
+
+    yaml_name = "invert"
+    short_form = True
+    example = "e.g. 'invert: {WallAhead: {}}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        return py_trees.decorators.Inverter(name=name, child=children[0])
+
+
+class ForceSuccess(ControlNode):
+    """Report SUCCESS when the child fails (RUNNING stays RUNNING)."""
+
+    yaml_name = "force_success"
+    short_form = True
+    example = "e.g. 'force_success: {MoveDistance: {distance: 5cm}}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        return py_trees.decorators.FailureIsSuccess(name=name, child=children[0])
+
+
+class ForceFailure(ControlNode):
+    """Report FAILURE when the child succeeds (RUNNING stays RUNNING)."""
+
+    yaml_name = "force_failure"
+    short_form = True
+    example = "e.g. 'force_failure: {WallAhead: {}}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        return py_trees.decorators.SuccessIsFailure(name=name, child=children[0])
+
+
+class UntilParams(ControlParams):
+    status: Literal["success", "failure"] = Field(description="the child's result that ends the wait: success or failure")
+
+    @field_validator("status", mode="before")
+    @classmethod
+    def _known(cls, value: Any) -> Any:
+        if value not in ("success", "failure"):
+            raise refuse("until status must be success or failure")
+        return value
+
+
+class Until(ControlNode):
+    """RUNNING until the child returns ``status``, then SUCCESS (the child is ticked again meanwhile)."""
+
+    yaml_name = "until"
+    Params = UntilParams
+    example = "e.g. 'until: {status: success, do: ...}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        status = Status.SUCCESS if params.status == "success" else Status.FAILURE
+        return py_trees.decorators.Condition(name=name, child=children[0], status=status)
+
+
+class Guard(ControlNode):
+    """Run the child while ``condition`` succeeds, checked every tick; FAILURE as soon as it does not."""
+
+    yaml_name = "guard"
+    node_keys = ("condition",)
+    required_nodes = ("condition",)
+    example = "e.g. 'guard: {condition: {WallAhead: {}}, do: ...}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        child, condition = children
+
+        def check() -> bool:
+            for _ in condition.tick():
+                pass
+            return condition.status == Status.SUCCESS
+
+        return py_trees.decorators.EternalGuard(name=name, child=child, condition=check)
+
+
+class OneShotParams(ControlParams):
+    on: Literal["success", "completion"] = Field("success", description="success: only a success counts; "
+                                                 "completion: any result")
+
+    @field_validator("on", mode="before")
+    @classmethod
+    def _known(cls, value: Any) -> Any:
+        if value not in ("success", "completion"):
+            raise refuse("one_shot on must be success or completion")
+        return value
+
+
+class OneShot(ControlNode):
+    """Run the child until it succeeds (or finishes, ``on: completion``), then return that result for ever."""
+
+    yaml_name = "one_shot"
+    Params = OneShotParams
+    short_form = True
+    example = "e.g. 'one_shot: {on: completion, do: ...}'"
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        policy = OneShotPolicy.ON_SUCCESSFUL_COMPLETION if params.on == "success" else OneShotPolicy.ON_COMPLETION
+        return py_trees.decorators.OneShot(name=name, child=children[0], policy=policy)
+
+
+#: The decorators, in the order docs list them.
+DECORATORS: tuple[type[ControlNode], ...] = (Repeat, Retry, Timeout, Delay, Invert, ForceSuccess, ForceFailure,
+                                             Until, Guard, OneShot)
