@@ -313,7 +313,8 @@ def validate(files: tuple[Path, ...], sets: tuple[str, ...]) -> None:
 def _check_file(path: Path, overrides: dict[str, str]) -> str:
     """Validate one mission or maze file (a maze has ``walls:`` or ``grid:`` and no ``tree:``)."""
     from .errors import Problem
-    from .sim import Simulation
+    from .placement import placement_problem
+    from .robot_model import COURSE
     from .yamlio import load_yaml
 
     data = load_yaml(path)
@@ -321,13 +322,12 @@ def _check_file(path: Path, overrides: dict[str, str]) -> str:
         from .maze import load_maze
 
         maze = load_maze(path)
-        sim = Simulation(maze)
         spawns = data.get("spawns") if "grid" not in data else None
         problems = [Problem(f"spawn '{name}' is impossible: {why}", str(path),
                             *(getattr(spawns, "marks", {}).get(name, (0, 0))), f"spawns.{name}",
                             "move it into a free cell, away from the walls")
                     for name, spawn in maze.spawns.items()
-                    if (why := sim.spawn_problem("thymio", spawn.pose()))]
+                    if (why := placement_problem(maze, COURSE, spawn.pose()))]
         if problems:
             raise UserError(problems)
         return f"maze: {len(maze.walls)} walls, {len(maze.obstacles)} obstacles, spawns {', '.join(maze.spawns) or 'none'}"

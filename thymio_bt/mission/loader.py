@@ -21,7 +21,9 @@ from pydantic import BaseModel, ValidationError
 
 from ..errors import Problem, UserError, did_you_mean, type_name
 from ..maze import Maze, load_maze, resolve_maze
-from ..robot import ROBOT_ENTITY, Pose
+from ..placement import placement_problem
+from ..robot import Pose
+from ..robot_model import ROBOTS, robot_model
 from ..sim.noise import NoiseConfig
 from ..units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
 from ..validation import problems_from
@@ -176,7 +178,7 @@ class MissionLoader:
         self._subtrees(data, file)
         maze, maze_file = self._maze(data, path, maze_override)
         self.maze = maze
-        start = self._start(data, file, maze, start_override)
+        start = self._start(data, file, maze, start_override, settings.get("robot", "course"))
         start_where = ("--start", 0, 0) if start_override is not None else self.where_value(data, "start", file)
         scope = _Scope(params)
         self.root_scope = scope
@@ -360,8 +362,6 @@ class MissionLoader:
                          "sensor_model", "raw: a real Thymio's integer readings through its calibration table")
 
     def _robot(self, value: Any, where: Where, values: dict[str, Any]) -> None:
-        from ..robot_model import ROBOTS
-
         if value in ROBOTS:
             values["robot"] = value
         else:
@@ -427,7 +427,8 @@ class MissionLoader:
                 self.problems.append(p if p.line else Problem(p.message, *where, "maze", p.hint))
             return None, None
 
-    def _start(self, data: MarkedDict, file: str, maze: Maze | None, override: str | None) -> Pose | None:
+    def _start(self, data: MarkedDict, file: str, maze: Maze | None, override: str | None,
+               robot: str) -> Pose | None:
         if override is not None:
             where: Where = ("--start", 0, 0)
             raw: Any = override
@@ -439,9 +440,7 @@ class MissionLoader:
             return None
         pose = self.pose(raw, where, "start", _Scope({}), maze)
         if pose is not None and maze is not None:
-            from ..sim import Simulation      # pymunk's geometry, imported only when it is needed
-
-            problem = Simulation(maze).spawn_problem(ROBOT_ENTITY, pose)
+            problem = placement_problem(maze, robot_model(robot), pose)
             if problem:
                 self.problem(f"impossible start pose: {problem}", where, "start",
                              "pick a free pose inside the maze"

@@ -29,6 +29,7 @@ import pymunk
 
 from ..calibration import RawProximityModel, raw_scan_to_metres
 from ..maze import Maze
+from ..placement import convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Pose, Request, RequestState, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .fastpath import RayCaster, stepper
@@ -241,24 +242,16 @@ class Simulation(Backend):
 
     # -------------------------------------------------------------- Entities
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
-        """Why a robot cannot be spawned at ``pose`` (None when it can)."""
+        """Why a robot cannot be spawned at ``pose`` (None when it can): the maze's geometry
+        (:func:`~thymio_bt.placement.placement_problem`), then the robots already there."""
         if name in self._entities:
             return f"an entity named '{name}' already exists: delete it first"
-        if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):
-            return "the pose must be finite numbers"
+        problem = placement_problem(self.maze, self.model, pose)
+        if problem:
+            return problem
         hull = self.model.hull_at(pose)
-        xmin, ymin, xmax, ymax = self.bounds
-        if self.maze.walls and not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
-            return (f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
-                    f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])")
-        probe = pymunk.Poly(None, hull)
-        probe.filter = pymunk.ShapeFilter(group=1_000_000)
-        body = pymunk.Body(body_type=pymunk.Body.STATIC)
-        probe.body = body
-        probe.cache_bb()
-        hits = [h for h in self.space.shape_query(probe) if h.shape.collision_type in (_WALL_TYPE, _ROBOT_TYPE)]
-        if hits:
-            return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps a wall"
+        if any(convex_overlap(hull, self.model.hull_at(other.pose())) for other in self._entities.values()):
+            return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps another robot"
         return None
 
     # ------------------------------------------------------------- stepping

@@ -40,10 +40,12 @@ def failing_tree(run: Any) -> str:
 
 
 def _build(mission_path: Path) -> Any:
-    from ..mission import load_mission
-    from ..runner import Run
+    """The mission's py_trees tree, to draw: built with no robot (behaviours touch it only when ticked)."""
+    from ..behaviours import Context
+    from ..mission import build_tree, load_mission
 
-    return Run(load_mission(mission_path)).root
+    mission = load_mission(mission_path)
+    return build_tree(mission.tree, Context(robot=None, entities=None), mission.registry)  # type: ignore[arg-type]
 
 
 def tree_text(mission_path: Path) -> str:

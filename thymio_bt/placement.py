@@ -1,0 +1,53 @@
+"""Where a robot may stand in a maze, by plain geometry (no physics engine).
+
+A spawn or start pose is refused when a coordinate is not finite, when the robot's hull leaves the
+maze's bounds, or when it overlaps a wall or obstacle (both convex polygons: the separating axis
+test). The simulator adds only what it alone knows (other robots); ``validate`` and the loader use
+this directly, so checking a mission never loads pymunk.
+
+Example::
+
+    placement_problem(maze, COURSE, Pose(0.1, 0.1, 0.0))      # None: the robot fits there
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Iterable, Sequence
+
+from .maze import Maze
+from .robot import Pose
+from .robot_model import RobotModel
+
+Polygon = Sequence[tuple[float, float]]
+
+
+def _axes(polygon: Polygon) -> Iterable[tuple[float, float]]:
+    for (x0, y0), (x1, y1) in zip(polygon, [*polygon[1:], polygon[0]]):
+        yield y0 - y1, x1 - x0                       # the edge's normal (not normalised: only signs matter)
+
+
+def convex_overlap(a: Polygon, b: Polygon) -> bool:
+    """Whether two convex polygons overlap with a positive area (touching edges do not count)."""
+    for nx, ny in (*_axes(a), *_axes(b)):
+        pa = [x * nx + y * ny for x, y in a]
+        pb = [x * nx + y * ny for x, y in b]
+        if max(pa) <= min(pb) or max(pb) <= min(pa):
+            return False                             # a separating axis
+    return True
+
+
+def placement_problem(maze: Maze, model: RobotModel, pose: Pose) -> str | None:
+    """Why the robot ``model`` cannot stand at ``pose`` in ``maze`` (None when it can)."""
+    if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):
+        return "the pose must be finite numbers"
+    hull = model.hull_at(pose)
+    if maze.walls:
+        xmin, ymin, xmax, ymax = maze.bounds()
+        if not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
+            return (f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
+                    f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])")
+    for shape in (*maze.walls, *maze.obstacles):
+        if convex_overlap(hull, shape.corners()):
+            return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps a wall"
+    return None
