@@ -37,3 +37,19 @@ def test_a_missing_plugin_is_a_user_error(tmp_path):
     problems = err.value.problems
     assert "plugin file not found: nope.py" in problems[0].message and problems[0].line == 3
     assert "cannot import plugin 'no_such_module:X'" in problems[1].message
+
+
+def test_a_plugin_behaviour_fails_with_its_own_code(tmp_path):
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    (tmp_path / "lost.py").write_text(
+        "from thymio_bt.behaviours import RobotBehaviour\n"
+        "class LoseLine(RobotBehaviour):\n"
+        "    '''Fail with a code of its own.'''\n"
+        "    def step(self):\n"
+        "        return self.fail('LINE_LOST', 'no line under the robot')\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [lost.py]\ntree: LoseLine\n")
+    result = Run(load_mission(mission)).run()
+    assert (result.status, result.code, result.reason) == ("FAILURE", "LINE_LOST", "no line under the robot")

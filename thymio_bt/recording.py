@@ -24,6 +24,7 @@ from typing import IO, Any
 import py_trees
 
 from .errors import Problem, UserError
+from .behaviours.base import node_path
 from .maze import Maze
 
 _STATUS = {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}
@@ -108,7 +109,7 @@ class Recorder:
         if self.keep:
             self.samples.append(sample)
         if self._file is not None:
-            nodes = {_path(n): _STATUS[n.status.name] for n in run.root.iterate()}
+            nodes = {node_path(n): _STATUS[n.status.name] for n in run.root.iterate()}
             storage = py_trees.blackboard.Blackboard.storage
             changed = {k: _jsonable(v) for k, v in storage.items() if self._blackboard.get(k, object()) != v}
             self._blackboard = dict(storage)
@@ -125,14 +126,6 @@ class Recorder:
             self._file = None
         maze = self._run.mission.maze if self._run is not None else Maze()
         return Recording(maze=maze, mission=result.mission, samples=self.samples, events=result.events, end=end)
-
-
-def _path(node: Any) -> str:
-    names = []
-    while node is not None:
-        names.append(node.name)
-        node = node.parent
-    return "/".join(reversed(names))
 
 
 def _running_leaves(root: Any) -> list[Any]:

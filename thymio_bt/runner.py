@@ -21,7 +21,7 @@ from py_trees.common import Status
 
 from .backends import backend_kind
 from .behaviours import Context, EventLog
-from .behaviours.base import snapshot
+from .behaviours.base import node_path, snapshot
 from .errors import Problem, UserError
 from .mission import Mission, build_tree
 from .robot import Backend
@@ -157,7 +157,7 @@ class Run:
         self.final_tree = py_trees.display.unicode_tree(root, show_status=True)
         if status in ("TIMEOUT", "STOPPED"):
             running = root.tip()
-            failed_path = _path(running) if running is not None else None
+            failed_path = node_path(running) if running is not None else None
             if status == "TIMEOUT":
                 reason, code = f"time limit of {self.mission.time_limit:g} s reached", "TIMEOUT"
             else:
@@ -192,7 +192,7 @@ class NodeStats(py_trees.visitors.VisitorBase):
         self.table: dict[str, dict[str, float]] = {}
 
     def run(self, behaviour: Behaviour) -> None:
-        row = self.table.setdefault(_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0})
+        row = self.table.setdefault(node_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0})
         row["ticks"] += 1
         if behaviour.status == Status.SUCCESS:
             row["successes"] += 1
@@ -200,15 +200,6 @@ class NodeStats(py_trees.visitors.VisitorBase):
             row["failures"] += 1
         elif behaviour.status == Status.RUNNING:
             row["running_time"] = round(row["running_time"] + self.period, 9)
-
-
-def _path(node: Behaviour) -> str:
-    names = []
-    current: Behaviour | None = node
-    while current is not None:
-        names.append(current.name)
-        current = current.parent
-    return "/".join(reversed(names))
 
 
 def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
@@ -225,8 +216,8 @@ def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
     failure = getattr(node, "failure", None)
     if failure:
         code, reason = failure
-        return _path(node), getattr(code, "value", code), reason
-    return _path(node), "FAILED", node.feedback_message or f"'{node.name}' returned FAILURE"
+        return node_path(node), code, reason
+    return node_path(node), "FAILED", node.feedback_message or f"'{node.name}' returned FAILURE"
 
 
 def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> RunResult:

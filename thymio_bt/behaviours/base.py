@@ -18,6 +18,7 @@ Example::
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any, Callable, ClassVar
@@ -29,8 +30,15 @@ from pydantic import BaseModel, ConfigDict, Field
 from ..robot import Entities, Pose, Robot
 
 
+_CODE = re.compile(r"[A-Z][A-Z0-9_]*")
+
+
 class FailureCode(str, Enum):
-    """Why a behaviour failed, in the style of Nav2's error codes."""
+    """Why a behaviour failed, in the style of Nav2's error codes.
+
+    These are the built-in codes; a plugin behaviour may fail with a code of its own, any
+    UPPER_SNAKE_CASE string (``self.fail("LINE_LOST", "...")``): reports carry codes as strings.
+    """
 
     TIMEOUT = "TIMEOUT"
     COLLISION = "COLLISION"
@@ -119,7 +127,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.params: Any = params
         self.ctx = ctx
         self.robot = ctx.robot
-        self.failure: tuple[FailureCode, str] | None = None
+        self.failure: tuple[str, str] | None = None
         self.extra: dict[str, Any] = {}
         self._refs = dict(blackboard_refs or {})
         self._reader = None
@@ -149,10 +157,14 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     def elapsed(self) -> float:
         return self.ctx.now() - self._start_time
 
-    def fail(self, code: FailureCode, reason: str) -> Status:
-        """Record why the behaviour fails and return FAILURE."""
-        self.failure = (code, reason)
-        self.feedback_message = f"{code.value}: {reason}"
+    def fail(self, code: FailureCode | str, reason: str) -> Status:
+        """Record why the behaviour fails (a :class:`FailureCode` or a plugin's own UPPER_SNAKE_CASE
+        code) and return FAILURE."""
+        text = code.value if isinstance(code, FailureCode) else code
+        if not _CODE.fullmatch(text):
+            raise ValueError(f"failure code {text!r} must be UPPER_SNAKE_CASE, e.g. LINE_LOST")
+        self.failure = (text, reason)
+        self.feedback_message = f"{text}: {reason}"
         return Status.FAILURE
 
     def initialise(self) -> None:
@@ -207,7 +219,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             return
         event: dict[str, Any] = {"name": self.yaml_name, "path": self.path, "status": new_status.name}
         if self.failure is not None:
-            event["code"], event["reason"] = self.failure[0].value, self.failure[1]
+            event["code"], event["reason"] = self.failure
         event.update(self.extra)
         event.update(snapshot(self.robot))
         self.ctx.events.emit(self.ctx.now(), "behaviour_end", **event)

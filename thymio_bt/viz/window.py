@@ -31,7 +31,8 @@ from typing import Any, Iterable
 from ..errors import UserError
 from ..maze import Maze
 from ..recording import Recording, _num
-from ..runner import Run, RunResult, StopRun, _path
+from ..behaviours.base import node_path
+from ..runner import Run, RunResult, StopRun
 from ..robot_model import COURSE
 from .plots import _outline, _rays
 
@@ -324,7 +325,7 @@ def _node_text(run: Run) -> str:
     if tip is None:
         return ""
     feedback = tip.feedback_message
-    return _path(tip) + (f" — {feedback}" if feedback else "")
+    return node_path(tip) + (f" — {feedback}" if feedback else "")
 
 
 class LiveView:
