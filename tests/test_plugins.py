@@ -53,3 +53,20 @@ def test_a_plugin_behaviour_fails_with_its_own_code(tmp_path):
     mission.write_text("maze: arena\nstart: centre\nplugins: [lost.py]\ntree: LoseLine\n")
     result = Run(load_mission(mission)).run()
     assert (result.status, result.code, result.reason) == ("FAILURE", "LINE_LOST", "no line under the robot")
+
+
+def test_a_plugin_behaviour_returning_no_status_fails_with_a_reason(tmp_path):
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    (tmp_path / "sloppy.py").write_text(
+        "from thymio_bt.behaviours import RobotBehaviour\n"
+        "class Sloppy(RobotBehaviour):\n"
+        "    '''Forgets to return a status.'''\n"
+        "    def step(self):\n"
+        "        pass\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [sloppy.py]\ntree: Sloppy\n")
+    result = Run(load_mission(mission)).run()
+    assert (result.status, result.code) == ("FAILURE", "FAILED")
+    assert result.reason == "Sloppy returned None, not a Status"

@@ -21,7 +21,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any, Callable, ClassVar
+from typing import Any, Callable, ClassVar, Iterator
 
 import py_trees
 from py_trees.common import Access, Status
@@ -148,6 +148,19 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         return Status.SUCCESS
 
     # ---------------------------------------------------------- machinery
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list: the same
+        initialise → update → stop sequence, about a third of the cost (the hot path of a run)."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        new_status = self.update()
+        if new_status.__class__ is not Status:        # a plugin's bug: fail the node, say why
+            new_status = self.fail(FailureCode.FAILED, f"{self.yaml_name} returned {new_status!r}, not a Status")
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
     @property
     def path(self) -> str:
         if self._path is None:
