@@ -93,7 +93,7 @@ def breakdown_in_process(repeats: int) -> dict:
     runs = []
     for _ in range(repeats + 1):
         run = Run(mission)
-        sim = run.sim
+        sim = run.backend
         tick = run.root.tick            # a generator: the runner consumes it, so time it consumed
         timed = {"tree.tick": _Timed(lambda tick=tick: iter(list(tick()))), "advance": _Timed(sim.advance),
                  "sensor refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
