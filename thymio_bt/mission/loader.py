@@ -19,7 +19,9 @@ from typing import Any, Mapping
 
 from pydantic import BaseModel, ValidationError
 
+from ..behaviours import ControlNode
 from ..errors import Problem, UserError, did_you_mean, type_name
+from ..fields import SpawnName, Unit, field_metadata, metadata, unit_of
 from ..maze import Maze, load_maze, resolve_maze
 from ..placement import placement_problem
 from ..robot import Pose
@@ -28,7 +30,6 @@ from ..sim.noise import NoiseConfig
 from ..units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
 from ..validation import problems_from
 from ..yamlio import MarkedDict, MarkedList, load_yaml
-from ..behaviours import ControlNode
 from .plan import Mission, NodePlan
 from .registry import Registry, default_registry
 
@@ -36,7 +37,6 @@ TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "se
             "robot", "backend", "parameters", "subtrees", "include", "plugins", "tree")
 SENSOR_MODELS = ("metres", "raw")
 INCLUDE_KEYS = ("description", "parameters", "subtrees", "include", "plugins")
-UNIT_KIND = {"m": "length", "rad": "angle", "m/s": "speed", "rad/s": "angular_speed", "s": "time"}
 MAX_DEPTH = 64
 #: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
 MAX_NODES = 20_000
@@ -721,9 +721,8 @@ class MissionLoader:
         return raw
 
     def field_value(self, field: Any, raw: Any, scope: _Scope, where: Where, path: str) -> Any:
-        """Convert one YAML value for a parameter field: units, $references, poses, spawn names."""
+        """Convert one YAML value for a parameter field: $references, then by the field's type."""
         annotation = field.annotation
-        unit = (field.json_schema_extra or {}).get("unit") if isinstance(field.json_schema_extra, dict) else None
         if isinstance(raw, str) and raw.startswith("$") and raw[1:].isidentifier() and not _is_number(annotation):
             try:
                 value = scope.get(raw[1:])
@@ -735,34 +734,39 @@ class MissionLoader:
             if not isinstance(value, (str, list)):
                 return value
             raw = value            # a text or list parameter (e.g. a spawn name): convert it like a literal
-        if _is_number(annotation):
-            if raw is None:
-                return raw     # an optional number left empty: pydantic says whether that is allowed
-            value = self.quantity(raw, scope, where, path, UNIT_KIND.get(unit or ""))
+        return self.convert(annotation, field_metadata(field), raw, scope, where, path)
+
+    def convert(self, annotation: Any, extra: list[Any], raw: Any, scope: _Scope, where: Where, path: str) -> Any:
+        """A YAML value as the type ``annotation`` wants it: numbers through the unit parser (in the
+        type's unit), tuples and lists element by element, spawn names for pose types; anything else
+        as written, for pydantic to check. The types (thymio_bt.fields) say everything: a new
+        parameter shape built from them needs no change here."""
+        meta = metadata(annotation, extra)
+        base = _strip_optional(annotation)
+        base = typing.get_args(base)[0] if typing.get_origin(base) is typing.Annotated else base
+        if raw is None:
+            return raw             # an optional value left empty: pydantic says whether that is allowed
+        if base in (float, int):
+            unit = next((m for m in meta if isinstance(m, Unit)), None)
+            value = self.quantity(raw, scope, where, path, unit.kind if unit else None)
             return _INVALID if value is None else value
-        if _is_tuple(annotation):
-            if isinstance(raw, str) and "," not in raw and self.maze is not None and len(typing.get_args(
-                    _strip_optional(annotation))) == 3:
+        origin, args = typing.get_origin(base), typing.get_args(base)
+        if origin is tuple:
+            if isinstance(raw, str) and "," not in raw and any(isinstance(m, SpawnName) for m in meta):
+                if self.maze is None:
+                    return raw
                 pose = self.pose(raw, where, path, scope, self.maze)
                 return _INVALID if pose is None else (pose.x, pose.y, pose.yaw)
             if isinstance(raw, str):
                 raw = raw.split(",")
-            if isinstance(raw, list):
-                kinds = [UNIT_KIND.get(unit or "")] * len(raw) if unit else ["length", "length", "angle"]
-                out = [self.quantity(v, scope, where, path, kinds[i] if i < len(kinds) else None)
-                       for i, v in enumerate(raw)]
-                return _INVALID if any(v is None for v in out) else tuple(out)
-        if _is_list_of_tuples(annotation) and isinstance(raw, list):
-            items = []
-            for i, item in enumerate(raw):
-                if not isinstance(item, list):
-                    self.problem("expected a list of [x, y] points", where, f"{path}[{i}]")
-                    return _INVALID
-                values = [self.quantity(v, scope, where, f"{path}[{i}]", UNIT_KIND.get(unit or "")) for v in item]
-                if any(v is None for v in values):
-                    return _INVALID
-                items.append(tuple(values))
-            return items
+            if isinstance(raw, list) and (len(args) == len(raw) or (len(args) == 2 and args[1] is Ellipsis)):
+                kinds = [args[0]] * len(raw) if args[1:] == (Ellipsis,) else list(args)
+                out = [self.convert(kind, [], item, scope, where, path) for kind, item in zip(kinds, raw)]
+                return _INVALID if any(v is _INVALID for v in out) else tuple(out)
+        if origin is list and isinstance(raw, list) and args:
+            out = [self.convert(args[0], [], item, scope, self.where_item(raw, i, where), f"{path}[{i}]")
+                   for i, item in enumerate(raw)]
+            return _INVALID if any(v is _INVALID for v in out) else out
         return raw
 
 
@@ -793,17 +797,6 @@ def _strip_optional(annotation: Any) -> Any:
 
 def _is_number(annotation: Any) -> bool:
     return _strip_optional(annotation) in (float, int)
-
-
-def _is_tuple(annotation: Any) -> bool:
-    base = _strip_optional(annotation)
-    base = typing.get_args(base)[0] if typing.get_origin(base) is typing.Annotated else base
-    return typing.get_origin(base) is tuple
-
-
-def _is_list_of_tuples(annotation: Any) -> bool:
-    base = _strip_optional(annotation)
-    return typing.get_origin(base) is list and any(typing.get_origin(a) is tuple for a in typing.get_args(base))
 
 
 def _is_number_text(text: str) -> bool:
@@ -840,7 +833,7 @@ def _range_hint(field: Any) -> str:
             value = getattr(meta, attr, None)
             if value is not None:
                 bounds.append(f"{sym} {value:g}" if isinstance(value, (int, float)) else f"{sym} {value}")
-    unit = (field.json_schema_extra or {}).get("unit", "") if isinstance(field.json_schema_extra, dict) else ""
+    unit = unit_of(field)
     return f"allowed: {' and '.join(bounds)}{(' ' + unit) if unit else ''}" if bounds else (field.description or "")
 
 
