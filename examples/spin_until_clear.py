@@ -11,13 +11,13 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
+from thymio_bt.fields import AngularSpeed
 
 
 class SpinUntilClearParams(BehaviourParams):
     """Turn until the front sensors see nothing."""
 
-    rate: float = Field(1.0, gt=0, le=4, description="turn rate, left positive",
-                        json_schema_extra={"unit": "rad/s"})
+    rate: AngularSpeed = Field(1.0, gt=0, le=4, description="turn rate, left positive")
 
 
 class SpinUntilClear(RobotBehaviour):

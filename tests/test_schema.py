@@ -19,7 +19,7 @@ from click.testing import CliRunner
 
 from thymio_bt.cli import main
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.loader import INCLUDE_KEYS
+from thymio_bt.mission.assemble import INCLUDE_KEYS
 from thymio_bt.mission.schema import mission_schema
 
 ROOT = Path(__file__).resolve().parents[1]

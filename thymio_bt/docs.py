@@ -8,6 +8,7 @@ import typing
 from typing import Any
 
 from .behaviours import ControlNode
+from .fields import unit_of
 
 
 def _type_name(annotation: Any) -> str:
@@ -47,8 +48,7 @@ def parameter_rows(cls: Any) -> list[tuple[str, str, str, str, str, str]]:
     """(name, type, unit, default, range, description) for each parameter."""
     rows = []
     for name, field in cls.Params.model_fields.items():
-        extra = field.json_schema_extra if isinstance(field.json_schema_extra, dict) else {}
-        rows.append((name, _type_name(field.annotation), str(extra.get("unit", "")), _default(field),
+        rows.append((name, _type_name(field.annotation), unit_of(field), _default(field),
                      _range(field), field.description or ""))
     return rows
 

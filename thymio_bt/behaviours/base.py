@@ -28,6 +28,7 @@ from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..robot import Entities, Pose, Robot
+from ..fields import Duration
 
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
@@ -79,8 +80,7 @@ class BehaviourParams(BaseModel):
     """Parameters every robot behaviour accepts."""
 
     model_config = ConfigDict(extra="forbid")
-    timeout: float = Field(60.0, gt=0, le=3600, description="time limit in simulated seconds",
-                           json_schema_extra={"unit": "s"})
+    timeout: Duration = Field(60.0, gt=0, le=3600, description="time limit in simulated seconds")
 
 
 def snapshot(robot: Robot) -> dict[str, Any]:

@@ -24,6 +24,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, Status
 from pydantic import Field, field_validator
 
+from ..fields import Duration
 from .control import RepeatUntil, SimTimeout
 from .control_node import ControlNode, ControlParams, refuse, whole
 
@@ -88,7 +89,7 @@ class Retry(ControlNode):
 
 
 class SecondsParams(ControlParams):
-    seconds: float = Field(gt=0, le=36000, description="simulated seconds", json_schema_extra={"unit": "s"})
+    seconds: Duration = Field(gt=0, le=36000, description="simulated seconds")
 
 
 class Timeout(ControlNode):

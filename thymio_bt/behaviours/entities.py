@@ -2,31 +2,19 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
-
 from py_trees.common import Status
-from pydantic import BeforeValidator, Field
+from pydantic import Field
 
+from ..fields import Duration, Pose2D
 from ..robot import ROBOT_ENTITY, Pose, Request, RequestState
-from ..units import UnitError, parse_pose
 from .base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
-
-
-def _pose(value: Any) -> Any:
-    if isinstance(value, str):
-        try:
-            return parse_pose(value)
-        except UnitError as exc:
-            raise ValueError(str(exc)) from None
-    return value
 
 
 class DeleteEntityParams(BehaviourParams):
     """Remove an entity from the world."""
 
     entity: str = Field(ROBOT_ENTITY, description="the entity's name")
-    timeout: float = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds",
-                           json_schema_extra={"unit": "s"})
+    timeout: Duration = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds")
 
 
 class DeleteEntity(RobotBehaviour):
@@ -63,10 +51,9 @@ class SpawnEntityParams(BehaviourParams):
     """Put a fresh robot at a pose."""
 
     entity: str = Field(ROBOT_ENTITY, description="the entity's name")
-    pose: Annotated[tuple[float, float, float], BeforeValidator(_pose)] = Field(
+    pose: Pose2D = Field(
         description="x, y (m) and yaw (rad) of base_link, e.g. [0.5, 0.3, pi/2] or a named spawn of the maze")
-    timeout: float = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds",
-                           json_schema_extra={"unit": "s"})
+    timeout: Duration = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds")
 
 
 class SpawnEntity(RobotBehaviour):

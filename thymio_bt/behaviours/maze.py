@@ -15,6 +15,7 @@ from py_trees.common import Access, Status
 from pydantic import Field, model_validator
 
 from ..robot import Pose, wrap_angle
+from ..fields import AngularSpeed, Duration, Length, Speed
 from ..robot_model import COURSE
 from .base import (BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour,
                    current_pose)
@@ -34,8 +35,7 @@ def side_ray(side: str) -> str:
 class WallAheadParams(BehaviourParams):
     """Is a wall ahead?"""
 
-    distance: float = Field(RANGE_MAX, gt=0, le=RANGE_MAX, description="closer than this counts",
-                            json_schema_extra={"unit": "m"})
+    distance: Length = Field(RANGE_MAX, gt=0, le=RANGE_MAX, description="closer than this counts")
     sensor: Literal["front_center", "front_center_left", "front_center_right"] = "front_center"
 
 
@@ -176,20 +176,15 @@ class WallFollowParams(BehaviourParams):
     """Follow one wall through a maze of square cells."""
 
     side: Side = Field("left", description="the wall to keep on the robot's side")
-    speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
-    turn_speed: float = Field(1.0, gt=0, le=4.0, description="fastest turn rate",
-                              json_schema_extra={"unit": "rad/s"})
-    cell: float = Field(0.2, ge=0.17, le=1.0, description="the maze's grid pitch (wall centre to centre)",
-                        json_schema_extra={"unit": "m"})
-    wall_thickness: float = Field(0.01, gt=0, le=0.05, description="the maze's wall thickness",
-                                  json_schema_extra={"unit": "m"})
+    speed: Speed = Field(0.1, gt=0, le=0.2, description="cruise speed")
+    turn_speed: AngularSpeed = Field(1.0, gt=0, le=4.0, description="fastest turn rate")
+    cell: Length = Field(0.2, ge=0.17, le=1.0, description="the maze's grid pitch (wall centre to centre)")
+    wall_thickness: Length = Field(0.01, gt=0, le=0.05, description="the maze's wall thickness")
     until: Literal["exit", "goal"] = Field("exit", description="stop when leaving the maze's bounding "
                                            "box, or on reaching the goal")
     goal: tuple[float, float] | None = Field(None, description="goal position [x, y] for until: goal")
-    goal_radius: float = Field(0.05, gt=0, le=1.0, description="how close to the goal counts",
-                               json_schema_extra={"unit": "m"})
-    timeout: float = Field(600.0, gt=0, le=36000, description="time limit in simulated seconds",
-                           json_schema_extra={"unit": "s"})
+    goal_radius: Length = Field(0.05, gt=0, le=1.0, description="how close to the goal counts")
+    timeout: Duration = Field(600.0, gt=0, le=36000, description="time limit in simulated seconds")
 
     @model_validator(mode="after")
     def _goal_given(self) -> "WallFollowParams":

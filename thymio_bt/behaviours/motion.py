@@ -14,6 +14,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from ..robot import SENSOR_NAMES, wrap_angle
+from ..fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
 from ..robot_model import COURSE
 from .base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
 
@@ -39,22 +40,18 @@ def approach_speed(remaining: float, cruise: float, gain: float, minimum: float,
 class MoveUntilWallParams(BehaviourParams):
     """Drive forward until a proximity sensor reads ``distance``."""
 
-    speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
-    distance: float = Field(0.05, ge=COURSE.range_min, le=COURSE.range_max, description="stop when the sensor reads this",
-                            json_schema_extra={"unit": "m"})
+    speed: Speed = Field(0.1, gt=0, le=0.2, description="cruise speed")
+    distance: Length = Field(0.05, ge=COURSE.range_min, le=COURSE.range_max, description="stop when the sensor reads this")
     sensor: SensorName = Field("front_center", description="the sensor that watches the wall")
-    approach_gain: float = Field(5.0, gt=0, le=10, description="slow-down gain once the wall is in range",
-                                 json_schema_extra={"unit": "1/s"})
-    min_speed: float = Field(0.005, gt=0, le=0.05, description="slowest approach speed",
-                             json_schema_extra={"unit": "m/s"})
-    tolerance: float = Field(0.0005, gt=0, le=0.01, description="stop when within this of distance",
-                             json_schema_extra={"unit": "m"})
+    approach_gain: PerSecond = Field(5.0, gt=0, le=10, description="slow-down gain once the wall is in range")
+    min_speed: Speed = Field(0.005, gt=0, le=0.05, description="slowest approach speed")
+    tolerance: Length = Field(0.0005, gt=0, le=0.01, description="stop when within this of distance")
     hold_heading: bool = Field(True, description="steer to keep the heading the robot had at the start")
     centre: bool = Field(False, description="steer to the middle of the corridor while both ±38° rays see its "
                          "side walls and no wall is ahead (cancels the lateral drift odometry errors build "
                          "up between turns)")
-    centre_gain: float = Field(5.0, gt=0, le=50, description="steering per metre of difference between the "
-                               "left and right ±38° readings", json_schema_extra={"unit": "rad/s/m"})
+    centre_gain: PerSecondPerMetre = Field(5.0, gt=0, le=50, description="steering per metre of difference between the "
+                               "left and right ±38° readings")
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
@@ -128,15 +125,11 @@ def heading_hold(behaviour: RobotBehaviour, heading: float, gain: float = 3.0) -
 class MoveDistanceParams(BehaviourParams):
     """Drive straight by odometry; a negative distance drives backwards."""
 
-    distance: float = Field(description="signed distance along the heading at the start",
-                            json_schema_extra={"unit": "m"}, ge=-10, le=10)
-    speed: float = Field(0.1, gt=0, le=0.2, description="cruise speed", json_schema_extra={"unit": "m/s"})
-    approach_gain: float = Field(5.0, gt=0, le=10, description="slow-down gain near the goal",
-                                 json_schema_extra={"unit": "1/s"})
-    min_speed: float = Field(0.005, gt=0, le=0.05, description="slowest approach speed",
-                             json_schema_extra={"unit": "m/s"})
-    tolerance: float = Field(0.0005, gt=0, le=0.01, description="done when within this of the goal",
-                             json_schema_extra={"unit": "m"})
+    distance: Length = Field(description="signed distance along the heading at the start", ge=-10, le=10)
+    speed: Speed = Field(0.1, gt=0, le=0.2, description="cruise speed")
+    approach_gain: PerSecond = Field(5.0, gt=0, le=10, description="slow-down gain near the goal")
+    min_speed: Speed = Field(0.005, gt=0, le=0.05, description="slowest approach speed")
+    tolerance: Length = Field(0.0005, gt=0, le=0.01, description="done when within this of the goal")
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
@@ -177,19 +170,15 @@ class MoveDistance(RobotBehaviour):
 class TurnAngleParams(BehaviourParams):
     """Turn in place by a relative angle."""
 
-    angle: float = Field(description="relative angle, left positive (may come from the blackboard)",
-                         json_schema_extra={"unit": "rad"}, ge=-2 * math.pi, le=2 * math.pi)
+    angle: Angle = Field(description="relative angle, left positive (may come from the blackboard)", ge=-2 * math.pi, le=2 * math.pi)
     mode: Literal["odometry", "rear_sensors"] = Field(
         "odometry", description="end by odometry, or when the two rear rays read equal")
-    speed: float = Field(1.0, gt=0, le=4.3, description="fastest turn rate",
-                         json_schema_extra={"unit": "rad/s"})
-    tolerance: float = Field(0.0005, gt=0, le=0.2,
+    speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="fastest turn rate")
+    tolerance: Angle = Field(0.0005, gt=0, le=0.2,
                              description="odometry: done within this angle; rear_sensors: "
-                                         "done when the rear rays differ by less than spacing*tan(tolerance)",
-                             json_schema_extra={"unit": "rad"})
-    snap: float = Field(0.0, ge=0, le=math.pi, description="if > 0, round the target heading to a multiple "
-                        "of this (e.g. 90deg) so errors do not add up turn after turn",
-                        json_schema_extra={"unit": "rad"})
+                                         "done when the rear rays differ by less than spacing*tan(tolerance)")
+    snap: Angle = Field(0.0, ge=0, le=math.pi, description="if > 0, round the target heading to a multiple "
+                        "of this (e.g. 90deg) so errors do not add up turn after turn")
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
@@ -269,9 +258,8 @@ class Stop(RobotBehaviour):
 class WaitParams(BehaviourParams):
     """Wait in simulated time."""
 
-    seconds: float = Field(description="how long to wait", ge=0, le=3600, json_schema_extra={"unit": "s"})
-    timeout: float = Field(3600.0, gt=0, le=3600, description="time limit in simulated seconds",
-                           json_schema_extra={"unit": "s"})
+    seconds: Duration = Field(description="how long to wait", ge=0, le=3600)
+    timeout: Duration = Field(3600.0, gt=0, le=3600, description="time limit in simulated seconds")
 
 
 class Wait(RobotBehaviour):

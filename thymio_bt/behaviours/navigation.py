@@ -17,6 +17,7 @@ from py_trees.common import Access, Status
 from pydantic import Field
 
 from ..pid import PID
+from ..fields import Angle, AngularSpeed, Duration, Length, Point, Speed
 from ..robot import Pose, wrap_angle
 from .base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
 from .motion import approach_speed
@@ -25,7 +26,7 @@ FRONT = ("front_left", "front_center_left", "front_center", "front_center_right"
 #: The report's simulation thresholds for the 5 front sensors (Table 2), metres.
 REPORT_THRESHOLDS = (0.025, 0.03, 0.03, 0.03, 0.025)
 
-Thresholds = tuple[float, float, float, float, float]
+Thresholds = tuple[Length, Length, Length, Length, Length]
 
 
 class PIDGains(BehaviourParams):
@@ -37,15 +38,12 @@ class PIDGains(BehaviourParams):
     distance_kp: float = Field(2.0, ge=0, le=100, description="distance PID: proportional gain")
     distance_ki: float = Field(0.0, ge=0, le=100, description="distance PID: integral gain")
     distance_kd: float = Field(0.0, ge=0, le=100, description="distance PID: derivative gain")
-    max_speed: float = Field(0.05, gt=0, le=0.2, description="forward speed limit", json_schema_extra={"unit": "m/s"})
-    max_turn: float = Field(math.pi, gt=0, le=4.3, description="turn rate limit", json_schema_extra={"unit": "rad/s"})
-    turn_in_place_above: float = Field(math.pi / 90, gt=0, le=math.pi,
-                                       description="turn in place while the heading error exceeds this",
-                                       json_schema_extra={"unit": "rad"})
-    tolerance: float = Field(0.01, gt=0, le=0.5, description="a goal counts as reached within this distance",
-                             json_schema_extra={"unit": "m"})
-    timeout: float = Field(300.0, gt=0, le=36000, description="time limit in simulated seconds",
-                           json_schema_extra={"unit": "s"})
+    max_speed: Speed = Field(0.05, gt=0, le=0.2, description="forward speed limit")
+    max_turn: AngularSpeed = Field(math.pi, gt=0, le=4.3, description="turn rate limit")
+    turn_in_place_above: Angle = Field(math.pi / 90, gt=0, le=math.pi,
+                                       description="turn in place while the heading error exceeds this")
+    tolerance: Length = Field(0.01, gt=0, le=0.5, description="a goal counts as reached within this distance")
+    timeout: Duration = Field(300.0, gt=0, le=36000, description="time limit in simulated seconds")
 
 
 class _Navigator:
@@ -74,7 +72,7 @@ class _Navigator:
 class GoToPoseParams(PIDGains):
     """Drive to a point with the report's two PID controllers."""
 
-    goal: tuple[float, float] = Field(description="the point [x, y] to reach", json_schema_extra={"unit": "m"})
+    goal: Point = Field(description="the point [x, y] to reach")
 
 
 class GoToPose(RobotBehaviour):
@@ -105,8 +103,7 @@ class GoToPose(RobotBehaviour):
 class FollowWaypointsParams(PIDGains):
     """Visit waypoints in order with the report's PID controllers."""
 
-    waypoints: list[tuple[float, float]] = Field(min_length=1, description="the points [[x, y], ...] to visit",
-                                                 json_schema_extra={"unit": "m"})
+    waypoints: list[Point] = Field(min_length=1, description="the points [[x, y], ...] to visit")
     key: str = Field("waypoint", description="blackboard key holding the index of the next waypoint, so the "
                      "behaviour resumes where it was after an interruption (e.g. by obstacle avoidance)")
 
@@ -200,8 +197,7 @@ def _blocked(scan: dict[str, float], thresholds: Thresholds) -> bool:
 class ObstacleAheadParams(BehaviourParams):
     """Is an obstacle closer than a threshold to any front sensor?"""
 
-    thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right",
-                                   json_schema_extra={"unit": "m"})
+    thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right")
 
 
 class ObstacleAhead(ConditionBehaviour):
@@ -222,10 +218,9 @@ class ObstacleAhead(ConditionBehaviour):
 
 
 class _CounterParams(BehaviourParams):
-    thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right",
-                                   json_schema_extra={"unit": "m"})
+    thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right")
     counter: str = Field("avoid_turn", description="blackboard key of the angle turned since avoidance began")
-    speed: float = Field(1.0, gt=0, le=4.3, description="turn rate", json_schema_extra={"unit": "rad/s"})
+    speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="turn rate")
 
 
 class _CountingTurn(RobotBehaviour):
@@ -256,9 +251,8 @@ class TurnUntilClearParams(_CounterParams):
     """turning_left: turn until no front sensor is below its threshold."""
 
     direction: Literal["left", "right"] = Field("left", description="which way to turn")
-    margin: float = Field(0.0, ge=0, le=math.pi / 2, description="keep turning this much more once clear, so "
-                          "the body (which the angled sensors do not see) clears a corner too",
-                          json_schema_extra={"unit": "rad"})
+    margin: Angle = Field(0.0, ge=0, le=math.pi / 2, description="keep turning this much more once clear, so "
+                          "the body (which the angled sensors do not see) clears a corner too")
 
 
 class TurnUntilClear(_CountingTurn):
@@ -300,8 +294,7 @@ class TurnUntilClear(_CountingTurn):
 class TurnBackParams(_CounterParams):
     """turning_right: turn the Pledge counter back to zero."""
 
-    tolerance: float = Field(0.01, gt=0, le=0.5, description="back on course within this angle",
-                             json_schema_extra={"unit": "rad"})
+    tolerance: Angle = Field(0.01, gt=0, le=0.5, description="back on course within this angle")
 
 
 class TurnBack(_CountingTurn):

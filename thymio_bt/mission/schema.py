@@ -10,6 +10,7 @@ import copy
 from typing import Any
 
 from ..behaviours import ControlNode
+from ..fields import unit_of
 from ..robot_model import ROBOTS
 from ..sim.noise import NoiseConfig
 from .registry import Registry, default_registry
@@ -45,7 +46,7 @@ def _parameters(model: Any, loosen: Any) -> tuple[dict[str, Any], list[str]]:
     schema = model.model_json_schema()
     props = {name: loosen(p) for name, p in schema.get("properties", {}).items()}
     for name, field in model.model_fields.items():
-        unit = (field.json_schema_extra or {}).get("unit") if isinstance(field.json_schema_extra, dict) else None
+        unit = unit_of(field)
         if unit and name in props:
             props[name]["description"] = f"{props[name].get('description', '')} [{unit}]".strip()
     props["name"] = {"type": "string", "description": "the node's name in the tree"}

@@ -1,0 +1,155 @@
+"""What every pass of the mission loader shares: the problems found so far, where each value was
+written (file:line:col from the YAML marks), and how a number with a unit or a pose is read.
+
+The loader reports every problem of a mission at once, so a pass never stops at the first: it
+records a :class:`Problem` and goes on (see :mod:`thymio_bt.mission.loader`).
+"""
+
+from __future__ import annotations
+
+import typing
+from typing import Any, Mapping
+
+from ..errors import Problem, did_you_mean, type_name
+from ..maze import Maze
+from ..robot import Pose
+from ..units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
+from ..yamlio import MarkedDict, MarkedList
+
+Where = tuple[str, int, int]
+
+
+class Scope:
+    """Parameter values visible at one place: mission parameters, overlaid by a subtree's."""
+
+    def __init__(self, values: Mapping[str, Any], parent: "Scope | None" = None) -> None:
+        self.values = dict(values)
+        self.parent = parent
+
+    def get(self, name: str) -> Any:
+        if name in self.values:
+            return self.values[name]
+        if self.parent is not None:
+            return self.parent.get(name)
+        raise KeyError(name)
+
+    def names(self) -> set[str]:
+        return set(self.values) | (self.parent.names() if self.parent else set())
+
+
+class Checker:
+    """Collects :class:`Problem` s for one mission load and reads values where they were written."""
+
+    def __init__(self, problems: list[Problem]) -> None:
+        self.problems = problems
+
+    def problem(self, message: str, where: Where, path: str = "", hint: str = "") -> None:
+        self.problems.append(Problem(message, where[0], where[1], where[2], path, hint))
+
+    @staticmethod
+    def where_key(data: Any, key: Any, file: str) -> Where:
+        if isinstance(data, MarkedDict) and key in data.marks:
+            return (file, *data.marks[key])
+        return (file, *getattr(data, "mark", (0, 0)))
+
+    @staticmethod
+    def where_value(data: Any, key: Any, file: str) -> Where:
+        if isinstance(data, MarkedDict) and key in data.value_marks:
+            return (file, *data.value_marks[key])
+        if isinstance(data, MarkedList) and isinstance(key, int) and key < len(data.marks):
+            return (file, *data.marks[key])
+        return (file, *getattr(data, "mark", (0, 0)))
+
+    @staticmethod
+    def where_item(items: Any, index: int, where: Where) -> Where:
+        """The place of ``items[index]`` when the list carries marks, else ``where`` (the list's)."""
+        if isinstance(items, MarkedList) and index < len(items.marks):
+            return (where[0], *items.marks[index])
+        return where
+
+    def check_keys(self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str,
+                   what: str) -> None:
+        allowed = list(allowed)
+        for key in data:
+            if key not in allowed:
+                self.problem(f"unknown key '{key}' in {what}", self.where_key(data, key, file),
+                             path, did_you_mean(str(key), allowed))
+
+    def quantity(self, value: Any, scope: Scope, where: Where, path: str, kind: str | None) -> float | None:
+        """Parse a number-with-unit or expression in ``scope``; None (and a problem) when it fails."""
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            self.problem(f"expected a number, got {type_name(value)}", where, path,
+                         "write a number, optionally with a unit: 0.1, 10cm/s, pi/2, 90deg")
+            return None
+
+        def resolve(name: str) -> Quantity:
+            try:
+                raw = scope.get(name)
+            except KeyError:
+                raise UnitError(f"unknown parameter '${name}'", _parameter_hint(name, scope)) from None
+            if isinstance(raw, Quantity):
+                return raw
+            if isinstance(raw, (int, float)) and not isinstance(raw, bool):
+                return Quantity(float(raw))
+            raise UnitError(f"parameter '${name}' is {raw!r}, not a number")
+
+        try:
+            q = parse_value(value, resolve)
+        except UnitError as exc:
+            self.problem(str(exc), where, path, exc.hint or "numbers may carry a unit (5cm, 90deg, 0.1 m/s) "
+                         "and use + - * / ( ) pi and $parameters")
+            return None
+        error = check_kind(q, kind)
+        if error:
+            self.problem(error, where, path, kind_hint(kind))
+            return None
+        return q.value
+
+    def parameter_value(self, value: Any, where: Where, path: str) -> Any:
+        """A mission or subtree parameter default: a quantity when it parses, else the raw value."""
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return Quantity(float(value))
+        if isinstance(value, str):
+            try:
+                return parse_value(value)
+            except UnitError:
+                return value
+        if isinstance(value, bool):
+            return value
+        self.problem(f"a parameter must be a number, a string or true/false, got {type_name(value)}",
+                     where, path, "e.g. cruise: 10cm/s, side: pi/2, turn: bb:turn_angle or enabled: true")
+        return None
+
+    def pose(self, raw: Any, where: Where, path: str, scope: Scope, maze: Maze | None) -> Pose | None:
+        """A pose from ``[x, y, yaw]``, ``"x,y,yaw"`` or the name of a spawn of the maze."""
+        if isinstance(raw, str) and "," not in raw:
+            if maze is None:
+                return None
+            if raw in maze.spawns:
+                return maze.spawns[raw].pose()
+            self.problem(f"maze '{maze.name}' has no spawn named '{raw}'", where, path,
+                         did_you_mean(raw, maze.spawns) if maze.spawns else "give [x, y, yaw] instead")
+            return None
+        if isinstance(raw, str):
+            try:
+                return Pose(*parse_pose(raw))
+            except UnitError as exc:
+                self.problem(str(exc), where, path)
+                return None
+        if not isinstance(raw, list) or len(raw) != 3:
+            spawns = f", or one of the maze's spawns: {', '.join(maze.spawns)}" if maze and maze.spawns else ""
+            self.problem("a pose is [x, y, yaw] or the name of a maze spawn", where, path,
+                         "e.g. [0.5, 0.3, pi/2] or [50cm, 30cm, 90deg]" + spawns)
+            return None
+        parts = [self.quantity(v, scope, self.where_item(raw, i, where), path, kind)
+                 for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle")))]
+        if any(p is None for p in parts):
+            return None
+        return Pose(*parts)  # type: ignore[arg-type]
+
+
+def _parameter_hint(name: str, scope: Scope) -> str:
+    names = scope.names()
+    if not names:
+        return "no parameters are defined here: declare it under 'parameters:'"
+    return did_you_mean(name, names)
