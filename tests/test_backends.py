@@ -1,5 +1,6 @@
 """Backends by name (--backend NAME, --backend-opt, a mission's backend: block) and robot models (--robot)."""
 
+import math
 import subprocess
 import sys
 import textwrap
@@ -94,3 +95,39 @@ def test_cli_backend_errors_exit_2_without_traceback():
         done = subprocess.run([sys.executable, "-m", "thymio_bt.cli", "run", "missions/square.yaml", *args],
                               capture_output=True, text=True)
         assert done.returncode == 2 and "Traceback" not in done.stderr and done.stderr.startswith("error:"), args
+
+
+def test_the_backend_base_serves_requests_through_two_hooks():
+    from thymio_bt.robot import Backend, Pose, RequestState
+
+    class Tiny(Backend):
+        """A backend with one robot slot: just enough to check the request loop."""
+
+        def __init__(self):
+            super().__init__()
+            self.present, self.placed = False, []
+
+        def _remove(self, name):
+            if not self.present:
+                return f"no entity named '{name}'"
+            self.present = False
+            return None
+
+        def _place_entity(self, name, pose):
+            self.present = True
+            self.placed.append(pose)
+            return None
+
+        def spawn_problem(self, name, pose):
+            return "taken" if self.present else None
+
+        drive = exists = proximity = pose = velocity = command = time = true_pose = advance = None
+
+    backend = Tiny()
+    first, again = backend.request_spawn("thymio", Pose(1, 2, 0)), backend.request_spawn("thymio", Pose(3, 4, 0))
+    gone, missing = backend.request_delete("thymio"), backend.request_delete("thymio")
+    backend.serve_requests()
+    assert (first.state, again.state, gone.state, missing.state) == (
+        RequestState.SUCCEEDED, RequestState.FAILED, RequestState.SUCCEEDED, RequestState.FAILED)
+    assert again.reason == "taken" and missing.reason == "no entity named 'thymio'"
+    assert backend.placed == [Pose(1, 2, 0)] and backend.collisions == [] and backend.min_clearance == math.inf

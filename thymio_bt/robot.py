@@ -141,6 +141,10 @@ class Backend(Robot, Entities):
     Besides :class:`Robot` and :class:`Entities`, the runner needs to let time pass between ticks
     (instantly in a simulation, by waiting on a real robot), a best-known pose for the report, and
     what the backend knows of contacts with walls (a real Thymio has no bumper: nothing).
+
+    The base queues entity requests and serves them (:meth:`serve_requests`, from :meth:`advance`):
+    a backend only says how to remove and place a robot (:meth:`_remove`, :meth:`_place_entity`),
+    and keeps ``collisions`` and ``min_clearance`` up to date where it can measure them.
     """
 
     #: the entity name of the robot
@@ -149,8 +153,13 @@ class Backend(Robot, Entities):
     collisions: list
     #: the smallest hull-to-wall gap so far in metres (inf when unknown)
     min_clearance: float = math.inf
-    #: entity requests not yet served; :meth:`advance` serves them
+    #: entity requests not yet served; :meth:`serve_requests` serves them
     _requests: list[Request]
+
+    def __init__(self) -> None:
+        self._requests = []
+        self.collisions = []
+        self.min_clearance = math.inf
 
     def request_delete(self, name: str) -> Request:
         request = Request("delete", name)
@@ -161,6 +170,28 @@ class Backend(Robot, Entities):
         request = Request("spawn", name, pose)
         self._requests.append(request)
         return request
+
+    def serve_requests(self) -> None:
+        """Complete the queued requests in order, each SUCCEEDED or FAILED with a reason."""
+        pending, self._requests = self._requests, []
+        for request in pending:
+            if request.kind == "delete":
+                problem = self._remove(request.entity)
+            else:
+                assert request.pose is not None
+                problem = self.spawn_problem(request.entity, request.pose) or self._place_entity(
+                    request.entity, request.pose)
+            request.reason = problem
+            request.state = RequestState.FAILED if problem else RequestState.SUCCEEDED
+
+    @abstractmethod
+    def _remove(self, name: str) -> str | None:
+        """Remove entity ``name``; why it cannot be (e.g. no such entity), or None when done."""
+
+    @abstractmethod
+    def _place_entity(self, name: str, pose: Pose) -> str | None:
+        """Put a fresh robot ``name`` at ``pose`` (already checked by :meth:`spawn_problem`); why
+        it could not be (e.g. an operator refused), or None when done."""
 
     @abstractmethod
     def advance(self, duration: float) -> None:

@@ -41,7 +41,7 @@ from typing import Any, Callable
 
 from ..calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from ..errors import Problem, UserError
-from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Request, RequestState, Scan, Twist
+from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
 from ..robot_model import COURSE, integrate_arc
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
@@ -187,6 +187,7 @@ class ThymioRobot(Backend):
                  robot_name: str = ROBOT_ENTITY, clock: Callable[[], float] = time.monotonic,
                  sleep: Callable[[float], None] = time.sleep, ask: Callable[[str], str] = input,
                  say: Callable[[str], None] = print) -> None:
+        super().__init__()
         self.node = node
         self.config = config or RealConfig()
         self.robot_name = robot_name
@@ -196,17 +197,13 @@ class ThymioRobot(Backend):
         self._deadline = 0.0                    # backend time the current tick ends at
         self._present = False
         self._closed = False
-        self._requests: list[Request] = []
         self._cmd = Twist()
         self._raw: dict[str, int] | None = None
         self._scan: dict[str, float] | None = None
         self._wheels = (0.0, 0.0)               # latest measured wheel speeds, m/s
         self._read_at = 0.0                     # backend time of that measurement
         self._axle = (0.0, 0.0, 0.0)            # odometry of the axle centre: x, y, yaw
-        #: no bumper: the runner's collision events and the behaviours' COLLISION failures never fire
-        self.collisions: list[Any] = []
-        #: no ground truth: the clearance to walls is unknown
-        self.min_clearance = math.inf
+        # no bumper: collisions stay empty (COLLISION never fires); no ground truth: min_clearance stays inf
         node.set_motors(0, 0)
         if spawn is not None:
             self._place(spawn)
@@ -303,7 +300,7 @@ class ThymioRobot(Backend):
             self._sleep(lag)
         if self._present:
             self._read()
-        self._serve_requests()
+        self.serve_requests()
 
     def _read(self) -> None:
         """Integrate odometry since the last reading, then take the proximity readings.
@@ -343,30 +340,19 @@ class ThymioRobot(Backend):
         self._read_at = self._read_wheels()
         self._read_prox()
 
-    def _serve_requests(self) -> None:
-        pending, self._requests = self._requests, []
-        for request in pending:
-            if request.kind == "delete":
-                if request.entity != self.robot_name or not self._present:
-                    known = self.robot_name if self._present else "none"
-                    request.reason = f"no entity named '{request.entity}' (existing: {known})"
-                    request.state = RequestState.FAILED
-                    continue
-                self.node.set_motors(0, 0)
-                self._present, self._cmd = False, Twist()
-                self._say(f"[thymio-bt] '{request.entity}' deleted: motors stopped, the robot may stay where it is")
-                request.state = RequestState.SUCCEEDED
-                continue
-            assert request.pose is not None
-            problem = self.spawn_problem(request.entity, request.pose)
-            if problem is None:
-                problem = self._operator_places(request.pose)
-            if problem:
-                request.reason = problem
-                request.state = RequestState.FAILED
-                continue
-            self._place(request.pose)
-            request.state = RequestState.SUCCEEDED
+    def _remove(self, name: str) -> str | None:
+        if name != self.robot_name or not self._present:
+            return f"no entity named '{name}' (existing: {self.robot_name if self._present else 'none'})"
+        self.node.set_motors(0, 0)
+        self._present, self._cmd = False, Twist()
+        self._say(f"[thymio-bt] '{name}' deleted: motors stopped, the robot may stay where it is")
+        return None
+
+    def _place_entity(self, name: str, pose: Pose) -> str | None:
+        problem = self._operator_places(pose)
+        if problem is None:
+            self._place(pose)
+        return problem
 
     def _operator_places(self, pose: Pose) -> str | None:
         """Ask the operator to put the robot at ``pose``; the clock is paused while they do."""

@@ -30,7 +30,7 @@ import pymunk
 from ..calibration import RawProximityModel, raw_scan_to_metres
 from ..maze import Maze
 from ..placement import convex_overlap, placement_problem
-from ..robot import ROBOT_ENTITY, Backend, Pose, Request, RequestState, Scan, Twist
+from ..robot import ROBOT_ENTITY, Backend, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .fastpath import RayCaster, stepper
 from .noise import NoiseConfig, NoiseSource
@@ -142,6 +142,7 @@ class Simulation(Backend):
     def __init__(self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None,
                  robot_name: str = ROBOT_ENTITY) -> None:
         self.maze = maze
+        super().__init__()
         self.config = config or SimConfig()
         self.model = self.config.robot
         self._hull = _hull_tables(self.model.hull, self.model.axle_x)
@@ -181,14 +182,11 @@ class Simulation(Backend):
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
-        self._requests: list[Request] = []
         self._cmd = Twist()
         self._applied = (0.0, 0.0)
         self._scan: dict[str, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._contacts = 0
-        self.collisions: list[Collision] = []
-        self.min_clearance = math.inf
         self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
         reach = self.model.range_max
         self._rays = [(s.name, (s.x, s.y), (s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw)))
@@ -275,7 +273,7 @@ class Simulation(Backend):
             self._steps += 1
             if entity is not None and self._steps % self._sensor_every == 0:
                 self._refresh_sensors(entity)
-        self._serve_requests()
+        self.serve_requests()
 
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
@@ -415,29 +413,18 @@ class Simulation(Backend):
             self._applied = (0.0, 0.0)
             self._refresh_sensors(entity)
 
-    def _serve_requests(self) -> None:
-        pending, self._requests = self._requests, []
-        for request in pending:
-            if request.kind == "delete":
-                entity = self._entities.pop(request.entity, None)
-                if entity is None:
-                    known = ", ".join(sorted(self._entities)) or "none"
-                    request.reason = f"no entity named '{request.entity}' (existing: {known})"
-                    request.state = RequestState.FAILED
-                    continue
-                entity.remove(self.space)
-                if request.entity == self.robot_name:
-                    self._scan, self._cmd, self._contacts = None, Twist(), 0
-                request.state = RequestState.SUCCEEDED
-            else:
-                assert request.pose is not None
-                problem = self.spawn_problem(request.entity, request.pose)
-                if problem:
-                    request.reason = problem
-                    request.state = RequestState.FAILED
-                    continue
-                self._add_robot(request.entity, request.pose)
-                request.state = RequestState.SUCCEEDED
+    def _remove(self, name: str) -> str | None:
+        entity = self._entities.pop(name, None)
+        if entity is None:
+            return f"no entity named '{name}' (existing: {', '.join(sorted(self._entities)) or 'none'})"
+        entity.remove(self.space)
+        if name == self.robot_name:
+            self._scan, self._cmd, self._contacts = None, Twist(), 0
+        return None
+
+    def _place_entity(self, name: str, pose: Pose) -> str | None:
+        self._add_robot(name, pose)
+        return None
 
     # ------------------------------------------------------------ collisions
     def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
