@@ -6,7 +6,7 @@ import pytest
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
-from thymio_bt.recording import read_log
+from thymio_bt.logs import read_log
 
 pytest.importorskip("matplotlib")
 PIL = pytest.importorskip("PIL.Image")

@@ -176,7 +176,7 @@ def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif:
 def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | None, view: bool,
            speedup: float | None) -> None:
     """Redraw a run from its --log FILE.jsonl without re-running it."""
-    from .recording import read_log
+    from .logs import read_log
 
     try:
         recording = read_log(log)

@@ -30,6 +30,8 @@ def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
     children = [build_tree(child, ctx, registry, substitutions, path) for child in plan.children]
     cls = registry[plan.behaviour if plan.kind == "behaviour" else plan.kind]
     if issubclass(cls, ControlNode):
-        return cls.build(plan.name, plan.params, children, ctx)
+        node = cls.build(plan.name, plan.params, children, ctx)
+        node.yaml_name = cls.yaml_name            # what logs and exports call it
+        return node
     assert plan.params is not None
     return cls(plan.name, plan.params, ctx, blackboard_refs=plan.blackboard_refs)

@@ -30,7 +30,8 @@ from typing import Any, Iterable
 
 from ..errors import UserError
 from ..maze import Maze
-from ..recording import Recording, _num
+from ..logs.records import number
+from ..recording import Recording
 from ..behaviours.base import node_path
 from ..runner import Run, RunResult, StopRun
 from ..robot_model import COURSE
@@ -341,7 +342,7 @@ class LiveView:
         pose = sim.true_pose()
         scan = sim.proximity() or {}
         self.viewer.show(Frame(sim.time(), None if pose is None else pose.as_dict(),
-                               {name: _num(value) for name, value in scan.items()}, _node_text(run)))
+                               {name: number(value) for name, value in scan.items()}, _node_text(run)))
 
     def finish(self, result: RunResult) -> None:
         """Show the run's outcome; with ``hold``, wait until the window is closed."""
@@ -354,7 +355,7 @@ def live_hook(run: Run, speedup: float, **options: Any) -> LiveView:
 
 
 def replay(recording: Recording, speedup: float, **options: Any) -> Viewer:
-    """Show a recorded run (e.g. from :func:`~thymio_bt.recording.read_log`) at ``speedup`` times
+    """Show a recorded run (e.g. from :func:`~thymio_bt.logs.read_log`) at ``speedup`` times
     real time; closing the window just ends the replay. Returns the (closed) viewer."""
     points = [(s["pose"]["x"], s["pose"]["y"]) for s in recording.samples if s["pose"]]
     viewer = Viewer(recording.maze, speedup, title=f"thymio-bt replay: {recording.mission}", include=points, **options)

@@ -1,0 +1,102 @@
+"""What a run log holds, whatever its file format: a header, one record per tick, an end.
+
+The header carries the mission, the maze and the tree itself (each node with a BT.CPP-style
+pre-order uid, 1 = the root), so a log is self-contained: a replay, a Groot2 log or a rosbag2
+export needs nothing else. Times are simulated seconds, poses base_link in the world frame.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Iterator, TypedDict
+
+from py_trees.behaviour import Behaviour
+
+from ..behaviours.base import node_path
+
+#: a node status in one letter, as logs store it
+STATUS_LETTER = {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}
+
+
+class TreeNode(TypedDict):
+    """One node of the logged tree: ``kind`` is its YAML type (``MoveUntilWall``, ``sequence``...)."""
+
+    uid: int
+    path: str
+    name: str
+    kind: str
+    parent: int | None
+
+
+class LogHeader(TypedDict):
+    version: int
+    mission: str
+    tick_hz: float
+    seed: int
+    start: dict[str, float]
+    maze: dict[str, Any]
+    tree: list[TreeNode]
+
+
+class TickRecord(TypedDict, total=False):
+    """The robot and the tree after one tick (``nodes`` and ``bb`` only where the format keeps them)."""
+
+    t: float
+    tick: int
+    pose: dict[str, float] | None
+    cmd: list[float]
+    vel: list[float]
+    prox: dict[str, float | None] | None
+    running: list[str]
+    nodes: dict[str, str]
+    bb: dict[str, Any]
+
+
+class LogEnd(TypedDict, total=False):
+    status: str
+    reason: str | None
+    code: str | None
+    failed_path: str | None
+    sim_time: float
+    final_pose: dict[str, float] | None
+    collisions: int
+    events: list[dict[str, Any]]
+
+
+def walk(root: Behaviour) -> Iterator[Behaviour]:
+    """The nodes of a py_trees tree in pre-order (BT.CPP's uid order)."""
+    yield root
+    for child in getattr(root, "children", []):
+        yield from walk(child)
+
+
+def tree_nodes(root: Behaviour) -> list[TreeNode]:
+    """The tree as the header stores it: pre-order, uids from 1, each with its parent's uid."""
+    uids: dict[int, int] = {}
+    nodes: list[TreeNode] = []
+    for uid, node in enumerate(walk(root), 1):
+        uids[id(node)] = uid
+        parent = uids.get(id(node.parent)) if node.parent is not None else None
+        kind = getattr(node, "yaml_name", "") or getattr(node, "node_kind", "") or type(node).__name__
+        nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=kind, parent=parent))
+    return nodes
+
+
+def number(value: float | None) -> float | None:
+    """A float as logs store it: 6 decimals, None for infinity or no value."""
+    if value is None or (isinstance(value, float) and math.isinf(value)):
+        return None
+    return round(value, 6)
+
+
+def jsonable(value: Any) -> Any:
+    """A blackboard value as JSON: numbers rounded, containers converted, anything else its repr."""
+    if isinstance(value, float):
+        return number(value)
+    if isinstance(value, (str, int, bool)) or value is None:
+        return value
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    return repr(value)
