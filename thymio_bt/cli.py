@@ -200,14 +200,59 @@ def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | 
 @click.option("--svg", "fmt", flag_value="svg", help="Write an SVG (needs Graphviz's dot program).")
 @click.option("--png", "fmt", flag_value="png", help="Write a PNG (needs Graphviz's dot program).")
 @click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="File to write.")
-def tree(mission: Path, fmt: str, output: Path | None) -> None:
-    """Draw the tree of MISSION (text on the terminal, and a .dot/.svg/.png file)."""
+@click.option("--btcpp", type=click.Path(path_type=Path), default=None, metavar="OUT.xml",
+              help="Write the tree as BehaviorTree.CPP v4 XML (Groot2 opens it) instead of a drawing.")
+def tree(mission: Path, fmt: str, output: Path | None, btcpp: Path | None) -> None:
+    """Draw the tree of MISSION (text on the terminal, and a .dot/.svg/.png file), or export it."""
     try:
+        if btcpp is not None:
+            from .btcpp import mission_xml
+            from .mission import load_mission
+
+            text = mission_xml(load_mission(mission))
+            try:
+                btcpp.write_text(text, encoding="utf-8")
+            except OSError as exc:
+                raise UserError(f"cannot write {btcpp}: {exc}") from None
+            click.echo(f"wrote {btcpp}", err=True)
+            return
         from .viz.terminal import export_tree, tree_text
 
         click.echo(tree_text(mission))
         written, note = export_tree(mission, fmt, output)
         click.echo(f"wrote {written}" + (f" ({note})" if note else ""), err=True)
+    except UserError as exc:
+        _fail(exc)
+
+
+@main.command()
+@click.argument("log", type=click.Path(path_type=Path))
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=None,
+              help="The log to write; its suffix picks the format (.jsonl, .mcap, .btlog, or a folder: rosbag2).")
+@click.option("--btlog", type=click.Path(path_type=Path), default=None, metavar="OUT.btlog",
+              help="Write a Groot2 log (BT.CPP's FileLogger2 file).")
+def export(log: Path, output: Path | None, btlog: Path | None) -> None:
+    """Convert the run log LOG into another format (e.g. a JSON-lines log into a rosbag2 .mcap)."""
+    try:
+        from .logs import open_writer, read_log
+
+        targets = [p for p in (output, btlog) if p is not None]
+        if not targets:
+            raise UserError("nothing to write (hint: -o run.mcap, or --btlog run.btlog)")
+        recording = read_log(log)
+        if not recording.header.get("tree"):
+            raise UserError(f"{log} was written before logs carried their tree (hint: run the mission again "
+                            f"with --log to export it)")
+        for target in targets:
+            writer = open_writer(target)
+            try:
+                writer.header(recording.header)  # type: ignore[arg-type]
+                for sample in recording.samples:
+                    writer.tick(sample)  # type: ignore[arg-type]
+                writer.end({**recording.end, "events": recording.events})  # type: ignore[typeddict-item]
+            finally:
+                writer.close()
+            click.echo(f"wrote {target}", err=True)
     except UserError as exc:
         _fail(exc)
 

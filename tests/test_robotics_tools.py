@@ -1,0 +1,132 @@
+"""Runs and trees in the robotics tools' formats, each checked with the format's own reader:
+rosbag2/MCAP (rosbags and mcap_ros2), BT.CPP XML (BehaviorTree.CPP via behaviortreepy), and the
+Groot2 log (a parser written here from FileLogger2's layout)."""
+
+import json
+import math
+import re
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from _require import module
+
+MISSIONS = sorted(Path("missions").glob("*.yaml"))
+
+
+def thymio_bt(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "thymio_bt.cli", *map(str, args)], capture_output=True,
+                          text=True, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def part1_2(tmp_path_factory):
+    """One run of maze_part1_2 with a JSON-lines log and a bag, and its report."""
+    module("rosbags")
+    folder = tmp_path_factory.mktemp("run")
+    done = thymio_bt("run", "missions/maze_part1_2.yaml", "--log", folder / "run.mcap", "--report",
+                     folder / "report.json", "-q")
+    assert done.returncode == 0, done.stderr
+    done = thymio_bt("run", "missions/maze_part1_2.yaml", "--log", folder / "run.jsonl", "-q")
+    assert done.returncode == 0, done.stderr
+    return folder, json.loads((folder / "report.json").read_text())
+
+
+def test_the_bag_odometry_is_the_report_trajectory(part1_2):
+    reader = module("mcap_ros2.reader")
+    folder, report = part1_2
+    odom, topics = [], {}
+    for m in reader.read_ros2_messages(str(folder / "run.mcap")):
+        topics[m.channel.topic] = m.schema.name
+        if m.channel.topic == "/odom":
+            p, q = m.ros_msg.pose.pose.position, m.ros_msg.pose.pose.orientation
+            odom.append((m.log_time_ns / 1e9, p.x, p.y, 2 * math.atan2(q.z, q.w)))
+    trajectory = {round(s[0], 6): s[1:] for s in report["trajectory"]}
+    assert len(odom) == len(trajectory) == 328           # 329 ticks, one without a robot (deleted)
+    for t, x, y, yaw in odom:
+        rx, ry, ryaw = trajectory[round(t, 6)]
+        assert (x, y) == pytest.approx((rx, ry), abs=1e-6)
+        assert math.remainder(yaw - ryaw, 2 * math.pi) == pytest.approx(0.0, abs=1e-5)
+    assert topics["/cmd_vel"] == "geometry_msgs/msg/Twist" and topics["/odom"] == "nav_msgs/msg/Odometry"
+    assert topics["/tf"] == "tf2_msgs/msg/TFMessage" and topics["/clock"] == "rosgraph_msgs/msg/Clock"
+    assert topics["/thymio_front_center_proximity_sensor"] == "sensor_msgs/msg/LaserScan"
+
+
+def test_the_bag_scans_are_the_logged_readings_with_inf_for_nothing(part1_2):
+    highlevel = module("rosbags.highlevel")
+    folder, report = part1_2
+    log = [json.loads(line) for line in (folder / "run.jsonl").read_text().splitlines()]
+    logged = [t["prox"]["rear_left"] for t in log[1:-1] if t["prox"] is not None]
+    with highlevel.AnyReader([folder / "run.mcap"]) as reader:
+        rear = [c for c in reader.connections if c.topic == "/thymio_rear_left_proximity_sensor"]
+        scans = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=rear)]
+    ranges = [float(m.ranges[0]) for m in scans]
+    assert [math.isinf(r) for r in ranges] == [v is None for v in logged] and any(map(math.isinf, ranges))
+    assert [r for r in ranges if not math.isinf(r)] == pytest.approx([v for v in logged if v is not None], abs=1e-6)
+    assert scans[-1].header.frame_id == "rear_left_proximity_link" and scans[-1].range_max == pytest.approx(0.0975)
+
+
+def test_replay_and_export_read_a_bag_back(part1_2, tmp_path):
+    folder, report = part1_2
+    done = thymio_bt("replay", folder / "run.mcap")
+    assert done.returncode == 0 and "SUCCESS" in done.stdout and "329 ticks" in done.stdout
+    done = thymio_bt("export", folder / "run.jsonl", "-o", tmp_path / "converted")      # a rosbag2 folder
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "converted" / "metadata.yaml").is_file()
+    again = thymio_bt("replay", tmp_path / "converted")
+    assert again.stdout.splitlines()[0] == done.stdout.splitlines()[0] if done.stdout else "SUCCESS" in again.stdout
+
+
+def parse_btlog(data: bytes):
+    """FileLogger2's layout, read from its description (BehaviorTree.CPP bt_file_logger_v2.cpp)."""
+    assert data[:18] == b"BTCPP4-FileLogger2" and data[18] == 1
+    (size,) = struct.unpack_from("<i", data, 19)
+    xml = data[23:23 + size].decode()
+    (start,) = struct.unpack_from("<q", data, 23 + size)
+    body = data[31 + size:]
+    assert len(body) % 9 == 0
+    records = [(int.from_bytes(body[i:i + 6], "little"), *struct.unpack_from("<HB", body, i + 6))
+               for i in range(0, len(body), 9)]
+    return xml, start, records
+
+
+def test_the_groot2_log_holds_one_record_per_status_change(part1_2, tmp_path):
+    folder, _ = part1_2
+    done = thymio_bt("export", folder / "run.jsonl", "--btlog", tmp_path / "run.btlog")
+    assert done.returncode == 0, done.stderr
+    xml, start, records = parse_btlog((tmp_path / "run.btlog").read_bytes())
+    log = [json.loads(line) for line in (folder / "run.jsonl").read_text().splitlines()]
+    tree = {n["path"]: n["uid"] for n in log[0]["tree"]}
+    uids_in_xml = {int(u) for u in re.findall(r'_uid="(\d+)"', xml)}
+    assert uids_in_xml == set(tree.values()) and start == 0
+    expected, last = [], {path: "-" for path in tree}
+    code = {"-": 0, "R": 1, "S": 2, "F": 3}
+    for tick in log[1:-1]:
+        for path, status in tick["nodes"].items():
+            if last[path] != status:
+                last[path] = status
+                expected.append((round(tick["t"] * 1e6), tree[path], code[status]))
+    assert records == expected and len(records) > 100
+    assert (0, 1, 1) in records and records[-1][2] == 2   # the root (uid 1) runs from t = 0; the run succeeds
+
+
+@pytest.mark.parametrize("mission", MISSIONS, ids=[m.stem for m in MISSIONS])
+def test_every_mission_exports_to_xml_that_behaviortree_cpp_accepts(mission, tmp_path):
+    bt = module("behaviortreepy")
+    out = tmp_path / "tree.xml"
+    done = thymio_bt("tree", mission, "--btcpp", out)
+    assert done.returncode == 0, done.stderr
+    xml = out.read_text()
+    factory = bt.BehaviorTreeFactory()
+    model = re.search(r"<TreeNodesModel>(.*)</TreeNodesModel>", xml, re.S).group(1)
+    register = {"Action": factory.register_simple_action, "Condition": factory.register_simple_condition,
+                "Decorator": factory.register_simple_decorator}
+    for tag, ident in re.findall(r'<(Action|Condition|Decorator|Control) ID="([^"]+)"', model):
+        if tag in register:
+            register[tag](ident, lambda *args: bt.NodeStatus.SUCCESS)
+    # behaviortreepy cannot register a Python control node: check RepeatUntil's place as a sequence
+    checked = xml.replace("<RepeatUntil ", "<SequenceWithMemory ").replace("</RepeatUntil>", "</SequenceWithMemory>")
+    factory.register_behavior_tree_from_text(checked)        # BT.CPP's own verification; raises if invalid
+    assert "MainTree" in factory.registered_behavior_trees()

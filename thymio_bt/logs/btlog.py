@@ -1,0 +1,65 @@
+"""Runs as BT.CPP's Groot2 log (``.btlog``, FileLogger2's layout), for Groot2's log replay.
+
+Little endian: ``BTCPP4-FileLogger2``, a protocol byte (1), the tree's BT.CPP XML (i32 length, then
+the text, nodes with their ``_uid``), the start time (i64 µs), then one 9-byte record per status
+change: µs since the start (6 bytes), the node's uid (u16), its new status (u8: 0 IDLE, 1 RUNNING,
+2 SUCCESS, 3 FAILURE). Times are simulated, so the same run gives the same file; the start time is
+0 (1970 in Groot2's clock).
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+from typing import IO
+
+from ..errors import UserError
+from .records import LogEnd, LogHeader, TickRecord
+
+MAGIC = b"BTCPP4-FileLogger2"
+PROTOCOL = 1
+#: a log's status letter -> BT.CPP's NodeStatus
+STATUS = {"-": 0, "R": 1, "S": 2, "F": 3}
+
+
+class BtlogWriter:
+    """Writes a run as a Groot2 log: one record per node status change."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._file: IO[bytes] | None = path.open("wb")
+        except OSError as exc:
+            raise UserError(f"cannot write the log {path}: {exc}") from None
+        self._uids: dict[str, int] = {}
+        self._last: dict[str, str] = {}
+
+    def header(self, header: LogHeader) -> None:
+        from ..btcpp import tree_xml
+        from ..mission import default_registry
+
+        assert self._file is not None
+        nodes = header["tree"]
+        self._uids = {n["path"]: n["uid"] for n in nodes}
+        self._last = {n["path"]: "-" for n in nodes}
+        xml = tree_xml(nodes, default_registry()).encode("utf-8")
+        self._file.write(MAGIC + struct.pack("<Bi", PROTOCOL, len(xml)) + xml + struct.pack("<q", 0))
+
+    def tick(self, record: TickRecord) -> None:
+        assert self._file is not None
+        stamp = round(record["t"] * 1e6)
+        records = []
+        for path, status in record.get("nodes", {}).items():
+            if self._last.get(path) != status and path in self._uids:
+                self._last[path] = status
+                records.append(stamp.to_bytes(6, "little") + struct.pack("<HB", self._uids[path], STATUS[status]))
+        self._file.write(b"".join(records))
+
+    def end(self, end: LogEnd) -> None:
+        """Nothing to add: a Groot2 log holds status changes only."""
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
