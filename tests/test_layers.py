@@ -34,3 +34,54 @@ def test_commands_that_run_nothing_load_no_physics_engine(args, tmp_path):
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip().splitlines()[-1] == "False", args
+
+
+def _import_graph():
+    """thymio_bt's modules and what each imports (anywhere in the module, TYPE_CHECKING blocks aside)."""
+    import ast
+    from pathlib import Path
+
+    files = {".".join(p.with_suffix("").parts).removesuffix(".__init__"): p for p in Path("thymio_bt").rglob("*.py")}
+    graph = {}
+    for module, path in files.items():
+        tree = ast.parse(path.read_text())
+        hidden = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+                  for n in ast.walk(node)}
+        package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
+        imported = set()
+        for node in ast.walk(tree):
+            if id(node) in hidden:
+                continue
+            if isinstance(node, ast.Import):
+                imported |= {a.name for a in node.names}
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    base = ".".join(package[:len(package) - node.level + 1] + ([base] if base else []))
+                imported |= {f"{base}.{a.name}" if f"{base}.{a.name}" in files else base for a in node.names}
+        graph[module] = imported
+    return files, graph
+
+
+def test_no_import_cycle_among_the_package_modules():
+    files, graph = _import_graph()
+    edges = {m: {d for d in deps if d in files and d != m} for m, deps in graph.items()}
+    state: dict[str, int] = {}
+
+    def visit(module, trail):
+        state[module] = 1
+        for dep in sorted(edges[module]):
+            assert state.get(dep) != 1, "import cycle: " + " -> ".join([*trail, module, dep])
+            if dep not in state:
+                visit(dep, [*trail, module])
+        state[module] = 2
+
+    for module in sorted(edges):
+        if module not in state:
+            visit(module, [])
+
+
+def test_only_the_simulator_imports_pymunk():
+    _, graph = _import_graph()
+    users = sorted(m for m, deps in graph.items() if any(d == "pymunk" or d.startswith("pymunk.") for d in deps))
+    assert users and all(m.startswith("thymio_bt.sim.") for m in users), users

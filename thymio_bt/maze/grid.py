@@ -19,13 +19,12 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
 
 from ..errors import Problem, UserError
-from .model import Maze, Spawn, Wall
-
-if TYPE_CHECKING:
-    from .model import GridMazeFile
+from .model import Length, Maze, Point, Spawn, Wall
 
 _HEADINGS = {">": 0.0, "^": math.pi / 2, "<": math.pi, "v": -math.pi / 2}
 
@@ -125,7 +124,20 @@ def _merge(walls: list[Wall]) -> list[Wall]:
     return merged
 
 
-def maze_from_grid_file(header: "GridMazeFile", mark: tuple[int, int], filename: str) -> Maze:
+class GridMazeFile(BaseModel):
+    """The keys of a maze file in the grid form; the art itself is read by :mod:`.grid`."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = "grid"
+    description: str = ""
+    grid: str = Field(description="the maze as ASCII art: 'grid: |' then '+--+' lines")
+    cell: Annotated[Length, Field(gt=0, le=10)] = 0.2
+    origin: Point = (0.0, 0.0)
+    thickness: Annotated[Length, Field(gt=0, le=1.0)] = 0.01
+    spawns: dict[str, Spawn] = Field(default_factory=dict)
+
+
+def maze_from_grid_file(header: GridMazeFile, mark: tuple[int, int], filename: str) -> Maze:
     """The maze of a validated grid-form file; ``mark`` is where the ``grid:`` value starts, so
     errors in the art point at the file's own line and column (a ``grid: |`` block is indented)."""
     line, col = mark

@@ -16,7 +16,6 @@ Example (``mazes/corridor.yaml``)::
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
@@ -25,17 +24,6 @@ from pydantic_core import PydanticCustomError
 from ..errors import Problem, UserError, did_you_mean, type_name
 from ..robot import Pose
 from ..units import UnitError, check_kind, kind_hint, parse_value
-from ..validation import validate
-from ..yamlio import MarkedDict, load_yaml
-
-#: The project's mazes/ folder when running from a checkout.
-MAZE_DIR = Path(__file__).resolve().parents[2] / "mazes"
-
-
-def maze_dirs() -> list[Path]:
-    """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the checkout's."""
-    dirs = [Path.cwd() / "mazes", MAZE_DIR]
-    return [d for i, d in enumerate(dirs) if d.is_dir() and d not in dirs[:i]]
 
 
 def _problem(message: str, hint: str) -> PydanticCustomError:
@@ -199,49 +187,3 @@ class Maze(BaseModel):
         if self.spawns:
             out["spawns"] = {k: {"x": r(s.x), "y": r(s.y), "yaw": r(s.yaw)} for k, s in self.spawns.items()}
         return out
-
-
-class GridMazeFile(BaseModel):
-    """The keys of a maze file in the grid form; the art itself is read by :mod:`.grid`."""
-
-    model_config = ConfigDict(extra="forbid")
-    name: str = "grid"
-    description: str = ""
-    grid: str = Field(description="the maze as ASCII art: 'grid: |' then '+--+' lines")
-    cell: Annotated[Length, Field(gt=0, le=10)] = 0.2
-    origin: Point = (0.0, 0.0)
-    thickness: Annotated[Length, Field(gt=0, le=1.0)] = 0.01
-    spawns: dict[str, Spawn] = Field(default_factory=dict)
-
-
-def load_maze(path: str | Path) -> Maze:
-    """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
-    from .grid import maze_from_grid_file
-
-    data = load_yaml(path)
-    if not isinstance(data, MarkedDict):
-        raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path),
-                                *getattr(data, "mark", (1, 1)),
-                                hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)"))
-    if "grid" in data:
-        header = validate(GridMazeFile, data, str(path))      # units and types, before the art is read
-        return maze_from_grid_file(header, data.value_marks["grid"], str(path))
-    return validate(Maze, data, str(path))
-
-
-def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
-    """Find a maze by path (relative to ``relative_to``) or by name in the project's mazes/."""
-    candidates = []
-    ref_path = Path(ref)
-    if relative_to is not None and not ref_path.is_absolute():
-        candidates.append(relative_to / ref_path)
-    candidates.append(ref_path)
-    if ref_path.suffix == "" and len(ref_path.parts) == 1:
-        candidates += [d / f"{ref}.yaml" for d in maze_dirs()]
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate
-    known = sorted({p.stem for d in maze_dirs() for p in d.glob("*.yaml")})
-    raise UserError(Problem(f"maze not found: '{ref}'",
-                            hint=("a path relative to the mission file, or a named maze: "
-                                  + (did_you_mean(ref, known) if known else "none installed"))))

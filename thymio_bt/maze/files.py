@@ -1,0 +1,56 @@
+"""Maze files in every form: the wall-list YAML, the grid (ASCII art) YAML, found by path or by name.
+
+This is the only place that knows the file forms: :mod:`.model` is the maze itself, :mod:`.grid`
+turns ASCII art into walls.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import Problem, UserError, did_you_mean
+from ..validation import validate
+from ..yamlio import MarkedDict, load_yaml
+from .grid import GridMazeFile, maze_from_grid_file
+from .model import Maze
+
+#: The project's mazes/ folder when running from a checkout.
+MAZE_DIR = Path(__file__).resolve().parents[2] / "mazes"
+
+
+def maze_dirs() -> list[Path]:
+    """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the checkout's."""
+    dirs = [Path.cwd() / "mazes", MAZE_DIR]
+    return [d for i, d in enumerate(dirs) if d.is_dir() and d not in dirs[:i]]
+
+
+
+def load_maze(path: str | Path) -> Maze:
+    """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
+    data = load_yaml(path)
+    if not isinstance(data, MarkedDict):
+        raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path),
+                                *getattr(data, "mark", (1, 1)),
+                                hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)"))
+    if "grid" in data:
+        header = validate(GridMazeFile, data, str(path))      # units and types, before the art is read
+        return maze_from_grid_file(header, data.value_marks["grid"], str(path))
+    return validate(Maze, data, str(path))
+
+
+def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
+    """Find a maze by path (relative to ``relative_to``) or by name in the project's mazes/."""
+    candidates = []
+    ref_path = Path(ref)
+    if relative_to is not None and not ref_path.is_absolute():
+        candidates.append(relative_to / ref_path)
+    candidates.append(ref_path)
+    if ref_path.suffix == "" and len(ref_path.parts) == 1:
+        candidates += [d / f"{ref}.yaml" for d in maze_dirs()]
+    for candidate in candidates:
+        if candidate.is_file():
+            return candidate
+    known = sorted({p.stem for d in maze_dirs() for p in d.glob("*.yaml")})
+    raise UserError(Problem(f"maze not found: '{ref}'",
+                            hint=("a path relative to the mission file, or a named maze: "
+                                  + (did_you_mean(ref, known) if known else "none installed"))))
