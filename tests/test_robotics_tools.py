@@ -130,3 +130,52 @@ def test_every_mission_exports_to_xml_that_behaviortree_cpp_accepts(mission, tmp
     checked = xml.replace("<RepeatUntil ", "<SequenceWithMemory ").replace("</RepeatUntil>", "</SequenceWithMemory>")
     factory.register_behavior_tree_from_text(checked)        # BT.CPP's own verification; raises if invalid
     assert "MainTree" in factory.registered_behavior_trees()
+
+
+@pytest.mark.parametrize("mission", MISSIONS, ids=[m.stem for m in MISSIONS])
+def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_path):
+    from thymio_bt.btcpp import mission_xml
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    xml = tmp_path / f"{mission.stem}.xml"
+    xml.write_text(mission_xml(load_mission(mission), xml))
+    reports = [Run(load_mission(path), seed=7).run().report() for path in (mission, xml)]
+    for report in reports:
+        report.pop("wall_time"), report.pop("real_time_factor")
+    assert reports[0] == reports[1]
+    assert thymio_bt("validate", xml).returncode == 0
+
+
+@pytest.mark.parametrize("change, message, hint", [
+    (("<MoveUntilWall ", "<MoveUntilWal "), "unknown node type 'MoveUntilWal'", "did you mean 'MoveUntilWall'?"),
+    (('distance="0.05"', 'distance="5 apples"'), "unknown unit 'apples'", ""),
+    (("<Parallel ", "<Timeout msec=\"100\" "), "BT.CPP node <Timeout> is not supported", "simulated"),
+    (("</root>", ""), "invalid XML", ""),
+])
+def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message, hint):
+    from thymio_bt.btcpp import mission_xml
+    from thymio_bt.mission import load_mission
+
+    text = mission_xml(load_mission("missions/maze_bonus.yaml"), tmp_path / "m.xml")
+    old, new = change
+    assert old in text
+    broken = text.replace(old, new, 1)
+    if new.startswith("<Timeout"):
+        broken = broken.replace("</Parallel>", "</Timeout>", 1)
+    path = tmp_path / "m.xml"
+    path.write_text(broken)
+    done = thymio_bt("run", path)
+    line = next(i for i, l in enumerate(broken.splitlines(), 1) if new and new.strip() in l) if new else None
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert message in done.stderr and hint in done.stderr, done.stderr
+    if line:
+        assert f"{path}:{line}:" in done.stderr
+
+
+def test_an_xml_file_with_entities_is_refused(tmp_path):
+    path = tmp_path / "bomb.xml"
+    path.write_text('<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaa"><!ENTITY b "&a;&a;&a;">]>'
+                    '<root BTCPP_format="4"><BehaviorTree ID="T"><Stop name="&b;"/></BehaviorTree></root>')
+    done = thymio_bt("validate", path)
+    assert done.returncode == 2 and "DTDs and entities are not allowed" in done.stderr and f"{path}:1:" in done.stderr

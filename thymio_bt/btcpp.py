@@ -15,7 +15,10 @@ Example::
 
 from __future__ import annotations
 
+import json
+import os
 import xml.etree.ElementTree as ET
+from pathlib import Path
 from typing import Any, Mapping
 
 from .behaviours import ControlNode
@@ -28,6 +31,8 @@ BUILTIN = {"sequence": "SequenceWithMemory", "reactive_sequence": "ReactiveSeque
            "reactive_selector": "ReactiveFallback", "parallel": "Parallel", "invert": "Inverter",
            "force_success": "ForceSuccess", "force_failure": "ForceFailure", "retry": "RetryUntilSuccessful",
            "repeat": "Repeat"}
+#: the element that carries a mission's settings (maze, start, rates, noise); BT.CPP skips it
+MISSION_TAG = "ThymioMission"
 #: BT.CPP's own node IDs (besides BUILTIN's): a thymio-bt node of one of these names is exported as
 #: Thymio<name> so that it does not clash with the built-in
 RESERVED = frozenset({"SetBlackboard", "Sequence", "Fallback", "Delay", "Timeout", "Script", "Sleep",
@@ -48,12 +53,13 @@ def node_id(node: TreeNode, children: int) -> str:
 
 
 def _port_value(value: Any) -> str:
+    """A parameter as a port's text: exact (``repr``) numbers, lists as JSON, so a read back is exact."""
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (list, tuple)):
-        return ";".join(_port_value(v) for v in value)         # BT.CPP's vector separator
+        return json.dumps(value)
     if isinstance(value, float):
-        return repr(round(value, 9))
+        return repr(value)
     return str(value)
 
 
@@ -63,18 +69,21 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, s
         return {}                                  # the loop ends by its condition, not a count
     if kind == "parallel":
         one = params.get("policy") == "success_on_one"
-        return {"success_count": "1" if one else "-1", "failure_count": "1"}
+        ports = {"success_count": "1" if one else "-1", "failure_count": "1"}
+        return ports if params.get("synchronise", True) else {**ports, "synchronise": "false"}
     if kind == "repeat" and params.get("times") == "forever":
         return {"num_cycles": "-1"}
-    return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items()}
+    return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items() if v is not None}
 
 
 def tree_xml(nodes: list[TreeNode], registry: Any, params: Mapping[int, Mapping[str, Any]] | None = None,
-             tree_id: str = "MainTree") -> str:
+             tree_id: str = "MainTree", settings: Mapping[str, str] | None = None) -> str:
     """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
     lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel."""
     params = params or {}
     root = ET.Element("root", BTCPP_format="4", main_tree_to_execute=tree_id)
+    if settings:
+        ET.SubElement(root, MISSION_TAG, dict(settings))
     tree = ET.SubElement(root, "BehaviorTree", ID=tree_id)
     children = {n["uid"]: 0 for n in nodes}
     for n in nodes:
@@ -117,8 +126,24 @@ def _category(cls: Any, ident: str) -> str:
     return "Action"
 
 
-def mission_xml(mission: Any) -> str:
-    """The BT.CPP XML of a loaded mission: its tree as planned, parameters as ports (in SI units)."""
+def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
+    """A mission's settings as ``<ThymioMission>`` attributes (the maze's path relative to ``folder``)."""
+    pose = mission.start
+    settings = {"name": mission.name, "description": mission.description,
+                "maze": os.path.relpath(mission.maze_file, folder) if mission.maze_file else mission.maze.name,
+                "start": f"{pose.x!r}, {pose.y!r}, {pose.yaw!r}", "tick_hz": repr(mission.tick_hz),
+                "time_limit": repr(mission.time_limit), "seed": str(mission.seed),
+                "sensor_model": mission.sensor_model, "robot": mission.robot,
+                **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()}}
+    if mission.backend != "sim" or mission.backend_options:
+        settings["backend"] = json.dumps({"name": mission.backend, **mission.backend_options})
+    return settings
+
+
+def mission_xml(mission: Any, output: Path | None = None) -> str:
+    """The BT.CPP XML of a loaded mission: its tree as planned, parameters as ports (in SI units),
+    its settings in a ``<ThymioMission>`` element (BT.CPP ignores it) so that the file runs as the
+    mission did (``thymio-bt run mission.xml``)."""
     nodes: list[TreeNode] = []
     params: dict[int, dict[str, Any]] = {}
 
@@ -134,4 +159,5 @@ def mission_xml(mission: Any) -> str:
             visit(child, uid, path)
 
     visit(mission.tree, None, "")
-    return tree_xml(nodes, mission.registry, params)
+    folder = (output or Path("mission.xml")).resolve().parent
+    return tree_xml(nodes, mission.registry, params, settings=mission_settings(mission, folder))

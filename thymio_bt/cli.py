@@ -209,7 +209,7 @@ def tree(mission: Path, fmt: str, output: Path | None, btcpp: Path | None) -> No
             from .btcpp import mission_xml
             from .mission import load_mission
 
-            text = mission_xml(load_mission(mission))
+            text = mission_xml(load_mission(mission), btcpp)
             try:
                 btcpp.write_text(text, encoding="utf-8")
             except OSError as exc:
@@ -362,7 +362,7 @@ def _check_file(path: Path, overrides: dict[str, str]) -> str:
     from .robot_model import COURSE
     from .yamlio import load_yaml
 
-    data = load_yaml(path)
+    data = None if path.suffix.lower() == ".xml" else load_yaml(path)      # an .xml file is a BT.CPP mission
     if isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
         from .maze import load_maze
 

@@ -1,6 +1,7 @@
 """Load a mission file into a validated :class:`~thymio_bt.mission.plan.Mission`, in passes:
 
-1. **read** — the YAML with the place of every key and value (:func:`thymio_bt.yamlio.load_yaml`);
+1. **read** — the YAML with the place of every key and value (:func:`thymio_bt.yamlio.load_yaml`), or
+   a BehaviorTree.CPP XML mission into the same form (:mod:`thymio_bt.mission.xml_reader`);
 2. **assemble** — includes, plugins, parameters, subtrees, settings and ``--set``, the maze and the
    start pose (:mod:`thymio_bt.mission.assemble`);
 3. **validate and plan** — each node of the tree by its registered class and parameter model
@@ -28,6 +29,7 @@ from .assemble import Assembler
 from .plan import Mission
 from .planner import TreePlanner
 from .registry import Registry
+from .xml_reader import read_xml_mission
 
 
 def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
@@ -36,7 +38,8 @@ def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
     """Load and validate a mission file; raise :class:`UserError` listing every problem."""
     path = Path(path)
     file = str(path)
-    assembly = Assembler(registry).assemble(path, load_yaml(path), overrides, maze, start)
+    data = read_xml_mission(path) if path.suffix.lower() == ".xml" else load_yaml(path)
+    assembly = Assembler(registry).assemble(path, data, overrides, maze, start)
     tree = TreePlanner(assembly).plan(assembly.data, file)
     if assembly.problems:
         raise UserError(sorted(dict.fromkeys(assembly.problems),      # in reading order, this file first

@@ -1,0 +1,194 @@
+"""Missions written in BehaviorTree.CPP v4 XML (as Groot2 edits them), read into the same marked
+data as a YAML mission, so the loader's passes check them with the same errors and hints.
+
+The read pass for ``.xml`` files: the ``<BehaviorTree>`` named by ``main_tree_to_execute`` (or the
+only one) is the tree, ``<ThymioMission>`` holds the settings (``maze``, ``start``, ``tick_hz``,
+``noise.wheel``...), ``<TreeNodesModel>`` is ignored. BT.CPP's built-ins map back to thymio-bt's
+composites and decorators (:data:`thymio_bt.btcpp.BUILTIN`), ``{key}`` ports to ``bb:key``.
+Elements and their attributes carry the element's line and column. The file is parsed with
+expat, with no DTD: entities are refused, so nothing is expanded or fetched.
+
+Example::
+
+    data = read_xml_mission(Path("bonus.xml"))     # a MarkedDict like load_yaml's
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+from xml.parsers import expat
+
+from ..btcpp import BUILTIN, MISSION_TAG, RESERVED
+from ..errors import Problem, UserError
+from ..yamlio import MarkedDict, MarkedList
+
+_FROM_BUILTIN = {ident: kind for kind, ident in BUILTIN.items()}
+#: BT.CPP nodes that thymio-bt cannot run, with what to use instead
+_UNSUPPORTED = {
+    "Timeout": "BT.CPP's Timeout counts wall-clock milliseconds: use thymio-bt's timeout (seconds: simulated)",
+    "Delay": "BT.CPP's Delay counts wall-clock milliseconds: use thymio-bt's delay (seconds: simulated)",
+    "Sleep": "use Wait (seconds: simulated)", "Script": "scripts are not supported: use SetBlackboard",
+    "SubTree": "subtrees are not supported in XML missions yet: write the subtree's nodes in place",
+    "Sequence": "BT.CPP's Sequence differs from both thymio-bt sequences: use SequenceWithMemory or ReactiveSequence",
+}
+MAX_DEPTH = 200
+
+
+@dataclass
+class _Element:
+    tag: str
+    attrs: dict[str, str]
+    line: int
+    column: int
+    children: list["_Element"] = field(default_factory=list)
+
+
+def _parse(path: Path) -> _Element:
+    file = str(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise UserError(Problem(f"cannot read {path}: {exc}", file)) from None
+    parser = expat.ParserCreate()
+    stack: list[_Element] = []
+    roots: list[_Element] = []
+
+    def refuse(*_: Any) -> None:
+        raise UserError(Problem("DTDs and entities are not allowed in a mission", file, parser.CurrentLineNumber,
+                                parser.CurrentColumnNumber + 1, hint="remove the <!DOCTYPE ...> part"))
+
+    def start(tag: str, attrs: dict[str, str]) -> None:
+        if len(stack) >= MAX_DEPTH:
+            raise UserError(Problem(f"the XML is nested deeper than {MAX_DEPTH} levels", file,
+                                    parser.CurrentLineNumber, parser.CurrentColumnNumber + 1))
+        element = _Element(tag, attrs, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+        (stack[-1].children if stack else roots).append(element)
+        stack.append(element)
+
+    parser.StartDoctypeDeclHandler = refuse
+    parser.EntityDeclHandler = refuse
+    parser.StartElementHandler = start
+    parser.EndElementHandler = lambda tag: stack.pop()
+    try:
+        parser.Parse(data, True)
+    except expat.ExpatError as exc:
+        raise UserError(Problem(f"invalid XML: {expat.errors.messages[exc.code]}", file, exc.lineno,
+                                exc.offset + 1, hint="check that every <Node ...> is closed (<Node/> or </Node>)")) from None
+    if not roots or roots[0].tag != "root":
+        raise UserError(Problem("a BT.CPP XML mission starts with <root BTCPP_format=\"4\">", file, 1, 1,
+                                hint="export one with: thymio-bt tree MISSION.yaml --btcpp OUT.xml"))
+    return roots[0]
+
+
+def _value(text: str) -> Any:
+    """A port's text as the YAML scalar it stands for: numbers, true/false, JSON lists, {key}."""
+    stripped = text.strip()
+    if stripped in ("true", "false"):
+        return stripped == "true"
+    if stripped.startswith("{") and stripped.endswith("}") and stripped[1:-1].strip():
+        return "bb:" + stripped[1:-1].strip()
+    if stripped.startswith("["):
+        try:
+            return json.loads(stripped)
+        except ValueError:
+            return text
+    for convert in (int, float):
+        try:
+            return convert(stripped)
+        except ValueError:
+            pass
+    return text
+
+
+def _marked(mapping: dict[str, Any], element: _Element) -> MarkedDict:
+    out = MarkedDict(mapping)
+    out.mark = (element.line, element.column)
+    for key in mapping:
+        out.marks[key] = out.value_marks[key] = (element.line, element.column)
+    return out
+
+
+def _node(element: _Element, file: str) -> MarkedDict:
+    """One element as a ``{Type: body}`` node of the YAML form."""
+    ident = element.tag
+    if ident in _UNSUPPORTED:
+        raise UserError(Problem(f"BT.CPP node <{ident}> is not supported", file, element.line, element.column,
+                                hint=_UNSUPPORTED[ident]))
+    attrs = {k: v for k, v in element.attrs.items() if not k.startswith("_")}
+    children = [_node(child, file) for child in element.children]
+    kind = _FROM_BUILTIN.get(ident, ident[len("Thymio"):] if ident.startswith("Thymio") and
+                             ident[len("Thymio"):] in RESERVED else ident)
+    body: dict[str, Any] = {}
+    if "name" in attrs:
+        body["name"] = attrs.pop("name")
+    if ident == "RepeatUntil":
+        kind = "repeat"
+        if len(children) != 2:
+            raise UserError(Problem("RepeatUntil takes two children: the body, then the condition", file,
+                                    element.line, element.column))
+        body.update(do=children[0], until=children[1])
+    elif kind == "parallel":
+        body["policy"] = "success_on_one" if attrs.pop("success_count", "-1").strip() == "1" else "success_on_all"
+        attrs.pop("failure_count", None)
+        body.update({k: _value(v) for k, v in attrs.items()}, children=_list(children, element))
+    elif kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
+        body.update({k: _value(v) for k, v in attrs.items()}, children=_list(children, element))
+    elif children:                                              # a decorator
+        renamed = {"num_cycles": "times", "num_attempts": "times"}
+        body.update({renamed.get(k, k): _value(v) for k, v in attrs.items()})
+        if body.get("times") == -1:
+            body["times"] = "forever"
+        extra = {"guard": "condition"}.get(kind)
+        body["do"] = children[0]
+        if extra and len(children) > 1:
+            body[extra] = children[1]
+    else:                                                       # a behaviour or condition
+        body.update({k: _value(v) for k, v in attrs.items()})
+    return _marked({kind: _marked(body, element)}, element)
+
+
+def _list(items: list[MarkedDict], element: _Element) -> MarkedList:
+    out = MarkedList(items)
+    out.mark = (element.line, element.column)
+    out.marks = [item.mark for item in items]
+    return out
+
+
+def read_xml_mission(path: Path) -> MarkedDict:
+    """The mission in a BT.CPP v4 XML file, as the marked mapping a YAML mission file reads as."""
+    file = str(path)
+    root = _parse(path)
+    if root.attrs.get("BTCPP_format", "4") != "4":
+        raise UserError(Problem(f"BTCPP_format {root.attrs['BTCPP_format']} is not supported", file, root.line,
+                                root.column, hint="Groot2 and BehaviorTree.CPP 4 write format 4"))
+    trees = [e for e in root.children if e.tag == "BehaviorTree"]
+    main = root.attrs.get("main_tree_to_execute")
+    chosen = [t for t in trees if t.attrs.get("ID") == main] if main else trees
+    if len(chosen) != 1:
+        raise UserError(Problem("cannot tell which <BehaviorTree> is the mission" if chosen else
+                                "no <BehaviorTree> to run", file, root.line, root.column,
+                                hint="one <BehaviorTree ID=...>, or main_tree_to_execute naming one"))
+    tree = chosen[0]
+    if len(tree.children) != 1:
+        raise UserError(Problem("a <BehaviorTree> holds exactly one root node", file, tree.line, tree.column))
+    settings: dict[str, Any] = {}
+    element = tree
+    for mission in (e for e in root.children if e.tag == MISSION_TAG):
+        element = mission
+        for key, text in mission.attrs.items():
+            if key.startswith("noise."):
+                settings.setdefault("noise", {})[key[len("noise."):]] = _value(text)
+            elif key == "backend":
+                settings[key] = _value(text) if not text.strip().startswith("{") else json.loads(text)
+            elif key in ("name", "description", "maze", "start", "sensor_model", "robot"):
+                settings[key] = text
+            else:
+                settings[key] = _value(text)
+    if "noise" in settings:
+        settings["noise"] = _marked(settings["noise"], element)
+    data = _marked({**settings, "tree": _node(tree.children[0], file)}, element)
+    data.marks["tree"] = data.value_marks["tree"] = (tree.line, tree.column)
+    return data
