@@ -179,3 +179,76 @@ def test_an_xml_file_with_entities_is_refused(tmp_path):
                     '<root BTCPP_format="4"><BehaviorTree ID="T"><Stop name="&b;"/></BehaviorTree></root>')
     done = thymio_bt("validate", path)
     assert done.returncode == 2 and "DTDs and entities are not allowed" in done.stderr and f"{path}:1:" in done.stderr
+
+
+def _groot2_request(zmq, port, kind, payload=None, request_id=7):
+    """One Groot2 protocol-2 request, written from BT.CPP's groot2_protocol.h, and its reply."""
+    context = zmq.Context()
+    socket = context.socket(zmq.REQ)
+    socket.setsockopt(zmq.RCVTIMEO, 500)
+    socket.setsockopt(zmq.LINGER, 0)
+    socket.connect(f"tcp://127.0.0.1:{port}")
+    try:
+        socket.send_multipart([struct.pack("<BBI", 2, ord(kind), request_id)] + ([payload] if payload else []))
+        return socket.recv_multipart()
+    finally:
+        context.destroy(linger=0)
+
+
+def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
+    zmq = module("zmq")
+    msgpack = module("msgpack")
+    btview = _require_program_in_venv("btview")
+    port = _free_port_pair()
+    mission = Path("missions/maze_part1_2.yaml").resolve()
+    xml = tmp_path / "tree.xml"
+    thymio_bt("tree", mission, "--btcpp", xml)
+    run = subprocess.Popen([sys.executable, "-m", "thymio_bt.cli", "run", str(mission),
+                            "--realtime", "2", "--groot2", str(port), "-q"], cwd=tmp_path)
+    try:
+        for _ in range(100):             # the server starts with the first tick
+            try:
+                head, tree = _groot2_request(zmq, port, "T")
+                break
+            except zmq.Again:
+                assert run.poll() is None, "the run ended before serving"
+        assert head[:6] == struct.pack("<BBI", 2, ord("T"), 7) and len(head) == 22
+        assert tree.decode() == xml.read_text()      # the same XML as `tree --btcpp`, uids and all
+        uids = [int(u) for u in re.findall(r'_uid="(\d+)"', tree.decode())]
+        head, statuses = _groot2_request(zmq, port, "S")
+        records = [struct.unpack_from("<HB", statuses, i) for i in range(0, len(statuses), 3)]
+        assert [uid for uid, _ in records] == uids and records[0][1] == 1   # the root is RUNNING
+        assert all(status in (0, 1, 2, 3, 11, 12, 13) for _, status in records)
+        head, board = _groot2_request(zmq, port, "B", b"MainTree")
+        assert set(msgpack.unpackb(board)) == {"MainTree"}
+        assert _groot2_request(zmq, port, "Z") == [b"error"]
+        shown = subprocess.run([btview, "snapshot", "-p", str(port), "--ascii", "--no-color"],
+                               capture_output=True, text=True, timeout=30)
+        assert "part 1 [MoveUntilWall]" in shown.stdout and "15 nodes" in shown.stdout, shown.stderr
+    finally:
+        run.terminate()
+        run.wait(timeout=10)
+
+
+def _free_port_pair():
+    """A loopback port N with N+1 free too (Groot2 serves on both)."""
+    import socket
+    for _ in range(50):
+        with socket.socket() as first, socket.socket() as second:
+            first.bind(("127.0.0.1", 0))
+            port = first.getsockname()[1]
+            try:
+                second.bind(("127.0.0.1", port + 1))
+            except OSError:
+                continue
+            return port
+    raise AssertionError("no two consecutive free ports on 127.0.0.1")
+
+
+def _require_program_in_venv(name):
+    """A console script installed beside this Python (btview, Groot2's terminal client)."""
+    path = Path(sys.executable).parent / name
+    if not path.exists():
+        from _require import missing
+        missing(f"program {name}")
+    return str(path)

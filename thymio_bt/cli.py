@@ -85,10 +85,13 @@ def _write_json(path: Path, data: Any) -> None:
               help="A setting of the backend, e.g. --backend-opt device=/dev/ttyACM0 (repeatable).")
 @click.option("--robot", default=None, metavar="NAME",
               help="The robot model: course (default), enki or real (see 'thymio-bt backends').")
+@click.option("--groot2", type=click.IntRange(1, 65534), is_flag=False, flag_value=1667, default=None,
+              metavar="[PORT]", help="Serve the live tree to Groot2 on 127.0.0.1:PORT and PORT+1 "
+                                     "(default 1667; use with --realtime; needs thymio-bt[groot2]).")
 def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | None, start: str | None,
         report: Path | None, quiet: bool, realtime: float | None, plot: Path | None, plot_signals: Path | None,
         gif: Path | None, view: bool, speedup: float | None, log: Path | None, live_tree: bool,
-        backend: str | None, backend_opts: tuple[str, ...], robot: str | None) -> None:
+        backend: str | None, backend_opts: tuple[str, ...], robot: str | None, groot2: int | None) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     try:
         from .mission import load_mission
@@ -118,7 +121,16 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
             from .viz.window import live_hook
             window = live_hook(runner, 1.0 if speedup is None else speedup)
             hooks.append(window)
-        result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
+        monitor = None
+        if groot2 is not None:
+            from .groot2 import Groot2Server
+            monitor = Groot2Server(groot2)
+            hooks.append(monitor)
+        try:
+            result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
+        finally:
+            if monitor is not None:
+                monitor.close()
         hooks[0].done()
         if report is not None:
             _write_json(report, result.report())
