@@ -90,12 +90,12 @@ def breakdown_in_process(repeats: int) -> dict:
     from thymio_bt.runner import Run
 
     mission = load_mission(MISSION)
+    expected = Run(mission).run()
     runs = []
     for _ in range(repeats + 1):
         run = Run(mission)
         sim = run.backend
-        tick = run.root.tick            # a generator: the runner consumes it, so time it consumed
-        timed = {"tree.tick": _Timed(lambda tick=tick: iter(list(tick()))), "advance": _Timed(sim.advance),
+        timed = {"tree.tick": _TimedTick(run.root.tick), "advance": _Timed(sim.advance),
                  "sensor refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
                  "space.step": _Timed(sim._step)}
         run.root.tick, sim.advance = timed["tree.tick"], timed["advance"]
@@ -105,6 +105,8 @@ def breakdown_in_process(repeats: int) -> dict:
         result = run.run()
         total = time.perf_counter() - t0
         ticks = result.ticks
+        assert (result.status, ticks) == (expected.status, expected.ticks), \
+            f"the timed run is not the mission's run: {result.status} after {ticks} ticks"
         runs.append({"tick_total": total / ticks * 1e6,
                      **{k: t.total / ticks * 1e6 for k, t in timed.items()},
                      "calls": {k: t.calls for k, t in timed.items()}})
@@ -112,6 +114,24 @@ def breakdown_in_process(repeats: int) -> dict:
     out = {k: statistics.median(r[k] for r in runs) for k in runs[0] if k != "calls"}
     out["calls"] = runs[0]["calls"]
     return out
+
+
+class _TimedTick:
+    """Times a py_trees ``tick()`` generator while the runner consumes it, and stays lazy: py_trees'
+    ``stop()`` calls ``tick()`` to make a fresh iterator, so an eager wrapper would tick the tree
+    again after it has ended (the mission restarted and the breakdown timed a TIMEOUT run)."""
+
+    def __init__(self, tick):
+        self.tick, self.calls, self.total = tick, 0, 0.0
+
+    def __call__(self):
+        t0 = time.perf_counter()
+        for node in self.tick():
+            self.total += time.perf_counter() - t0
+            yield node
+            t0 = time.perf_counter()
+        self.total += time.perf_counter() - t0
+        self.calls += 1
 
 
 # ------------------------------------------------------------------ (b) whole process
