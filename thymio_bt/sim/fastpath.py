@@ -1,4 +1,4 @@
-"""Two pymunk calls without their per-call Python wrapping, for the simulation's hot path.
+"""Three pymunk calls without their per-call Python wrapping, for the simulation's hot path.
 
 pymunk 7's ``Space.step`` wraps the C step in bookkeeping for deferred adds and removes and for
 post-step callbacks, and ``Space.segment_query_first`` builds three Python objects per ray. At 100
@@ -14,12 +14,14 @@ Example::
     step(0.01)                                 # same as space.step(0.01)
     ray = RayCaster(space)
     ray.alpha((0, 0), (1, 0), shape_filter)    # fraction along the segment of the first hit, or None
+    near = NearShapes(space, body, hull, shape_filter)
+    near.within(0.02)                          # is any shape closer than 2 cm to the hull?
 """
 
 from __future__ import annotations
 
 from functools import partial
-from typing import Callable
+from typing import Callable, Sequence
 
 import pymunk
 from pymunk._chipmunk import ffi, lib
@@ -46,3 +48,28 @@ class RayCaster:
         if self._query(start, end, 0.0, shape_filter, self._info) == self._null:
             return None
         return self._info.alpha
+
+
+class NearShapes:
+    """Whether any shape of a space lies closer than ``r`` to a body's convex hull: one C shape query
+    with a probe (the hull grown by ``r``, never added to the space) and no Python callback.
+
+    pymunk's ``Space.shape_query`` builds a Python object per overlap; here only the yes/no is
+    needed, which lets the clearance tracker skip its exact (Python) computation in the common case.
+    """
+
+    __slots__ = ("_probe", "_query", "radius")
+
+    def __init__(self, space: pymunk.Space, body: pymunk.Body, hull: Sequence[tuple[float, float]],
+                 shape_filter: pymunk.ShapeFilter) -> None:
+        self._probe = pymunk.Poly(body, list(hull))
+        self._probe.filter = shape_filter
+        self._query = partial(lib.cpSpaceShapeQuery, space._space, self._probe._shape, ffi.NULL, ffi.NULL)
+        self.radius = 0.0
+
+    def within(self, radius: float) -> bool:
+        """True when some shape the filter admits is closer than ``radius`` to the hull."""
+        if radius != self.radius:
+            self._probe.unsafe_set_radius(radius)
+            self.radius = radius
+        return bool(self._query())

@@ -32,7 +32,7 @@ from ..maze import Maze
 from ..placement import convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
-from .fastpath import RayCaster, stepper
+from .fastpath import NearShapes, RayCaster, stepper
 from .noise import NoiseConfig, NoiseSource
 
 _ROBOT_TYPE = 1
@@ -122,6 +122,7 @@ class _Body:
         gear.max_bias = 0.0
         gear.max_force = 0.1
         self.joints = (pivot, gear)
+        self.near = NearShapes(space, self.body, model.hull, self.filter)   # for the clearance tracker
         self.body.angle = pose.yaw
         self.body.position = (pose.x, pose.y)
         self.control.position = self.body.local_to_world((model.axle_x, 0.0))
@@ -336,15 +337,19 @@ class Simulation(Backend):
     def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
         """Track the smallest hull-to-wall gap, exactly, cheaply in the common case.
 
+        First one C query asks whether anything is closer to the hull than the record: mostly not,
+        and then there is nothing to compute.
         For each wall near the axle, q is its closest point and n the direction to it. When q lies
         on a long face of a wall box, the face's line is at distance d from the axle and the hull's
         support point in direction n is nearest to it: if that point projects onto the face, the
         gap is exactly d - extent(n). Otherwise (wall ends, corners, polygons) d - extent(n) is a
         lower bound, and the polygon distance is computed only if the bound could beat the record.
         """
+        record = min(self.min_clearance, self._farthest_gap)
+        if not entity.near.within(record + 1e-6):      # nothing can beat the record: one C query
+            return
         tables = self._hull
         ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
-        record = min(self.min_clearance, self._farthest_gap)
         best = math.inf
         candidates = []
         for info in self.space.point_query((ax, ay), tables.reach + record, entity.filter):
