@@ -12,8 +12,8 @@ from thymio_bt.errors import UserError
 from thymio_bt.maze import load_maze
 from thymio_bt.maze.gazebo import import_world
 
-COURSE = Path(__file__).resolve().parents[1].parent / "shared" / "course"
-WORLDS = COURSE / "gazebo" / "worlds"
+COURSE = Path(__file__).resolve().parent / "data" / "course"      # the course package's worlds and walls
+WORLDS = COURSE
 MAZES = Path(__file__).resolve().parents[1] / "mazes"
 
 GROUND = """
@@ -217,8 +217,6 @@ def test_tilted_and_square_boxes(tmp_path):
 # --- (c) the course worlds --------------------------------------------------------------------
 
 def course(name: str) -> tuple[Path, dict]:
-    if not (WORLDS / f"{name}.world").is_file():
-        pytest.skip(f"course files not found in {COURSE}")
     return WORLDS / f"{name}.world", json.loads((COURSE / f"{name}.json").read_text())
 
 
