@@ -18,7 +18,7 @@ def missing(what: str) -> None:
     """Skip (locally) or fail (in CI) because ``what`` is not installed."""
     if REQUIRE_ALL:
         pytest.fail(f"{what} is required in CI (THYMIO_BT_REQUIRE_ALL=1) but missing")
-    pytest.skip(f"{what} is not installed")
+    pytest.skip(f"{what} is not installed", allow_module_level=True)
 
 
 def module(name: str) -> ModuleType:

@@ -1,15 +1,18 @@
 """Plots, animation, JSON-lines log and replay, tree exports and the live tree (headless)."""
 
 import json
+from pathlib import Path
 
+import _require
 import pytest
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
 from thymio_bt.logs import read_log
 
-pytest.importorskip("matplotlib")
-PIL = pytest.importorskip("PIL.Image")
+_require.module("matplotlib")
+PIL = _require.module("PIL.Image")
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
@@ -69,12 +72,39 @@ def test_replay_of_a_file_that_is_not_a_log_is_a_user_error(tmp_path):
     assert result.exit_code == 2 and "first line must be its header" in result.output
 
 
-def test_tree_command_writes_dot_and_explains_missing_graphviz(tmp_path):
+def test_tree_prints_the_tree_and_writes_nothing_unasked(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(main, ["tree", str(ROOT / "missions/maze_bonus.yaml")])
+    assert result.exit_code == 0 and "ChooseTurn" in result.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_tree_writes_dot_by_flag_or_suffix_and_to_standard_output(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    mission = str(ROOT / "missions/maze_bonus.yaml")
+    assert CliRunner().invoke(main, ["tree", mission, "--dot"]).exit_code == 0       # default: ./maze_bonus.dot
+    assert (tmp_path / "maze_bonus.dot").read_text().startswith("digraph")
+    assert CliRunner().invoke(main, ["tree", mission, "-o", "t.dot"]).exit_code == 0
+    assert "MoveUntilWall" in (tmp_path / "t.dot").read_text()
+    printed = CliRunner().invoke(main, ["tree", mission, "--dot", "-o", "-"])
+    assert printed.exit_code == 0 and printed.stdout.startswith("digraph")
+    unknown = CliRunner().invoke(main, ["tree", mission, "-o", "t.txt"])
+    assert unknown.exit_code == 2 and "cannot tell the format" in unknown.output
+
+
+def test_tree_draws_svg_with_graphviz(tmp_path):
+    _require.program("dot")
     result = CliRunner().invoke(main, ["tree", "missions/maze_bonus.yaml", "--svg", "-o", str(tmp_path / "t.svg")])
-    assert result.exit_code == 0
-    assert "ChooseTurn" in result.output
-    dot = (tmp_path / "t.dot").read_text()
-    assert dot.startswith("digraph") and "MoveUntilWall" in dot
+    assert result.exit_code == 0, result.output
+    assert "<svg" in (tmp_path / "t.svg").read_text() and "MoveUntilWall" in (tmp_path / "t.svg").read_text()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.svg"]            # no .dot or temporary left
+
+
+def test_tree_explains_missing_graphviz(tmp_path, monkeypatch):
+    monkeypatch.setattr("shutil.which", lambda name: None)
+    result = CliRunner().invoke(main, ["tree", "missions/maze_bonus.yaml", "--png", "-o", str(tmp_path / "t.png")])
+    assert result.exit_code == 2 and "needs Graphviz's 'dot' program" in result.output
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_live_tree_prints_statuses_as_they_change():

@@ -9,12 +9,14 @@ import json
 import math
 import sys
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any, NoReturn
 
 import click
 
 from .errors import UserError
+from .outputs import STDOUT, Output, check_writable
 
 
 def _fail(exc: UserError) -> NoReturn:
@@ -46,14 +48,8 @@ def main() -> None:
     """YAML behaviour-tree missions for a simulated Thymio II (no ROS, no Gazebo)."""
 
 
-def _write_json(path: Path, data: Any) -> None:
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(path.suffix + ".tmp")
-        tmp.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n")
-        tmp.replace(path)
-    except OSError as exc:
-        raise UserError(f"cannot write {path}: {exc}") from None
+def _json(data: Any) -> str:
+    return json.dumps(data, indent=1, allow_nan=False) + "\n"
 
 
 @main.command()
@@ -100,6 +96,10 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
         overrides = _overrides(sets)
         if robot is not None:
             overrides["robot"] = robot
+        report_out = Output(report, "--report") if report is not None else None
+        _check_pictures(plot, plot_signals, gif)
+        if log is not None and str(log) != STDOUT:
+            check_writable(log, "--log")
         spec = load_mission(mission, overrides, maze=maze, start=start)
         device = _backend(spec, seed, backend, backend_opts)
         try:
@@ -132,15 +132,15 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
             if monitor is not None:
                 monitor.close()
         hooks[0].done()
-        if report is not None:
-            _write_json(report, result.report())
+        if report_out is not None:
+            report_out.write_text(_json(result.report()))
         if recorder is not None:
             recording = recorder.finish(result)
             _pictures(recording, plot, plot_signals, gif, 4.0 if speedup is None else speedup, quiet)
     except UserError as exc:
         _fail(exc)
     if not quiet:
-        _summary(result)
+        _summary(result, err=STDOUT in (str(report), str(log)))     # stdout carries the report or log
         if result.status != "SUCCESS":
             from .viz.terminal import failing_tree
             click.echo(failing_tree(runner), err=True)
@@ -157,6 +157,23 @@ def _backend(spec: Any, seed: int | None, name: str | None, opts: tuple[str, ...
     options.update(_pairs(opts, "--backend-opt", "device=/dev/ttyACM0"))
     kind = backend_kind(name or spec.backend)
     return kind.create(spec, spec.seed if seed is None else seed, options)
+
+
+#: what --plot/--plot-signals (matplotlib) and --gif (Pillow, or ffmpeg for .mp4) can write
+PICTURE_SUFFIXES = {"--plot": (".png", ".svg", ".pdf", ".jpg"), "--plot-signals": (".png", ".svg", ".pdf", ".jpg"),
+                    "--gif": (".gif", ".mp4")}
+
+
+def _check_pictures(plot: Path | None, plot_signals: Path | None, gif: Path | None) -> None:
+    """Refuse, before the run, a picture whose format cannot be written or whose folder is missing."""
+    for option, path in (("--plot", plot), ("--plot-signals", plot_signals), ("--gif", gif)):
+        if path is None:
+            continue
+        suffixes = PICTURE_SUFFIXES[option]
+        if path.suffix.lower() not in suffixes:
+            raise UserError(f"{option} {path}: cannot write '{path.suffix or 'no extension'}' "
+                            f"(hint: use {', '.join(suffixes)})")
+        check_writable(path, option)
 
 
 def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif: Path | None,
@@ -191,6 +208,7 @@ def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | 
     from .logs import read_log
 
     try:
+        _check_pictures(plot, plot_signals, gif)
         recording = read_log(log)
         end = recording.end
         click.echo(f"{recording.mission}: {end.get('status')} after {end.get('sim_time', 0):.1f} s simulated, "
@@ -208,31 +226,41 @@ def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | 
 
 @main.command()
 @click.argument("mission", type=click.Path(path_type=Path))
-@click.option("--dot", "fmt", flag_value="dot", default=True, help="Write a Graphviz .dot file (default).")
+@click.option("--dot", "fmt", flag_value="dot", help="Write a Graphviz .dot file.")
 @click.option("--svg", "fmt", flag_value="svg", help="Write an SVG (needs Graphviz's dot program).")
 @click.option("--png", "fmt", flag_value="png", help="Write a PNG (needs Graphviz's dot program).")
-@click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="File to write.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=None,
+              help="File to write (- = standard output); its suffix picks the format when no flag does. "
+                   "Default with a format flag: MISSION's name with that suffix, in the current folder.")
 @click.option("--btcpp", type=click.Path(path_type=Path), default=None, metavar="OUT.xml",
               help="Write the tree as BehaviorTree.CPP v4 XML (Groot2 opens it) instead of a drawing.")
-def tree(mission: Path, fmt: str, output: Path | None, btcpp: Path | None) -> None:
-    """Draw the tree of MISSION (text on the terminal, and a .dot/.svg/.png file), or export it."""
+def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None) -> None:
+    """Print the tree of MISSION; write it as .dot/.svg/.png or BT.CPP XML when asked."""
     try:
         if btcpp is not None:
             from .btcpp import mission_xml
             from .mission import load_mission
 
-            text = mission_xml(load_mission(mission), btcpp)
-            try:
-                btcpp.write_text(text, encoding="utf-8")
-            except OSError as exc:
-                raise UserError(f"cannot write {btcpp}: {exc}") from None
-            click.echo(f"wrote {btcpp}", err=True)
+            out = Output(btcpp, "--btcpp")
+            out.write_text(mission_xml(load_mission(mission), btcpp))
+            click.echo(f"wrote {out}", err=True)
             return
         from .viz.terminal import export_tree, tree_text
 
-        click.echo(tree_text(mission))
-        written, note = export_tree(mission, fmt, output)
-        click.echo(f"wrote {written}" + (f" ({note})" if note else ""), err=True)
+        if fmt is None and output is not None:
+            fmt = output.suffix.lower().lstrip(".")
+            if fmt not in ("dot", "svg", "png"):
+                raise UserError(f"--output {output}: cannot tell the format from '{output.suffix or 'no extension'}' "
+                                f"(hint: end the name with .dot, .svg or .png, or add --dot/--svg/--png)")
+        if fmt is None:
+            click.echo(tree_text(mission))
+            return
+        out = Output(output if output is not None else Path(mission.stem).with_suffix(f".{fmt}"), "--output")
+        if not out.is_stdout:
+            click.echo(tree_text(mission))
+        export_tree(mission, out, fmt)
+        if not out.is_stdout:
+            click.echo(f"wrote {out}", err=True)
     except UserError as exc:
         _fail(exc)
 
@@ -249,6 +277,9 @@ def export(log: Path, output: Path | None, btlog: Path | None) -> None:
         from .logs import open_writer, read_log
 
         targets = [p for p in (output, btlog) if p is not None]
+        for target, option in ((output, "--output"), (btlog, "--btlog")):
+            if target is not None and str(target) != STDOUT:
+                check_writable(target, option)
         if not targets:
             raise UserError("nothing to write (hint: -o run.mcap, or --btlog run.btlog)")
         recording = read_log(log)
@@ -288,22 +319,23 @@ class _Progress:
             click.echo("\r" + " " * 60 + "\r", err=True, nl=False)
 
 
-def _summary(result: Any) -> None:
+def _summary(result: Any, err: bool = False) -> None:
+    echo = partial(click.echo, err=err)
     colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow"}[result.status]
     rtf = result.real_time_factor
-    click.echo(f"{result.mission}: " + click.style(result.status, fg=colour, bold=True)
-               + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
-               f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)")
+    echo(f"{result.mission}: " + click.style(result.status, fg=colour, bold=True)
+         + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
+         f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)")
     pose = result.final_pose
     if pose:
-        click.echo(f"  final pose: x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg")
+        echo(f"  final pose: x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg")
     else:
-        click.echo("  final pose: no robot")
+        echo("  final pose: no robot")
     clearance = f"{result.min_clearance:.4f} m" if result.min_clearance is not None else "n/a"
-    click.echo(f"  collisions: {result.collisions}   min clearance: {clearance}")
+    echo(f"  collisions: {result.collisions}   min clearance: {clearance}")
     if result.status != "SUCCESS":
-        click.echo(f"  failed at: {result.failed_path}", err=True)
-        click.echo(f"  reason: [{result.code}] {result.reason}", err=True)
+        echo(f"  failed at: {result.failed_path}", err=True)
+        echo(f"  reason: [{result.code}] {result.reason}", err=True)
 
 
 @main.command()
@@ -322,13 +354,14 @@ def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tup
     from .sweep import LocalPool, sweep as run_sweep
 
     try:
+        sweep_out = Output(out, "--out") if out is not None else None
         with click.progressbar(length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr,
                                show_pos=True) as bar:
             result = run_sweep(mission, runs, seed_start, _overrides(sets), str(maze) if maze else None, start,
                                executor=LocalPool(workers), progress=lambda _: bar.update(1))
         data = result.to_json()
-        if out is not None:
-            _write_json(out, data)
+        if sweep_out is not None:
+            sweep_out.write_text(_json(data))
     except UserError as exc:
         _fail(exc)
     _sweep_table(data)
@@ -434,16 +467,16 @@ def backends_command() -> None:
 
 
 @main.command()
-@click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="Write to a file.")
-def schema(output: Path | None) -> None:
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=STDOUT, show_default=True,
+              help="File to write (- = standard output).")
+def schema(output: Path) -> None:
     """Print the JSON Schema of mission files (for editors with yaml-language-server)."""
     from .mission.schema import mission_schema
 
-    text = json.dumps(mission_schema(), indent=1)
-    if output is None:
-        click.echo(text)
-    else:
-        output.write_text(text + "\n")
+    try:
+        Output(output, "--output").write_text(json.dumps(mission_schema(), indent=1) + "\n")
+    except UserError as exc:
+        _fail(exc)
 
 
 @main.group()
@@ -453,24 +486,24 @@ def maze() -> None:
 
 @maze.command("import")
 @click.argument("world", type=click.Path(path_type=Path))
-@click.option("--output", "-o", type=click.Path(path_type=Path), default=None, help="Maze YAML to write.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=STDOUT, show_default=True,
+              help="Maze YAML to write (- = standard output).")
 @click.option("--model", default=None, help="Import only this model of the world.")
-def maze_import(world: Path, output: Path | None, model: str | None) -> None:
+def maze_import(world: Path, output: Path, model: str | None) -> None:
     """Convert a Gazebo classic WORLD file of box walls into a maze file."""
     import yaml
 
     from .maze.gazebo import import_world
 
     try:
+        out = Output(output, "--output")
         result = import_world(world, model)
+        text = (f"# Made by: thymio-bt maze import {world}" + ("" if out.is_stdout else f" -o {output}") + "\n"
+                + yaml.safe_dump(result.to_yaml_dict(), sort_keys=False))
+        out.write_text(text)
     except UserError as exc:
         _fail(exc)
-    text = (f"# Made by: thymio-bt maze import {world}" + (f" -o {output}" if output else "") + "\n"
-            + yaml.safe_dump(result.to_yaml_dict(), sort_keys=False))
-    if output is None:
-        click.echo(text, nl=False)
-    else:
-        output.write_text(text)
+    if not out.is_stdout:
         click.echo(f"wrote {output}: {len(result.walls)} walls", err=True)
 
 

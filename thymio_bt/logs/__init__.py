@@ -84,7 +84,10 @@ def formats() -> list[LogFormat]:
 
 
 def format_for(path: str | Path, *, reading: bool = False) -> LogFormat:
-    """The format of ``path`` by its suffix (a folder, or a path without suffix, is a rosbag2 bag)."""
+    """The format of ``path`` by its suffix (a folder, or a path without suffix, is a rosbag2 bag;
+    ``-``, standard output, is written as JSON lines)."""
+    if str(path) == "-" and not reading:
+        return BUILTIN[0]
     path = Path(path)
     suffix = path.suffix.lower()
     available = formats()

@@ -8,6 +8,7 @@ changed), then an ``end`` with the outcome and the events.
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 from typing import IO, Any
 
@@ -22,9 +23,13 @@ class JsonlWriter:
 
     def __init__(self, path: Path) -> None:
         self.path = path
+        self._owned = str(path) != "-"                      # "-": standard output, left open
+        self._file: IO[str] | None = sys.stdout
+        if not self._owned:
+            return
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            self._file: IO[str] | None = path.open("w", encoding="utf-8", buffering=1)
+            self._file = path.open("w", encoding="utf-8", buffering=1)
         except OSError as exc:
             raise UserError(f"cannot write the log {path}: {exc}") from None
 
@@ -43,7 +48,10 @@ class JsonlWriter:
 
     def close(self) -> None:
         if self._file is not None:
-            self._file.close()
+            if self._owned:
+                self._file.close()
+            else:
+                self._file.flush()
             self._file = None
 
 

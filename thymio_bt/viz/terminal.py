@@ -8,11 +8,14 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 
 from ..errors import UserError
+
+if TYPE_CHECKING:
+    from ..outputs import Output
 
 
 class LiveTree:
@@ -52,20 +55,19 @@ def tree_text(mission_path: Path) -> str:
     return py_trees.display.unicode_tree(_build(mission_path))
 
 
-def export_tree(mission_path: Path, fmt: str, output: Path | None) -> tuple[Path, str]:
-    """Write the tree as .dot, or .svg/.png through Graphviz; fall back to .dot with a hint."""
-    graph = py_trees.display.dot_tree(_build(mission_path))
-    target = output or Path(mission_path.stem).with_suffix(f".{fmt}")
-    dot_file = target.with_suffix(".dot")
-    try:
-        dot_file.write_text(graph.to_string())
-    except OSError as exc:
-        raise UserError(f"cannot write {dot_file}: {exc}") from None
+def export_tree(mission_path: Path, out: "Output", fmt: str) -> None:
+    """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``."""
+    source = py_trees.display.dot_tree(_build(mission_path)).to_string()
     if fmt == "dot":
-        return dot_file, ""
+        out.write_text(source)
+        return
     program = shutil.which("dot")
     if program is None:
-        return dot_file, f"no .{fmt}: Graphviz's 'dot' program is not installed " \
-                         f"(hint: apt-get install graphviz, then: dot -T{fmt} {dot_file} -o {target})"
-    subprocess.run([program, f"-T{fmt}", str(dot_file), "-o", str(target)], check=True)
-    return target, ""
+        raise UserError(f"a .{fmt} needs Graphviz's 'dot' program (hint: apt-get install graphviz, "
+                        f"or write the .dot: thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot)")
+    if out.is_stdout:
+        sys.stdout.buffer.write(subprocess.run([program, f"-T{fmt}"], input=source.encode(), check=True,
+                                               capture_output=True).stdout)
+        return
+    with out.staged() as tmp:
+        subprocess.run([program, f"-T{fmt}", "-o", str(tmp)], input=source.encode(), check=True)

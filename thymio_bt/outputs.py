@@ -1,0 +1,90 @@
+"""Files the user asked for: ``-`` is standard output, a file is written whole or not at all.
+
+Every command that writes (``--report``, ``sweep --out``, ``schema -o``, ``maze import -o``, ``tree -o``,
+``export -o``, pictures) goes through here, so that the same promises hold everywhere:
+
+- the target is checked *before* any work starts (its folder exists and is writable, and it is not
+  a FIFO, a device or a folder), so a 200-run sweep does not fail at the end;
+- the text goes to a temporary file in the target's folder, renamed over the target only once
+  complete: a full disk or a crash never leaves half a report or a ``*.tmp`` behind;
+- the message says which path was actually written.
+
+Example::
+
+    out = Output(Path("run.json"), "--report")   # raises UserError now if run.json cannot be written
+    out.write_text(json.dumps(report))           # atomically; "-" would print it instead
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+from .errors import UserError
+
+STDOUT = "-"
+
+
+class Output:
+    """One file the user named for ``option`` (``-`` = standard output), checked when created."""
+
+    __slots__ = ("path", "option")
+
+    def __init__(self, path: Path | str, option: str, stdout_ok: bool = True) -> None:
+        self.path = Path(path)
+        self.option = option
+        if self.is_stdout and not stdout_ok:
+            raise UserError(f"{option} cannot write to standard output (hint: give a file name)")
+        if not self.is_stdout:
+            check_writable(self.path, option)
+
+    @property
+    def is_stdout(self) -> bool:
+        return str(self.path) == STDOUT
+
+    def __str__(self) -> str:
+        return "standard output" if self.is_stdout else str(self.path)
+
+    def write_text(self, text: str) -> None:
+        """Print ``text`` (for ``-``) or replace the file with it atomically."""
+        if self.is_stdout:
+            sys.stdout.write(text)
+            sys.stdout.flush()
+            return
+        with self.staged() as tmp:
+            tmp.write_text(text, encoding="utf-8")
+
+    @contextmanager
+    def staged(self) -> Iterator[Path]:
+        """A temporary path (same folder and suffix) to write; renamed over the target on success,
+        removed on any failure. A write error becomes a UserError naming the target."""
+        fd, name = tempfile.mkstemp(prefix=f".{self.path.stem}.", suffix=f".tmp{self.path.suffix}",
+                                    dir=self.path.parent)
+        os.close(fd)
+        tmp = Path(name)
+        try:
+            yield tmp
+            os.replace(tmp, self.path)
+        except OSError as exc:
+            raise UserError(f"cannot write {self.path}: {exc.strerror or exc}") from None
+        finally:
+            tmp.unlink(missing_ok=True)
+
+
+def check_writable(path: Path, option: str) -> None:
+    """Refuse, before any work, a target that cannot be written or must not be replaced."""
+    if path.is_dir():
+        raise UserError(f"{option} {path}: is a folder (hint: give a file name, e.g. {path / 'out'}"
+                        f"{path.suffix or '.json'})")
+    if path.exists() and not path.is_file():
+        raise UserError(f"{option} {path}: not a regular file (a FIFO or a device); refusing to replace it "
+                        f"(hint: write to a regular file)")
+    folder = path.parent
+    if not folder.is_dir():
+        raise UserError(f"{option} {path}: the folder {folder} does not exist (hint: mkdir -p {folder})")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UserError(f"{option} {path}: the folder {folder} is not writable (hint: choose another folder)")
