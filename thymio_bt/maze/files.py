@@ -8,21 +8,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..data import MAZES
 from ..errors import Problem, UserError, did_you_mean
 from ..validation import validate
 from ..yamlio import MarkedDict, load_yaml
 from .grid import GridMazeFile, maze_from_grid_file
 from .model import Maze
 
-#: The project's mazes/ folder when running from a checkout.
-MAZE_DIR = Path(__file__).resolve().parents[2] / "mazes"
-
-
 def maze_dirs() -> list[Path]:
-    """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the checkout's."""
-    dirs = [Path.cwd() / "mazes", MAZE_DIR]
+    """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the shipped ones."""
+    dirs = [Path.cwd() / "mazes", MAZES]
     return [d for i, d in enumerate(dirs) if d.is_dir() and d not in dirs[:i]]
-
 
 
 def load_maze(path: str | Path) -> Maze:

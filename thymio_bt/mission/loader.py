@@ -22,7 +22,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping
 
-from ..errors import UserError
+from ..data import MISSIONS
+from ..errors import Problem, UserError, did_you_mean
 from ..units import Quantity
 from ..yamlio import load_yaml
 from .assemble import Assembler
@@ -32,11 +33,27 @@ from .registry import Registry
 from .xml_reader import read_xml_mission
 
 
+def resolve_mission(ref: str | Path) -> Path:
+    """A mission by path, or by name (``maze_part1_2``): ./missions, then the missions shipped with
+    thymio-bt. A name that matches nothing is an error with the nearest names."""
+    path = Path(ref)
+    if path.exists() or path.suffix or len(path.parts) != 1:
+        return path
+    folders = [Path("missions"), MISSIONS]
+    for folder in folders:
+        if (folder / f"{ref}.yaml").is_file():
+            return folder / f"{ref}.yaml"
+    known = sorted({p.stem for folder in folders if folder.is_dir() for p in folder.glob("*.yaml")})
+    raise UserError(Problem(f"mission not found: '{ref}'", hint=f"a mission file, or a shipped mission: "
+                                                                 f"{did_you_mean(str(ref), known)}"))
+
+
 def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
                  maze: str | Path | None = None, start: str | None = None,
                  registry: Registry | None = None) -> Mission:
-    """Load and validate a mission file; raise :class:`UserError` listing every problem."""
-    path = Path(path)
+    """Load and validate a mission file (or a shipped mission by name); raise :class:`UserError`
+    listing every problem."""
+    path = resolve_mission(path)
     file = str(path)
     data = read_xml_mission(path) if path.suffix.lower() == ".xml" else load_yaml(path)
     assembly = Assembler(registry).assemble(path, data, overrides, maze, start)
