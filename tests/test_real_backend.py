@@ -1,6 +1,8 @@
 """The real-robot backend's mapping logic against fake nodes: no robot, no network, no waiting."""
 
 import math
+import os
+import signal
 import subprocess
 import sys
 import types
@@ -520,6 +522,28 @@ def test_a_crash_inside_the_run_still_stops_the_motors():
     with pytest.raises(KeyboardInterrupt):
         run.run(on_tick=interrupt)
     assert node.closed and node.writes[-1] == (0, 0)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_the_real_robot_and_ends_the_run_interrupted(sig):
+    from thymio_bt.interrupts import Interrupts
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    node = IdealWheels()
+    robot, *_ = make(node, spawn=None)
+    run = Run(load_mission("missions/square.yaml"), backend=robot)
+
+    def signal_at_tick_20(r):
+        if r.ticks == 20:
+            os.kill(os.getpid(), sig)
+
+    with Interrupts() as interrupts:
+        result = run.run(on_tick=signal_at_tick_20, interrupts=interrupts)
+    assert result.status == "INTERRUPTED" and result.code == "INTERRUPTED" and result.ticks == 20
+    assert signal.Signals(sig).name in result.reason and interrupts.exit_code == 128 + sig
+    assert node.closed and node.writes[-1] == (0, 0)        # motors stopped, robot released
+    assert result.report()["sim_time"] == pytest.approx(1.9)
 
 
 def test_cli_backend_tdm_without_a_device_manager_is_a_user_error(monkeypatch):

@@ -16,6 +16,7 @@ from typing import Any, NoReturn
 import click
 
 from .errors import UserError
+from .interrupts import Interrupts
 from .outputs import STDOUT, Output, check_writable
 
 
@@ -42,7 +43,18 @@ def _pairs(values: tuple[str, ...], option: str, example: str) -> dict[str, str]
     return out
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Commands(click.Group):
+    """The command group; a Ctrl-C outside a run's own handling (or a second one) exits 130, quietly."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            click.echo("\ninterrupted", err=True)
+            sys.exit(130)
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="thymio-bt")
 def main() -> None:
     """YAML behaviour-tree missions for a simulated Thymio II (no ROS, no Gazebo)."""
@@ -127,7 +139,9 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
             monitor = Groot2Server(groot2)
             hooks.append(monitor)
         try:
-            result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime)
+            with Interrupts() as interrupts:
+                result = runner.run(on_tick=lambda r: [hook(r) for hook in hooks], realtime=realtime,
+                                    interrupts=interrupts)
         finally:
             if monitor is not None:
                 monitor.close()
@@ -144,6 +158,8 @@ def run(mission: Path, seed: int | None, sets: tuple[str, ...], maze: Path | Non
         if result.status != "SUCCESS":
             from .viz.terminal import failing_tree
             click.echo(failing_tree(runner), err=True)
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
     if window is not None:
         window.finish(result)            # with a display: stays open on the last frame until closed
     sys.exit(0 if result.status == "SUCCESS" else 1)
@@ -321,7 +337,7 @@ class _Progress:
 
 def _summary(result: Any, err: bool = False) -> None:
     echo = partial(click.echo, err=err)
-    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow"}[result.status]
+    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow", "INTERRUPTED": "yellow"}[result.status]
     rtf = result.real_time_factor
     echo(f"{result.mission}: " + click.style(result.status, fg=colour, bold=True)
          + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
@@ -355,33 +371,43 @@ def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tup
 
     try:
         sweep_out = Output(out, "--out") if out is not None else None
-        with click.progressbar(length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr,
-                               show_pos=True) as bar:
-            result = run_sweep(mission, runs, seed_start, _overrides(sets), str(maze) if maze else None, start,
-                               executor=LocalPool(workers), progress=lambda _: bar.update(1))
+        with Interrupts() as interrupts:
+            with click.progressbar(length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr,
+                                   show_pos=True) as bar:
+                result = run_sweep(mission, runs, seed_start, _overrides(sets), str(maze) if maze else None, start,
+                                   executor=LocalPool(workers, interrupts), progress=lambda _: bar.update(1),
+                                   interrupts=interrupts)
+            click.echo("", err=True)                 # the bar leaves its line open
         data = result.to_json()
         if sweep_out is not None:
             sweep_out.write_text(_json(data))
     except UserError as exc:
         _fail(exc)
-    _sweep_table(data)
+    _sweep_table(data, err=sweep_out is not None and sweep_out.is_stdout)
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
 
 
-def _sweep_table(data: dict[str, Any]) -> None:
-    click.echo(f"{data['mission']}: {data['successes']}/{data['runs']} succeeded "
-               f"({100 * data['success_rate']:.1f} %), seeds {data['seed_start']}..{data['seed_start'] + data['runs'] - 1}, "
-               f"noise {', '.join(f'{k}={v:g}' for k, v in data['noise'].items())}")
-    click.echo(f"  {data['wall_time']:.2f} s wall, {data['aggregate_real_time_factor']:,.0f}x real time in aggregate")
+def _sweep_table(data: dict[str, Any], err: bool = False) -> None:
+    echo = partial(click.echo, err=err)
+    if data["interrupted"]:
+        echo(f"{data['mission']}: interrupted by {data['interrupted']} after {data['runs']} of "
+             f"{data['runs_requested']} runs", err=True)
+    echo(f"{data['mission']}: {data['successes']}/{data['runs']} succeeded "
+         f"({100 * data['success_rate']:.1f} %), seeds {data['seed_start']}..{data['seed_start'] + data['runs_requested'] - 1}, "
+         f"noise {', '.join(f'{k}={v:g}' for k, v in data['noise'].items())}")
+    echo(f"  {data['wall_time']:.2f} s wall, {data['aggregate_real_time_factor'] or 0:,.0f}x real time in aggregate")
     rows = [("mission time [s]", data["sim_time"], 1.0), ("first stop error [mm]", data["first_stop_error"], 1000.0)]
-    click.echo(f"  {'':22} {'min':>8} {'p5':>8} {'median':>8} {'p95':>8} {'max':>8}")
+    echo(f"  {'':22} {'min':>8} {'p5':>8} {'median':>8} {'p95':>8} {'max':>8}")
     for label, dist, scale in rows:
         if dist:
-            click.echo(f"  {label:22} " + " ".join(f"{dist[k] * scale:8.2f}" for k in ("min", "p5", "median", "p95", "max")))
+            echo(f"  {label:22} " + " ".join(f"{dist[k] * scale:8.2f}" for k in ("min", "p5", "median", "p95", "max")))
     for code, count in data["failures"].items():
-        click.echo(f"  failures {code}: {count}")
+        echo(f"  failures {code}: {count}")
     for r in data["results"]:
         if r["status"] != "SUCCESS":
-            click.echo(f"  seed {r['seed']}: {r['status']} [{r['code']}] {r['failed_path']}: {r['reason']}")
+            echo(f"  seed {r['seed']}: {r['status']} [{r['code']}] {r['failed_path']}: {r['reason']}")
+            echo(f"    reproduce: {r['reproduce']}")
 
 
 @main.command()

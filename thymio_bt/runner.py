@@ -23,6 +23,7 @@ from .backends import backend_kind
 from .behaviours import Context, EventLog
 from .behaviours.base import node_path, snapshot
 from .errors import Problem, UserError
+from .interrupts import Interrupts
 from .mission import Mission, build_tree
 from .robot import Backend
 
@@ -113,15 +114,17 @@ class Run:
         self.final_tree = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
 
-    def run(self, on_tick: TickHook | None = None, realtime: float | None = None) -> RunResult:
+    def run(self, on_tick: TickHook | None = None, realtime: float | None = None,
+            interrupts: Interrupts | None = None) -> RunResult:
         """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time).
+        A signal noted in ``interrupts`` ends the run at the next tick with status INTERRUPTED.
         The backend is closed (a real robot's motors stopped) however the run ends, even on Ctrl-C."""
         try:
-            return self._run(on_tick, realtime)
+            return self._run(on_tick, realtime, interrupts or Interrupts())
         finally:
             self.backend.close()
 
-    def _run(self, on_tick: TickHook | None, realtime: float | None) -> RunResult:
+    def _run(self, on_tick: TickHook | None, realtime: float | None, interrupts: Interrupts) -> RunResult:
         sim, root, stats = self.backend, self.root, self.stats
         limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
         seen_collisions = 0
@@ -144,6 +147,9 @@ class Run:
             if root.status in (Status.SUCCESS, Status.FAILURE):
                 status = root.status.name
                 break
+            if interrupts.signal:
+                status = "INTERRUPTED"
+                break
             sim.advance(self.period)
             for c in sim.collisions[seen_collisions:]:
                 self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
@@ -155,11 +161,13 @@ class Run:
                     time.sleep(lag)  # realtime: pacing asked for with --realtime
         reason = code = failed_path = None
         self.final_tree = py_trees.display.unicode_tree(root, show_status=True)
-        if status in ("TIMEOUT", "STOPPED"):
+        if status in ("TIMEOUT", "STOPPED", "INTERRUPTED"):
             running = root.tip()
             failed_path = node_path(running) if running is not None else None
             if status == "TIMEOUT":
                 reason, code = f"time limit of {self.mission.time_limit:g} s reached", "TIMEOUT"
+            elif status == "INTERRUPTED":
+                reason, code = f"interrupted by {interrupts.name} at {sim.time():.1f} s", "INTERRUPTED"
             else:
                 reason, code, status = stopped, "STOPPED", "FAILURE"
             root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped

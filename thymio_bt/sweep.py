@@ -13,13 +13,17 @@ Example::
 
 from __future__ import annotations
 
+import multiprocessing
 import os
+import shlex
+import signal
 import statistics
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator, Protocol
 
+from .interrupts import Interrupts
 from .sim.noise import REALISTIC
 
 
@@ -63,19 +67,55 @@ class Executor(Protocol):
 
 
 class LocalPool:
-    """A process pool on this machine (one worker per core by default)."""
+    """A process pool on this machine (one worker per core by default).
 
-    def __init__(self, workers: int | None = None) -> None:
+    With ``interrupts`` (see :mod:`thymio_bt.interrupts`), a SIGINT/SIGTERM ends the iteration within
+    a tenth of a second: the workers (which ignore both signals themselves) are terminated and joined,
+    so none is left behind, and the results already yielded stand."""
+
+    def __init__(self, workers: int | None = None, interrupts: Interrupts | None = None) -> None:
         self.workers = workers or os.cpu_count() or 1
+        self.interrupts = interrupts or Interrupts()
 
     def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
         jobs = list(jobs)
         if self.workers == 1:
-            yield from map(fn, jobs)
+            for job in jobs:
+                if self.interrupts.signal:
+                    return
+                yield fn(job)
             return
-        chunk = max(1, len(jobs) // (self.workers * 8))
-        with ProcessPoolExecutor(self.workers) as pool:
-            yield from pool.map(fn, jobs, chunksize=chunk)
+        size = max(1, min(4, len(jobs) // (self.workers * 8)))    # small: an interrupt loses little
+        chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+        pool = multiprocessing.Pool(self.workers, initializer=_worker_signals)
+        try:
+            # chunks by hand: with chunksize > 1, Pool.imap_unordered returns a generator that cannot wait
+            # with a timeout, and the loop must look at the interrupts while it waits
+            results = pool.imap_unordered(partial(_map_chunk, fn), chunks)
+            for _ in chunks:
+                while True:
+                    if self.interrupts.signal:
+                        return
+                    try:
+                        done = results.next(timeout=0.1)
+                        break
+                    except multiprocessing.TimeoutError:
+                        continue
+                yield from done
+        finally:
+            pool.terminate()
+            pool.join()
+
+
+def _map_chunk(fn: Callable[[Job], dict[str, Any]], jobs: list[Job]) -> list[dict[str, Any]]:
+    return [fn(job) for job in jobs]
+
+
+def _worker_signals() -> None:
+    """Workers leave Ctrl-C (sent to the whole terminal's process group) and SIGTERM to the parent,
+    which stops them itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 @dataclass
@@ -89,6 +129,16 @@ class SweepResult:
     noise: dict[str, float]
     results: list[dict[str, Any]] = field(default_factory=list)
     wall_time: float = 0.0
+    #: runs asked for (``runs`` counts those completed: fewer when the sweep was interrupted)
+    requested: int = 0
+    #: the signal that ended the sweep early ("SIGINT", "SIGTERM"), or None
+    interrupted: str | None = None
+    #: the ``thymio-bt run`` arguments that reproduce one run, but its ``--seed``
+    command: tuple[str, ...] = ()
+
+    def reproduce(self, seed: int) -> str:
+        """The shell command that runs the sweep's run of ``seed`` again, noise settings included."""
+        return shlex.join(("thymio-bt", "run", *self.command, "--seed", str(seed)))
 
     @property
     def success_rate(self) -> float:
@@ -105,42 +155,53 @@ class SweepResult:
     def to_json(self) -> dict[str, Any]:
         sim_total = sum(r["sim_time"] for r in self.results)
         return {
-            "mission": self.mission, "runs": self.runs, "successes": self.successes,
+            "mission": self.mission, "runs": self.runs, "runs_requested": self.requested,
+            "interrupted": self.interrupted, "successes": self.successes,
             "success_rate": round(self.success_rate, 6), "seed_start": self.seed_start, "noise": self.noise,
             "sim_time": self.distribution("sim_time"), "first_stop_error": self.distribution("first_stop_error"),
             "failures": {code: sum(1 for r in self.results if r["code"] == code)
                          for code in sorted({r["code"] for r in self.results if r["code"]})},
             "wall_time": round(self.wall_time, 3),
             "aggregate_real_time_factor": round(sim_total / self.wall_time, 1) if self.wall_time else None,
-            "results": [{k: v for k, v in r.items() if k != "wall_time"} for r in self.results],
+            "results": [{k: v for k, v in r.items() if k != "wall_time"}
+                        | ({} if r["status"] == "SUCCESS" else {"reproduce": self.reproduce(r["seed"])})
+                        for r in self.results],
         }
 
 
 def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[str, str] | None = None,
           maze: str | None = None, start: str | None = None, executor: Executor | None = None,
-          progress: Callable[[dict[str, Any]], None] | None = None) -> SweepResult:
+          progress: Callable[[dict[str, Any]], None] | None = None,
+          interrupts: Interrupts | None = None) -> SweepResult:
     """Run ``mission`` ``runs`` times with seeds ``seed_start``... and the realistic noise models on
-    (``overrides`` such as ``noise.wheel=0`` change them)."""
+    (``overrides`` such as ``noise.wheel=0`` change them). A signal noted in ``interrupts`` ends it
+    early with the runs completed so far."""
     import time
 
     from .mission import load_mission
 
+    interrupts = interrupts or Interrupts()
     settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
     settings.update(overrides or {})
     spec = load_mission(mission, settings, maze=maze, start=start)     # fail fast, in this process
     jobs = [Job(str(mission), seed, tuple(sorted(settings.items())), maze, start)
             for seed in range(seed_start, seed_start + runs)]
-    executor = executor or LocalPool()
+    executor = executor or LocalPool(interrupts=interrupts)
     results = []
     began = time.perf_counter()
     for summary in executor.imap_unordered(run_job, jobs):
         results.append(summary)
         if progress is not None:
             progress(summary)
+        if interrupts.signal:
+            break
     results.sort(key=lambda r: r["seed"])
-    return SweepResult(mission=spec.name, runs=runs, successes=sum(r["status"] == "SUCCESS" for r in results),
+    command = (str(mission), *(a for k, v in sorted(settings.items()) for a in ("--set", f"{k}={v}")),
+               *(("--maze", maze) if maze else ()), *(("--start", start) if start else ()))
+    return SweepResult(mission=spec.name, runs=len(results), successes=sum(r["status"] == "SUCCESS" for r in results),
                        seed_start=seed_start, noise=spec.noise.model_dump(), results=results,
-                       wall_time=time.perf_counter() - began)
+                       wall_time=time.perf_counter() - began, requested=runs,
+                       interrupted=interrupts.name or None, command=command)
 
 
 __all__ = ["Executor", "Job", "LocalPool", "SweepResult", "run_job", "sweep"]

@@ -1,0 +1,95 @@
+"""Ctrl-C and SIGTERM on `run` and `sweep`: the robot stopped, the report and the log complete with
+status INTERRUPTED, sweep workers gone within a second with the results so far, exit 130/143."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+CLI = [sys.executable, "-m", "thymio_bt"]
+
+
+def start(args, tmp_path):
+    return subprocess.Popen([*CLI, *args], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for(path: Path, timeout: float = 20.0) -> None:
+    """Until ``path`` has content: the process is past its start-up and inside its loop."""
+    deadline = time.monotonic() + timeout
+    while not (path.exists() and path.stat().st_size > 0):
+        assert time.monotonic() < deadline, f"{path} never appeared"
+        time.sleep(0.05)
+
+
+def children(pid: int) -> list[int]:
+    found = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout.split()
+    return [int(p) for p in found]
+
+
+def alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    stat = Path(f"/proc/{pid}/stat")
+    return not (stat.exists() and stat.read_text().split(") ")[1].startswith("Z"))
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_run_ends_interrupted_with_report_and_log_end(tmp_path, sig, code):
+    mission = str(ROOT / "missions/maze_6x6_left.yaml")
+    proc = start(["run", mission, "--realtime", "4", "--report", "r.json", "--log", "r.jsonl"], tmp_path)
+    wait_for(tmp_path / "r.jsonl")
+    time.sleep(0.5)
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == code, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["status"] == "INTERRUPTED" and report["code"] == "INTERRUPTED"
+    assert signal.Signals(sig).name in report["reason"] and 0 < report["sim_time"] < 30
+    last = json.loads((tmp_path / "r.jsonl").read_text().splitlines()[-1])
+    assert last["kind"] == "end" and last["status"] == "INTERRUPTED"
+    assert last["sim_time"] == report["sim_time"]
+    assert "Traceback" not in err and "INTERRUPTED" in out
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_sweep_stops_within_a_second_keeps_results_and_leaves_no_worker(tmp_path, sig, code):
+    mission = str(ROOT / "missions/maze_6x6_left.yaml")
+    proc = start(["sweep", mission, "--runs", "2000", "--workers", "2", "--out", "s.json"], tmp_path)
+    deadline = time.monotonic() + 20
+    while len(workers := children(proc.pid)) < 2:
+        assert time.monotonic() < deadline, "no workers started"
+        time.sleep(0.05)
+    time.sleep(1.5)
+    sent = time.monotonic()
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=10)
+    stopped_in = time.monotonic() - sent
+    assert proc.returncode == code, err
+    assert stopped_in < 5.0          # measured ~0.05 s; a 2-worker batch of this sweep is ~65 s
+    assert not [pid for pid in workers if alive(pid)]
+    data = json.loads((tmp_path / "s.json").read_text())
+    assert data["interrupted"] == signal.Signals(sig).name and data["runs_requested"] == 2000
+    assert 0 < data["runs"] == len(data["results"]) < 2000 and data["successes"] == data["runs"]
+    assert f"interrupted by {signal.Signals(sig).name}" in err and "Traceback" not in err
+
+
+def test_a_failing_sweep_run_prints_the_command_that_reproduces_it(tmp_path):
+    mission = str(ROOT / "missions/maze_part1_2.yaml")
+    done = subprocess.run([*CLI, "sweep", mission, "--runs", "2", "--seed-start", "5", "--workers", "1",
+                           "--set", "time_limit=12", "--out", "s.json"], cwd=tmp_path, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    failed = json.loads((tmp_path / "s.json").read_text())["results"][0]
+    assert failed["status"] == "TIMEOUT" and f"reproduce: {failed['reproduce']}" in done.stdout
+    args = failed["reproduce"].split()[2:]
+    again = subprocess.run([*CLI, "run", *args, "--report", "r.json"], cwd=tmp_path, capture_output=True, text=True)
+    assert again.returncode == 1
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert (report["final_pose"], report["sim_time"]) == (failed["final_pose"], failed["sim_time"])
