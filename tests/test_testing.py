@@ -50,3 +50,32 @@ def test_a_status_list_is_returned_one_per_tick():
                               substitute={"four sides/side/TurnAngle": ["running", "running", "failure"]})
     assert result.status == "FAILURE"
     assert result.node_stats["four sides/side/TurnAngle"]["ticks"] == 3
+
+
+def test_the_plugin_imports_nothing_heavy():
+    import subprocess
+    import sys
+
+    code = ("import sys, thymio_bt.pytest_plugin; "
+            "print(sorted(m for m in ('py_trees', 'pymunk', 'pydantic', 'numpy', 'thymio_bt.testing') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"
+
+
+def test_the_plugin_leaves_the_blackboard_of_tests_that_made_no_behaviour(pytester):
+    pytester.makepyfile("""
+        import py_trees
+
+        def test_a_writes():
+            py_trees.blackboard.Blackboard.set("/mine", 1)
+
+        def test_b_still_sees_it():
+            assert py_trees.blackboard.Blackboard.get("/mine") == 1
+
+        def test_c_makes_a_thymio_behaviour(thymio):
+            thymio.run_tree({"Stop": {}}, thymio.world("corridor"))
+
+        def test_d_the_blackboard_was_cleared_after_it():
+            assert "/mine" not in py_trees.blackboard.Blackboard.storage
+    """)
+    pytester.runpytest_subprocess("-p", "no:cacheprovider").assert_outcomes(passed=4)

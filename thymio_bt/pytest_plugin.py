@@ -1,7 +1,10 @@
 """The pytest plugin (registered through the ``pytest11`` entry point when thymio-bt is installed).
 
-It clears py_trees' process-global blackboard around every test and offers the ``thymio``
-fixture with the helpers of :mod:`thymio_bt.testing`.
+It offers the ``thymio`` fixture with the helpers of :mod:`thymio_bt.testing`, and clears py_trees'
+process-global blackboard around the tests that ran thymio-bt trees, so one test's keys never leak
+into the next. It is loaded by every pytest run of every project in the environment, so it imports
+nothing heavy until a test asks for thymio-bt (loading it costs about a millisecond), and it leaves
+alone the blackboard of tests that never made a thymio-bt behaviour.
 
 Example::
 
@@ -10,20 +13,34 @@ Example::
         assert result.status == "SUCCESS"
 """
 
+from __future__ import annotations
+
+import sys
 from types import SimpleNamespace
 from typing import Iterator
 
 import pytest
 
-from .testing import clear_blackboard, run_mission_file, run_tree, world
+
+def _behaviours_so_far() -> int:
+    """How many thymio-bt behaviours this process has made (0 while thymio-bt is not loaded)."""
+    base = sys.modules.get("thymio_bt.behaviours.base")
+    return base.RobotBehaviour.created if base is not None else 0
 
 
 @pytest.fixture(autouse=True)
 def _thymio_bt_clean_blackboard() -> Iterator[None]:
-    yield from clear_blackboard()
+    before = _behaviours_so_far()
+    yield
+    if _behaviours_so_far() != before:        # this test made thymio-bt behaviours: remove what they left
+        import py_trees
+
+        py_trees.blackboard.Blackboard.clear()
 
 
 @pytest.fixture
 def thymio() -> SimpleNamespace:
     """The testing helpers: ``run_tree``, ``world``, ``run_mission_file``."""
+    from .testing import run_mission_file, run_tree, world
+
     return SimpleNamespace(run_tree=run_tree, world=world, run_mission_file=run_mission_file)

@@ -120,9 +120,13 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     #: Whether it fails with COLLISION when the robot hits a wall while it runs.
     fails_on_collision: ClassVar[bool] = True
 
+    #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
+    created = 0
+
     def __init__(self, name: str, params: BaseModel, ctx: Context,
                  blackboard_refs: dict[str, str] | None = None) -> None:
         super().__init__(name=name)
+        RobotBehaviour.created += 1
         self.declared = params
         self.params: Any = params
         self.ctx = ctx
