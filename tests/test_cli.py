@@ -77,3 +77,14 @@ def test_validate_gives_the_line_of_an_impossible_start_pose(tmp_path):
     result = invoke("validate", mission)
     assert result.exit_code == 2
     assert f"{mission}:3:8: impossible start pose" in result.output
+
+
+def test_colour_follows_no_color_and_the_color_option(monkeypatch):
+    def status_line(*args, color=False):
+        return CliRunner().invoke(main, [*args, "run", "missions/square.yaml"], color=color).output.splitlines()[0]
+
+    assert "\x1b[" in status_line(color=True)                       # a terminal: coloured
+    assert "\x1b[" not in status_line("--color", "never", color=True)
+    monkeypatch.setenv("NO_COLOR", "1")
+    assert "\x1b[" not in status_line(color=True)
+    assert "\x1b[" in status_line("--color", "always", color=False)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 import time
 from functools import partial
@@ -56,8 +57,15 @@ class _Commands(click.Group):
 
 @click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="thymio-bt")
-def main() -> None:
+@click.option("--color", "--colour", "color", type=click.Choice(["auto", "always", "never"]), default="auto",
+              show_default=True, help="Colour in the output; auto: on a terminal, unless NO_COLOR is set.")
+@click.pass_context
+def main(ctx: click.Context, color: str) -> None:
     """YAML behaviour-tree missions for a simulated Thymio II (no ROS, no Gazebo)."""
+    if color == "always":
+        ctx.color = True
+    elif color == "never" or os.environ.get("NO_COLOR"):     # https://no-color.org: any non-empty value
+        ctx.color = False
 
 
 def _json(data: Any) -> str:
