@@ -131,3 +131,20 @@ def test_the_backend_base_serves_requests_through_two_hooks():
         RequestState.SUCCEEDED, RequestState.FAILED, RequestState.SUCCEEDED, RequestState.FAILED)
     assert again.reason == "taken" and missing.reason == "no entity named 'thymio'"
     assert backend.placed == [Pose(1, 2, 0)] and backend.collisions == [] and backend.min_clearance == math.inf
+
+
+def test_a_backend_that_raises_ends_the_run_failure_with_its_reason():
+    from thymio_bt.sim import Simulation
+
+    class Flaky(Simulation):
+        def advance(self, dt):
+            if self.time() >= 1.0:
+                raise OSError("serial port vanished")
+            super().advance(dt)
+
+    mission = load_mission("missions/square.yaml")
+    backend = Flaky(mission.maze)
+    result = Run(mission, backend=backend).run()
+    assert (result.status, result.code) == ("FAILURE", "BACKEND_ERROR")
+    assert result.reason.startswith("the backend raised OSError: serial port vanished (at test_backends.py:")
+    assert result.sim_time == pytest.approx(1.0) and result.failed_path

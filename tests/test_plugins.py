@@ -70,3 +70,36 @@ def test_a_plugin_behaviour_returning_no_status_fails_with_a_reason(tmp_path):
     result = Run(load_mission(mission)).run()
     assert (result.status, result.code) == ("FAILURE", "FAILED")
     assert result.reason == "Sloppy returned None, not a Status"
+
+
+@pytest.mark.parametrize("body, shown", [
+    ("raise ValueError('first line\\nthe last line')", "ValueError: the last line (at crashing.py:5)"),
+    ("return self.step()", "RecursionError: maximum recursion depth exceeded"),
+    ("raise MemoryError", "MemoryError (at crashing.py:5)"),
+    ("import sys; sys.exit(3)", "SystemExit: 3 (at crashing.py:5)"),
+])
+def test_a_plugin_that_raises_ends_the_run_failure_with_report_and_log(tmp_path, body, shown):
+    import json
+
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    (tmp_path / "crashing.py").write_text(
+        "from thymio_bt.behaviours import RobotBehaviour\n"
+        "class Crashing(RobotBehaviour):\n"
+        "    '''Has a bug.'''\n"
+        "    def step(self):\n"
+        f"        {body}\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [crashing.py]\n"
+                       "tree:\n  sequence: [{MoveDistance: {distance: 5cm}}, Crashing]\n")
+    result = CliRunner().invoke(main, ["run", str(mission), "--report", str(tmp_path / "r.json"),
+                                       "--log", str(tmp_path / "r.jsonl")])
+    assert result.exit_code == 1 and "Traceback" not in result.output
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert (report["status"], report["code"]) == ("FAILURE", "EXCEPTION")
+    assert report["reason"].startswith(f"Crashing raised {shown}")
+    assert report["failed_path"].endswith("Crashing")
+    last = json.loads((tmp_path / "r.jsonl").read_text().splitlines()[-1])
+    assert last["kind"] == "end" and last["code"] == "EXCEPTION"

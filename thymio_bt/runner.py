@@ -21,7 +21,7 @@ from py_trees.common import Status
 
 from .backends import backend_kind
 from .behaviours import Context, EventLog
-from .behaviours.base import node_path, snapshot
+from .behaviours.base import describe, node_path, snapshot
 from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
@@ -150,7 +150,11 @@ class Run:
             if interrupts.signal:
                 status = "INTERRUPTED"
                 break
-            sim.advance(self.period)
+            try:
+                sim.advance(self.period)
+            except (Exception, SystemExit) as exc:     # a backend's bug (a plugin's, say): end the run, say why
+                status, crashed = "CRASHED", f"the backend raised {describe(exc)}"
+                break
             for c in sim.collisions[seen_collisions:]:
                 self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
             seen_collisions = len(sim.collisions)
@@ -161,13 +165,15 @@ class Run:
                     time.sleep(lag)  # realtime: pacing asked for with --realtime
         reason = code = failed_path = None
         self.final_tree = py_trees.display.unicode_tree(root, show_status=True)
-        if status in ("TIMEOUT", "STOPPED", "INTERRUPTED"):
+        if status in ("TIMEOUT", "STOPPED", "INTERRUPTED", "CRASHED"):
             running = root.tip()
             failed_path = node_path(running) if running is not None else None
             if status == "TIMEOUT":
                 reason, code = f"time limit of {self.mission.time_limit:g} s reached", "TIMEOUT"
             elif status == "INTERRUPTED":
                 reason, code = f"interrupted by {interrupts.name} at {sim.time():.1f} s", "INTERRUPTED"
+            elif status == "CRASHED":
+                reason, code, status = crashed, "BACKEND_ERROR", "FAILURE"
             else:
                 reason, code, status = stopped, "STOPPED", "FAILURE"
             root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped

@@ -19,8 +19,10 @@ from __future__ import annotations
 
 import math
 import re
+import traceback
 from dataclasses import dataclass, field
 from enum import Enum
+from pathlib import Path
 from typing import Any, Callable, ClassVar, Iterator
 
 import py_trees
@@ -50,6 +52,18 @@ class FailureCode(str, Enum):
     #: not an error: the way is blocked, and the tree is expected to react (e.g. avoidance turns away)
     BLOCKED = "BLOCKED"
     FAILED = "FAILED"
+    #: the behaviour's code raised an exception (or called sys.exit): a bug, reported with its place
+    EXCEPTION = "EXCEPTION"
+
+
+def describe(exc: BaseException) -> str:
+    """An exception in one line: its type, the last line of its message, and where it was raised."""
+    lines = str(exc).strip().splitlines()
+    text = type(exc).__name__ + (f": {lines[-1]}" if lines else "")
+    frames = traceback.extract_tb(exc.__traceback__)
+    if frames:
+        text += f" (at {Path(frames[-1].filename).name}:{frames[-1].lineno})"
+    return text
 
 
 class EventLog(list):
@@ -155,9 +169,12 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list: the same
         initialise → update → stop sequence, about a third of the cost (the hot path of a run)."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        new_status = self.update()
+        try:
+            if self.status != Status.RUNNING:
+                self.initialise()
+            new_status = self.update()
+        except (Exception, SystemExit) as exc:        # a plugin's bug (or ours): fail the node, say where
+            new_status = self.fail(FailureCode.EXCEPTION, f"{self.yaml_name} raised {describe(exc)}")
         if new_status.__class__ is not Status:        # a plugin's bug: fail the node, say why
             new_status = self.fail(FailureCode.FAILED, f"{self.yaml_name} returned {new_status!r}, not a Status")
         if new_status != Status.RUNNING:
