@@ -9,6 +9,7 @@ was written. Subtrees are expanded with their arguments in place.
 
 from __future__ import annotations
 
+import math
 import types
 import typing
 from typing import Any
@@ -230,6 +231,9 @@ class TreePlanner(Checker):
                         hint = "write true or false"
                     elif not hint and key in fields:
                         hint = _range_hint(fields[key])
+                        guess = _unit_guess(fields[key], body.get(key) if isinstance(body, dict) else None)
+                        if guess:
+                            hint = f"did you mean {guess}? a bare number is in {unit_of(fields[key])}; {hint}"
                     if err["type"] == "missing":
                         message = f"{kind} needs '{key}'"
                         hint = missing_hint or fields[key].description or ""
@@ -369,6 +373,24 @@ def parse_value_kind(text: str) -> str | None:
         return parse_value(text, lambda name: Quantity(1.0)).kind
     except UnitError:
         return None
+
+
+#: for a bare number out of range, the units a user may have meant, and their factor to the field's unit
+_MEANT = {"rad": (("deg", math.pi / 180),), "m": (("cm", 0.01), ("mm", 0.001)), "m/s": (("cm/s", 0.01),),
+          "rad/s": (("deg/s", math.pi / 180),)}
+
+
+def _unit_guess(field: Any, raw: Any) -> str | None:
+    """``90deg`` for ``angle: 90``: the bare number with the first unit that brings it into range."""
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        return None
+    checks = [(getattr(meta, attr), test) for meta in field.metadata
+              for attr, test in (("ge", float.__ge__), ("gt", float.__gt__), ("le", float.__le__), ("lt", float.__lt__))
+              if isinstance(getattr(meta, attr, None), (int, float))]
+    for unit, factor in _MEANT.get(unit_of(field), ()):
+        if all(test(float(raw) * factor, float(bound)) for bound, test in checks):
+            return f"{raw:g}{unit}"
+    return None
 
 
 def _range_hint(field: Any) -> str:
