@@ -20,6 +20,7 @@ import yaml
 from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 
 from .errors import Problem, UserError
+from .reading import read_text
 
 #: Most alias uses accepted in one file; generous for hand-written missions.
 MAX_ALIASES = 200
@@ -236,14 +237,7 @@ def _syntax_problem(exc: yaml.MarkedYAMLError, filename: str) -> Problem:
     return Problem(f"invalid YAML: {exc.problem or exc.context}", filename, line, col, hint=hint)
 
 
-def load_yaml(path: str | Path) -> Any:
-    """Read and parse a YAML file; a missing or unreadable file is a :class:`UserError`."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise UserError(Problem(f"file not found: {path}", str(path),
-                                hint="check the path; relative paths start from the current directory")) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UserError(Problem(f"cannot read {path}: {exc}", str(path))) from None
-    return loads_yaml(text, str(path))
+def load_yaml(path: str | Path, what: str = "mission") -> Any:
+    """Read and parse a YAML file of kind ``what`` (see :mod:`thymio_bt.reading`: only a regular file,
+    up to its cap); a missing, special, huge or unreadable file is a :class:`UserError`."""
+    return loads_yaml(read_text(path, what), str(path))

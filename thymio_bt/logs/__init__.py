@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from ..errors import Problem, UserError
+from ..reading import check_regular
 
 if TYPE_CHECKING:
     from ..recording import Recording
@@ -113,6 +114,7 @@ def read_log(path: str | Path) -> "Recording":
     path = Path(path)
     if not path.exists():
         raise UserError(Problem(f"log not found: {path}", str(path), hint="write one with run --log FILE.jsonl"))
+    check_regular(path, "log", folder_ok=True)           # a rosbag2 bag may be a folder
     fmt = format_for(path, reading=True)
     assert fmt.reader is not None
     return fmt.load(fmt.reader)(path)

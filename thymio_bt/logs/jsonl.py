@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from ..errors import Problem, UserError
+from ..reading import read_text
 from ..maze import Maze
 from ..recording import Recording
 from .records import LogEnd, LogHeader, TickRecord
@@ -57,10 +58,7 @@ class JsonlWriter:
 
 def read_jsonl(path: Path) -> Recording:
     """Read a JSON-lines log; a truncated log (a crashed run) is read up to its last whole line."""
-    try:
-        lines = path.read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UserError(Problem(f"cannot read the log: {exc}", str(path))) from None
+    lines = read_text(path, "log").splitlines()
     recording: Recording | None = None
     for number, line in enumerate(lines, 1):
         try:

@@ -23,7 +23,7 @@ def maze_dirs() -> list[Path]:
 
 def load_maze(path: str | Path) -> Maze:
     """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
-    data = load_yaml(path)
+    data = load_yaml(path, "maze")
     if not isinstance(data, MarkedDict):
         raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path),
                                 *getattr(data, "mark", (1, 1)),
@@ -44,7 +44,7 @@ def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
     if ref_path.suffix == "" and len(ref_path.parts) == 1:
         candidates += [d / f"{ref}.yaml" for d in maze_dirs()]
     for candidate in candidates:
-        if candidate.is_file():
+        if candidate.exists():             # a folder or a FIFO too: reading it says what is wrong
             return candidate
     known = sorted({p.stem for d in maze_dirs() for p in d.glob("*.yaml")})
     raise UserError(Problem(f"maze not found: '{ref}'",

@@ -29,6 +29,7 @@ from xml.parsers import expat
 from pydantic import ValidationError
 
 from ..errors import Problem, UserError, did_you_mean
+from ..reading import read_bytes
 from .model import Maze, Spawn, Wall
 
 Vec = tuple[float, float, float]
@@ -101,12 +102,7 @@ class _Doc:
 def _parse(path: Path) -> _Doc:
     """Parse XML with line numbers; DOCTYPE/ENTITY declarations are refused (billion laughs)."""
     file = str(path)
-    try:
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise UserError(Problem(f"world file not found: '{path}'", file)) from None
-    except OSError as exc:
-        raise UserError(Problem(f"cannot read the world file: {exc.strerror or exc}", file)) from None
+    data = read_bytes(path, "world")
     builder = ET.TreeBuilder()
     parser = expat.ParserCreate()
     marks: dict[ET.Element, tuple[int, int]] = {}

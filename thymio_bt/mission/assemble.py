@@ -135,13 +135,13 @@ class Assembler(Checker):
             if target in self.included:
                 continue                    # included twice (e.g. by two included files): once is enough
             self.included.add(target)
-            if not target.is_file():
+            if not target.exists():
                 self.problem(f"included file not found: {shown}", where, f"include[{i}]",
                              "include paths are relative to the including file"
                              + _file_suggestion(shown))
                 continue
             try:
-                included = load_yaml(shown)
+                included = load_yaml(shown, "include")
             except UserError as exc:
                 for p in exc.problems:
                     self.problems.append(p if p.line else Problem(p.message, *where, f"include[{i}]", p.hint))

@@ -23,6 +23,7 @@ from xml.parsers import expat
 
 from ..btcpp import BUILTIN, MISSION_TAG, RESERVED
 from ..errors import Problem, UserError
+from ..reading import read_bytes
 from ..yamlio import MarkedDict, MarkedList
 
 _FROM_BUILTIN = {ident: kind for kind, ident in BUILTIN.items()}
@@ -48,10 +49,7 @@ class _Element:
 
 def _parse(path: Path) -> _Element:
     file = str(path)
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise UserError(Problem(f"cannot read {path}: {exc}", file)) from None
+    data = read_bytes(path, "mission")
     parser = expat.ParserCreate()
     stack: list[_Element] = []
     roots: list[_Element] = []
