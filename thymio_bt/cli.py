@@ -29,6 +29,24 @@ def _fail(exc: UserError) -> NoReturn:
     sys.exit(2)
 
 
+class _Positive(click.ParamType):
+    """A finite number > 0 (click's FloatRange lets NaN through: every comparison with it is false)."""
+
+    name = "number"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number", param, ctx)
+        if not (math.isfinite(number) and 0 < number <= 1e9):
+            self.fail(f"{value} must be a finite number > 0", param, ctx)
+        return number
+
+
+POSITIVE = _Positive()
+
+
 def _overrides(values: tuple[str, ...]) -> dict[str, str]:
     return _pairs(values, "--set", "cruise=0.15")
 
@@ -74,14 +92,15 @@ def _json(data: Any) -> str:
 
 @main.command()
 @click.argument("mission", type=click.Path(path_type=Path))
-@click.option("--seed", type=int, default=None, help="Random seed (noise models); default: the mission's.")
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=None,
+              help="Random seed (noise models), >= 0; default: the mission's.")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
               help="Override a mission parameter, e.g. --set cruise=0.15 or --set noise.wheel=0.03.")
 @click.option("--maze", type=click.Path(path_type=Path), default=None, help="Run in another maze file.")
 @click.option("--start", default=None, metavar="X,Y,YAW", help="Override the start pose, e.g. 0.5,0.3,pi/2.")
 @click.option("--report", type=click.Path(path_type=Path), default=None, help="Write the run report (JSON).")
 @click.option("--quiet", "-q", is_flag=True, help="Print nothing; use the exit code.")
-@click.option("--realtime", type=float, default=None, metavar="FACTOR",
+@click.option("--realtime", type=POSITIVE, default=None, metavar="FACTOR",
               help="Pace the run against the wall clock (1 = real time).")
 @click.option("--plot", type=click.Path(path_type=Path), default=None, help="Draw the path in the maze (PNG).")
 @click.option("--plot-signals", type=click.Path(path_type=Path), default=None,
@@ -89,7 +108,7 @@ def _json(data: Any) -> str:
 @click.option("--gif", type=click.Path(path_type=Path), default=None, help="Animate the run (.gif, or .mp4 with ffmpeg).")
 @click.option("--view", is_flag=True,
               help="Watch the run in a window (pygame): SPACE pause, N step, +/- speed, Q quit.")
-@click.option("--speedup", type=float, default=None,
+@click.option("--speedup", type=POSITIVE, default=None,
               help="Speed-up of --view (default 1: real time) and --gif (default 4).")
 @click.option("--log", "log", type=click.Path(path_type=Path), default=None,
               help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
@@ -224,7 +243,7 @@ def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif:
 @click.option("--gif", type=click.Path(path_type=Path), default=None, help="Animate the run.")
 @click.option("--view", is_flag=True,
               help="Watch the run in a window (pygame): SPACE pause, N step, +/- speed, Q quit.")
-@click.option("--speedup", type=float, default=None,
+@click.option("--speedup", type=POSITIVE, default=None,
               help="Speed-up of --view (default 1: real time) and --gif (default 4).")
 def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | None, view: bool,
            speedup: float | None) -> None:
@@ -365,7 +384,7 @@ def _summary(result: Any, err: bool = False) -> None:
 @main.command()
 @click.argument("mission", type=click.Path(path_type=Path))
 @click.option("--runs", type=click.IntRange(1, 1_000_000), default=100, show_default=True, help="Number of runs.")
-@click.option("--seed-start", type=click.IntRange(0), default=0, show_default=True, help="Seed of the first run.")
+@click.option("--seed-start", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True, help="Seed of the first run.")
 @click.option("--out", type=click.Path(path_type=Path), default=None, help="Write the sweep JSON here.")
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE",
               help="Override a parameter or a noise model (e.g. --set noise.wheel=0.05).")

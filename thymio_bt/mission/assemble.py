@@ -27,6 +27,10 @@ from ..yamlio import MarkedDict, load_yaml
 from .checker import Checker, Scope, Where
 from .registry import Registry, default_registry
 
+#: the settings that are numbers: their kind and range, however they are given
+SETTING_RANGES = {"tick_hz": ("frequency", 1.0, 100.0), "time_limit": ("time", 0.1, 36000.0)}
+MAX_SEED = 2**63 - 1
+
 TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "seed", "noise", "sensor_model",
             "robot", "backend", "parameters", "subtrees", "include", "plugins", "tree")
 SENSOR_MODELS = ("metres", "raw")
@@ -179,23 +183,11 @@ class Assembler(Checker):
 
     def _settings(self, data: MarkedDict, file: str, params: dict[str, Any],
                   overrides: Mapping[str, str]) -> dict[str, Any]:
-        empty = Scope({})
         values: dict[str, Any] = {"tick_hz": 10.0, "time_limit": 300.0, "seed": 0, "sensor_model": "metres"}
         noise_raw: dict[str, Any] = {}
-        for key, kind, lo, hi in (("tick_hz", "frequency", 1.0, 100.0), ("time_limit", "time", 0.1, 36000.0)):
+        for key in ("tick_hz", "time_limit", "seed"):
             if key in data:
-                value = self.quantity(data[key], empty, self.where_value(data, key, file), key, kind)
-                if value is not None and not lo <= value <= hi:
-                    self.problem(f"{key} must be between {lo:g} and {hi:g}", self.where_value(data, key, file), key)
-                elif value is not None:
-                    values[key] = value
-        if "seed" in data:
-            seed = data["seed"]
-            if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-                self.problem("seed must be a whole number >= 0", self.where_value(data, "seed", file), "seed",
-                             "e.g. seed: 42")
-            else:
-                values["seed"] = seed
+                self._setting(key, data[key], self.where_value(data, key, file), values)
         if "sensor_model" in data:
             self._sensor_model(data["sensor_model"], self.where_value(data, "sensor_model", file), values)
         if "robot" in data:
@@ -213,19 +205,12 @@ class Assembler(Checker):
             where = ("--set", 0, 0)
             if name.startswith("noise."):
                 noise_raw[name[6:]] = _number_or_text(text)
-            elif name in ("tick_hz", "time_limit"):
-                value = self.quantity(text, empty, where, name, "frequency" if name == "tick_hz" else "time")
-                if value is not None:
-                    values[name] = value
+            elif name in ("tick_hz", "time_limit", "seed"):
+                self._setting(name, _whole_or_text(text) if name == "seed" else text, where, values)
             elif name == "sensor_model":
                 self._sensor_model(text, where, values)
             elif name == "robot":
                 self._robot(text, where, values)
-            elif name == "seed":
-                try:
-                    values["seed"] = int(text)
-                except ValueError:
-                    self.problem(f"seed must be a whole number, got '{text}'", where, name)
             elif name in params:
                 old = params[name]
                 new = self.parameter_value(text, where, name)
@@ -246,6 +231,22 @@ class Assembler(Checker):
             self.problems.extend(problems_from(exc, data.get("noise", {}), file, NoiseConfig, "noise."))
             values["noise"] = NoiseConfig()
         return values
+
+    def _setting(self, key: str, raw: Any, where: Where, values: dict[str, Any]) -> None:
+        """``tick_hz``, ``time_limit`` or ``seed``, from the file or ``--set``: the same checks either way."""
+        if key == "seed":
+            if isinstance(raw, bool) or not isinstance(raw, int) or not 0 <= raw <= MAX_SEED:
+                self.problem(f"seed must be a whole number >= 0 (at most {MAX_SEED}), got {raw!r}", where, "seed",
+                             "e.g. seed: 42")
+            else:
+                values["seed"] = raw
+            return
+        kind, lo, hi = SETTING_RANGES[key]
+        value = self.quantity(raw, Scope({}), where, key, kind)
+        if value is not None and not lo <= value <= hi:
+            self.problem(f"{key} must be between {lo:g} and {hi:g}, got {value:g}", where, key)
+        elif value is not None:
+            values[key] = value
 
     def _sensor_model(self, value: Any, where: Where, values: dict[str, Any]) -> None:
         if value in SENSOR_MODELS:
@@ -357,6 +358,13 @@ def _is_number_text(text: str) -> bool:
         return True
     except ValueError:
         return False
+
+
+def _whole_or_text(text: str) -> Any:
+    try:
+        return int(text)
+    except ValueError:
+        return text
 
 
 def _number_or_text(text: str) -> Any:

@@ -7,6 +7,7 @@ records a :class:`Problem` and goes on (see :mod:`thymio_bt.mission.loader`).
 
 from __future__ import annotations
 
+import math
 import typing
 from typing import Any, Mapping
 
@@ -132,7 +133,7 @@ class Checker:
             return None
         if isinstance(raw, str):
             try:
-                return Pose(*parse_pose(raw))
+                return self._heading(Pose(*parse_pose(raw)), where, path)
             except UnitError as exc:
                 self.problem(str(exc), where, path)
                 return None
@@ -145,7 +146,20 @@ class Checker:
                  for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle")))]
         if any(p is None for p in parts):
             return None
-        return Pose(*parts)  # type: ignore[arg-type]
+        return self._heading(Pose(*parts), where, path)  # type: ignore[arg-type]
+
+    def _heading(self, pose: Pose, where: Where, path: str) -> Pose | None:
+        """The pose with its yaw in [-pi, pi] (exactly as given when it already is); a yaw of more
+        than ten turns is surely a mistake (degrees written as radians, a stray exponent)."""
+        if abs(pose.yaw) > MAX_YAW:
+            self.problem(f"yaw {pose.yaw:g} rad is more than ten turns", where, path,
+                         "give a heading such as 90deg, pi/2 or -45deg")
+            return None
+        return Pose(pose.x, pose.y, math.remainder(pose.yaw, math.tau))
+
+
+#: the largest |yaw| accepted in a pose (rad): ten turns
+MAX_YAW = 10 * math.tau
 
 
 def _parameter_hint(name: str, scope: Scope) -> str:
