@@ -245,14 +245,16 @@ def _pictures(recording: Any, plot: Path | None, plot_signals: Path | None, gif:
               help="Watch the run in a window (pygame): SPACE pause, N step, +/- speed, Q quit.")
 @click.option("--speedup", type=POSITIVE, default=None,
               help="Speed-up of --view (default 1: real time) and --gif (default 4).")
+@click.option("--partial", is_flag=True, help="Replay a damaged log up to its first damaged line.")
 def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | None, view: bool,
-           speedup: float | None) -> None:
+           speedup: float | None, partial: bool) -> None:
     """Redraw a run from its --log FILE.jsonl without re-running it."""
     from .logs import read_log
 
     try:
         _check_pictures(plot, plot_signals, gif)
-        recording = read_log(log)
+        recording = read_log(log, partial)
+        _damage_note(log, recording)
         end = recording.end
         click.echo(f"{recording.mission}: {end.get('status')} after {end.get('sim_time', 0):.1f} s simulated, "
                    f"{len(recording.samples)} ticks; final pose {end.get('final_pose')}")
@@ -314,7 +316,8 @@ def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None
               help="The log to write; its suffix picks the format (.jsonl, .mcap, .btlog, or a folder: rosbag2).")
 @click.option("--btlog", type=click.Path(path_type=Path), default=None, metavar="OUT.btlog",
               help="Write a Groot2 log (BT.CPP's FileLogger2 file).")
-def export(log: Path, output: Path | None, btlog: Path | None) -> None:
+@click.option("--partial", is_flag=True, help="Export a damaged log up to its first damaged line.")
+def export(log: Path, output: Path | None, btlog: Path | None, partial: bool) -> None:
     """Convert the run log LOG into another format (e.g. a JSON-lines log into a rosbag2 .mcap)."""
     try:
         from .logs import open_writer, read_log
@@ -325,7 +328,8 @@ def export(log: Path, output: Path | None, btlog: Path | None) -> None:
                 check_writable(target, option)
         if not targets:
             raise UserError("nothing to write (hint: -o run.mcap, or --btlog run.btlog)")
-        recording = read_log(log)
+        recording = read_log(log, partial)
+        _damage_note(log, recording)
         if not recording.header.get("tree"):
             raise UserError(f"{log} was written before logs carried their tree (hint: run the mission again "
                             f"with --log to export it)")
@@ -341,6 +345,13 @@ def export(log: Path, output: Path | None, btlog: Path | None) -> None:
             click.echo(f"wrote {target}", err=True)
     except UserError as exc:
         _fail(exc)
+
+
+def _damage_note(log: Path, recording: Any) -> None:
+    """Say where a --partial read stopped."""
+    line = recording.header.get("damaged_at")
+    if line:
+        click.echo(f"{log}:{line}: damaged line; kept the {len(recording.samples)} ticks before it", err=True)
 
 
 class _Progress:

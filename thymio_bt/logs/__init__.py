@@ -53,6 +53,8 @@ class LogFormat:
     reader: str | None = None
     #: whether a path without a suffix (a folder) is this format
     folder: bool = False
+    #: whether the reader takes ``partial=True``: stop at a damaged record, keeping those before it
+    partial: bool = False
 
     def load(self, attr: str) -> Any:
         module, _, name = attr.partition(":")
@@ -61,7 +63,7 @@ class LogFormat:
 
 BUILTIN: tuple[LogFormat, ...] = (
     LogFormat("jsonl", "JSON lines: thymio-bt's own log, every field of every tick", (".jsonl",),
-              "thymio_bt.logs.jsonl:JsonlWriter", "thymio_bt.logs.jsonl:read_jsonl"),
+              "thymio_bt.logs.jsonl:JsonlWriter", "thymio_bt.logs.jsonl:read_jsonl", partial=True),
     LogFormat("rosbag2", "rosbag2 with MCAP storage: /cmd_vel, /odom, /tf, the 7 proximity scans, /clock, "
               "tree state and events (Foxglove, PlotJuggler, ros2 bag; needs thymio-bt[rosbag])", (".mcap",),
               "thymio_bt.logs.rosbag:RosbagWriter", "thymio_bt.logs.rosbag:read_rosbag", folder=True),
@@ -109,12 +111,14 @@ def open_writer(path: str | Path) -> LogWriter:
     return fmt.load(fmt.writer)(Path(path))
 
 
-def read_log(path: str | Path) -> "Recording":
-    """Read a log of any format that has a reader."""
+def read_log(path: str | Path, partial: bool = False) -> "Recording":
+    """Read a log of any format that has a reader; ``partial``: what is readable of a damaged one."""
     path = Path(path)
     if not path.exists():
         raise UserError(Problem(f"log not found: {path}", str(path), hint="write one with run --log FILE.jsonl"))
     check_regular(path, "log", folder_ok=True)           # a rosbag2 bag may be a folder
     fmt = format_for(path, reading=True)
     assert fmt.reader is not None
-    return fmt.load(fmt.reader)(path)
+    if partial and not fmt.partial:
+        raise UserError(Problem(f"--partial is not available for {fmt.name} logs", str(path)))
+    return fmt.load(fmt.reader)(path, **({"partial": True} if partial else {}))

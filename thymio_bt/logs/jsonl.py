@@ -12,10 +12,13 @@ import sys
 from pathlib import Path
 from typing import IO, Any
 
+from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
+
 from ..errors import Problem, UserError
-from ..reading import read_text
 from ..maze import Maze
+from ..reading import read_text
 from ..recording import Recording
+from ..validation import validate
 from .records import LogEnd, LogHeader, TickRecord
 
 
@@ -56,36 +59,97 @@ class JsonlWriter:
             self._file = None
 
 
-def read_jsonl(path: Path) -> Recording:
-    """Read a JSON-lines log; a truncated log (a crashed run) is read up to its last whole line."""
+class _Pose(BaseModel):
+    x: FiniteFloat
+    y: FiniteFloat
+    yaw: FiniteFloat
+
+
+class _Tick(BaseModel):
+    """What a replay needs of a tick line; other keys are kept as they are."""
+
+    model_config = ConfigDict(extra="allow")
+    t: FiniteFloat
+    pose: _Pose | None
+    cmd: tuple[FiniteFloat, FiniteFloat]
+    vel: tuple[FiniteFloat, FiniteFloat]
+    prox: dict[str, FiniteFloat | None] | None
+    running: list[str] = []
+
+
+class _Header(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    mission: str = ""
+    maze: dict[str, Any]
+
+
+class _End(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    status: str
+    events: list[dict[str, Any]] = []
+
+
+_LINES: dict[str, type[BaseModel]] = {"header": _Header, "tick": _Tick, "end": _End}
+
+
+def read_jsonl(path: Path, partial: bool = False) -> Recording:
+    """Read a JSON-lines log. A log cut short (a crashed run) is read up to its last whole line; a
+    damaged line (not JSON, a wrong type, a missing field) is an error naming it, or with
+    ``partial``, where the reading stops, keeping what came before."""
     lines = read_text(path, "log").splitlines()
+    if not lines:
+        raise UserError(Problem("the log is empty", str(path), hint="logs are written by thymio-bt run --log FILE.jsonl"))
     recording: Recording | None = None
     for number, line in enumerate(lines, 1):
         try:
-            obj = json.loads(line)
-        except json.JSONDecodeError:
-            if number == len(lines):
+            kind, obj = _line(line, number == 1)
+        except ValueError as exc:
+            if number == 1:
+                raise UserError(Problem(f"not a thymio-bt log: {exc}", str(path), 1, 1,
+                                        hint="logs are written by thymio-bt run --log FILE.jsonl")) from None
+            if number == len(lines) and "invalid JSON" in str(exc):
                 break                      # the run crashed mid-line: keep what came before
-            raise UserError(Problem("not a thymio-bt log line (invalid JSON)", str(path), number, 1)) from None
-        kind = obj.get("kind") if isinstance(obj, dict) else None
-        if number == 1:
-            if kind != "header":
-                raise UserError(Problem("not a thymio-bt log: the first line must be its header", str(path), 1, 1,
-                                        hint="logs are written by thymio-bt run --log FILE.jsonl"))
-            from ..validation import validate
+            if partial:
+                assert recording is not None
+                recording.header["damaged_at"] = number
+                break
+            raise UserError(Problem(f"damaged log line: {exc}", str(path), number, 1,
+                                    hint=f"replay the {number - 2} ticks before it with --partial")) from None
+        if kind == "header":
             header = {k: v for k, v in obj.items() if k != "kind"}
             recording = Recording(maze=validate(Maze, obj["maze"], str(path)), mission=obj.get("mission", ""),
                                   header=header)
-            continue
-        assert recording is not None
-        if kind == "tick":
+        elif kind == "tick":
+            assert recording is not None
             recording.samples.append({k: v for k, v in obj.items() if k != "kind"})
         elif kind == "end":
+            assert recording is not None
             recording.events = obj.get("events", [])
             recording.end = {k: v for k, v in obj.items() if k not in ("kind", "events")}
-    if recording is None:
-        raise UserError(Problem("empty log", str(path)))
-    if not recording.end and recording.samples:
-        last = recording.samples[-1]
+    assert recording is not None
+    if not recording.end:
+        last = recording.samples[-1] if recording.samples else {"pose": None, "t": 0.0}
         recording.end = {"status": "INCOMPLETE", "final_pose": last["pose"], "sim_time": last["t"]}
     return recording
+
+
+def _line(line: str, first: bool) -> tuple[str, dict[str, Any]]:
+    """The kind and content of one log line, checked; ValueError says what is wrong with it."""
+    try:
+        obj = json.loads(line)
+    except json.JSONDecodeError:
+        raise ValueError("invalid JSON") from None
+    kind = obj.get("kind") if isinstance(obj, dict) else None
+    if first and kind != "header":
+        raise ValueError("the first line must be its header")
+    if not first and kind == "header":
+        raise ValueError("a second header")
+    if kind not in _LINES:
+        raise ValueError(f"unknown line kind {kind!r} (expected header, tick or end)")
+    try:
+        _LINES[kind].model_validate(obj)
+    except ValidationError as exc:
+        err = exc.errors(include_url=False)[0]
+        where = ".".join(str(step) for step in err["loc"])
+        raise ValueError(f"{kind} line: {where}: {err['msg']}") from None
+    return kind, obj

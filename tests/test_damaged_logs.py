@@ -1,0 +1,74 @@
+"""Damaged logs: `replay` and `export` of a truncated, binary, empty, wrong-typed or foreign log give
+one message naming the line, and `--partial` replays what is readable before the damage."""
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from thymio_bt.cli import main
+
+
+@pytest.fixture(scope="module")
+def good_log(tmp_path_factory):
+    path = tmp_path_factory.mktemp("log") / "ok.jsonl"
+    assert CliRunner().invoke(main, ["run", "missions/square.yaml", "-q", "--log", str(path)]).exit_code == 0
+    return path.read_text().splitlines()
+
+
+def damaged(lines, tmp_path, how):
+    path = tmp_path / "bad.jsonl"
+    if how == "empty":
+        path.write_text("")
+    elif how == "foreign":
+        path.write_text("time,x,y\n0,1,2\n")
+    elif how == "binary":
+        path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00")
+    elif how == "json list":
+        path.write_text("[1, 2, 3]\n")
+    elif how == "header without maze":
+        path.write_text(json.dumps({"kind": "header", "mission": "x"}) + "\n")
+    elif how == "line 5 not JSON":
+        path.write_text("\n".join(lines[:4] + ["{broken"] + lines[5:]) + "\n")
+    elif how == "line 5 wrong type":
+        tick = json.loads(lines[4])
+        tick["pose"] = "north"
+        path.write_text("\n".join(lines[:4] + [json.dumps(tick)] + lines[5:]) + "\n")
+    elif how == "line 5 unknown kind":
+        path.write_text("\n".join(lines[:4] + ['{"kind": "tock"}'] + lines[5:]) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("how, line, message", [
+    ("empty", 0, "the log is empty"),
+    ("foreign", 1, "not a thymio-bt log: invalid JSON"),
+    ("binary", 0, "not UTF-8 text"),
+    ("json list", 1, "the first line must be its header"),
+    ("header without maze", 1, "header line: maze: Field required"),
+    ("line 5 not JSON", 5, "damaged log line: invalid JSON"),
+    ("line 5 wrong type", 5, "tick line: pose"),
+    ("line 5 unknown kind", 5, "unknown line kind 'tock'"),
+])
+@pytest.mark.parametrize("command", [["replay"], ["export", "-o", "{tmp}/out.mcap"]])
+def test_a_damaged_log_is_one_message_naming_the_line(good_log, tmp_path, how, line, message, command):
+    path = damaged(good_log, tmp_path, how)
+    args = [a.replace("{tmp}", str(tmp_path)) for a in command]
+    result = CliRunner().invoke(main, [args[0], str(path), *args[1:]])
+    assert result.exit_code == 2 and message in result.output, result.output
+    assert (f"{path}:{line}:" in result.output) if line else (f"{path}:" in result.output)
+    assert "Traceback" not in result.output and not (tmp_path / "out.mcap").exists()
+
+
+def test_partial_replays_what_comes_before_the_damage(good_log, tmp_path):
+    path = damaged(good_log, tmp_path, "line 5 wrong type")
+    result = CliRunner().invoke(main, ["replay", "--partial", str(path)])
+    assert result.exit_code == 0
+    assert f"{path}:5: damaged line; kept the 3 ticks before it" in result.output
+    assert "INCOMPLETE after 0.2 s simulated, 3 ticks" in result.output
+
+
+def test_a_log_cut_mid_line_reads_without_being_asked(good_log, tmp_path):
+    path = tmp_path / "cut.jsonl"
+    path.write_text("\n".join(good_log[:10]) + "\n" + good_log[10][:20])
+    result = CliRunner().invoke(main, ["replay", str(path)])
+    assert result.exit_code == 0 and "INCOMPLETE" in result.output and "9 ticks" in result.output
