@@ -119,3 +119,13 @@ def test_a_failed_run_prints_the_failing_branch():
     assert result.exit_code == 1
     assert "failed at: course/part 2" in result.output
     assert "TurnAngle [*]" in result.output and "[TIMEOUT]" in result.output
+
+
+def test_the_signals_plot_unwraps_yaw():
+    from thymio_bt.viz.plots import unwrapped
+
+    yaws = [3.0, 3.1, -3.1, -3.0, float("nan"), 3.1, -3.1]
+    out = unwrapped(yaws)
+    assert out[:4] == pytest.approx([3.0, 3.1, 3.1 + (2 * 3.141592653589793 - 6.2), 3.0 + (2 * 3.141592653589793 - 6.0)])
+    assert all(abs(b - a) < 0.5 for a, b in zip(out[:3], out[1:4]))
+    assert out[5] == 3.1 and abs(out[6] - out[5]) < 0.5            # after a gap: restarts where it is

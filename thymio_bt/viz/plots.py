@@ -148,6 +148,19 @@ def _save(fig: Any, plt: Any, path: str | Path) -> Path:
     return path
 
 
+def unwrapped(angles: list[float]) -> list[float]:
+    """Angles made continuous (no ±pi jumps drawn as vertical lines); a gap (NaN: no robot) restarts
+    the unwrapping, since a respawned robot may face anywhere."""
+    out: list[float] = []
+    previous = math.nan
+    for angle in angles:
+        if not math.isnan(angle) and not math.isnan(previous):
+            angle = previous + math.remainder(angle - previous, math.tau)
+        out.append(angle)
+        previous = angle
+    return out
+
+
 def _behaviour_spans(recording: Recording) -> list[tuple[float, float, str]]:
     """(start, end, name) of every robot behaviour that ran, from the start/end events."""
     open_: dict[str, tuple[float, str]] = {}
@@ -176,7 +189,7 @@ def plot_signals(recording: Recording, path: str | Path) -> Path:
     ax = axes[0]
     ax.plot(t, series(lambda s: s["pose"]["x"]), label="x [m]")
     ax.plot(t, series(lambda s: s["pose"]["y"]), label="y [m]")
-    ax.plot(t, series(lambda s: s["pose"]["yaw"]), label="yaw [rad]")
+    ax.plot(t, unwrapped(series(lambda s: s["pose"]["yaw"])), label="yaw [rad, unwrapped]")
     ax.set_ylabel("pose")
     ax = axes[1]
     ax.plot(t, [s["cmd"][0] for s in samples], label="commanded v", drawstyle="steps-post")
