@@ -31,6 +31,18 @@ def test_follow_waypoints_visits_every_waypoint_in_order():
         assert math.dist((event["pose"]["x"], event["pose"]["y"]), point) <= 0.01
 
 
+@pytest.mark.parametrize("node", ["GoToPose: {goal: [0.9, 0.8], tolerance: 0.2mm}",
+                                  "FollowWaypoints: {waypoints: [[0.9, 0.8]], tolerance: 0.2mm}"])
+def test_a_tolerance_tighter_than_the_controller_holds_fails_instead_of_spinning(tmp_path, node):
+    path = tmp_path / "m.yaml"
+    path.write_text(f"maze: arena\nstart: centre\ntree:\n  {node}\n")
+    result = Run(load_mission(path)).run()
+    assert (result.status, result.code) == ("FAILURE", "NO_PROGRESS")        # not a 300 s TIMEOUT
+    assert result.sim_time < 30 and "tighter than the controller can hold (try tolerance: 5mm)" in result.reason
+    path.write_text(f"maze: arena\nstart: centre\ntree:\n  {node.replace('0.2mm', '5mm')}\n")
+    assert Run(load_mission(path)).run().status == "SUCCESS"                    # the suggestion works
+
+
 def test_speed_limits_are_respected():
     from thymio_bt.recording import Recorder
     mission = load_mission("missions/waypoints.yaml")

@@ -52,6 +52,8 @@ class FailureCode(str, Enum):
     #: not an error: the way is blocked, and the tree is expected to react (e.g. avoidance turns away)
     BLOCKED = "BLOCKED"
     FAILED = "FAILED"
+    #: the robot moves but gets no closer to its goal (e.g. circling a goal tighter than it can hold)
+    NO_PROGRESS = "NO_PROGRESS"
     #: the behaviour's code raised an exception (or called sys.exit): a bug, reported with its place
     EXCEPTION = "EXCEPTION"
 

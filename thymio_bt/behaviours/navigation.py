@@ -47,21 +47,44 @@ class PIDGains(BehaviourParams):
 
 
 class _Navigator:
-    """Algorithm 2 for one goal: heading PID and distance PID; turn in place on large heading errors."""
+    """Algorithm 2 for one goal: heading PID and distance PID; turn in place on large heading errors.
+
+    A goal the controller cannot settle on (a tolerance tighter than it holds at this tick rate:
+    base_link, off the axle, circles the goal or spins beside it) would keep it turning until the
+    time limit. So :attr:`stalled` says why, once the robot has turned a full circle since it last
+    got closer to the goal by half the tolerance; no normal approach turns that much.
+    """
 
     def __init__(self, p: PIDGains) -> None:
         self.p = p
         self.heading = PID(p.heading_kp, p.heading_ki, p.heading_kd, p.max_turn)
         self.distance = PID(p.distance_kp, p.distance_ki, p.distance_kd, p.max_speed)
+        self.stalled: str | None = None
+        self._best = math.inf          # the closest to the goal so far
+        self._turned = 0.0             # how far the robot turned since then (rad)
+        self._yaw: float | None = None
 
     def command(self, pose: Pose, goal: tuple[float, float], dt: float) -> tuple[float, float] | None:
-        """(v, ω) towards ``goal``, or None when it is reached (the PIDs are then reset)."""
+        """(v, ω) towards ``goal``, or None when it is reached (the PIDs are then reset) or when
+        the robot makes no progress (:attr:`stalled` then says why)."""
         dx, dy = goal[0] - pose.x, goal[1] - pose.y
         distance = math.hypot(dx, dy)
         if distance <= self.p.tolerance:
             self.heading.reset()
             self.distance.reset()
+            self._best, self._turned, self._yaw = math.inf, 0.0, None
             return None
+        if distance < self._best - self.p.tolerance / 2:
+            self._best, self._turned = distance, 0.0
+        elif self._yaw is not None:
+            self._turned += abs(wrap_angle(pose.yaw - self._yaw))
+            if self._turned > math.tau:
+                self.stalled = (f"turned a full circle without getting closer to ({goal[0]:g}, {goal[1]:g}) than "
+                                f"{1000 * self._best:.1f} mm: a tolerance of {1000 * self.p.tolerance:g} mm is "
+                                f"tighter than the controller can hold (try tolerance: "
+                                f"{max(5.0, math.ceil(2000 * self._best)):g}mm)")
+                return None
+        self._yaw = pose.yaw
         error = wrap_angle(math.atan2(dy, dx) - pose.yaw)
         omega = self.heading(error, dt)
         if abs(error) > self.p.turn_in_place_above:
@@ -95,7 +118,7 @@ class GoToPose(RobotBehaviour):
         command = self.nav.command(current_pose(self.robot), self.params.goal, self.ctx.tick_period)
         if command is None:
             self.robot.drive(0.0, 0.0)
-            return Status.SUCCESS
+            return self.fail(FailureCode.NO_PROGRESS, self.nav.stalled) if self.nav.stalled else Status.SUCCESS
         self.robot.drive(*command)
         return Status.RUNNING
 
@@ -144,6 +167,9 @@ class FollowWaypoints(RobotBehaviour):
         while self.index < len(waypoints):
             pose = current_pose(self.robot)
             command = self.nav.command(pose, waypoints[self.index], self.ctx.tick_period)
+            if self.nav.stalled:
+                self.robot.drive(0.0, 0.0)
+                return self.fail(FailureCode.NO_PROGRESS, f"waypoint {self.index + 1}: {self.nav.stalled}")
             if command is not None:
                 self.robot.drive(*command)
                 self.feedback_message = f"to waypoint {self.index + 1}/{len(waypoints)} {waypoints[self.index]}"
