@@ -103,3 +103,19 @@ def test_a_plugin_that_raises_ends_the_run_failure_with_report_and_log(tmp_path,
     assert report["failed_path"].endswith("Crashing")
     last = json.loads((tmp_path / "r.jsonl").read_text().splitlines()[-1])
     assert last["kind"] == "end" and last["code"] == "EXCEPTION"
+
+
+def test_a_missions_plugins_are_listed_documented_and_in_its_schema():
+    import json
+
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    mission = ["--mission", "examples/spin_until_clear.yaml"]
+    assert "SpinUntilClear" in CliRunner().invoke(main, ["behaviours", *mission]).output
+    assert "SpinUntilClear" not in CliRunner().invoke(main, ["behaviours"]).output
+    doc = CliRunner().invoke(main, ["behaviours", "SpinUntilClear", *mission])
+    assert doc.exit_code == 0 and "Parameters:" in doc.output
+    schema = json.loads(CliRunner().invoke(main, ["schema", *mission]).stdout)
+    assert "SpinUntilClear" in json.dumps(schema["$defs"]["node"])

@@ -492,14 +492,26 @@ def _check_file(path: Path, overrides: dict[str, str]) -> str:
     return f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
 
 
+def _registry(mission: Path | None) -> Any:
+    """The node registry: the installed nodes, plus the ``plugins:`` of ``mission`` when one is given
+    (their code runs: that is what naming the mission asks for)."""
+    from .mission import default_registry, load_mission
+
+    return default_registry() if mission is None else load_mission(mission).registry
+
+
 @main.command()
 @click.argument("name", required=False)
-def behaviours(name: str | None) -> None:
+@click.option("--mission", type=click.Path(path_type=Path), default=None,
+              help="Include the behaviours of this mission's plugins (runs their code).")
+def behaviours(name: str | None, mission: Path | None) -> None:
     """List the behaviours, or document one (its parameters, units, defaults, ranges)."""
     from .docs import behaviour_help, behaviour_list
-    from .mission import default_registry
 
-    registry = default_registry()
+    try:
+        registry = _registry(mission)
+    except UserError as exc:
+        _fail(exc)
     if name is None:
         click.echo(behaviour_list(registry))
         return
@@ -533,12 +545,15 @@ def backends_command() -> None:
 @main.command()
 @click.option("--output", "-o", type=click.Path(path_type=Path), default=STDOUT, show_default=True,
               help="File to write (- = standard output).")
-def schema(output: Path) -> None:
+@click.option("--mission", type=click.Path(path_type=Path), default=None,
+              help="Include the behaviours of this mission's plugins (runs their code).")
+def schema(output: Path, mission: Path | None) -> None:
     """Print the JSON Schema of mission files (for editors with yaml-language-server)."""
     from .mission.schema import mission_schema
 
     try:
-        Output(output, "--output").write_text(json.dumps(mission_schema(), indent=1) + "\n")
+        out = Output(output, "--output")
+        out.write_text(json.dumps(mission_schema(_registry(mission)), indent=1) + "\n")
     except UserError as exc:
         _fail(exc)
 
