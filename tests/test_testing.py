@@ -79,3 +79,17 @@ def test_the_plugin_leaves_the_blackboard_of_tests_that_made_no_behaviour(pytest
             assert "/mine" not in py_trees.blackboard.Blackboard.storage
     """)
     pytester.runpytest_subprocess("-p", "no:cacheprovider").assert_outcomes(passed=4)
+
+
+def test_a_substitution_that_matches_nothing_is_an_error_naming_it():
+    from thymio_bt.errors import UserError
+
+    with pytest.raises(UserError, match=r"substitution 'course/part2' matches no node .*did you mean 'course/part 2'"):
+        run_mission_file("missions/maze_part1_2.yaml", substitute={"course/part2": "success"})
+
+
+def test_a_misspelt_preset_world_suggests_the_nearest():
+    from thymio_bt.errors import UserError
+
+    with pytest.raises(UserError, match="no preset world named 'coridor' .*did you mean 'corridor'"):
+        world("coridor")

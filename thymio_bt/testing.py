@@ -19,6 +19,7 @@ from typing import Any, Iterator
 import py_trees
 import yaml
 
+from .errors import UserError, did_you_mean
 from .maze import Maze, maze_from_grid
 from .runner import Run, RunResult
 
@@ -68,6 +69,9 @@ PRESETS: dict[str, str] = {
 
 def world(preset_or_grid: str, cell: float = 0.2) -> Maze:
     """A preset world (corridor, L, T, pocket, arena) or a grid drawn in ASCII (see maze.grid)."""
+    if preset_or_grid not in PRESETS and "\n" not in preset_or_grid.strip():
+        raise UserError(f"no preset world named '{preset_or_grid}' (hint: {did_you_mean(preset_or_grid, PRESETS)}, "
+                        f"or draw one as a grid of several lines)")
     text = PRESETS.get(preset_or_grid, preset_or_grid)
     return maze_from_grid(text, cell=cell, name=preset_or_grid if preset_or_grid in PRESETS else "grid")
 

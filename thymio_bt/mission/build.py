@@ -10,19 +10,27 @@ BehaviorTree.CPP's substitution rules).
 from __future__ import annotations
 
 from fnmatch import fnmatchcase
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
 from py_trees.behaviour import Behaviour
 
 from ..behaviours import Context, ControlNode, ScriptedStub
+from ..errors import UserError, did_you_mean
 from .plan import NodePlan
 from .registry import Registry, default_registry
 
 
 def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
                substitutions: Mapping[str, Any] | None = None, parent: str = "") -> Behaviour:
-    """Instantiate the behaviours of ``plan`` (recursively) against ``ctx``."""
+    """Instantiate the behaviours of ``plan`` (recursively) against ``ctx``. A substitution pattern
+    that matches no node is a :class:`UserError` naming it (a misspelt path would test nothing)."""
     registry = registry or default_registry()
+    if substitutions and not parent:
+        paths = list(node_paths(plan))
+        for pattern in substitutions:
+            if not any(fnmatchcase(p, pattern) for p in paths):
+                raise UserError(f"substitution '{pattern}' matches no node of the tree "
+                                f"(hint: {did_you_mean(pattern, paths)}; paths are node names joined by '/')")
     path = f"{parent}/{plan.name}" if parent else plan.name
     for pattern, script in (substitutions or {}).items():
         if fnmatchcase(path, pattern):
@@ -35,3 +43,11 @@ def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
         return node
     assert plan.params is not None
     return cls(plan.name, plan.params, ctx, blackboard_refs=plan.blackboard_refs)
+
+
+def node_paths(plan: NodePlan, parent: str = "") -> Iterator[str]:
+    """The path of every node of ``plan``, as substitution patterns match them."""
+    path = f"{parent}/{plan.name}" if parent else plan.name
+    yield path
+    for child in plan.children:
+        yield from node_paths(child, path)
