@@ -93,3 +93,29 @@ def test_a_failing_sweep_run_prints_the_command_that_reproduces_it(tmp_path):
     assert again.returncode == 1
     report = json.loads((tmp_path / "r.json").read_text())
     assert (report["final_pose"], report["sim_time"]) == (failed["final_pose"], failed["sim_time"])
+
+
+PLUGIN = """\
+import os, signal
+from py_trees.common import Status
+from thymio_bt.behaviours import RobotBehaviour
+class DieOnSeed3(RobotBehaviour):
+    \"\"\"Kills its process in the run of seed 3 (a simulation's config holds the seed).\"\"\"
+    def step(self):
+        if self.robot.config.seed == 3:
+            BODY
+        return Status.SUCCESS
+"""
+
+
+@pytest.mark.parametrize("body, message", [("os._exit(3)", "a worker process died (exit code 3)"),
+                                           ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL")])
+def test_a_sweep_worker_that_dies_is_reported_not_a_traceback(tmp_path, body, message):
+    (tmp_path / "dying.py").write_text(PLUGIN.replace("BODY", body))
+    (tmp_path / "m.yaml").write_text("maze: arena\nstart: centre\nplugins: [dying.py]\ntree: DieOnSeed3\n")
+    done = subprocess.run([*CLI, "sweep", "m.yaml", "--runs", "40", "--workers", "2", "--out", "s.json"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 1 and message in done.stderr and "Traceback" not in done.stderr
+    data = json.loads((tmp_path / "s.json").read_text())
+    assert data["interrupted"].startswith("a worker process died") and data["runs"] < 40
+    assert all(r["status"] == "SUCCESS" for r in data["results"])

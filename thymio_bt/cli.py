@@ -424,13 +424,16 @@ def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tup
     _sweep_table(data, err=sweep_out is not None and sweep_out.is_stdout)
     if interrupts.signal:
         sys.exit(interrupts.exit_code)
+    if data["interrupted"]:
+        sys.exit(1)                                  # a worker died: the sweep did not complete
 
 
 def _sweep_table(data: dict[str, Any], err: bool = False) -> None:
     echo = partial(click.echo, err=err)
-    if data["interrupted"]:
-        echo(f"{data['mission']}: interrupted by {data['interrupted']} after {data['runs']} of "
-             f"{data['runs_requested']} runs", err=True)
+    if stopped := data["interrupted"]:
+        why = f"interrupted by {stopped}" if stopped.startswith("SIG") else stopped
+        echo(f"{data['mission']}: {why} after {data['runs']} of {data['runs_requested']} runs; "
+             f"those are reported", err=True)
     echo(f"{data['mission']}: {data['successes']}/{data['runs']} succeeded "
          f"({100 * data['success_rate']:.1f} %), seeds {data['seed_start']}..{data['seed_start'] + data['runs_requested'] - 1}, "
          f"noise {', '.join(f'{k}={v:g}' for k, v in data['noise'].items())}")

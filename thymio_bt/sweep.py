@@ -43,6 +43,7 @@ _CACHE: dict[tuple[Any, ...], Any] = {}
 
 def run_job(job: Job) -> dict[str, Any]:
     """Run one job and summarise it (the function executors map); missions are loaded once per worker."""
+    from .behaviours.base import describe
     from .mission import load_mission
     from .runner import Run
 
@@ -50,7 +51,12 @@ def run_job(job: Job) -> dict[str, Any]:
     mission = _CACHE.get(key)
     if mission is None:
         mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
-    result = Run(mission, job.seed).run()
+    try:
+        result = Run(mission, job.seed).run()
+    except Exception as exc:              # that run fails, the sweep goes on and reports it
+        return {"seed": job.seed, "status": "FAILURE", "sim_time": 0.0, "final_pose": None,
+                "reason": f"the run raised {describe(exc)}", "code": "EXCEPTION", "failed_path": None,
+                "collisions": 0, "first_stop_error": None, "wall_time": 0.0}
     stops = [abs(e["range"] - e["distance"]) for e in result.events
              if e["kind"] == "behaviour_end" and e["name"] == "MoveUntilWall" and e["status"] == "SUCCESS"
              and e.get("range") is not None]
@@ -88,6 +94,7 @@ class LocalPool:
         size = max(1, min(4, len(jobs) // (self.workers * 8)))    # small: an interrupt loses little
         chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
         pool = multiprocessing.Pool(self.workers, initializer=_worker_signals)
+        workers = list(pool._pool)             # type: ignore[attr-defined]  # to notice one that dies
         try:
             # chunks by hand: with chunksize > 1, Pool.imap_unordered returns a generator that cannot wait
             # with a timeout, and the loop must look at the interrupts while it waits
@@ -100,11 +107,22 @@ class LocalPool:
                         done = results.next(timeout=0.1)
                         break
                     except multiprocessing.TimeoutError:
-                        continue
+                        # a dead worker's chunk never comes back: the pool would wait for ever
+                        dead = next((w for w in workers if w.exitcode is not None), None)
+                        if dead is not None:
+                            raise WorkerDied(dead.exitcode) from None
                 yield from done
         finally:
             pool.terminate()
             pool.join()
+
+
+class WorkerDied(RuntimeError):
+    """A sweep worker process ended in the middle of its runs (killed, crashed, or ``os._exit``)."""
+
+    def __init__(self, exitcode: int | None) -> None:
+        how = f"killed by {signal.Signals(-exitcode).name}" if exitcode and exitcode < 0 else f"exit code {exitcode}"
+        super().__init__(f"a worker process died ({how})")
 
 
 def _map_chunk(fn: Callable[[Job], dict[str, Any]], jobs: list[Job]) -> list[dict[str, Any]]:
@@ -131,7 +149,7 @@ class SweepResult:
     wall_time: float = 0.0
     #: runs asked for (``runs`` counts those completed: fewer when the sweep was interrupted)
     requested: int = 0
-    #: the signal that ended the sweep early ("SIGINT", "SIGTERM"), or None
+    #: what ended the sweep early: the signal ("SIGINT", "SIGTERM") or a worker's death; None
     interrupted: str | None = None
     #: the ``thymio-bt run`` arguments that reproduce one run, but its ``--seed``
     command: tuple[str, ...] = ()
@@ -189,19 +207,23 @@ def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[s
     executor = executor or LocalPool(interrupts=interrupts)
     results = []
     began = time.perf_counter()
-    for summary in executor.imap_unordered(run_job, jobs):
-        results.append(summary)
-        if progress is not None:
-            progress(summary)
-        if interrupts.signal:
-            break
+    stopped = None
+    try:
+        for summary in executor.imap_unordered(run_job, jobs):
+            results.append(summary)
+            if progress is not None:
+                progress(summary)
+            if interrupts.signal:
+                break
+    except WorkerDied as exc:
+        stopped = str(exc)
     results.sort(key=lambda r: r["seed"])
     command = (str(mission), *(a for k, v in sorted(settings.items()) for a in ("--set", f"{k}={v}")),
                *(("--maze", maze) if maze else ()), *(("--start", start) if start else ()))
     return SweepResult(mission=spec.name, runs=len(results), successes=sum(r["status"] == "SUCCESS" for r in results),
                        seed_start=seed_start, noise=spec.noise.model_dump(), results=results,
                        wall_time=time.perf_counter() - began, requested=runs,
-                       interrupted=interrupts.name or None, command=command)
+                       interrupted=interrupts.name or stopped, command=command)
 
 
 __all__ = ["Executor", "Job", "LocalPool", "SweepResult", "run_job", "sweep"]
