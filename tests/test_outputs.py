@@ -93,3 +93,21 @@ def test_log_dash_streams_json_lines_and_moves_the_summary_to_stderr(tmp_path):
     lines = [json.loads(line) for line in result.stdout.splitlines()]
     assert lines[0]["kind"] == "header" and lines[-1]["kind"] == "end" and lines[-1]["status"] == "SUCCESS"
     assert "SUCCESS after" in result.stderr
+
+
+def test_a_log_that_cannot_be_written_mid_run_ends_the_run_and_keeps_the_report(tmp_path):
+    import resource
+    import subprocess
+    import sys
+
+    def small_files():                       # like a full disk: writes past 200 kB fail with EFBIG
+        resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
+
+    mission = str(Path(__file__).resolve().parents[1] / "missions" / "maze_6x6_left.yaml")
+    done = subprocess.run([sys.executable, "-m", "thymio_bt", "run", mission, "--log", "big.jsonl",
+                           "--report", "r.json"], cwd=tmp_path, capture_output=True, text=True, preexec_fn=small_files)
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["code"] == "STOPPED" and "cannot write the log big.jsonl: File too large" in report["reason"]
+    assert 0 < report["sim_time"] < 100
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["big.jsonl", "r.json"]

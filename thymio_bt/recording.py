@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any
 import py_trees
 
 from .behaviours.base import node_path
+from .errors import UserError
 from .maze import Maze
 
 if TYPE_CHECKING:
@@ -96,7 +97,13 @@ class Recorder:
             self._blackboard = dict(storage)
             if changed:
                 record["bb"] = changed
-            self._writer.tick(record)
+            try:
+                self._writer.tick(record)
+            except OSError as exc:             # a full disk, a file size limit: end the run, keep the report
+                from .runner import StopRun
+
+                self._abandon()
+                raise StopRun(f"cannot write the log {self._path}: {exc.strerror or exc}") from None
         if self.keep:
             self.samples.append(dict(record))
 
@@ -108,12 +115,24 @@ class Recorder:
         if self._writer is not None:
             try:
                 self._writer.end({**end, "events": result.events})
-            finally:
                 self._writer.close()
-                self._writer = None
+            except OSError as exc:
+                self._abandon()
+                raise UserError(f"cannot write the end of the log {self._path}: {exc.strerror or exc}") from None
+            self._writer = None
         maze = self._run.mission.maze if self._run is not None else Maze()
         return Recording(maze=maze, mission=result.mission, samples=self.samples, events=result.events,
                          end=dict(end), header=self._header)
+
+
+    def _abandon(self) -> None:
+        """Close a log that can no longer be written (what reached the disk stays readable)."""
+        writer, self._writer = self._writer, None
+        try:
+            if writer is not None:
+                writer.close()
+        except OSError:
+            pass
 
 
 def _running_leaves(root: Any) -> list[Any]:
