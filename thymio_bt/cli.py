@@ -402,18 +402,22 @@ def _summary(result: Any, err: bool = False) -> None:
 @click.option("--maze", type=click.Path(path_type=Path), default=None, help="Run in another maze file.")
 @click.option("--start", default=None, metavar="X,Y,YAW", help="Override the start pose.")
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
+@click.option("--dask", "dask", default=None, metavar="ADDRESS",
+              help="Run on a Dask cluster, e.g. tcp://127.0.0.1:8786 (needs thymio-bt[dask]).")
 def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tuple[str, ...],
-          maze: Path | None, start: str | None, workers: int | None) -> None:
+          maze: Path | None, start: str | None, workers: int | None, dask: str | None) -> None:
     """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
     from .sweep import LocalPool, sweep as run_sweep
 
     try:
         sweep_out = Output(out, "--out") if out is not None else None
+        executor = _dask(dask) if dask else None
         with Interrupts() as interrupts:
             with click.progressbar(length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr,
                                    show_pos=True) as bar:
                 result = run_sweep(mission, runs, seed_start, _overrides(sets), str(maze) if maze else None, start,
-                                   executor=LocalPool(workers, interrupts), progress=lambda _: bar.update(1),
+                                   executor=executor or LocalPool(workers, interrupts),
+                                   progress=lambda _: bar.update(1),
                                    interrupts=interrupts)
             click.echo("", err=True)                 # the bar leaves its line open
         data = result.to_json()
@@ -426,6 +430,21 @@ def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tup
         sys.exit(interrupts.exit_code)
     if data["interrupted"]:
         sys.exit(1)                                  # a worker died: the sweep did not complete
+
+
+def _dask(address: str) -> Any:
+    """A sweep executor on the Dask cluster at ``address``."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UserError("--dask needs Dask (hint: pip install 'thymio-bt[dask]')") from None
+    from .distributed import DaskExecutor
+
+    try:
+        return DaskExecutor(Client(address, timeout=5))
+    except (OSError, TimeoutError) as exc:
+        raise UserError(f"--dask {address}: cannot reach the scheduler ({exc}) "
+                        f"(hint: start one with: dask scheduler; dask worker ADDRESS)") from None
 
 
 def _sweep_table(data: dict[str, Any], err: bool = False) -> None:

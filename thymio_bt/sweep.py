@@ -13,6 +13,7 @@ Example::
 
 from __future__ import annotations
 
+import hashlib
 import multiprocessing
 import os
 import shlex
@@ -36,9 +37,20 @@ class Job:
     overrides: tuple[tuple[str, str], ...] = ()
     maze: str | None = None
     start: str | None = None
+    #: a digest of every file the mission is read from and of the settings: the workers' cache key, so
+    #: a file edited between two sweeps (same path) is read again by long-lived (Ray, Dask) workers
+    key: str = ""
 
 
 _CACHE: dict[tuple[Any, ...], Any] = {}
+
+
+def content_key(sources: Iterable[Path], *settings: Any) -> str:
+    """A digest of the files' contents and the settings (not their paths)."""
+    digest = hashlib.sha256(repr(settings).encode())
+    for source in sources:
+        digest.update(Path(source).read_bytes())
+    return digest.hexdigest()
 
 
 def run_job(job: Job) -> dict[str, Any]:
@@ -47,7 +59,7 @@ def run_job(job: Job) -> dict[str, Any]:
     from .mission import load_mission
     from .runner import Run
 
-    key = (job.mission, job.overrides, job.maze, job.start)
+    key = job.key or (job.mission, job.overrides, job.maze, job.start)
     mission = _CACHE.get(key)
     if mission is None:
         mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
@@ -202,8 +214,9 @@ def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[s
     settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
     settings.update(overrides or {})
     spec = load_mission(mission, settings, maze=maze, start=start)     # fail fast, in this process
-    jobs = [Job(str(mission), seed, tuple(sorted(settings.items())), maze, start)
-            for seed in range(seed_start, seed_start + runs)]
+    overrides_key = tuple(sorted(settings.items()))
+    key = content_key(spec.sources, overrides_key, maze, start)
+    jobs = [Job(str(mission), seed, overrides_key, maze, start, key) for seed in range(seed_start, seed_start + runs)]
     executor = executor or LocalPool(interrupts=interrupts)
     results = []
     began = time.perf_counter()

@@ -61,6 +61,8 @@ class Assembly:
     maze_file: Path | None
     start: Pose | None
     start_where: Where
+    #: every file the mission was read from: itself, its includes, its maze and its .py plugins
+    sources: tuple[Path, ...] = ()
 
 
 class Assembler(Checker):
@@ -90,8 +92,9 @@ class Assembler(Checker):
         maze, maze_file = self._maze(data, path, maze_override)
         start = self._start(data, file, maze, start_override, settings.get("robot", "course"))
         start_where = ("--start", 0, 0) if start_override is not None else self.where_value(data, "start", file)
+        sources = (path, *sorted(self.included), *([maze_file] if maze_file else []), *self.registry.plugin_files)
         return Assembly(path, data, self.registry, self.problems, params, settings, self.subtrees, maze, maze_file,
-                        start, start_where)
+                        start, start_where, sources)
 
     def _plugins(self, data: MarkedDict, path: Path) -> None:
         file = str(path)

@@ -66,4 +66,5 @@ def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
     return Mission(name=str(data.get("name", path.stem)), description=str(data.get("description", "")),
                    file=path, maze=assembly.maze, maze_file=assembly.maze_file, start=assembly.start, tree=tree,
                    parameters={k: (v.value if isinstance(v, Quantity) else v) for k, v in assembly.parameters.items()},
-                   registry=assembly.registry, start_where=assembly.start_where, **assembly.settings)
+                   registry=assembly.registry, start_where=assembly.start_where, sources=assembly.sources,
+                   **assembly.settings)

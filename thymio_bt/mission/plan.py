@@ -68,3 +68,5 @@ class Mission:
     backend_options: dict[str, Any] = field(default_factory=dict)
     #: where the start pose was given (file, line, column), for error messages
     start_where: tuple[str, int, int] = ("", 0, 0)
+    #: every file the mission was read from: itself, its includes, its maze and its .py plugins
+    sources: tuple[Path, ...] = ()

@@ -42,6 +42,8 @@ class Registry:
 
     def __init__(self, classes: tuple[Node, ...] = ()) -> None:
         self._classes: dict[str, Node] = {}
+        #: the .py plugin files loaded (a mission's sources, e.g. for a sweep's cache key)
+        self.plugin_files: list[Path] = []
         for cls in classes:
             self.register(cls)
 
@@ -60,6 +62,7 @@ class Registry:
     def copy(self) -> "Registry":
         other = Registry()
         other._classes = dict(self._classes)
+        other.plugin_files = list(self.plugin_files)
         return other
 
     def __getitem__(self, name: str) -> Node:
@@ -92,6 +95,7 @@ class Registry:
                 if not path.is_file():
                     raise UserError(Problem(f"plugin file not found: {target}", file, line, col,
                                             hint="plugin paths are relative to the mission file"))
+                self.plugin_files.append(path)
                 name = f"thymio_bt_plugin_{abs(hash(str(path)))}"
                 module = sys.modules.get(name)
                 if module is None:
