@@ -119,3 +119,59 @@ def test_a_missions_plugins_are_listed_documented_and_in_its_schema():
     assert doc.exit_code == 0 and "Parameters:" in doc.output
     schema = json.loads(CliRunner().invoke(main, ["schema", *mission]).stdout)
     assert "SpinUntilClear" in json.dumps(schema["$defs"]["node"])
+
+
+MARKER_PLUGIN = '''\
+from pathlib import Path
+from py_trees.common import Status
+from thymio_bt.behaviours import RobotBehaviour
+Path(__file__).with_name("IMPORTED").write_text("plugin code ran")
+
+class Marker(RobotBehaviour):
+    """Succeeds at once."""
+    yaml_name = "MarkIt"
+
+    def step(self):
+        return Status.SUCCESS
+'''
+
+
+@pytest.mark.parametrize("command", [["validate"], ["tree"], ["tree", "--dot", "-o", "-"], ["tree", "--btcpp", "-"]])
+def test_validate_and_tree_read_plugins_without_running_their_code(tmp_path, command):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    (tmp_path / "marker.py").write_text(MARKER_PLUGIN)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n")
+    result = CliRunner().invoke(main, [command[0], str(mission), *command[1:]])
+    assert result.exit_code == 0, result.output
+    assert "MarkIt" in result.output or command[0] == "validate"
+    assert not (tmp_path / "IMPORTED").exists()
+    if command == ["validate"]:
+        assert "1 plugin node not checked: --plugins imports them" in result.output
+
+
+def test_validate_plugins_imports_them_and_checks_their_parameters(tmp_path):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    (tmp_path / "marker.py").write_text(MARKER_PLUGIN)
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n")
+    result = CliRunner().invoke(main, ["validate", "--plugins", str(mission)])
+    assert result.exit_code == 2 and "MarkIt has no parameter 'x'" in result.output
+    assert (tmp_path / "IMPORTED").exists()
+
+
+def test_a_plugin_that_is_not_python_is_located_without_running_it(tmp_path):
+    from thymio_bt.errors import UserError
+
+    (tmp_path / "broken.py").write_text("class X(RobotBehaviour):\n    def step(self) return 1\n")
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [broken.py]\ntree: Stop\n")
+    with pytest.raises(UserError) as err:
+        load_mission(mission, run_plugins=False)
+    assert "invalid Python" in err.value.problems[0].message and err.value.problems[0].line == 2

@@ -279,7 +279,8 @@ def replay(log: Path, plot: Path | None, plot_signals: Path | None, gif: Path | 
                    "Default with a format flag: MISSION's name with that suffix, in the current folder.")
 @click.option("--btcpp", type=click.Path(path_type=Path), default=None, metavar="OUT.xml",
               help="Write the tree as BehaviorTree.CPP v4 XML (Groot2 opens it) instead of a drawing.")
-def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None) -> None:
+@click.option("--plugins", is_flag=True, help="Import the mission's plugins (runs their code; default: read only).")
+def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None, plugins: bool) -> None:
     """Print the tree of MISSION; write it as .dot/.svg/.png or BT.CPP XML when asked."""
     try:
         if btcpp is not None:
@@ -287,8 +288,9 @@ def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None
             from .mission import load_mission
 
             out = Output(btcpp, "--btcpp")
-            out.write_text(mission_xml(load_mission(mission), btcpp))
-            click.echo(f"wrote {out}", err=True)
+            out.write_text(mission_xml(load_mission(mission, run_plugins=plugins), btcpp))
+            if not out.is_stdout:
+                click.echo(f"wrote {out}", err=True)
             return
         from .viz.terminal import export_tree, tree_text
 
@@ -298,12 +300,12 @@ def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None
                 raise UserError(f"--output {output}: cannot tell the format from '{output.suffix or 'no extension'}' "
                                 f"(hint: end the name with .dot, .svg or .png, or add --dot/--svg/--png)")
         if fmt is None:
-            click.echo(tree_text(mission))
+            click.echo(tree_text(mission, plugins))
             return
         out = Output(output if output is not None else Path(mission.stem).with_suffix(f".{fmt}"), "--output")
         if not out.is_stdout:
-            click.echo(tree_text(mission))
-        export_tree(mission, out, fmt)
+            click.echo(tree_text(mission, plugins))
+        export_tree(mission, out, fmt, plugins)
         if not out.is_stdout:
             click.echo(f"wrote {out}", err=True)
     except UserError as exc:
@@ -473,12 +475,15 @@ def _sweep_table(data: dict[str, Any], err: bool = False) -> None:
 @main.command()
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check missions with these overrides.")
-def validate(files: tuple[Path, ...], sets: tuple[str, ...]) -> None:
-    """Check mission FILES (and the mazes they name) or maze files without running anything."""
+@click.option("--plugins", is_flag=True,
+              help="Import the missions' plugins to check their nodes' parameters too (runs their code).")
+def validate(files: tuple[Path, ...], sets: tuple[str, ...], plugins: bool) -> None:
+    """Check mission FILES (and the mazes they name) or maze files without running anything
+    (not even the missions' plugins, unless --plugins)."""
     bad = 0
     for path in files:
         try:
-            click.echo(f"ok: {path} ({_check_file(path, _overrides(sets))})")
+            click.echo(f"ok: {path} ({_check_file(path, _overrides(sets), plugins)})")
         except UserError as exc:
             bad += 1
             for problem in exc.problems:
@@ -486,7 +491,7 @@ def validate(files: tuple[Path, ...], sets: tuple[str, ...]) -> None:
     sys.exit(2 if bad else 0)
 
 
-def _check_file(path: Path, overrides: dict[str, str]) -> str:
+def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) -> str:
     """Validate one mission or maze file (a maze has ``walls:`` or ``grid:`` and no ``tree:``)."""
     from .errors import Problem
     from .placement import placement_problem
@@ -509,9 +514,12 @@ def _check_file(path: Path, overrides: dict[str, str]) -> str:
         return f"maze: {len(maze.walls)} walls, {len(maze.obstacles)} obstacles, spawns {', '.join(maze.spawns) or 'none'}"
     from .mission import load_mission
 
-    spec = load_mission(path, overrides)        # checks the start pose against the maze too
+    spec = load_mission(path, overrides, run_plugins=plugins)       # checks the start pose against the maze too
     nodes = sum(1 for _ in spec.tree.walk())
-    return f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
+    unchecked = sum(1 for n in spec.tree.walk()
+                    if n.behaviour and getattr(spec.registry[n.behaviour], "unrun_plugin", False))
+    note = f"; {unchecked} plugin node{'s' * (unchecked != 1)} not checked: --plugins imports them" if unchecked else ""
+    return f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}{note}"
 
 
 def _registry(mission: Path | None) -> Any:

@@ -68,9 +68,10 @@ class Assembly:
 class Assembler(Checker):
     """Runs the assemble pass over one mission file."""
 
-    def __init__(self, registry: Registry | None = None) -> None:
+    def __init__(self, registry: Registry | None = None, run_plugins: bool = True) -> None:
         super().__init__([])
         self.registry = (registry or default_registry()).copy()
+        self.run_plugins = run_plugins
         self.subtrees: dict[str, Subtree] = {}
         self.included_parameters: list[tuple[MarkedDict, str]] = []
         self.included: set[Path] = set()
@@ -111,7 +112,7 @@ class Assembler(Checker):
                 self.problem("a plugin is a string: 'module:Class' or a .py path", where, f"plugins[{i}]")
                 continue
             try:
-                self.registry.load_plugin(ref, path.parent, where)
+                self.registry.load_plugin(ref, path.parent, where, run=self.run_plugins)
             except UserError as exc:
                 self.problems.extend(exc.problems)
 

@@ -50,13 +50,14 @@ def resolve_mission(ref: str | Path) -> Path:
 
 def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
                  maze: str | Path | None = None, start: str | None = None,
-                 registry: Registry | None = None) -> Mission:
+                 registry: Registry | None = None, run_plugins: bool = True) -> Mission:
     """Load and validate a mission file (or a shipped mission by name); raise :class:`UserError`
-    listing every problem."""
+    listing every problem. ``run_plugins=False`` reads the mission's plugins without importing them
+    (see :mod:`thymio_bt.mission.unrun_plugins`): for tools that must not run a stranger's code."""
     path = resolve_mission(path)
     file = str(path)
     data = read_xml_mission(path) if path.suffix.lower() == ".xml" else load_yaml(path)
-    assembly = Assembler(registry).assemble(path, data, overrides, maze, start)
+    assembly = Assembler(registry, run_plugins).assemble(path, data, overrides, maze, start)
     tree = TreePlanner(assembly).plan(assembly.data, file)
     if assembly.problems:
         raise UserError(sorted(dict.fromkeys(assembly.problems),      # in reading order, this file first

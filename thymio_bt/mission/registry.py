@@ -85,10 +85,14 @@ class Registry:
         """The composites (``category="composite"``) or decorators."""
         return ((n, c) for n, c in self._classes.items() if issubclass(c, ControlNode) and c.category == category)
 
-    def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
-        """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours."""
+    def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int], run: bool = True) -> None:
+        """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours; with
+        ``run=False``, register stand-ins for them without running any of the plugin's code."""
         file, line, col = where
         target, _, attr = ref.partition(":")
+        if not run:
+            self._declare_plugin(ref, base_dir, where)
+            return
         try:
             if target.endswith(".py"):
                 path = (base_dir / target).resolve()
@@ -128,6 +132,36 @@ class Registry:
                 self.register(cls)
             except (TypeError, ValueError) as exc:
                 raise UserError(Problem(f"plugin '{ref}': {exc}", file, line, col)) from None
+
+    def _declare_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
+        """Stand-ins for the nodes of plugin ``ref``, found by reading its source, not running it."""
+        from .unrun_plugins import plugin_node_names, stand_in
+
+        file, line, col = where
+        target, _, attr = ref.partition(":")
+        if attr:
+            names = [attr]
+        else:
+            if target.endswith(".py"):
+                path: Path | None = (base_dir / target).resolve()
+                if not path.is_file():
+                    raise UserError(Problem(f"plugin file not found: {target}", file, line, col,
+                                            hint="plugin paths are relative to the mission file"))
+                self.plugin_files.append(path)
+            else:
+                spec = importlib.util.find_spec(target) if "." not in target else None
+                path = Path(spec.origin) if spec and spec.origin and spec.origin.endswith(".py") else None
+                if path is None:
+                    raise UserError(Problem(f"cannot find plugin '{ref}' without importing it", file, line, col,
+                                            hint="name its class (module:Class), or check with --plugins"))
+            try:
+                names = plugin_node_names(path)
+            except SyntaxError as exc:
+                raise UserError(Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0,
+                                        exc.offset or 0)) from None
+        for name in names:
+            if name not in self._classes:
+                self._classes[name] = stand_in(name)
 
 
 def _entry_point_classes() -> list[Any]:

@@ -42,22 +42,23 @@ def failing_tree(run: Any) -> str:
     return "the tree when the run ended:\n" + run.final_tree
 
 
-def _build(mission_path: Path) -> Any:
-    """The mission's py_trees tree, to draw: built with no robot (behaviours touch it only when ticked)."""
+def _build(mission_path: Path, run_plugins: bool = False) -> Any:
+    """The mission's py_trees tree, to draw: built with no robot (behaviours touch it only when ticked);
+    its plugins are read, not imported, unless ``run_plugins``."""
     from ..behaviours import Context
     from ..mission import build_tree, load_mission
 
-    mission = load_mission(mission_path)
+    mission = load_mission(mission_path, run_plugins=run_plugins)
     return build_tree(mission.tree, Context(robot=None, entities=None), mission.registry)  # type: ignore[arg-type]
 
 
-def tree_text(mission_path: Path) -> str:
-    return py_trees.display.unicode_tree(_build(mission_path))
+def tree_text(mission_path: Path, run_plugins: bool = False) -> str:
+    return py_trees.display.unicode_tree(_build(mission_path, run_plugins))
 
 
-def export_tree(mission_path: Path, out: "Output", fmt: str) -> None:
+def export_tree(mission_path: Path, out: "Output", fmt: str, run_plugins: bool = False) -> None:
     """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``."""
-    source = py_trees.display.dot_tree(_build(mission_path)).to_string()
+    source = py_trees.display.dot_tree(_build(mission_path, run_plugins)).to_string()
     if fmt == "dot":
         out.write_text(source)
         return

@@ -1,0 +1,63 @@
+"""Plugins named by a mission, known without running their code.
+
+``thymio-bt validate`` and ``tree`` read missions that may come from anyone; importing their
+``plugins:`` would run that code. So those commands read a ``.py`` plugin with :mod:`ast` only: each
+class deriving from a thymio-bt node class becomes a stand-in node of the same YAML name, whose
+parameters are accepted unchecked (``--plugins`` asks for the real import, and the full check).
+
+Example::
+
+    names = plugin_node_names(Path("examples/spin_until_clear.py"))    # ['SpinUntilClear']
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict
+from py_trees.common import Status
+
+from ..behaviours import RobotBehaviour
+from ..reading import read_text
+
+#: base classes that make a plugin class a node
+NODE_BASES = ("RobotBehaviour", "ConditionBehaviour", "ControlNode")
+
+
+class UncheckedParams(BaseModel):
+    """Any parameters: a plugin that was not imported cannot say which it takes."""
+
+    model_config = ConfigDict(extra="allow")
+
+
+def plugin_node_names(path: Path) -> list[str]:
+    """The YAML names of the node classes a plugin file defines, read from its syntax tree."""
+    tree = ast.parse(read_text(path, "plugin"), str(path))
+    names = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ClassDef) and any(_base_name(b) in NODE_BASES for b in node.bases):
+            names.append(_yaml_name(node) or node.name)
+    return names
+
+
+def stand_in(name: str) -> type[RobotBehaviour]:
+    """A node class standing for the plugin node ``name`` (never ticked: validate and tree only)."""
+    def step(self: RobotBehaviour) -> Status:
+        raise RuntimeError(f"{name} is a stand-in: its plugin was not imported")
+
+    return type(name, (RobotBehaviour,), {
+        "__doc__": f"{name}, from a plugin that was not imported (its parameters are not checked).",
+        "yaml_name": name, "Params": UncheckedParams, "step": step, "unrun_plugin": True})
+
+
+def _base_name(base: ast.expr) -> str:
+    return base.attr if isinstance(base, ast.Attribute) else base.id if isinstance(base, ast.Name) else ""
+
+
+def _yaml_name(cls: ast.ClassDef) -> str | None:
+    for stmt in cls.body:
+        if (isinstance(stmt, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "yaml_name" for t in stmt.targets)
+                and isinstance(stmt.value, ast.Constant) and isinstance(stmt.value.value, str)):
+            return stmt.value.value
+    return None
