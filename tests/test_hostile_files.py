@@ -77,3 +77,24 @@ def test_a_binary_xml_file_gets_a_message_not_a_traceback(tmp_path, args, name):
     (tmp_path / name).write_bytes(b"\xff\xfe\x00<root BTCPP_format='4'>")
     done = cli(args, tmp_path)
     assert done.returncode == 2 and "Traceback" not in done.stderr and name in done.stderr
+
+
+FOREIGN = {
+    "unknown encoding": '<?xml version="1.0" encoding="EBCDIC"?>\n<sdf><world name="w"/></sdf>\n',
+    "entity": '<?xml version="1.0"?>\n<!DOCTYPE sdf [<!ENTITY x SYSTEM "file:///etc/passwd">]>\n<sdf>&x;</sdf>\n',
+    "external include": '<sdf><world name="w"><include><uri>http://127.0.0.1:9/m</uri></include></world></sdf>\n',
+    "deep nesting": "<sdf><world name='w'>" + "<model name='m'>" * 5000 + "</model>" * 5000 + "</world></sdf>\n",
+    "not XML": "walls:\n  - {from: [0, 0], to: [1, 0]}\n",
+}
+
+
+@pytest.mark.parametrize("case", list(FOREIGN))
+@pytest.mark.parametrize("suffix, args", [(".world", ["maze", "import"]), (".xml", ["validate"])])
+def test_a_foreign_or_tricky_xml_file_is_a_message_and_nothing_is_fetched(tmp_path, case, suffix, args):
+    path = tmp_path / f"input{suffix}"
+    path.write_text(FOREIGN[case].replace("<sdf", "<root").replace("</sdf>", "</root>") if suffix == ".xml"
+                    else FOREIGN[case])
+    done = cli([*args, str(path)], tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert str(path) in done.stderr and len(done.stderr.splitlines()) <= 2
+    assert "root:" not in done.stderr + done.stdout                     # /etc/passwd was not read

@@ -127,6 +127,9 @@ def _parse(path: Path) -> _Doc:
         raise UserError(Problem(f"not a valid XML file: {expat.ErrorString(exc.code)}", file,
                                 exc.lineno, exc.offset + 1,
                                 hint="a Gazebo .world file is SDF (XML) starting with <sdf version=...>")) from None
+    except (LookupError, ValueError) as exc:        # an encoding expat does not know, e.g. EBCDIC
+        raise UserError(Problem(f"cannot read the XML: {exc}", file, 1, 1,
+                                hint="save the world as UTF-8 (<?xml version=\"1.0\" encoding=\"UTF-8\"?>)")) from None
     root = builder.close()
     doc = _Doc(file, root, marks)
     if root.tag != "sdf":

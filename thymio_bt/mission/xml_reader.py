@@ -75,6 +75,9 @@ def _parse(path: Path) -> _Element:
     except expat.ExpatError as exc:
         raise UserError(Problem(f"invalid XML: {expat.errors.messages[exc.code]}", file, exc.lineno,
                                 exc.offset + 1, hint="check that every <Node ...> is closed (<Node/> or </Node>)")) from None
+    except (LookupError, ValueError) as exc:        # an encoding expat does not know, e.g. EBCDIC
+        raise UserError(Problem(f"cannot read the XML: {exc}", file, 1, 1,
+                                hint="save the mission as UTF-8 (<?xml version=\"1.0\" encoding=\"UTF-8\"?>)")) from None
     if not roots or roots[0].tag != "root":
         raise UserError(Problem("a BT.CPP XML mission starts with <root BTCPP_format=\"4\">", file, 1, 1,
                                 hint="export one with: thymio-bt tree MISSION.yaml --btcpp OUT.xml"))
