@@ -65,6 +65,8 @@ class CalibrationTable:
     distances: tuple[float, ...]
     readings: tuple[float, ...]
     source: str = ""
+    #: readings at or below this are noise, not an obstacle: they mean nothing seen (inf)
+    floor: float = 0.0
     _ascending: tuple[float, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -105,7 +107,7 @@ class CalibrationTable:
     def to_metres(self, reading: float) -> float:
         """The distance a reading means: inf for 0 (nothing seen), :attr:`min_distance` at saturation."""
         d, r = self.distances, self.readings
-        if reading <= 0:
+        if reading <= self.floor:
             return math.inf
         if reading >= r[0]:
             return float(d[0])
@@ -141,6 +143,7 @@ ENKI_THYMIO2 = CalibrationTable(
     distances=tuple(d for d, _ in _ENKI_ROWS),
     readings=tuple(float(r) for _, r in _ENKI_ROWS),
     source="enki-community/enki enki/robots/thymio2/Thymio2.cpp @ bb486bfb (IRSensor m=4505, x0=0.03, c=73)",
+    floor=20.0,                # empty sensors read 0-8 (noise sd 2.87): 20 is 7 sd
 )
 
 

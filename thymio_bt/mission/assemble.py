@@ -33,7 +33,9 @@ MAX_SEED = 2**63 - 1
 
 TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "seed", "noise", "sensor_model",
             "robot", "backend", "parameters", "subtrees", "include", "plugins", "tree")
-SENSOR_MODELS = ("metres", "raw")
+SENSOR_MODELS = ("metres", "raw", "cone")
+#: a robot model's sensor model as the simulator calls it ("rays": the course's exact rays, in metres)
+_SIM_SENSOR_MODEL = {"rays": "metres", "raw": "raw", "cone": "cone"}
 INCLUDE_KEYS = ("description", "parameters", "subtrees", "include", "plugins")
 
 
@@ -187,7 +189,7 @@ class Assembler(Checker):
 
     def _settings(self, data: MarkedDict, file: str, params: dict[str, Any],
                   overrides: Mapping[str, str]) -> dict[str, Any]:
-        values: dict[str, Any] = {"tick_hz": 10.0, "time_limit": 300.0, "seed": 0, "sensor_model": "metres"}
+        values: dict[str, Any] = {"tick_hz": 10.0, "time_limit": 300.0, "seed": 0}
         noise_raw: dict[str, Any] = {}
         for key in ("tick_hz", "time_limit", "seed"):
             if key in data:
@@ -229,11 +231,16 @@ class Assembler(Checker):
                 self.problem(f"--set {name}: no such parameter", where, name,
                              did_you_mean(name, [*params, "tick_hz", "time_limit", "seed", "sensor_model", "robot", "noise.range_sd",
                                                  "noise.wheel", "noise.odometry"]))
+        motor_noise = ROBOTS[values.get("robot", "course")].motor_noise
+        if motor_noise and "wheel" not in noise_raw:       # the robot's own (Enki's cannot be switched off)
+            noise_raw["wheel"] = motor_noise
         try:
             values["noise"] = NoiseConfig.model_validate(noise_raw)
         except ValidationError as exc:
             self.problems.extend(problems_from(exc, data.get("noise", {}), file, NoiseConfig, "noise."))
             values["noise"] = NoiseConfig()
+        if "sensor_model" not in values:      # the robot's own: the course's rays, Enki's cones, a real robot's readings
+            values["sensor_model"] = _SIM_SENSOR_MODEL[ROBOTS[values.get("robot", "course")].sensor_model]
         return values
 
     def _setting(self, key: str, raw: Any, where: Where, values: dict[str, Any]) -> None:
@@ -257,7 +264,8 @@ class Assembler(Checker):
             values["sensor_model"] = value
         else:
             self.problem(f"sensor_model must be one of {', '.join(SENSOR_MODELS)}, got {value!r}", where,
-                         "sensor_model", "raw: a real Thymio's integer readings through its calibration table")
+                         "sensor_model", "raw: a real Thymio's integer readings through its calibration table; "
+                         "cone: Enki's three-ray cones")
 
     def _robot(self, value: Any, where: Where, values: dict[str, Any]) -> None:
         if value in ROBOTS:

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Literal
+from typing import Callable, Literal
 
 import pymunk
 
@@ -32,6 +32,7 @@ from ..maze import Maze
 from ..placement import convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
+from .cone import APERTURE, ConeResponse
 from .fastpath import NearShapes, RayCaster, stepper
 from .noise import NoiseConfig, NoiseSource
 
@@ -78,6 +79,36 @@ def _raw_model(seed: int) -> RawProximityModel:
     return RawProximityModel(np.random.default_rng((seed, 1)))
 
 
+class _ConeSensors:
+    """The seven sensors as Enki's cones (:mod:`thymio_bt.sim.cone`): 21 rays, noisy integer readings."""
+
+    def __init__(self, model: RobotModel, seed: int) -> None:
+        import numpy as np
+
+        self.response = ConeResponse()
+        reach = self.response.range
+        self.rays = [(s.name, (s.x, s.y), tuple((s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
+                                               for a in (APERTURE, 0.0, -APERTURE)))
+                     for s in model.sensors]
+        self.rng = np.random.default_rng((seed, 2))
+
+    def measure(self, query: Callable[..., float | None], entity: "_Body") -> dict[str, int]:
+        body = entity.body
+        cos, sin = math.cos(body.angle), math.sin(body.angle)
+        bx, by = body.position
+        reach, response = self.response.range, self.response
+        draws = self.rng.standard_normal(len(self.rays))
+        readings = {}
+        for (name, (sx, sy), ends), z in zip(self.rays, draws):
+            start = (bx + sx * cos - sy * sin, by + sx * sin + sy * cos)
+            hits = []
+            for ex, ey in ends:
+                alpha = query(start, (bx + ex * cos - ey * sin, by + ex * sin + ey * cos), entity.filter)
+                hits.append(None if alpha is None else alpha * reach)
+            readings[name] = response.reading(response.value(*hits), float(z))
+        return readings
+
+
 @dataclass(frozen=True, slots=True)
 class SimConfig:
     """Simulation settings; the defaults are the course's Gazebo model (noise-free)."""
@@ -90,8 +121,9 @@ class SimConfig:
     #: the wheel-speed limit (m/s); None: the robot's own
     max_wheel_speed: float | None = None
     #: "metres": the course's ideal rays; "raw": what a real Thymio reports (noisy integer readings
-    #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does
-    sensor_model: Literal["metres", "raw"] = "metres"
+    #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does;
+    #: "cone": Enki's three-ray cones (:mod:`thymio_bt.sim.cone`), read through the robot's calibration
+    sensor_model: Literal["metres", "raw", "cone"] = "metres"
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,6 +217,8 @@ class Simulation(Backend):
         self._entities: dict[str, _Body] = {}
         self._cmd = Twist()
         self._applied = (0.0, 0.0)
+        self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
+        self._pending = False
         self._scan: dict[str, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._contacts = 0
@@ -192,6 +226,7 @@ class Simulation(Backend):
         reach = self.model.range_max
         self._rays = [(s.name, (s.x, s.y), (s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw)))
                       for s in self.model.sensors]
+        self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
         self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
         if spawn is not None:
             problem = self.spawn_problem(robot_name, spawn)
@@ -204,7 +239,10 @@ class Simulation(Backend):
         if self.robot_name not in self._entities:
             return
         self._cmd = Twist(float(linear), float(angular))
-        self._apply_command()
+        if self._delay_steps:
+            self._pending = True           # applied a few physics steps into the next advance (Enki: one)
+        else:
+            self._apply_command()
 
     def exists(self) -> bool:
         return self.robot_name in self._entities
@@ -257,8 +295,19 @@ class Simulation(Backend):
     def advance(self, duration: float) -> None:
         """Run the physics for ``duration`` seconds of simulated time, then serve pending requests."""
         entity = self._entities.get(self.robot_name)
+        steps = round(duration / self._dt)
+        if self._pending:
+            self._pending = False
+            delay = min(self._delay_steps, steps)
+            self._run_steps(entity, delay)          # the old command still drives (the robot's command delay)
+            self._apply_command()
+            steps -= delay
+        self._run_steps(entity, steps)
+        self.serve_requests()
+
+    def _run_steps(self, entity: "_Body | None", steps: int) -> None:
+        """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
         step, dt = self._step, self._dt
-        steps = round(duration / dt)
         if entity is not None and self.config.noise.odometry:
             self._integrate_odometry(steps * dt)
         v, w = self._applied
@@ -274,7 +323,6 @@ class Simulation(Backend):
             self._steps += 1
             if entity is not None and self._steps % self._sensor_every == 0:
                 self._refresh_sensors(entity)
-        self.serve_requests()
 
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
@@ -311,6 +359,12 @@ class Simulation(Backend):
         return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
 
     def _refresh_sensors(self, entity: _Body) -> None:
+        if self._cone is not None:
+            self._raw = self._cone.measure(self._ray.alpha, entity)
+            self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
+            body = entity.body
+            self._update_clearance(entity, *body.position, math.cos(body.angle), math.sin(body.angle))
+            return
         body = entity.body
         flt = entity.filter
         query = self._ray.alpha
