@@ -51,3 +51,35 @@ def test_run_job_reports_the_first_stop_error():
     summary = run_job(Job("missions/maze_part1_2.yaml", 0))
     assert summary["status"] == "SUCCESS"
     assert summary["first_stop_error"] < 0.001
+
+
+def test_a_matrix_sweeps_every_combination_and_tabulates_it(tmp_path):
+    import json
+
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    out = tmp_path / "m.json"
+    result = CliRunner().invoke(main, ["sweep", "missions/maze_bonus.yaml", "--runs", "3", "--workers", "1",
+                                       "--matrix", "robot=course,enki", "--matrix", "sensor_model=rays,cone",
+                                       "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    data = json.loads(out.read_text())
+    assert [c["settings"] for c in data["cells"]] == [
+        {"robot": "course", "sensor_model": "rays"}, {"robot": "course", "sensor_model": "cone"},
+        {"robot": "enki", "sensor_model": "rays"}, {"robot": "enki", "sensor_model": "cone"}]
+    assert all(c["runs"] == 3 for c in data["cells"])
+    assert data["cells"][0]["success_rate"] == 1.0 and data["cells"][0]["final_error_max"] < 0.01
+    assert "median err" in result.output and result.output.count("course") >= 2
+
+
+def test_a_bad_matrix_axis_is_a_user_error():
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--matrix", "robot"])
+    assert result.exit_code == 2 and "--matrix expects NAME=VALUE,VALUE" in result.output
+    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--matrix", "robot=course,marvin"])
+    assert result.exit_code == 2 and "robot must be one of" in result.output

@@ -406,14 +406,20 @@ def _summary(result: Any, err: bool = False) -> None:
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
 @click.option("--dask", "dask", default=None, metavar="ADDRESS",
               help="Run on a Dask cluster, e.g. tcp://127.0.0.1:8786 (needs thymio-bt[dask]).")
+@click.option("--matrix", "matrix", multiple=True, metavar="NAME=V1,V2,...",
+              help="Sweep every combination of these settings, e.g. --matrix robot=course,enki,real.")
 def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tuple[str, ...],
-          maze: Path | None, start: str | None, workers: int | None, dask: str | None) -> None:
+          maze: Path | None, start: str | None, workers: int | None, dask: str | None,
+          matrix: tuple[str, ...]) -> None:
     """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
     from .sweep import LocalPool, sweep as run_sweep
 
     try:
         sweep_out = Output(out, "--out") if out is not None else None
         executor = _dask(dask) if dask else None
+        if matrix:
+            _matrix(mission, runs, seed_start, sweep_out, sets, maze, start, executor, workers, matrix)
+            return
         with Interrupts() as interrupts:
             with click.progressbar(length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr,
                                    show_pos=True) as bar:
@@ -432,6 +438,41 @@ def sweep(mission: Path, runs: int, seed_start: int, out: Path | None, sets: tup
         sys.exit(interrupts.exit_code)
     if data["interrupted"]:
         sys.exit(1)                                  # a worker died: the sweep did not complete
+
+
+def _matrix(mission: Path, runs: int, seed_start: int, out: Output | None, sets: tuple[str, ...],
+            maze: Path | None, start: str | None, executor: Any, workers: int | None, specs: tuple[str, ...]) -> None:
+    """sweep --matrix: one sweep per combination of settings, then one table."""
+    from .matrix import parse_axes, run_matrix
+    from .sweep import LocalPool
+
+    axes = parse_axes(specs)
+    count = math.prod(len(v) for v in axes.values())
+    with Interrupts() as interrupts:
+        with click.progressbar(length=runs * count, label=f"{mission.name}: {count} cells x {runs} runs",
+                               file=sys.stderr, show_pos=True) as bar:
+            cells = run_matrix(mission, runs, axes, seed_start, _overrides(sets), str(maze) if maze else None, start,
+                               executor=executor or LocalPool(workers, interrupts),
+                               progress=lambda _: bar.update(1), interrupts=interrupts)
+        click.echo("", err=True)
+    rows = [cell.row() for cell in cells]
+    if out is not None:
+        out.write_text(_json({"mission": cells[0].result.mission, "runs": runs, "seed_start": seed_start,
+                              "axes": axes, "reference_final_pose": cells[0].reference, "cells": rows}))
+    echo = partial(click.echo, err=out is not None and out.is_stdout)
+    names = list(axes)
+    echo(f"{cells[0].result.mission}: {runs} noisy runs per cell; final error = distance from the final pose "
+         f"of the noise-free run on the course's robot")
+    echo("  " + "".join(f"{n:>14}" for n in names) + f"{'success':>10}{'collided':>10}{'median err':>12}{'max err':>10}  failures")
+    for row in rows:
+        median, worst = row["final_error_median"], row["final_error_max"]
+        echo("  " + "".join(f"{row['settings'][n]:>14}" for n in names)
+             + f"{100 * row['success_rate']:>9.1f}%{row['runs_with_collision']:>10}"
+             + (f"{1000 * median:>10.1f}mm" if median is not None else f"{'-':>12}")
+             + (f"{1000 * worst:>8.1f}mm" if worst is not None else f"{'-':>10}")
+             + "  " + ", ".join(f"{code} {n}" for code, n in row["failures"].items()))
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
 
 
 def _dask(address: str) -> Any:

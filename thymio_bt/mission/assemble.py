@@ -260,6 +260,8 @@ class Assembler(Checker):
             values[key] = value
 
     def _sensor_model(self, value: Any, where: Where, values: dict[str, Any]) -> None:
+        if value == "rays":                  # the robot models' name for the course's exact rays
+            value = "metres"
         if value in SENSOR_MODELS:
             values["sensor_model"] = value
         else:
