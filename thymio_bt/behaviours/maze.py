@@ -225,6 +225,7 @@ class WallFollow(RobotBehaviour):
         self.turns: list[str] = []
         self.mode = "forward"
         self.aligned = False
+        self.anchor: tuple[float, float] | None = None     # a cell centre (axle, odometry frame)
         self._new_segment()
         if p.until == "exit" and self.ctx.bounds is None:
             self._bad_input = "until: exit needs the maze's bounds, and this backend has none"
@@ -277,7 +278,7 @@ class WallFollow(RobotBehaviour):
                 self.last_hit = s + self.ray_ahead + side * self.ray_cos
             elif self.wall_seen:       # the side wall just ended: the opening starts in between
                 edge = (self.last_hit + s + self.probe) / 2
-                self.target = edge + self.corridor / 2
+                self.target = self._on_grid(edge + self.corridor / 2, s)
             elif self.aligned:         # open from the cell centre on: the opening is the next cell
                 self.target = p.cell
         front = scan["front_center"]
@@ -297,6 +298,27 @@ class WallFollow(RobotBehaviour):
         self.feedback_message = (f"following the {p.side} wall" if self.target is None
                                  else f"opening on the {p.side} in {self.target - s:.3f} m")
         return Status.RUNNING
+
+    def _on_grid(self, estimate: float, s: float) -> float:
+        """``estimate`` (a distance along the corridor from the segment's origin) moved to the
+        nearest cell centre of the grid anchored at the last stop before a wall, never behind the robot.
+
+        Where a sensor loses a wall's end depends on the sensor (one ray or a cone) and on its
+        calibration by centimetres; the maze's cells do not. A stop facing a wall puts the axle in a
+        cell centre, measured by the front sensor square to the wall (the most reliable reading), and
+        every other cell centre is a whole number of cells from it along x and y: rounding the
+        estimate to one absorbs errors of up to half a cell, and an opening turn that came out a
+        little off does not carry its error into the next one.
+        """
+        if self.anchor is None:
+            return estimate
+        c, s_ = math.cos(self.heading), math.sin(self.heading)
+        along_x = abs(c) > abs(s_)
+        origin, anchor, direction = ((self.origin[0], self.anchor[0], c) if along_x
+                                     else (self.origin[1], self.anchor[1], s_))
+        world = origin + estimate * direction
+        snapped = anchor + round((world - anchor) / self.params.cell) * self.params.cell
+        return max((snapped - origin) / direction, s)
 
     def _steer(self, pose: Pose, scan: dict[str, float] | object) -> float:
         """Hold the corridor's heading, nudged towards the centre line when both sides are seen."""
@@ -329,8 +351,10 @@ class WallFollow(RobotBehaviour):
         self.robot.drive(0.0, 0.0)
         scan = self.robot.proximity()
         assert scan is not None
-        if self.turn_reason == "wall" and scan["front_center"] <= RANGE_MAX:
-            return self._begin_turn(-self.sign, "wall")   # still a wall ahead: a dead end
+        if self.turn_reason == "wall" and scan["front_center"] < self.params.cell / 2:
+            return self._begin_turn(-self.sign, "wall")   # still a wall ahead, in this cell: a dead end
+        if self.turn_reason == "wall":
+            self.anchor = self._axle(pose)        # stopped by a wall: the axle is in a cell centre
         self.mode = "forward"
         self.aligned = True
         self._new_segment()
