@@ -137,6 +137,8 @@ def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
                 **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()}}
     if mission.backend != "sim" or mission.backend_options:
         settings["backend"] = json.dumps({"name": mission.backend, **mission.backend_options})
+    if mission.expect is not None:
+        settings["expect"] = json.dumps(mission.expect.model_dump(mode="json"))
     return settings
 
 

@@ -50,12 +50,16 @@ class RunResult:
     trajectory: list[tuple[float, float, float, float]] = field(default_factory=list)
     #: per node path: ticks, successes, failures, running_time (only with ``node_stats=True``)
     node_stats: dict[str, dict[str, float]] | None = None
+    #: the mission's ``expect:`` criteria that failed ([] all held); None when it declares none
+    expectations: list[str] | None = None
 
     @property
     def real_time_factor(self) -> float:
         return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
 
     def report(self) -> dict[str, Any]:
+        expectations = {} if self.expectations is None else {
+            "expectations": {"met": not self.expectations, "failed": self.expectations}}
         return {
             "mission": self.mission,
             "maze": self.maze,
@@ -73,6 +77,7 @@ class RunResult:
             "collisions": self.collisions,
             "min_clearance": None if self.min_clearance is None else round(self.min_clearance, 6),
             "events": self.events,
+            **expectations,
             "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
         }
 
@@ -109,6 +114,7 @@ class Run:
                            collision_count=lambda: len(self.backend.collisions))
         py_trees.blackboard.Blackboard.clear()
         self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
+        self.substituted = bool(substitutions)
         self.stats = NodeStats(self.period) if node_stats else None
         self.ticks = 0
         self.final_tree = ""
@@ -182,13 +188,28 @@ class Run:
         wall = time.perf_counter() - wall_start
         final = snapshot(sim)
         true_pose = sim.true_pose()
-        return RunResult(
+        result = RunResult(
             mission=self.mission.name, maze=self.mission.maze.name, status=status, reason=reason, code=code,
             failed_path=failed_path, sim_time=sim.time(), ticks=self.ticks, wall_time=wall, seed=self.seed,
             final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
             final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
             min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
             trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None)
+        if self.mission.expect is not None:
+            self._check_expectations(result, places=not self.substituted)
+        return result
+
+    def _check_expectations(self, result: RunResult, places: bool) -> None:
+        """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
+        With nodes substituted (a test of part of a mission), where it ends is not checked."""
+        from .expect import check
+        from .robot_model import robot_model
+
+        expect = self.mission.expect if places else self.mission.expect.model_copy(update={"goal": None, "gaps": []})
+        result.expectations = check(expect, result, self.mission.maze, robot_model(self.mission.robot))
+        if result.status == "SUCCESS" and result.expectations:
+            result.status, result.code, result.failed_path = "FAILURE", "EXPECTATION", "expect"
+            result.reason = "; ".join(result.expectations)
 
     def _record(self) -> None:
         pose = self.backend.true_pose()

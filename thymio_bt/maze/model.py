@@ -31,7 +31,7 @@ def _problem(message: str, hint: str) -> PydanticCustomError:
     return PydanticCustomError("maze", "{message}", {"message": message, "hint": hint})
 
 
-def _quantity(kind: str) -> BeforeValidator:
+def parsed_quantity(kind: str) -> BeforeValidator:
     """Accept a number or a text with units (``20cm``, ``pi/2``) of ``kind``; errors carry a hint."""
     def parse(value: Any) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
@@ -47,8 +47,8 @@ def _quantity(kind: str) -> BeforeValidator:
     return BeforeValidator(parse)
 
 
-Length = Annotated[float, _quantity("length")]
-Angle = Annotated[float, _quantity("angle")]
+Length = Annotated[float, parsed_quantity("length")]
+Angle = Annotated[float, parsed_quantity("angle")]
 Point = tuple[Length, Length]
 
 

@@ -16,13 +16,14 @@ from typing import Any, Mapping
 from pydantic import ValidationError
 
 from ..errors import Problem, UserError, did_you_mean
+from ..expect import Expect
 from ..maze import Maze, load_maze, resolve_maze
 from ..placement import placement_problem
 from ..robot import Pose
 from ..robot_model import ROBOTS, robot_model
 from ..sim.noise import NoiseConfig
 from ..units import Quantity, check_kind
-from ..validation import problems_from
+from ..validation import problems_from, validate
 from ..yamlio import MarkedDict, load_yaml
 from .checker import Checker, Scope, Where
 from .registry import Registry, default_registry
@@ -32,7 +33,7 @@ SETTING_RANGES = {"tick_hz": ("frequency", 1.0, 100.0), "time_limit": ("time", 0
 MAX_SEED = 2**63 - 1
 
 TOP_KEYS = ("name", "description", "maze", "start", "tick_hz", "time_limit", "seed", "noise", "sensor_model",
-            "robot", "backend", "parameters", "subtrees", "include", "plugins", "tree")
+            "robot", "backend", "expect", "parameters", "subtrees", "include", "plugins", "tree")
 SENSOR_MODELS = ("metres", "raw", "cone")
 #: a robot model's sensor model as the simulator calls it ("rays": the course's exact rays, in metres)
 _SIM_SENSOR_MODEL = {"rays": "metres", "raw": "raw", "cone": "cone"}
@@ -95,6 +96,9 @@ class Assembler(Checker):
         maze, maze_file = self._maze(data, path, maze_override)
         start = self._start(data, file, maze, start_override, settings.get("robot", "course"))
         start_where = ("--start", 0, 0) if start_override is not None else self.where_value(data, "start", file)
+        if settings.get("expect") is not None and (maze_override is not None or start_override is not None):
+            # places are the mission's own maze's: elsewhere only the place-free criteria hold
+            settings["expect"] = settings["expect"].model_copy(update={"goal": None, "gaps": []})
         sources = (path, *sorted(self.included), *([maze_file] if maze_file else []), *self.registry.plugin_files)
         return Assembly(path, data, self.registry, self.problems, params, settings, self.subtrees, maze, maze_file,
                         start, start_where, sources)
@@ -200,6 +204,11 @@ class Assembler(Checker):
             self._robot(data["robot"], self.where_value(data, "robot", file), values)
         if "backend" in data:
             self._backend(data["backend"], self.where_value(data, "backend", file), values)
+        if "expect" in data:
+            try:
+                values["expect"] = validate(Expect, data["expect"], file, "expect.")
+            except UserError as exc:
+                self.problems.extend(exc.problems)
         if "noise" in data:
             noise = data["noise"]
             if isinstance(noise, MarkedDict):

@@ -70,3 +70,5 @@ class Mission:
     start_where: tuple[str, int, int] = ("", 0, 0)
     #: every file the mission was read from: itself, its includes, its maze and its .py plugins
     sources: tuple[Path, ...] = ()
+    #: what counts as success besides the tree's status (:mod:`thymio_bt.expect`), or None
+    expect: Any = None

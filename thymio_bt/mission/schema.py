@@ -89,6 +89,18 @@ def control_schema(cls: type[ControlNode], node_ref: dict[str, Any]) -> dict[str
     return {**long_form, "description": _summary(cls)}
 
 
+#: ``expect:`` (thymio_bt.expect): what counts as success besides the tree's status
+_EXPECT = {"type": "object", "additionalProperties": False, "description": "success criteria checked after the run", "properties": {
+    "goal": {"type": "object", "additionalProperties": False, "required": ["centre"],
+             "properties": {"centre": {"type": "array", "prefixItems": [_VALUE, _VALUE], "minItems": 2, "maxItems": 2},
+                            "radius": _VALUE}},
+    "no_collision": {"type": "boolean"},
+    "max_time": _VALUE,
+    "gaps": {"type": "array", "items": {"type": "object", "additionalProperties": False, "required": ["after", "distance"],
+                                        "properties": {"after": {"type": "string"}, "distance": _VALUE,
+                                                       "tolerance": _VALUE}}}}}
+
+
 def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
     registry = registry or default_registry()
     node_ref = {"$ref": "#/$defs/node"}
@@ -119,13 +131,15 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "start": {**pose, "description": "a named spawn of the maze or [x, y, yaw]"},
             "tick_hz": _VALUE, "time_limit": _VALUE,
             "seed": {"type": "integer", "minimum": 0},
-            "sensor_model": {"enum": ["metres", "raw"],
-                             "description": "metres: the course's ideal rays; raw: a real Thymio's readings"},
+            "sensor_model": {"enum": ["metres", "rays", "raw", "cone"],
+                             "description": "metres (or rays): the course's ideal rays; raw: a real Thymio's "
+                                            "readings; cone: Enki's three-ray cones; default: the robot's own"},
             "robot": {"enum": list(ROBOTS), "description": "the robot model (thymio-bt backends lists them)"},
             "backend": {"anyOf": [{"type": "string"}, {"type": "object", "required": ["name"],
                                                          "properties": {"name": {"type": "string"}}}],
                         "description": "where the mission runs: a backend name, or {name: NAME, OPTION: VALUE}"},
             "noise": {"type": "object", "properties": noise["properties"], "additionalProperties": False},
+            "expect": _EXPECT,
             "parameters": {"type": "object", "additionalProperties": {"type": ["number", "string", "boolean"]}},
             "include": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]},
             "plugins": {"anyOf": [{"type": "string"}, {"type": "array", "items": {"type": "string"}}]},

@@ -182,8 +182,12 @@ def read_xml_mission(path: Path) -> MarkedDict:
         for key, text in mission.attrs.items():
             if key.startswith("noise."):
                 settings.setdefault("noise", {})[key[len("noise."):]] = _value(text)
-            elif key == "backend":
-                settings[key] = _value(text) if not text.strip().startswith("{") else json.loads(text)
+            elif key in ("backend", "expect") and text.strip().startswith("{"):
+                try:
+                    settings[key] = json.loads(text)
+                except json.JSONDecodeError as exc:
+                    raise UserError(Problem(f"{key}: invalid JSON: {exc.msg}", file, mission.line, mission.column,
+                                            hint=f"write {key} as a JSON object, e.g. {key}='{{\"name\": \"sim\"}}'"))
             elif key in ("name", "description", "maze", "start", "sensor_model", "robot"):
                 settings[key] = text
             else:

@@ -1,0 +1,93 @@
+"""expect: a run succeeds only when its tree succeeds and the mission's criteria hold on the ground
+truth (goal region, no collision, time bound, front gaps by geometry); the failed ones are named."""
+
+import math
+
+import pytest
+
+from thymio_bt.errors import UserError
+from thymio_bt.expect import front_gap
+from thymio_bt.maze import load_maze
+from thymio_bt.mission import load_mission
+from thymio_bt.robot import Pose
+from thymio_bt.robot_model import COURSE
+from thymio_bt.runner import Run
+from thymio_bt.sweep import sweep
+
+MISSION = """\
+maze: two_parts_maze
+start: part1
+expect:
+{expect}
+tree:
+  MoveUntilWall: {{distance: 5cm}}
+"""
+
+
+def run(tmp_path, expect: str):
+    path = tmp_path / "m.yaml"
+    path.write_text(MISSION.format(expect=expect))
+    return Run(load_mission(path)).run()
+
+
+def test_all_criteria_met_is_a_success_with_the_check_in_the_report(tmp_path):
+    result = run(tmp_path, "  goal: {centre: [0.4893, 0.1], radius: 2mm}\n  no_collision: true\n  max_time: 10s\n"
+                           "  gaps: [{after: MoveUntilWall, distance: 5cm, tolerance: 1mm}]")
+    assert result.status == "SUCCESS" and result.report()["expectations"] == {"met": True, "failed": []}
+
+
+@pytest.mark.parametrize("expect, message", [
+    ("  goal: {centre: [0.3, 0.1], radius: 1cm}", "goal: ended 189.2 mm from (0.3, 0.1), more than 10 mm"),
+    ("  max_time: 2s", "max_time: took 4.3 s, more than 2 s"),
+    ("  gaps: [{after: MoveUntilWall, distance: 4cm}]", "the front gap was 5.01 cm, not 4 ± 0.3 cm"),
+    ("  gaps: [{after: Nothing, distance: 4cm}]", "gaps: no node matching 'Nothing' ended with a robot"),
+])
+def test_a_tree_success_that_misses_an_expectation_is_a_failure_naming_it(tmp_path, expect, message):
+    result = run(tmp_path, expect)
+    assert (result.status, result.code, result.failed_path) == ("FAILURE", "EXPECTATION", "expect")
+    assert message in result.reason and result.report()["expectations"]["met"] is False
+
+
+def test_a_collision_fails_no_collision(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text("maze: two_parts_maze\nstart: part1\nexpect: {no_collision: true}\n"
+                    "tree:\n  force_success: {MoveDistance: {distance: 50cm, timeout: 10}}\n")
+    result = Run(load_mission(path)).run()
+    assert (result.status, result.code) == ("FAILURE", "EXPECTATION") and "no_collision: 1 collision" in result.reason
+
+
+def test_the_front_gap_is_measured_by_geometry():
+    maze = load_maze("mazes/two_parts_maze.yaml")
+    assert front_gap(maze, COURSE, Pose(0.4893, 0.1, 0.0)) == pytest.approx(0.0500, abs=2e-4)
+    behind = front_gap(maze, COURSE, Pose(0.4893, 0.1, math.pi))          # the west wall, far behind
+    assert math.isfinite(behind) and behind > 0.3
+
+
+def test_expectations_are_validated_with_units_and_places(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text("maze: arena\nstart: centre\nexpect:\n  goal: {centre: [1, 2], radius: 3 s}\n  colision: true\n"
+                    "tree: Stop\n")
+    with pytest.raises(UserError) as err:
+        load_mission(path)
+    messages = [(p.line, p.message) for p in err.value.problems]
+    assert messages[0][0] == 4 and "length" in messages[0][1]
+    assert (5, "unknown key 'colision'") in messages
+
+
+def test_in_another_maze_only_place_free_criteria_hold(tmp_path):
+    mission = load_mission("missions/maze_bonus.yaml", maze="mazes/arena.yaml", start="0.6,0.6,0")
+    assert mission.expect.goal is None and mission.expect.no_collision
+
+
+def test_a_sweep_counts_a_missed_expectation_as_a_failure(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text(MISSION.format(expect="  gaps: [{after: MoveUntilWall, distance: 5cm, tolerance: 0.2mm}]"))
+    result = sweep(path, runs=6, overrides={"noise.range_sd": "0.003"})
+    failed = [r for r in result.results if r["status"] != "SUCCESS"]
+    assert failed and all(r["code"] == "EXPECTATION" for r in failed) and result.successes == 6 - len(failed)
+
+
+def test_the_course_missions_meet_their_expectations():
+    for name in ("maze_part1_2", "maze_bonus", "course_full"):
+        result = Run(load_mission(f"missions/{name}.yaml")).run()
+        assert result.status == "SUCCESS" and result.report()["expectations"]["met"], name
