@@ -25,6 +25,8 @@ Side = Literal["left", "right"]
 _SENSOR = {s.name: (s.x, s.y, s.yaw) for s in COURSE.sensors}
 RANGE_MAX = COURSE.range_max
 AXLE_X = COURSE.axle_x
+#: stationary readings WallFollow averages before a wall to square its heading to it
+SQUARING_READINGS = 3
 
 
 def side_ray(side: str) -> str:
@@ -213,6 +215,8 @@ class WallFollow(RobotBehaviour):
 
     def start(self) -> None:
         p = self.params
+        model = getattr(self.robot, "model", COURSE)          # this robot's own sensor poses
+        self.sensors = {s.name: (s.x, s.y, s.yaw) for s in model.sensors}
         sx, sy, syaw = _SENSOR[side_ray(p.side)]
         self.sign = 1.0 if p.side == "left" else -1.0
         self.corridor = p.cell - p.wall_thickness
@@ -263,6 +267,8 @@ class WallFollow(RobotBehaviour):
             return Status.SUCCESS
         if self.mode == "turn":
             return self._turn(pose)
+        if self.mode == "square":
+            return self._square(pose)
         return self._forward(pose)
 
     def _forward(self, pose: Pose) -> Status:
@@ -288,7 +294,9 @@ class WallFollow(RobotBehaviour):
                                         (front_left <= tol and self.target - s < p.cell / 2)):
             return self._begin_turn(self.sign, "opening")
         if front_left <= tol:
-            return self._begin_turn(-self.sign, "wall")
+            self.robot.drive(0.0, 0.0)
+            self.mode, self.squaring = "square", []
+            return Status.RUNNING
         limit = p.speed
         if math.isfinite(front):
             limit = approach_speed(front_left, limit, 5.0, 0.005, self.ctx.tick_period)
@@ -332,6 +340,36 @@ class WallFollow(RobotBehaviour):
                 heading -= max(-0.1, min(0.1, 5.0 * offset))
         error = wrap_angle(heading - pose.yaw)
         return max(-0.5, min(0.5, 3.0 * error))
+
+    def _square(self, pose: Pose) -> Status:
+        """Stopped before a wall: read the two ±20° sensors for a few ticks, re-take the corridor's
+        heading from where they see the wall, then turn.
+
+        Odometry's heading drifts a little at every turn; a wall ahead is square to the corridor, so
+        where the two sensors hit it gives the robot's true angle to it. A few stationary readings
+        are averaged (a real sensor's noise), and only small corrections are believed.
+        """
+        scan = self.robot.proximity()
+        assert scan is not None
+        self.squaring.append((scan["front_center_left"], scan["front_center_right"]))
+        if len(self.squaring) < SQUARING_READINGS:
+            self.robot.drive(0.0, 0.0)
+            return Status.RUNNING
+        readings = [sum(r[i] for r in self.squaring) / len(self.squaring) for i in (0, 1)]
+        if all(math.isfinite(r) for r in readings):
+            self._square_to_wall(pose, readings)
+        return self._begin_turn(-self.sign, "wall")
+
+    def _square_to_wall(self, pose: Pose, readings: list[float]) -> None:
+        """Set the corridor's heading square to the wall the ±20° sensors read at ``readings``."""
+        hits = []
+        for name, reading in zip(("front_center_left", "front_center_right"), readings):
+            x, y, yaw = self.sensors[name]
+            hits.append((x + reading * math.cos(yaw), y + reading * math.sin(yaw)))
+        (lx, ly), (rx, ry) = hits
+        error = math.atan2(lx - rx, ly - ry)          # > 0: the robot is turned left of the wall's normal
+        if abs(error) < math.radians(8):
+            self.heading = wrap_angle(pose.yaw - error)
 
     def _begin_turn(self, direction: float, why: str) -> Status:
         self.robot.drive(0.0, 0.0)

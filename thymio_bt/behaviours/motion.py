@@ -55,6 +55,10 @@ class MoveUntilWallParams(BehaviourParams):
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
+#: how many of the latest readings MoveUntilWall averages (through odometry) to place the wall
+WALL_READINGS = 4
+
+
 class MoveUntilWall(RobotBehaviour):
     """Cruise at ``speed``, slow down once the wall is in range, stop when the sensor reads ``distance``.
 
@@ -73,8 +77,16 @@ class MoveUntilWall(RobotBehaviour):
     moves = True
 
     def start(self) -> None:
-        self.heading = current_pose(self.robot).yaw
+        pose = current_pose(self.robot)
+        self.heading = pose.yaw
         self.wall_seen = False
+        self.origin = (pose.x, pose.y)
+        self.walls: list[float] = []         # the wall's place along the heading, one per recent reading
+
+    def _travelled(self) -> float:
+        pose = current_pose(self.robot)
+        return ((pose.x - self.origin[0]) * math.cos(self.heading)
+                + (pose.y - self.origin[1]) * math.sin(self.heading))
 
     def step(self) -> Status:
         p = self.params
@@ -84,6 +96,14 @@ class MoveUntilWall(RobotBehaviour):
         if math.isfinite(reading):
             self.wall_seen = True
         remaining = reading - p.distance
+        if math.isfinite(reading):
+            # where the wall is, by this reading and odometry: averaged over the last readings, one
+            # noisy reading (a real sensor's) cannot stop the robot early; noise-free they all agree
+            travelled = self._travelled()
+            self.walls = [*self.walls[-(WALL_READINGS - 1):], travelled + reading]
+            remaining = sum(self.walls) / len(self.walls) - travelled - p.distance
+        else:
+            self.walls = []
         self.extra = {"range": None if math.isinf(reading) else round(reading, 6), "distance": p.distance}
         if remaining <= p.tolerance:
             self.robot.drive(0.0, 0.0)
