@@ -204,6 +204,18 @@ def test_wall_follow_leaves_generated_perfect_mazes(side, seed):
     assert "LL" in follow["turns"] or "RR" in follow["turns"] or len(follow["turns"]) > 3
 
 
+@pytest.mark.parametrize("robot", ["enki", "real"])
+@pytest.mark.parametrize("side, seed", [("left", 4), ("right", 5), ("left", 6)])
+def test_wall_follow_leaves_generated_mazes_on_other_robots_with_noise(robot, side, seed):
+    """Enki's cones (and its motor noise) or a real robot's noisy readings: the same behaviour, no
+    collision, with every noise model on."""
+    maze = perfect_maze(5, 5, seed=seed)
+    result = run_tree({"WallFollow": {"side": side}}, maze, seconds=600, seed=seed, robot=robot,
+                      noise={"wheel": 0.027, "odometry": 0.01, "range_sd": 0.001})
+    assert result.status == "SUCCESS", result.reason
+    assert result.collisions == 0 and result.final_pose["y"] > maze.bounds()[3] - 0.02   # by odometry: drift
+
+
 def test_wall_follow_turns_around_in_dead_ends():
     dead_end_first = world("""
 +--+--+--+
