@@ -7,6 +7,7 @@ import subprocess
 import sys
 import types
 
+import _require
 import pytest
 from py_trees.common import Status
 
@@ -458,7 +459,7 @@ def sent_variables(tdmclient, packet):
 
 
 def test_tdm_node_on_tdmclients_cache_node():
-    tdmclient = pytest.importorskip("tdmclient")
+    tdmclient = _require.module("tdmclient")
     client = FakeClient()
     cache = tdmclient.ClientAsyncCacheNode(client, {"node_id": [7] * 16, "node_id_str": "fake", "status": 2})
     client.node = cache

@@ -4,6 +4,7 @@ import json
 import sys
 import time
 
+import _require
 import numpy as np
 import pytest
 
@@ -23,7 +24,7 @@ FAST = 1e9          # a speed-up at which the pacing never waits
 @pytest.fixture
 def pg(monkeypatch):
     monkeypatch.setenv("SDL_VIDEODRIVER", "dummy")
-    return pytest.importorskip("pygame")
+    return _require.module("pygame")
 
 
 def _key(pg, key):
