@@ -64,6 +64,10 @@ class Expect(BaseModel):
     max_time: Duration | None = Field(None, gt=0, le=36000, description="the mission must end within this")
     gaps: list[GapExpectation] = Field(default_factory=list, description="front gaps when nodes end")
 
+    def without_places(self) -> "Expect":
+        """The criteria that hold anywhere (no goal, no gaps): for a run in another maze or start."""
+        return self.model_copy(update={"goal": None, "gaps": []})
+
 
 def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[str]:
     """The expectations ``result`` (a :class:`~thymio_bt.runner.RunResult`) does not meet."""

@@ -205,7 +205,7 @@ class Run:
         from .expect import check
         from .robot_model import robot_model
 
-        expect = self.mission.expect if places else self.mission.expect.model_copy(update={"goal": None, "gaps": []})
+        expect = self.mission.expect if places else self.mission.expect.without_places()
         result.expectations = check(expect, result, self.mission.maze, robot_model(self.mission.robot))
         if result.status == "SUCCESS" and result.expectations:
             result.status, result.code, result.failed_path = "FAILURE", "EXPECTATION", "expect"

@@ -98,7 +98,7 @@ class Assembler(Checker):
         start_where = ("--start", 0, 0) if start_override is not None else self.where_value(data, "start", file)
         if settings.get("expect") is not None and (maze_override is not None or start_override is not None):
             # places are the mission's own maze's: elsewhere only the place-free criteria hold
-            settings["expect"] = settings["expect"].model_copy(update={"goal": None, "gaps": []})
+            settings["expect"] = settings["expect"].without_places()
         sources = (path, *sorted(self.included), *([maze_file] if maze_file else []), *self.registry.plugin_files)
         return Assembly(path, data, self.registry, self.problems, params, settings, self.subtrees, maze, maze_file,
                         start, start_where, sources)
