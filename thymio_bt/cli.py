@@ -539,12 +539,13 @@ def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) ->
     from .robot_model import COURSE
     from .yamlio import load_yaml
 
-    data = None if path.suffix.lower() == ".xml" else load_yaml(path)      # an .xml file is a BT.CPP mission
-    if isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
+    micromouse = path.suffix.lower() == ".txt"                          # a micromouse contest maze
+    data = None if path.suffix.lower() == ".xml" or micromouse else load_yaml(path)   # .xml: a BT.CPP mission
+    if micromouse or isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
         from .maze import load_maze
 
         maze = load_maze(path)
-        spawns = data.get("spawns") if "grid" not in data else None
+        spawns = data.get("spawns") if isinstance(data, dict) and "grid" not in data else None
         problems = [Problem(f"spawn '{name}' is impossible: {why}", str(path),
                             *(getattr(spawns, "marks", {}).get(name, (0, 0))), f"spawns.{name}",
                             "move it into a free cell, away from the walls")
@@ -552,7 +553,9 @@ def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) ->
                     if (why := placement_problem(maze, COURSE, spawn.pose()))]
         if problems:
             raise UserError(problems)
-        return f"maze: {len(maze.walls)} walls, {len(maze.obstacles)} obstacles, spawns {', '.join(maze.spawns) or 'none'}"
+        goal = f", goal {len(maze.goal)} cell{'s' * (len(maze.goal) != 1)}" if maze.goal else ""
+        return (f"maze: {len(maze.walls)} walls, {len(maze.obstacles)} obstacles, "
+                f"spawns {', '.join(maze.spawns) or 'none'}{goal}")
     from .mission import load_mission
 
     spec = load_mission(path, overrides, run_plugins=plugins)       # checks the start pose against the maze too
@@ -639,15 +642,23 @@ def maze() -> None:
 @click.option("--output", "-o", type=click.Path(path_type=Path), default=STDOUT, show_default=True,
               help="Maze YAML to write (- = standard output).")
 @click.option("--model", default=None, help="Import only this model of the world.")
-def maze_import(world: Path, output: Path, model: str | None) -> None:
-    """Convert a Gazebo classic WORLD file of box walls into a maze file."""
+@click.option("--cell", type=POSITIVE, default=0.18, show_default=True, help="Micromouse: cell size (m).")
+@click.option("--wall", type=POSITIVE, default=0.012, show_default=True, help="Micromouse: wall thickness (m).")
+@click.option("--post", type=POSITIVE, default=0.012, show_default=True, help="Micromouse: post size (m).")
+def maze_import(world: Path, output: Path, model: str | None, cell: float, wall: float, post: float) -> None:
+    """Convert a Gazebo classic WORLD file of box walls, or a micromouse contest maze (.txt), into a maze file."""
     import yaml
-
-    from .maze.gazebo import import_world
 
     try:
         out = Output(output, "--output")
-        result = import_world(world, model)
+        if world.suffix.lower() == ".txt":
+            from .maze.micromouse import read_micromouse
+
+            result = read_micromouse(world, cell, wall, post)
+        else:
+            from .maze.gazebo import import_world
+
+            result = import_world(world, model)
         text = (f"# Made by: thymio-bt maze import {world}" + ("" if out.is_stdout else f" -o {output}") + "\n"
                 + yaml.safe_dump(result.to_yaml_dict(), sort_keys=False))
         out.write_text(text)

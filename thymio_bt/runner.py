@@ -52,6 +52,8 @@ class RunResult:
     node_stats: dict[str, dict[str, float]] | None = None
     #: the mission's ``expect:`` criteria that failed ([] all held); None when it declares none
     expectations: list[str] | None = None
+    #: for a maze with a goal region: whether base_link entered it, and when (s); else None
+    goal: dict[str, Any] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -78,6 +80,7 @@ class RunResult:
             "min_clearance": None if self.min_clearance is None else round(self.min_clearance, 6),
             "events": self.events,
             **expectations,
+            **({} if self.goal is None else {"goal": self.goal}),
             "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
         }
 
@@ -195,6 +198,9 @@ class Run:
             final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
             min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
             trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None)
+        if self.mission.maze.goal:
+            reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
+            result.goal = {"reached": reached is not None, "t": reached}
         if self.mission.expect is not None:
             self._check_expectations(result, places=not self.substituted)
         return result

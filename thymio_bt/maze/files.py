@@ -22,7 +22,12 @@ def maze_dirs() -> list[Path]:
 
 
 def load_maze(path: str | Path) -> Maze:
-    """Load a maze file (YAML, or the grid form with a ``grid:`` key); errors give file:line."""
+    """Load a maze file (YAML, the grid form with a ``grid:`` key, or a micromouse ``.txt``);
+    errors give file:line."""
+    if Path(path).suffix.lower() == ".txt":
+        from .micromouse import read_micromouse
+
+        return read_micromouse(path)
     data = load_yaml(path, "maze")
     if not isinstance(data, MarkedDict):
         raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path),
@@ -42,11 +47,11 @@ def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
         candidates.append(relative_to / ref_path)
     candidates.append(ref_path)
     if ref_path.suffix == "" and len(ref_path.parts) == 1:
-        candidates += [d / f"{ref}.yaml" for d in maze_dirs()]
+        candidates += [d / f"{ref}{suffix}" for d in maze_dirs() for suffix in (".yaml", ".txt")]
     for candidate in candidates:
         if candidate.exists():             # a folder or a FIFO too: reading it says what is wrong
             return candidate
-    known = sorted({p.stem for d in maze_dirs() for p in d.glob("*.yaml")})
+    known = sorted({p.stem for d in maze_dirs() for p in (*d.glob("*.yaml"), *d.glob("*.txt"))})
     raise UserError(Problem(f"maze not found: '{ref}'",
                             hint=("a path relative to the mission file, or a named maze: "
                                   + (did_you_mean(ref, known) if known else "none installed"))))

@@ -119,3 +119,49 @@ def mirrored(maze: Maze, axis_x: float) -> Maze:
                                                                           math.cos(math.pi - s.yaw)))
               for k, s in maze.spawns.items()}
     return Maze(name=f"{maze.name}_mirrored", walls=walls, spawns=spawns, description=f"{maze.name} mirrored")
+
+
+def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> "CellWalls":
+    """A maze of the micromouse contest kind, as cells and walls (:mod:`.micromouse` makes the geometry).
+
+    The start is the bottom-left cell, open only to the north; the goal is the 2 x 2 block at the
+    centre, open inside, with one entrance; the rest is a random perfect maze (recursive
+    backtracker) in which a fraction ``loops`` of the inner walls is then removed, so that wall
+    following is defeated by loops and a map and a plan are needed.
+    """
+    from .micromouse import CellWalls
+
+    rng = random.Random(seed)
+    half = size // 2
+    goal = {(half - 1, half - 1), (half, half - 1), (half - 1, half), (half, half)}
+    passages: set[frozenset[Cell]] = {frozenset(p) for p in (((half - 1, half - 1), (half, half - 1)),
+                                                               ((half - 1, half), (half, half)),
+                                                               ((half - 1, half - 1), (half - 1, half)),
+                                                               ((half, half - 1), (half, half)))}
+    start = (0, 0)
+    passages.add(frozenset({start, (0, 1)}))
+    seen, stack = {start, (0, 1)}, [(0, 1)]
+    while stack:
+        c, r = stack[-1]
+        options = [(c + dc, r + dr) for dc, dr in _STEPS if 0 <= c + dc < size and 0 <= r + dr < size
+                   and (c + dc, r + dr) not in seen and (c + dc, r + dr) != start]
+        if not options:
+            stack.pop()
+            continue
+        nxt = rng.choice(options)
+        if nxt in goal:                    # the goal block is entered once, then counts as visited
+            seen |= goal
+        else:
+            seen.add(nxt)
+            stack.append(nxt)
+        passages.add(frozenset({(c, r), nxt}))
+    inner = [frozenset({(c, r), (c + dc, r + dr)}) for c in range(size) for r in range(size)
+             for dc, dr in ((1, 0), (0, 1)) if c + dc < size and r + dr < size]
+    walls = [pair for pair in inner if pair not in passages and not (pair & goal) and start not in pair]
+    for pair in rng.sample(walls, int(len(walls) * loops)):
+        passages.add(pair)
+    horizontal = {(c, r) for c in range(size) for r in range(size + 1)
+                  if r in (0, size) or frozenset({(c, r - 1), (c, r)}) not in passages}
+    vertical = {(c, r) for c in range(size + 1) for r in range(size)
+                if c in (0, size) or frozenset({(c - 1, r), (c, r)}) not in passages}
+    return CellWalls(size, size, frozenset(horizontal), frozenset(vertical), start, frozenset(goal))

@@ -141,8 +141,20 @@ class Spawn(BaseModel):
         return Pose(self.x, self.y, self.yaw)
 
 
+class Area(BaseModel):
+    """An axis-aligned rectangle ``from`` one corner ``to`` the other (e.g. a goal cell)."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, frozen=True)
+    start: Point = Field(alias="from", description="one corner [x, y]")
+    end: Point = Field(alias="to", description="the opposite corner [x, y]")
+
+    def contains(self, x: float, y: float) -> bool:
+        (x0, y0), (x1, y1) = self.start, self.end
+        return min(x0, x1) <= x <= max(x0, x1) and min(y0, y1) <= y <= max(y0, y1)
+
+
 class Maze(BaseModel):
-    """Static walls and named spawn poses, in world metres."""
+    """Static walls and named spawn poses, in world metres; optionally a goal region."""
 
     model_config = ConfigDict(extra="forbid")
     name: str = "maze"
@@ -151,6 +163,11 @@ class Maze(BaseModel):
     walls: list[Wall] = Field(default_factory=list)
     obstacles: list[Obstacle] = Field(default_factory=list)
     spawns: dict[str, Spawn] = Field(default_factory=dict)
+    #: where the maze's goal is (e.g. a micromouse maze's centre cells): base_link inside any area
+    goal: list[Area] = Field(default_factory=list)
+
+    def in_goal(self, x: float, y: float) -> bool:
+        return any(area.contains(x, y) for area in self.goal)
 
     def bounds(self) -> tuple[float, float, float, float]:
         """(xmin, ymin, xmax, ymax) of all walls and obstacles; an empty maze has all zero."""
@@ -186,4 +203,6 @@ class Maze(BaseModel):
             out["obstacles"] = [o.model_dump(exclude_none=True, exclude_defaults=True) for o in self.obstacles]
         if self.spawns:
             out["spawns"] = {k: {"x": r(s.x), "y": r(s.y), "yaw": r(s.yaw)} for k, s in self.spawns.items()}
+        if self.goal:
+            out["goal"] = [{"from": [r(a.start[0]), r(a.start[1])], "to": [r(a.end[0]), r(a.end[1])]} for a in self.goal]
         return out
