@@ -8,6 +8,7 @@ degree, and never command more than the goal needs in one tick (no overshoot).
 from __future__ import annotations
 
 import math
+from collections import deque
 from typing import Literal
 
 from py_trees.common import Status
@@ -81,7 +82,7 @@ class MoveUntilWall(RobotBehaviour):
         self.heading = pose.yaw
         self.wall_seen = False
         self.origin = (pose.x, pose.y)
-        self.walls: list[float] = []         # the wall's place along the heading, one per recent reading
+        self.walls: deque[float] = deque(maxlen=WALL_READINGS)   # the wall's place along the heading, per reading
 
     def _travelled(self) -> float:
         pose = current_pose(self.robot)
@@ -100,10 +101,10 @@ class MoveUntilWall(RobotBehaviour):
             # where the wall is, by this reading and odometry: averaged over the last readings, one
             # noisy reading (a real sensor's) cannot stop the robot early; noise-free they all agree
             travelled = self._travelled()
-            self.walls = [*self.walls[-(WALL_READINGS - 1):], travelled + reading]
+            self.walls.append(travelled + reading)
             remaining = sum(self.walls) / len(self.walls) - travelled - p.distance
         else:
-            self.walls = []
+            self.walls.clear()
         self.extra = {"range": None if math.isinf(reading) else round(reading, 6), "distance": p.distance}
         if remaining <= p.tolerance:
             self.robot.drive(0.0, 0.0)
