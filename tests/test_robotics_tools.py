@@ -217,14 +217,15 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
         uids = [int(u) for u in re.findall(r'_uid="(\d+)"', tree.decode())]
         head, statuses = _groot2_request(zmq, port, "S")
         records = [struct.unpack_from("<HB", statuses, i) for i in range(0, len(statuses), 3)]
-        assert [uid for uid, _ in records] == uids and records[0][1] == 1   # the root is RUNNING
+        assert sorted(uid for uid, _ in records) == sorted(uids) and records[0][1] == 1   # the root is RUNNING
         assert all(status in (0, 1, 2, 3, 11, 12, 13) for _, status in records)
         head, board = _groot2_request(zmq, port, "B", b"MainTree")
         assert set(msgpack.unpackb(board)) == {"MainTree"}
         assert _groot2_request(zmq, port, "Z") == [b"error"]
         shown = subprocess.run([btview, "snapshot", "-p", str(port), "--ascii", "--no-color"],
                                capture_output=True, text=True, timeout=30)
-        assert "part 1 [MoveUntilWall]" in shown.stdout and "15 nodes" in shown.stdout, shown.stderr
+        assert "part 1 [MoveUntilWall]" in shown.stdout and "16 nodes" in shown.stdout, shown.stderr
+        assert "part 2 [SubTree]" in shown.stdout               # the subtree as Groot2 shows one
     finally:
         run.terminate()
         run.wait(timeout=10)
@@ -252,3 +253,25 @@ def _require_program_in_venv(name):
         from _require import missing
         missing(f"program {name}")
     return str(path)
+
+
+def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
+    from thymio_bt.btcpp import mission_xml
+    from thymio_bt.errors import UserError
+    from thymio_bt.mission import load_mission
+
+    xml = mission_xml(load_mission("missions/course_full.yaml"))
+    assert re.findall(r'<BehaviorTree ID="([^"]+)"', xml) == ["MainTree", "respawn", "to_dead_end", "respawn_2",
+                                                               "to_dead_end_2"]
+    assert '<SubTree ID="to_dead_end" name="part 2"' in xml
+    uids = sorted(int(u) for u in re.findall(r'_uid="(\d+)"', xml))
+    assert uids == list(range(1, 35))                          # BT.CPP's pre-order, SubTree nodes included
+    bad = tmp_path / "bad.xml"
+    for body, message in (('<SubTree ID="nowhere"/>', 'names no <BehaviorTree ID="nowhere">'),
+                          ('<SubTree ID="loop"/>', "subtree 'loop' uses itself"),
+                          ('<SubTree ID="loop" speed="{v}"/>', "with ports (speed) is not supported")):
+        bad.write_text(f'<root BTCPP_format="4" main_tree_to_execute="MainTree">\n'
+                       f'<BehaviorTree ID="MainTree">{body}</BehaviorTree>\n'
+                       f'<BehaviorTree ID="loop"><SubTree ID="loop"/></BehaviorTree>\n</root>\n')
+        with pytest.raises(UserError, match=re.escape(message)):
+            load_mission(bad)

@@ -77,10 +77,13 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, s
 
 
 def tree_xml(nodes: list[TreeNode], registry: Any, params: Mapping[int, Mapping[str, Any]] | None = None,
-             tree_id: str = "MainTree", settings: Mapping[str, str] | None = None) -> str:
+             tree_id: str = "MainTree", settings: Mapping[str, str] | None = None,
+             subtrees: Mapping[int, str] | None = None) -> str:
     """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
-    lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel."""
-    params = params or {}
+    lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
+    ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
+    tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node (see :func:`xml_uids`)."""
+    params, subtrees = params or {}, subtrees or {}
     root = ET.Element("root", BTCPP_format="4", main_tree_to_execute=tree_id)
     if settings:
         ET.SubElement(root, MISSION_TAG, dict(settings))
@@ -89,13 +92,18 @@ def tree_xml(nodes: list[TreeNode], registry: Any, params: Mapping[int, Mapping[
     for n in nodes:
         if n["parent"] is not None:
             children[n["parent"]] += 1
+    uids, wrappers = xml_uids(nodes, subtrees)
     elements: dict[int, ET.Element] = {}
     used: dict[str, str] = {}
     for n in nodes:
         parent = tree if n["parent"] is None else elements[n["parent"]]
+        if n["uid"] in subtrees:
+            sid = subtrees[n["uid"]]
+            ET.SubElement(parent, "SubTree", {"ID": sid, "name": n["name"], "_uid": str(wrappers[n["uid"]])})
+            parent = ET.SubElement(root, "BehaviorTree", ID=sid)
         ident = node_id(n, children[n["uid"]])
         used.setdefault(ident, n["kind"])
-        attrs = {"name": n["name"], **_ports(n, ident, params.get(n["uid"], {})), "_uid": str(n["uid"])}
+        attrs = {"name": n["name"], **_ports(n, ident, params.get(n["uid"], {})), "_uid": str(uids[n["uid"]])}
         elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
     model = ET.SubElement(root, "TreeNodesModel")
     for ident, kind in sorted(used.items()):
@@ -113,6 +121,19 @@ def tree_xml(nodes: list[TreeNode], registry: Any, params: Mapping[int, Mapping[
                 port.text = text
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[int, int], dict[int, int]]:
+    """BT.CPP's pre-order uids once subtree instances are ``<SubTree>`` nodes: (the uid of each node,
+    by its uid in ``nodes``; the uid of the ``<SubTree>`` node above each subtree root)."""
+    uids, wrappers, count = {}, {}, 0
+    for n in nodes:
+        if n["uid"] in subtrees:
+            count += 1
+            wrappers[n["uid"]] = count
+        count += 1
+        uids[n["uid"]] = count
+    return uids, wrappers
 
 
 def _category(cls: Any, ident: str) -> str:
@@ -144,15 +165,30 @@ def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
 
 def mission_xml(mission: Any, output: Path | None = None) -> str:
     """The BT.CPP XML of a loaded mission: its tree as planned, parameters as ports (in SI units),
-    its settings in a ``<ThymioMission>`` element (BT.CPP ignores it) so that the file runs as the
-    mission did (``thymio-bt run mission.xml``)."""
+    each subtree instance as its own ``<BehaviorTree>`` used by a ``<SubTree>`` node, its settings
+    in a ``<ThymioMission>`` element (BT.CPP ignores it) so that the file runs as the mission did
+    (``thymio-bt run mission.xml``)."""
+    nodes, params, subtrees = mission_nodes(mission)
+    folder = (output or Path("mission.xml")).resolve().parent
+    return tree_xml(nodes, mission.registry, params, settings=mission_settings(mission, folder), subtrees=subtrees)
+
+
+def mission_nodes(mission: Any) -> tuple[list[TreeNode], dict[int, dict[str, Any]], dict[int, str]]:
+    """A mission's planned tree in pre-order (uids from 1, as the built py_trees tree walks), each
+    node's parameters, and the BehaviorTree ID of each subtree instance's root (``NAME``, then
+    ``NAME_2``... when a subtree is used several times)."""
     nodes: list[TreeNode] = []
     params: dict[int, dict[str, Any]] = {}
+    subtrees: dict[int, str] = {}
+    uses: dict[str, int] = {}
 
     def visit(plan: Any, parent: int | None, prefix: str) -> None:
         uid = len(nodes) + 1
         path = f"{prefix}/{plan.name}" if prefix else plan.name
         nodes.append(TreeNode(uid=uid, path=path, name=plan.name, kind=plan.behaviour or plan.kind, parent=parent))
+        if plan.subtree is not None:
+            uses[plan.subtree] = uses.get(plan.subtree, 0) + 1
+            subtrees[uid] = plan.subtree if uses[plan.subtree] == 1 else f"{plan.subtree}_{uses[plan.subtree]}"
         if plan.params is not None:
             values = plan.params.model_dump()
             values.update({key: "{" + ref + "}" for key, ref in plan.blackboard_refs.items()})
@@ -161,5 +197,4 @@ def mission_xml(mission: Any, output: Path | None = None) -> str:
             visit(child, uid, path)
 
     visit(mission.tree, None, "")
-    folder = (output or Path("mission.xml")).resolve().parent
-    return tree_xml(nodes, mission.registry, params, settings=mission_settings(mission, folder))
+    return nodes, params, subtrees

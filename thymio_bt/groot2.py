@@ -70,12 +70,17 @@ class Groot2Server:
 
     def __call__(self, run: Any) -> None:
         if not self.uids:
-            from .btcpp import mission_xml
+            from .btcpp import mission_nodes, mission_xml, xml_uids
             from .logs.records import walk
 
-            nodes = tree_nodes(run.root)
             self.xml = mission_xml(run.mission)      # as `tree --btcpp` writes it: ports and settings
-            self.uids = list(zip((n["uid"] for n in nodes), walk(run.root)))
+            nodes, _, subtrees = mission_nodes(run.mission)
+            uids, wrappers = xml_uids(nodes, subtrees)
+            # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's status
+            for plan_node, node in zip(nodes, walk(run.root)):
+                if plan_node["uid"] in wrappers:
+                    self.uids.append((wrappers[plan_node["uid"]], node))
+                self.uids.append((uids[plan_node["uid"]], node))
             self.previous = {uid: 0 for uid, _ in self.uids}
             self.thread.start()
         import py_trees

@@ -35,6 +35,8 @@ class NodePlan:
     options: dict[str, Any] = field(default_factory=dict)
     children: list["NodePlan"] = field(default_factory=list)
     where: tuple[str, int, int] = ("", 0, 0)
+    #: the subtree (``subtrees:``) this node is the root of an instance of, or None
+    subtree: str | None = None
 
     def walk(self):
         yield self

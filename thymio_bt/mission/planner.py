@@ -283,6 +283,7 @@ class TreePlanner(Checker):
                          Scope(values, self.root_scope), depth + 1, (*stack, kind))
         if tree is not None:
             tree.name = self._name(body, kind, file, path)
+            tree.subtree = kind
         return tree
 
     def _argument(self, raw: Any, scope: Scope, where: Where, path: str, kind: str | None) -> Any:

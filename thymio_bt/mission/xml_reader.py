@@ -32,7 +32,6 @@ _UNSUPPORTED = {
     "Timeout": "BT.CPP's Timeout counts wall-clock milliseconds: use thymio-bt's timeout (seconds: simulated)",
     "Delay": "BT.CPP's Delay counts wall-clock milliseconds: use thymio-bt's delay (seconds: simulated)",
     "Sleep": "use Wait (seconds: simulated)", "Script": "scripts are not supported: use SetBlackboard",
-    "SubTree": "subtrees are not supported in XML missions yet: write the subtree's nodes in place",
     "Sequence": "BT.CPP's Sequence differs from both thymio-bt sequences: use SequenceWithMemory or ReactiveSequence",
 }
 MAX_DEPTH = 200
@@ -112,14 +111,17 @@ def _marked(mapping: dict[str, Any], element: _Element) -> MarkedDict:
     return out
 
 
-def _node(element: _Element, file: str) -> MarkedDict:
-    """One element as a ``{Type: body}`` node of the YAML form."""
+def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple[str, ...] = ()) -> MarkedDict:
+    """One element as a ``{Type: body}`` node of the YAML form; a ``<SubTree ID=...>`` is replaced by
+    the root of that ``<BehaviorTree>`` (named as the SubTree, when it is)."""
     ident = element.tag
     if ident in _UNSUPPORTED:
         raise UserError(Problem(f"BT.CPP node <{ident}> is not supported", file, element.line, element.column,
                                 hint=_UNSUPPORTED[ident]))
+    if ident == "SubTree":
+        return _subtree(element, file, trees, stack)
     attrs = {k: v for k, v in element.attrs.items() if not k.startswith("_")}
-    children = [_node(child, file) for child in element.children]
+    children = [_node(child, file, trees, stack) for child in element.children]
     kind = _FROM_BUILTIN.get(ident, ident[len("Thymio"):] if ident.startswith("Thymio") and
                              ident[len("Thymio"):] in RESERVED else ident)
     body: dict[str, Any] = {}
@@ -149,6 +151,30 @@ def _node(element: _Element, file: str) -> MarkedDict:
     else:                                                       # a behaviour or condition
         body.update({k: _value(v) for k, v in attrs.items()})
     return _marked({kind: _marked(body, element)}, element)
+
+
+def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tuple[str, ...]) -> MarkedDict:
+    ident = element.attrs.get("ID", "")
+    ports = sorted(k for k in element.attrs if k not in ("ID", "name") and not k.startswith("_"))
+    if ports:
+        raise UserError(Problem(f"<SubTree ID=\"{ident}\"> with ports ({', '.join(ports)}) is not supported",
+                                file, element.line, element.column,
+                                hint="write the values in the subtree's nodes (one <BehaviorTree> per use)"))
+    if ident not in trees:
+        raise UserError(Problem(f"<SubTree> names no <BehaviorTree ID=\"{ident}\">", file, element.line,
+                                element.column, hint=f"the file's trees: {', '.join(sorted(trees)) or 'none'}"))
+    if ident in stack:
+        raise UserError(Problem(f"subtree '{ident}' uses itself ({' -> '.join([*stack, ident])})", file,
+                                element.line, element.column, hint="a subtree may not contain itself"))
+    tree = trees[ident]
+    if len(tree.children) != 1:
+        raise UserError(Problem("a <BehaviorTree> holds exactly one root node", file, tree.line, tree.column))
+    node = _node(tree.children[0], file, trees, (*stack, ident))
+    if "name" in element.attrs:
+        body = next(iter(node.values()))
+        if isinstance(body, MarkedDict):
+            body["name"] = element.attrs["name"]
+    return node
 
 
 def _list(items: list[MarkedDict], element: _Element) -> MarkedList:
@@ -194,6 +220,7 @@ def read_xml_mission(path: Path) -> MarkedDict:
                 settings[key] = _value(text)
     if "noise" in settings:
         settings["noise"] = _marked(settings["noise"], element)
-    data = _marked({**settings, "tree": _node(tree.children[0], file)}, element)
+    by_id = {t.attrs.get("ID", ""): t for t in trees}
+    data = _marked({**settings, "tree": _node(tree.children[0], file, by_id, (tree.attrs.get("ID", ""),))}, element)
     data.marks["tree"] = data.value_marks["tree"] = (tree.line, tree.column)
     return data
