@@ -25,6 +25,7 @@ from .behaviours.base import describe, node_path, snapshot
 from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
+from .phases import phases
 from .robot import Backend
 
 
@@ -54,6 +55,8 @@ class RunResult:
     expectations: list[str] | None = None
     #: for a maze with a goal region: whether base_link entered it, and when (s); else None
     goal: dict[str, Any] | None = None
+    #: each subtree use that ran: when, how long, cells seen (:mod:`thymio_bt.phases`)
+    phases: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def real_time_factor(self) -> float:
@@ -81,6 +84,7 @@ class RunResult:
             "events": self.events,
             **expectations,
             **({} if self.goal is None else {"goal": self.goal}),
+            **({"phases": self.phases} if self.phases else {}),
             "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
         }
 
@@ -114,6 +118,8 @@ class Run:
         self.events = EventLog()
         self.ctx = Context(robot=self.backend, entities=self.backend, events=self.events, tick_period=self.period,
                            bounds=mission.maze.bounds() if mission.maze.walls else None,
+                           goal=tuple((min(a.start[0], a.end[0]), min(a.start[1], a.end[1]),
+                                       max(a.start[0], a.end[0]), max(a.start[1], a.end[1])) for a in mission.maze.goal),
                            collision_count=lambda: len(self.backend.collisions))
         py_trees.blackboard.Blackboard.clear()
         self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
@@ -197,7 +203,8 @@ class Run:
             final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
             final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
             min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
-            trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None)
+            trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None,
+            phases=phases(self.mission.tree, self.events))
         if self.mission.maze.goal:
             reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
             result.goal = {"reached": reached is not None, "t": reached}

@@ -1,4 +1,4 @@
-"""The built-in nodes: robot behaviours, one family per module (motion, maze, entities, navigation),
+"""The built-in nodes: robot behaviours, one family per module (motion, maze, entities, navigation, mapping),
 and the composites and decorators that arrange them."""
 
 from .base import Context, EventLog, FailureCode, RobotBehaviour
@@ -7,6 +7,7 @@ from .control import RepeatUntil, ScriptedStub, SimTimeout
 from .control_node import ControlNode
 from .decorators import DECORATORS
 from .entities import DeleteEntity, SpawnEntity
+from .mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
 from .maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
 from .motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
 from .navigation import (FollowWaypoints, GoToPose, ObstacleAhead, SetBlackboard, TurnBack, TurnUntilClear,
@@ -18,6 +19,7 @@ BUILTIN: tuple[type[RobotBehaviour], ...] = (
     DeleteEntity, SpawnEntity,
     ChooseTurn, WallAhead, SideOpen, IsDeadEnd, WallFollow,
     GoToPose, FollowWaypoints, WaypointsDone, ObstacleAhead, TurnUntilClear, TurnBack, SetBlackboard,
+    MapWalls, PlanMove, MoveCells, WallMapped, AtTarget,
 )
 
 #: Every built-in composite and decorator.

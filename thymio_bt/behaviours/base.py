@@ -54,6 +54,8 @@ class FailureCode(str, Enum):
     FAILED = "FAILED"
     #: the robot moves but gets no closer to its goal (e.g. circling a goal tighter than it can hold)
     NO_PROGRESS = "NO_PROGRESS"
+    #: the map leaves no way to the target
+    NO_PATH = "NO_PATH"
     #: the behaviour's code raised an exception (or called sys.exit): a bug, reported with its place
     EXCEPTION = "EXCEPTION"
 
@@ -85,6 +87,8 @@ class Context:
     tick_period: float = 0.1
     #: (xmin, ymin, xmax, ymax) of the known map, for "leave the maze" stop conditions.
     bounds: tuple[float, float, float, float] | None = None
+    #: the maze's goal region, as (xmin, ymin, xmax, ymax) rectangles (e.g. a micromouse maze's centre)
+    goal: tuple[tuple[float, float, float, float], ...] = ()
     #: How many collisions the backend has counted so far (a backend without a bumper returns 0).
     collision_count: Callable[[], int] = lambda: 0
 

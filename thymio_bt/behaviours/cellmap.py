@@ -1,0 +1,142 @@
+"""A map of the walls of a maze of square cells, learnt as the robot goes, and flood fill on it.
+
+Cell (i, j) spans [i·c, (i+1)·c] × [j·c, (j+1)·c] (the micromouse coordinates: origin at the
+bottom-left post). Each side of a cell is unknown, open or a wall; the outline is a wall. The flood
+fill is a breadth-first distance map from target cells over the sides not known to be walls
+(optimistic exploration), or over the sides known to be open (``known_only``: a path sure to exist).
+
+Where the robot is on that grid is a :class:`GridFrame`: odometry drifts, so the map keeps the
+rigid transform from the odometry frame to the maze's, and corrects it whenever a wall is seen
+square ahead (the heading from two sensors' hits, the distance along it from the front sensor).
+
+Example::
+
+    cells = CellMap(16, 16)
+    cells.mark((0, 0), "E", True)
+    distance = cells.distances({(7, 7), (8, 7), (7, 8), (8, 8)})
+    distance[(0, 0)]          # steps to the centre, walls not yet seen assumed open
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+Cell = tuple[int, int]
+#: side -> (di, dj), in the order a tie is broken after "straight on"
+STEPS = {"N": (0, 1), "E": (1, 0), "S": (0, -1), "W": (-1, 0)}
+OPPOSITE = {"N": "S", "E": "W", "S": "N", "W": "E"}
+
+
+@dataclass
+class GridFrame:
+    """The maze frame as seen from odometry: ``maze = R(yaw)·odometry + (x, y)``, a rigid transform."""
+
+    x: float = 0.0
+    y: float = 0.0
+    yaw: float = 0.0
+
+    def to_maze(self, x: float, y: float, yaw: float) -> tuple[float, float, float]:
+        """An odometry (x, y, yaw) in maze coordinates."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        return c * x - s * y + self.x, s * x + c * y + self.y, yaw + self.yaw
+
+    def correct(self, odometry: tuple[float, float, float], maze: tuple[float, float, float]) -> None:
+        """Change the transform so that ``odometry`` maps to ``maze`` (its position and heading)."""
+        ox, oy, oyaw = odometry
+        mx, my, myaw = maze
+        self.yaw = myaw - oyaw
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        self.x, self.y = mx - (c * ox - s * oy), my - (s * ox + c * oy)
+
+
+@dataclass
+class RunningMean:
+    """A mean over the latest ``window`` values at most (older ones fade), and how many were added."""
+
+    window: int = 50
+    mean: float = 0.0
+    count: int = 0
+
+    def add(self, value: float) -> None:
+        self.count += 1
+        self.mean += (value - self.mean) / min(self.count, self.window)
+
+
+@dataclass
+class CellMap:
+    """What is known of a ``cols`` × ``rows`` maze's walls, and which cells were visited."""
+
+    cols: int
+    rows: int
+    #: (i, j, side) -> True for a wall, False for an opening; absent: unknown
+    sides: dict[tuple[int, int, str], bool] = field(default_factory=dict)
+    visited: set[Cell] = field(default_factory=set)
+    #: odometry to maze coordinates (corrected at walls)
+    frame: GridFrame = field(default_factory=GridFrame)
+    #: the cell the map was started in
+    start: Cell | None = None
+    #: how much longer than the geometry the side sensors read a side wall (learnt in corridors)
+    side_bias: RunningMean = field(default_factory=RunningMean)
+
+    def inside(self, cell: Cell) -> bool:
+        return 0 <= cell[0] < self.cols and 0 <= cell[1] < self.rows
+
+    def mark(self, cell: Cell, side: str, wall: bool) -> None:
+        """Record the side of ``cell`` (and the same edge seen from the neighbour)."""
+        di, dj = STEPS[side]
+        self.sides[(cell[0], cell[1], side)] = wall
+        self.sides[(cell[0] + di, cell[1] + dj, OPPOSITE[side])] = wall
+
+    def wall(self, cell: Cell, side: str) -> bool | None:
+        """True, False, or None when unknown; the outline is always a wall."""
+        di, dj = STEPS[side]
+        if not self.inside((cell[0] + di, cell[1] + dj)):
+            return True
+        return self.sides.get((cell[0], cell[1], side))
+
+    def passable(self, cell: Cell, side: str, known_only: bool = False) -> bool:
+        known = self.wall(cell, side)
+        return known is False if known_only else known is not True
+
+    def distances(self, targets: set[Cell], known_only: bool = False) -> dict[Cell, int]:
+        """Steps from each reachable cell to the nearest target cell."""
+        out = {t: 0 for t in targets if self.inside(t)}
+        todo = deque(out)
+        while todo:
+            cell = todo.popleft()
+            for side, (di, dj) in STEPS.items():
+                nxt = (cell[0] + di, cell[1] + dj)
+                if nxt not in out and self.passable(cell, side, known_only):
+                    out[nxt] = out[cell] + 1
+                    todo.append(nxt)
+        return out
+
+    def next_side(self, cell: Cell, facing: str, distance: dict[Cell, int], known_only: bool = False) -> str:
+        """The side of ``cell`` to leave by, downhill on ``distance``: straight on when that is as good."""
+        order = [facing, *(s for s in STEPS if s != facing)]
+        options = [s for s in order if self.passable(cell, s, known_only) and _next(cell, s) in distance]
+        return min(options, key=lambda s: distance[_next(cell, s)])
+
+    def straight_run(self, cell: Cell, side: str, distance: dict[Cell, int]) -> int:
+        """How many cells the way down ``distance`` goes straight on through ``side`` (at least 1)."""
+        run, here = 1, _next(cell, side)
+        while distance.get(here, 0) > 0 and self.passable(here, side, True):
+            nxt = _next(here, side)
+            if distance.get(nxt) != distance[here] - 1:
+                break
+            run, here = run + 1, nxt
+        return run
+
+
+def _next(cell: Cell, side: str) -> Cell:
+    di, dj = STEPS[side]
+    return cell[0] + di, cell[1] + dj
+
+
+def centre_cells(cols: int, rows: int) -> set[Cell]:
+    """The contest's goal: the 2 × 2 block at the centre (or the middle cells of an odd size)."""
+    xs = {cols // 2} if cols % 2 else {cols // 2 - 1, cols // 2}
+    ys = {rows // 2} if rows % 2 else {rows // 2 - 1, rows // 2}
+    return {(i, j) for i in xs for j in ys}
