@@ -11,7 +11,8 @@ Example::
 
 from __future__ import annotations
 
-from typing import Any, Iterator
+from collections.abc import Iterator
+from typing import Any
 
 from .mission.plan import NodePlan
 
@@ -26,7 +27,7 @@ def subtree_uses(plan: NodePlan, parent: str = "") -> Iterator[tuple[str, NodePl
 
 
 def phases(plan: NodePlan, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One entry per subtree use that ran: ``name``, ``path``, ``subtree``, ``start``, ``end``,
+    """One entry per subtree use that ran: ``name``, ``path``, ``start``, ``end``,
     ``duration`` (simulated s), ``status`` (of its last behaviour) and ``cells`` (how many different
     maze cells its behaviours reported, for the mapping behaviours; else absent)."""
     out = []
@@ -35,8 +36,7 @@ def phases(plan: NodePlan, events: list[dict[str, Any]]) -> list[dict[str, Any]]
         if not inside:
             continue
         start, end = inside[0]["t"], inside[-1]["t"]
-        entry: dict[str, Any] = {"name": node.name, "path": path, "subtree": node.subtree,
-                                 "start": start, "end": end, "duration": round(end - start, 6),
+        entry: dict[str, Any] = {"name": node.name, "path": path, "start": start, "end": end, "duration": round(end - start, 6),
                                  "status": inside[-1].get("status")}
         cells = {tuple(e["cell"]) for e in inside if isinstance(e.get("cell"), list)}
         if cells:

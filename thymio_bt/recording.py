@@ -122,7 +122,7 @@ class Recorder:
             self._writer = None
         maze = self._run.mission.maze if self._run is not None else Maze()
         return Recording(maze=maze, mission=result.mission, samples=self.samples, events=result.events,
-                         end=dict(end), header=self._header)
+                         end={**end, **({"map": result.maze_map} if result.maze_map else {})}, header=self._header)
 
 
     def _abandon(self) -> None:

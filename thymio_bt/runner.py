@@ -22,6 +22,7 @@ from py_trees.common import Status
 from .backends import backend_kind
 from .behaviours import Context, EventLog
 from .behaviours.base import describe, node_path, snapshot
+from .behaviours.cellmap import CellMap
 from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
@@ -57,6 +58,8 @@ class RunResult:
     goal: dict[str, Any] | None = None
     #: each subtree use that ran: when, how long, cells seen (:mod:`thymio_bt.phases`)
     phases: list[dict[str, Any]] = field(default_factory=list)
+    #: the maze map the mapping behaviours learnt (:meth:`CellMap.summary`), if a run made one
+    maze_map: dict[str, Any] | None = None
 
     @property
     def real_time_factor(self) -> float:
@@ -85,6 +88,7 @@ class RunResult:
             **expectations,
             **({} if self.goal is None else {"goal": self.goal}),
             **({"phases": self.phases} if self.phases else {}),
+            **({"map": self.maze_map} if self.maze_map else {}),
             "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
         }
 
@@ -204,7 +208,9 @@ class Run:
             final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
             min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
             trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None,
-            phases=phases(self.mission.tree, self.events))
+            phases=phases(self.mission.tree, self.events),
+            maze_map=next((v.summary() for v in py_trees.blackboard.Blackboard.storage.values()
+                           if isinstance(v, CellMap)), None))
         if self.mission.maze.goal:
             reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
             result.goal = {"reached": reached is not None, "t": reached}

@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Any
 
 Cell = tuple[int, int]
 #: side -> (di, dj), in the order a tie is broken after "straight on"
@@ -79,6 +80,9 @@ class CellMap:
     start: Cell | None = None
     #: how much longer than the geometry the side sensors read a side wall (learnt in corridors)
     side_bias: RunningMean = field(default_factory=RunningMean)
+    #: the grid's pitch and its origin in the world (the bottom-left post's centre), for drawing
+    cell: float = 0.18
+    origin: tuple[float, float] = (0.0, 0.0)
 
     def inside(self, cell: Cell) -> bool:
         return 0 <= cell[0] < self.cols and 0 <= cell[1] < self.rows
@@ -112,6 +116,21 @@ class CellMap:
                     out[nxt] = out[cell] + 1
                     todo.append(nxt)
         return out
+
+    def summary(self) -> dict[str, Any]:
+        """The map as JSON for a run report and its plot: the known walls as world segments
+        ``[x0, y0, x1, y1]``, the cells visited, how many sides are known open."""
+        c, (ox, oy) = self.cell, self.origin
+        walls = set()
+        for (i, j, side), wall in self.sides.items():
+            if wall and self.inside((i, j)):
+                x0, y0 = ox + i * c, oy + j * c
+                end = {"N": (x0, y0 + c, x0 + c, y0 + c), "S": (x0, y0, x0 + c, y0),
+                       "E": (x0 + c, y0, x0 + c, y0 + c), "W": (x0, y0, x0, y0 + c)}[side]
+                walls.add(tuple(round(v, 6) for v in end))
+        return {"cols": self.cols, "rows": self.rows, "cell": self.cell, "origin": [round(ox, 6), round(oy, 6)],
+                "walls": [list(w) for w in sorted(walls)], "visited": sorted([list(v) for v in self.visited]),
+                "open_sides": sum(1 for (i, j, _), wall in self.sides.items() if not wall and self.inside((i, j)))}
 
     def next_side(self, cell: Cell, facing: str, distance: dict[Cell, int], known_only: bool = False) -> str:
         """The side of ``cell`` to leave by, downhill on ``distance``: straight on when that is as good."""

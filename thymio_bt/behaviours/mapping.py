@@ -39,7 +39,7 @@ from py_trees.common import Access, Status
 from pydantic import Field
 
 from ..fields import Length, Speed
-from ..robot import Pose, wrap_angle
+from ..robot import wrap_angle
 from ..robot_model import COURSE, RobotModel
 from .base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
 from .cellmap import STEPS, Cell, CellMap, centre_cells
@@ -106,7 +106,7 @@ class _OnGrid(RobotBehaviour):
         """The map, made on first use with the cell the robot is in as its start."""
         if not self.board.exists(self.params.key):
             assert not isinstance(self.grid, str)
-            found = CellMap(self.grid[0], self.grid[1])
+            found = CellMap(self.grid[0], self.grid[1], cell=self.params.cell, origin=(self.grid[2], self.grid[3]))
             self.board.set(self.params.key, found)
             found.start = self.cell()
         found = self.board.get(self.params.key)
@@ -126,7 +126,7 @@ class _OnGrid(RobotBehaviour):
 
     def cell(self) -> Cell:
         x, y, _ = self.pose()
-        return int(math.floor(x / self.params.cell)), int(math.floor(y / self.params.cell))
+        return math.floor(x / self.params.cell), math.floor(y / self.params.cell)
 
     def facing(self) -> str:
         yaw = self.pose()[2]
@@ -325,6 +325,11 @@ _BIAS_SAMPLES = 10
 _FIX_GATE = 0.012
 #: nor a side-sensor fix further than this, nor one from a wall in view for less than _STEADY ticks
 _SIDE_GATE, _STEADY = 0.004, 3
+#: two-wall readings whose mean bias differs from the learnt one by more than this are not used
+_WIDTH_GATE = 0.003
+#: side walls are read only while nothing is this close ahead of the axle (a cone sensor's inner
+#: edge sees a wall ahead long before its centre ray would)
+_CLEAR_AHEAD = 0.16
 #: the heading correction per metre of a side-sensor fix (the map was off across: it was heading off)
 _FIX_TURN = 2.0
 
@@ -391,7 +396,7 @@ class MoveCells(_OnGrid):
             sensor, reading = self.model.sensor(name), scan[name]
             # the ray meets a side wall this far ahead of the axle; a wall ahead nearer than that hides it
             meets = sensor.x - self.model.axle_x + (half - abs(sensor.y)) / math.tan(abs(sensor.yaw))
-            if math.isfinite(reading) and front > meets + _FIX_GATE:
+            if math.isfinite(reading) and front > max(meets + _FIX_GATE, _CLEAR_AHEAD):
                 reach[name] = abs(sensor.y + reading * math.sin(sensor.yaw))   # the wall's distance from the axle line
         for name in ("front_left", "front_right"):        # a wall's end seen by a cone is not a wall yet
             self.steady[name] = self.steady[name] + 1 if name in reach else 0
@@ -400,8 +405,10 @@ class MoveCells(_OnGrid):
         cells = self.cell_map()
         if len(reach) == 2:
             offset = (reach["front_right"] - reach["front_left"]) / 2        # > 0: the robot is left of the centre
-            if abs(offset) <= _FIX_GATE:
-                cells.side_bias.add((reach["front_right"] + reach["front_left"]) / 2 - half)
+            bias = (reach["front_right"] + reach["front_left"]) / 2 - half
+            if cells.side_bias.count >= _BIAS_SAMPLES and abs(bias - cells.side_bias.mean) > _WIDTH_GATE:
+                return                      # the corridor reads too wide or narrow: a wall's end, a post
+            cells.side_bias.add(bias)
             gain = _FIX_BOTH
         elif reach and cells.side_bias.count >= _BIAS_SAMPLES:
             name, value = next(iter(reach.items()))

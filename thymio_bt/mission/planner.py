@@ -51,7 +51,16 @@ class TreePlanner(Checker):
 
     def node(self, value: Any, where: Where, path: str, scope: Scope, depth: int,
              subtree_stack: tuple[str, ...]) -> NodePlan | None:
-        """One tree node: ``{Type: body}``, or a bare ``Type`` string for a node without parameters."""
+        """One tree node: ``{Type: body}``, or a bare ``Type`` string for a node without parameters.
+        A node the XML reader made from a ``<SubTree>`` stays marked as that subtree's use."""
+        plan = self._node(value, where, path, scope, depth, subtree_stack)
+        used = getattr(value, "subtree_use", None)
+        if plan is not None and used is not None:
+            plan.subtree = used
+        return plan
+
+    def _node(self, value: Any, where: Where, path: str, scope: Scope, depth: int,
+              subtree_stack: tuple[str, ...]) -> NodePlan | None:
         file = where[0]
         self.node_count += 1
         if self.node_count > MAX_NODES:

@@ -170,6 +170,7 @@ def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tu
     if len(tree.children) != 1:
         raise UserError(Problem("a <BehaviorTree> holds exactly one root node", file, tree.line, tree.column))
     node = _node(tree.children[0], file, trees, (*stack, ident))
+    node.subtree_use = ident            # the plan remembers it: the report's phases, the export's <SubTree>
     if "name" in element.attrs:
         body = next(iter(node.values()))
         if isinstance(body, MarkedDict):

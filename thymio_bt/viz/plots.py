@@ -58,6 +58,16 @@ def _draw_maze(ax: Any, recording: Recording) -> None:
     ax.grid(True, lw=0.3, alpha=0.5)
 
 
+def _draw_cell_map(ax: Any, cells: dict[str, Any]) -> None:
+    """What the mapping behaviours learnt: visited cells shaded, the walls they found drawn over the maze."""
+    c, (ox, oy) = cells["cell"], cells["origin"]
+    for n, (i, j) in enumerate(cells["visited"]):
+        ax.add_patch(_pyplot().Rectangle((ox + i * c, oy + j * c), c, c, color="tab:green", alpha=0.12, lw=0,
+                                         label="cell visited (map)" if n == 0 else None))
+    for n, (x0, y0, x1, y1) in enumerate(cells["walls"]):
+        ax.plot([x0, x1], [y0, y1], color="tab:red", lw=2.2, alpha=0.8, label="wall on the map" if n == 0 else None)
+
+
 def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None = None, alpha: float = 0.9) -> Any:
     from matplotlib.patches import Polygon
 
@@ -98,6 +108,8 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(9, 5.5), dpi=110)
     _draw_maze(ax, recording)
+    if recording.end.get("map"):
+        _draw_cell_map(ax, recording.end["map"])
     for i, part in enumerate(_segments(recording)):
         ax.plot([s["pose"]["x"] for s in part], [s["pose"]["y"] for s in part], color="tab:blue", lw=1.4,
                 label="trajectory (base_link)" if i == 0 else None)
