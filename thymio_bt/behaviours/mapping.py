@@ -135,31 +135,6 @@ class _OnGrid(RobotBehaviour):
     def centre_of(self, cell: Cell) -> tuple[float, float]:
         return (cell[0] + 0.5) * self.params.cell, (cell[1] + 0.5) * self.params.cell
 
-    def wall_fix(self, front: float, left: float, right: float, side: str,
-                 face: float) -> tuple[float | None, float | None]:
-        """What a wall square ahead, its face at ``face`` along the heading of ``side``, says of the
-        robot: (heading, axle coordinate along that heading), each None when the readings do not
-        tell (out of range, or nearer than ``trusted_from``)."""
-        lo, hi = getattr(self.params, "trusted_from", 0.0), getattr(self.params, "trusted_to", math.inf)
-        if not lo <= front <= hi:
-            return None, None
-        tilt = 0.0
-        heading = None
-        if lo <= min(left, right) and max(left, right) <= hi:
-            hits = []
-            for name, reading in (("front_center_left", left), ("front_center_right", right)):
-                sensor = self.model.sensor(name)
-                hits.append((sensor.x + reading * math.cos(sensor.yaw), sensor.y + reading * math.sin(sensor.yaw)))
-            (lx, ly), (rx, ry) = hits
-            tilt = math.atan2(lx - rx, ly - ry)           # > 0: turned left of the wall's normal
-            if abs(tilt) < _MAX_TILT:
-                heading = _HEADING[side] + tilt
-            else:
-                tilt = 0.0
-        # the front sensor's distance to the wall, from the axle, measured square to the wall
-        reach = (self.model.sensor("front_center").x - self.model.axle_x + front) * math.cos(tilt)
-        return heading, face - reach
-
     def nudge(self, heading: float, along: float, left: float, turn: float) -> None:
         """Move the map's pose of the robot by ``along`` ``heading`` and ``left`` across it, and turn it."""
         cells = self.cell_map()
@@ -183,6 +158,51 @@ class _OnGrid(RobotBehaviour):
         return centre_cells(cells.cols, cells.rows)
 
 
+class _Sensing(_OnGrid):
+    """Shared by the behaviours that correct the map's pose from a wall square ahead."""
+
+    Params = SensingParams
+
+    def wall_fix(self, front: float, left: float, right: float, side: str,
+                 face: float) -> tuple[float | None, float | None]:
+        """What a wall square ahead, its face at ``face`` along the heading of ``side``, says of the
+        robot: (heading, axle coordinate along that heading), each None when the readings do not
+        tell (out of range, or nearer than ``trusted_from``)."""
+        lo, hi = self.params.trusted_from, self.params.trusted_to
+        if not lo <= front <= hi:
+            return None, None
+        tilt = 0.0
+        heading = None
+        if lo <= min(left, right) and max(left, right) <= hi:
+            hits = []
+            for name, reading in (("front_center_left", left), ("front_center_right", right)):
+                sensor = self.model.sensor(name)
+                hits.append((sensor.x + reading * math.cos(sensor.yaw), sensor.y + reading * math.sin(sensor.yaw)))
+            (lx, ly), (rx, ry) = hits
+            tilt = math.atan2(lx - rx, ly - ry)           # > 0: turned left of the wall's normal
+            if abs(tilt) < _MAX_TILT:
+                heading = _HEADING[side] + tilt
+            else:
+                tilt = 0.0
+        # the front sensor's distance to the wall, from the axle, measured square to the wall
+        reach = (self.model.sensor("front_center").x - self.model.axle_x + front) * math.cos(tilt)
+        return heading, face - reach
+
+    def fix_from_wall(self, readings: tuple[float, float, float], centre: tuple[float, float], side: str,
+                      gain: float, gate: float) -> None:
+        """Take ``gain`` of what the wall on ``side`` of the cell centred at ``centre`` says (front,
+        ±20° readings) into the map's pose; a shift along the heading over ``gate`` is not believed."""
+        heading = _HEADING[side]
+        c, s = math.cos(heading), math.sin(heading)
+        x, y, yaw = self.pose()
+        face = centre[0] * c + centre[1] * s + (self.params.cell - self.params.wall) / 2
+        measured_yaw, measured_along = self.wall_fix(*readings, side, face)
+        along = 0.0 if measured_along is None else measured_along - (x * c + y * s)
+        turn = 0.0 if measured_yaw is None else wrap_angle(measured_yaw - yaw)
+        if abs(along) <= gate and (along or turn):
+            self.nudge(heading, gain * along, 0.0, gain * turn)
+
+
 class MapWallsParams(SensingParams):
     """How the wall ahead is read."""
 
@@ -190,7 +210,7 @@ class MapWallsParams(SensingParams):
                           "at most when they disagree")
 
 
-class MapWalls(_OnGrid):
+class MapWalls(_Sensing):
     """Look at the side of the robot's cell it faces: a wall when the front sensor sees one within
     half a cell, an opening when it sees none; mark the cell visited. It stands still for
     ``readings`` ticks and reads on while they disagree (a wall at the edge of the sensor's range, a
@@ -230,22 +250,11 @@ class MapWalls(_OnGrid):
         return Status.SUCCESS
 
     def _relocate(self, here: Cell, side: str) -> None:
-        """Correct the map's pose from the wall ahead: it is square to the grid, its face half a wall
-        in from the cell's edge."""
+        """Correct the map's pose from the wall ahead, by the mean of the readings that saw it."""
         valid = [s for s in self.samples if all(math.isfinite(v) for v in s)]
-        if not valid:
-            return
-        front, left, right = (sum(s[k] for s in valid) / len(valid) for k in range(3))
-        heading = _HEADING[side]
-        c, s = math.cos(heading), math.sin(heading)
-        x, y, yaw = self.pose()
-        cx, cy = self.centre_of(here)
-        face = cx * c + cy * s + (self.params.cell - self.params.wall) / 2
-        measured_yaw, measured_along = self.wall_fix(front, left, right, side, face)
-        along = 0.0 if measured_along is None else measured_along - (x * c + y * s)
-        turn = 0.0 if measured_yaw is None else wrap_angle(measured_yaw - yaw)
-        if abs(along) < _MAX_SHIFT:
-            self.nudge(heading, along, 0.0, turn)
+        if valid:
+            mean = tuple(sum(s[k] for s in valid) / len(valid) for k in range(3))
+            self.fix_from_wall(mean, self.centre_of(here), side, 1.0, _MAX_SHIFT)  # type: ignore[arg-type]
 
 
 class PlanMoveParams(MazeMapParams):
@@ -334,7 +343,7 @@ _CLEAR_AHEAD = 0.16
 _FIX_TURN = 2.0
 
 
-class MoveCells(_OnGrid):
+class MoveCells(_Sensing):
     """Drive to ``distance`` from the centre of the robot's cell along the grid line of the heading
     it faces (a whole number of cells ends on a cell centre), steering onto the
     line by the map's pose. While the ±38° sensors see side walls (and nothing is ahead) their
@@ -351,7 +360,8 @@ class MoveCells(_OnGrid):
     moves = True
 
     def start(self) -> None:
-        self.heading = _HEADING[self.facing()]
+        self.side = self.facing()
+        self.heading = _HEADING[self.side]
         x, y = self.centre_of(self.cell())
         self.goal = (x + self.params.distance * math.cos(self.heading), y + self.params.distance * math.sin(self.heading))
         self.line = self._left(x, y)                # the grid line through the robot's cell
@@ -424,15 +434,8 @@ class MoveCells(_OnGrid):
     def _fix_along(self, scan: dict[str, float]) -> None:
         """Where the wall at the end of the move says the robot is along it (and how it is turned to
         it), taken into the map's pose."""
-        x, y, yaw = self.pose()
-        c, s = math.cos(self.heading), math.sin(self.heading)
-        face = self.goal[0] * c + self.goal[1] * s + (self.params.cell - self.params.wall) / 2
-        heading, along = self.wall_fix(scan["front_center"], scan["front_center_left"],
-                                       scan["front_center_right"], self.facing(), face)
-        error = 0.0 if along is None else along - (x * c + y * s)
-        turn = 0.0 if heading is None else wrap_angle(heading - yaw)
-        if abs(error) <= 2 * _FIX_GATE and (error or turn):
-            self.nudge(self.heading, _FIX_BOTH * error, 0.0, _FIX_BOTH * turn)
+        self.fix_from_wall((scan["front_center"], scan["front_center_left"], scan["front_center_right"]),
+                           self.goal, self.side, _FIX_BOTH, 2 * _FIX_GATE)
 
 
 class WallMappedParams(MazeMapParams):
