@@ -43,14 +43,16 @@ def one(job: tuple[str, str, int]) -> dict[str, Any]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mazes", type=int, default=30)
+    parser.add_argument("--first", type=int, default=0, help="the first generated maze's seed")
+    parser.add_argument("--loops", type=float, default=0.1, help="the fraction of inner walls removed")
     parser.add_argument("--robots", default="course,enki,real")
     args = parser.parse_args()
     robots = args.robots.split(",")
     with tempfile.TemporaryDirectory() as tmp:
         mazes = [str(ROOT / "mazes" / "micromouse_4x4.txt")]
-        for seed in range(args.mazes):
+        for seed in range(args.first, args.first + args.mazes):
             path = Path(tmp) / f"contest_{seed:02d}.txt"
-            path.write_text(to_text(contest_maze(seed)))
+            path.write_text(to_text(contest_maze(seed, loops=args.loops)))
             mazes.append(str(path))
         jobs = [(maze, robot, n) for robot in robots for n, maze in enumerate(mazes)]
         with multiprocessing.Pool() as pool:
@@ -68,10 +70,12 @@ def main() -> None:
                      f"{statistics.median(r['cells'] for r in ok):.0f}" if ok else "-",
                      f"{statistics.median(r['wall_time'] for r in big):.2f} / {max(r['wall_time'] for r in big):.2f}",
                      ", ".join(f"{r['maze']}:{r['code']}" for r in mine if r["status"] != "SUCCESS") or "-"))
-    print(f"{len(mazes)} mazes (the 4 x 4 example and {args.mazes} generated 16 x 16), realistic noise, seed = maze index")
+    print(f"{len(mazes)} mazes (the 4 x 4 example and {args.mazes} generated 16 x 16 from seed {args.first}, "
+          f"loops {args.loops:g}), realistic noise, seed = maze index")
     print(table(rows, ("robot", "success", "goal", "collided", "fast > search", "search s (median)",
                        "fast s (median)", "cells seen", "wall s 16x16 (median / max)", "failures")))
-    save_results("micromouse", {"machine": machine(), "mazes": args.mazes, "runs": runs})
+    save_results("micromouse", {"machine": machine(), "mazes": args.mazes, "first": args.first,
+                                "loops": args.loops, "runs": runs})
 
 
 if __name__ == "__main__":

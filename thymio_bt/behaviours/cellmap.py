@@ -20,6 +20,7 @@ Example::
 from __future__ import annotations
 
 import math
+import statistics
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -53,16 +54,22 @@ class GridFrame:
 
 
 @dataclass
-class RunningMean:
-    """A mean over the latest ``window`` values at most (older ones fade), and how many were added."""
+class RunningMedian:
+    """The median of the latest ``window`` values (a few wild ones do not move it), and how many came."""
 
-    window: int = 50
-    mean: float = 0.0
+    window: int = 31
+    values: deque[float] = field(default_factory=deque)
     count: int = 0
 
     def add(self, value: float) -> None:
         self.count += 1
-        self.mean += (value - self.mean) / min(self.count, self.window)
+        self.values.append(value)
+        if len(self.values) > self.window:
+            self.values.popleft()
+
+    @property
+    def median(self) -> float:
+        return statistics.median(self.values) if self.values else 0.0
 
 
 @dataclass
@@ -79,7 +86,7 @@ class CellMap:
     #: the cell the map was started in
     start: Cell | None = None
     #: how much longer than the geometry the side sensors read a side wall (learnt in corridors)
-    side_bias: RunningMean = field(default_factory=RunningMean)
+    side_bias: RunningMedian = field(default_factory=RunningMedian)
     #: the grid's pitch and its origin in the world (the bottom-left post's centre), for drawing
     cell: float = 0.18
     origin: tuple[float, float] = (0.0, 0.0)

@@ -33,6 +33,7 @@ Example (YAML)::
 from __future__ import annotations
 
 import math
+from collections import deque
 from typing import Literal
 
 from py_trees.common import Access, Status
@@ -48,6 +49,8 @@ from .motion import approach_speed
 Target = Literal["goal", "centre", "start"]
 Side = Literal["N", "E", "S", "W"]
 _HEADING = {"E": 0.0, "N": math.pi / 2, "W": math.pi, "S": -math.pi / 2}
+_LEFT = {"E": "N", "N": "W", "W": "S", "S": "E"}
+_RIGHT = {"E": "S", "S": "W", "W": "N", "N": "E"}
 #: a front-wall measurement that disagrees with the map's pose by more than this is not believed
 _MAX_SHIFT = 0.03
 _MAX_TILT = math.radians(8.0)
@@ -189,7 +192,7 @@ class _Sensing(_OnGrid):
         return heading, face - reach
 
     def fix_from_wall(self, readings: tuple[float, float, float], centre: tuple[float, float], side: str,
-                      gain: float, gate: float) -> None:
+                      gain: float, turn_gain: float, gate: float) -> None:
         """Take ``gain`` of what the wall on ``side`` of the cell centred at ``centre`` says (front,
         ±20° readings) into the map's pose; a shift along the heading over ``gate`` is not believed."""
         heading = _HEADING[side]
@@ -200,7 +203,7 @@ class _Sensing(_OnGrid):
         along = 0.0 if measured_along is None else measured_along - (x * c + y * s)
         turn = 0.0 if measured_yaw is None else wrap_angle(measured_yaw - yaw)
         if abs(along) <= gate and (along or turn):
-            self.nudge(heading, gain * along, 0.0, gain * turn)
+            self.nudge(heading, gain * along, 0.0, turn_gain * turn)
 
 
 class MapWallsParams(SensingParams):
@@ -254,7 +257,7 @@ class MapWalls(_Sensing):
         valid = [s for s in self.samples if all(math.isfinite(v) for v in s)]
         if valid:
             mean = tuple(sum(s[k] for s in valid) / len(valid) for k in range(3))
-            self.fix_from_wall(mean, self.centre_of(here), side, 1.0, _MAX_SHIFT)  # type: ignore[arg-type]
+            self.fix_from_wall(mean, self.centre_of(here), side, 1.0, 1.0, _MAX_SHIFT)  # type: ignore[arg-type]
 
 
 class PlanMoveParams(MazeMapParams):
@@ -334,11 +337,16 @@ _BIAS_SAMPLES = 10
 _FIX_GATE = 0.012
 #: nor a side-sensor fix further than this, nor one from a wall in view for less than _STEADY ticks
 _SIDE_GATE, _STEADY = 0.004, 3
+#: ... unless this many in a row agree to within _SIDE_GATE
+_PERSIST = 5
 #: two-wall readings whose mean bias differs from the learnt one by more than this are not used
 _WIDTH_GATE = 0.003
 #: side walls are read only while nothing is this close ahead of the axle (a cone sensor's inner
 #: edge sees a wall ahead long before its centre ray would)
 _CLEAR_AHEAD = 0.16
+#: how much of a heading measured from a wall ahead (the ±20° sensors) the map takes per tick: two
+#: readings with 1 mm of noise each, 5 cm apart, give the angle to a degree only
+_FIX_TILT = 0.1
 #: the heading correction per metre of a side-sensor fix (the map was off across: it was heading off)
 _FIX_TURN = 2.0
 
@@ -366,6 +374,8 @@ class MoveCells(_Sensing):
         self.goal = (x + self.params.distance * math.cos(self.heading), y + self.params.distance * math.sin(self.heading))
         self.line = self._left(x, y)                # the grid line through the robot's cell
         self.steady = {"front_left": 0, "front_right": 0}      # ticks each side wall has been in view
+        self.votes: dict[tuple[Cell, str], list[int]] = {}    # (cell, side) -> [wall, open] readings
+        self.outliers: deque[float] = deque(maxlen=_PERSIST)   # the latest side fixes beyond the gate
 
     def _left(self, x: float, y: float) -> float:
         """The coordinate of (x, y) to the left of the heading (y facing E, -x facing N, ...)."""
@@ -375,6 +385,7 @@ class MoveCells(_Sensing):
         p = self.params
         scan = self.robot.proximity()
         assert scan is not None
+        self._map_sides(scan)
         self._fix_across(scan)
         self._fix_along(scan)
         x, y, yaw = self.pose()
@@ -392,6 +403,49 @@ class MoveCells(_Sensing):
         self.feedback_message = f"{remaining:.3f} m to go"
         return Status.RUNNING
 
+    def _map_sides(self, scan: dict[str, float]) -> None:
+        """Map the side walls of the cells the robot drives through from the ±38° sensors: where a
+        ray would meet the side wall of a cell (in the middle of its length, well within range), a
+        reading there is a wall and none is an opening. Two agreeing readings and no contrary one
+        mark an unknown side; so turns are planned towards sides known to be open."""
+        cells = self.cell_map()
+        x, y, yaw = self.pose()
+        c = self.params.cell
+        half = (c - self.params.wall) / 2
+        along = (math.cos(self.heading), math.sin(self.heading))
+        normal = (-along[1], along[0])                         # to the left of the heading
+        front = scan["front_center"] + self.model.sensor("front_center").x - self.model.axle_x
+        for name, sign in (("front_left", 1.0), ("front_right", -1.0)):
+            sensor = self.model.sensor(name)
+            ax, ay = sensor.x - self.model.axle_x, sensor.y
+            px, py = x + ax * math.cos(yaw) - ay * math.sin(yaw), y + ax * math.sin(yaw) + ay * math.cos(yaw)
+            dx, dy = math.cos(yaw + sensor.yaw), math.sin(yaw + sensor.yaw)
+            across = dx * normal[0] + dy * normal[1]
+            if across * sign <= 0.0:
+                continue
+            lateral = px * normal[0] + py * normal[1] - self.line
+            expected = (sign * half - lateral) / across         # the ray's length to the side wall's face
+            qx, qy = px + expected * dx, py + expected * dy     # where it would meet it
+            ahead = (qx - x) * along[0] + (qy - y) * along[1]
+            position = (qx * along[0] + qy * along[1]) / c
+            if (expected > 0.8 * self.model.range_max or front < ahead + _FIX_GATE
+                    or not 0.3 <= position % 1.0 <= 0.7):
+                continue
+            reading = scan[name]
+            if reading < expected + 0.03:
+                seen = 0                                        # a wall
+            elif reading > expected + 0.06:
+                seen = 1                                        # nothing there (inf, or a wall beyond)
+            else:
+                continue
+            ox, oy = qx - sign * half * normal[0], qy - sign * half * normal[1]   # back onto the centre line
+            cell = (math.floor(ox / c), math.floor(oy / c))
+            side = (_LEFT if sign > 0 else _RIGHT)[self.side]
+            votes = self.votes.setdefault((cell, side), [0, 0])
+            votes[seen] += 1
+            if cells.inside(cell) and cells.wall(cell, side) is None and votes[seen] >= 2 and not votes[1 - seen]:
+                cells.mark(cell, side, seen == 0)
+
     def _fix_across(self, scan: dict[str, float]) -> None:
         """Where the side walls say the robot is across the corridor, taken into the map's pose (and
         its heading: an offset that keeps growing as the robot drives is a heading error).
@@ -402,12 +456,17 @@ class MoveCells(_Sensing):
         half = (self.params.cell - self.params.wall) / 2
         front = scan["front_center"] + self.model.sensor("front_center").x - self.model.axle_x
         reach: dict[str, float] = {}
+        tilt = wrap_angle(self.pose()[2] - self.heading)          # the robot's angle to the corridor
+        cos, sin = math.cos(tilt), math.sin(tilt)
         for name in ("front_left", "front_right"):
             sensor, reading = self.model.sensor(name), scan[name]
             # the ray meets a side wall this far ahead of the axle; a wall ahead nearer than that hides it
             meets = sensor.x - self.model.axle_x + (half - abs(sensor.y)) / math.tan(abs(sensor.yaw))
             if math.isfinite(reading) and front > max(meets + _FIX_GATE, _CLEAR_AHEAD):
-                reach[name] = abs(sensor.y + reading * math.sin(sensor.yaw))   # the wall's distance from the axle line
+                # the hit point, from the axle, turned into the corridor's frame: its distance across
+                hx = sensor.x - self.model.axle_x + reading * math.cos(sensor.yaw)
+                hy = sensor.y + reading * math.sin(sensor.yaw)
+                reach[name] = abs(hx * sin + hy * cos)
         for name in ("front_left", "front_right"):        # a wall's end seen by a cone is not a wall yet
             self.steady[name] = self.steady[name] + 1 if name in reach else 0
             if self.steady[name] < _STEADY:
@@ -416,26 +475,32 @@ class MoveCells(_Sensing):
         if len(reach) == 2:
             offset = (reach["front_right"] - reach["front_left"]) / 2        # > 0: the robot is left of the centre
             bias = (reach["front_right"] + reach["front_left"]) / 2 - half
-            if cells.side_bias.count >= _BIAS_SAMPLES and abs(bias - cells.side_bias.mean) > _WIDTH_GATE:
-                return                      # the corridor reads too wide or narrow: a wall's end, a post
             cells.side_bias.add(bias)
-            gain = _FIX_BOTH
+            if cells.side_bias.count >= _BIAS_SAMPLES and abs(bias - cells.side_bias.median) > _WIDTH_GATE:
+                return                      # the corridor reads too wide or narrow: a wall's end, a post
+            gain, gate = _FIX_BOTH, _SIDE_GATE
         elif reach and cells.side_bias.count >= _BIAS_SAMPLES:
             name, value = next(iter(reach.items()))
-            offset = (half - (value - cells.side_bias.mean)) * (1.0 if name == "front_left" else -1.0)
-            gain = _FIX_ONE
+            offset = (half - (value - cells.side_bias.median)) * (1.0 if name == "front_left" else -1.0)
+            gain, gate = _FIX_ONE, _SIDE_GATE
         else:
             return
         x, y, _ = self.pose()
         error = offset - (self._left(x, y) - self.line)
-        if abs(error) <= _SIDE_GATE:
-            self.nudge(self.heading, 0.0, gain * error, _FIX_TURN * gain * error)
+        if abs(error) > gate:
+            # beyond the gate: a post or a wall's end, unless the readings keep saying the same thing
+            # (then the map is what is wrong, and the fix is taken)
+            self.outliers.append(error)
+            if len(self.outliers) < _PERSIST or max(self.outliers) - min(self.outliers) > _SIDE_GATE:
+                return
+        self.outliers.clear()
+        self.nudge(self.heading, 0.0, gain * error, _FIX_TURN * gain * error)
 
     def _fix_along(self, scan: dict[str, float]) -> None:
         """Where the wall at the end of the move says the robot is along it (and how it is turned to
         it), taken into the map's pose."""
         self.fix_from_wall((scan["front_center"], scan["front_center_left"], scan["front_center_right"]),
-                           self.goal, self.side, _FIX_BOTH, 2 * _FIX_GATE)
+                           self.goal, self.side, _FIX_BOTH, _FIX_TILT, 2 * _FIX_GATE)
 
 
 class WallMappedParams(MazeMapParams):
