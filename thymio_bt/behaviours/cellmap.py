@@ -115,11 +115,16 @@ class CellMap:
         """Steps from each reachable cell to the nearest target cell."""
         out = {t: 0 for t in targets if self.inside(t)}
         todo = deque(out)
-        while todo:
+        sides, cols, rows, steps = self.sides, self.cols, self.rows, tuple(STEPS.items())
+        while todo:                         # passable() inlined: this runs at every cell of every plan
             cell = todo.popleft()
-            for side, (di, dj) in STEPS.items():
-                nxt = (cell[0] + di, cell[1] + dj)
-                if nxt not in out and self.passable(cell, side, known_only):
+            i, j = cell
+            for side, (di, dj) in steps:
+                nxt = (i + di, j + dj)
+                if nxt in out or not (0 <= nxt[0] < cols and 0 <= nxt[1] < rows):
+                    continue
+                known = sides.get((i, j, side))
+                if known is False or (known is None and not known_only):
                     out[nxt] = out[cell] + 1
                     todo.append(nxt)
         return out

@@ -86,6 +86,8 @@ class _OnGrid(RobotBehaviour):
         self.board.register_key(params.key, access=Access.WRITE)
         self.model: RobotModel = getattr(self.robot, "model", COURSE)
         self.grid = self._grid()
+        self._map: CellMap | None = None
+        self._goal: set[Cell] | None = None
 
     def _grid(self) -> tuple[int, int, float, float] | str:
         """cols, rows and the grid's origin (the bottom-left post's centre), or why they are unknown."""
@@ -106,7 +108,10 @@ class _OnGrid(RobotBehaviour):
         return super().update()
 
     def cell_map(self) -> CellMap:
-        """The map, made on first use with the cell the robot is in as its start."""
+        """The map, made on first use with the cell the robot is in as its start (and then kept:
+        one map object per run, looked up on the blackboard once per behaviour)."""
+        if self._map is not None:
+            return self._map
         if not self.board.exists(self.params.key):
             assert not isinstance(self.grid, str)
             found = CellMap(self.grid[0], self.grid[1], cell=self.params.cell, origin=(self.grid[2], self.grid[3]))
@@ -114,6 +119,7 @@ class _OnGrid(RobotBehaviour):
             found.start = self.cell()
         found = self.board.get(self.params.key)
         assert isinstance(found, CellMap)
+        self._map = found
         return found
 
     # ------------------------------------------------------------------ poses
@@ -151,11 +157,13 @@ class _OnGrid(RobotBehaviour):
         contest's centre block, or the cell the map was started in."""
         cells = self.cell_map()
         if target == "goal":
-            assert not isinstance(self.grid, str)
-            ox, oy = self.grid[2], self.grid[3]
-            return {(i, j) for i in range(cells.cols) for j in range(cells.rows)
-                    if any(x0 <= ox + self.centre_of((i, j))[0] <= x1 and y0 <= oy + self.centre_of((i, j))[1] <= y1
-                           for x0, y0, x1, y1 in self.ctx.goal)}
+            if self._goal is None:
+                assert not isinstance(self.grid, str)
+                ox, oy = self.grid[2], self.grid[3]
+                centres = {(i, j): self.centre_of((i, j)) for i in range(cells.cols) for j in range(cells.rows)}
+                self._goal = {cell for cell, (cx, cy) in centres.items()
+                              if any(x0 <= ox + cx <= x1 and y0 <= oy + cy <= y1 for x0, y0, x1, y1 in self.ctx.goal)}
+            return self._goal
         if target == "start":
             return {cells.start} if cells.start is not None else set()
         return centre_cells(cells.cols, cells.rows)
@@ -217,7 +225,8 @@ class MapWalls(_Sensing):
     """Look at the side of the robot's cell it faces: a wall when the front sensor sees one within
     half a cell, an opening when it sees none; mark the cell visited. It stands still for
     ``readings`` ticks and reads on while they disagree (a wall at the edge of the sensor's range, a
-    noisy reading). Facing a wall it re-measures the heading (from where the two ±20° sensors hit
+    noisy reading); a side the map already knows takes one reading that agrees. Facing a wall it
+    re-measures the heading (from where the two ±20° sensors hit
     it) and the distance to it (front sensor): the map's pose follows the robot, not odometry.
 
     Example (YAML)::
@@ -239,11 +248,14 @@ class MapWalls(_Sensing):
         assert scan is not None
         self.samples.append((scan["front_center"], scan["front_center_left"], scan["front_center_right"]))
         near = [s[0] < p.cell / 2 for s in self.samples]
-        if len(self.samples) < p.readings or (0 < sum(near) < len(near) and len(near) < 3 * p.readings):
+        cells, here, side = self.cell_map(), self.cell(), self.facing()
+        known = cells.wall(here, side)
+        confirmed = known is not None and near == [known]       # one reading agrees with the map: done
+        if not confirmed and (len(self.samples) < p.readings
+                              or (0 < sum(near) < len(near) and len(near) < 3 * p.readings)):
             self.feedback_message = f"reading ({len(self.samples)})"
             return Status.RUNNING
-        cells, here, side = self.cell_map(), self.cell(), self.facing()
-        wall = 2 * sum(near) > len(near)
+        wall = known if confirmed else 2 * sum(near) > len(near)
         cells.mark(here, side, wall)
         cells.visited.add(here)
         if wall:
