@@ -134,3 +134,37 @@ def test_the_mission_with_realistic_noise_reaches_the_goal(tmp_path):
     noise = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
     result = mission_in(tmp_path, contest_maze(4, size=8), **noise)
     assert result.status == "SUCCESS" and result.goal["reached"]
+
+
+def test_move_cells_maps_the_side_walls_of_the_cells_it_drives_through():
+    corridor = """
+o---o---o---o---o
+| S             |
+o---o   o---o---o
+|   |   |   |   |
+o---o---o---o---o
+"""
+    result = run_tree({"MoveCells": {"distance": "54cm"}}, text_maze(corridor), seconds=20)
+    assert result.status == "SUCCESS" and result.collisions == 0
+    # the corridor is the row y in [0.18, 0.36]; its north side is the outline, known from the start
+    walls = {tuple(w) for w in result.maze_map["walls"]}
+    assert walls == {(0.36, 0.18, 0.54, 0.18), (0.54, 0.18, 0.72, 0.18)}   # south of cells (2, 1), (3, 1)
+    assert result.maze_map["open_sides"] == 1                               # south of (1, 1)
+
+
+def test_the_side_bias_is_a_median_that_a_few_wild_readings_do_not_move():
+    from thymio_bt.behaviours.cellmap import RunningMedian
+
+    bias = RunningMedian(window=5)
+    for value in (0.007, 0.0069, 0.03, 0.0071, -0.02, 0.007):
+        bias.add(value)
+    assert bias.median == pytest.approx(0.007) and bias.count == 6 and len(bias.values) == 5
+
+
+@pytest.mark.parametrize("robot", ["course", "enki", "real"])
+def test_the_mission_solves_a_16x16_contest_maze_with_noise_on_every_robot_model(tmp_path, robot):
+    noise = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
+    result = mission_in(tmp_path, contest_maze(12), robot=robot, **noise)
+    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal["reached"]
+    phases = {p["name"]: p for p in result.phases}
+    assert phases["fast run"]["duration"] < phases["search"]["duration"]

@@ -131,7 +131,7 @@ class CellMap:
 
     def summary(self) -> dict[str, Any]:
         """The map as JSON for a run report and its plot: the known walls as world segments
-        ``[x0, y0, x1, y1]``, the cells visited, how many sides are known open."""
+        ``[x0, y0, x1, y1]``, the cells visited, how many inner sides (edges) are known open."""
         c, (ox, oy) = self.cell, self.origin
         walls = set()
         for (i, j, side), wall in self.sides.items():
@@ -142,7 +142,8 @@ class CellMap:
                 walls.add(tuple(round(v, 6) for v in end))
         return {"cols": self.cols, "rows": self.rows, "cell": self.cell, "origin": [round(ox, 6), round(oy, 6)],
                 "walls": [list(w) for w in sorted(walls)], "visited": sorted([list(v) for v in self.visited]),
-                "open_sides": sum(1 for (i, j, _), wall in self.sides.items() if not wall and self.inside((i, j)))}
+                "open_sides": len({_edge(i, j, side) for (i, j, side), wall in self.sides.items()
+                                   if not wall and self.inside((i, j))})}
 
     def next_side(self, cell: Cell, facing: str, distance: dict[Cell, int], known_only: bool = False) -> str:
         """The side of ``cell`` to leave by, downhill on ``distance``: straight on when that is as good."""
@@ -159,6 +160,14 @@ class CellMap:
                 break
             run, here = run + 1, nxt
         return run
+
+
+def _edge(i: int, j: int, side: str) -> tuple[int, int, str]:
+    """One name for an edge seen from either cell: its N or E side."""
+    if side in ("N", "E"):
+        return i, j, side
+    di, dj = STEPS[side]
+    return i + di, j + dj, OPPOSITE[side]
 
 
 def _next(cell: Cell, side: str) -> Cell:

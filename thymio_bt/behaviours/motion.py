@@ -201,7 +201,7 @@ class TurnAngleParams(BehaviourParams):
     snap: Angle = Field(0.0, ge=0, le=math.pi, description="if > 0, round the target heading to a multiple "
                         "of this (e.g. 90deg) so errors do not add up turn after turn")
     pivot: Length = Field(0.0, ge=0, le=0.05, description="turn about the point of the axle line this far "
-                          "inside the turn, not the axle's centre: the axle backs away along an arc, so the "
+                          "outside the turn, not the axle's centre: the axle backs away along an arc, so the "
                           "front sweeps this much further from the walls ahead and on the turning side "
                           "(a tight cell)")
     keep_moving: bool = Field(False, description="do not stop the robot when done")
@@ -213,8 +213,9 @@ class TurnAngle(RobotBehaviour):
     ``mode: rear_sensors`` turns by odometry to within 10° and then squares the robot to the wall
     behind it until the two rear rays read the same; it fails with NO_WALL when no wall is behind.
 
-    With ``pivot`` it turns about a point of the axle line that far inside the turn: a 90° turn
-    ends with the axle ``pivot`` back from where it was along both the old and the new heading.
+    With ``pivot`` it turns about a point of the axle line that far outside the turn (backing as
+    it turns): a 90° turn ends with the axle ``pivot`` back from where it was along both the old
+    and the new heading, so the front passes that much further from the walls it sweeps.
 
     Example (YAML)::
 
@@ -258,7 +259,7 @@ class TurnAngle(RobotBehaviour):
             self.feedback_message = f"turned {math.degrees(self.turned):.2f} deg"
             return Status.SUCCESS
         rate = approach_speed(abs(error), p.speed, 5.0, 0.02, self.ctx.tick_period)
-        # about a point ``pivot`` inside the turn: the axle backs away as the robot turns
+        # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
         self.robot.drive(-rate * p.pivot, math.copysign(rate, error))
         self.feedback_message = f"{math.degrees(error):.2f} deg to go"
         return Status.RUNNING
