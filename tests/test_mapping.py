@@ -168,3 +168,14 @@ def test_the_mission_solves_a_16x16_contest_maze_with_noise_on_every_robot_model
     assert result.status == "SUCCESS" and result.collisions == 0 and result.goal["reached"]
     phases = {p["name"]: p for p in result.phases}
     assert phases["fast run"]["duration"] < phases["search"]["duration"]
+
+
+def test_the_report_map_has_the_distances_to_the_goal_and_the_shortest_known_path():
+    result = run_mission(load_mission("missions/micromouse.yaml"))
+    cells = result.maze_map
+    assert cells["goal"] == [[0, 3]]                       # the 4 x 4 example's G cell
+    path = cells["path"]
+    assert path[0] == [0, 0] and path[-1] == [0, 3]
+    steps = {(i, j): d for i, j, d in cells["distances"]}
+    assert [steps[tuple(p)] for p in path] == list(range(len(path) - 1, -1, -1))
+    assert all(abs(a[0] - b[0]) + abs(a[1] - b[1]) == 1 for a, b in zip(path, path[1:]))

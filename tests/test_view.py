@@ -194,3 +194,20 @@ def test_view_without_pygame_is_a_user_error(monkeypatch):
     monkeypatch.setitem(sys.modules, "pygame", None)
     result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view"])
     assert result.exit_code == 2 and "pip install 'thymio-bt[viz]'" in result.output
+
+
+def test_a_mapping_mission_shows_its_map_live(pg, tmp_path):
+    run = Run(load_mission("missions/micromouse.yaml"))
+    view = live_hook(run, FAST, max_fps=None)
+    screenshot = tmp_path / "map.png"
+
+    def hook(r):
+        view(r)
+        if r.ticks == 400:
+            view.viewer.save(screenshot)
+            raise window.StopRun("enough")
+
+    run.run(on_tick=hook)
+    view.viewer.close()
+    assert view.cells is not None and view.cells.wall_segments()
+    assert {window.MAP_WALL, window.MAP_VISITED} <= _colours(pg, screenshot)

@@ -87,6 +87,8 @@ class CellMap:
     start: Cell | None = None
     #: how much longer than the geometry the side sensors read a side wall (learnt in corridors)
     side_bias: RunningMedian = field(default_factory=RunningMedian)
+    #: the cells a plan last went for as "the goal" (the maze's goal region or the centre block)
+    goal: set[Cell] = field(default_factory=set)
     #: the grid's pitch and its origin in the world (the bottom-left post's centre), for drawing
     cell: float = 0.18
     origin: tuple[float, float] = (0.0, 0.0)
@@ -130,8 +132,26 @@ class CellMap:
         return out
 
     def summary(self) -> dict[str, Any]:
-        """The map as JSON for a run report and its plot: the known walls as world segments
-        ``[x0, y0, x1, y1]``, the cells visited, how many inner sides (edges) are known open."""
+        """The map as JSON for a run report and its pictures: the known walls as world segments
+        ``[x0, y0, x1, y1]``, the cells visited, how many inner sides (edges) are known open, and,
+        once a goal was planned for, the flood-fill ``distances`` (``[i, j, steps]``) to it over
+        known openings and the shortest known ``path`` (cells) from the start."""
+        ox, oy = self.origin
+        out: dict[str, Any] = {
+            "cols": self.cols, "rows": self.rows, "cell": self.cell, "origin": [round(ox, 6), round(oy, 6)],
+            "walls": [list(w) for w in sorted(self.wall_segments())],
+            "visited": sorted([list(v) for v in self.visited]),
+            "open_sides": len({_edge(i, j, side) for (i, j, side), wall in self.sides.items()
+                               if not wall and self.inside((i, j))})}
+        if self.goal:
+            distance = self.distances(self.goal, known_only=True)
+            out["goal"] = sorted([list(g) for g in self.goal])
+            out["distances"] = sorted([i, j, d] for (i, j), d in distance.items())
+            out["path"] = [list(p) for p in self.path(self.start, distance)] if self.start in distance else []
+        return out
+
+    def wall_segments(self) -> set[tuple[float, ...]]:
+        """The known walls as world segments (x0, y0, x1, y1), each once."""
         c, (ox, oy) = self.cell, self.origin
         walls = set()
         for (i, j, side), wall in self.sides.items():
@@ -140,10 +160,17 @@ class CellMap:
                 end = {"N": (x0, y0 + c, x0 + c, y0 + c), "S": (x0, y0, x0 + c, y0),
                        "E": (x0 + c, y0, x0 + c, y0 + c), "W": (x0, y0, x0, y0 + c)}[side]
                 walls.add(tuple(round(v, 6) for v in end))
-        return {"cols": self.cols, "rows": self.rows, "cell": self.cell, "origin": [round(ox, 6), round(oy, 6)],
-                "walls": [list(w) for w in sorted(walls)], "visited": sorted([list(v) for v in self.visited]),
-                "open_sides": len({_edge(i, j, side) for (i, j, side), wall in self.sides.items()
-                                   if not wall and self.inside((i, j))})}
+        return walls
+
+    def path(self, start: Cell | None, distance: dict[Cell, int]) -> list[Cell]:
+        """The cells from ``start`` down ``distance`` (known openings) to its zero."""
+        if start is None:
+            return []
+        cells, here = [start], start
+        while distance.get(here, 0) > 0:
+            here = _next(here, self.next_side(here, "N", distance, known_only=True))
+            cells.append(here)
+        return cells
 
     def next_side(self, cell: Cell, facing: str, distance: dict[Cell, int], known_only: bool = False) -> str:
         """The side of ``cell`` to leave by, downhill on ``distance``: straight on when that is as good."""

@@ -163,10 +163,12 @@ class _OnGrid(RobotBehaviour):
                 centres = {(i, j): self.centre_of((i, j)) for i in range(cells.cols) for j in range(cells.rows)}
                 self._goal = {cell for cell, (cx, cy) in centres.items()
                               if any(x0 <= ox + cx <= x1 and y0 <= oy + cy <= y1 for x0, y0, x1, y1 in self.ctx.goal)}
+            cells.goal = self._goal
             return self._goal
         if target == "start":
             return {cells.start} if cells.start is not None else set()
-        return centre_cells(cells.cols, cells.rows)
+        cells.goal = centre_cells(cells.cols, cells.rows)
+        return cells.goal
 
 
 class _Sensing(_OnGrid):

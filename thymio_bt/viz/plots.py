@@ -59,13 +59,21 @@ def _draw_maze(ax: Any, recording: Recording) -> None:
 
 
 def _draw_cell_map(ax: Any, cells: dict[str, Any]) -> None:
-    """What the mapping behaviours learnt: visited cells shaded, the walls they found drawn over the maze."""
+    """What the mapping behaviours learnt: visited cells shaded, the walls they found drawn over the
+    maze, each cell's steps to the goal over known openings, and the shortest known path."""
     c, (ox, oy) = cells["cell"], cells["origin"]
     for n, (i, j) in enumerate(cells["visited"]):
         ax.add_patch(_pyplot().Rectangle((ox + i * c, oy + j * c), c, c, color="tab:green", alpha=0.12, lw=0,
                                          label="cell visited (map)" if n == 0 else None))
     for n, (x0, y0, x1, y1) in enumerate(cells["walls"]):
         ax.plot([x0, x1], [y0, y1], color="tab:red", lw=2.2, alpha=0.8, label="wall on the map" if n == 0 else None)
+    for i, j, steps in cells.get("distances", []):
+        ax.annotate(str(steps), (ox + (i + 0.5) * c, oy + (j + 0.5) * c), ha="center", va="center",
+                    fontsize=5, color="tab:green", alpha=0.9)
+    path = cells.get("path", [])
+    if len(path) > 1:
+        ax.plot([ox + (i + 0.5) * c for i, _ in path], [oy + (j + 0.5) * c for _, j in path], color="tab:green",
+                lw=2.0, ls="--", alpha=0.9, zorder=5, label="shortest known path (map)")
 
 
 def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None = None, alpha: float = 0.9) -> Any:

@@ -28,11 +28,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterable
 
+import py_trees
+
 from ..errors import UserError
 from ..maze import Maze
 from ..logs.records import number
 from ..recording import Recording
 from ..behaviours.base import node_path
+from ..behaviours.cellmap import CellMap
 from ..runner import Run, RunResult, StopRun
 from ..robot_model import COURSE
 from .plots import _outline, _rays
@@ -49,6 +52,8 @@ RAY_FREE = (180, 180, 180)
 BAR = (40, 40, 40)
 BAR_TEXT = (235, 235, 235)
 PAUSED_TEXT = (255, 190, 60)
+MAP_VISITED = (44, 160, 44)
+MAP_WALL = (214, 39, 40)
 
 #: Height of the status bar (pixels), margin around the world (metres), and the largest jump of
 #: the base_link between ticks still drawn as one line (a larger one is a respawn, as in plots.py).
@@ -76,6 +81,8 @@ class Frame:
     pose: dict[str, float] | None
     prox: dict[str, float | None]
     node: str = ""
+    #: the mapping behaviours' map (:class:`~thymio_bt.behaviours.cellmap.CellMap`), if the run has one
+    cells: Any = None
 
 
 def _pygame() -> Any:
@@ -194,6 +201,8 @@ class Viewer:
         """Draw the current frame: maze and trail, rays, robot, status bar; flip the display."""
         pg, screen, frame = self.pg, self.screen, self._frame
         screen.blit(self._background, (0, 0))
+        if frame is not None and frame.cells is not None:
+            self._draw_cell_map(frame.cells)
         if frame is not None and frame.pose is not None:
             for start, end, hit in _rays(frame.pose, frame.prox):
                 pg.draw.line(screen, RAY_HIT if hit else RAY_FREE, self.to_screen(*start), self.to_screen(*end), 1)
@@ -206,6 +215,14 @@ class Viewer:
         pg.display.flip()
         self.frames += 1
         self._last_draw = time.perf_counter()
+
+    def _draw_cell_map(self, cells: Any) -> None:
+        """What the map knows so far: a dot in each visited cell, the walls found drawn over the maze's."""
+        c, (ox, oy) = cells.cell, cells.origin
+        for i, j in cells.visited:
+            self.pg.draw.circle(self.screen, MAP_VISITED, self.to_screen(ox + (i + 0.5) * c, oy + (j + 0.5) * c), 4)
+        for x0, y0, x1, y1 in cells.wall_segments():
+            self.pg.draw.line(self.screen, MAP_WALL, self.to_screen(x0, y0), self.to_screen(x1, y1), 3)
 
     def _draw_status(self, frame: Frame | None) -> None:
         width, height = self.screen.get_size()
@@ -336,13 +353,16 @@ class LiveView:
         start = run.mission.start
         self.viewer = Viewer(run.mission.maze, speedup, title=f"thymio-bt: {run.mission.name}",
                              include=[(start.x, start.y)], **options)
+        self.cells: Any = None
 
     def __call__(self, run: Run) -> None:
         sim = run.backend
         pose = sim.true_pose()
         scan = sim.proximity() or {}
+        if self.cells is None:          # a mapping mission's map, once one of its behaviours made it
+            self.cells = next((v for v in py_trees.blackboard.Blackboard.storage.values() if isinstance(v, CellMap)), None)
         self.viewer.show(Frame(sim.time(), None if pose is None else pose.as_dict(),
-                               {name: number(value) for name, value in scan.items()}, _node_text(run)))
+                               {name: number(value) for name, value in scan.items()}, _node_text(run), self.cells))
 
     def finish(self, result: RunResult) -> None:
         """Show the run's outcome; with ``hold``, wait until the window is closed."""
