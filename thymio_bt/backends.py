@@ -85,6 +85,16 @@ class TdmOptions(BackendOptions):
     password: str | None = Field(None, description="Thymio Device Manager password, if it has one")
 
 
+class AsebaOptions(BackendOptions):
+    device: str = Field("", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for "
+                        "the only Thymio plugged in")
+    timeout: float = Field(5.0, gt=0, le=60, description="how long to wait for the robot to answer (s)")
+
+
+class PlaygroundOptions(BackendOptions):
+    timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
+
+
 #: The backends that come with thymio-bt.
 BUILTIN: dict[str, BackendKind] = {kind.name: kind for kind in (
     BackendKind("sim", "the pymunk simulation of the mission's maze (default; instant, deterministic)",
@@ -92,6 +102,11 @@ BUILTIN: dict[str, BackendKind] = {kind.name: kind for kind in (
     BackendKind("tdm", "a Thymio through Thymio Suite's Thymio Device Manager (needs thymio-bt[thymio]; "
                 "untested here: no registry has the Device Manager)", "thymio_bt.real.thymio:create_tdm",
                 TdmOptions, realtime=True),
+    BackendKind("aseba", "a Thymio over its own Aseba protocol: on USB, or a simulated one on TCP "
+                "(needs thymio-bt[aseba])", "thymio_bt.real.aseba:create_aseba", AsebaOptions, realtime=True),
+    BackendKind("playground", "the Aseba Playground (Enki) started headless on the mission's maze, driven "
+                "over Aseba like a real Thymio, in real time (needs the aseba package and thymio-bt[aseba])",
+                "thymio_bt.playground.backend:create_playground", PlaygroundOptions, realtime=True),
 )}
 
 

@@ -37,6 +37,27 @@ def convex_overlap(a: Polygon, b: Polygon) -> bool:
     return True
 
 
+def _point_segment(px: float, py: float, a: tuple[float, float], b: tuple[float, float]) -> float:
+    (ax, ay), (bx, by) = a, b
+    dx, dy = bx - ax, by - ay
+    t = max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy or 1.0)))
+    return math.hypot(px - ax - t * dx, py - ay - t * dy)
+
+
+def convex_gap(a: Polygon, b: Polygon) -> float:
+    """The distance between two convex polygons (0 when they touch or overlap)."""
+    if convex_overlap(a, b):
+        return 0.0
+    return min(_point_segment(px, py, p, q) for one, other in ((a, b), (b, a))
+               for px, py in one for p, q in zip(other, [*other[1:], other[0]]))
+
+
+def clearance(maze: Maze, model: RobotModel, pose: Pose) -> float:
+    """The smallest gap between the robot's hull at ``pose`` and the maze's walls and obstacles."""
+    hull = model.hull_at(pose)
+    return min((convex_gap(hull, shape.corners()) for shape in (*maze.walls, *maze.obstacles)), default=math.inf)
+
+
 def placement_problem(maze: Maze, model: RobotModel, pose: Pose) -> str | None:
     """Why the robot ``model`` cannot stand at ``pose`` in ``maze`` (None when it can)."""
     if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):

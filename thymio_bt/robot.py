@@ -40,6 +40,10 @@ def wrap_angle(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
+class RobotLost(Exception):
+    """Raised by a backend whose robot stopped answering: the run ends as FAILURE ``ROBOT_LOST``."""
+
+
 @dataclass(frozen=True, slots=True)
 class Pose:
     """A planar pose: position in metres, yaw in radians (counter-clockwise from +x)."""

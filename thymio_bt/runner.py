@@ -27,7 +27,7 @@ from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
 from .phases import phases
-from .robot import Backend
+from .robot import Backend, RobotLost
 
 
 @dataclass
@@ -171,8 +171,11 @@ class Run:
                 break
             try:
                 sim.advance(self.period)
+            except RobotLost as exc:                    # a real robot gone silent: its own code
+                status, crashed, crash_code = "CRASHED", str(exc), "ROBOT_LOST"
+                break
             except (Exception, SystemExit) as exc:     # a backend's bug (a plugin's, say): end the run, say why
-                status, crashed = "CRASHED", f"the backend raised {describe(exc)}"
+                status, crashed, crash_code = "CRASHED", f"the backend raised {describe(exc)}", "BACKEND_ERROR"
                 break
             for c in sim.collisions[seen_collisions:]:
                 self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
@@ -192,7 +195,7 @@ class Run:
             elif status == "INTERRUPTED":
                 reason, code = f"interrupted by {interrupts.name} at {sim.time():.1f} s", "INTERRUPTED"
             elif status == "CRASHED":
-                reason, code, status = crashed, "BACKEND_ERROR", "FAILURE"
+                reason, code, status = crashed, crash_code, "FAILURE"
             else:
                 reason, code, status = stopped, "STOPPED", "FAILURE"
             root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped
