@@ -161,3 +161,18 @@ def test_a_playground_that_dies_mid_run_ends_it_as_robot_lost_within_a_second(tm
     assert result.status == "FAILURE" and result.code == "ROBOT_LOST"
     assert result.sim_time - killed["t"] < 1.2
 
+
+
+def test_maze_export_writes_a_playground_world_with_the_robot_at_a_spawn(tmp_path):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    out = tmp_path / "maze.playground"
+    result = CliRunner().invoke(main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground",
+                                       "--spawn", "part2", "--port", "40123", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    text = out.read_text()
+    assert text.count("<wall ") == 21 and 'port="40123"' in text and 'angle="1.570796"' in text
+    missing = CliRunner().invoke(main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground", "--spawn", "nope"])
+    assert missing.exit_code == 2 and "nope" in missing.output

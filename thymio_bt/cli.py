@@ -668,5 +668,37 @@ def maze_import(world: Path, output: Path, model: str | None, cell: float, wall:
         click.echo(f"wrote {output}: {len(result.walls)} walls", err=True)
 
 
+@maze.command("export")
+@click.argument("maze_file", type=click.Path(path_type=Path))
+@click.option("--playground", "playground", is_flag=True, required=True,
+              help="As an Aseba Playground world (the only export format so far).")
+@click.option("--spawn", default=None, help="The robot's place: a spawn of the maze (default: its first).")
+@click.option("--robot", default="enki", show_default=True, help="The robot model (its wheel axle is placed).")
+@click.option("--port", type=click.IntRange(1, 65535), default=33333, show_default=True,
+              help="The robot's Aseba TCP port.")
+@click.option("--output", "-o", type=click.Path(path_type=Path), default=STDOUT, show_default=True,
+              help="World file to write (- = standard output).")
+def maze_export(maze_file: Path, playground: bool, spawn: str | None, robot: str, port: int, output: Path) -> None:
+    """Write MAZE_FILE (.yaml, grid or .txt) as an Aseba Playground world with one Thymio."""
+    from .maze.files import load_maze
+    from .playground.world import playground_world
+    from .robot import Pose
+    from .robot_model import robot_model
+
+    try:
+        out = Output(output, "--output")
+        result = load_maze(maze_file)
+        names = list(result.spawns)
+        if spawn is None and not names:
+            raise UserError(f"{maze_file} names no spawn (hint: pass --spawn NAME, or add spawns: to the maze)")
+        pose = result.spawn(spawn or names[0])
+        world = playground_world(result, Pose(*robot_model(robot).axle_of(pose)), port)
+        out.write_text(world.text)
+    except UserError as exc:
+        _fail(exc)
+    if not out.is_stdout:
+        click.echo(f"wrote {output}: {len(result.walls)} walls, the robot on port {port}", err=True)
+
+
 if __name__ == "__main__":
     main()
