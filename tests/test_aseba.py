@@ -176,3 +176,4 @@ def test_maze_export_writes_a_playground_world_with_the_robot_at_a_spawn(tmp_pat
     assert text.count("<wall ") == 21 and 'port="40123"' in text and 'angle="1.570796"' in text
     missing = CliRunner().invoke(main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground", "--spawn", "nope"])
     assert missing.exit_code == 2 and "nope" in missing.output
+

@@ -240,3 +240,30 @@ def test_move_until_wall_with_centre_steers_to_the_corridor_middle():
     assert abs(on.final_pose["y"] - 0.1) < 0.003             # centred within 3 mm over 0.5 m
     assert abs(on.final_pose["yaw"]) < 0.02
     assert on.final_proximity["front_center"] == pytest.approx(0.05, abs=0.001)
+
+
+
+def late_run(tmp_path, latency, tree, preset="corridor"):
+    """``tree`` in a preset world on a simulated robot that says it is ``latency`` s late."""
+    import yaml
+
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+    from thymio_bt.testing import mission_text
+
+    (tmp_path / "w.yaml").write_text(yaml.safe_dump(world(preset).to_yaml_dict()))
+    (tmp_path / "m.yaml").write_text(mission_text(tree, "w.yaml", seconds=30))
+    run = Run(load_mission(tmp_path / "m.yaml"))
+    run.backend.latency = latency
+    return run.run()
+
+
+def test_a_late_robot_makes_move_until_wall_and_turn_angle_lead_by_its_latency(tmp_path):
+    plain = late_run(tmp_path, 0.0, {"MoveUntilWall": {"distance": "5cm"}})
+    late = late_run(tmp_path, 0.2, {"MoveUntilWall": {"distance": "5cm"}})
+    # this robot is not late: leading by 0.2 s stops it early by what its slowing approach covers
+    assert late.final_proximity["front_center"] > plain.final_proximity["front_center"] + 0.001
+    # (leading by a latency the robot does not have oscillates once gain x latency reaches 1: 0.1 s here)
+    turn = late_run(tmp_path, 0.1, {"TurnAngle": {"angle": "90deg"}}, "arena")
+    turned = ends(turn, "TurnAngle")[-1]["angle"]
+    assert turn.status == "SUCCESS" and math.pi / 2 - 0.05 < turned < math.pi / 2 - 0.0005

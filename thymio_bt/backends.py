@@ -89,10 +89,16 @@ class AsebaOptions(BackendOptions):
     device: str = Field("", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for "
                         "the only Thymio plugged in")
     timeout: float = Field(5.0, gt=0, le=60, description="how long to wait for the robot to answer (s)")
+    latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
+                           "command acting (behaviours stop early by it); 0.2 was measured on the Playground, "
+                           "measure your robot's")
 
 
 class PlaygroundOptions(BackendOptions):
     timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
+    latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
+                           "command acting, for the behaviours (measured: readings 40-120 ms behind the true "
+                           "pose, a new motor target acting ~100 ms later)")
 
 
 #: The backends that come with thymio-bt.

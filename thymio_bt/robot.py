@@ -157,6 +157,10 @@ class Backend(Robot, Entities):
     collisions: list
     #: the smallest hull-to-wall gap so far in metres (inf when unknown)
     min_clearance: float = math.inf
+    #: seconds from the world a reading shows to the moment a command sent now takes effect
+    #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
+    #: 0 for the simulation, whose behaviours see the world of this tick.
+    latency: float = 0.0
     #: entity requests not yet served; :meth:`serve_requests` serves them
     _requests: list[Request]
 

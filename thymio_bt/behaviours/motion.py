@@ -27,6 +27,9 @@ assert set(SensorName.__args__) == set(SENSOR_NAMES)  # type: ignore[attr-define
 #: so a centred robot drives dead straight on its held heading instead of hunting around it.
 CENTRE_DEADBAND = 0.0005
 
+#: The slowest turn TurnAngle commands near its goal (rad/s).
+MIN_TURN_RATE = 0.02
+
 #: Distance between the two rear sensors (robot.md: y = ±0.0305).
 REAR_SENSOR_SPACING = 0.061
 
@@ -83,6 +86,7 @@ class MoveUntilWall(RobotBehaviour):
         self.wall_seen = False
         self.origin = (pose.x, pose.y)
         self.walls: deque[float] = deque(maxlen=WALL_READINGS)   # the wall's place along the heading, per reading
+        self.speed = 0.0                                        # the speed last commanded
 
     def _travelled(self) -> float:
         pose = current_pose(self.robot)
@@ -103,6 +107,8 @@ class MoveUntilWall(RobotBehaviour):
             travelled = self._travelled()
             self.walls.append(travelled + reading)
             remaining = sum(self.walls) / len(self.walls) - travelled - p.distance
+            # a late robot (readings and commands) covers this much before anything sent now acts
+            remaining -= self.speed * getattr(self.robot, "latency", 0.0)
         else:
             self.walls.clear()
         self.extra = {"range": None if math.isinf(reading) else round(reading, 6), "distance": p.distance}
@@ -120,6 +126,7 @@ class MoveUntilWall(RobotBehaviour):
         else:
             turn = heading_hold(self, self.heading) if p.hold_heading else 0.0
         self.robot.drive(speed, turn)
+        self.speed = speed
         self.feedback_message = ("no wall in range" if math.isinf(reading)
                                  else f"{p.sensor} {reading:.4f} m, {speed:.3f} m/s")
         return Status.RUNNING
@@ -237,6 +244,11 @@ class TurnAngle(RobotBehaviour):
         self.goal = target - yaw          # the signed angle to turn, unwrapped (may exceed pi)
         self.last_yaw = yaw
         self.turned = 0.0
+        self.rate = 0.0                   # the turn rate last commanded
+        latency = getattr(self.robot, "latency", 0.0)
+        # a late robot cannot stop finer than its slowest turn covers in a tick and its latency
+        self.tolerance = max(self.params.tolerance, MIN_TURN_RATE * (self.ctx.tick_period + latency)) \
+            if latency else self.params.tolerance
 
     def step(self) -> Status:
         yaw = current_pose(self.robot).yaw
@@ -245,7 +257,8 @@ class TurnAngle(RobotBehaviour):
         self.turned += delta
         self.extra = {"angle": round(self.turned, 6)}
         p = self.params
-        error = self.goal - self.turned
+        # a late robot turns this much more before anything sent now acts
+        error = self.goal - self.turned - self.rate * getattr(self.robot, "latency", 0.0)
         if p.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
             scan = self.robot.proximity()
             assert scan is not None
@@ -254,13 +267,14 @@ class TurnAngle(RobotBehaviour):
                 return self.fail(FailureCode.NO_WALL, "the rear sensors see no wall behind the robot")
             # the rear-left sensor reads farther when the robot must still turn left to be square
             error = math.atan2(left - right, REAR_SENSOR_SPACING)
-        if abs(error) <= p.tolerance:
+        if abs(error) <= self.tolerance:
             self.robot.drive(0.0, 0.0)
             self.feedback_message = f"turned {math.degrees(self.turned):.2f} deg"
             return Status.SUCCESS
-        rate = approach_speed(abs(error), p.speed, 5.0, 0.02, self.ctx.tick_period)
+        rate = approach_speed(abs(error), p.speed, 5.0, MIN_TURN_RATE, self.ctx.tick_period)
         # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
-        self.robot.drive(-rate * p.pivot, math.copysign(rate, error))
+        self.rate = math.copysign(rate, error)
+        self.robot.drive(-rate * p.pivot, self.rate)
         self.feedback_message = f"{math.degrees(error):.2f} deg to go"
         return Status.RUNNING
 

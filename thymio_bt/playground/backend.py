@@ -46,9 +46,10 @@ class PlaygroundRobot(ThymioRobot):
     """A :class:`ThymioRobot` whose world is a Playground it started (and stops on :meth:`close`)."""
 
     def __init__(self, node: AsebaNode, config: RealConfig, playground: Playground, enki: EnkiRobot,
-                 world: PlaygroundWorld, maze: Maze, model: RobotModel) -> None:
+                 world: PlaygroundWorld, maze: Maze, model: RobotModel, latency: float = 0.2) -> None:
         self.playground, self.enki, self.world, self.maze, self.model = playground, enki, world, maze, model
         self._touching = False
+        self.latency = latency
         super().__init__(node, config, say=lambda text: None)    # deleting needs nobody: the robot is parked
 
     def true_pose(self) -> Pose | None:
@@ -117,4 +118,4 @@ def create_playground(mission: Any, seed: int, options: Any) -> PlaygroundRobot:
         raise
     config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
                         wheel_separation=model.wheel_separation, table=model.calibration)
-    return PlaygroundRobot(node, config, playground, enki, world, mission.maze, model)
+    return PlaygroundRobot(node, config, playground, enki, world, mission.maze, model, options.latency)

@@ -227,4 +227,6 @@ def create_aseba(mission: Any, seed: int, options: Any) -> Any:
     model = robot_model(mission.robot)
     config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
                         wheel_separation=model.wheel_separation, table=model.calibration)
-    return ThymioRobot(AsebaNode.connect(options.device, options.timeout), config=config)
+    robot = ThymioRobot(AsebaNode.connect(options.device, options.timeout), config=config)
+    robot.latency = options.latency
+    return robot
