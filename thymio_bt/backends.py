@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from importlib import import_module
-from typing import TYPE_CHECKING, Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -101,6 +101,18 @@ class PlaygroundOptions(BackendOptions):
                            "pose, a new motor target acting ~100 ms later)")
 
 
+class Ros2Options(BackendOptions):
+    topics: str = Field("", description="a YAML topic map (default: the course's Gazebo topics and services)")
+    timeout: float = Field(5.0, gt=0, le=120, description="how long a topic may stay silent, or a service "
+                           "take to appear or answer, before the run fails (wall s)")
+    clock: Literal["auto", "sim", "wall"] = Field(
+        "auto", description="the run's time: the /clock of a simulator (sim), the wall clock (wall), or sim "
+        "when someone publishes /clock (auto)")
+    latency: float = Field(0.0, ge=0, le=2, description="seconds from the world a reading shows to a new command "
+                           "acting (behaviours stop early by it); measure a real robot's")
+    robot_xml: str = Field("", description="URDF/SDF file sent when spawning (default: /robot_description)")
+
+
 #: The backends that come with thymio-bt.
 BUILTIN: dict[str, BackendKind] = {kind.name: kind for kind in (
     BackendKind("sim", "the pymunk simulation of the mission's maze (default; instant, deterministic)",
@@ -113,6 +125,9 @@ BUILTIN: dict[str, BackendKind] = {kind.name: kind for kind in (
     BackendKind("playground", "the Aseba Playground (Enki) started headless on the mission's maze, driven "
                 "over Aseba like a real Thymio, in real time (needs the aseba package and thymio-bt[aseba])",
                 "thymio_bt.playground.backend:create_playground", PlaygroundOptions, realtime=True),
+    BackendKind("ros2", "a Thymio through ROS 2 topics and services: the course's Gazebo, 'thymio-bt serve ros2' "
+                "or a robot's driver (needs rclpy: see scripts/ros2-env.sh)", "thymio_bt.ros2.backend:create_ros2",
+                Ros2Options, realtime=True),
 )}
 
 

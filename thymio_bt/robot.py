@@ -192,14 +192,16 @@ class Backend(Robot, Entities):
             request.reason = problem
             request.state = RequestState.FAILED if problem else RequestState.SUCCEEDED
 
-    @abstractmethod
     def _remove(self, name: str) -> str | None:
-        """Remove entity ``name``; why it cannot be (e.g. no such entity), or None when done."""
+        """Remove entity ``name``; why it cannot be (e.g. no such entity), or None when done.
+        Every backend that keeps :meth:`serve_requests` must define it (one whose requests take
+        several ticks, like ROS 2 service calls, overrides :meth:`serve_requests` instead)."""
+        raise NotImplementedError(f"{type(self).__name__} serves requests without defining _remove")
 
-    @abstractmethod
     def _place_entity(self, name: str, pose: Pose) -> str | None:
         """Put a fresh robot ``name`` at ``pose`` (already checked by :meth:`spawn_problem`); why
-        it could not be (e.g. an operator refused), or None when done."""
+        it could not be (e.g. an operator refused), or None when done. See :meth:`_remove`."""
+        raise NotImplementedError(f"{type(self).__name__} serves requests without defining _place_entity")
 
     @abstractmethod
     def advance(self, duration: float) -> None:

@@ -27,7 +27,7 @@ from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
 from .phases import phases
-from .robot import Backend, RobotLost
+from .robot import Backend, RequestState, RobotLost
 
 
 @dataclass
@@ -116,8 +116,15 @@ class Run:
         if problem:
             raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",
                                     "pick a free pose inside the maze, e.g. a named spawn of the maze"))
-        self.backend.request_spawn(self.backend.robot_name, mission.start)
-        self.backend.advance(0.0)
+        start = self.backend.request_spawn(self.backend.robot_name, mission.start)
+        #: why the run cannot start (code, reason): a robot that is not there, a start it was refused
+        self.unstarted: tuple[str, str] | None = None
+        try:
+            self.backend.advance(0.0)
+        except RobotLost as exc:
+            self.unstarted = ("ROBOT_LOST", str(exc))
+        if self.unstarted is None and start.state is RequestState.FAILED:
+            self.unstarted = ("ENTITY_ERROR", f"the robot could not be put at the start: {start.reason}")
         self.period = 1.0 / mission.tick_hz
         self.events = EventLog()
         self.ctx = Context(robot=self.backend, entities=self.backend, events=self.events, tick_period=self.period,
@@ -150,6 +157,9 @@ class Run:
         wall_start = time.perf_counter()
         status = "TIMEOUT"
         self._record()
+        if self.unstarted is not None:
+            status, (crash_code, crashed) = "CRASHED", self.unstarted
+            limit_ticks = 0
         while self.ticks < limit_ticks:
             # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
             # every tick for "full" visitors, which cost ~15 % of a run here and we have none
