@@ -17,7 +17,9 @@ from gazebo_msgs.srv import DeleteEntity, SpawnEntity
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import LaserScan
+from std_msgs.msg import String
 
 STOP_DISTANCE = 0.05     # m, from the front of the robot
 SPEED = 0.1              # m/s while nothing is in range
@@ -30,6 +32,10 @@ class Part1(Node):
         self.cmd_pub = self.create_publisher(Twist, "/cmd_vel", 10)
         self.create_subscription(Odometry, "/odom", self.odom_callback, 10)
         self.create_subscription(LaserScan, "/thymio_front_center_proximity_sensor", self.front_callback, 10)
+        # the robot's URDF, to spawn it again (latched by robot_state_publisher, as spawn_entity.py reads it)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.create_subscription(String, "/robot_description", self.description_callback, latched)
+        self.robot_description = ""
         self.delete_client = self.create_client(DeleteEntity, "/delete_entity")
         self.spawn_client = self.create_client(SpawnEntity, "/spawn_entity")
         self.front = float("inf")     # no reading yet: nothing in range
@@ -42,6 +48,9 @@ class Part1(Node):
 
     def front_callback(self, msg):
         self.front = float(msg.ranges[0])
+
+    def description_callback(self, msg):
+        self.robot_description = msg.data
 
     def step(self):
         if self.state != "MOVE_UNTIL_WALL":
@@ -65,7 +74,7 @@ class Part1(Node):
             return
         request = SpawnEntity.Request()
         request.name = "thymio"
-        request.xml = ""                          # the course sends its URDF; the stand-in needs none
+        request.xml = self.robot_description
         request.initial_pose.position.x, request.initial_pose.position.y = 0.5, 0.3
         request.initial_pose.orientation.z = math.sin(math.pi / 4)
         request.initial_pose.orientation.w = math.cos(math.pi / 4)

@@ -25,7 +25,7 @@ import uuid
 from typing import Any
 
 from .errors import UserError
-from .logs.records import jsonable, tree_nodes
+from .logs.records import jsonable
 
 PROTOCOL = 2
 DEFAULT_PORT = 1667

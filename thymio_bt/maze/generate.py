@@ -14,8 +14,12 @@ from __future__ import annotations
 
 import math
 import random
+from typing import TYPE_CHECKING
 
 from .model import Maze, Spawn, Wall
+
+if TYPE_CHECKING:
+    from .micromouse import CellWalls
 
 Cell = tuple[int, int]
 _STEPS = {(1, 0): 0.0, (0, 1): math.pi / 2, (-1, 0): math.pi, (0, -1): -math.pi / 2}
