@@ -270,3 +270,30 @@ def test_a_run_stopped_while_driving_stops_the_robot(ros2_env, tmp_path):
                 run.kill()
         assert _probe_speed(ros2_env, domain) == 0.0
     assert json.loads(report.read_text())["status"] == "INTERRUPTED"
+
+
+def test_a_driver_publishing_range_in_wall_time(ros2_env, tmp_path):
+    """A real robot's layout: no /clock, Range messages on its own names, no spawn service."""
+    topics = tmp_path / "driver.yaml"
+    topics.write_text("sensor_type: Range\nspawn: ''\ndelete: ''\nsensors:\n" + "".join(
+        f"  {name}: /proximity/{topic}\n" for name, topic in (
+            ("front_left", "left"), ("front_center_left", "center_left"), ("front_center", "center"),
+            ("front_center_right", "center_right"), ("front_right", "right"), ("rear_left", "rear_left"),
+            ("rear_right", "rear_right"))))
+    mission = tmp_path / "approach.yaml"
+    mission.write_text(f"name: approach\nmaze: {ROOT / 'mazes' / 'two_parts_maze.yaml'}\nstart: part1\n"
+                       "time_limit: 20\ntree:\n  MoveUntilWall: {distance: 5cm}\n")
+    domain = next(_domains)
+    driver = subprocess.Popen([str(ros2_env / "bin" / "python"), str(ROOT / "tests" / "data" / "ros2_range_driver.py")],
+                              env=_environment(domain))
+    try:
+        report = tmp_path / "report.json"
+        result = _cli(ros2_env / "bin" / "python", "run", str(mission), "--backend", "ros2", "--backend-opt",
+                      f"topics={topics}", "--report", str(report), domain=domain)
+    finally:
+        driver.terminate()
+        driver.wait(timeout=10)
+    assert result.returncode == 0, result.stderr
+    data = json.loads(report.read_text())
+    gap = 0.595 - data["final_pose"]["x"] - 0.0557
+    assert gap == pytest.approx(0.05, abs=0.01)      # wall time: the readings are up to 0.1 s old
