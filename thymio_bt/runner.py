@@ -23,6 +23,7 @@ from .backends import backend_kind
 from .behaviours import Context, EventLog
 from .behaviours.base import describe, node_path, snapshot
 from .behaviours.cellmap import CellMap
+from .behaviours.ticking import tick
 from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
@@ -163,8 +164,10 @@ class Run:
         while self.ticks < limit_ticks:
             # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
             # every tick for "full" visitors, which cost ~15 % of a run here and we have none
-            for node in root.tick():
-                if stats is not None:
+            if stats is None:
+                tick(root)                  # no visitor: the direct tick, without generators
+            else:
+                for node in root.tick():
                     stats.run(node)
             self.ticks += 1
             if on_tick is not None:

@@ -173,8 +173,13 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
 
     # ---------------------------------------------------------- machinery
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list: the same
-        initialise → update → stop sequence, about a third of the cost (the hot path of a run)."""
+        """py_trees' ``Behaviour.tick``: :meth:`tick_direct`, then yield the node."""
+        self.tick_direct()
+        yield self
+
+    def tick_direct(self) -> None:
+        """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list, nor a
+        generator: the same initialise → update → stop sequence (see :mod:`.ticking`)."""
         try:
             if self.status != Status.RUNNING:
                 self.initialise()
@@ -186,7 +191,6 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         if new_status != Status.RUNNING:
             self.stop(new_status)
         self.status = new_status
-        yield self
 
     @property
     def path(self) -> str:

@@ -7,7 +7,7 @@ runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock in
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -61,6 +61,16 @@ class RepeatUntil(py_trees.composites.Composite):
         self.iterations = 0
 
     def tick(self) -> Iterator[Behaviour]:
+        yield from self._tick(lambda child: child.tick())
+        yield self
+
+    def tick_direct(self) -> None:
+        """The same tick without generators (:mod:`.ticking`)."""
+        for _ in self._tick(_tick_directly):
+            pass
+
+    def _tick(self, tick_child: Callable[[Behaviour], Iterable[Behaviour]]) -> Iterator[Behaviour]:
+        """One tick of the loop; ``tick_child`` ticks a child and gives what it yields."""
         body, condition = self.children
         if self.status != Status.RUNNING:
             for child in self.children:
@@ -70,18 +80,16 @@ class RepeatUntil(py_trees.composites.Composite):
             self.iterations = 0
             self.initialise()
         if self.current_child is body:
-            yield from body.tick()
+            yield from tick_child(body)
             if body.status == Status.RUNNING:
                 self.status = Status.RUNNING
-                yield self
                 return
             if body.status == Status.FAILURE:
                 self.stop(Status.FAILURE)
-                yield self
                 return
             self.iterations += 1
             self.current_child = condition
-        yield from condition.tick()
+        yield from tick_child(condition)
         if condition.status == Status.SUCCESS:
             self.stop(Status.SUCCESS)
         else:
@@ -89,7 +97,13 @@ class RepeatUntil(py_trees.composites.Composite):
                 self.current_child = body
             self.status = Status.RUNNING
             self.feedback_message = f"iteration {self.iterations + 1}"
-        yield self
+
+
+def _tick_directly(child: Behaviour) -> tuple[()]:
+    from .ticking import tick
+
+    tick(child)
+    return ()
 
 
 class ScriptedStub(Behaviour):

@@ -1,7 +1,8 @@
-"""Three pymunk calls without their per-call Python wrapping, for the simulation's hot path.
+"""pymunk calls without their per-call Python wrapping, for the simulation's hot path.
 
 pymunk 7's ``Space.step`` wraps the C step in bookkeeping for deferred adds and removes and for
-post-step callbacks, and ``Space.segment_query_first`` builds three Python objects per ray. At 100
+post-step callbacks, ``Space.segment_query_first`` builds three Python objects per ray, and a body's
+``position`` a Vec2d per read. At 100
 physics sub-steps and 70 rays per simulated second that wrapping cost as much as the physics itself
 (profiled: ~1 µs of ~2 per sub-step, ~1 µs per ray). The simulation never changes the space from a
 collision callback (they only count contacts) and adds or removes bodies only between steps, so it
@@ -25,6 +26,32 @@ from typing import Callable, Sequence
 
 import pymunk
 from pymunk._chipmunk import ffi, lib
+
+
+def body_reader(body: pymunk.Body) -> Callable[[], tuple[float, float, float]]:
+    """A function giving ``body``'s position and angle (x, y, angle) straight from Chipmunk, without
+    pymunk's Vec2d and property wrapping (the same values: read on every tick and sub-step)."""
+    handle = body._body
+    get_position, get_angle = lib.cpBodyGetPosition, lib.cpBodyGetAngle
+
+    def read() -> tuple[float, float, float]:
+        p = get_position(handle)
+        return p.x, p.y, get_angle(handle)
+    return read
+
+
+def body_mover(body: pymunk.Body) -> Callable[[float, float], None]:
+    """A function that sets ``body``'s velocity to ``v`` along its heading and its angular velocity
+    to ``w``, as ``body.velocity = v * body.rotation_vector; body.angular_velocity = w`` does."""
+    handle = body._body
+    get_rotation, set_velocity, set_angular = lib.cpBodyGetRotation, lib.cpBodySetVelocity, \
+        lib.cpBodySetAngularVelocity
+
+    def move(v: float, w: float) -> None:
+        rot = get_rotation(handle)
+        set_velocity(handle, (v * rot.x, v * rot.y))
+        set_angular(handle, w)
+    return move
 
 
 def stepper(space: pymunk.Space) -> Callable[[float], None]:

@@ -33,7 +33,7 @@ from ..placement import convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
-from .fastpath import NearShapes, RayCaster, stepper
+from .fastpath import NearShapes, RayCaster, body_mover, body_reader, stepper
 from .noise import NoiseConfig, NoiseSource
 
 _ROBOT_TYPE = 1
@@ -160,13 +160,15 @@ class _Body:
         self.control.position = self.body.local_to_world((model.axle_x, 0.0))
         self.control.angle = pose.yaw
         space.add(self.body, self.shape, self.control, *self.joints)
+        self.read = body_reader(self.body)      # (x, y, angle), the hot path's way to read the body
+        self.move = body_mover(self.body)
 
     def remove(self, space: pymunk.Space) -> None:
         space.remove(self.body, self.shape, self.control, *self.joints)
 
     def pose(self) -> Pose:
-        x, y = self.body.position
-        return Pose(x, y, (self.body.angle + math.pi) % (2.0 * math.pi) - math.pi)
+        x, y, angle = self.read()
+        return Pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
 
 
 class Simulation(Backend):
@@ -312,10 +314,11 @@ class Simulation(Backend):
             self._integrate_odometry(steps * dt)
         v, w = self._applied
         aim = entity is not None and v != 0.0 and w != 0.0
+        read = entity.read if entity is not None else None
         for _ in range(steps):
             if entity is not None and (aim or self._contacts):
                 # keep the control body's velocity along the heading while the heading changes
-                angle = entity.body.angle
+                angle = read()[2]
                 _set_velocity(entity.control, (v * math.cos(angle), v * math.sin(angle)))
                 if self._contacts:
                     _set_angular_velocity(entity.control, w)
@@ -333,15 +336,12 @@ class Simulation(Backend):
         self._applied = (v, w)
         entity = self._entities.get(self.robot_name)
         if entity is not None:
-            angle = entity.body.angle
+            angle = entity.read()[2]
             _set_velocity(entity.control, (v * math.cos(angle), v * math.sin(angle)))
             _set_angular_velocity(entity.control, w)
         if entity is not None and self._contacts == 0:
             # Chipmunk moves bodies before solving joints: seed the velocity so motion starts now.
-            body = entity.body
-            rot = body.rotation_vector
-            body.velocity = (v * rot.x, v * rot.y)
-            body.angular_velocity = w
+            entity.move(v, w)
 
     def _integrate_odometry(self, duration: float) -> None:
         """Dead-reckon the axle from the wheel speeds as encoders measure them (with a per-call error).
@@ -362,16 +362,15 @@ class Simulation(Backend):
         if self._cone is not None:
             self._raw = self._cone.measure(self._ray.alpha, entity)
             self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
-            body = entity.body
-            self._update_clearance(entity, *body.position, math.cos(body.angle), math.sin(body.angle))
+            bx, by, angle = entity.read()
+            self._update_clearance(entity, bx, by, math.cos(angle), math.sin(angle))
             return
-        body = entity.body
         flt = entity.filter
         query = self._ray.alpha
-        angle = body.angle
+        bx, by, angle = entity.read()
         cos, sin = math.cos(angle), math.sin(angle)
-        bx, by = body.position
         noise, raw = self._noise, self._raw_model
+        noisy = bool(noise.config.range_sd)         # noise.range would return the value unchanged
         lo, hi = self.model.range_min, self.model.range_max
         scan: dict[str, float] = {}
         for name, (sx, sy), (ex, ey) in self._rays:
@@ -381,7 +380,7 @@ class Simulation(Backend):
                 scan[name] = math.inf
                 continue
             value = max(alpha * hi, lo)
-            scan[name] = value if raw is not None else noise.range(value, lo, hi)
+            scan[name] = value if raw is not None or not noisy else noise.range(value, lo, hi)
         if raw is not None:
             self._raw = raw.measure_scan(scan)
             scan = raw_scan_to_metres(self._raw, raw.table)

@@ -1,0 +1,200 @@
+"""Ticking a tree without py_trees' generators: the same hooks in the same order, a fraction of the cost.
+
+py_trees' ``tick()`` is a generator at every level: each node a leaf yields passes up through every
+ancestor's generator (five or six in a course mission), and every composite and decorator builds a
+debug string per tick whether or not anything logs it. Visitors need the yields; a run without them
+does not. :func:`tick` gives the tree one tick by calling the nodes' own ``initialise``, ``update``,
+``stop`` and ``terminate`` exactly as py_trees' ``tick()`` does, for the node kinds the mission
+language builds: py_trees' Sequence and Selector (with or without memory), Parallel (success on all
+or on one), any Decorator that keeps
+py_trees' tick, our behaviours (:meth:`~thymio_bt.behaviours.base.RobotBehaviour.tick_direct`) and
+anything else with a ``tick_direct`` method. Any other node (a plugin's composite, a parallel of
+another policy or a decorator with its own tick) is ticked through its generator, so the result never differs:
+``tests/test_ticking.py`` runs every mission both ways and compares the reports.
+
+Example::
+
+    for _ in range(10):
+        tick(root)                    # like root.tick_once(), without the generators
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from py_trees.behaviour import Behaviour
+from py_trees.common import ParallelPolicy, Status
+from py_trees.composites import Parallel, Selector, Sequence
+from py_trees.decorators import Decorator
+
+RUNNING, SUCCESS, FAILURE, INVALID = Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
+_STATUSES = frozenset(Status)
+
+_Tick = Callable[[Behaviour], None]
+#: how each node class is ticked, found once per class
+_BY_CLASS: dict[type, _Tick] = {}
+
+
+def tick(node: Behaviour) -> None:
+    """Give ``node`` (and its subtree) one tick, as ``node.tick_once()`` would."""
+    kind = type(node)
+    how = _BY_CLASS.get(kind)
+    if how is None:
+        how = _BY_CLASS[kind] = _how_to_tick(kind)
+    how(node)
+
+
+def _how_to_tick(kind: type) -> _Tick:
+    """The direct tick for a node class, or its generator when it has one of its own."""
+    if getattr(kind, "tick_direct", None) is not None:
+        return kind.tick_direct
+    if kind.tick is Sequence.tick:
+        return _sequence
+    if kind.tick is Selector.tick:
+        return _selector
+    if kind.tick is Parallel.tick:
+        return _parallel
+    if issubclass(kind, Decorator) and kind.tick is Decorator.tick:
+        return _decorator
+    return _generator
+
+
+def _generator(node: Behaviour) -> None:
+    for _ in node.tick():
+        pass
+
+
+def _sequence(seq: Sequence) -> None:
+    """py_trees' ``Sequence.tick``: resume at the running child (memory) or start over."""
+    children = seq.children
+    index = 0
+    if seq.status != RUNNING:
+        seq.current_child = children[0] if children else None
+        for child in children:
+            if child.status != INVALID:
+                child.stop(INVALID)
+        seq.initialise()
+    elif seq.memory and seq.current_child is not None:
+        index = children.index(seq.current_child)
+    else:
+        seq.current_child = children[0] if children else None
+    if not children:
+        seq.current_child = None
+        seq.stop(SUCCESS)
+        return
+    last = len(children) - 1
+    while index <= last:
+        child = children[index]
+        tick(child)
+        status = child.status
+        if status != SUCCESS:
+            if not seq.memory:                  # invalidate the rest: no dangling runners
+                for later in children[index + 1:]:
+                    if later.status != INVALID:
+                        later.stop(INVALID)
+            if status != RUNNING:
+                seq.stop(status)
+            else:
+                seq.status = status
+            return
+        if index < last:
+            seq.current_child = children[index + 1]
+        index += 1
+    seq.stop(SUCCESS)
+
+
+def _selector(sel: Selector) -> None:
+    """py_trees' ``Selector.tick``: the first child that does not fail wins; a change of winner
+    invalidates the lower priorities."""
+    children = sel.children
+    if sel.status != RUNNING:
+        sel.current_child = children[0] if children else None
+        sel.initialise()
+    if not children:
+        sel.current_child = None
+        sel.stop(FAILURE)
+        return
+    if sel.memory:
+        index = children.index(sel.current_child)
+        for child in children[:index]:
+            if child.status != INVALID:
+                child.stop(INVALID)
+    else:
+        index = 0
+    previous = sel.current_child
+    for child in children[index:]:
+        tick(child)
+        status = child.status
+        if status == RUNNING or status == SUCCESS:
+            sel.current_child = child
+            if previous is None or previous != child:
+                passed = False
+                for other in children:
+                    if passed and other.status != INVALID:
+                        other.stop(INVALID)
+                    passed = True if other == child else passed
+            if status == SUCCESS:
+                sel.stop(status)
+            else:
+                sel.status = status
+            return
+    sel.stop(FAILURE)
+    sel.current_child = children[-1]
+
+
+def _parallel(par: Parallel) -> None:
+    """py_trees' ``Parallel.tick`` with the policies the mission language builds (success on all,
+    success on one); another policy goes through the generator."""
+    policy = par.policy
+    if not isinstance(policy, (ParallelPolicy.SuccessOnAll, ParallelPolicy.SuccessOnOne)):
+        _generator(par)
+        return
+    par.validate_policy_configuration()
+    children = par.children
+    if par.status != RUNNING:
+        for child in children:
+            if child.status != INVALID:
+                child.stop(INVALID)
+        par.current_child = None
+        par.initialise()
+    if not children:
+        par.current_child = None
+        par.stop(SUCCESS)
+        return
+    synchronise = policy.synchronise
+    for child in children:
+        if synchronise and child.status == SUCCESS:
+            continue
+        tick(child)
+    new_status = RUNNING
+    par.current_child = children[-1]
+    failed = next((child for child in children if child.status == FAILURE), None)
+    if failed is not None:
+        par.current_child = failed
+        new_status = FAILURE
+    elif isinstance(policy, ParallelPolicy.SuccessOnAll):
+        if all(child.status == SUCCESS for child in children):
+            new_status = SUCCESS
+            par.current_child = children[-1]
+    else:
+        for child in reversed(children):
+            if child.status == SUCCESS:
+                new_status = SUCCESS
+                par.current_child = child
+                break
+    if new_status != RUNNING:
+        par.stop(new_status)
+    par.status = new_status
+
+
+def _decorator(dec: Decorator) -> None:
+    """py_trees' ``Decorator.tick``: the child first, then the decorator's own update."""
+    if dec.status != RUNNING:
+        dec.initialise()
+    tick(dec.decorated)
+    new_status = dec.update()
+    if new_status not in _STATUSES:
+        new_status = INVALID
+    if new_status != RUNNING:
+        dec.stop(new_status)
+    dec.status = new_status
