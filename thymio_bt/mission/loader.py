@@ -30,7 +30,6 @@ from .assemble import Assembler
 from .plan import Mission
 from .planner import TreePlanner
 from .registry import Registry
-from .xml_reader import read_xml_mission
 
 
 def resolve_mission(ref: str | Path) -> Path:
@@ -56,7 +55,12 @@ def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
     (see :mod:`thymio_bt.mission.unrun_plugins`): for tools that must not run a stranger's code."""
     path = resolve_mission(path)
     file = str(path)
-    data = read_xml_mission(path) if path.suffix.lower() == ".xml" else load_yaml(path)
+    if path.suffix.lower() == ".xml":
+        from .xml_reader import read_xml_mission         # BT.CPP XML: imported only for XML missions
+
+        data = read_xml_mission(path)
+    else:
+        data = load_yaml(path)
     assembly = Assembler(registry, run_plugins).assemble(path, data, overrides, maze, start)
     tree = TreePlanner(assembly).plan(assembly.data, file)
     if assembly.problems:
