@@ -91,11 +91,20 @@ def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[st
         if ended is None:
             failed.append(f"gaps: no node matching '{gap.after}' ended with a robot")
             continue
-        measured = front_gap(maze, model, Pose(ended["pose"]["x"], ended["pose"]["y"], ended["pose"]["yaw"]))
+        measured = front_gap(maze, model, _true_pose_at(result, ended))
         if abs(measured - gap.distance) > gap.tolerance:
             failed.append(f"gaps: after '{ended['path']}' the front gap was {100 * measured:.2f} cm, "
                           f"not {100 * gap.distance:g} ± {100 * gap.tolerance:g} cm")
     return failed
+
+
+def _true_pose_at(result: Any, event: dict) -> Pose:
+    """Where the robot really was when ``event`` happened: the trajectory's true pose of that tick
+    (an event's own pose is the robot's odometry, which drifts on a real or late robot)."""
+    before = [s for s in result.trajectory if s[0] <= event["t"] + 1e-9]
+    if not before:
+        return Pose(event["pose"]["x"], event["pose"]["y"], event["pose"]["yaw"])
+    return Pose(*before[-1][1:4])
 
 
 def front_gap(maze: Maze, model: RobotModel, pose: Pose) -> float:

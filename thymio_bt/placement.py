@@ -16,7 +16,7 @@ import math
 from typing import Iterable, Sequence
 
 from .maze import Maze
-from .robot import Pose
+from .robot import Backend, Collision, Pose
 from .robot_model import RobotModel
 
 Polygon = Sequence[tuple[float, float]]
@@ -72,3 +72,28 @@ def placement_problem(maze: Maze, model: RobotModel, pose: Pose) -> str | None:
         if convex_overlap(hull, shape.corners()):
             return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps a wall"
     return None
+
+
+class ContactTracker:
+    """A backend's smallest hull-to-wall gap and contact episodes, from a known pose and the maze's
+    geometry: for backends without a physics engine of ours (the Playground's ground truth, a ROS 2
+    robot's odometry). Call :meth:`update` after each tick's move.
+
+    Example::
+
+        tracker = ContactTracker(maze, model)
+        tracker.update(backend, backend.true_pose())     # backend.min_clearance, .collisions kept up
+    """
+
+    def __init__(self, maze: Maze, model: RobotModel) -> None:
+        self.maze, self.model = maze, model
+        self.touching = False
+
+    def update(self, backend: Backend, pose: Pose | None) -> None:
+        if pose is None or not (self.maze.walls or self.maze.obstacles):
+            return
+        gap = clearance(self.maze, self.model, pose)
+        backend.min_clearance = min(backend.min_clearance, gap)
+        if gap <= 0.0 and not self.touching:
+            backend.collisions.append(Collision(backend.time(), pose.x, pose.y))
+        self.touching = gap <= 0.0

@@ -70,6 +70,15 @@ class Twist:
     angular: float = 0.0
 
 
+@dataclass(frozen=True, slots=True)
+class Collision:
+    """The start of one contact episode between the robot and a wall: when (backend time) and where."""
+
+    t: float
+    x: float
+    y: float
+
+
 Scan = Mapping[str, float]
 """Proximity ranges by sensor name, in metres; ``math.inf`` when nothing is in range."""
 
@@ -153,8 +162,8 @@ class Backend(Robot, Entities):
 
     #: the entity name of the robot
     robot_name: str = ROBOT_ENTITY
-    #: contact episodes so far, oldest first; each has ``t``, ``x`` and ``y``
-    collisions: list
+    #: contact episodes so far, oldest first
+    collisions: list[Collision]
     #: the smallest hull-to-wall gap so far in metres (inf when unknown)
     min_clearance: float = math.inf
     #: seconds from the world a reading shows to the moment a command sent now takes effect

@@ -34,6 +34,18 @@ MIN_TURN_RATE = 0.02
 REAR_SENSOR_SPACING = 0.061
 
 
+#: A late robot's approach gain times its delay (latency plus a tick) stays below this, so that
+#: the proportional approach settles instead of hunting (a loop with dead time oscillates as the
+#: product nears pi/2; on the Playground, TurnAngle at gain 5 with 0.3 s of delay hunted for 60 s).
+DAMPED_GAIN_DELAY = 0.5
+
+
+def late_gain(gain: float, robot: object, period: float) -> float:
+    """``gain``, capped for a robot that declares a latency (see :data:`DAMPED_GAIN_DELAY`)."""
+    latency = getattr(robot, "latency", 0.0)
+    return min(gain, DAMPED_GAIN_DELAY / (period + latency)) if latency else gain
+
+
 def approach_speed(remaining: float, cruise: float, gain: float, minimum: float, period: float) -> float:
     """Speed towards a goal ``remaining`` away: cruise, then proportional, never past it in one tick."""
     if remaining <= 0.0:
@@ -87,6 +99,7 @@ class MoveUntilWall(RobotBehaviour):
         self.origin = (pose.x, pose.y)
         self.walls: deque[float] = deque(maxlen=WALL_READINGS)   # the wall's place along the heading, per reading
         self.speed = 0.0                                        # the speed last commanded
+        self.saw_nothing = False                                # the last reading was out of range
 
     def _travelled(self) -> float:
         pose = current_pose(self.robot)
@@ -98,10 +111,19 @@ class MoveUntilWall(RobotBehaviour):
         scan = self.robot.proximity()
         assert scan is not None
         reading = scan[p.sensor]
+        remaining = reading - p.distance
+        if self.saw_nothing and math.isfinite(reading) and remaining <= p.tolerance:
+            # nothing was in range a tick ago and now the wall would be at the stop distance: a wall
+            # ahead comes into range far beyond it, so this is a glint (Enki's cones at a corner
+            # read 0 once): hold still for a tick and let the next reading say
+            self.saw_nothing = False
+            self.robot.drive(0.0, 0.0)
+            self.speed = 0.0
+            self.feedback_message = f"{p.sensor} jumped to {reading:.4f} m: checking"
+            return Status.RUNNING
+        self.saw_nothing = math.isinf(reading)
         if math.isfinite(reading):
             self.wall_seen = True
-        remaining = reading - p.distance
-        if math.isfinite(reading):
             # where the wall is, by this reading and odometry: averaged over the last readings, one
             # noisy reading (a real sensor's) cannot stop the robot early; noise-free they all agree
             travelled = self._travelled()
@@ -117,7 +139,8 @@ class MoveUntilWall(RobotBehaviour):
             self.feedback_message = f"stopped at {reading:.4f} m"
             return Status.SUCCESS
         speed = p.speed if math.isinf(reading) else approach_speed(
-            remaining, p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
+            remaining, p.speed, late_gain(p.approach_gain, self.robot, self.ctx.tick_period), p.min_speed,
+            self.ctx.tick_period)
         left, right = scan["front_left"], scan["front_right"]
         if (p.centre and math.isfinite(left) and math.isfinite(right) and math.isinf(scan["front_center"])
                 and abs(left - right) > CENTRE_DEADBAND):
@@ -271,7 +294,8 @@ class TurnAngle(RobotBehaviour):
             self.robot.drive(0.0, 0.0)
             self.feedback_message = f"turned {math.degrees(self.turned):.2f} deg"
             return Status.SUCCESS
-        rate = approach_speed(abs(error), p.speed, 5.0, MIN_TURN_RATE, self.ctx.tick_period)
+        rate = approach_speed(abs(error), p.speed, late_gain(5.0, self.robot, self.ctx.tick_period), MIN_TURN_RATE,
+                              self.ctx.tick_period)
         # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
         self.rate = math.copysign(rate, error)
         self.robot.drive(-rate * p.pivot, self.rate)

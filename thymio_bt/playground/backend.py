@@ -14,11 +14,10 @@ Example::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 from ..maze import Maze
-from ..placement import clearance, placement_problem
+from ..placement import ContactTracker, placement_problem
 from ..real.aseba import AsebaNode
 from ..real.thymio import RealConfig, ThymioRobot
 from ..robot import Pose, RobotLost
@@ -33,22 +32,13 @@ from .world import PlaygroundWorld, playground_world
 SETTLE = 0.2
 
 
-@dataclass(frozen=True)
-class Contact:
-    """The start of a contact episode between the hull and a wall (from the true pose)."""
-
-    t: float
-    x: float
-    y: float
-
-
 class PlaygroundRobot(ThymioRobot):
     """A :class:`ThymioRobot` whose world is a Playground it started (and stops on :meth:`close`)."""
 
     def __init__(self, node: AsebaNode, config: RealConfig, playground: Playground, enki: EnkiRobot,
                  world: PlaygroundWorld, maze: Maze, model: RobotModel, latency: float = 0.2) -> None:
         self.playground, self.enki, self.world, self.maze, self.model = playground, enki, world, maze, model
-        self._touching = False
+        self._contacts = ContactTracker(maze, model)
         self.latency = latency
         super().__init__(node, config, say=lambda text: None)    # deleting needs nobody: the robot is parked
 
@@ -73,14 +63,7 @@ class PlaygroundRobot(ThymioRobot):
 
     def advance(self, duration: float) -> None:
         super().advance(duration)
-        pose = self._truth()              # RobotLost when the Playground is gone: the run ends there
-        if pose is None or not (self.maze.walls or self.maze.obstacles):
-            return
-        gap = clearance(self.maze, self.model, pose)
-        self.min_clearance = min(self.min_clearance, gap)
-        if gap <= 0.0 and not self._touching:
-            self.collisions.append(Contact(self.time(), pose.x, pose.y))
-        self._touching = gap <= 0.0
+        self._contacts.update(self, self._truth())    # RobotLost when the Playground is gone: the run ends there
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
         self.node.set_motors(0, 0)

@@ -30,7 +30,7 @@ import time
 from typing import Any, Callable, Generator
 
 from ..maze import Maze
-from ..placement import clearance, placement_problem
+from ..placement import ContactTracker, placement_problem
 from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Request, RequestState, RobotLost, Scan, Twist
 from ..robot_model import RobotModel, robot_model
 from . import import_rclpy
@@ -43,13 +43,6 @@ ADOPT_DISTANCE, ADOPT_ANGLE = 0.02, math.radians(3.0)
 POLL = 0.05
 
 _Step = Generator[None, None, None]
-
-
-class _Contact:
-    """The start of a contact episode between the hull and a wall (from the odometry pose)."""
-
-    def __init__(self, t: float, x: float, y: float) -> None:
-        self.t, self.x, self.y = t, x, y
 
 
 class Ros2Robot(Backend):
@@ -88,7 +81,7 @@ class Ros2Robot(Backend):
         self._cmd = Twist()
         self._steps: list[tuple[Request, _Step]] = []
         self._closed = False
-        self._touching = False
+        self._contacts = ContactTracker(maze, model)
         node = self._node
         node.create_subscription(Clock, topics.clock, self._on_clock, qos_profile_sensor_data)
         node.create_subscription(Odometry, topics.odom, self._on_odom, qos_profile_sensor_data)
@@ -263,7 +256,7 @@ class Ros2Robot(Backend):
         if self._present and self._cmd != Twist():
             self._publish_command()
         self._pump()
-        self._track_clearance()
+        self._contacts.update(self, self.pose())     # the course's odometry is the true pose
 
     def _wait_sim_tick(self) -> None:
         """Until the clock reaches the tick and every sensor has published its reading of it
@@ -302,17 +295,6 @@ class Ros2Robot(Backend):
             for name, topic in self.topics.sensors.items():
                 if now - self._sensor_wall.get(name, 0.0) > self.timeout:
                     raise RobotLost(f"no message on {topic} for {self.timeout:g} s")
-
-    def _track_clearance(self) -> None:
-        """The smallest hull-to-wall gap and contact episodes, from the pose and the mission's maze."""
-        pose = self.pose()
-        if pose is None or not (self.maze.walls or self.maze.obstacles):
-            return
-        gap = clearance(self.maze, self.model, pose)
-        self.min_clearance = min(self.min_clearance, gap)
-        if gap <= 0.0 and not self._touching:
-            self.collisions.append(_Contact(self.time(), pose.x, pose.y))
-        self._touching = gap <= 0.0
 
     # ------------------------------------------------------------ entities
     def spawn_problem(self, name: str, pose: Pose) -> str | None:

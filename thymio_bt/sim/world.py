@@ -30,7 +30,7 @@ import pymunk
 from ..calibration import RawProximityModel, raw_scan_to_metres
 from ..maze import Maze
 from ..placement import convex_overlap, placement_problem
-from ..robot import ROBOT_ENTITY, Backend, Pose, Scan, Twist
+from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
 from .fastpath import NearShapes, RayCaster, body_mover, body_reader, stepper
@@ -124,15 +124,6 @@ class SimConfig:
     #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does;
     #: "cone": Enki's three-ray cones (:mod:`thymio_bt.sim.cone`), read through the robot's calibration
     sensor_model: Literal["metres", "raw", "cone"] = "metres"
-
-
-@dataclass(frozen=True, slots=True)
-class Collision:
-    """The start of one contact episode between the robot and a wall."""
-
-    t: float
-    x: float
-    y: float
 
 
 class _Body:

@@ -1,0 +1,90 @@
+"""What keeps behaviours right on a late or glinting robot (the Playground, a real Thymio): a single
+near reading right after nothing was in range does not stop MoveUntilWall, approach gains are capped
+by the robot's latency, and the expected front gaps are measured on the true pose, not odometry."""
+
+import math
+from types import SimpleNamespace
+
+import pytest
+
+from thymio_bt.behaviours import Context, MoveUntilWall
+from thymio_bt.behaviours.motion import DAMPED_GAIN_DELAY, late_gain
+from thymio_bt.behaviours.ticking import tick
+from thymio_bt.expect import Expect, check
+from thymio_bt.maze import load_maze
+from thymio_bt.robot import SENSOR_NAMES, Pose
+from thymio_bt.robot_model import COURSE
+from py_trees.common import Status
+
+
+class ScriptedRobot:
+    """A robot driving along +x at its last command, whose front-centre sensor reads a script."""
+
+    latency = 0.0
+
+    def __init__(self, readings):
+        self.readings, self.i, self.x, self.v = list(readings), 0, 0.1, 0.0
+
+    def advance(self):
+        self.i += 1
+        self.x += self.v * 0.1
+
+    def proximity(self):
+        scan = dict.fromkeys(SENSOR_NAMES, math.inf)
+        scan["front_center"] = self.readings[min(self.i, len(self.readings) - 1)]
+        return scan
+
+    def pose(self):
+        return Pose(self.x, 0.1, 0.0)
+
+    def exists(self):
+        return True
+
+    def drive(self, v, w):
+        self.v = v
+
+    def time(self):
+        return self.i * 0.1
+
+
+def test_one_glint_right_after_nothing_does_not_stop_move_until_wall():
+    robot = ScriptedRobot([math.inf, math.inf, 0.0, math.inf, math.inf])
+    node = MoveUntilWall("approach", MoveUntilWall.Params(distance=0.05), Context(robot=robot, entities=robot))
+    statuses = []
+    for _ in range(5):
+        tick(node)
+        statuses.append(node.status)
+        robot.advance()
+    assert statuses == [Status.RUNNING] * 5          # held still for the glint's tick, then on its way
+    assert robot.v == pytest.approx(0.1)
+
+
+def test_a_wall_that_stays_near_stops_it_a_tick_later():
+    robot = ScriptedRobot([math.inf, 0.04, 0.04])
+    node = MoveUntilWall("approach", MoveUntilWall.Params(distance=0.05), Context(robot=robot, entities=robot))
+    tick(node)
+    robot.advance()
+    tick(node)                                       # 4 cm right after nothing: checked, robot held
+    assert node.status == Status.RUNNING and robot.v == 0.0
+    robot.advance()
+    tick(node)
+    assert node.status == Status.SUCCESS
+
+
+def test_approach_gains_are_capped_by_latency_only_on_late_robots():
+    assert late_gain(5.0, SimpleNamespace(latency=0.0), 0.1) == 5.0
+    assert late_gain(5.0, SimpleNamespace(), 0.1) == 5.0
+    assert late_gain(5.0, SimpleNamespace(latency=0.2), 0.1) == pytest.approx(DAMPED_GAIN_DELAY / 0.3)
+    assert late_gain(1.0, SimpleNamespace(latency=0.2), 0.1) == 1.0
+
+
+def test_expected_gaps_are_measured_on_the_true_pose_not_odometry():
+    maze = load_maze("mazes/two_parts_maze.yaml")
+    truth = 0.595 - 0.05 - max(x for x, _ in COURSE.hull)          # base_link 5 cm from part 1's wall
+    event = {"t": 4.0, "kind": "behaviour_end", "path": "course/part 1",
+             "pose": {"x": truth + 0.013, "y": 0.1, "yaw": 0.0}}     # odometry 1.3 cm too far
+    result = SimpleNamespace(final_pose={"x": truth, "y": 0.1, "yaw": 0.0}, collisions=0, sim_time=5.0,
+                             events=[event], trajectory=[(3.9, truth - 0.001, 0.1, 0.0), (4.0, truth, 0.1, 0.0),
+                                                         (4.1, truth, 0.1, 0.0)])
+    expect = Expect.model_validate({"gaps": [{"after": "course/part 1", "distance": 0.05, "tolerance": 0.001}]})
+    assert check(expect, result, maze, COURSE) == []
