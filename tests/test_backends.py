@@ -49,7 +49,7 @@ def test_a_mission_names_its_backend_and_robot(tmp_path):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("robot: enkki", "robot must be one of course, enki, real, got 'enkki'"),
+    ("robot: enkki", "robot must be one of course, enki, real or a profile file (.yaml), got 'enkki'"),
     ("backend: [sim]", "backend must be a name or a mapping with 'name'"),
 ])
 def test_bad_robot_or_backend_in_a_mission_is_located(tmp_path, text, message):

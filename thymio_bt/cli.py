@@ -700,6 +700,60 @@ def maze_export(maze_file: Path, playground: bool, spawn: str | None, robot: str
         click.echo(f"wrote {output}: {len(result.walls)} walls, the robot on port {port}", err=True)
 
 
+@main.command("calibrate")
+@click.option("--backend", "backend", default="sim", show_default=True, metavar="NAME",
+              help="The robot to measure: playground, aseba (a real Thymio), sim, ... (see 'thymio-bt backends').")
+@click.option("--backend-opt", "backend_opts", multiple=True, metavar="KEY=VALUE", help="A setting of the backend.")
+@click.option("--robot", default="enki", show_default=True, help="The built-in model to start from (course, enki, real).")
+@click.option("--output", "-o", type=click.Path(path_type=Path), required=True, help="The profile file to write (.yaml).")
+@click.option("--name", default=None, help="The profile's name (default: the file's name).")
+def calibrate_command(backend: str, backend_opts: tuple[str, ...], robot: str, output: Path, name: str | None) -> None:
+    """Measure a robot's speed scale, wheel base and proximity response into a profile for --robot.
+
+    The robot faces a wall along a corridor (a simulator builds it; a real robot is placed at the
+    printed pose): 2 s straight, a slow approach to 8 mm, a spin. About 25 s in real time.
+    """
+    import tempfile
+
+    import yaml
+
+    from .calibrate import arena, calibrate
+    from .mission import load_mission
+    from .robot_model import ROBOTS, robot_model
+    from .robot_profile import profile_text
+
+    try:
+        out = Output(output, "--output")
+        if output.suffix.lower() not in (".yaml", ".yml"):
+            raise UserError(f"--output {output}: a profile is a .yaml file (hint: -o my_thymio.yaml)")
+        if robot not in ROBOTS:
+            from .errors import did_you_mean
+            raise UserError(f"--robot {robot}: calibrate starts from a built-in model (hint: {did_you_mean(robot, ROBOTS)})")
+        with tempfile.TemporaryDirectory() as tmp:
+            maze_file = Path(tmp) / "corridor.yaml"
+            maze_file.write_text(yaml.safe_dump(arena().to_yaml_dict(), sort_keys=False))
+            mission_file = Path(tmp) / "calibrate.yaml"
+            mission_file.write_text(f"name: calibrate\nmaze: {maze_file}\nstart: start\nrobot: {robot}\n"
+                                    "time_limit: 120\ntree:\n  Stop: {}\n")
+            spec = load_mission(mission_file)
+            device = _backend(spec, 0, backend, backend_opts)
+        try:
+            device.request_spawn(device.robot_name, spec.start)
+            device.advance(0.0)
+            with Interrupts():
+                result = calibrate(device, robot_model(robot), spec.maze, say=lambda text: click.echo(text, err=True))
+        except ValueError as exc:
+            raise UserError(f"calibrate: {exc}") from None
+        finally:
+            device.close()
+        out.write_text(profile_text(result.profile(name or output.stem)))
+    except UserError as exc:
+        _fail(exc)
+    for line in result.summary():
+        click.echo(line)
+    click.echo(f"wrote {output}: use it with --robot {output}", err=True)
+
+
 @main.group()
 def serve() -> None:
     """Serve our simulation to other tools (ROS 2 nodes)."""

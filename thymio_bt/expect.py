@@ -31,6 +31,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from .maze import Maze
 from .maze.model import Length, Point, parsed_quantity
+from .placement import ray_distance
 from .robot import Pose
 from .robot_model import RobotModel
 
@@ -111,25 +112,4 @@ def front_gap(maze: Maze, model: RobotModel, pose: Pose) -> float:
     """The distance from the robot's nose (the front of its hull on its centre line) straight ahead
     to the nearest wall or obstacle; inf when nothing is ahead."""
     nose = max(x for x, _ in model.hull)
-    c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-    ox, oy = pose.x + nose * c, pose.y + nose * s
-    best = math.inf
-    for shape in (*maze.walls, *maze.obstacles):
-        corners = shape.corners()
-        for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]]):
-            hit = _ray_segment(ox, oy, c, s, x0, y0, x1, y1)
-            if hit is not None and hit < best:
-                best = hit
-    return best
-
-
-def _ray_segment(ox: float, oy: float, dx: float, dy: float,
-                 x0: float, y0: float, x1: float, y1: float) -> float | None:
-    """Distance along the ray (o, d) to the segment, or None when it misses."""
-    ex, ey = x1 - x0, y1 - y0
-    denom = dx * ey - dy * ex
-    if abs(denom) < 1e-15:
-        return None
-    t = ((x0 - ox) * ey - (y0 - oy) * ex) / denom
-    u = ((x0 - ox) * dy - (y0 - oy) * dx) / denom
-    return t if t >= 0 and 0 <= u <= 1 else None
+    return ray_distance(maze, pose.x + nose * math.cos(pose.yaw), pose.y + nose * math.sin(pose.yaw), pose.yaw)

@@ -74,6 +74,31 @@ def placement_problem(maze: Maze, model: RobotModel, pose: Pose) -> str | None:
     return None
 
 
+def ray_distance(maze: Maze, ox: float, oy: float, yaw: float) -> float:
+    """How far from (ox, oy) along ``yaw`` the first wall or obstacle face is; inf when none is."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    best = math.inf
+    for shape in (*maze.walls, *maze.obstacles):
+        corners = shape.corners()
+        for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]]):
+            hit = _ray_segment(ox, oy, c, s, x0, y0, x1, y1)
+            if hit is not None and hit < best:
+                best = hit
+    return best
+
+
+def _ray_segment(ox: float, oy: float, dx: float, dy: float,
+                 x0: float, y0: float, x1: float, y1: float) -> float | None:
+    """Distance along the ray (o, d) to the segment, or None when it misses."""
+    ex, ey = x1 - x0, y1 - y0
+    denom = dx * ey - dy * ex
+    if abs(denom) < 1e-15:
+        return None
+    t = ((x0 - ox) * ey - (y0 - oy) * ex) / denom
+    u = ((x0 - ox) * dy - (y0 - oy) * dx) / denom
+    return t if t >= 0 and 0 <= u <= 1 else None
+
+
 class ContactTracker:
     """A backend's smallest hull-to-wall gap and contact episodes, from a known pose and the maze's
     geometry: for backends without a physics engine of ours (the Playground's ground truth, a ROS 2

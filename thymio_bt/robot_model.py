@@ -228,11 +228,16 @@ REAL = replace(
 
 #: The robot models a run can name, by name.
 ROBOTS: dict[str, RobotModel] = {m.name: m for m in (COURSE, ENKI, REAL)}
+_MODELS = tuple(ROBOTS.items())      # hashable, for the profile cache
 
 
 def robot_model(name: str) -> RobotModel:
-    """The robot model called ``name``; ``KeyError`` with the known names otherwise."""
-    try:
+    """The robot model called ``name``, or the profile file ``name`` (``.yaml``, written by
+    ``thymio-bt calibrate``); ``KeyError`` with the known names otherwise."""
+    if name in ROBOTS:
         return ROBOTS[name]
-    except KeyError:
-        raise KeyError(f"no robot model named '{name}' (known: {', '.join(ROBOTS)})") from None
+    from .robot_profile import is_profile_path, read_profile
+
+    if is_profile_path(name):
+        return read_profile(name, _MODELS)
+    raise KeyError(f"no robot model named '{name}' (known: {', '.join(ROBOTS)}, or a profile file .yaml)")

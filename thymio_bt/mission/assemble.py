@@ -21,6 +21,7 @@ from ..maze import Maze, load_maze, resolve_maze
 from ..placement import placement_problem
 from ..robot import Pose
 from ..robot_model import ROBOTS, robot_model
+from ..robot_profile import is_profile_path
 from ..sim.noise import NoiseConfig
 from ..units import Quantity, check_kind
 from ..validation import problems_from, validate
@@ -240,7 +241,7 @@ class Assembler(Checker):
                 self.problem(f"--set {name}: no such parameter", where, name,
                              did_you_mean(name, [*params, "tick_hz", "time_limit", "seed", "sensor_model", "robot", "noise.range_sd",
                                                  "noise.wheel", "noise.odometry"]))
-        motor_noise = ROBOTS[values.get("robot", "course")].motor_noise
+        motor_noise = robot_model(values.get("robot", "course")).motor_noise
         if motor_noise and "wheel" not in noise_raw:       # the robot's own (Enki's cannot be switched off)
             noise_raw["wheel"] = motor_noise
         try:
@@ -249,7 +250,7 @@ class Assembler(Checker):
             self.problems.extend(problems_from(exc, data.get("noise", {}), file, NoiseConfig, "noise."))
             values["noise"] = NoiseConfig()
         if "sensor_model" not in values:      # the robot's own: the course's rays, Enki's cones, a real robot's readings
-            values["sensor_model"] = _SIM_SENSOR_MODEL[ROBOTS[values.get("robot", "course")].sensor_model]
+            values["sensor_model"] = _SIM_SENSOR_MODEL[robot_model(values.get("robot", "course")).sensor_model]
         return values
 
     def _setting(self, key: str, raw: Any, where: Where, values: dict[str, Any]) -> None:
@@ -281,9 +282,20 @@ class Assembler(Checker):
     def _robot(self, value: Any, where: Where, values: dict[str, Any]) -> None:
         if value in ROBOTS:
             values["robot"] = value
+        elif isinstance(value, str) and is_profile_path(value):
+            # a profile file (thymio-bt calibrate): relative to the mission's folder, or to here for --robot
+            path = Path(value) if Path(value).is_absolute() or not Path(where[0]).is_file() \
+                else Path(where[0]).parent / value
+            try:
+                robot_model(str(path.resolve()))
+            except UserError as exc:
+                self.problems.extend(p if p.line else Problem(p.message, *where, "robot", p.hint)
+                                     for p in exc.problems)
+                return
+            values["robot"] = str(path.resolve())
         else:
-            self.problem(f"robot must be one of {', '.join(ROBOTS)}, got {value!r}", where, "robot",
-                         did_you_mean(str(value), ROBOTS))
+            self.problem(f"robot must be one of {', '.join(ROBOTS)} or a profile file (.yaml), got {value!r}",
+                         where, "robot", did_you_mean(str(value), ROBOTS))
 
     def _backend(self, value: Any, where: Where, values: dict[str, Any]) -> None:
         """``backend: NAME`` or ``backend: {name: NAME, OPTION: VALUE, ...}``; the backend checks its options."""

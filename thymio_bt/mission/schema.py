@@ -134,7 +134,9 @@ def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
             "sensor_model": {"enum": ["metres", "rays", "raw", "cone"],
                              "description": "metres (or rays): the course's ideal rays; raw: a real Thymio's "
                                             "readings; cone: Enki's three-ray cones; default: the robot's own"},
-            "robot": {"enum": list(ROBOTS), "description": "the robot model (thymio-bt backends lists them)"},
+            "robot": {"anyOf": [{"enum": list(ROBOTS)}, {"type": "string", "pattern": "\\.ya?ml$"}],
+                      "description": "the robot model (thymio-bt backends lists them), or a profile file "
+                                     "written by thymio-bt calibrate"},
             "backend": {"anyOf": [{"type": "string"}, {"type": "object", "required": ["name"],
                                                          "properties": {"name": {"type": "string"}}}],
                         "description": "where the mission runs: a backend name, or {name: NAME, OPTION: VALUE}"},

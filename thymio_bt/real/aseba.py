@@ -213,9 +213,16 @@ class AsebaNode(Node):
         connection = self.connection
         connection.shutdown()                      # its loops end within a read timeout or a refresh
         connection.input_thread.join(1.0)
-        self.thread.join(1.0)
         if self.loop.is_running():
             self.loop.call_soon_threadsafe(self.loop.stop)
+        self.thread.join(1.0)
+        if not self.loop.is_running():             # end its pending handlers (else: "Task was destroyed")
+            pending = asyncio.all_tasks(self.loop)
+            for task in pending:
+                task.cancel()
+            if pending:
+                self.loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
+            self.loop.close()
         connection.close()
 
 
