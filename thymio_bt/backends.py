@@ -99,6 +99,9 @@ class PlaygroundOptions(BackendOptions):
     latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
                            "command acting, for the behaviours (measured: readings 40-120 ms behind the true "
                            "pose, a new motor target acting ~100 ms later)")
+    speed_scale: float | None = Field(None, gt=0.5, le=2, description="the Playground's Thymio's speed per motor "
+                                      "unit over the robot model's; default: 0.985 (measured against its ground "
+                                      "truth) for a built-in model, 1 for a profile measured by thymio-bt calibrate")
 
 
 class Ros2Options(BackendOptions):
