@@ -19,7 +19,7 @@ from ..fields import AngularSpeed, Duration, Length, Speed
 from ..robot_model import COURSE
 from .base import (BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour,
                    current_pose)
-from .motion import approach_speed
+from .motion import MIN_TURN_RATE, approach_speed, late_gain
 
 Side = Literal["left", "right"]
 _SENSOR = {s.name: (s.x, s.y, s.yaw) for s in COURSE.sensors}
@@ -230,6 +230,14 @@ class WallFollow(RobotBehaviour):
         self.mode = "forward"
         self.aligned = False
         self.anchor: tuple[float, float] | None = None     # a cell centre (axle, odometry frame)
+        # a late robot (see Backend.latency) stops early by what its last command still covers,
+        # approaches with a damped gain and settles a turn within what its slowest turn covers
+        self.latency = getattr(self.robot, "latency", 0.0)
+        self.gain = late_gain(5.0, self.robot, self.ctx.tick_period)
+        self.turn_tolerance = math.radians(0.1)
+        if self.latency:
+            self.turn_tolerance = max(self.turn_tolerance, MIN_TURN_RATE * (self.ctx.tick_period + self.latency))
+        self.speed = self.rate = 0.0                       # the speed and turn rate last commanded
         self._new_segment()
         if p.until == "exit" and self.ctx.bounds is None:
             self._bad_input = "until: exit needs the maze's bounds, and this backend has none"
@@ -288,21 +296,24 @@ class WallFollow(RobotBehaviour):
             elif self.aligned:         # open from the cell centre on: the opening is the next cell
                 self.target = p.cell
         front = scan["front_center"]
-        front_left = front - self.stop_distance
+        lead = self.speed * self.latency
+        front_left = front - self.stop_distance - lead
         tol = 0.0005
-        if self.target is not None and (self.target - s <= tol or
+        if self.target is not None and (self.target - s - lead <= tol or
                                         (front_left <= tol and self.target - s < p.cell / 2)):
             return self._begin_turn(self.sign, "opening")
         if front_left <= tol:
             self.robot.drive(0.0, 0.0)
+            self.speed = 0.0
             self.mode, self.squaring = "square", []
             return Status.RUNNING
         limit = p.speed
         if math.isfinite(front):
-            limit = approach_speed(front_left, limit, 5.0, 0.005, self.ctx.tick_period)
+            limit = approach_speed(front_left, limit, self.gain, 0.005, self.ctx.tick_period)
         if self.target is not None:
-            limit = min(limit, approach_speed(self.target - s, p.speed, 5.0, 0.005, self.ctx.tick_period))
+            limit = min(limit, approach_speed(self.target - s - lead, p.speed, self.gain, 0.005, self.ctx.tick_period))
         self.robot.drive(limit, self._steer(pose, scan))
+        self.speed = limit
         self.feedback_message = (f"following the {p.side} wall" if self.target is None
                                  else f"opening on the {p.side} in {self.target - s:.3f} m")
         return Status.RUNNING
@@ -373,6 +384,7 @@ class WallFollow(RobotBehaviour):
 
     def _begin_turn(self, direction: float, why: str) -> Status:
         self.robot.drive(0.0, 0.0)
+        self.speed = 0.0
         self.mode = "turn"
         self.heading = wrap_angle(self.heading + direction * math.pi / 2)
         self.turn_reason = why
@@ -380,13 +392,15 @@ class WallFollow(RobotBehaviour):
         return Status.RUNNING
 
     def _turn(self, pose: Pose) -> Status:
-        error = wrap_angle(self.heading - pose.yaw)
-        if abs(error) > math.radians(0.1):
-            rate = approach_speed(abs(error), self.params.turn_speed, 5.0, 0.02, self.ctx.tick_period)
-            self.robot.drive(0.0, math.copysign(rate, error))
+        error = wrap_angle(self.heading - pose.yaw) - self.rate * self.latency
+        if abs(error) > self.turn_tolerance:
+            rate = approach_speed(abs(error), self.params.turn_speed, self.gain, MIN_TURN_RATE, self.ctx.tick_period)
+            self.rate = math.copysign(rate, error)
+            self.robot.drive(0.0, self.rate)
             self.feedback_message = f"turning, {math.degrees(error):.1f} deg to go"
             return Status.RUNNING
         self.robot.drive(0.0, 0.0)
+        self.rate = 0.0
         scan = self.robot.proximity()
         assert scan is not None
         if self.turn_reason == "wall" and scan["front_center"] < self.params.cell / 2:
