@@ -246,6 +246,7 @@ class WallFollow(RobotBehaviour):
 
     def _new_segment(self) -> None:
         self.origin = self._axle(current_pose(self.robot))
+        self.front_was_clear = False           # the front sensor read nothing last tick
         self.wall_seen = False
         self.last_hit = 0.0
         self.target: float | None = None
@@ -302,6 +303,14 @@ class WallFollow(RobotBehaviour):
         if self.target is not None and (self.target - s - lead <= tol or
                                         (front_left <= tol and self.target - s < p.cell / 2)):
             return self._begin_turn(self.sign, "opening")
+        if front_left <= tol and self.front_was_clear:
+            # nothing ahead a tick ago and now a wall at the stop: a glint (Enki's cones at a wall's
+            # end), as in MoveUntilWall: hold still for a tick and let the next reading say
+            self.front_was_clear = False
+            self.robot.drive(0.0, 0.0)
+            self.speed = 0.0
+            return Status.RUNNING
+        self.front_was_clear = math.isinf(front)
         if front_left <= tol:
             self.robot.drive(0.0, 0.0)
             self.speed = 0.0
