@@ -67,7 +67,7 @@ class _SocketIO(io.RawIOBase):
                 return b""
             except OSError as exc:
                 self.failed = exc
-        time.sleep(0.05)          # a dead link: thymiodirect's reader would spin; not a simulation step
+        time.sleep(0.05)          # realtime: a dead link (thymiodirect's reader would spin), not a sim step
         return b""
 
     def write(self, data: Any) -> int:                     # type: ignore[override]

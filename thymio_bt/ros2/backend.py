@@ -250,7 +250,7 @@ class Ros2Robot(Backend):
         else:
             lag = (self._deadline_ns - self._now_ns()) / 1e9
             if lag > 0:
-                time.sleep(lag)  # pacing a real robot by the wall clock, as the aseba backend does
+                time.sleep(lag)  # realtime: a real robot is paced by the wall clock, as the aseba backend is
             self._deadline_ns = max(self._deadline_ns, self._now_ns())
             self._check_alive()
         if self._present and self._cmd != Twist():

@@ -219,7 +219,7 @@ class GazeboStandIn:
             sim_time = steps * self.dt
             lag = wall_start + sim_time / self.speedup - time.monotonic()
             if lag > 0:
-                time.sleep(lag)  # a stand-in for Gazebo runs against the wall clock (real time x speedup)
+                time.sleep(lag)  # realtime: a stand-in for Gazebo runs against the wall clock (x speedup)
             if on_second is not None and steps % round(1.0 / self.dt) == 0:
                 on_second(sim_time, sim_time / max(time.monotonic() - wall_start, 1e-9))
 
