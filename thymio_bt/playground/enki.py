@@ -56,7 +56,7 @@ class EnkiRobot:
                 connection.close()
                 raise UserError(Problem(f"the Aseba Playground's D-Bus interface did not appear within {timeout:g} s",
                                         hint="is it the Playground of the aseba package (1.6.99 or later)?"))
-            time.sleep(0.05)     # waiting for a program to register: not a simulation step
+            time.sleep(0.05)     # realtime: waiting for a program to register
         reply = connection.send_and_get_reply(jeepney.new_method_call(world, "PhysicalObject", "s", (reply.body[0][0],)))
         return cls(connection, reply.body[0])
 

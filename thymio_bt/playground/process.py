@@ -94,7 +94,7 @@ class Playground:
             if time.monotonic() > deadline:
                 raise UserError(Problem(f"the Aseba Playground did not open {what} within {timeout:g} s",
                                         hint=f"its output: {self.folder / 'playground.log'}"))
-            time.sleep(0.02)      # starting a program: not a simulation step
+            time.sleep(0.02)      # realtime: starting a program, not a simulation step
 
     def stop(self) -> None:
         """Stop every process it started (by PID, the Playground first) and remove its folder."""

@@ -157,7 +157,7 @@ class AsebaNode(Node):
         connection = made.get("connection")
         deadline = time.monotonic() + timeout
         while connection is not None and not connection.remote_node_set and time.monotonic() < deadline:
-            time.sleep(0.02)    # connecting: waiting for the robot's description, not a simulation step
+            time.sleep(0.02)    # realtime: connecting, waiting for the robot's description
         if connection is None or not connection.remote_node_set:
             if connection is not None:
                 connection.shutdown()
@@ -168,7 +168,7 @@ class AsebaNode(Node):
         node = cls(connection, node_id, made["loop"], device, thread)
         deadline = time.monotonic() + timeout
         while not node._has_variables() and time.monotonic() < deadline:
-            time.sleep(0.02)
+            time.sleep(0.02)    # realtime: waiting for its first variables
         node.set_motors(0, 0)
         return node
 
