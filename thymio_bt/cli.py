@@ -614,6 +614,7 @@ def backends_command() -> None:
     click.echo("robot models (--robot NAME):")
     for model in ROBOTS.values():
         click.echo(f"  {model.name:10} {model.description}")
+    click.echo(f"  {'FILE.yaml':10} a profile measured on your robot by 'thymio-bt calibrate'")
 
 
 @main.command()
