@@ -88,3 +88,47 @@ def test_expected_gaps_are_measured_on_the_true_pose_not_odometry():
                                                          (4.1, truth, 0.1, 0.0)])
     expect = Expect.model_validate({"gaps": [{"after": "course/part 1", "distance": 0.05, "tolerance": 0.001}]})
     assert check(expect, result, maze, COURSE) == []
+
+
+def test_wall_follow_is_not_out_of_the_maze_while_a_wall_is_in_front():
+    """Odometry that drifted past the maze's box does not end WallFollow while a wall is still seen."""
+    from thymio_bt.behaviours import WallFollow
+
+    robot = ScriptedRobot([0.05, 0.05, math.inf])
+    robot.x = 1.2                                           # beyond the box by odometry
+    ctx = Context(robot=robot, entities=robot, bounds=(0.0, 0.0, 1.0, 1.0))
+    node = WallFollow("follow", WallFollow.Params(), ctx)
+    tick(node)
+    assert node.status == Status.RUNNING                    # a wall ahead: still inside
+    robot.advance()
+    robot.advance()
+    tick(node)
+    assert node.status == Status.SUCCESS                    # nothing in front any more: out
+
+
+def test_wall_follow_retakes_the_corridor_heading_from_a_steady_offset():
+    """Between two walls, an offset that holds still means the robot is parallel to the corridor:
+    WallFollow takes its odometry heading then as the corridor's (drift corrected), not before."""
+    from thymio_bt.behaviours import WallFollow
+
+    class Corridor(ScriptedRobot):
+        yaw = 0.0
+
+        def proximity(self):
+            scan = dict.fromkeys(SENSOR_NAMES, math.inf)
+            scan["front_left"] = scan["front_right"] = 0.074      # centred: offset 0
+            return scan
+
+        def pose(self):
+            return Pose(self.x, 0.1, self.yaw)
+
+    robot = Corridor([])
+    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
+    tick(node)
+    robot.yaw = math.radians(3)                 # odometry now says 3° off while the walls say parallel
+    for _ in range(3):
+        tick(node)
+    assert node.heading == 0.0                  # not steady for long enough yet
+    for _ in range(2):
+        tick(node)
+    assert node.heading == pytest.approx(math.radians(3))
