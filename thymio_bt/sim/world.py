@@ -208,8 +208,10 @@ class Simulation(Backend):
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
+        self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)   # (step, entity, its pose)
         self._cmd = Twist()
         self._applied = (0.0, 0.0)
+        self._velocity_of: tuple[Twist | None, tuple[float, float]] = (None, (0.0, 0.0))   # (command, its v, w)
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
         self._scan: dict[str, float] | None = None
@@ -253,9 +255,16 @@ class Simulation(Backend):
         return self.true_pose()
 
     def true_pose(self) -> Pose | None:
-        """The ground-truth pose (equal to :meth:`pose` unless odometry drift is on)."""
+        """The ground-truth pose (equal to :meth:`pose` unless odometry drift is on). Read once per
+        physics step and entity: behaviours ask for it several times a tick."""
         entity = self._entities.get(self.robot_name)
-        return entity.pose() if entity else None
+        if entity is None:
+            return None
+        step, body, pose = self._pose_read
+        if step != self._steps or body is not entity:
+            pose = entity.pose()
+            self._pose_read = (self._steps, entity, pose)
+        return pose
 
     def velocity(self) -> Twist:
         entity = self._entities.get(self.robot_name)
@@ -320,11 +329,12 @@ class Simulation(Backend):
 
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
-        model = self.model
-        left, right = model.wheel_speeds(*model.limit_command(self._cmd.linear, self._cmd.angular, self._max_wheel))
-        fl, fr = self._noise.wheel_factors()
-        v, w = model.body_velocity(left * fl, right * fr)
-        self._applied = (v, w)
+        model, cmd = self.model, self._cmd
+        if self._noise.config.wheel or cmd != self._velocity_of[0]:     # noise-free: a function of the command
+            left, right = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
+            fl, fr = self._noise.wheel_factors()
+            self._velocity_of = (cmd, model.body_velocity(left * fl, right * fr))
+        v, w = self._applied = self._velocity_of[1]
         entity = self._entities.get(self.robot_name)
         if entity is not None:
             angle = entity.read()[2]
