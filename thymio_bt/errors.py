@@ -7,7 +7,9 @@ a student sees every mistake of a file at once. The CLI prints them and exits wi
 from __future__ import annotations
 
 import difflib
+import importlib
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Any, Iterable
 
 
@@ -67,3 +69,18 @@ def type_name(value: Any) -> str:
     if value is None:
         return "nothing"
     return type(value).__name__
+
+
+def optional_module(name: str, needed_by: str, hint: str) -> ModuleType:
+    """``import name`` for what an optional extra brings: a :class:`UserError` saying who needs it and
+    how to get it, instead of an ImportError, when it is not installed.
+
+    Example::
+
+        tdmclient = optional_module("tdmclient", "the 'tdm' backend", "pip install 'thymio-bt[thymio]'")
+    """
+    try:
+        return importlib.import_module(name)
+    except ImportError as exc:
+        raise UserError(Problem(f"{needed_by} needs {name.partition('.')[0]}, which is not installed ({exc})",
+                                hint=hint)) from None

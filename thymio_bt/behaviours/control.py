@@ -13,6 +13,8 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from .ticking import tick
+
 
 class SimTimeout(py_trees.decorators.Decorator):
     """Fail (and stop the child) when the child runs longer than ``duration`` simulated seconds.
@@ -100,8 +102,6 @@ class RepeatUntil(py_trees.composites.Composite):
 
 
 def _tick_directly(child: Behaviour) -> tuple[()]:
-    from .ticking import tick
-
     tick(child)
     return ()
 

@@ -30,7 +30,7 @@ import threading
 import time
 from typing import Any
 
-from ..errors import Problem, UserError
+from ..errors import Problem, UserError, optional_module
 from ..robot import RobotLost
 from .thymio import PROX_VARIABLE, SPEED_VARIABLES, TARGET_VARIABLES, Node
 
@@ -84,12 +84,7 @@ class _SocketIO(io.RawIOBase):
 
 
 def _thymiodirect() -> Any:
-    try:
-        from thymiodirect.connection import Connection
-    except ImportError:
-        raise UserError(Problem("the 'aseba' backend needs thymiodirect, which is not installed",
-                                hint=_INSTALL_HINT)) from None
-    return Connection
+    return optional_module("thymiodirect.connection", "the 'aseba' backend", _INSTALL_HINT).Connection
 
 
 def _open_stream(device: str, timeout: float) -> Any:

@@ -40,7 +40,7 @@ from types import ModuleType
 from typing import Any, Callable
 
 from ..calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
-from ..errors import Problem, UserError
+from ..errors import Problem, UserError, optional_module
 from ..robot import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
 from ..robot_model import COURSE, integrate_arc
 
@@ -105,12 +105,7 @@ class Node(ABC):
 
 def import_tdmclient() -> ModuleType:
     """tdmclient, imported on first use so that the package works without the optional extra."""
-    try:
-        import tdmclient
-    except ImportError:
-        raise UserError(Problem("the 'thymio' backend needs tdmclient, which is not installed",
-                                hint=_INSTALL_HINT)) from None
-    return tdmclient
+    return optional_module("tdmclient", "the 'tdm' backend", _INSTALL_HINT)
 
 
 class TdmNode(Node):

@@ -11,19 +11,15 @@ from __future__ import annotations
 
 from types import ModuleType
 
-from ..errors import Problem, UserError
+from ..errors import optional_module
 
 INSTALL_HINT = ("source your ROS 2 install (Humble or later), or make an environment with "
                 "'scripts/ros2-env.sh DIR' and run DIR/bin/thymio-bt")
 
 
 def import_rclpy() -> ModuleType:
-    """rclpy, imported on first use; a :class:`UserError` with a hint when ROS 2 is not there."""
-    try:
-        import rclpy
-        import gazebo_msgs.srv  # noqa: F401  (the spawn and delete services: built by ros2-env.sh)
-        import nav_msgs.msg  # noqa: F401
-        import sensor_msgs.msg  # noqa: F401
-    except ImportError as exc:
-        raise UserError(Problem(f"ROS 2 is not available to this Python ({exc})", hint=INSTALL_HINT)) from None
-    return rclpy
+    """rclpy, imported on first use, with the message packages the backend and serve use (the spawn
+    and delete services are built by ros2-env.sh); a :class:`UserError` with a hint when missing."""
+    for name in ("gazebo_msgs.srv", "nav_msgs.msg", "sensor_msgs.msg", "tf2_msgs.msg"):
+        optional_module(name, "ROS 2 in thymio-bt", INSTALL_HINT)
+    return optional_module("rclpy", "ROS 2 in thymio-bt", INSTALL_HINT)
