@@ -32,7 +32,7 @@ from ..robot import ROBOT_ENTITY, Pose
 from ..robot_model import RobotModel
 from ..sim.world import SimConfig, Simulation
 from . import import_rclpy
-from .messages import quaternion_of, stamp_parts
+from .messages import quaternion_of, stamp_parts, yaw_of
 from .topics import COURSE_TOPICS, PREFIXES, TopicMap
 
 #: what the course's diff-drive plugin reports as its covariances (x, y, yaw)
@@ -130,7 +130,7 @@ class GazeboStandIn:
             response.status_message = f"this stand-in simulates one Thymio, named '{ROBOT_ENTITY}'"
             return response
         p, q = request.initial_pose.position, request.initial_pose.orientation
-        yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+        yaw = yaw_of(q.x, q.y, q.z, q.w)
         return self._entity_request(lambda: self.sim.request_spawn(request.name, Pose(p.x, p.y, yaw)), response)
 
     def _on_delete(self, request: Any, response: Any) -> Any:
