@@ -215,9 +215,11 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
         def __init__(self, space):
             self.space = space
 
-        def alpha(self, start, end, shape_filter):
-            hit = self.space.segment_query_first(start, end, 0.0, shape_filter)
-            return None if hit is None else hit.alpha
+        def fan(self, rays, x, y, cos, sin, shape_filter):
+            hits = [self.space.segment_query_first((x + sx * cos - sy * sin, y + sx * sin + sy * cos),
+                                                   (x + ex * cos - ey * sin, y + ex * sin + ey * cos),
+                                                   0.0, shape_filter) for sx, sy, ex, ey in rays]
+            return [None if hit is None else hit.alpha for hit in hits]
 
     mission = load_mission("missions/maze_part1_2.yaml", overrides={"noise.wheel": "0.027", "noise.range_sd": "0.001"})
 

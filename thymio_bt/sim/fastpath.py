@@ -13,16 +13,19 @@ Example::
 
     step = stepper(space)
     step(0.01)                                 # same as space.step(0.01)
-    ray = RayCaster(space)
-    ray.alpha((0, 0), (1, 0), shape_filter)    # fraction along the segment of the first hit, or None
+    rays = RayCaster(space)
+    rays.fan([(0, 0, 1, 0)], 0, 0, 1, 0, shape_filter)   # [fraction along the segment of the first hit, or None]
     near = NearShapes(space, body, hull, shape_filter)
     near.within(0.02)                          # is any shape closer than 2 cm to the hull?
+    distance = PointDistance()
+    distance(wall._shape, (0.1, 0.2))          # (distance, nearest x, nearest y), as wall.point_query
 """
 
 from __future__ import annotations
 
+import math
 from functools import partial
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import pymunk
 from pymunk._chipmunk import ffi, lib
@@ -54,27 +57,82 @@ def body_mover(body: pymunk.Body) -> Callable[[float, float], None]:
     return move
 
 
+def control_aimer(body: pymunk.Body, control: pymunk.Body) -> Callable[[float], None]:
+    """A function that sets ``control``'s velocity to ``v`` along ``body``'s heading, as
+    ``control.velocity = (v * cos(body.angle), v * sin(body.angle))`` does (re-aimed every sub-step
+    while the robot turns)."""
+    handle, target = body._body, control._body
+    get_angle, set_velocity = lib.cpBodyGetAngle, lib.cpBodySetVelocity
+    cos, sin = math.cos, math.sin
+
+    def aim(v: float) -> None:
+        angle = get_angle(handle)
+        set_velocity(target, (v * cos(angle), v * sin(angle)))
+    return aim
+
+
+def spinner(body: pymunk.Body) -> Callable[[float], None]:
+    """A function that sets ``body``'s angular velocity (``body.angular_velocity = w``)."""
+    return partial(lib.cpBodySetAngularVelocity, body._body)
+
+
 def stepper(space: pymunk.Space) -> Callable[[float], None]:
     """A function that steps ``space`` by ``dt`` like :meth:`pymunk.Space.step`, minus its bookkeeping."""
     return partial(lib.cpSpaceStep, space._space)
 
 
 class RayCaster:
-    """First-hit segment queries in one space, reusing one result buffer."""
+    """First-hit segment queries in one space, reusing one result buffer and one C filter per filter."""
 
-    __slots__ = ("_query", "_info", "_null")
+    __slots__ = ("_query", "_info", "_null", "_filters")
 
     def __init__(self, space: pymunk.Space) -> None:
         self._query = partial(lib.cpSpaceSegmentQueryFirst, space._space)
         self._info = ffi.new("cpSegmentQueryInfo *")
         self._null = ffi.NULL
+        self._filters: dict[pymunk.ShapeFilter, Any] = {}
 
-    def alpha(self, start: tuple[float, float], end: tuple[float, float],
-              shape_filter: pymunk.ShapeFilter) -> float | None:
-        """Where along start→end (0..1) the segment first touches a shape the filter admits, or None."""
-        if self._query(start, end, 0.0, shape_filter, self._info) == self._null:
-            return None
-        return self._info.alpha
+    def _c_filter(self, shape_filter: pymunk.ShapeFilter) -> Any:
+        """``shape_filter`` as a C struct, converted once (cffi converts a tuple on every call)."""
+        owner = self._filters.get(shape_filter)
+        if owner is None:
+            owner = self._filters[shape_filter] = ffi.new("cpShapeFilter *", tuple(shape_filter))
+        return owner[0]
+
+    def fan(self, rays: Sequence[tuple[float, float, float, float]], x: float, y: float, cos: float, sin: float,
+            shape_filter: pymunk.ShapeFilter) -> list[float | None]:
+        """For each ray ``(sx, sy, ex, ey)`` (start and end in a body frame, the body at ``(x, y)`` with
+        a heading of this cosine and sine): where along it (0..1) it first touches a shape the filter
+        admits, or None."""
+        query, info, null = self._query, self._info, self._null
+        flt = self._c_filter(shape_filter)
+        alphas: list[float | None] = []
+        hit = alphas.append
+        for sx, sy, ex, ey in rays:
+            if query((x + sx * cos - sy * sin, y + sx * sin + sy * cos),
+                     (x + ex * cos - ey * sin, y + ex * sin + ey * cos), 0.0, flt, info) == null:
+                hit(None)
+            else:
+                hit(info.alpha)
+        return alphas
+
+
+class PointDistance:
+    """The distance from a point to one shape and the shape's nearest point, as
+    :meth:`pymunk.Shape.point_query` gives them, without its Python result objects."""
+
+    __slots__ = ("_query", "_info")
+
+    def __init__(self) -> None:
+        self._query = lib.cpShapePointQuery
+        self._info = ffi.new("cpPointQueryInfo *")
+
+    def __call__(self, handle: Any, point: tuple[float, float]) -> tuple[float, float, float]:
+        """(distance, x, y) from ``point`` to the shape whose C handle (``shape._shape``) is given;
+        negative inside the shape."""
+        distance = self._query(handle, point, self._info)
+        nearest = self._info.point
+        return distance, nearest.x, nearest.y
 
 
 class NearShapes:

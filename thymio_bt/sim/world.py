@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Callable, Literal
+from typing import Literal
 
 import pymunk
 
@@ -33,7 +33,7 @@ from ..placement import convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
-from .fastpath import NearShapes, RayCaster, body_mover, body_reader, stepper
+from .fastpath import NearShapes, RayCaster, body_mover, body_reader, control_aimer, spinner, stepper
 from .noise import NoiseConfig, NoiseSource
 
 _ROBOT_TYPE = 1
@@ -69,10 +69,6 @@ def _hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> _HullT
     return _HullTables(reach, extent, support)
 
 
-_set_velocity = pymunk.Body.velocity.fset                # skips pymunk's __setattr__ wrapper (hot path)
-_set_angular_velocity = pymunk.Body.angular_velocity.fset
-
-
 def _raw_model(seed: int) -> RawProximityModel:
     import numpy as np                 # only raw mode needs it: keeps ~50 ms off every start-up
 
@@ -87,24 +83,20 @@ class _ConeSensors:
 
         self.response = ConeResponse()
         reach = self.response.range
-        self.rays = [(s.name, (s.x, s.y), tuple((s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
-                                               for a in (APERTURE, 0.0, -APERTURE)))
-                     for s in model.sensors]
+        self.names = [s.name for s in model.sensors]
+        #: each sensor's three rays in turn, (start, end) in the body frame
+        self.rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
+                     for s in model.sensors for a in (APERTURE, 0.0, -APERTURE)]
         self.rng = np.random.default_rng((seed, 2))
 
-    def measure(self, query: Callable[..., float | None], entity: "_Body") -> dict[str, int]:
-        body = entity.body
-        cos, sin = math.cos(body.angle), math.sin(body.angle)
-        bx, by = body.position
+    def measure(self, rays: RayCaster, entity: "_Body") -> dict[str, int]:
+        bx, by, angle = entity.read()
+        alphas = rays.fan(self.rays, bx, by, math.cos(angle), math.sin(angle), entity.filter)
         reach, response = self.response.range, self.response
-        draws = self.rng.standard_normal(len(self.rays))
+        draws = self.rng.standard_normal(len(self.names))
         readings = {}
-        for (name, (sx, sy), ends), z in zip(self.rays, draws):
-            start = (bx + sx * cos - sy * sin, by + sx * sin + sy * cos)
-            hits = []
-            for ex, ey in ends:
-                alpha = query(start, (bx + ex * cos - ey * sin, by + ex * sin + ey * cos), entity.filter)
-                hits.append(None if alpha is None else alpha * reach)
+        for i, (name, z) in enumerate(zip(self.names, draws)):
+            hits = [None if alpha is None else alpha * reach for alpha in alphas[3 * i:3 * i + 3]]
             readings[name] = response.reading(response.value(*hits), float(z))
         return readings
 
@@ -153,6 +145,8 @@ class _Body:
         space.add(self.body, self.shape, self.control, *self.joints)
         self.read = body_reader(self.body)      # (x, y, angle), the hot path's way to read the body
         self.move = body_mover(self.body)
+        self.aim = control_aimer(self.body, self.control)
+        self.spin = spinner(self.control)
 
     def remove(self, space: pymunk.Space) -> None:
         space.remove(self.body, self.shape, self.control, *self.joints)
@@ -219,7 +213,8 @@ class Simulation(Backend):
         self._contacts = 0
         self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
         reach = self.model.range_max
-        self._rays = [(s.name, (s.x, s.y), (s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw)))
+        self._ray_names = [s.name for s in self.model.sensors]
+        self._rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw))
                       for s in self.model.sensors]
         self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
         self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
@@ -312,37 +307,41 @@ class Simulation(Backend):
         step, dt = self._step, self._dt
         if entity is not None and self.config.noise.odometry:
             self._integrate_odometry(steps * dt)
+        if entity is None:
+            for _ in range(steps):
+                step(dt)
+                self._steps += 1
+            return
         v, w = self._applied
-        aim = entity is not None and v != 0.0 and w != 0.0
-        read = entity.read if entity is not None else None
+        turning = v != 0.0 and w != 0.0
+        every = self._sensor_every
         for _ in range(steps):
-            if entity is not None and (aim or self._contacts):
-                # keep the control body's velocity along the heading while the heading changes
-                angle = read()[2]
-                _set_velocity(entity.control, (v * math.cos(angle), v * math.sin(angle)))
+            if turning or self._contacts:
+                entity.aim(v)          # keep the control body's velocity along the heading as it changes
                 if self._contacts:
-                    _set_angular_velocity(entity.control, w)
+                    entity.spin(w)
             step(dt)
             self._steps += 1
-            if entity is not None and self._steps % self._sensor_every == 0:
+            if self._steps % every == 0:
                 self._refresh_sensors(entity)
 
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
         model, cmd = self.model, self._cmd
-        if self._noise.config.wheel or cmd != self._velocity_of[0]:     # noise-free: a function of the command
+        last = self._velocity_of[0]
+        if self._noise.config.wheel or last is None or cmd.linear != last.linear or cmd.angular != last.angular:
+            # noise-free, the velocity is a function of the command: computed once per command
             left, right = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
             fl, fr = self._noise.wheel_factors()
             self._velocity_of = (cmd, model.body_velocity(left * fl, right * fr))
         v, w = self._applied = self._velocity_of[1]
         entity = self._entities.get(self.robot_name)
         if entity is not None:
-            angle = entity.read()[2]
-            _set_velocity(entity.control, (v * math.cos(angle), v * math.sin(angle)))
-            _set_angular_velocity(entity.control, w)
-        if entity is not None and self._contacts == 0:
-            # Chipmunk moves bodies before solving joints: seed the velocity so motion starts now.
-            entity.move(v, w)
+            entity.aim(v)
+            entity.spin(w)
+            if self._contacts == 0:
+                # Chipmunk moves bodies before solving joints: seed the velocity so motion starts now.
+                entity.move(v, w)
 
     def _integrate_odometry(self, duration: float) -> None:
         """Dead-reckon the axle from the wheel speeds as encoders measure them (with a per-call error).
@@ -361,27 +360,27 @@ class Simulation(Backend):
 
     def _refresh_sensors(self, entity: _Body) -> None:
         if self._cone is not None:
-            self._raw = self._cone.measure(self._ray.alpha, entity)
+            self._raw = self._cone.measure(self._ray, entity)
             self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
             bx, by, angle = entity.read()
             self._update_clearance(entity, bx, by, math.cos(angle), math.sin(angle))
             return
-        flt = entity.filter
-        query = self._ray.alpha
         bx, by, angle = entity.read()
         cos, sin = math.cos(angle), math.sin(angle)
+        alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
         noise, raw = self._noise, self._raw_model
-        noisy = bool(noise.config.range_sd)         # noise.range would return the value unchanged
-        lo, hi = self.model.range_min, self.model.range_max
+        # noise.range would return the value unchanged; raw readings get the raw model's noise instead
+        noisy = raw is None and bool(noise.config.range_sd)
+        lo, hi, inf = self.model.range_min, self.model.range_max, math.inf
         scan: dict[str, float] = {}
-        for name, (sx, sy), (ex, ey) in self._rays:
-            alpha = query((bx + sx * cos - sy * sin, by + sx * sin + sy * cos),
-                          (bx + ex * cos - ey * sin, by + ex * sin + ey * cos), flt)
+        for name, alpha in zip(self._ray_names, alphas):
             if alpha is None:
-                scan[name] = math.inf
+                scan[name] = inf
                 continue
-            value = max(alpha * hi, lo)
-            scan[name] = value if raw is not None or not noisy else noise.range(value, lo, hi)
+            value = alpha * hi
+            if value < lo:
+                value = lo
+            scan[name] = noise.range(value, lo, hi) if noisy else value
         if raw is not None:
             self._raw = raw.measure_scan(scan)
             scan = raw_scan_to_metres(self._raw, raw.table)
