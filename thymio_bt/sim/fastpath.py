@@ -18,7 +18,7 @@ Example::
     near = NearShapes(space, body, hull, shape_filter)
     near.within(0.02)                          # is any shape closer than 2 cm to the hull?
     distance = PointDistance()
-    distance(wall._shape, (0.1, 0.2))          # (distance, nearest x, nearest y), as wall.point_query
+    distance(wall, (0.1, 0.2))                 # (distance, nearest x, nearest y), as wall.point_query
 """
 
 from __future__ import annotations
@@ -127,10 +127,9 @@ class PointDistance:
         self._query = lib.cpShapePointQuery
         self._info = ffi.new("cpPointQueryInfo *")
 
-    def __call__(self, handle: Any, point: tuple[float, float]) -> tuple[float, float, float]:
-        """(distance, x, y) from ``point`` to the shape whose C handle (``shape._shape``) is given;
-        negative inside the shape."""
-        distance = self._query(handle, point, self._info)
+    def __call__(self, shape: pymunk.Shape, point: tuple[float, float]) -> tuple[float, float, float]:
+        """(distance, x, y) from ``point`` to ``shape`` and its nearest point; negative inside it."""
+        distance = self._query(shape._shape, point, self._info)
         nearest = self._info.point
         return distance, nearest.x, nearest.y
 

@@ -33,13 +33,18 @@ from ..placement import convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
-from .fastpath import NearShapes, RayCaster, body_mover, body_reader, control_aimer, spinner, stepper
+from .fastpath import NearShapes, PointDistance, RayCaster, body_mover, body_reader, control_aimer, spinner, stepper
 from .noise import NoiseConfig, NoiseSource
+from .walls import wall_grid
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
 #: The hull's extent tables are made in 1 degree steps.
 _EXTENT_STEP = math.radians(1.0)
+#: The clearance tracker's wall grid: cell size, and the smallest gap record it serves (m); above
+#: it (a run's first ticks) every wall is a candidate.
+_GRID_CELL = 0.05
+_GRID_RECORD = 0.05
 
 
 @dataclass(frozen=True, slots=True)
@@ -194,6 +199,11 @@ class Simulation(Backend):
         self.bounds = maze.bounds()
         xmin, ymin, xmax, ymax = self.bounds
         self._farthest_gap = math.hypot(xmax - xmin, ymax - ymin)     # no gap inside the maze exceeds it
+        self._wall_shapes = tuple(self._wall_corners)
+        self._walls = wall_grid(tuple((min(x for x, _ in c), min(y for _, y in c), max(x for x, _ in c),
+                                       max(y for _, y in c)) for c in self._wall_corners.values()),
+                                _GRID_CELL, self._hull.reach + _GRID_RECORD)
+        self._distance = PointDistance()
         self._dt = 1.0 / self.config.physics_hz
         self._step = stepper(self.space)
         self._ray = RayCaster(self.space)
@@ -405,15 +415,15 @@ class Simulation(Backend):
         ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
         best = math.inf
         candidates = []
-        for info in self.space.point_query((ax, ay), tables.reach + record, entity.filter):
-            shape = info.shape
-            if shape.collision_type != _WALL_TYPE:
+        radius, axle, distance, shapes = tables.reach + record, (ax, ay), self._distance, self._wall_shapes
+        for index in self._walls.near(ax, ay, radius):
+            shape = shapes[index]
+            d, qx, qy = distance(shape, axle)
+            if d >= radius:                    # what a space point query within the radius leaves out
                 continue
-            d = info.distance
             if d <= 0.0:
                 candidates.append(shape)
                 continue
-            qx, qy = info.point.x, info.point.y
             nx, ny = (qx - ax) / d, (qy - ay) / d
             lx, ly = nx * cos + ny * sin, ny * cos - nx * sin      # n in the body frame
             index = round(math.atan2(ly, lx) / _EXTENT_STEP) % len(tables.extent)
@@ -444,8 +454,8 @@ class Simulation(Backend):
         gap = math.inf
         for wall in walls:
             frame = self._wall_frames[wall]
-            if frame is None:                  # a polygon obstacle: ask pymunk
-                gap = min(gap, min(wall.point_query(p).distance for p in hull))
+            if frame is None:                  # a polygon obstacle: ask Chipmunk
+                gap = min(gap, min(self._distance(wall, p)[0] for p in hull))
             else:
                 cx, cy, ux, uy, hl, ht = frame
                 for px, py in hull:
@@ -458,7 +468,7 @@ class Simulation(Backend):
         for wall in walls:
             for cx, cy in self._wall_corners[wall]:
                 if math.hypot(cx - ax, cy - ay) - self._hull.reach < gap:    # could this corner be nearer?
-                    gap = min(gap, entity.shape.point_query((cx, cy)).distance)
+                    gap = min(gap, self._distance(entity.shape, (cx, cy))[0])
         return gap
 
     # -------------------------------------------------------------- entities
