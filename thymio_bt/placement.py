@@ -13,6 +13,7 @@ Example::
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Iterable, Sequence
 
 from .maze import Maze
@@ -20,6 +21,32 @@ from .robot import Backend, Collision, Pose
 from .robot_model import RobotModel
 
 Polygon = Sequence[tuple[float, float]]
+Box = tuple[float, float, float, float]
+#: Bounding boxes farther apart than this cannot hold overlapping polygons, whatever the rounding of
+#: the separating axis test: it is skipped for them.
+_APART = 1e-9
+
+
+def _box(polygon: Polygon) -> Box:
+    xs, ys = [x for x, _ in polygon], [y for _, y in polygon]
+    return min(xs), min(ys), max(xs), max(ys)
+
+
+@dataclass(frozen=True)
+class MazeShapes:
+    """A maze's walls, then its obstacles, as polygons with their bounding boxes, and the maze's
+    bounds: computed once for a simulator that checks placements during a run."""
+
+    polygons: tuple[tuple[tuple[float, float], ...], ...]
+    boxes: tuple[Box, ...]
+    bounds: Box
+    #: whether the maze has walls (only then must a robot stay inside its bounds)
+    walled: bool
+
+    @classmethod
+    def of(cls, maze: Maze) -> "MazeShapes":
+        polygons = tuple(tuple(shape.corners()) for shape in (*maze.walls, *maze.obstacles))
+        return cls(polygons, tuple(_box(p) for p in polygons), maze.bounds(), bool(maze.walls))
 
 
 def _axes(polygon: Polygon) -> Iterable[tuple[float, float]]:
@@ -58,18 +85,22 @@ def clearance(maze: Maze, model: RobotModel, pose: Pose) -> float:
     return min((convex_gap(hull, shape.corners()) for shape in (*maze.walls, *maze.obstacles)), default=math.inf)
 
 
-def placement_problem(maze: Maze, model: RobotModel, pose: Pose) -> str | None:
+def placement_problem(maze: Maze | MazeShapes, model: RobotModel, pose: Pose) -> str | None:
     """Why the robot ``model`` cannot stand at ``pose`` in ``maze`` (None when it can)."""
     if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):
         return "the pose must be finite numbers"
+    shapes = maze if isinstance(maze, MazeShapes) else MazeShapes.of(maze)
     hull = model.hull_at(pose)
-    if maze.walls:
-        xmin, ymin, xmax, ymax = maze.bounds()
+    if shapes.walled:
+        xmin, ymin, xmax, ymax = shapes.bounds
         if not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
             return (f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
                     f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])")
-    for shape in (*maze.walls, *maze.obstacles):
-        if convex_overlap(hull, shape.corners()):
+    hx0, hy0, hx1, hy1 = _box(hull)
+    for polygon, (x0, y0, x1, y1) in zip(shapes.polygons, shapes.boxes):
+        if x0 - hx1 > _APART or hx0 - x1 > _APART or y0 - hy1 > _APART or hy0 - y1 > _APART:
+            continue
+        if convex_overlap(hull, polygon):
             return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps a wall"
     return None
 

@@ -28,8 +28,8 @@ from typing import Literal
 import pymunk
 
 from ..calibration import RawProximityModel, raw_scan_to_metres
-from ..maze import Maze
-from ..placement import convex_overlap, placement_problem
+from ..maze import Maze, Wall
+from ..placement import MazeShapes, convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
@@ -72,6 +72,14 @@ def _hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> _HullT
                       key=lambda v, i=i: from_axle[v][0] * math.cos(i * _EXTENT_STEP)
                       + from_axle[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(360)))
     return _HullTables(reach, extent, support)
+
+
+def _wall_frame(wall: Wall) -> tuple[float, ...]:
+    """A wall box's frame for the clearance tracker: centre, unit direction, half length and half
+    thickness."""
+    (x0, y0), (x1, y1) = wall.start, wall.end
+    ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
+    return (x0 + x1) / 2, (y0 + y1) / 2, ux, uy, (wall.length + wall.thickness) / 2, wall.thickness / 2
 
 
 def _raw_model(seed: int) -> RawProximityModel:
@@ -177,32 +185,25 @@ class Simulation(Backend):
         self.space = pymunk.Space()
         self.space.collision_slop = 0.0002
         self.space.iterations = 10
+        self._shapes = MazeShapes.of(maze)       # walls, then obstacles: polygons and boxes
         self._wall_frames: dict[pymunk.Shape, tuple[float, ...] | None] = {}
         self._wall_corners: dict[pymunk.Shape, tuple[tuple[float, float], ...]] = {}
-        for obstacle in maze.obstacles:
-            shape = pymunk.Poly(self.space.static_body, obstacle.corners())
+        walled = len(maze.walls)
+        boxes = []
+        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):    # obstacles first
+            corners = self._shapes.polygons[index]
+            shape = pymunk.Poly(self.space.static_body, corners)
             shape.collision_type = _WALL_TYPE
             shape.friction = 1.0
             self.space.add(shape)
-            self._wall_frames[shape] = None
-            self._wall_corners[shape] = tuple(obstacle.corners())
-        for wall in maze.walls:
-            shape = pymunk.Poly(self.space.static_body, wall.corners())
-            shape.collision_type = _WALL_TYPE
-            shape.friction = 1.0
-            self.space.add(shape)
-            (x0, y0), (x1, y1) = wall.start, wall.end
-            ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
-            self._wall_frames[shape] = ((x0 + x1) / 2, (y0 + y1) / 2, ux, uy,
-                                        (wall.length + wall.thickness) / 2, wall.thickness / 2)
-            self._wall_corners[shape] = tuple(wall.corners())
-        self.bounds = maze.bounds()
+            self._wall_frames[shape] = None if index >= walled else _wall_frame(maze.walls[index])
+            self._wall_corners[shape] = corners
+            boxes.append(self._shapes.boxes[index])
+        self.bounds = self._shapes.bounds
         xmin, ymin, xmax, ymax = self.bounds
         self._farthest_gap = math.hypot(xmax - xmin, ymax - ymin)     # no gap inside the maze exceeds it
         self._wall_shapes = tuple(self._wall_corners)
-        self._walls = wall_grid(tuple((min(x for x, _ in c), min(y for _, y in c), max(x for x, _ in c),
-                                       max(y for _, y in c)) for c in self._wall_corners.values()),
-                                _GRID_CELL, self._hull.reach + _GRID_RECORD)
+        self._walls = wall_grid(tuple(boxes), _GRID_CELL, self._hull.reach + _GRID_RECORD)
         self._distance = PointDistance()
         self._dt = 1.0 / self.config.physics_hz
         self._step = stepper(self.space)
@@ -290,7 +291,7 @@ class Simulation(Backend):
         (:func:`~thymio_bt.placement.placement_problem`), then the robots already there."""
         if name in self._entities:
             return f"an entity named '{name}' already exists: delete it first"
-        problem = placement_problem(self.maze, self.model, pose)
+        problem = placement_problem(self._shapes, self.model, pose)
         if problem:
             return problem
         hull = self.model.hull_at(pose)
