@@ -41,6 +41,7 @@ _ROBOT_TYPE = 1
 _WALL_TYPE = 2
 #: The hull's extent tables are made in 1 degree steps.
 _EXTENT_STEP = math.radians(1.0)
+_EXTENT_STEPS = 360
 #: The clearance tracker's wall grid: cell size, and the smallest gap record it serves (m); above
 #: it (a run's first ticks) every wall is a candidate.
 _GRID_CELL = 0.05
@@ -65,12 +66,12 @@ def _hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> _HullT
     reach = max(math.hypot(x, y) for x, y in from_axle)
     extent = tuple(
         max(x * math.cos(i * _EXTENT_STEP) + y * math.sin(i * _EXTENT_STEP) for x, y in from_axle)
-        + reach * _EXTENT_STEP / 2 for i in range(360))
+        + reach * _EXTENT_STEP / 2 for i in range(_EXTENT_STEPS))
     support = tuple(
         tuple(from_axle[(k + j) % len(from_axle)] for j in (-1, 0, 1))
         for k in (max(range(len(from_axle)),
                       key=lambda v, i=i: from_axle[v][0] * math.cos(i * _EXTENT_STEP)
-                      + from_axle[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(360)))
+                      + from_axle[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(_EXTENT_STEPS)))
     return _HullTables(reach, extent, support)
 
 
@@ -417,6 +418,7 @@ class Simulation(Backend):
         best = math.inf
         candidates = []
         radius, axle, distance, shapes = tables.reach + record, (ax, ay), self._distance, self._wall_shapes
+        extents, supports, frames, atan2 = tables.extent, tables.support, self._wall_frames, math.atan2
         for index in self._walls.near(ax, ay, radius):
             shape = shapes[index]
             d, qx, qy = distance(shape, axle)
@@ -427,19 +429,23 @@ class Simulation(Backend):
                 continue
             nx, ny = (qx - ax) / d, (qy - ay) / d
             lx, ly = nx * cos + ny * sin, ny * cos - nx * sin      # n in the body frame
-            index = round(math.atan2(ly, lx) / _EXTENT_STEP) % len(tables.extent)
-            frame = self._wall_frames[shape]
+            index = round(atan2(ly, lx) / _EXTENT_STEP) % _EXTENT_STEPS
+            frame = frames[shape]
             if frame is not None:
                 cx, cy, ux, uy, hl, _ = frame
                 if abs((qx - cx) * ux + (qy - cy) * uy) < hl - 1e-9:          # q on a long face
-                    vx, vy = max(tables.support[index], key=lambda v: v[0] * lx + v[1] * ly)
-                    extent = vx * lx + vy * ly
+                    extent = -math.inf
+                    for sx, sy in supports[index]:                           # the first farthest along n
+                        along = sx * lx + sy * ly
+                        if along > extent:
+                            extent, vx, vy = along, sx, sy
                     px = ax + vx * cos - vy * sin                              # the support point
                     py = ay + vx * sin + vy * cos
                     if abs((px - cx) * ux + (py - cy) * uy) <= hl:
-                        best = min(best, d - extent)
+                        if d - extent < best:
+                            best = d - extent
                         continue
-            if d - tables.extent[index] < record - 1e-6:
+            if d - extents[index] < record - 1e-6:
                 candidates.append(shape)
         if candidates:
             best = min(best, self._exact_gap(entity, candidates, bx, by, cos, sin))
@@ -463,6 +469,8 @@ class Simulation(Backend):
                     dx, dy = px - cx, py - cy
                     ex = abs(dx * ux + dy * uy) - hl
                     ey = abs(dy * ux - dx * uy) - ht
+                    if ex >= gap or ey >= gap:     # the distance is at least max(ex, ey): not nearer
+                        continue
                     d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
                     if d < gap:
                         gap = d
