@@ -190,6 +190,8 @@ class Backend(Robot, Entities):
 
     def serve_requests(self) -> None:
         """Complete the queued requests in order, each SUCCEEDED or FAILED with a reason."""
+        if not self._requests:                 # the common case, every tick
+            return
         pending, self._requests = self._requests, []
         for request in pending:
             if request.kind == "delete":

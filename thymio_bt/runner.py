@@ -190,9 +190,10 @@ class Run:
             except (Exception, SystemExit) as exc:     # a backend's bug (a plugin's, say): end the run, say why
                 status, crashed, crash_code = "CRASHED", f"the backend raised {describe(exc)}", "BACKEND_ERROR"
                 break
-            for c in sim.collisions[seen_collisions:]:
-                self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
-            seen_collisions = len(sim.collisions)
+            if len(sim.collisions) > seen_collisions:
+                for c in sim.collisions[seen_collisions:]:
+                    self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
+                seen_collisions = len(sim.collisions)
             self._record()
             if realtime:
                 lag = sim.time() / realtime - (time.perf_counter() - wall_start)
@@ -249,7 +250,7 @@ class Run:
     def _record(self) -> None:
         pose = self.backend.true_pose()
         if pose is not None:
-            self.trajectory.append((self.backend.time(), *pose.as_tuple()))
+            self.trajectory.append((self.backend.time(), pose.x, pose.y, pose.yaw))
 
 
 class NodeStats(py_trees.visitors.VisitorBase):

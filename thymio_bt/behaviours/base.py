@@ -34,6 +34,7 @@ from ..fields import Duration
 
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
+RUNNING = Status.RUNNING
 
 
 class FailureCode(str, Enum):
@@ -181,14 +182,14 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list, nor a
         generator: the same initialise → update → stop sequence (see :mod:`.ticking`)."""
         try:
-            if self.status != Status.RUNNING:
+            if self.status is not RUNNING:
                 self.initialise()
             new_status = self.update()
         except (Exception, SystemExit) as exc:        # a plugin's bug (or ours): fail the node, say where
             new_status = self.fail(FailureCode.EXCEPTION, f"{self.yaml_name} raised {describe(exc)}")
         if new_status.__class__ is not Status:        # a plugin's bug: fail the node, say why
             new_status = self.fail(FailureCode.FAILED, f"{self.yaml_name} returned {new_status!r}, not a Status")
-        if new_status != Status.RUNNING:
+        if new_status is not RUNNING:
             self.stop(new_status)
         self.status = new_status
 
@@ -246,7 +247,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         if self.fails_on_collision and self.ctx.collision_count() > self._collisions_at_start:
             return self.fail(FailureCode.COLLISION, "the robot hit a wall")
         status = self.step()
-        if status is Status.RUNNING and self.elapsed() >= self.params.timeout - 1e-9:
+        if status is RUNNING and self.ctx.now() - self._start_time >= self.params.timeout - 1e-9:
             return self.on_timeout()
         return status
 

@@ -211,6 +211,8 @@ class Simulation(Backend):
         self._ray = RayCaster(self.space)
         self._steps = 0
         self._noise = NoiseSource(self.config.noise, self.config.seed)
+        self._drifts = bool(self.config.noise.odometry)      # odometry drifts from the true pose
+        self._noisy_wheels = bool(self.config.noise.wheel)
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
@@ -250,14 +252,14 @@ class Simulation(Backend):
         return self.robot_name in self._entities
 
     def proximity(self) -> Scan | None:
-        return self._scan if self.exists() else None
+        return self._scan if self.robot_name in self._entities else None
 
     def proximity_raw(self) -> dict[str, int] | None:
         """The latest readings as a real Thymio's integers (``sensor_model="raw"`` only), or None."""
         return self._raw if self.exists() else None
 
     def pose(self) -> Pose | None:
-        if self.config.noise.odometry:
+        if self._drifts:
             return self._odometry_pose() if self.exists() else None
         return self.true_pose()
 
@@ -317,7 +319,7 @@ class Simulation(Backend):
     def _run_steps(self, entity: "_Body | None", steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
         step, dt = self._step, self._dt
-        if entity is not None and self.config.noise.odometry:
+        if entity is not None and self._drifts:
             self._integrate_odometry(steps * dt)
         if entity is None:
             for _ in range(steps):
@@ -341,7 +343,7 @@ class Simulation(Backend):
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
         model, cmd = self.model, self._cmd
         last = self._velocity_of[0]
-        if self._noise.config.wheel or last is None or cmd.linear != last.linear or cmd.angular != last.angular:
+        if self._noisy_wheels or last is None or cmd.linear != last.linear or cmd.angular != last.angular:
             # noise-free, the velocity is a function of the command: computed once per command
             left, right = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
             fl, fr = self._noise.wheel_factors()
