@@ -319,24 +319,29 @@ class Simulation(Backend):
     def _run_steps(self, entity: "_Body | None", steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
         step, dt = self._step, self._dt
-        if entity is not None and self._drifts:
-            self._integrate_odometry(steps * dt)
         if entity is None:
             for _ in range(steps):
                 step(dt)
                 self._steps += 1
             return
+        if self._drifts:
+            self._integrate_odometry(steps * dt)
         v, w = self._applied
         turning = v != 0.0 and w != 0.0
-        every = self._sensor_every
-        for _ in range(steps):
-            if turning or self._contacts:
-                entity.aim(v)          # keep the control body's velocity along the heading as it changes
-                if self._contacts:
-                    entity.spin(w)
-            step(dt)
-            self._steps += 1
-            if self._steps % every == 0:
+        every, done = self._sensor_every, self._steps + steps
+        while self._steps < done:
+            first = self._steps
+            refresh = first + every - first % every            # the step count of the next sensor refresh
+            last = min(done, refresh)
+            # during a step, _steps counts the steps before it (a collision's time)
+            for self._steps in range(first, last):
+                if turning or self._contacts:
+                    entity.aim(v)      # keep the control body's velocity along the heading as it changes
+                    if self._contacts:
+                        entity.spin(w)
+                step(dt)
+            self._steps = last
+            if last == refresh:
                 self._refresh_sensors(entity)
 
     def _apply_command(self) -> None:
