@@ -6,7 +6,7 @@ import pytest
 
 from thymio_bt.maze import Maze, Wall, load_maze
 from thymio_bt.robot import SENSOR_NAMES, Pose
-from thymio_bt.sim import NoiseConfig, SimConfig, Simulation
+from thymio_bt.sim import NoiseConfig, SimConfig, Simulation, fastpath
 from thymio_bt.robot_model import COURSE as thymio_model
 from thymio_bt.testing import world
 
@@ -230,7 +230,28 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     fast = [run(seed) for seed in (0, 7)]
     monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
     monkeypatch.setattr(world_module, "RayCaster", PublicRays)
+    monkeypatch.setattr(fastpath, "_memory", lambda body: None)      # bodies through Chipmunk's calls
     assert [run(seed) for seed in (0, 7)] == fast
+
+
+def test_bodies_are_read_and_written_in_chipmunks_memory_on_this_pymunk():
+    """The layout check passes here (else the simulation silently takes the slower C calls), and the
+    memory view reads what pymunk reads and writes what it writes."""
+    import pymunk
+
+    assert fastpath._layout_known()
+    body = pymunk.Body(0.27, 0.001)
+    body.center_of_gravity = (0.03, 0.0)
+    body.position, body.angle = (0.4, -0.2), 2.5
+    control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+    x, y, angle = fastpath.body_reader(body)()
+    assert (x, y, angle) == (*body.position, body.angle)
+    fastpath.body_mover(body)(0.1, 0.3)
+    assert body.velocity == 0.1 * body.rotation_vector and body.angular_velocity == 0.3
+    fastpath.control_aimer(body, control)(0.2)
+    fastpath.spinner(control)(-0.4)
+    assert tuple(control.velocity) == (0.2 * math.cos(angle), 0.2 * math.sin(angle))
+    assert control.angular_velocity == -0.4
 
 
 def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatch):
@@ -248,6 +269,7 @@ def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatc
     fast = crash()
     assert fast[1], "the robot must hit a wall in this world"
     monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
+    monkeypatch.setattr(fastpath, "_memory", lambda body: None)
     assert crash() == fast
 
 

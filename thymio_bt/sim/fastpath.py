@@ -6,8 +6,11 @@ post-step callbacks, ``Space.segment_query_first`` builds three Python objects p
 physics sub-steps and 70 rays per simulated second that wrapping cost as much as the physics itself
 (profiled: ~1 µs of ~2 per sub-step, ~1 µs per ray). The simulation never changes the space from a
 collision callback (they only count contacts) and adds or removes bodies only between steps, so it
-may call the C functions directly. This is the only module that touches pymunk's private ``_space``
-handle; ``tests/test_sim.py`` checks that both paths give bit-identical runs.
+may call the C functions directly. A body's position, angle and velocities are read and written in
+Chipmunk's memory, where a C call (which releases and takes back the GIL) would cost ten times more,
+once a probe body has shown that the fields are where this module expects them. This is the only
+module that touches pymunk's private handles; ``tests/test_sim.py`` checks that both paths give
+bit-identical runs.
 
 Example::
 
@@ -24,55 +27,143 @@ Example::
 from __future__ import annotations
 
 import math
-from functools import partial
+from functools import lru_cache, partial
 from typing import Any, Callable, Sequence
 
 import pymunk
 from pymunk._chipmunk import ffi, lib
 
 
+#: Where pymunk 7's Chipmunk keeps a body's state, counted in doubles from the start of its cpBody
+#: (after two function pointers, mass, moment, their inverses and the centre of gravity): velocity
+#: (x, y), angle, angular velocity, and the transform (a, b, c, d, tx, ty; a, b the rotation).
+_VELOCITY, _ANGLE, _SPIN, _TRANSFORM = 10, 14, 15, 17
+_DOUBLES = _TRANSFORM + 6
+
+
+def _view(body: pymunk.Body) -> memoryview:
+    return memoryview(ffi.buffer(body._body, 8 * _DOUBLES)).cast("d")
+
+
+def _reader(m: memoryview) -> Callable[[], tuple[float, float, float]]:
+    """(x, y, angle) from a body's memory ``m``: the position as ``cpBodyGetPosition`` computes it,
+    the transform applied to the origin (``a * 0 + c * 0 + tx``), which is the translation itself
+    unless that is a zero, whose sign the sum decides."""
+    a, b, c, d, tx, ty = range(_TRANSFORM, _TRANSFORM + 6)
+    angle = _ANGLE
+
+    def read() -> tuple[float, float, float]:
+        return (m[tx] or (m[a] * 0.0 + m[c] * 0.0) + m[tx],
+                m[ty] or (m[b] * 0.0 + m[d] * 0.0) + m[ty], m[angle])
+    return read
+
+
+def _same(xs: Sequence[float], ys: Sequence[float]) -> bool:
+    """Equal, signed zeros included."""
+    return all(x == y and math.copysign(1.0, x) == math.copysign(1.0, y) for x, y in zip(xs, ys))
+
+
+@lru_cache(maxsize=1)
+def _layout_known() -> bool:
+    """Whether this Chipmunk's cpBody holds its state where :data:`_VELOCITY` and the others say:
+    checked once, on a probe body, against Chipmunk's own getters and setters (signed zeros too)."""
+    body = pymunk.Body(1.0, 1.0)
+    body.center_of_gravity = (0.25, -0.5)
+    body.angle, body.position = 0.7, (0.125, -0.375)
+    body.velocity, body.angular_velocity = (1.5, -2.5), 3.5
+    h, m = body._body, _view(body)
+    read = _reader(m)
+
+    def agrees() -> bool:
+        p, r, v = lib.cpBodyGetPosition(h), lib.cpBodyGetRotation(h), lib.cpBodyGetVelocity(h)
+        return _same((*read(), m[_VELOCITY], m[_VELOCITY + 1], m[_SPIN], m[_TRANSFORM], m[_TRANSFORM + 1]),
+                     (p.x, p.y, lib.cpBodyGetAngle(h), v.x, v.y, lib.cpBodyGetAngularVelocity(h), r.x, r.y))
+
+    if not agrees():
+        return False
+    m[_VELOCITY], m[_VELOCITY + 1], m[_SPIN] = -4.5, 5.5, -6.5        # written here, read by Chipmunk
+    for a, c in ((0.5, -0.5), (-0.5, -0.5)):        # a zero translation: the sign comes from the sum
+        m[_TRANSFORM], m[_TRANSFORM + 1], m[_TRANSFORM + 2], m[_TRANSFORM + 3] = a, a, c, c
+        m[_TRANSFORM + 4], m[_TRANSFORM + 5] = -0.0, -0.0
+        if not agrees():
+            return False
+    return True
+
+
+def _memory(body: pymunk.Body) -> memoryview | None:
+    """``body``'s cpBody as doubles when its layout is the known one, else None. Reading or writing
+    one costs a third of a C call; writing a velocity this way skips only Chipmunk's waking of a
+    sleeping body, and the simulation never lets bodies sleep."""
+    return _view(body) if _layout_known() else None
+
+
 def body_reader(body: pymunk.Body) -> Callable[[], tuple[float, float, float]]:
-    """A function giving ``body``'s position and angle (x, y, angle) straight from Chipmunk, without
-    pymunk's Vec2d and property wrapping (the same values: read on every tick and sub-step)."""
+    """A function giving ``body``'s position and angle (x, y, angle), the values Chipmunk's getters
+    give, without pymunk's Vec2d and property wrapping (read on every tick and sub-step)."""
+    m = _memory(body)
+    if m is not None:
+        return _reader(m)
     handle = body._body
     get_position, get_angle = lib.cpBodyGetPosition, lib.cpBodyGetAngle
 
-    def read() -> tuple[float, float, float]:
+    def read_by_calls() -> tuple[float, float, float]:
         p = get_position(handle)
         return p.x, p.y, get_angle(handle)
-    return read
+    return read_by_calls
 
 
 def body_mover(body: pymunk.Body) -> Callable[[float, float], None]:
     """A function that sets ``body``'s velocity to ``v`` along its heading and its angular velocity
     to ``w``, as ``body.velocity = v * body.rotation_vector; body.angular_velocity = w`` does."""
+    m = _memory(body)
+    if m is not None:
+        vx, vy, cos, sin, spin = _VELOCITY, _VELOCITY + 1, _TRANSFORM, _TRANSFORM + 1, _SPIN
+
+        def move(v: float, w: float) -> None:
+            m[vx], m[vy], m[spin] = v * m[cos], v * m[sin], w
+        return move
     handle = body._body
     get_rotation, set_velocity, set_angular = lib.cpBodyGetRotation, lib.cpBodySetVelocity, \
         lib.cpBodySetAngularVelocity
 
-    def move(v: float, w: float) -> None:
+    def move_by_calls(v: float, w: float) -> None:
         rot = get_rotation(handle)
         set_velocity(handle, (v * rot.x, v * rot.y))
         set_angular(handle, w)
-    return move
+    return move_by_calls
 
 
 def control_aimer(body: pymunk.Body, control: pymunk.Body) -> Callable[[float], None]:
     """A function that sets ``control``'s velocity to ``v`` along ``body``'s heading, as
     ``control.velocity = (v * cos(body.angle), v * sin(body.angle))`` does (re-aimed every sub-step
     while the robot turns)."""
+    cos, sin = math.cos, math.sin
+    m, c = _memory(body), _memory(control)
+    if m is not None and c is not None:
+        heading, vx, vy = _ANGLE, _VELOCITY, _VELOCITY + 1
+
+        def aim(v: float) -> None:
+            angle = m[heading]
+            c[vx], c[vy] = v * cos(angle), v * sin(angle)
+        return aim
     handle, target = body._body, control._body
     get_angle, set_velocity = lib.cpBodyGetAngle, lib.cpBodySetVelocity
-    cos, sin = math.cos, math.sin
 
-    def aim(v: float) -> None:
+    def aim_by_calls(v: float) -> None:
         angle = get_angle(handle)
         set_velocity(target, (v * cos(angle), v * sin(angle)))
-    return aim
+    return aim_by_calls
 
 
 def spinner(body: pymunk.Body) -> Callable[[float], None]:
     """A function that sets ``body``'s angular velocity (``body.angular_velocity = w``)."""
+    m = _memory(body)
+    if m is not None:
+        index = _SPIN
+
+        def spin(w: float) -> None:
+            m[index] = w
+        return spin
     return partial(lib.cpBodySetAngularVelocity, body._body)
 
 
