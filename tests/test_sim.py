@@ -246,8 +246,10 @@ def test_bodies_are_read_and_written_in_chipmunks_memory_on_this_pymunk():
     control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
     x, y, angle = fastpath.body_reader(body)()
     assert (x, y, angle) == (*body.position, body.angle)
-    fastpath.body_mover(body)(0.1, 0.3)
+    fastpath.body_driver(body, control)(0.1, 0.3, True)
     assert body.velocity == 0.1 * body.rotation_vector and body.angular_velocity == 0.3
+    assert tuple(control.velocity) == (0.1 * math.cos(angle), 0.1 * math.sin(angle))
+    assert control.angular_velocity == 0.3
     fastpath.control_aimer(body, control)(0.2)
     fastpath.spinner(control)(-0.4)
     assert tuple(control.velocity) == (0.2 * math.cos(angle), 0.2 * math.sin(angle))

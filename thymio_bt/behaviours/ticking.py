@@ -37,26 +37,25 @@ _BY_CLASS: dict[type, _Tick] = {}
 
 def tick(node: Behaviour) -> None:
     """Give ``node`` (and its subtree) one tick, as ``node.tick_once()`` would."""
-    kind = type(node)
-    how = _BY_CLASS.get(kind)
-    if how is None:
-        how = _BY_CLASS[kind] = _how_to_tick(kind)
-    how(node)
+    (_BY_CLASS.get(type(node)) or _how_to_tick(type(node)))(node)
 
 
 def _how_to_tick(kind: type) -> _Tick:
-    """The direct tick for a node class, or its generator when it has one of its own."""
+    """The direct tick for a node class, or its generator when it has one of its own; found once
+    per class (composites look their children's up inline: a call less per child and tick)."""
+    how: _Tick = _generator
     if getattr(kind, "tick_direct", None) is not None:
-        return kind.tick_direct
-    if kind.tick is Sequence.tick:
-        return _sequence
-    if kind.tick is Selector.tick:
-        return _selector
-    if kind.tick is Parallel.tick:
-        return _parallel
-    if issubclass(kind, Decorator) and kind.tick is Decorator.tick:
-        return _decorator
-    return _generator
+        how = kind.tick_direct
+    elif kind.tick is Sequence.tick:
+        how = _sequence
+    elif kind.tick is Selector.tick:
+        how = _selector
+    elif kind.tick is Parallel.tick:
+        how = _parallel
+    elif issubclass(kind, Decorator) and kind.tick is Decorator.tick:
+        how = _decorator
+    _BY_CLASS[kind] = how
+    return how
 
 
 def _generator(node: Behaviour) -> None:
@@ -85,7 +84,7 @@ def _sequence(seq: Sequence) -> None:
     last = len(children) - 1
     while index <= last:
         child = children[index]
-        tick(child)
+        (_BY_CLASS.get(type(child)) or _how_to_tick(type(child)))(child)
         status = child.status
         if status != SUCCESS:
             if not seq.memory:                  # invalidate the rest: no dangling runners
@@ -123,7 +122,7 @@ def _selector(sel: Selector) -> None:
         index = 0
     previous = sel.current_child
     for child in children[index:]:
-        tick(child)
+        (_BY_CLASS.get(type(child)) or _how_to_tick(type(child)))(child)
         status = child.status
         if status == RUNNING or status == SUCCESS:
             sel.current_child = child
@@ -165,7 +164,7 @@ def _parallel(par: Parallel) -> None:
     for child in children:
         if synchronise and child.status == SUCCESS:
             continue
-        tick(child)
+        (_BY_CLASS.get(type(child)) or _how_to_tick(type(child)))(child)
     new_status = RUNNING
     par.current_child = children[-1]
     failed = next((child for child in children if child.status == FAILURE), None)

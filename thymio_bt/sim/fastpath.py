@@ -112,27 +112,6 @@ def body_reader(body: pymunk.Body) -> Callable[[], tuple[float, float, float]]:
     return read_by_calls
 
 
-def body_mover(body: pymunk.Body) -> Callable[[float, float], None]:
-    """A function that sets ``body``'s velocity to ``v`` along its heading and its angular velocity
-    to ``w``, as ``body.velocity = v * body.rotation_vector; body.angular_velocity = w`` does."""
-    m = _memory(body)
-    if m is not None:
-        vx, vy, cos, sin, spin = _VELOCITY, _VELOCITY + 1, _TRANSFORM, _TRANSFORM + 1, _SPIN
-
-        def move(v: float, w: float) -> None:
-            m[vx], m[vy], m[spin] = v * m[cos], v * m[sin], w
-        return move
-    handle = body._body
-    get_rotation, set_velocity, set_angular = lib.cpBodyGetRotation, lib.cpBodySetVelocity, \
-        lib.cpBodySetAngularVelocity
-
-    def move_by_calls(v: float, w: float) -> None:
-        rot = get_rotation(handle)
-        set_velocity(handle, (v * rot.x, v * rot.y))
-        set_angular(handle, w)
-    return move_by_calls
-
-
 def control_aimer(body: pymunk.Body, control: pymunk.Body) -> Callable[[float], None]:
     """A function that sets ``control``'s velocity to ``v`` along ``body``'s heading, as
     ``control.velocity = (v * cos(body.angle), v * sin(body.angle))`` does (re-aimed every sub-step
@@ -153,6 +132,35 @@ def control_aimer(body: pymunk.Body, control: pymunk.Body) -> Callable[[float], 
         angle = get_angle(handle)
         set_velocity(target, (v * cos(angle), v * sin(angle)))
     return aim_by_calls
+
+
+def body_driver(body: pymunk.Body, control: pymunk.Body) -> Callable[[float, float, bool], None]:
+    """A function that applies a new command (v, w): ``control`` aimed and spun as
+    :func:`control_aimer` and :func:`spinner` do, and with ``seed`` ``body`` moved as
+    ``body.velocity = v * body.rotation_vector; body.angular_velocity = w`` does."""
+    m, c = _memory(body), _memory(control)
+    if m is not None and c is not None:
+        cos, sin = math.cos, math.sin
+        heading, vx, vy, spin, rx, ry = _ANGLE, _VELOCITY, _VELOCITY + 1, _SPIN, _TRANSFORM, _TRANSFORM + 1
+
+        def drive(v: float, w: float, seed: bool) -> None:
+            angle = m[heading]
+            c[vx], c[vy], c[spin] = v * cos(angle), v * sin(angle), w
+            if seed:
+                m[vx], m[vy], m[spin] = v * m[rx], v * m[ry], w
+        return drive
+    aim, turn, handle = control_aimer(body, control), spinner(control), body._body
+    get_rotation, set_velocity, set_angular = lib.cpBodyGetRotation, lib.cpBodySetVelocity, \
+        lib.cpBodySetAngularVelocity
+
+    def drive_by_calls(v: float, w: float, seed: bool) -> None:
+        aim(v)
+        turn(w)
+        if seed:
+            rot = get_rotation(handle)
+            set_velocity(handle, (v * rot.x, v * rot.y))
+            set_angular(handle, w)
+    return drive_by_calls
 
 
 def spinner(body: pymunk.Body) -> Callable[[float], None]:

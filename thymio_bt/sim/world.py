@@ -33,7 +33,7 @@ from ..placement import MazeShapes, convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
-from .fastpath import NearShapes, PointDistance, RayCaster, body_mover, body_reader, control_aimer, spinner, stepper
+from .fastpath import NearShapes, PointDistance, RayCaster, body_driver, body_reader, control_aimer, spinner, stepper
 from .noise import NoiseConfig, NoiseSource
 from .walls import wall_grid
 
@@ -158,9 +158,9 @@ class _Body:
         self.control.angle = pose.yaw
         space.add(self.body, self.shape, self.control, *self.joints)
         self.read = body_reader(self.body)      # (x, y, angle), the hot path's way to read the body
-        self.move = body_mover(self.body)
         self.aim = control_aimer(self.body, self.control)
         self.spin = spinner(self.control)
+        self.drive = body_driver(self.body, self.control)
 
     def remove(self, space: pymunk.Space) -> None:
         space.remove(self.body, self.shape, self.control, *self.joints)
@@ -356,11 +356,9 @@ class Simulation(Backend):
         v, w = self._applied = self._velocity_of[1]
         entity = self._entities.get(self.robot_name)
         if entity is not None:
-            entity.aim(v)
-            entity.spin(w)
-            if self._contacts == 0:
-                # Chipmunk moves bodies before solving joints: seed the velocity so motion starts now.
-                entity.move(v, w)
+            # Chipmunk moves bodies before solving joints: out of contact, the body's velocity is
+            # seeded too, so motion starts now
+            entity.drive(v, w, self._contacts == 0)
 
     def _integrate_odometry(self, duration: float) -> None:
         """Dead-reckon the axle from the wheel speeds as encoders measure them (with a per-call error).
