@@ -224,6 +224,7 @@ class Simulation(Backend):
         self._pending = False
         self._scan: dict[str, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
+        self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
         self._contacts = 0
         self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
         reach = self.model.range_max
@@ -328,7 +329,7 @@ class Simulation(Backend):
             self._integrate_odometry(steps * dt)
         v, w = self._applied
         turning = v != 0.0 and w != 0.0
-        every, done = self._sensor_every, self._steps + steps
+        every, done, aim = self._sensor_every, self._steps + steps, entity.aim
         while self._steps < done:
             first = self._steps
             refresh = first + every - first % every            # the step count of the next sensor refresh
@@ -336,7 +337,7 @@ class Simulation(Backend):
             # during a step, _steps counts the steps before it (a collision's time)
             for self._steps in range(first, last):
                 if turning or self._contacts:
-                    entity.aim(v)      # keep the control body's velocity along the heading as it changes
+                    aim(v)             # keep the control body's velocity along the heading as it changes
                     if self._contacts:
                         entity.spin(w)
                 step(dt)
@@ -372,8 +373,13 @@ class Simulation(Backend):
         self._odo = integrate_arc(*self._odo, v, w, duration)
 
     def _odometry_pose(self) -> Pose:
-        base = self.model.base_of(*self._odo)
-        return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
+        """The pose odometry believes, computed once per dead-reckoning step (asked several times a tick)."""
+        odo, pose = self._odo_pose
+        if odo is not self._odo or pose is None:
+            base = self.model.base_of(*self._odo)
+            pose = Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
+            self._odo_pose = (self._odo, pose)
+        return pose
 
     def _refresh_sensors(self, entity: _Body) -> None:
         if self._cone is not None:
