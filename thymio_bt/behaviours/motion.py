@@ -14,7 +14,7 @@ from typing import Literal
 from py_trees.common import Status
 from pydantic import Field
 
-from ..robot import SENSOR_NAMES, wrap_angle
+from ..robot import SENSOR_NAMES, Pose, wrap_angle
 from ..fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
 from ..robot_model import COURSE
 from .base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
@@ -101,13 +101,13 @@ class MoveUntilWall(RobotBehaviour):
         self.speed = 0.0                                        # the speed last commanded
         self.saw_nothing = False                                # the last reading was out of range
 
-    def _travelled(self) -> float:
-        pose = current_pose(self.robot)
+    def _travelled(self, pose: Pose) -> float:
         return ((pose.x - self.origin[0]) * math.cos(self.heading)
                 + (pose.y - self.origin[1]) * math.sin(self.heading))
 
     def step(self) -> Status:
         p = self.params
+        pose = current_pose(self.robot)           # read once: nothing moves the robot within a tick
         scan = self.robot.proximity()
         assert scan is not None
         reading = scan[p.sensor]
@@ -126,7 +126,7 @@ class MoveUntilWall(RobotBehaviour):
             self.wall_seen = True
             # where the wall is, by this reading and odometry: averaged over the last readings, one
             # noisy reading (a real sensor's) cannot stop the robot early; noise-free they all agree
-            travelled = self._travelled()
+            travelled = self._travelled(pose)
             self.walls.append(travelled + reading)
             remaining = sum(self.walls) / len(self.walls) - travelled - p.distance
             # a late robot (readings and commands) covers this much before anything sent now acts
@@ -145,9 +145,9 @@ class MoveUntilWall(RobotBehaviour):
         if (p.centre and math.isfinite(left) and math.isfinite(right) and math.isinf(scan["front_center"])
                 and abs(left - right) > CENTRE_DEADBAND):
             turn = max(-0.5, min(0.5, p.centre_gain * (left - right)))   # nearer the right wall: turn left
-            self.heading = current_pose(self.robot).yaw                   # hold this once a wall drops out
+            self.heading = pose.yaw                                       # hold this once a wall drops out
         else:
-            turn = heading_hold(self, self.heading) if p.hold_heading else 0.0
+            turn = heading_hold(pose.yaw, self.heading) if p.hold_heading else 0.0
         self.robot.drive(speed, turn)
         self.speed = speed
         self.feedback_message = ("no wall in range" if math.isinf(reading)
@@ -167,9 +167,9 @@ class MoveUntilWall(RobotBehaviour):
 HEADING_DEADBAND = 1e-4
 
 
-def heading_hold(behaviour: RobotBehaviour, heading: float, gain: float = 3.0) -> float:
-    """An angular velocity that steers back to ``heading`` (zero when already on it)."""
-    error = wrap_angle(heading - current_pose(behaviour.robot).yaw)
+def heading_hold(yaw: float, heading: float, gain: float = 3.0) -> float:
+    """An angular velocity that steers a robot heading ``yaw`` back to ``heading`` (zero when already on it)."""
+    error = wrap_angle(heading - yaw)
     return 0.0 if abs(error) < HEADING_DEADBAND else max(-0.5, min(0.5, gain * error))
 
 
@@ -199,21 +199,22 @@ class MoveDistance(RobotBehaviour):
     def start(self) -> None:
         self.origin = current_pose(self.robot)
 
-    def travelled(self) -> float:
-        pose = current_pose(self.robot)
+    def travelled(self, pose: Pose) -> float:
+        """How far ``pose`` is from the start along the start heading."""
         o = self.origin
         return (pose.x - o.x) * math.cos(o.yaw) + (pose.y - o.y) * math.sin(o.yaw)
 
     def step(self) -> Status:
         p = self.params
-        done = self.travelled()
+        pose = current_pose(self.robot)           # read once: nothing moves the robot within a tick
+        done = self.travelled(pose)
         remaining = p.distance - done
         self.extra = {"distance": round(done, 6)}
         if abs(remaining) <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             return Status.SUCCESS
         speed = approach_speed(abs(remaining), p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
-        self.robot.drive(math.copysign(speed, remaining), heading_hold(self, self.origin.yaw))
+        self.robot.drive(math.copysign(speed, remaining), heading_hold(pose.yaw, self.origin.yaw))
         self.feedback_message = f"{done:.3f} of {p.distance:.3f} m"
         return Status.RUNNING
 
