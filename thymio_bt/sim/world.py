@@ -83,6 +83,11 @@ def _wall_frame(wall: Wall) -> tuple[float, ...]:
     return (x0 + x1) / 2, (y0 + y1) / 2, ux, uy, (wall.length + wall.thickness) / 2, wall.thickness / 2
 
 
+def _pose_of(x: float, y: float, angle: float) -> Pose:
+    """A body's pose, its angle wrapped to [-pi, pi)."""
+    return Pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
+
+
 def _raw_model(seed: int) -> RawProximityModel:
     import numpy as np                 # only raw mode needs it: keeps ~50 ms off every start-up
 
@@ -103,9 +108,9 @@ class _ConeSensors:
                      for s in model.sensors for a in (APERTURE, 0.0, -APERTURE)]
         self.rng = np.random.default_rng((seed, 2))
 
-    def measure(self, rays: RayCaster, entity: "_Body") -> dict[str, int]:
-        bx, by, angle = entity.read()
-        alphas = rays.fan(self.rays, bx, by, math.cos(angle), math.sin(angle), entity.filter)
+    def measure(self, rays: RayCaster, entity: "_Body", bx: float, by: float, cos: float, sin: float) -> dict[str, int]:
+        """The readings of ``entity`` at (bx, by), heading with this cosine and sine."""
+        alphas = rays.fan(self.rays, bx, by, cos, sin, entity.filter)
         reach, response = self.response.range, self.response
         draws = self.rng.standard_normal(len(self.names))
         readings = {}
@@ -166,8 +171,7 @@ class _Body:
         space.remove(self.body, self.shape, self.control, *self.joints)
 
     def pose(self) -> Pose:
-        x, y, angle = self.read()
-        return Pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
+        return _pose_of(*self.read())
 
 
 class Simulation(Backend):
@@ -382,14 +386,15 @@ class Simulation(Backend):
         return pose
 
     def _refresh_sensors(self, entity: _Body) -> None:
-        if self._cone is not None:
-            self._raw = self._cone.measure(self._ray, entity)
-            self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
-            bx, by, angle = entity.read()
-            self._update_clearance(entity, bx, by, math.cos(angle), math.sin(angle))
-            return
+        """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
         bx, by, angle = entity.read()
+        self._pose_read = (self._steps, entity, _pose_of(bx, by, angle))
         cos, sin = math.cos(angle), math.sin(angle)
+        if self._cone is not None:
+            self._raw = self._cone.measure(self._ray, entity, bx, by, cos, sin)
+            self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
+            self._update_clearance(entity, bx, by, cos, sin)
+            return
         alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
         noise, raw = self._noise, self._raw_model
         # noise.range would return the value unchanged; raw readings get the raw model's noise instead
