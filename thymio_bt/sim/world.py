@@ -222,6 +222,9 @@ class Simulation(Backend):
         self._entities: dict[str, _Body] = {}
         self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)   # (step, entity, its pose)
         self._cmd = Twist()
+        #: the last drive() arguments and their Twist: a behaviour cruising passes the same float
+        #: objects tick after tick, and a frozen dataclass costs more to make than to reuse
+        self._drive_args: tuple[object, object, Twist] = (None, None, self._cmd)
         self._applied = (0.0, 0.0)
         self._velocity_of: tuple[Twist | None, tuple[float, float]] = (None, (0.0, 0.0))   # (command, its v, w)
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
@@ -247,7 +250,11 @@ class Simulation(Backend):
     def drive(self, linear: float, angular: float) -> None:
         if self.robot_name not in self._entities:
             return
-        self._cmd = Twist(float(linear), float(angular))
+        last_linear, last_angular, cmd = self._drive_args
+        if linear is not last_linear or angular is not last_angular:
+            cmd = Twist(float(linear), float(angular))
+            self._drive_args = (linear, angular, cmd)
+        self._cmd = cmd
         if self._delay_steps:
             self._pending = True           # applied a few physics steps into the next advance (Enki: one)
         else:
@@ -353,7 +360,8 @@ class Simulation(Backend):
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
         model, cmd = self.model, self._cmd
         last = self._velocity_of[0]
-        if self._noisy_wheels or last is None or cmd.linear != last.linear or cmd.angular != last.angular:
+        if self._noisy_wheels or last is not cmd and (
+                last is None or cmd.linear != last.linear or cmd.angular != last.angular):
             # noise-free, the velocity is a function of the command: computed once per command
             left, right = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
             fl, fr = self._noise.wheel_factors()
