@@ -1,8 +1,8 @@
 """Benchmark: a 200-run sweep of maze_part1_2 with the realistic noise on, on all cores.
 
-Target (issue "Test your own behaviours, and know how robust a mission is"): >= 1500x aggregate
-real time (simulated seconds of all runs / wall seconds of the whole sweep, pool start-up
-included) on this 2-core machine. Run: ``python benchmarks/bench_sweep.py [--runs N]``.
+Target (issue #19; "Test your own behaviours, and know how robust a mission is" asked for 1500x):
+>= 5000x aggregate real time (simulated seconds of all runs / wall seconds of the whole sweep, pool
+start-up included) on this 2-core machine. Run: ``python benchmarks/bench_sweep.py [--runs N]``.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from _common import ROOT, save_results, table, verdict
 
 from thymio_bt.sweep import LocalPool, sweep
 
-TARGET = 1500.0
+TARGET = 5000.0
 
 
 def main() -> None:
