@@ -112,7 +112,8 @@ class MoveUntilWall(RobotBehaviour):
         assert scan is not None
         reading = scan[p.sensor]
         remaining = reading - p.distance
-        if self.saw_nothing and math.isfinite(reading) and remaining <= p.tolerance:
+        finite, infinite = math.isfinite(reading), math.isinf(reading)
+        if self.saw_nothing and finite and remaining <= p.tolerance:
             # nothing was in range a tick ago and now the wall would be at the stop distance: a wall
             # ahead comes into range far beyond it, so this is a glint (Enki's cones at a corner
             # read 0 once): hold still for a tick and let the next reading say
@@ -121,8 +122,8 @@ class MoveUntilWall(RobotBehaviour):
             self.speed = 0.0
             self.feedback_message = f"{p.sensor} jumped to {reading:.4f} m: checking"
             return Status.RUNNING
-        self.saw_nothing = math.isinf(reading)
-        if math.isfinite(reading):
+        self.saw_nothing = infinite
+        if finite:
             self.wall_seen = True
             # where the wall is, by this reading and odometry: averaged over the last readings, one
             # noisy reading (a real sensor's) cannot stop the robot early; noise-free they all agree
@@ -133,12 +134,12 @@ class MoveUntilWall(RobotBehaviour):
             remaining -= self.speed * getattr(self.robot, "latency", 0.0)
         else:
             self.walls.clear()
-        self.extra = {"range": None if math.isinf(reading) else round(reading, 6), "distance": p.distance}
+        self.extra = {"range": None if infinite else round(reading, 6), "distance": p.distance}
         if remaining <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             self.feedback_message = f"stopped at {reading:.4f} m"
             return Status.SUCCESS
-        speed = p.speed if math.isinf(reading) else approach_speed(
+        speed = p.speed if infinite else approach_speed(
             remaining, p.speed, late_gain(p.approach_gain, self.robot, self.ctx.tick_period), p.min_speed,
             self.ctx.tick_period)
         left, right = scan["front_left"], scan["front_right"]
@@ -150,7 +151,7 @@ class MoveUntilWall(RobotBehaviour):
             turn = heading_hold(pose.yaw, self.heading) if p.hold_heading else 0.0
         self.robot.drive(speed, turn)
         self.speed = speed
-        self.feedback_message = ("no wall in range" if math.isinf(reading)
+        self.feedback_message = ("no wall in range" if infinite
                                  else f"{p.sensor} {reading:.4f} m, {speed:.3f} m/s")
         return Status.RUNNING
 
