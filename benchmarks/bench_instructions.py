@@ -16,6 +16,7 @@ Needs valgrind (``apt-get install valgrind``); each count takes 10-30 s.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
@@ -41,8 +42,10 @@ def instructions(cmd: list[str], cwd: Path) -> int:
     """Instructions (callgrind's Ir) of a whole process, children not followed."""
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "callgrind.out"
+        # string hashing is randomised per process, which moves a count by up to half a million
+        env = {**os.environ, "PYTHONHASHSEED": "0"}
         done = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *cmd],
-                              cwd=cwd, capture_output=True, text=True)
+                              cwd=cwd, capture_output=True, text=True, env=env)
         if done.returncode != 0:
             raise SystemExit(f"{' '.join(cmd)} failed under callgrind:\n{done.stderr[-2000:]}")
         match = re.search(r"Collected : (\d+)", done.stderr) or re.search(r"summary: (\d+)", out.read_text())
