@@ -35,6 +35,8 @@ class NoiseSource:
     def __init__(self, config: NoiseConfig, seed: int) -> None:
         self.config = config
         self._rng = random.Random(seed)
+        self._gauss = self._rng.gauss
+        self._range_sd = config.range_sd          # read per ray: kept out of the model
 
     def wheel_factors(self) -> tuple[float, float]:
         a = self.config.wheel
@@ -47,10 +49,10 @@ class NoiseSource:
         return 1.0 + self._rng.uniform(-a, a), 1.0 + self._rng.uniform(-a, a)
 
     def range(self, value: float, lo: float, hi: float) -> float:
-        sd = self.config.range_sd
+        sd = self._range_sd
         if not sd or math.isinf(value):
             return value
-        noisy = value + self._rng.gauss(0.0, sd)
+        noisy = value + self._gauss(0.0, sd)
         if noisy > hi:
             return math.inf
         return max(noisy, lo)

@@ -226,6 +226,7 @@ class Simulation(Backend):
         #: objects tick after tick, and a frozen dataclass costs more to make than to reuse
         self._drive_args: tuple[object, object, Twist] = (None, None, self._cmd)
         self._applied = (0.0, 0.0)
+        self._wheels_of: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
         self._velocity_of: tuple[Twist | None, tuple[float, float]] = (None, (0.0, 0.0))   # (command, its v, w)
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
@@ -272,7 +273,7 @@ class Simulation(Backend):
 
     def pose(self) -> Pose | None:
         if self._drifts:
-            return self._odometry_pose() if self.exists() else None
+            return self._odometry_pose() if self.robot_name in self._entities else None
         return self.true_pose()
 
     def true_pose(self) -> Pose | None:
@@ -326,7 +327,8 @@ class Simulation(Backend):
             self._apply_command()
             steps -= delay
         self._run_steps(entity, steps)
-        self.serve_requests()
+        if self._requests:
+            self.serve_requests()
 
     def _run_steps(self, entity: "_Body | None", steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
@@ -379,7 +381,11 @@ class Simulation(Backend):
         Encoders count wheel turns, not body motion: a robot whose wheels slip against a wall
         believes it moves, as a real Thymio does. The arc is integrated exactly for the held command.
         """
-        left, right = self.model.wheel_speeds(*self._applied)
+        applied, wheels = self._wheels_of
+        if applied is not self._applied:             # the applied command's wheel speeds, once per command
+            wheels = self.model.wheel_speeds(*self._applied)
+            self._wheels_of = (self._applied, wheels)
+        left, right = wheels
         fl, fr = self._noise.encoder_factors()
         v, w = self.model.body_velocity(left * fl, right * fr)
         self._odo = integrate_arc(*self._odo, v, w, duration)
