@@ -438,7 +438,8 @@ class Simulation(Backend):
         on a long face of a wall box, the face's line is at distance d from the axle and the hull's
         support point in direction n is nearest to it: if that point projects onto the face, the
         gap is exactly d - extent(n). Otherwise (wall ends, corners, polygons) d - extent(n) is a
-        lower bound, and the polygon distance is computed only if the bound could beat the record.
+        lower bound, and the polygon distance is computed only if the bound could beat the record
+        and the gaps found on long faces.
         """
         record = min(self.min_clearance, self._farthest_gap)
         if not entity.near.within(record + 1e-6):      # nothing can beat the record: one C query
@@ -446,7 +447,7 @@ class Simulation(Backend):
         tables = self._hull
         ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
         best = math.inf
-        candidates = []
+        candidates: list[tuple[float, pymunk.Shape]] = []         # (a lower bound of its gap, wall)
         radius, axle, distance, shapes = tables.reach + record, (ax, ay), self._distance, self._wall_shapes
         extents, supports, frames, atan2 = tables.extent, tables.support, self._wall_frames, math.atan2
         for index in self._walls.near(ax, ay, radius):
@@ -455,7 +456,7 @@ class Simulation(Backend):
             if d >= radius:                    # what a space point query within the radius leaves out
                 continue
             if d <= 0.0:
-                candidates.append(shape)
+                candidates.append((-math.inf, shape))
                 continue
             nx, ny = (qx - ax) / d, (qy - ay) / d
             lx, ly = nx * cos + ny * sin, ny * cos - nx * sin      # n in the body frame
@@ -476,9 +477,10 @@ class Simulation(Backend):
                             best = d - extent
                         continue
             if d - extents[index] < record - 1e-6:
-                candidates.append(shape)
-        if candidates:
-            best = min(best, self._exact_gap(entity, candidates, bx, by, cos, sin))
+                candidates.append((d - extents[index], shape))
+        walls = [shape for bound, shape in candidates if bound < best]    # others cannot beat the faces
+        if walls:
+            best = min(best, self._exact_gap(entity, walls, bx, by, cos, sin))
         if best < self.min_clearance:
             self.min_clearance = max(best, 0.0)
 
