@@ -247,7 +247,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         if self.fails_on_collision and self.ctx.collision_count() > self._collisions_at_start:
             return self.fail(FailureCode.COLLISION, "the robot hit a wall")
         status = self.step()
-        if status is RUNNING and self.ctx.now() - self._start_time >= self.params.timeout - 1e-9:
+        if status is RUNNING and self.robot.time() - self._start_time >= self.params.timeout - 1e-9:
             return self.on_timeout()
         return status
 
