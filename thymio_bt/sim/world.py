@@ -227,7 +227,9 @@ class Simulation(Backend):
         self._drive_args: tuple[object, object, Twist] = (None, None, self._cmd)
         self._applied = (0.0, 0.0)
         self._wheels_of: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
-        self._velocity_of: tuple[Twist | None, tuple[float, float]] = (None, (0.0, 0.0))   # (command, its v, w)
+        #: the last command whose wheel speeds were worked out (limited), and those speeds
+        self._wheels_of_command: tuple[Twist | None, tuple[float, float]] = (None, (0.0, 0.0))
+        self._velocity = (0.0, 0.0)            # the body velocity (v, w) of the command, noise included
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
         self._scan: dict[str, float] | None = None
@@ -361,14 +363,16 @@ class Simulation(Backend):
     def _apply_command(self) -> None:
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
         model, cmd = self.model, self._cmd
-        last = self._velocity_of[0]
-        if self._noisy_wheels or last is not cmd and (
-                last is None or cmd.linear != last.linear or cmd.angular != last.angular):
-            # noise-free, the velocity is a function of the command: computed once per command
-            left, right = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
+        last, wheels = self._wheels_of_command
+        fresh = last is not cmd and (last is None or cmd.linear != last.linear or cmd.angular != last.angular)
+        if fresh:                  # the limited wheel speeds are a function of the command: once per command
+            wheels = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
+            self._wheels_of_command = (cmd, wheels)
+        if fresh or self._noisy_wheels:         # noisy wheels err anew with every command sent
+            left, right = wheels
             fl, fr = self._noise.wheel_factors()
-            self._velocity_of = (cmd, model.body_velocity(left * fl, right * fr))
-        v, w = self._applied = self._velocity_of[1]
+            self._velocity = model.body_velocity(left * fl, right * fr)
+        v, w = self._applied = self._velocity
         entity = self._entities.get(self.robot_name)
         if entity is not None:
             # Chipmunk moves bodies before solving joints: out of contact, the body's velocity is
