@@ -44,7 +44,7 @@ class MazeShapes:
     walled: bool
 
     @classmethod
-    def of(cls, maze: Maze) -> "MazeShapes":
+    def of(cls, maze: Maze) -> MazeShapes:
         polygons = tuple(tuple(shape.corners()) for shape in (*maze.walls, *maze.obstacles))
         return cls(polygons, tuple(_box(p) for p in polygons), maze.bounds(), bool(maze.walls))
 

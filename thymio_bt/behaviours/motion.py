@@ -50,7 +50,15 @@ def approach_speed(remaining: float, cruise: float, gain: float, minimum: float,
     """Speed towards a goal ``remaining`` away: cruise, then proportional, never past it in one tick."""
     if remaining <= 0.0:
         return 0.0
-    return min(cruise, max(gain * remaining, minimum), remaining / period)
+    # min(cruise, max(gain * remaining, minimum), remaining / period), without builtin calls (hot path)
+    speed = gain * remaining
+    if minimum > speed:
+        speed = minimum
+    best = cruise
+    if speed < best:
+        best = speed
+    limit = remaining / period
+    return limit if limit < best else best
 
 
 class MoveUntilWallParams(BehaviourParams):
@@ -171,7 +179,12 @@ HEADING_DEADBAND = 1e-4
 def heading_hold(yaw: float, heading: float, gain: float = 3.0) -> float:
     """An angular velocity that steers a robot heading ``yaw`` back to ``heading`` (zero when already on it)."""
     error = wrap_angle(heading - yaw)
-    return 0.0 if abs(error) < HEADING_DEADBAND else max(-0.5, min(0.5, gain * error))
+    if -HEADING_DEADBAND < error < HEADING_DEADBAND:
+        return 0.0
+    turn = gain * error                  # max(-0.5, min(0.5, turn)) without builtin calls (hot path)
+    if not turn < 0.5:
+        turn = 0.5
+    return turn if turn > -0.5 else -0.5
 
 
 class MoveDistanceParams(BehaviourParams):

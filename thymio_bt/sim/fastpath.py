@@ -33,7 +33,6 @@ from typing import Any, Callable, Sequence
 import pymunk
 from pymunk._chipmunk import ffi, lib
 
-
 #: Where pymunk 7's Chipmunk keeps a body's state, counted in doubles from the start of its cpBody
 #: (after two function pointers, mass, moment, their inverses and the centre of gravity): velocity
 #: (x, y), angle, angular velocity, and the transform (a, b, c, d, tx, ty; a, b the rotation).
@@ -220,7 +219,7 @@ class PointDistance:
     """The distance from a point to one shape and the shape's nearest point, as
     :meth:`pymunk.Shape.point_query` gives them, without its Python result objects."""
 
-    __slots__ = ("_query", "_info")
+    __slots__ = ("_info", "_query")
 
     def __init__(self) -> None:
         self._query = lib.cpShapePointQuery

@@ -33,7 +33,16 @@ from ..placement import MazeShapes, convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
-from .fastpath import NearShapes, PointDistance, RayCaster, body_driver, body_reader, control_aimer, spinner, stepper
+from .fastpath import (
+    NearShapes,
+    PointDistance,
+    RayCaster,
+    body_driver,
+    body_reader,
+    control_aimer,
+    spinner,
+    stepper,
+)
 from .noise import NoiseConfig, NoiseSource
 from .walls import wall_grid
 
@@ -348,7 +357,7 @@ class Simulation(Backend):
         while self._steps < done:
             first = self._steps
             refresh = first + every - first % every            # the step count of the next sensor refresh
-            last = min(done, refresh)
+            last = refresh if refresh < done else done
             # during a step, _steps counts the steps before it (a collision's time)
             for self._steps in range(first, last):
                 if turning or self._contacts:
@@ -424,7 +433,7 @@ class Simulation(Backend):
                 scan[name] = inf
                 continue
             value = alpha * hi
-            if value < lo:
+            if value < lo:                 # max(value, lo) without a builtin call: 7 a tick
                 value = lo
             scan[name] = noise.range(value, lo, hi) if noisy else value
         if raw is not None:
@@ -445,7 +454,7 @@ class Simulation(Backend):
         lower bound, and the polygon distance is computed only if the bound could beat the record
         and the gaps found on long faces.
         """
-        record = min(self.min_clearance, self._farthest_gap)
+        record = self._farthest_gap if self._farthest_gap < self.min_clearance else self.min_clearance
         if not entity.near.within(record + 1e-6):      # nothing can beat the record: one C query
             return
         tables = self._hull
@@ -503,8 +512,10 @@ class Simulation(Backend):
                 cx, cy, ux, uy, hl, ht = frame
                 for px, py in hull:
                     dx, dy = px - cx, py - cy
-                    ex = abs(dx * ux + dy * uy) - hl
-                    ey = abs(dy * ux - dx * uy) - ht
+                    along, across = dx * ux + dy * uy, dy * ux - dx * uy
+                    # abs() without a builtin call: the sign of a zero is lost in subtracting hl, ht > 0
+                    ex = (along if along >= 0.0 else -along) - hl
+                    ey = (across if across >= 0.0 else -across) - ht
                     if ex >= gap or ey >= gap:     # the distance is at least max(ex, ey): not nearer
                         continue
                     d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
