@@ -31,31 +31,35 @@ RUNNING, SUCCESS, FAILURE, INVALID = Status.RUNNING, Status.SUCCESS, Status.FAIL
 _STATUSES = frozenset(Status)
 
 _Tick = Callable[[Behaviour], None]
-#: how each node class is ticked, found once per class
-_BY_CLASS: dict[type, _Tick] = {}
+
+
+class _TickByClass(dict):
+    """How each node class is ticked, found on first use: ``_TICK[node.__class__](node)`` is one
+    dict lookup and no Python call (composites tick their children that way: a call less per child)."""
+
+    def __missing__(self, kind: type) -> _Tick:
+        how: _Tick = _generator
+        if getattr(kind, "tick_direct", None) is not None:
+            how = kind.tick_direct
+        elif kind.tick is Sequence.tick:
+            how = _sequence
+        elif kind.tick is Selector.tick:
+            how = _selector
+        elif kind.tick is Parallel.tick:
+            how = _parallel
+        elif issubclass(kind, Decorator) and kind.tick is Decorator.tick:
+            how = _decorator
+        self[kind] = how
+        return how
+
+
+#: the direct tick of each node class, or its generator when it has one of its own
+_TICK: dict[type, _Tick] = _TickByClass()
 
 
 def tick(node: Behaviour) -> None:
     """Give ``node`` (and its subtree) one tick, as ``node.tick_once()`` would."""
-    (_BY_CLASS.get(type(node)) or _how_to_tick(type(node)))(node)
-
-
-def _how_to_tick(kind: type) -> _Tick:
-    """The direct tick for a node class, or its generator when it has one of its own; found once
-    per class (composites look their children's up inline: a call less per child and tick)."""
-    how: _Tick = _generator
-    if getattr(kind, "tick_direct", None) is not None:
-        how = kind.tick_direct
-    elif kind.tick is Sequence.tick:
-        how = _sequence
-    elif kind.tick is Selector.tick:
-        how = _selector
-    elif kind.tick is Parallel.tick:
-        how = _parallel
-    elif issubclass(kind, Decorator) and kind.tick is Decorator.tick:
-        how = _decorator
-    _BY_CLASS[kind] = how
-    return how
+    _TICK[node.__class__](node)
 
 
 def _generator(node: Behaviour) -> None:
@@ -84,7 +88,7 @@ def _sequence(seq: Sequence) -> None:
     last = len(children) - 1
     while index <= last:
         child = children[index]
-        (_BY_CLASS.get(type(child)) or _how_to_tick(type(child)))(child)
+        _TICK[child.__class__](child)
         status = child.status
         if status != SUCCESS:
             if not seq.memory:                  # invalidate the rest: no dangling runners
@@ -122,7 +126,7 @@ def _selector(sel: Selector) -> None:
         index = 0
     previous = sel.current_child
     for child in children[index:]:
-        (_BY_CLASS.get(type(child)) or _how_to_tick(type(child)))(child)
+        _TICK[child.__class__](child)
         status = child.status
         if status == RUNNING or status == SUCCESS:
             sel.current_child = child
@@ -164,7 +168,7 @@ def _parallel(par: Parallel) -> None:
     for child in children:
         if synchronise and child.status == SUCCESS:
             continue
-        (_BY_CLASS.get(type(child)) or _how_to_tick(type(child)))(child)
+        _TICK[child.__class__](child)
     new_status = RUNNING
     par.current_child = children[-1]
     failed = next((child for child in children if child.status == FAILURE), None)

@@ -477,7 +477,8 @@ class Simulation(Backend):
             frame = frames[shape]
             if frame is not None:
                 cx, cy, ux, uy, hl, _ = frame
-                if abs((qx - cx) * ux + (qy - cy) * uy) < hl - 1e-9:          # q on a long face
+                along = (qx - cx) * ux + (qy - cy) * uy
+                if -(hl - 1e-9) < along < hl - 1e-9:                          # q on a long face
                     extent = -math.inf
                     for sx, sy in supports[index]:                           # the first farthest along n
                         along = sx * lx + sy * ly
@@ -485,7 +486,8 @@ class Simulation(Backend):
                             extent, vx, vy = along, sx, sy
                     px = ax + vx * cos - vy * sin                              # the support point
                     py = ay + vx * sin + vy * cos
-                    if abs((px - cx) * ux + (py - cy) * uy) <= hl:
+                    along = (px - cx) * ux + (py - cy) * uy
+                    if -hl <= along <= hl:                                    # it projects onto the face
                         if d - extent < best:
                             best = d - extent
                         continue
