@@ -7,7 +7,7 @@ physics sub-steps and 70 rays per simulated second that wrapping cost as much as
 (profiled: ~1 µs of ~2 per sub-step, ~1 µs per ray). The simulation never changes the space from a
 collision callback (they only count contacts) and adds or removes bodies only between steps, so it
 may call the C functions directly. A body's position, angle and velocities are read and written in
-Chipmunk's memory, where a C call (which releases and takes back the GIL) would cost ten times more,
+Chipmunk's memory (a C call, which releases and takes back the GIL, costs three to four times more),
 once a probe body has shown that the fields are where this module expects them. This is the only
 module that touches pymunk's private handles; ``tests/test_sim.py`` checks that both paths give
 bit-identical runs.
@@ -22,6 +22,8 @@ Example::
     near.within(0.02)                          # is any shape closer than 2 cm to the hull?
     distance = PointDistance()
     distance(wall, (0.1, 0.2))                 # (distance, nearest x, nearest y), as wall.point_query
+    read = body_reader(body)
+    read()                                     # (x, y, angle), as body.position and body.angle
 """
 
 from __future__ import annotations
