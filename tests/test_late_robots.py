@@ -168,3 +168,19 @@ def test_wall_follow_retakes_the_corridor_heading_from_the_side_walls(bias_deg):
         robot.advance()
         tick(node)
     assert abs(robot.yaw) < math.radians(1.0) and abs(robot.y) < 0.01
+
+
+def test_wall_follow_holds_on_a_glint_after_a_far_reading_and_does_not_turn():
+    """Enki's cones read 0 at a wall's end: a near reading right after a far one (more than a tick's
+    travel nearer) holds WallFollow still for a tick instead of stopping it before a wall and turning."""
+    from thymio_bt.behaviours import WallFollow
+
+    robot = ScriptedRobot([0.10, 0.09, 0.0, 0.08, 0.07])
+    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
+    speeds = []
+    for _ in range(5):
+        tick(node)
+        speeds.append(robot.v)
+        robot.advance()
+    assert node.turns == [] and node.mode == "forward"
+    assert speeds[2] == 0.0 and speeds[3] > 0.0           # held for the glint's tick, then on its way

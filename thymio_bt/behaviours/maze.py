@@ -38,6 +38,10 @@ RETAKE_ANGLE, RETAKE_MAX = math.radians(1.0), math.radians(15.0)
 #: the maze's four directions, as unit vectors in the frame of the start heading (quarter turns)
 _QUARTERS = ((1, 0), (0, 1), (-1, 0), (0, -1))
 
+#: a front reading this much nearer than the tick before cannot be a wall approached (1 cm a tick
+#: at most): a glint, held for a tick
+GLINT_JUMP = 0.03
+
 #: the sensor pairs that see a wall across the corridor ahead and behind, square to it
 FRONT_PAIR, REAR_PAIR = ("front_center_left", "front_center_right"), ("rear_left", "rear_right")
 
@@ -288,7 +292,7 @@ class WallFollow(RobotBehaviour):
     def _new_segment(self) -> None:
         self.origin = self._axle(current_pose(self.robot))
         self.segment_start = self.position
-        self.front_was_clear = False           # the front sensor read nothing last tick
+        self.last_front = math.inf             # the front sensor's reading last tick
         # where each side ray met its wall (odometry frame), while it reads one straight wall
         self.wall_points: dict[str, deque[tuple[float, float]]] = {
             name: deque(maxlen=12) for name in ("front_left", "front_right")}
@@ -363,22 +367,21 @@ class WallFollow(RobotBehaviour):
         lead = self.speed * self.latency
         front_left = front - self.stop_distance - lead
         tol = 0.0005
-        if self.target is not None and (self.target - s - lead <= tol or
-                                        (front_left <= tol and self.target - s < p.cell / 2)):
-            return self._begin_turn(self.sign, "opening")
-        if front_left <= tol and self.front_was_clear:
-            # nothing ahead a tick ago and now a wall at the stop: a glint (Enki's cones at a wall's
-            # end), as in MoveUntilWall: hold still for a tick and let the next reading say
-            self.front_was_clear = False
+        if front_left <= tol and self.last_front - front > GLINT_JUMP:
+            # far or nothing ahead a tick ago and now a wall at the stop: a glint (Enki's cones at a
+            # wall's end read 0), as in MoveUntilWall: hold still for a tick and let the next reading say
+            self.last_front = front
             self.robot.drive(0.0, 0.0)
             self.speed = 0.0
             return Status.RUNNING
-        self.front_was_clear = math.isinf(front)
+        self.last_front = front
+        if self.target is not None and (self.target - s - lead <= tol or
+                                        (front_left <= tol and self.target - s < p.cell / 2)):
+            return self._begin_turn(self.sign, "opening")
         if front_left <= tol:
             self.robot.drive(0.0, 0.0)
             self.speed = 0.0
             return self._begin_square(FRONT_PAIR, then_turn=True)
-            return Status.RUNNING
         limit = p.speed
         if math.isfinite(front):
             limit = approach_speed(front_left, limit, self.gain, 0.005, self.ctx.tick_period)
@@ -485,13 +488,17 @@ class WallFollow(RobotBehaviour):
         """
         scan = self.robot.proximity()
         assert scan is not None
-        self.squaring.append((scan[self.square_pair[0]], scan[self.square_pair[1]]))
+        self.squaring.append((scan[self.square_pair[0]], scan[self.square_pair[1]], scan["front_center"]))
         if len(self.squaring) < SQUARING_READINGS:
             self.robot.drive(0.0, 0.0)
             return Status.RUNNING
-        readings = [sum(r[i] for r in self.squaring) / len(self.squaring) for i in (0, 1)]
-        if all(math.isfinite(r) for r in readings):
-            self._square_to_wall(pose, readings)
+        readings = [sum(r[i] for r in self.squaring) / len(self.squaring) for i in (0, 1, 2)]
+        near = self.params.cell / 2
+        if self.square_then_turn and not readings[2] < near:
+            self.mode = "forward"           # no wall ahead after all (a glint stopped the robot): go on
+            return Status.RUNNING
+        if readings[0] < near and readings[1] < near:    # both on the wall across, in this cell
+            self._square_to_wall(pose, readings[:2])
         if self.square_then_turn:
             return self._begin_turn(-self.sign, "wall")
         return self._drive_on()
