@@ -175,7 +175,7 @@ def test_wall_follow_holds_on_a_glint_after_a_far_reading_and_does_not_turn():
     travel nearer) holds WallFollow still for a tick instead of stopping it before a wall and turning."""
     from thymio_bt.behaviours import WallFollow
 
-    robot = ScriptedRobot([0.10, 0.09, 0.0, 0.08, 0.07])
+    robot = ScriptedRobot([0.10, 0.09, 0.015, 0.08, 0.07])
     node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
     speeds = []
     for _ in range(5):
@@ -184,3 +184,17 @@ def test_wall_follow_holds_on_a_glint_after_a_far_reading_and_does_not_turn():
         robot.advance()
     assert node.turns == [] and node.mode == "forward"
     assert speeds[2] == 0.0 and speeds[3] > 0.0           # held for the glint's tick, then on its way
+
+
+def test_wall_follow_takes_a_reading_of_zero_for_nothing():
+    """Enki's cones read 0 m at a wall's end for seconds while the robot stands or turns; WallFollow
+    never comes that close on purpose, so such a reading neither stops nor turns it."""
+    from thymio_bt.behaviours import WallFollow
+
+    robot = ScriptedRobot([0.0] * 5)
+    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
+    for _ in range(5):
+        tick(node)
+        assert robot.v > 0.0
+        robot.advance()
+    assert node.turns == [] and node.mode == "forward"

@@ -41,6 +41,8 @@ _QUARTERS = ((1, 0), (0, 1), (-1, 0), (0, -1))
 #: a front reading this much nearer than the tick before cannot be a wall approached (1 cm a tick
 #: at most): a glint, held for a tick
 GLINT_JUMP = 0.03
+#: a reading nearer than this is a glint too (WallFollow stops 1.5 cm or more from walls)
+GLINT_BELOW = 0.003
 
 #: the sensor pairs that see a wall across the corridor ahead and behind, square to it
 FRONT_PAIR, REAR_PAIR = ("front_center_left", "front_center_right"), ("rear_left", "rear_right")
@@ -305,6 +307,15 @@ class WallFollow(RobotBehaviour):
         x, y, _ = COURSE.axle_of(pose)
         return x, y
 
+    def _scan(self) -> dict[str, float] | None:
+        """The robot's readings, a reading nearer than GLINT_BELOW taken for nothing: the robot never
+        comes that close to a wall on purpose, and Enki's cones at a wall's end read 0 m for seconds
+        while the robot stands still or turns (one made WallFollow square and turn twice in the open)."""
+        scan = self.robot.proximity()
+        if scan is None:
+            return None
+        return {name: math.inf if value < GLINT_BELOW else value for name, value in scan.items()}
+
     def _where(self) -> tuple[float, float]:
         """Where base_link is by the distances covered along the corridors (world frame), which
         unlike 2D odometry does not wander off with a drifted heading (odometry's heading was 30-45°
@@ -327,7 +338,7 @@ class WallFollow(RobotBehaviour):
             return False
         # out of the maze's box, and no wall in front: a robot whose distances are off by a few
         # centimetres believes it is out while still beside a wall
-        scan = self.robot.proximity()
+        scan = self._scan()
         return scan is None or all(math.isinf(scan[name]) for name in FRONT_SENSORS)
 
     def step(self) -> Status:
@@ -347,7 +358,7 @@ class WallFollow(RobotBehaviour):
 
     def _forward(self, pose: Pose) -> Status:
         p = self.params
-        scan = self.robot.proximity()
+        scan = self._scan()
         assert scan is not None
         ax, ay = self._axle(pose)
         s = (ax - self.origin[0]) * math.cos(self.heading) + (ay - self.origin[1]) * math.sin(self.heading)
@@ -486,7 +497,7 @@ class WallFollow(RobotBehaviour):
         hit it gives the robot's true angle to it. A few stationary readings are averaged (a real
         sensor's noise), and corrections beyond RETAKE_MAX are not believed.
         """
-        scan = self.robot.proximity()
+        scan = self._scan()
         assert scan is not None
         self.squaring.append((scan[self.square_pair[0]], scan[self.square_pair[1]], scan["front_center"]))
         if len(self.squaring) < SQUARING_READINGS:
@@ -534,7 +545,7 @@ class WallFollow(RobotBehaviour):
             return Status.RUNNING
         self.robot.drive(0.0, 0.0)
         self.rate = 0.0
-        scan = self.robot.proximity()
+        scan = self._scan()
         assert scan is not None
         if self.turn_reason == "wall" and scan["front_center"] < self.params.cell / 2:
             # still a wall ahead, in this cell: a dead end; square to that wall, and turn again
