@@ -14,6 +14,7 @@ from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse
 from thymio_bt.mission import load_mission
 from thymio_bt.playground.enki import EnkiRobot
 from thymio_bt.playground.process import Playground, free_port, listening
+from thymio_bt.playground.backend import SPEED_SCALE
 from thymio_bt.playground.world import playground_world
 from thymio_bt.real.aseba import AsebaNode, signed
 from thymio_bt.robot import Pose
@@ -86,6 +87,7 @@ def test_the_robot_moves_as_commanded_within_five_percent(node, enki, playground
     enki.place(*world.to_enki(0.2, 0.09), 0.0)
     settle(0.2)
     x0, _, _ = enki.pose()
+    wheels0 = node.read_wheel_travel()
     node.set_motors(200, 200)
     settle(1.0)
     node.set_motors(0, 0)
@@ -94,6 +96,10 @@ def test_the_robot_moves_as_commanded_within_five_percent(node, enki, playground
     # the Playground's Thymio does 0.166 m/s at 500 units; about 60 ms of the second pass before it starts
     assert travelled == pytest.approx(0.166 * 200 / 500 * 1.0, rel=0.12)
     assert node.read_wheel_speeds() == (0, 0)
+    # the node integrates the speeds as they arrive: odometry's distance, within 5 % of the truth
+    wheels1 = node.read_wheel_travel()
+    odometry = (wheels1[0] - wheels0[0] + wheels1[1] - wheels0[1]) / 2 * 0.166 / 500 * SPEED_SCALE
+    assert odometry == pytest.approx(travelled, rel=0.05)
 
 
 def test_negative_targets_read_back_signed(node):

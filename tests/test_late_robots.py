@@ -106,29 +106,95 @@ def test_wall_follow_is_not_out_of_the_maze_while_a_wall_is_in_front():
     assert node.status == Status.SUCCESS                    # nothing in front any more: out
 
 
-def test_wall_follow_retakes_the_corridor_heading_from_a_steady_offset():
-    """Between two walls, an offset that holds still means the robot is parallel to the corridor:
-    WallFollow takes its odometry heading then as the corridor's (drift corrected), not before."""
+class DriftingCorridor:
+    """A robot in a straight corridor along +x (walls at y = ±0.095), turned by ``-bias`` from it
+    while its odometry, turned by ``bias`` from the world (drift from earlier turns), says it is
+    parallel to it; it reads the walls from its true pose."""
+
+    latency = 0.0
+
+    def __init__(self, bias):
+        self.bias, self.x, self.y, self.yaw, self.v, self.w, self.t = bias, 0.1, 0.0, -bias, 0.0, 0.0, 0.0
+
+    def advance(self):
+        self.x += self.v * 0.1 * math.cos(self.yaw)
+        self.y += self.v * 0.1 * math.sin(self.yaw)
+        self.yaw += self.w * 0.1
+        self.t += 0.1
+
+    def pose(self):
+        c, s = math.cos(self.bias), math.sin(self.bias)
+        return Pose(c * self.x - s * self.y, s * self.x + c * self.y, self.yaw + self.bias)
+
+    def proximity(self):
+        scan = dict.fromkeys(SENSOR_NAMES, math.inf)
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        for sensor in COURSE.sensors:
+            sy = self.y + s * sensor.x + c * sensor.y
+            direction = math.sin(self.yaw + sensor.yaw)
+            for wall in (0.095, -0.095):
+                if direction * (wall - sy) > 0:
+                    reach = (wall - sy) / direction
+                    if reach <= COURSE.range_max:
+                        scan[sensor.name] = min(scan[sensor.name], reach)
+        return scan
+
+    def exists(self):
+        return True
+
+    def drive(self, v, w):
+        self.v, self.w = v, w
+
+    def time(self):
+        return self.t
+
+
+@pytest.mark.parametrize("bias_deg", [-6.0, 4.0])
+def test_wall_follow_retakes_the_corridor_heading_from_the_side_walls(bias_deg):
+    """Odometry turned by a few degrees (a late robot's turns): the line through where the side rays
+    meet the walls is the corridor in odometry's frame; WallFollow takes it as its heading within
+    the first 10 cm and drives parallel to the walls, near the centre line, from then on."""
     from thymio_bt.behaviours import WallFollow
 
-    class Corridor(ScriptedRobot):
-        yaw = 0.0
-
-        def proximity(self):
-            scan = dict.fromkeys(SENSOR_NAMES, math.inf)
-            scan["front_left"] = scan["front_right"] = 0.074      # centred: offset 0
-            return scan
-
-        def pose(self):
-            return Pose(self.x, 0.1, self.yaw)
-
-    robot = Corridor([])
-    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
+    robot = DriftingCorridor(math.radians(bias_deg))
+    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, -1, 5, 1)))
     tick(node)
-    robot.yaw = math.radians(3)                 # odometry now says 3° off while the walls say parallel
-    for _ in range(3):
+    assert node.heading == 0.0                                        # odometry's yaw at the start
+    for _ in range(10):
+        robot.advance()
         tick(node)
-    assert node.heading == 0.0                  # not steady for long enough yet
-    for _ in range(2):
+    assert node.heading == pytest.approx(math.radians(bias_deg), abs=math.radians(0.5))  # the walls, in odometry
+    for _ in range(20):
+        robot.advance()
         tick(node)
-    assert node.heading == pytest.approx(math.radians(3))
+    assert abs(robot.yaw) < math.radians(1.0) and abs(robot.y) < 0.01
+
+
+def test_wall_follow_holds_on_a_glint_after_a_far_reading_and_does_not_turn():
+    """Enki's cones read 0 at a wall's end: a near reading right after a far one (more than a tick's
+    travel nearer) holds WallFollow still for a tick instead of stopping it before a wall and turning."""
+    from thymio_bt.behaviours import WallFollow
+
+    robot = ScriptedRobot([0.10, 0.09, 0.015, 0.08, 0.07])
+    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
+    speeds = []
+    for _ in range(5):
+        tick(node)
+        speeds.append(robot.v)
+        robot.advance()
+    assert node.turns == [] and node.mode == "forward"
+    assert speeds[2] == 0.0 and speeds[3] > 0.0           # held for the glint's tick, then on its way
+
+
+def test_wall_follow_takes_a_reading_of_zero_for_nothing():
+    """Enki's cones read 0 m at a wall's end for seconds while the robot stands or turns; WallFollow
+    never comes that close on purpose, so such a reading neither stops nor turns it."""
+    from thymio_bt.behaviours import WallFollow
+
+    robot = ScriptedRobot([0.0] * 5)
+    node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, 0, 5, 1)))
+    for _ in range(5):
+        tick(node)
+        assert robot.v > 0.0
+        robot.advance()
+    assert node.turns == [] and node.mode == "forward"

@@ -1,8 +1,10 @@
 """The course missions on the Aseba Playground with only --robot enki, judged on its ground truth
 (the issue's acceptance): part 1's front gap 5.0 ± 0.5 cm, the respawn at (0.5, 0.3, pi/2) ± 5 mm,
-the end in the right pocket within 2 cm, the hull never touching a wall, the bonus's turns.
+the end in the right pocket within 2 cm, the hull never touching a wall, the bonus's turns; the 6x6
+missions leave the maze through its gap (their own expect: goal region, no contact).
 
-Real time: about 3 minutes together (CI installs the Playground: .ci/setup.d/20-aseba.sh).
+Real time: about 9 minutes together, the two 6x6 runs 3.5-4.5 minutes each (CI installs the
+Playground: .ci/setup.d/20-aseba.sh).
 """
 
 import math
@@ -103,3 +105,17 @@ def test_maze_part1_2_on_the_playground():
 
 def test_maze_bonus_on_the_playground():
     _meets_in_two_runs("maze_bonus", _bonus_problems)
+
+
+def _exit_problems(mission, report):
+    """A 6x6 run must leave the maze through the top gap (the mission's goal region, judged on the
+    Playground's ground truth) without touching a wall."""
+    found = [] if report["status"] == "SUCCESS" else [f"[{report['code']}] {report['reason']}"]
+    if report["collisions"] or not report["min_clearance"] or report["min_clearance"] <= 0:
+        found.append(f"touched a wall ({report['collisions']} contacts)")
+    return found
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+def test_maze_6x6_on_the_playground(side):
+    _meets_in_two_runs(f"maze_6x6_{side}", _exit_problems)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Literal
+from typing import Literal, Sequence
 
 from py_trees.common import Access, Status
 from pydantic import Field, model_validator
@@ -29,9 +29,23 @@ AXLE_X = COURSE.axle_x
 #: stationary readings WallFollow averages before a wall to square its heading to it
 SQUARING_READINGS = 3
 
-#: the corridor's heading is re-taken from a robot whose offset from the centre line stayed within
-#: STEADY_SPREAD over STEADY_TICKS ticks, when it differs from the heading held by more than RETAKE_ANGLE
-STEADY_TICKS, STEADY_SPREAD, RETAKE_ANGLE = 5, 0.001, math.radians(1.0)
+#: the corridor's heading is re-taken from the line through where a side ray met its wall, once the
+#: points span WALL_SPAN of travel and lie within WALL_RESIDUAL of one line, when it differs from the
+#: heading held by more than RETAKE_ANGLE and less than RETAKE_MAX (more is a wall across, not beside)
+WALL_SPAN, WALL_RESIDUAL = 0.05, 0.0015
+RETAKE_ANGLE, RETAKE_MAX = math.radians(1.0), math.radians(15.0)
+
+#: the maze's four directions, as unit vectors in the frame of the start heading (quarter turns)
+_QUARTERS = ((1, 0), (0, 1), (-1, 0), (0, -1))
+
+#: a front reading this much nearer than the tick before cannot be a wall approached (1 cm a tick
+#: at most): a glint, held for a tick
+GLINT_JUMP = 0.03
+#: a reading nearer than this is a glint too (WallFollow stops 1.5 cm or more from walls)
+GLINT_BELOW = 0.003
+
+#: the sensor pairs that see a wall across the corridor ahead and behind, square to it
+FRONT_PAIR, REAR_PAIR = ("front_center_left", "front_center_right"), ("rear_left", "rear_right")
 
 #: the sensors that look ahead
 FRONT_SENSORS = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")
@@ -39,6 +53,25 @@ FRONT_SENSORS = ("front_left", "front_center_left", "front_center", "front_cente
 
 def side_ray(side: str) -> str:
     return "front_left" if side == "left" else "front_right"
+
+
+def line_direction(points: Sequence[tuple[float, float]]) -> tuple[float, float]:
+    """The direction (rad, modulo pi) of the least-squares line through ``points`` and the largest
+    distance of a point from it.
+
+    >>> angle, residual = line_direction([(0.0, 0.0), (1.0, 1.0), (2.0, 2.0)])
+    >>> round(math.degrees(angle), 6), round(residual, 9)
+    (45.0, 0.0)
+    """
+    n = len(points)
+    mx = sum(p[0] for p in points) / n
+    my = sum(p[1] for p in points) / n
+    sxx = sum((p[0] - mx) ** 2 for p in points)
+    syy = sum((p[1] - my) ** 2 for p in points)
+    sxy = sum((p[0] - mx) * (p[1] - my) for p in points)
+    angle = 0.5 * math.atan2(2.0 * sxy, sxx - syy)
+    nx, ny = -math.sin(angle), math.cos(angle)
+    return angle, max(abs((p[0] - mx) * nx + (p[1] - my) * ny) for p in points)
 
 
 # ----------------------------------------------------------------- conditions
@@ -233,11 +266,17 @@ class WallFollow(RobotBehaviour):
         self.probe = ahead + (self.corridor / 2 - lateral) / math.tan(abs(syaw))
         self.ray_ahead, self.ray_cos = ahead, math.cos(syaw)
         self.stop_distance = self.corridor / 2 - (_SENSOR["front_center"][0] - AXLE_X)
-        self.heading = current_pose(self.robot).yaw
+        start = current_pose(self.robot)
+        self.heading = start.yaw
+        self.start = (*self._axle(start), start.yaw)        # the maze frame's origin (axle) and x axis
         self.turns: list[str] = []
         self.mode = "forward"
         self.aligned = False
-        self.anchor: tuple[float, float] | None = None     # a cell centre (axle, odometry frame)
+        # where the axle is in the maze's frame (start heading = +x), from the distance covered along
+        # each corridor: unlike 2D odometry, it gains no sideways error when the heading drifts
+        self.quarter = 0                                    # the corridor's direction, in quarter turns
+        self.position = (0.0, 0.0)
+        self.anchor: tuple[float, float] | None = None     # a cell centre (axle, maze frame)
         # a late robot (see Backend.latency) stops early by what its last command still covers,
         # approaches with a damped gain and settles a turn within what its slowest turn covers
         self.latency = getattr(self.robot, "latency", 0.0)
@@ -254,8 +293,11 @@ class WallFollow(RobotBehaviour):
 
     def _new_segment(self) -> None:
         self.origin = self._axle(current_pose(self.robot))
-        self.front_was_clear = False           # the front sensor read nothing last tick
-        self.offsets: deque[float] = deque(maxlen=STEADY_TICKS)   # the latest offsets from the centre line
+        self.segment_start = self.position
+        self.last_front = math.inf             # the front sensor's reading last tick
+        # where each side ray met its wall (odometry frame), while it reads one straight wall
+        self.wall_points: dict[str, deque[tuple[float, float]]] = {
+            name: deque(maxlen=12) for name in ("front_left", "front_right")}
         self.wall_seen = False
         self.last_hit = 0.0
         self.target: float | None = None
@@ -265,18 +307,38 @@ class WallFollow(RobotBehaviour):
         x, y, _ = COURSE.axle_of(pose)
         return x, y
 
-    def _done(self, pose: Pose) -> bool:
+    def _scan(self) -> dict[str, float] | None:
+        """The robot's readings, a reading nearer than GLINT_BELOW taken for nothing: the robot never
+        comes that close to a wall on purpose, and Enki's cones at a wall's end read 0 m for seconds
+        while the robot stands still or turns (one made WallFollow square and turn twice in the open)."""
+        scan = self.robot.proximity()
+        if scan is None:
+            return None
+        return {name: math.inf if value < GLINT_BELOW else value for name, value in scan.items()}
+
+    def _where(self) -> tuple[float, float]:
+        """Where base_link is by the distances covered along the corridors (world frame), which
+        unlike 2D odometry does not wander off with a drifted heading (odometry's heading was 30-45°
+        off after 200 s on a loaded Playground, and its position with it)."""
+        x0, y0, yaw0 = self.start
+        (mx, my), c, s = self.position, math.cos(yaw0), math.sin(yaw0)
+        heading = yaw0 + self.quarter * math.pi / 2
+        return (x0 + c * mx - s * my - AXLE_X * math.cos(heading),
+                y0 + s * mx + c * my - AXLE_X * math.sin(heading))
+
+    def _done(self) -> bool:
         p = self.params
+        x, y = self._where()
         if p.until == "goal":
             assert p.goal is not None
-            return math.hypot(pose.x - p.goal[0], pose.y - p.goal[1]) <= p.goal_radius
+            return math.hypot(x - p.goal[0], y - p.goal[1]) <= p.goal_radius
         assert self.ctx.bounds is not None
         xmin, ymin, xmax, ymax = self.ctx.bounds
-        if xmin <= pose.x <= xmax and ymin <= pose.y <= ymax:
+        if xmin <= x <= xmax and ymin <= y <= ymax:
             return False
-        # out of the maze's box by odometry, and no wall in front: a robot whose odometry drifted
-        # (9-13 cm over 130-170 s on the Playground) believes it is out while still beside a wall
-        scan = self.robot.proximity()
+        # out of the maze's box, and no wall in front: a robot whose distances are off by a few
+        # centimetres believes it is out while still beside a wall
+        scan = self._scan()
         return scan is None or all(math.isinf(scan[name]) for name in FRONT_SENSORS)
 
     def step(self) -> Status:
@@ -284,7 +346,7 @@ class WallFollow(RobotBehaviour):
             return self.fail(FailureCode.INVALID_INPUT, self._bad_input)
         pose = current_pose(self.robot)
         self.extra = {"turns": "".join(self.turns)}
-        if self._done(pose):
+        if self._done():
             self.robot.drive(0.0, 0.0)
             self.feedback_message = "left the maze" if self.params.until == "exit" else "reached the goal"
             return Status.SUCCESS
@@ -296,10 +358,12 @@ class WallFollow(RobotBehaviour):
 
     def _forward(self, pose: Pose) -> Status:
         p = self.params
-        scan = self.robot.proximity()
+        scan = self._scan()
         assert scan is not None
         ax, ay = self._axle(pose)
         s = (ax - self.origin[0]) * math.cos(self.heading) + (ay - self.origin[1]) * math.sin(self.heading)
+        ux, uy = _QUARTERS[self.quarter]
+        self.position = (self.segment_start[0] + s * ux, self.segment_start[1] + s * uy)
         side = scan[side_ray(p.side)]
         if self.target is None:
             if math.isfinite(side):
@@ -314,27 +378,27 @@ class WallFollow(RobotBehaviour):
         lead = self.speed * self.latency
         front_left = front - self.stop_distance - lead
         tol = 0.0005
+        if front_left <= tol and self.last_front - front > GLINT_JUMP:
+            # far or nothing ahead a tick ago and now a wall at the stop: a glint (Enki's cones at a
+            # wall's end read 0), as in MoveUntilWall: hold still for a tick and let the next reading say
+            self.last_front = front
+            self.robot.drive(0.0, 0.0)
+            self.speed = 0.0
+            return Status.RUNNING
+        self.last_front = front
         if self.target is not None and (self.target - s - lead <= tol or
                                         (front_left <= tol and self.target - s < p.cell / 2)):
             return self._begin_turn(self.sign, "opening")
-        if front_left <= tol and self.front_was_clear:
-            # nothing ahead a tick ago and now a wall at the stop: a glint (Enki's cones at a wall's
-            # end), as in MoveUntilWall: hold still for a tick and let the next reading say
-            self.front_was_clear = False
-            self.robot.drive(0.0, 0.0)
-            self.speed = 0.0
-            return Status.RUNNING
-        self.front_was_clear = math.isinf(front)
         if front_left <= tol:
             self.robot.drive(0.0, 0.0)
             self.speed = 0.0
-            self.mode, self.squaring = "square", []
-            return Status.RUNNING
+            return self._begin_square(FRONT_PAIR, then_turn=True)
         limit = p.speed
         if math.isfinite(front):
             limit = approach_speed(front_left, limit, self.gain, 0.005, self.ctx.tick_period)
         if self.target is not None:
             limit = min(limit, approach_speed(self.target - s - lead, p.speed, self.gain, 0.005, self.ctx.tick_period))
+        self._retake_heading(pose, scan)
         self.robot.drive(limit, self._steer(pose, scan))
         self.speed = limit
         self.feedback_message = (f"following the {p.side} wall" if self.target is None
@@ -354,70 +418,111 @@ class WallFollow(RobotBehaviour):
         """
         if self.anchor is None:
             return estimate
-        c, s_ = math.cos(self.heading), math.sin(self.heading)
-        along_x = abs(c) > abs(s_)
-        origin, anchor, direction = ((self.origin[0], self.anchor[0], c) if along_x
-                                     else (self.origin[1], self.anchor[1], s_))
+        axis = self.quarter % 2                             # 0: along x, 1: along y
+        origin, anchor = self.segment_start[axis], self.anchor[axis]
+        direction = _QUARTERS[self.quarter][axis]
         world = origin + estimate * direction
         snapped = anchor + round((world - anchor) / self.params.cell) * self.params.cell
         return max((snapped - origin) / direction, s)
 
     def _steer(self, pose: Pose, scan: dict[str, float] | object) -> float:
-        """Hold the corridor's heading, nudged towards the centre line when both sides are seen."""
+        """Hold the corridor's heading, nudged towards the centre line when a side wall is seen."""
         heading = self.heading
-        left, right, front = scan["front_left"], scan["front_right"], scan["front_center"]  # type: ignore[index]
-        if math.isfinite(left) and math.isfinite(right) and math.isinf(front):
-            x, y, yaw = _SENSOR["front_left"]
-            reach = math.sin(yaw)
-            offset = ((y + left * reach) - (y + right * reach)) / -2.0  # > 0: robot left of centre
-            if abs(offset) < 0.02:
-                heading -= max(-0.1, min(0.1, 5.0 * offset))
-                self._retake_heading(pose, offset)
-        else:
-            self.offsets.clear()
+        offset = self._offset(scan) if math.isinf(scan["front_center"]) else None  # type: ignore[index]
+        if offset is not None:
+            heading -= max(-0.1, min(0.1, 5.0 * offset))
         error = wrap_angle(heading - pose.yaw)
         return max(-0.5, min(0.5, 3.0 * error))
 
-    def _retake_heading(self, pose: Pose, offset: float) -> None:
-        """Between two side walls, a robot whose offset from the centre line holds still is parallel
-        to the corridor: its heading by odometry is then the corridor's. When that differs from the
-        heading held (odometry drifts on a real robot: 5-10° over a few turns on the Playground), take
-        it, so that the next turns start from the walls, not from the drift."""
-        self.offsets.append(offset)
-        if len(self.offsets) < STEADY_TICKS or max(self.offsets) - min(self.offsets) > STEADY_SPREAD:
-            return
-        if abs(wrap_angle(pose.yaw - self.heading)) > RETAKE_ANGLE:
-            self.heading = pose.yaw
-        self.offsets.clear()
+    def _offset(self, scan: dict[str, float] | object) -> float | None:
+        """The axle's offset from the corridor's centre line (> 0: left of it) by the ±38° rays, from
+        both side walls when both are seen, else from the one seen; None when neither reads a side
+        wall (a reading more than 2 cm off the centre line is a wall's end or a wall across, not one)."""
+        _, y, yaw = _SENSOR["front_left"]
+        reach = math.sin(yaw)
+        half = self.corridor / 2
+        found = []
+        for name, sign in (("front_left", 1.0), ("front_right", -1.0)):
+            reading = scan[name]  # type: ignore[index]
+            if math.isfinite(reading):
+                offset = sign * (half - (y + reading * reach))
+                if abs(offset) < 0.02:
+                    found.append(offset)
+        return sum(found) / len(found) if found else None
+
+    def _retake_heading(self, pose: Pose, scan: dict[str, float] | object) -> None:
+        """Re-take the corridor's heading from the side walls: where a side ray meets a straight wall
+        traces that wall in the odometry frame, whatever the robot's own heading, so the line through
+        the points is the corridor's direction as odometry sees it. Odometry's heading drifts (on the
+        Playground 2-5° a turn, and more when its simulated time falls behind the wall clock); the
+        walls do not. A wall's end, a glint or a wall across breaks the line and starts it again."""
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        for name, points in self.wall_points.items():
+            reading = scan[name]  # type: ignore[index]
+            if math.isinf(reading):
+                points.clear()
+                continue
+            x, y, yaw = self.sensors[name]
+            angle = pose.yaw + yaw
+            points.append((pose.x + c * x - s * y + reading * math.cos(angle),
+                           pose.y + s * x + c * y + reading * math.sin(angle)))
+            if math.dist(points[0], points[-1]) < WALL_SPAN:
+                continue
+            direction, residual = line_direction(points)
+            if residual > WALL_RESIDUAL:
+                last = points[-1]
+                points.clear()
+                points.append(last)
+                continue
+            error = wrap_angle(direction - self.heading)
+            error = wrap_angle(error - math.pi) if abs(error) > math.pi / 2 else error   # the line has two directions
+            if RETAKE_ANGLE < abs(error) < RETAKE_MAX:
+                self.heading = wrap_angle(self.heading + error)
+                for other in self.wall_points.values():
+                    other.clear()
+                return
+
+    def _begin_square(self, pair: tuple[str, str], then_turn: bool) -> Status:
+        self.robot.drive(0.0, 0.0)
+        self.mode, self.squaring, self.square_pair, self.square_then_turn = "square", [], pair, then_turn
+        return Status.RUNNING
 
     def _square(self, pose: Pose) -> Status:
-        """Stopped before a wall: read the two ±20° sensors for a few ticks, re-take the corridor's
-        heading from where they see the wall, then turn.
+        """Stopped square to a wall (ahead, or behind): read a pair of sensors that both see it for a
+        few ticks, re-take the corridor's heading from where they see the wall, then turn away from
+        the side (a wall ahead) or drive on (a wall behind).
 
-        Odometry's heading drifts a little at every turn; a wall ahead is square to the corridor, so
-        where the two sensors hit it gives the robot's true angle to it. A few stationary readings
-        are averaged (a real sensor's noise), and only small corrections are believed.
+        Odometry's heading drifts at every turn (on the Playground up to 5°: it samples wheel speeds
+        that change in steps); a wall across the corridor is square to it, so where the two sensors
+        hit it gives the robot's true angle to it. A few stationary readings are averaged (a real
+        sensor's noise), and corrections beyond RETAKE_MAX are not believed.
         """
-        scan = self.robot.proximity()
+        scan = self._scan()
         assert scan is not None
-        self.squaring.append((scan["front_center_left"], scan["front_center_right"]))
+        self.squaring.append((scan[self.square_pair[0]], scan[self.square_pair[1]], scan["front_center"]))
         if len(self.squaring) < SQUARING_READINGS:
             self.robot.drive(0.0, 0.0)
             return Status.RUNNING
-        readings = [sum(r[i] for r in self.squaring) / len(self.squaring) for i in (0, 1)]
-        if all(math.isfinite(r) for r in readings):
-            self._square_to_wall(pose, readings)
-        return self._begin_turn(-self.sign, "wall")
+        readings = [sum(r[i] for r in self.squaring) / len(self.squaring) for i in (0, 1, 2)]
+        near = self.params.cell / 2
+        if self.square_then_turn and not readings[2] < near:
+            self.mode = "forward"           # no wall ahead after all (a glint stopped the robot): go on
+            return Status.RUNNING
+        if readings[0] < near and readings[1] < near:    # both on the wall across, in this cell
+            self._square_to_wall(pose, readings[:2])
+        if self.square_then_turn:
+            return self._begin_turn(-self.sign, "wall")
+        return self._drive_on()
 
     def _square_to_wall(self, pose: Pose, readings: list[float]) -> None:
-        """Set the corridor's heading square to the wall the ±20° sensors read at ``readings``."""
+        """Set the corridor's heading square to the wall the squaring pair reads at ``readings``."""
         hits = []
-        for name, reading in zip(("front_center_left", "front_center_right"), readings):
+        for name, reading in zip(self.square_pair, readings):
             x, y, yaw = self.sensors[name]
             hits.append((x + reading * math.cos(yaw), y + reading * math.sin(yaw)))
         (lx, ly), (rx, ry) = hits
         error = math.atan2(lx - rx, ly - ry)          # > 0: the robot is turned left of the wall's normal
-        if abs(error) < math.radians(8):
+        if abs(error) < RETAKE_MAX:
             self.heading = wrap_angle(pose.yaw - error)
 
     def _begin_turn(self, direction: float, why: str) -> Status:
@@ -425,6 +530,7 @@ class WallFollow(RobotBehaviour):
         self.speed = 0.0
         self.mode = "turn"
         self.heading = wrap_angle(self.heading + direction * math.pi / 2)
+        self.quarter = (self.quarter + (1 if direction > 0 else -1)) % 4
         self.turn_reason = why
         self.turns.append("L" if direction > 0 else "R")
         return Status.RUNNING
@@ -439,12 +545,18 @@ class WallFollow(RobotBehaviour):
             return Status.RUNNING
         self.robot.drive(0.0, 0.0)
         self.rate = 0.0
-        scan = self.robot.proximity()
+        scan = self._scan()
         assert scan is not None
         if self.turn_reason == "wall" and scan["front_center"] < self.params.cell / 2:
-            return self._begin_turn(-self.sign, "wall")   # still a wall ahead, in this cell: a dead end
+            # still a wall ahead, in this cell: a dead end; square to that wall, and turn again
+            return self._begin_square(FRONT_PAIR, then_turn=True)
         if self.turn_reason == "wall":
-            self.anchor = self._axle(pose)        # stopped by a wall: the axle is in a cell centre
+            self.anchor = self.position           # stopped by a wall: the axle is in a cell centre
+        if all(scan[name] < self.params.cell / 2 for name in REAR_PAIR):
+            return self._begin_square(REAR_PAIR, then_turn=False)   # a wall behind, across the corridor
+        return self._drive_on()
+
+    def _drive_on(self) -> Status:
         self.mode = "forward"
         self.aligned = True
         self._new_segment()

@@ -99,6 +99,12 @@ class Node(ABC):
     def read_wheel_speeds(self) -> tuple[int, int]:
         """The latest measured ``motor.left.speed`` and ``motor.right.speed`` (units)."""
 
+    def read_wheel_travel(self) -> tuple[float, float] | None:
+        """How far each wheel has turned since the node connected (units x s), integrated at every
+        set of variables the robot sent; None for a node that only has the latest speeds (the
+        backend then integrates those at its ticks)."""
+        return None
+
     def close(self) -> None:
         """Release the robot (the default node holds nothing)."""
 
@@ -196,6 +202,7 @@ class ThymioRobot(Backend):
         self._raw: dict[str, int] | None = None
         self._scan: dict[str, float] | None = None
         self._wheels = (0.0, 0.0)               # latest measured wheel speeds, m/s
+        self._travel: tuple[float, float] | None = None   # the node's wheel travel at the last reading
         self._read_at = 0.0                     # backend time of that measurement
         self._axle = (0.0, 0.0, 0.0)            # odometry of the axle centre: x, y, yaw
         # no bumper: collisions stay empty (COLLISION never fires); no ground truth: min_clearance stays inf
@@ -304,8 +311,14 @@ class ThymioRobot(Backend):
         trapezoid rule), along the exact arc for that constant speed pair."""
         previous = self._wheels
         now = self._read_wheels()
-        left, right = (previous[0] + self._wheels[0]) / 2.0, (previous[1] + self._wheels[1]) / 2.0
-        self._integrate(left, right, now - self._read_at)
+        travel = self.node.read_wheel_travel()
+        if travel is not None and self._travel is not None:    # the node's own, finer integral
+            metres = self.config.metres_per_unit
+            self._integrate((travel[0] - self._travel[0]) * metres, (travel[1] - self._travel[1]) * metres, 1.0)
+        else:
+            left, right = (previous[0] + self._wheels[0]) / 2.0, (previous[1] + self._wheels[1]) / 2.0
+            self._integrate(left, right, now - self._read_at)
+        self._travel = travel
         self._read_at = now
         self._read_prox()
 
@@ -333,6 +346,7 @@ class ThymioRobot(Backend):
         self._cmd = Twist()
         self._present = True
         self._read_at = self._read_wheels()
+        self._travel = self.node.read_wheel_travel()
         self._read_prox()
 
     def _remove(self, name: str) -> str | None:
