@@ -193,6 +193,16 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             self.stop(new_status)
         self.status = new_status
 
+    def stop(self, new_status: Status) -> None:
+        """py_trees' ``Behaviour.stop``, its debug line built only when py_trees logs at debug level
+        (it formats two statuses on every stop, logged or not)."""
+        if py_trees.logging.level is py_trees.logging.Level.DEBUG:
+            super().stop(new_status)
+            return
+        self.terminate(new_status)
+        self.status = new_status
+        self.iterator = self.tick()
+
     @property
     def path(self) -> str:
         if self._path is None:

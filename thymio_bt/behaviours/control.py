@@ -7,7 +7,7 @@ runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock in
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any, Callable, Iterator
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -63,47 +63,51 @@ class RepeatUntil(py_trees.composites.Composite):
         self.iterations = 0
 
     def tick(self) -> Iterator[Behaviour]:
-        yield from self._tick(lambda child: child.tick())
+        child = self._begin()
+        while child is not None:
+            yield from child.tick()
+            child = self._after(child)
         yield self
 
     def tick_direct(self) -> None:
         """The same tick without generators (:mod:`.ticking`)."""
-        for _ in self._tick(_tick_directly):
-            pass
+        child = self._begin()
+        while child is not None:
+            tick(child)
+            child = self._after(child)
 
-    def _tick(self, tick_child: Callable[[Behaviour], Iterable[Behaviour]]) -> Iterator[Behaviour]:
-        """One tick of the loop; ``tick_child`` ticks a child and gives what it yields."""
-        body, condition = self.children
-        if self.status != Status.RUNNING:
+    def _begin(self) -> Behaviour:
+        """Start the loop if it is not running; the child to tick first."""
+        if self.status is not Status.RUNNING:
             for child in self.children:
-                if child.status != Status.INVALID:
+                if child.status is not Status.INVALID:
                     child.stop(Status.INVALID)
-            self.current_child = body
+            self.current_child = self.children[0]
             self.iterations = 0
             self.initialise()
-        if self.current_child is body:
-            yield from tick_child(body)
-            if body.status == Status.RUNNING:
+        return self.current_child
+
+    def _after(self, child: Behaviour) -> Behaviour | None:
+        """Act on ``child``'s status once it has ticked; the child to tick next in this tick, or None."""
+        body, condition = self.children
+        if child is body:
+            if body.status is Status.RUNNING:
                 self.status = Status.RUNNING
-                return
-            if body.status == Status.FAILURE:
+                return None
+            if body.status is Status.FAILURE:
                 self.stop(Status.FAILURE)
-                return
+                return None
             self.iterations += 1
             self.current_child = condition
-        yield from tick_child(condition)
-        if condition.status == Status.SUCCESS:
+            return condition
+        if condition.status is Status.SUCCESS:
             self.stop(Status.SUCCESS)
         else:
-            if condition.status == Status.FAILURE:
+            if condition.status is Status.FAILURE:
                 self.current_child = body
             self.status = Status.RUNNING
             self.feedback_message = f"iteration {self.iterations + 1}"
-
-
-def _tick_directly(child: Behaviour) -> tuple[()]:
-    tick(child)
-    return ()
+        return None
 
 
 class ScriptedStub(Behaviour):

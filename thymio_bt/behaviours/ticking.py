@@ -29,6 +29,7 @@ from py_trees.decorators import Decorator
 
 RUNNING, SUCCESS, FAILURE, INVALID = Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
 _STATUSES = frozenset(Status)
+_SUCCESS_ON_ALL, _SUCCESS_ON_ONE = ParallelPolicy.SuccessOnAll, ParallelPolicy.SuccessOnOne
 
 _Tick = Callable[[Behaviour], None]
 
@@ -71,10 +72,10 @@ def _sequence(seq: Sequence) -> None:
     """py_trees' ``Sequence.tick``: resume at the running child (memory) or start over."""
     children = seq.children
     index = 0
-    if seq.status != RUNNING:
+    if seq.status is not RUNNING:
         seq.current_child = children[0] if children else None
         for child in children:
-            if child.status != INVALID:
+            if child.status is not INVALID:
                 child.stop(INVALID)
         seq.initialise()
     elif seq.memory and seq.current_child is not None:
@@ -90,12 +91,12 @@ def _sequence(seq: Sequence) -> None:
         child = children[index]
         _TICK[child.__class__](child)
         status = child.status
-        if status != SUCCESS:
+        if status is not SUCCESS:
             if not seq.memory:                  # invalidate the rest: no dangling runners
                 for later in children[index + 1:]:
-                    if later.status != INVALID:
+                    if later.status is not INVALID:
                         later.stop(INVALID)
-            if status != RUNNING:
+            if status is not RUNNING:
                 seq.stop(status)
             else:
                 seq.status = status
@@ -110,7 +111,7 @@ def _selector(sel: Selector) -> None:
     """py_trees' ``Selector.tick``: the first child that does not fail wins; a change of winner
     invalidates the lower priorities."""
     children = sel.children
-    if sel.status != RUNNING:
+    if sel.status is not RUNNING:
         sel.current_child = children[0] if children else None
         sel.initialise()
     if not children:
@@ -120,7 +121,7 @@ def _selector(sel: Selector) -> None:
     if sel.memory:
         index = children.index(sel.current_child)
         for child in children[:index]:
-            if child.status != INVALID:
+            if child.status is not INVALID:
                 child.stop(INVALID)
     else:
         index = 0
@@ -128,15 +129,15 @@ def _selector(sel: Selector) -> None:
     for child in children[index:]:
         _TICK[child.__class__](child)
         status = child.status
-        if status == RUNNING or status == SUCCESS:
+        if status is RUNNING or status is SUCCESS:
             sel.current_child = child
             if previous is None or previous != child:
                 passed = False
                 for other in children:
-                    if passed and other.status != INVALID:
+                    if passed and other.status is not INVALID:
                         other.stop(INVALID)
                     passed = True if other == child else passed
-            if status == SUCCESS:
+            if status is SUCCESS:
                 sel.stop(status)
             else:
                 sel.status = status
@@ -149,14 +150,13 @@ def _parallel(par: Parallel) -> None:
     """py_trees' ``Parallel.tick`` with the policies the mission language builds (success on all,
     success on one); another policy goes through the generator."""
     policy = par.policy
-    if not isinstance(policy, (ParallelPolicy.SuccessOnAll, ParallelPolicy.SuccessOnOne)):
-        _generator(par)
+    if policy.__class__ is not _SUCCESS_ON_ALL and policy.__class__ is not _SUCCESS_ON_ONE:
+        _generator(par)            # SuccessOnSelected (whose configuration its tick validates) or another
         return
-    par.validate_policy_configuration()
     children = par.children
-    if par.status != RUNNING:
+    if par.status is not RUNNING:
         for child in children:
-            if child.status != INVALID:
+            if child.status is not INVALID:
                 child.stop(INVALID)
         par.current_child = None
         par.initialise()
@@ -166,38 +166,44 @@ def _parallel(par: Parallel) -> None:
         return
     synchronise = policy.synchronise
     for child in children:
-        if synchronise and child.status == SUCCESS:
+        if synchronise and child.status is SUCCESS:
             continue
         _TICK[child.__class__](child)
     new_status = RUNNING
     par.current_child = children[-1]
-    failed = next((child for child in children if child.status == FAILURE), None)
-    if failed is not None:
-        par.current_child = failed
-        new_status = FAILURE
-    elif isinstance(policy, ParallelPolicy.SuccessOnAll):
-        if all(child.status == SUCCESS for child in children):
-            new_status = SUCCESS
-            par.current_child = children[-1]
-    else:
-        for child in reversed(children):
-            if child.status == SUCCESS:
+    succeeded = 0
+    for child in children:
+        status = child.status
+        if status is FAILURE:
+            par.current_child = child
+            new_status = FAILURE
+            break
+        if status is SUCCESS:
+            succeeded += 1
+    if new_status is RUNNING:
+        if policy.__class__ is _SUCCESS_ON_ALL:
+            if succeeded == len(children):
                 new_status = SUCCESS
-                par.current_child = child
-                break
-    if new_status != RUNNING:
+                par.current_child = children[-1]
+        else:
+            for child in reversed(children):
+                if child.status is SUCCESS:
+                    new_status = SUCCESS
+                    par.current_child = child
+                    break
+    if new_status is not RUNNING:
         par.stop(new_status)
     par.status = new_status
 
 
 def _decorator(dec: Decorator) -> None:
     """py_trees' ``Decorator.tick``: the child first, then the decorator's own update."""
-    if dec.status != RUNNING:
+    if dec.status is not RUNNING:
         dec.initialise()
     tick(dec.decorated)
     new_status = dec.update()
     if new_status not in _STATUSES:
         new_status = INVALID
-    if new_status != RUNNING:
+    if new_status is not RUNNING:
         dec.stop(new_status)
     dec.status = new_status
