@@ -67,10 +67,11 @@ def test_spinning_keeps_the_axle_fixed_and_base_link_on_a_0_0243_circle():
 
 
 def test_command_is_held_and_limited_to_the_wheel_speed_keeping_the_radius():
-    assert thymio_model.limit_command(0.3, 0.0) == pytest.approx((0.2, 0.0))
-    v, w = thymio_model.limit_command(0.2, 2.0)
-    left, right = thymio_model.wheel_speeds(v, w)
+    assert thymio_model.limited_wheel_speeds(0.3, 0.0) == pytest.approx((0.2, 0.2))
+    assert thymio_model.limited_wheel_speeds(0.05, 0.1) == thymio_model.wheel_speeds(0.05, 0.1)   # within the limit
+    left, right = thymio_model.limited_wheel_speeds(0.2, 2.0)
     assert max(abs(left), abs(right)) == pytest.approx(0.2)
+    v, w = thymio_model.body_velocity(left, right)
     assert v / w == pytest.approx(0.2 / 2.0)           # same turn radius
     sim = Simulation(world("arena"), spawn=Pose(0.3, 0.6, 0.0))
     sim.drive(1.0, 0.0)
@@ -195,10 +196,9 @@ def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
         if probe.spawn_problem("thymio", pose):
             continue
         sim = Simulation(maze, spawn=pose)               # the spawn computes the clearance once
-        walls = [s for s in sim.space.shapes if s.collision_type == 2]
-        entity = sim._entities["thymio"]
+        tracker, entity = sim._clearance, sim._entities["thymio"]
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        exact = sim._exact_gap(entity, walls, pose.x, pose.y, c, s)
+        exact = tracker.exact(list(tracker.walls), entity.shape, pose.x, pose.y, c, s)
         if exact < 0.05:                                 # within the tracked horizon
             assert sim.min_clearance == pytest.approx(exact, abs=1e-9)
             checked += 1

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Literal
 
 import pymunk
@@ -35,7 +34,6 @@ from ..robot_model import COURSE, RobotModel, integrate_arc
 from .cone import APERTURE, ConeResponse
 from .fastpath import (
     NearShapes,
-    PointDistance,
     RayCaster,
     body_driver,
     body_reader,
@@ -43,45 +41,16 @@ from .fastpath import (
     spinner,
     stepper,
 )
+from .clearance import ClearanceTracker, TrackedWall, hull_tables
 from .noise import NoiseConfig, NoiseSource
 from .walls import wall_grid
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
-#: The hull's extent tables are made in 1 degree steps.
-_EXTENT_STEP = math.radians(1.0)
-_EXTENT_STEPS = 360
 #: The clearance tracker's wall grid: cell size, and the smallest gap record it serves (m); above
 #: it (a run's first ticks) every wall is a candidate.
 _GRID_CELL = 0.05
 _GRID_RECORD = 0.05
-
-
-@dataclass(frozen=True, slots=True)
-class _HullTables:
-    """A hull seen from its axle, for the clearance tracker: ``reach`` is the farthest hull point
-    from the axle; ``extent`` the hull's extent in each direction (1 degree steps), padded by the
-    most it can grow within half a step so it never underestimates (a cheap, safe support
-    function); ``support`` the hull vertices that can be the support point in each direction."""
-
-    reach: float
-    extent: tuple[float, ...]
-    support: tuple[tuple[tuple[float, float], ...], ...]
-
-
-@lru_cache(maxsize=8)
-def _hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> _HullTables:
-    from_axle = tuple((x - axle_x, y) for x, y in hull)
-    reach = max(math.hypot(x, y) for x, y in from_axle)
-    extent = tuple(
-        max(x * math.cos(i * _EXTENT_STEP) + y * math.sin(i * _EXTENT_STEP) for x, y in from_axle)
-        + reach * _EXTENT_STEP / 2 for i in range(_EXTENT_STEPS))
-    support = tuple(
-        tuple(from_axle[(k + j) % len(from_axle)] for j in (-1, 0, 1))
-        for k in (max(range(len(from_axle)),
-                      key=lambda v, i=i: from_axle[v][0] * math.cos(i * _EXTENT_STEP)
-                      + from_axle[v][1] * math.sin(i * _EXTENT_STEP)) for i in range(_EXTENT_STEPS)))
-    return _HullTables(reach, extent, support)
 
 
 def _wall_frame(wall: Wall) -> tuple[float, ...]:
@@ -192,7 +161,6 @@ class Simulation(Backend):
         super().__init__()
         self.config = config or SimConfig()
         self.model = self.config.robot
-        self._hull = _hull_tables(self.model.hull, self.model.axle_x)
         self._max_wheel = self.model.max_wheel_speed if self.config.max_wheel_speed is None \
             else self.config.max_wheel_speed
         self.robot_name = robot_name
@@ -200,8 +168,7 @@ class Simulation(Backend):
         self.space.collision_slop = 0.0002
         self.space.iterations = 10
         self._shapes = MazeShapes.of(maze)       # walls, then obstacles: polygons and boxes
-        self._wall_frames: dict[pymunk.Shape, tuple[float, ...] | None] = {}
-        self._wall_corners: dict[pymunk.Shape, tuple[tuple[float, float], ...]] = {}
+        tracked: list[TrackedWall] = []
         walled = len(maze.walls)
         boxes = []
         for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):    # obstacles first
@@ -210,15 +177,11 @@ class Simulation(Backend):
             shape.collision_type = _WALL_TYPE
             shape.friction = 1.0
             self.space.add(shape)
-            self._wall_frames[shape] = None if index >= walled else _wall_frame(maze.walls[index])
-            self._wall_corners[shape] = corners
+            tracked.append((shape, None if index >= walled else _wall_frame(maze.walls[index]), corners))
             boxes.append(self._shapes.boxes[index])
         self.bounds = self._shapes.bounds
-        xmin, ymin, xmax, ymax = self.bounds
-        self._farthest_gap = math.hypot(xmax - xmin, ymax - ymin)     # no gap inside the maze exceeds it
-        self._wall_shapes = tuple(self._wall_corners)
-        self._walls = wall_grid(tuple(boxes), _GRID_CELL, self._hull.reach + _GRID_RECORD)
-        self._distance = PointDistance()
+        grid = wall_grid(tuple(boxes), _GRID_CELL, hull_tables(self.model.hull, self.model.axle_x).reach + _GRID_RECORD)
+        self._clearance = ClearanceTracker(self.model, tracked, grid, self.bounds)
         self._dt = 1.0 / self.config.physics_hz
         self._step = stepper(self.space)
         self._ray = RayCaster(self.space)
@@ -375,12 +338,14 @@ class Simulation(Backend):
         last, wheels = self._wheels_of_command
         fresh = last is not cmd and (last is None or cmd.linear != last.linear or cmd.angular != last.angular)
         if fresh:                  # the limited wheel speeds are a function of the command: once per command
-            wheels = model.wheel_speeds(*model.limit_command(cmd.linear, cmd.angular, self._max_wheel))
+            wheels = model.limited_wheel_speeds(cmd.linear, cmd.angular, self._max_wheel)
             self._wheels_of_command = (cmd, wheels)
-        if fresh or self._noisy_wheels:         # noisy wheels err anew with every command sent
+        if fresh or self._noisy_wheels:
             left, right = wheels
-            fl, fr = self._noise.wheel_factors()
-            self._velocity = model.body_velocity(left * fl, right * fr)
+            if self._noisy_wheels:              # noisy wheels err anew with every command sent
+                fl, fr = self._noise.wheel_factors()
+                left, right = left * fl, right * fr
+            self._velocity = model.body_velocity(left, right)
         v, w = self._applied = self._velocity
         entity = self._entities.get(self.robot_name)
         if entity is not None:
@@ -412,6 +377,11 @@ class Simulation(Backend):
             self._odo_pose = (self._odo, pose)
         return pose
 
+    def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
+        gap = self._clearance.below(self.min_clearance, entity.near, entity.shape, bx, by, cos, sin)
+        if gap < self.min_clearance:
+            self.min_clearance = max(gap, 0.0)
+
     def _refresh_sensors(self, entity: _Body) -> None:
         """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
         bx, by, angle = entity.read()
@@ -441,93 +411,6 @@ class Simulation(Backend):
             scan = raw_scan_to_metres(self._raw, raw.table)
         self._scan = scan
         self._update_clearance(entity, bx, by, cos, sin)
-
-    def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
-        """Track the smallest hull-to-wall gap, exactly, cheaply in the common case.
-
-        First one C query asks whether anything is closer to the hull than the record: mostly not,
-        and then there is nothing to compute.
-        For each wall near the axle, q is its closest point and n the direction to it. When q lies
-        on a long face of a wall box, the face's line is at distance d from the axle and the hull's
-        support point in direction n is nearest to it: if that point projects onto the face, the
-        gap is exactly d - extent(n). Otherwise (wall ends, corners, polygons) d - extent(n) is a
-        lower bound, and the polygon distance is computed only if the bound could beat the record
-        and the gaps found on long faces.
-        """
-        record = self._farthest_gap if self._farthest_gap < self.min_clearance else self.min_clearance
-        if not entity.near.within(record + 1e-6):      # nothing can beat the record: one C query
-            return
-        tables = self._hull
-        ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
-        best = math.inf
-        candidates: list[tuple[float, pymunk.Shape]] = []         # (a lower bound of its gap, wall)
-        radius, axle, distance, shapes = tables.reach + record, (ax, ay), self._distance, self._wall_shapes
-        extents, supports, frames, atan2 = tables.extent, tables.support, self._wall_frames, math.atan2
-        for index in self._walls.near(ax, ay, radius):
-            shape = shapes[index]
-            d, qx, qy = distance(shape, axle)
-            if d >= radius:                    # what a space point query within the radius leaves out
-                continue
-            if d <= 0.0:
-                candidates.append((-math.inf, shape))
-                continue
-            nx, ny = (qx - ax) / d, (qy - ay) / d
-            lx, ly = nx * cos + ny * sin, ny * cos - nx * sin      # n in the body frame
-            index = round(atan2(ly, lx) / _EXTENT_STEP) % _EXTENT_STEPS
-            frame = frames[shape]
-            if frame is not None:
-                cx, cy, ux, uy, hl, _ = frame
-                along = (qx - cx) * ux + (qy - cy) * uy
-                if -(hl - 1e-9) < along < hl - 1e-9:                          # q on a long face
-                    extent = -math.inf
-                    for sx, sy in supports[index]:                           # the first farthest along n
-                        along = sx * lx + sy * ly
-                        if along > extent:
-                            extent, vx, vy = along, sx, sy
-                    px = ax + vx * cos - vy * sin                              # the support point
-                    py = ay + vx * sin + vy * cos
-                    along = (px - cx) * ux + (py - cy) * uy
-                    if -hl <= along <= hl:                                    # it projects onto the face
-                        if d - extent < best:
-                            best = d - extent
-                        continue
-            if d - extents[index] < record - 1e-6:
-                candidates.append((d - extents[index], shape))
-        walls = [shape for bound, shape in candidates if bound < best]    # others cannot beat the faces
-        if walls:
-            best = min(best, self._exact_gap(entity, walls, bx, by, cos, sin))
-        if best < self.min_clearance:
-            self.min_clearance = max(best, 0.0)
-
-    def _exact_gap(self, entity: _Body, walls: list[pymunk.Shape], bx: float, by: float,
-                   cos: float, sin: float) -> float:
-        """The exact distance between the hull and the nearest of ``walls`` (convex polygons):
-        hull vertices to each wall, then the wall corners that could be nearer than that to the hull."""
-        hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in self.model.hull]
-        ax, ay = bx + self.model.axle_x * cos, by + self.model.axle_x * sin
-        gap = math.inf
-        for wall in walls:
-            frame = self._wall_frames[wall]
-            if frame is None:                  # a polygon obstacle: ask Chipmunk
-                gap = min(gap, min(self._distance(wall, p)[0] for p in hull))
-            else:
-                cx, cy, ux, uy, hl, ht = frame
-                for px, py in hull:
-                    dx, dy = px - cx, py - cy
-                    along, across = dx * ux + dy * uy, dy * ux - dx * uy
-                    # abs() without a builtin call: the sign of a zero is lost in subtracting hl, ht > 0
-                    ex = (along if along >= 0.0 else -along) - hl
-                    ey = (across if across >= 0.0 else -across) - ht
-                    if ex >= gap or ey >= gap:     # the distance is at least max(ex, ey): not nearer
-                        continue
-                    d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
-                    if d < gap:
-                        gap = d
-        for wall in walls:
-            for cx, cy in self._wall_corners[wall]:
-                if math.hypot(cx - ax, cy - ay) - self._hull.reach < gap:    # could this corner be nearer?
-                    gap = min(gap, self._distance(entity.shape, (cx, cy))[0])
-        return gap
 
     # -------------------------------------------------------------- entities
     def _add_robot(self, name: str, pose: Pose) -> None:
