@@ -87,15 +87,18 @@ class RobotModel:
         """Linear and angular velocity from wheel rim speeds."""
         return (left + right) / 2.0, (right - left) / self.wheel_separation
 
-    def limit_command(self, linear: float, angular: float, max_wheel: float | None = None) -> tuple[float, float]:
-        """Scale both wheels down when one would exceed ``max_wheel``, keeping the turn radius."""
+    def limited_wheel_speeds(self, linear: float, angular: float, max_wheel: float | None = None) -> tuple[float, float]:
+        """The wheel speeds of a command, both scaled down when one would exceed ``max_wheel`` (the
+        robot's limit by default), which keeps the turn radius."""
         limit = self.max_wheel_speed if max_wheel is None else max_wheel
         left, right = self.wheel_speeds(linear, angular)
-        fastest = max(abs(left), abs(right))
+        # max(abs(left), abs(right)) without builtin calls (once per command on the hot path)
+        left_abs, right_abs = (-left if left < 0.0 else left), (-right if right < 0.0 else right)
+        fastest = right_abs if right_abs > left_abs else left_abs
         if fastest <= limit:
-            return linear, angular
+            return left, right
         scale = limit / fastest
-        return linear * scale, angular * scale
+        return self.wheel_speeds(linear * scale, angular * scale)
 
     # ------------------------------------------------------------------ frames
     def axle_of(self, pose: Pose) -> tuple[float, float, float]:
