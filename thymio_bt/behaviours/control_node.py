@@ -36,7 +36,7 @@ if TYPE_CHECKING:
 class ControlParams(BaseModel):
     """Parameters of a composite or decorator (none by default)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", defer_build=True)
 
 
 class ControlNode:
