@@ -182,14 +182,24 @@ def stepper(space: pymunk.Space) -> Callable[[float], None]:
 
 
 class RayCaster:
-    """First-hit segment queries in one space, reusing one result buffer and one C filter per filter."""
+    """First-hit segment queries in one space, with one result buffer and one C filter per filter.
 
-    __slots__ = ("_query", "_info", "_null", "_filters")
+    A ray's two end points are written into a preallocated ``cpVect[2]`` through a memoryview and
+    passed as C structs (cffi converts a Python tuple to a struct field by field: 2.7 k instructions
+    per query, four times the query itself), and the hit is read from the result's ``alpha``:
+    Chipmunk leaves it at 1.0 when nothing is hit and records only hits below it.
+    """
+
+    __slots__ = ("_alpha", "_end", "_ends", "_filters", "_info", "_points", "_query", "_result", "_start")
 
     def __init__(self, space: pymunk.Space) -> None:
         self._query = partial(lib.cpSpaceSegmentQueryFirst, space._space)
         self._info = ffi.new("cpSegmentQueryInfo *")
-        self._null = ffi.NULL
+        self._result = memoryview(ffi.buffer(self._info)).cast("d")
+        self._alpha = ffi.offsetof("cpSegmentQueryInfo", "alpha") // 8
+        self._ends = ffi.new("cpVect[2]")
+        self._start, self._end = self._ends[0], self._ends[1]
+        self._points = memoryview(ffi.buffer(self._ends)).cast("d")     # x0, y0, x1, y1
         self._filters: dict[pymunk.ShapeFilter, Any] = {}
 
     def _c_filter(self, shape_filter: pymunk.ShapeFilter) -> Any:
@@ -204,16 +214,18 @@ class RayCaster:
         """For each ray ``(sx, sy, ex, ey)`` (start and end in a body frame, the body at ``(x, y)`` with
         a heading of this cosine and sine): where along it (0..1) it first touches a shape the filter
         admits, or None."""
-        query, info, null = self._query, self._info, self._null
-        flt = self._c_filter(shape_filter)
+        query, info, start, end, points = self._query, self._info, self._start, self._end, self._points
+        result, flt, alpha_at = self._result, self._c_filter(shape_filter), self._alpha
         alphas: list[float | None] = []
         hit = alphas.append
         for sx, sy, ex, ey in rays:
-            if query((x + sx * cos - sy * sin, y + sx * sin + sy * cos),
-                     (x + ex * cos - ey * sin, y + ex * sin + ey * cos), 0.0, flt, info) == null:
-                hit(None)
-            else:
-                hit(info.alpha)
+            points[0] = x + sx * cos - sy * sin
+            points[1] = y + sx * sin + sy * cos
+            points[2] = x + ex * cos - ey * sin
+            points[3] = y + ex * sin + ey * cos
+            query(start, end, 0.0, flt, info)
+            alpha = result[alpha_at]
+            hit(alpha if alpha < 1.0 else None)
         return alphas
 
 
