@@ -155,7 +155,9 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.ctx = ctx
         self.robot = ctx.robot
         self.failure: tuple[str, str] | None = None
-        self.extra: dict[str, Any] = {}
+        #: fields added to the behaviour_end event: a dict, or a function giving one when the
+        #: behaviour ends (a behaviour that updates them every tick saves rounding what nobody reads)
+        self.extra: dict[str, Any] | Callable[[], dict[str, Any]] = {}
         self._refs = dict(blackboard_refs or {})
         self._reader = None
         if self._refs:
@@ -204,6 +206,24 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.terminate(new_status)
         self.status = new_status
         self.iterator = self.tick()
+
+    @property
+    def feedback_message(self) -> str:
+        """py_trees' one-line status of the node, formatted when read (see :meth:`say`)."""
+        message = self._feedback
+        if message.__class__ is not str:
+            template, args = message
+            message = self._feedback = template.format(*args)
+        return message
+
+    @feedback_message.setter
+    def feedback_message(self, message: str) -> None:
+        self._feedback: str | tuple[str, tuple[Any, ...]] = message
+
+    def say(self, template: str, *args: Any) -> None:
+        """Set the feedback line to ``template.format(*args)``, formatted only if something reads it
+        (a display, the final tree): a line set every tick costs a float formatting each otherwise."""
+        self._feedback = (template, args)
 
     @property
     def path(self) -> str:
@@ -277,7 +297,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         event: dict[str, Any] = {"name": self.yaml_name, "path": self.path, "status": new_status.name}
         if self.failure is not None:
             event["code"], event["reason"] = self.failure
-        event.update(self.extra)
+        event.update(self.extra if isinstance(self.extra, dict) else self.extra())
         event.update(snapshot(self.robot))
         self.ctx.events.emit(self.ctx.now(), "behaviour_end", **event)
 

@@ -414,7 +414,7 @@ class MoveCells(_Sensing):
         speed = approach_speed(abs(remaining), p.speed, 5.0, 0.005, self.ctx.tick_period)
         self.robot.drive(direction * speed, max(-0.5, min(0.5, 3.0 * error)))
         self.extra = {"remaining": round(remaining, 6)}
-        self.feedback_message = f"{remaining:.3f} m to go"
+        self.say("{:.3f} m to go", remaining)
         return Status.RUNNING
 
     def _map_sides(self, scan: dict[str, float]) -> None:

@@ -97,7 +97,7 @@ class WallAhead(ConditionBehaviour):
         scan = self.robot.proximity()
         assert scan is not None
         reading = scan[self.params.sensor]
-        self.feedback_message = f"{self.params.sensor} reads {reading:.4f}"
+        self.say("{} reads {:.4f}", self.params.sensor, reading)
         return Status.SUCCESS if reading <= self.params.distance else Status.FAILURE
 
 
@@ -541,7 +541,7 @@ class WallFollow(RobotBehaviour):
             rate = approach_speed(abs(error), self.params.turn_speed, self.gain, MIN_TURN_RATE, self.ctx.tick_period)
             self.rate = math.copysign(rate, error)
             self.robot.drive(0.0, self.rate)
-            self.feedback_message = f"turning, {math.degrees(error):.1f} deg to go"
+            self.say("turning, {:.1f} deg to go", math.degrees(error))
             return Status.RUNNING
         self.robot.drive(0.0, 0.0)
         self.rate = 0.0

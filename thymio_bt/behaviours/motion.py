@@ -128,7 +128,7 @@ class MoveUntilWall(RobotBehaviour):
             self.saw_nothing = False
             self.robot.drive(0.0, 0.0)
             self.speed = 0.0
-            self.feedback_message = f"{p.sensor} jumped to {reading:.4f} m: checking"
+            self.say("{} jumped to {:.4f} m: checking", p.sensor, reading)
             return Status.RUNNING
         self.saw_nothing = infinite
         if finite:
@@ -142,10 +142,10 @@ class MoveUntilWall(RobotBehaviour):
             remaining -= self.speed * getattr(self.robot, "latency", 0.0)
         else:
             self.walls.clear()
-        self.extra = {"range": None if infinite else round(reading, 6), "distance": p.distance}
+        self.reading, self.extra = reading, self._end_fields
         if remaining <= p.tolerance:
             self.robot.drive(0.0, 0.0)
-            self.feedback_message = f"stopped at {reading:.4f} m"
+            self.say("stopped at {:.4f} m", reading)
             return Status.SUCCESS
         speed = p.speed if infinite else approach_speed(
             remaining, p.speed, late_gain(p.approach_gain, self.robot, self.ctx.tick_period), p.min_speed,
@@ -159,9 +159,15 @@ class MoveUntilWall(RobotBehaviour):
             turn = heading_hold(pose.yaw, self.heading) if p.hold_heading else 0.0
         self.robot.drive(speed, turn)
         self.speed = speed
-        self.feedback_message = ("no wall in range" if infinite
-                                 else f"{p.sensor} {reading:.4f} m, {speed:.3f} m/s")
+        if infinite:
+            self.feedback_message = "no wall in range"
+        else:
+            self.say("{} {:.4f} m, {:.3f} m/s", p.sensor, reading, speed)
         return Status.RUNNING
+
+    def _end_fields(self) -> dict[str, float | None]:
+        """The behaviour_end fields: the last range read and the stop distance."""
+        return {"range": None if math.isinf(self.reading) else round(self.reading, 6), "distance": self.params.distance}
 
     def on_timeout(self) -> Status:
         if not self.wall_seen:
@@ -223,14 +229,17 @@ class MoveDistance(RobotBehaviour):
         pose = current_pose(self.robot)           # read once: nothing moves the robot within a tick
         done = self.travelled(pose)
         remaining = p.distance - done
-        self.extra = {"distance": round(done, 6)}
+        self.done, self.extra = done, self._end_fields
         if abs(remaining) <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             return Status.SUCCESS
         speed = approach_speed(abs(remaining), p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
         self.robot.drive(math.copysign(speed, remaining), heading_hold(pose.yaw, self.origin.yaw))
-        self.feedback_message = f"{done:.3f} of {p.distance:.3f} m"
+        self.say("{:.3f} of {:.3f} m", done, p.distance)
         return Status.RUNNING
+
+    def _end_fields(self) -> dict[str, float]:
+        return {"distance": round(self.done, 6)}
 
 
 class TurnAngleParams(BehaviourParams):
@@ -293,7 +302,7 @@ class TurnAngle(RobotBehaviour):
         delta = wrap_angle(yaw - self.last_yaw)
         self.last_yaw = yaw
         self.turned += delta
-        self.extra = {"angle": round(self.turned, 6)}
+        self.extra = self._end_fields
         p = self.params
         # a late robot turns this much more before anything sent now acts
         error = self.goal - self.turned - self.rate * getattr(self.robot, "latency", 0.0)
@@ -307,15 +316,18 @@ class TurnAngle(RobotBehaviour):
             error = math.atan2(left - right, REAR_SENSOR_SPACING)
         if abs(error) <= self.tolerance:
             self.robot.drive(0.0, 0.0)
-            self.feedback_message = f"turned {math.degrees(self.turned):.2f} deg"
+            self.say("turned {:.2f} deg", math.degrees(self.turned))
             return Status.SUCCESS
         rate = approach_speed(abs(error), p.speed, late_gain(5.0, self.robot, self.ctx.tick_period), MIN_TURN_RATE,
                               self.ctx.tick_period)
         # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
         self.rate = math.copysign(rate, error)
         self.robot.drive(-rate * p.pivot, self.rate)
-        self.feedback_message = f"{math.degrees(error):.2f} deg to go"
+        self.say("{:.2f} deg to go", math.degrees(error))
         return Status.RUNNING
+
+    def _end_fields(self) -> dict[str, float]:
+        return {"angle": round(self.turned, 6)}
 
 
 class StopParams(BehaviourParams):
@@ -362,5 +374,5 @@ class Wait(RobotBehaviour):
     def step(self) -> Status:
         if self.elapsed() >= self.params.seconds - 1e-9:
             return Status.SUCCESS
-        self.feedback_message = f"{self.params.seconds - self.elapsed():.1f} s left"
+        self.say("{:.1f} s left", self.params.seconds - self.elapsed())
         return Status.RUNNING

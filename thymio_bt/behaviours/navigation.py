@@ -349,7 +349,7 @@ class TurnBack(_CountingTurn):
             return self.fail(FailureCode.BLOCKED, "obstacle ahead: turn away again")
         rate = approach_speed(abs(counter), self.params.speed, 5.0, 0.02, self.ctx.tick_period)
         self.robot.drive(0.0, -math.copysign(rate, counter))
-        self.feedback_message = f"{math.degrees(counter):.1f} deg to turn back"
+        self.say("{:.1f} deg to turn back", math.degrees(counter))
         return Status.RUNNING
 
 
