@@ -193,14 +193,15 @@ class Simulation(Backend):
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
         self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)   # (step, entity, its pose)
-        self._cmd = Twist()
-        #: the last drive() arguments and their Twist: a behaviour cruising passes the same float
-        #: objects tick after tick, and a frozen dataclass costs more to make than to reuse
-        self._drive_args: tuple[object, object, Twist] = (None, None, self._cmd)
+        #: the held command (linear, angular) as floats; command() makes it a Twist when asked
+        self._cmd = (0.0, 0.0)
+        #: the last drive() arguments and their floats: a behaviour cruising passes the same float
+        #: objects tick after tick
+        self._drive_args: tuple[object, object, tuple[float, float]] = (None, None, self._cmd)
         self._applied = (0.0, 0.0)
         self._wheels_of: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
         #: the last command whose wheel speeds were worked out (limited), and those speeds
-        self._wheels_of_command: tuple[Twist | None, tuple[float, float]] = (None, (0.0, 0.0))
+        self._wheels_of_command: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
         self._velocity = (0.0, 0.0)            # the body velocity (v, w) of the command, noise included
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
@@ -227,7 +228,7 @@ class Simulation(Backend):
             return
         last_linear, last_angular, cmd = self._drive_args
         if linear is not last_linear or angular is not last_angular:
-            cmd = Twist(float(linear), float(angular))
+            cmd = (float(linear), float(angular))
             self._drive_args = (linear, angular, cmd)
         self._cmd = cmd
         if self._delay_steps:
@@ -270,7 +271,7 @@ class Simulation(Backend):
         return Twist(body.velocity.dot(body.rotation_vector), body.angular_velocity)
 
     def command(self) -> Twist:
-        return self._cmd
+        return Twist(*self._cmd)
 
     def time(self) -> float:
         return self._steps * self._dt
@@ -336,9 +337,10 @@ class Simulation(Backend):
         """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
         model, cmd = self.model, self._cmd
         last, wheels = self._wheels_of_command
-        fresh = last is not cmd and (last is None or cmd.linear != last.linear or cmd.angular != last.angular)
+        linear, angular = cmd
+        fresh = last is not cmd and (last is None or linear != last[0] or angular != last[1])
         if fresh:                  # the limited wheel speeds are a function of the command: once per command
-            wheels = model.limited_wheel_speeds(cmd.linear, cmd.angular, self._max_wheel)
+            wheels = model.limited_wheel_speeds(linear, angular, self._max_wheel)
             self._wheels_of_command = (cmd, wheels)
         if fresh or self._noisy_wheels:
             left, right = wheels
@@ -418,7 +420,7 @@ class Simulation(Backend):
         self._entities[name] = entity
         if name == self.robot_name:
             self._odo = self.model.axle_of(pose)
-            self._cmd = Twist()
+            self._cmd = (0.0, 0.0)
             self._applied = (0.0, 0.0)
             self._refresh_sensors(entity)
 
@@ -428,7 +430,7 @@ class Simulation(Backend):
             return f"no entity named '{name}' (existing: {', '.join(sorted(self._entities)) or 'none'})"
         entity.remove(self.space)
         if name == self.robot_name:
-            self._scan, self._cmd, self._contacts = None, Twist(), 0
+            self._scan, self._cmd, self._contacts = None, (0.0, 0.0), 0
         return None
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
