@@ -108,6 +108,9 @@ class MoveUntilWall(RobotBehaviour):
         self.walls: deque[float] = deque(maxlen=WALL_READINGS)   # the wall's place along the heading, per reading
         self.speed = 0.0                                        # the speed last commanded
         self.saw_nothing = False                                # the last reading was out of range
+        # a backend's latency and the approach gain it allows: fixed for the run
+        self.latency = getattr(self.robot, "latency", 0.0)
+        self.gain = late_gain(self.params.approach_gain, self.robot, self.ctx.tick_period)
 
     def _travelled(self, pose: Pose) -> float:
         return ((pose.x - self.origin[0]) * math.cos(self.heading)
@@ -139,7 +142,7 @@ class MoveUntilWall(RobotBehaviour):
             self.walls.append(travelled + reading)
             remaining = sum(self.walls) / len(self.walls) - travelled - p.distance
             # a late robot (readings and commands) covers this much before anything sent now acts
-            remaining -= self.speed * getattr(self.robot, "latency", 0.0)
+            remaining -= self.speed * self.latency
         else:
             self.walls.clear()
         self.reading, self.extra = reading, self._end_fields
@@ -147,9 +150,8 @@ class MoveUntilWall(RobotBehaviour):
             self.robot.drive(0.0, 0.0)
             self.say("stopped at {:.4f} m", reading)
             return Status.SUCCESS
-        speed = p.speed if infinite else approach_speed(
-            remaining, p.speed, late_gain(p.approach_gain, self.robot, self.ctx.tick_period), p.min_speed,
-            self.ctx.tick_period)
+        speed = p.speed if infinite else approach_speed(remaining, p.speed, self.gain, p.min_speed,
+                                                        self.ctx.tick_period)
         left, right = scan["front_left"], scan["front_right"]
         if (p.centre and math.isfinite(left) and math.isfinite(right) and math.isinf(scan["front_center"])
                 and abs(left - right) > CENTRE_DEADBAND):
@@ -292,7 +294,8 @@ class TurnAngle(RobotBehaviour):
         self.last_yaw = yaw
         self.turned = 0.0
         self.rate = 0.0                   # the turn rate last commanded
-        latency = getattr(self.robot, "latency", 0.0)
+        latency = self.latency = getattr(self.robot, "latency", 0.0)
+        self.gain = late_gain(5.0, self.robot, self.ctx.tick_period)
         # a late robot cannot stop finer than its slowest turn covers in a tick and its latency
         self.tolerance = max(self.params.tolerance, MIN_TURN_RATE * (self.ctx.tick_period + latency)) \
             if latency else self.params.tolerance
@@ -305,7 +308,7 @@ class TurnAngle(RobotBehaviour):
         self.extra = self._end_fields
         p = self.params
         # a late robot turns this much more before anything sent now acts
-        error = self.goal - self.turned - self.rate * getattr(self.robot, "latency", 0.0)
+        error = self.goal - self.turned - self.rate * self.latency
         if p.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
             scan = self.robot.proximity()
             assert scan is not None
@@ -318,7 +321,7 @@ class TurnAngle(RobotBehaviour):
             self.robot.drive(0.0, 0.0)
             self.say("turned {:.2f} deg", math.degrees(self.turned))
             return Status.SUCCESS
-        rate = approach_speed(abs(error), p.speed, late_gain(5.0, self.robot, self.ctx.tick_period), MIN_TURN_RATE,
+        rate = approach_speed(abs(error), p.speed, self.gain, MIN_TURN_RATE,
                               self.ctx.tick_period)
         # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
         self.rate = math.copysign(rate, error)

@@ -188,6 +188,8 @@ class Simulation(Backend):
         self._steps = 0
         self._noise = NoiseSource(self.config.noise, self.config.seed)
         self._drifts = bool(self.config.noise.odometry)      # odometry drifts from the true pose
+        if not self._drifts:
+            self.pose = self.true_pose         # the same answer, a call less (asked several times a tick)
         self._noisy_wheels = bool(self.config.noise.wheel)
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
