@@ -153,24 +153,33 @@ class ClearanceTracker:
                cos: float, sin: float) -> float:
         """The exact distance between the hull and the nearest of ``walls`` (convex polygons): hull
         vertices to each wall, then the wall corners that could be nearer than that to the hull."""
-        hull = [(bx + x * cos - y * sin, by + x * sin + y * cos) for x, y in self.hull]
         ax, ay = bx + self.axle_x * cos, by + self.axle_x * sin
         gap = math.inf
         distance = self._distance
         for shape, frame, _ in walls:
             if frame is None:                  # a polygon obstacle: ask Chipmunk
-                gap = min(gap, min(distance(shape, p)[0] for p in hull))
+                for x, y in self.hull:
+                    d = distance(shape, (bx + x * cos - y * sin, by + x * sin + y * cos))[0]
+                    if d < gap:
+                        gap = d
                 continue
             cx, cy, ux, uy, hl, ht = frame
-            for px, py in hull:
-                dx, dy = px - cx, py - cy
-                along, across = dx * ux + dy * uy, dy * ux - dx * uy
+            # a hull vertex (x, y) of the body lies at (ox + x * a + y * b, oy + x * c + y * e) in the
+            # wall's frame (along its length, across it)
+            ox, oy = (bx - cx) * ux + (by - cy) * uy, (by - cy) * ux - (bx - cx) * uy
+            a, b = cos * ux + sin * uy, cos * uy - sin * ux
+            c, e = sin * ux - cos * uy, cos * ux + sin * uy
+            for x, y in self.hull:
+                along, across = ox + x * a + y * b, oy + x * c + y * e
                 # abs() without a builtin call: the sign of a zero is lost in subtracting hl, ht > 0
                 ex = (along if along >= 0.0 else -along) - hl
                 ey = (across if across >= 0.0 else -across) - ht
                 if ex >= gap or ey >= gap:     # the distance is at least max(ex, ey): not nearer
                     continue
-                d = math.hypot(max(ex, 0.0), max(ey, 0.0)) if ex > 0.0 or ey > 0.0 else max(ex, ey)
+                if ex > 0.0 or ey > 0.0:
+                    d = math.hypot(ex if ex > 0.0 else 0.0, ey if ey > 0.0 else 0.0)
+                else:                          # inside the box: the (negative) depth
+                    d = ex if ex > ey else ey
                 if d < gap:
                     gap = d
         reach = self.tables.reach
