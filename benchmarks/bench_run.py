@@ -29,6 +29,7 @@ import io
 import math
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
@@ -148,6 +149,25 @@ def process_env(bytecode_cache: bool, cache_dir: str) -> dict[str, str]:
     return env
 
 
+@contextlib.contextmanager
+def _pycache_aside(package: Path):
+    """Move ``package``'s __pycache__ directories aside meanwhile: PYTHONDONTWRITEBYTECODE only stops
+    writing .pyc files, and a checkout that has them would be timed with them."""
+    moved = []
+    try:
+        for cache in sorted(package.rglob("__pycache__")):
+            aside = cache.with_name("__pycache__.bench-aside")
+            cache.rename(aside)
+            moved.append((aside, cache))
+        yield
+    finally:
+        for aside, cache in moved:
+            if cache.exists():
+                shutil.rmtree(aside, ignore_errors=True)
+            else:
+                aside.rename(cache)
+
+
 def time_process(cmd: list[str], runs: int, env: dict[str, str] | None = None) -> tuple[float, list[float]]:
     def once() -> float:
         t0 = time.perf_counter()
@@ -195,7 +215,8 @@ def bench_process(runs: int) -> dict:
         run_imports, _ = time_process([sys.executable, "-c", "import thymio_bt.cli, thymio_bt.runner, "
                                        "thymio_bt.mission"], runs, env)
         offenders = import_offenders(env)
-    no_cache, no_cache_samples = time_process(cmd, runs, process_env(False, ""))
+    with _pycache_aside(ROOT / "thymio_bt"):
+        no_cache, no_cache_samples = time_process(cmd, runs, process_env(False, ""))
     worst = max(whole, no_cache)
     return {"command": " ".join(["thymio-bt", *cmd[-3:]]), "runs": runs, "median_s": whole,
             "samples_s": samples, "median_s_no_bytecode_cache": no_cache,
