@@ -169,7 +169,8 @@ class MoveUntilWall(RobotBehaviour):
 
     def _end_fields(self) -> dict[str, float | None]:
         """The behaviour_end fields: the last range read and the stop distance."""
-        return {"range": None if math.isinf(self.reading) else round(self.reading, 6), "distance": self.params.distance}
+        reading = self.reading
+        return {"range": None if math.isinf(reading) else round(reading, 6), "distance": self.params.distance}
 
     def on_timeout(self) -> Status:
         if not self.wall_seen:

@@ -15,7 +15,7 @@ the common case cheap:
 
 Example::
 
-    tracker = ClearanceTracker(model, walls, grid, bounds)
+    tracker = ClearanceTracker(model, [(shape, wall, corners, box), ...], bounds)
     gap = tracker.below(record, near, hull_shape, bx, by, cos, sin)   # < record only when beaten
 """
 
@@ -28,18 +28,30 @@ from typing import Sequence
 
 import pymunk
 
+from ..maze import Wall
 from ..robot_model import RobotModel
 from .fastpath import NearShapes, PointDistance
-from .walls import WallGrid
+from .walls import Box, wall_grid
 
 #: The hull's extent tables are made in 1 degree steps.
 EXTENT_STEP = math.radians(1.0)
 EXTENT_STEPS = 360
+#: The wall grid: cell size, and the smallest gap record it serves (m); above it (a run's first
+#: ticks) every wall is a candidate.
+GRID_CELL = 0.05
+GRID_RECORD = 0.05
 
 #: A wall as the tracker sees it: its shape in the space, its box frame (centre x, y, unit direction
 #: x, y, half length, half thickness; None for an obstacle polygon) and its corners.
 WallFrame = tuple[float, float, float, float, float, float]
 TrackedWall = tuple[pymunk.Shape, "WallFrame | None", tuple[tuple[float, float], ...]]
+
+
+def wall_frame(wall: Wall) -> WallFrame:
+    """A wall box's frame: centre, unit direction, half length and half thickness."""
+    (x0, y0), (x1, y1) = wall.start, wall.end
+    ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
+    return (x0 + x1) / 2, (y0 + y1) / 2, ux, uy, (wall.length + wall.thickness) / 2, wall.thickness / 2
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,12 +84,16 @@ def hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> HullTab
 class ClearanceTracker:
     """Measures one robot model's hull against the walls of one space (see the module's steps)."""
 
-    def __init__(self, model: RobotModel, walls: Sequence[TrackedWall], grid: WallGrid,
-                 bounds: tuple[float, float, float, float]) -> None:
+    def __init__(self, model: RobotModel,
+                 walls: Sequence[tuple[pymunk.Shape, Wall | None, tuple[tuple[float, float], ...], Box]],
+                 bounds: Box) -> None:
+        """``walls``: each static shape with its maze wall (None for an obstacle polygon), its
+        corners and its bounding box."""
         self.hull, self.axle_x = model.hull, model.axle_x
         self.tables = hull_tables(model.hull, model.axle_x)
-        self.walls = tuple(walls)           # in the grid's order
-        self.grid = grid
+        self.walls: tuple[TrackedWall, ...] = tuple(
+            (shape, None if wall is None else wall_frame(wall), corners) for shape, wall, corners, _ in walls)
+        self.grid = wall_grid(tuple(box for *_, box in walls), GRID_CELL, self.tables.reach + GRID_RECORD)
         xmin, ymin, xmax, ymax = bounds
         #: no gap inside the maze exceeds it: the record before the first measurement
         self.farthest = math.hypot(xmax - xmin, ymax - ymin)

@@ -4,7 +4,7 @@ box comes near it.
 The clearance tracker asks for the walls within a few centimetres of the robot's axle. pymunk's
 ``Space.point_query`` answers with a Python callback and result objects per shape, which cost more
 than the distances themselves; the grid gives the few candidates at the price of one dict lookup,
-and the caller measures each (:class:`~thymio_bt.sim.fastpath.PointDistance`). Grids are cached by
+and the caller (:mod:`~thymio_bt.sim.clearance`) measures each. Grids are cached by
 geometry: every run of a mission (a sweep's hundreds) shares its maze's grid.
 
 Example::

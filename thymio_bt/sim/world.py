@@ -27,10 +27,11 @@ from typing import Literal
 import pymunk
 
 from ..calibration import RawProximityModel, raw_scan_to_metres
-from ..maze import Maze, Wall
+from ..maze import Maze
 from ..placement import MazeShapes, convex_overlap, placement_problem
 from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
 from ..robot_model import COURSE, RobotModel, integrate_arc
+from .clearance import ClearanceTracker
 from .cone import APERTURE, ConeResponse
 from .fastpath import (
     NearShapes,
@@ -41,24 +42,10 @@ from .fastpath import (
     spinner,
     stepper,
 )
-from .clearance import ClearanceTracker, TrackedWall, hull_tables
 from .noise import NoiseConfig, NoiseSource
-from .walls import wall_grid
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
-#: The clearance tracker's wall grid: cell size, and the smallest gap record it serves (m); above
-#: it (a run's first ticks) every wall is a candidate.
-_GRID_CELL = 0.05
-_GRID_RECORD = 0.05
-
-
-def _wall_frame(wall: Wall) -> tuple[float, ...]:
-    """A wall box's frame for the clearance tracker: centre, unit direction, half length and half
-    thickness."""
-    (x0, y0), (x1, y1) = wall.start, wall.end
-    ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
-    return (x0 + x1) / 2, (y0 + y1) / 2, ux, uy, (wall.length + wall.thickness) / 2, wall.thickness / 2
 
 
 def _pose_of(x: float, y: float, angle: float) -> Pose:
@@ -168,20 +155,17 @@ class Simulation(Backend):
         self.space.collision_slop = 0.0002
         self.space.iterations = 10
         self._shapes = MazeShapes.of(maze)       # walls, then obstacles: polygons and boxes
-        tracked: list[TrackedWall] = []
+        tracked = []
         walled = len(maze.walls)
-        boxes = []
         for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):    # obstacles first
             corners = self._shapes.polygons[index]
             shape = pymunk.Poly(self.space.static_body, corners)
             shape.collision_type = _WALL_TYPE
             shape.friction = 1.0
             self.space.add(shape)
-            tracked.append((shape, None if index >= walled else _wall_frame(maze.walls[index]), corners))
-            boxes.append(self._shapes.boxes[index])
+            tracked.append((shape, maze.walls[index] if index < walled else None, corners, self._shapes.boxes[index]))
         self.bounds = self._shapes.bounds
-        grid = wall_grid(tuple(boxes), _GRID_CELL, hull_tables(self.model.hull, self.model.axle_x).reach + _GRID_RECORD)
-        self._clearance = ClearanceTracker(self.model, tracked, grid, self.bounds)
+        self._clearance = ClearanceTracker(self.model, tracked, self.bounds)
         self._dt = 1.0 / self.config.physics_hz
         self._step = stepper(self.space)
         self._ray = RayCaster(self.space)
