@@ -228,7 +228,7 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
         return result.trajectory, result.events, result.collisions
 
     fast = [run(seed) for seed in (0, 7)]
-    monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
+    monkeypatch.setattr(world_module, "stepper", lambda space: (lambda _, dt: space.step(dt), None))
     monkeypatch.setattr(world_module, "RayCaster", PublicRays)
     monkeypatch.setattr(fastpath, "_memory", lambda body: None)      # bodies through Chipmunk's calls
     assert [run(seed) for seed in (0, 7)] == fast
@@ -270,7 +270,7 @@ def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatc
 
     fast = crash()
     assert fast[1], "the robot must hit a wall in this world"
-    monkeypatch.setattr(world_module, "stepper", lambda space: space.step)
+    monkeypatch.setattr(world_module, "stepper", lambda space: (lambda _, dt: space.step(dt), None))
     monkeypatch.setattr(fastpath, "_memory", lambda body: None)
     assert crash() == fast
 

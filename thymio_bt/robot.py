@@ -62,6 +62,19 @@ class Pose:
         return math.hypot(other.x - self.x, other.y - self.y)
 
 
+_set_x, _set_y, _set_yaw = Pose.x.__set__, Pose.y.__set__, Pose.yaw.__set__   # type: ignore[attr-defined]
+
+
+def new_pose(x: float, y: float, yaw: float) -> Pose:
+    """``Pose(x, y, yaw)``, its slots filled directly: a frozen dataclass's ``__init__`` sets each
+    field through ``object.__setattr__``, twice the cost (a simulation makes one per sensor refresh)."""
+    pose = object.__new__(Pose)
+    _set_x(pose, x)
+    _set_y(pose, y)
+    _set_yaw(pose, yaw)
+    return pose
+
+
 @dataclass(frozen=True, slots=True)
 class Twist:
     """A planar velocity: linear along the robot's heading (m/s), angular (rad/s, left positive)."""

@@ -29,7 +29,7 @@ import pymunk
 from ..calibration import RawProximityModel, raw_scan_to_metres
 from ..maze import Maze
 from ..placement import MazeShapes, convex_overlap, placement_problem
-from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist
+from ..robot import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose
 from ..robot_model import COURSE, RobotModel, integrate_arc
 from .clearance import ClearanceTracker
 from .cone import APERTURE, ConeResponse
@@ -50,7 +50,7 @@ _WALL_TYPE = 2
 
 def _pose_of(x: float, y: float, angle: float) -> Pose:
     """A body's pose, its angle wrapped to [-pi, pi)."""
-    return Pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
+    return new_pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
 
 
 def _raw_model(seed: int) -> RawProximityModel:
@@ -293,10 +293,10 @@ class Simulation(Backend):
 
     def _run_steps(self, entity: "_Body | None", steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
-        step, dt = self._step, self._dt
+        (step, space), dt = self._step, self._dt
         if entity is None:
             for _ in range(steps):
-                step(dt)
+                step(space, dt)
                 self._steps += 1
             return
         if self._drifts:
@@ -314,7 +314,7 @@ class Simulation(Backend):
                     aim(v)             # keep the control body's velocity along the heading as it changes
                     if self._contacts:
                         entity.spin(w)
-                step(dt)
+                step(space, dt)
             self._steps = last
             if last == refresh:
                 self._refresh_sensors(entity)
