@@ -204,6 +204,22 @@ def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
             checked += 1
 
 
+def test_a_gap_a_hair_below_the_record_is_recorded():
+    """The tracker's one-query shortcut (nothing nearer than the record) must not hide a gap a few
+    nanometres below it: the record follows the exact distance down in 20 nm steps."""
+    walls = [Wall(start=(0, 0), end=(0.6, 0)), Wall(start=(0, 0.2), end=(0.6, 0.2))]
+    sim = Simulation(Maze(walls=walls), spawn=Pose(0.3, 0.1, 0.0))
+    entity, tracker = sim._entities["thymio"], sim._clearance
+    records = [sim.min_clearance]
+    for step in range(1, 6):
+        entity.body.position = (0.3, 0.1 + step * 2e-8)
+        sim._refresh_sensors(entity)
+        exact = tracker.exact(list(tracker.walls), entity.shape, 0.3, 0.1 + step * 2e-8, 1.0, 0.0)
+        assert sim.min_clearance == pytest.approx(exact, abs=1e-12)
+        records.append(sim.min_clearance)
+    assert all(later < earlier for earlier, later in zip(records, records[1:]))
+
+
 def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     """fastpath calls pymunk's C step and ray query directly; the public API must agree bit for bit,
     through collisions, a delete and a respawn (the course mission) and with noise on."""
