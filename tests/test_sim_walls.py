@@ -44,3 +44,24 @@ def test_placement_with_precomputed_shapes_gives_the_same_answers():
         assert answer == placement_problem(maze, COURSE, pose)
         answers.add(answer is None)
     assert answers == {True, False}
+
+
+def test_maze_shapes_are_the_mazes_corners_and_bounds_and_shared_only_bit_for_bit():
+    """MazeShapes.of is cached by the walls' floats: it gives every maze's corners, boxes and bounds
+    (obstacles too), and mazes that differ in one float, even a zero's sign, do not share it."""
+    import glob
+
+    from thymio_bt.maze import Maze, Wall
+    from thymio_bt.placement import MazeShapes
+
+    for path in sorted(glob.glob("mazes/*.yaml")):
+        maze = load_maze(path)
+        shapes = MazeShapes.of(maze)
+        assert shapes.polygons == tuple(tuple(s.corners()) for s in (*maze.walls, *maze.obstacles)), path
+        assert shapes.bounds == maze.bounds(), path
+        assert MazeShapes.of(load_maze(path)) == shapes
+    plus, minus = (Maze(walls=[Wall(start=(zero, 0.0), end=(0.0, 0.5))]) for zero in (0.0, -0.0))
+    assert MazeShapes.of(plus) is MazeShapes.of(Maze(walls=[Wall(start=(0.0, 0.0), end=(0.0, 0.5))]))
+    assert MazeShapes.of(plus) is not MazeShapes.of(minus)
+    moved = Maze(walls=[Wall(start=(0.0, 0.0), end=(0.0, 0.5 + 1e-12))])
+    assert MazeShapes.of(moved).bounds == moved.bounds() != plus.bounds()

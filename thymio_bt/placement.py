@@ -13,10 +13,13 @@ Example::
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Iterable, Sequence
 
 from .maze import Maze
+from .maze.model import wall_corners
 from .robot import Backend, Collision, Pose
 from .robot_model import RobotModel
 
@@ -45,8 +48,33 @@ class MazeShapes:
 
     @classmethod
     def of(cls, maze: Maze) -> MazeShapes:
-        polygons = tuple(tuple(shape.corners()) for shape in (*maze.walls, *maze.obstacles))
-        return cls(polygons, tuple(_box(p) for p in polygons), maze.bounds(), bool(maze.walls))
+        """``maze``'s shapes. Its walls' are computed once per geometry (every run of a sweep, and the
+        runner's and the simulator's asking in one run, share them: 1 M instructions a run)."""
+        geometry = [v for wall in maze.walls for v in (*wall.start, *wall.end, wall.thickness)]
+        shapes = _wall_shapes(struct.pack(f"{len(geometry)}d", *geometry))
+        if not maze.obstacles:
+            return shapes
+        polygons = tuple(tuple(obstacle.corners()) for obstacle in maze.obstacles)
+        boxes = shapes.boxes + tuple(_box(p) for p in polygons)
+        return cls(shapes.polygons + polygons, boxes, _union(boxes), shapes.walled)
+
+
+def _union(boxes: Sequence[Box]) -> Box:
+    """The bounding box of ``boxes`` (all zero for none), as :meth:`Maze.bounds` gives it."""
+    if not boxes:
+        return (0.0, 0.0, 0.0, 0.0)
+    return (min(b[0] for b in boxes), min(b[1] for b in boxes), max(b[2] for b in boxes), max(b[3] for b in boxes))
+
+
+@lru_cache(maxsize=16)
+def _wall_shapes(geometry: bytes) -> MazeShapes:
+    """The shapes of walls given as (x0, y0, x1, y1, thickness) doubles: keyed by their bytes, so two
+    mazes share them only when every float is the same, bit for bit (0.0 and -0.0 differ)."""
+    values = struct.unpack(f"{len(geometry) // 8}d", geometry)
+    polygons = tuple(tuple(wall_corners(values[i:i + 2], values[i + 2:i + 4], values[i + 4]))
+                     for i in range(0, len(values), 5))
+    boxes = tuple(_box(p) for p in polygons)
+    return MazeShapes(polygons, boxes, _union(boxes), bool(polygons))
 
 
 def _axes(polygon: Polygon) -> Iterable[tuple[float, float]]:

@@ -28,6 +28,7 @@ from .errors import Problem, UserError
 from .interrupts import Interrupts
 from .mission import Mission, build_tree
 from .phases import phases
+from .placement import MazeShapes
 from .robot import Backend, RequestState, RobotLost
 
 
@@ -129,7 +130,7 @@ class Run:
         self.period = 1.0 / mission.tick_hz
         self.events = EventLog()
         self.ctx = Context(robot=self.backend, entities=self.backend, events=self.events, tick_period=self.period,
-                           bounds=mission.maze.bounds() if mission.maze.walls else None,
+                           bounds=MazeShapes.of(mission.maze).bounds if mission.maze.walls else None,
                            goal=tuple((min(a.start[0], a.end[0]), min(a.start[1], a.end[1]),
                                        max(a.start[0], a.end[0]), max(a.start[1], a.end[1])) for a in mission.maze.goal),
                            collision_count=lambda: len(self.backend.collisions))

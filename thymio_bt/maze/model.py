@@ -16,7 +16,7 @@ Example (``mazes/corridor.yaml``)::
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any
+from typing import Annotated, Any, Sequence
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
@@ -74,13 +74,20 @@ class Wall(BaseModel):
 
     def corners(self) -> list[tuple[float, float]]:
         """The 4 corners of the wall's box, counter-clockwise."""
-        (x0, y0), (x1, y1) = self.start, self.end
-        ux, uy = (x1 - x0) / self.length, (y1 - y0) / self.length
-        h = self.thickness / 2.0
-        ex, ey = ux * h, uy * h          # extension past the ends
-        nx, ny = -uy * h, ux * h         # half thickness across
-        return [(x0 - ex - nx, y0 - ey - ny), (x1 + ex - nx, y1 + ey - ny),
-                (x1 + ex + nx, y1 + ey + ny), (x0 - ex + nx, y0 - ey + ny)]
+        return wall_corners(self.start, self.end, self.thickness)
+
+
+def wall_corners(start: Sequence[float], end: Sequence[float], thickness: float) -> list[tuple[float, float]]:
+    """The 4 corners, counter-clockwise, of a wall's box from ``start`` to ``end``: it extends half
+    its thickness past each end and to each side."""
+    (x0, y0), (x1, y1) = start, end
+    length = math.dist(start, end)
+    ux, uy = (x1 - x0) / length, (y1 - y0) / length
+    h = thickness / 2.0
+    ex, ey = ux * h, uy * h          # extension past the ends
+    nx, ny = -uy * h, ux * h         # half thickness across
+    return [(x0 - ex - nx, y0 - ey - ny), (x1 + ex - nx, y1 + ey - ny),
+            (x1 + ex + nx, y1 + ey + ny), (x0 - ex + nx, y0 - ey + ny)]
 
 
 class Obstacle(BaseModel):
