@@ -205,8 +205,8 @@ def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
 
 
 def test_a_gap_a_hair_below_the_record_is_recorded():
-    """The tracker's one-query shortcut (nothing nearer than the record) must not hide a gap a few
-    nanometres below it: the record follows the exact distance down in 20 nm steps."""
+    """The tracker's one-query shortcut (nothing nearer than the record, to 1 pm) must not hide a gap
+    a few nanometres below it: the record follows the exact distance down in 20 nm steps."""
     walls = [Wall(start=(0, 0), end=(0.6, 0)), Wall(start=(0, 0.2), end=(0.6, 0.2))]
     sim = Simulation(Maze(walls=walls), spawn=Pose(0.3, 0.1, 0.0))
     entity, tracker = sim._entities["thymio"], sim._clearance

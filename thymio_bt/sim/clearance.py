@@ -5,7 +5,8 @@ smallest gap, and it is asked for ten times a simulated second, so :class:`Clear
 the common case cheap:
 
 1. one C shape query (:class:`~thymio_bt.sim.fastpath.NearShapes`) asks whether anything is closer
-   to the hull than the record: mostly not, and then nothing is computed;
+   to the hull than the record, by more than :data:`RESOLUTION` (1 pm): mostly not, and then
+   nothing is computed;
 2. otherwise each wall box near the axle (:mod:`.walls`) is measured in its own frame: when the
    axle lies beside a long face, the face's line is at distance d from the axle and the hull's
    support point towards it is the nearest hull point; if that point projects onto the face, the
@@ -36,6 +37,8 @@ from .walls import Box, wall_grid
 #: The hull's extent tables are made in 1 degree steps.
 EXTENT_STEP = math.radians(1.0)
 EXTENT_STEPS = 360
+#: A new record must beat the last by more than this (m): the gap is exact to it.
+RESOLUTION = 1e-12
 #: The wall grid: cell size, and the smallest gap record it serves (m); above it (a run's first
 #: ticks) every wall is a candidate.
 GRID_CELL = 0.05
@@ -105,10 +108,11 @@ class ClearanceTracker:
         the nearest wall when that is below ``record``; otherwise something not below it."""
         if self.farthest < record:
             record = self.farthest
-        # nothing can beat the record: one C query. Its margin covers Chipmunk's rounding (1e-16 m
-        # here); at 1 µm, a robot cruising a hair above its record (a side wall's gap, set at the
-        # spawn) took the exact path at every refresh of a corridor
-        if not near.within(record + 1e-9):
+        # nothing can beat the record: one C query. It asks for 1 pm less than the record, still
+        # 1e5 times Chipmunk's rounding at these sizes (1e-17 m) and a millionth of the report's
+        # (1 µm): a robot cruising beside a wall at exactly its record gap (a corridor's side wall),
+        # or a hair above it, would otherwise take the exact path at every refresh
+        if not near.within(record - RESOLUTION):
             return record
         tables = self.tables
         ax, ay = bx + self.axle_x * cos, by + self.axle_x * sin
