@@ -175,6 +175,8 @@ class Simulation(Backend):
         if not self._drifts:
             self.pose = self.true_pose         # the same answer, a call less (asked several times a tick)
         self._noisy_wheels = bool(self.config.noise.wheel)
+        #: range noise on the metres (raw readings get the raw model's noise instead)
+        self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
@@ -196,7 +198,8 @@ class Simulation(Backend):
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
         self._contacts = 0
         self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
-        reach = self.model.range_max
+        reach = self._range_max = self.model.range_max
+        self._range_min = self.model.range_min
         self._ray_names = [s.name for s in self.model.sensors]
         self._rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw))
                       for s in self.model.sensors]
@@ -381,10 +384,8 @@ class Simulation(Backend):
             self._update_clearance(entity, bx, by, cos, sin)
             return
         alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
-        noise, raw = self._noise, self._raw_model
-        # noise.range would return the value unchanged; raw readings get the raw model's noise instead
-        noisy = raw is None and bool(noise.config.range_sd)
-        lo, hi, inf = self.model.range_min, self.model.range_max, math.inf
+        noise, raw, noisy = self._noise, self._raw_model, self._range_noise
+        lo, hi, inf = self._range_min, self._range_max, math.inf
         scan: dict[str, float] = {}
         for name, alpha in zip(self._ray_names, alphas):
             if alpha is None:
