@@ -220,6 +220,44 @@ def test_a_gap_a_hair_below_the_record_is_recorded():
     assert all(later < earlier for earlier, later in zip(records, records[1:]))
 
 
+def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch):
+    """Noise-free metres are cast only when proximity() asks: every mission's trajectory, events
+    and readings are those of casting at every refresh, and a robot spawned after a refresh is not
+    seen until the next one, as before."""
+    import glob
+
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    def runs():
+        out = []
+        for path in sorted(glob.glob("missions/*.yaml")):
+            result = Run(load_mission(path)).run()
+            out.append((result.trajectory, result.events, result.final_proximity, result.min_clearance))
+        return out
+
+    def in_front(sim):
+        sim.advance(0.1)                                            # a refresh, not read
+        sim.request_spawn("other", Pose(0.25, 0.1, math.pi))      # 6 cm ahead of the front sensors
+        sim.advance(0.0)                                            # served: no physics step
+        seen_after_spawn = dict(sim.proximity())
+        sim.advance(0.1)
+        return seen_after_spawn, dict(sim.proximity())
+
+    lazy = runs(), in_front(Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0)))
+    assert lazy[1][1]["front_center"] < lazy[1][0]["front_center"]   # seen from the next refresh on
+    monkeypatch.setattr(Simulation, "_refresh_sensors", _eager(Simulation._refresh_sensors))
+    assert (runs(), in_front(Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0)))) == lazy
+
+
+def _eager(refresh):
+    """``Simulation._refresh_sensors`` that casts the rays at once (as before they were cast when read)."""
+    def eager(sim, entity):
+        refresh(sim, entity)
+        sim.proximity()
+    return eager
+
+
 def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     """fastpath calls pymunk's C step and ray query directly; the public API must agree bit for bit,
     through collisions, a delete and a respawn (the course mission) and with noise on."""

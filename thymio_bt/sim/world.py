@@ -177,6 +177,8 @@ class Simulation(Backend):
         self._noisy_wheels = bool(self.config.noise.wheel)
         #: range noise on the metres (raw readings get the raw model's noise instead)
         self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
+        #: noise-free metres are cast only when read (noise draws from streams whose order must hold)
+        self._lazy_scan = self.config.sensor_model == "metres" and not self._range_noise
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
@@ -193,7 +195,9 @@ class Simulation(Backend):
         self._velocity = (0.0, 0.0)            # the body velocity (v, w) of the command, noise included
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
-        self._scan: dict[str, float] | None = None
+        self._scan: Scan | None = None
+        #: the last refresh's (entity, x, y, cos, sin), whose rays proximity() casts when _scan is None
+        self._sensed: tuple[_Body, float, float, float, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
         self._contacts = 0
@@ -229,7 +233,12 @@ class Simulation(Backend):
         return self.robot_name in self._entities
 
     def proximity(self) -> Scan | None:
-        return self._scan if self.robot_name in self._entities else None
+        if self.robot_name not in self._entities:
+            return None
+        scan, sensed = self._scan, self._sensed
+        if scan is None and sensed is not None:        # the last refresh's rays, not cast yet
+            scan = self._scan = self._cast(*sensed)
+        return scan
 
     def proximity_raw(self) -> dict[str, int] | None:
         """The latest readings as a real Thymio's integers (``sensor_model="raw"`` only), or None."""
@@ -383,6 +392,14 @@ class Simulation(Backend):
             self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
             self._update_clearance(entity, bx, by, cos, sin)
             return
+        self._sensed = (entity, bx, by, cos, sin)
+        # noise-free metres depend on nothing but this pose and the walls: cast when first read (a
+        # quarter to all of a run's refreshes are never read); noise or other robots need them now
+        self._scan = None if self._lazy_scan and len(self._entities) == 1 else self._cast(*self._sensed)
+        self._update_clearance(entity, bx, by, cos, sin)
+
+    def _cast(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> Scan:
+        """The seven rays' readings of ``entity`` at (bx, by), heading with this cosine and sine."""
         alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
         noise, raw, noisy = self._noise, self._raw_model, self._range_noise
         lo, hi, inf = self._range_min, self._range_max, math.inf
@@ -398,11 +415,12 @@ class Simulation(Backend):
         if raw is not None:
             self._raw = raw.measure_scan(scan)
             scan = raw_scan_to_metres(self._raw, raw.table)
-        self._scan = scan
-        self._update_clearance(entity, bx, by, cos, sin)
+        return scan
 
     # -------------------------------------------------------------- entities
     def _add_robot(self, name: str, pose: Pose) -> None:
+        if name != self.robot_name:
+            self.proximity()               # the robot's pending rays, cast before they could see the new one
         entity = _Body(self.space, pose, group=1 + len(self._entities), model=self.model)
         self._entities[name] = entity
         if name == self.robot_name:
