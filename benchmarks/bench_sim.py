@@ -10,8 +10,8 @@ Measured:
   1. the whole loop (proximity -> controller -> drive -> advance(0.1)) for SIM_SECONDS,
      median of REPEATS -> real-time factor (target >= 2000x);
   2. where a tick's time goes, measured inside the same loop by wrapping the simulation's
-     methods on the instance (µs per ``advance(0.1)``, per sensor refresh = 7 ray queries +
-     clearance bookkeeping, per C step; physics = advance - refresh), plus a bare step(0.01)
+     methods on the instance (µs per ``advance(0.1)``, per sensor refresh = pose + clearance
+     bookkeeping, per 7 ray queries cast when read, per C step; physics = advance - refresh), plus a bare step(0.01)
      timed in isolation, through the C function and through pymunk's public ``Space.step``;
   3. an untimed check run of the same (deterministic) drive that the robot really moves and
      never tunnels: it stays inside the maze box it started in, never crosses a wall's centre
@@ -182,9 +182,10 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     """Where a tick's time goes, measured inside the real loop (same drive as the benchmark).
 
     The simulation's methods are wrapped on the instance only (nothing in thymio_bt is changed):
-    ``advance``, ``drive``, ``_refresh_sensors`` (the 10 Hz sensor refresh: 7 ray queries plus the
-    clearance bookkeeping), ``_update_clearance`` (that bookkeeping alone) and ``_step`` (pymunk's C
-    step, called through sim/fastpath.py).
+    ``advance``, ``drive``, ``_refresh_sensors`` (the 10 Hz sensor refresh: the pose and the
+    clearance bookkeeping), ``_update_clearance`` (that bookkeeping alone), ``_cast`` (the 7 ray
+    queries and the scan dict, cast when ``proximity()`` first reads a refresh) and the C step
+    function (pymunk's, called through sim/fastpath.py).
     Each wrapper adds about 0.1 µs per call; the wrappers' own cost is measured and subtracted.
     Medians over ``repeats`` instrumented runs.
     """
@@ -193,10 +194,10 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
         sim = make_sim(spawn)
         timed = {"advance": _Timed(sim.advance), "drive": _Timed(sim.drive),
                  "refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
-                 "step": _Timed(sim._step)}
+                 "cast": _Timed(sim._cast), "step": _Timed(sim._step[0])}
         sim.advance, sim.drive = timed["advance"], timed["drive"]
         sim._refresh_sensors, sim._update_clearance = timed["refresh"], timed["clearance"]
-        sim._step = timed["step"]
+        sim._cast, sim._step = timed["cast"], (timed["step"], sim._step[1])
         t0 = perf_counter()
         drive(sim, round(seconds / TICK))
         tick = (perf_counter() - t0) / timed["advance"].calls * 1e6
@@ -210,12 +211,13 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     wrap = (perf_counter() - t0) / 100000 * 1e6
     med = {k: statistics.median(r[k] for r in runs) for k in runs[0]}
     steps = med["steps_per_advance"]
-    # advance contains `steps` wrapped steps and one wrapped refresh (which contains one wrapped clearance)
+    # advance contains `steps` wrapped steps and one wrapped refresh (which contains one wrapped
+    # clearance); the rays are cast when the loop's proximity() reads them, outside advance
     refresh = med["refresh"] - wrap
     clearance = med["clearance"]
     step = med["step"]
     advance = med["advance"] - wrap * (steps + 2)
-    rays = refresh - clearance
+    rays = med["cast"]
     substep_python = (advance - refresh - steps * step) / steps
 
     # pymunk alone: a bare step(0.01) of the same space, robot in free space, velocity held; through
@@ -224,12 +226,12 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     sim.drive(0.0, 1.0)          # turning in place: no wall contact
     sim.advance(0.1)
 
-    def steps_of(step):
+    def steps_of(step, *handle):
         def steps_only(n):
             for _ in range(n):
-                step(0.01)
+                step(*handle, 0.01)
         return per_call_us(steps_only, 10000)[0]
-    bare_step, public_step = steps_of(sim._step), steps_of(sim.space.step)
+    bare_step, public_step = steps_of(*sim._step), steps_of(sim.space.step)
     return {"advance_0.1_us": advance, "drive_us": med["drive"] - wrap,
             "sensor_refresh_us": refresh, "rays_7_us": rays, "clearance_us": clearance,
             "space_step_in_loop_us": step, "substeps_per_advance": steps,
@@ -237,7 +239,7 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
             "physics_per_advance_us": advance - refresh, "bare_space_step_us": bare_step,
             "bare_public_space_step_us": public_step,
             "wrapper_overhead_us": wrap, "instrumented_tick_us": med["tick"],
-            "instrumented_tick_less_wrappers_us": med["tick"] - wrap * (steps + 3)}
+            "instrumented_tick_less_wrappers_us": med["tick"] - wrap * (steps + 4)}
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -268,7 +270,7 @@ def main(argv: list[str] | None = None) -> dict:
     m = breakdown(args.spawn, args.seconds, args.repeats)
     per_tick = loop / ticks * 1e6
     inst = m["instrumented_tick_less_wrappers_us"]
-    rest = inst - m["advance_0.1_us"] - m["drive_us"]
+    rest = inst - m["advance_0.1_us"] - m["drive_us"] - m["rays_7_us"]
 
     print(f"bench_sim: physics + sensing, no behaviour tree - {MAZE.name}, spawn '{args.spawn}', "
           f"{sim_time:.0f} s simulated, 10 Hz commands / 100 Hz physics, median of {args.repeats}")
@@ -294,8 +296,8 @@ def main(argv: list[str] | None = None) -> dict:
     rows = [
         ("advance(0.1)", f"{m['advance_0.1_us']:.1f}", share(m["advance_0.1_us"]),
          f"{steps:.0f} sub-steps + 1 sensor refresh"),
-        ("  sensor refresh", f"{m['sensor_refresh_us']:.1f}", share(m["sensor_refresh_us"]), "per 10 Hz refresh"),
-        ("    7 ray queries + scan dict", f"{m['rays_7_us']:.1f}", share(m["rays_7_us"]), ""),
+        ("  sensor refresh", f"{m['sensor_refresh_us']:.1f}", share(m["sensor_refresh_us"]),
+         "per 10 Hz refresh: the pose and"),
         ("    clearance tracking", f"{m['clearance_us']:.1f}", share(m["clearance_us"]), "min_clearance bookkeeping"),
         ("  physics (advance - refresh)", f"{m['physics_per_advance_us']:.1f}", share(m["physics_per_advance_us"]),
          f"= {m['physics_per_advance_us'] / steps:.2f} us per sub-step:"),
@@ -304,8 +306,10 @@ def main(argv: list[str] | None = None) -> dict:
         ("    Python per sub-step x10", f"{m['substep_python_overhead_us'] * steps:.1f}",
          share(m["substep_python_overhead_us"] * steps),
          f"{m['substep_python_overhead_us']:.2f} us each (control-body update, counters)"),
+        ("7 ray queries + scan dict", f"{m['rays_7_us']:.1f}", share(m["rays_7_us"]),
+         "cast when proximity() first reads a refresh"),
         ("drive(v, w)", f"{m['drive_us']:.1f}", share(m["drive_us"]), "wheel limits + seeding the body velocity"),
-        ("proximity + controller + loop", f"{rest:.1f}", share(rest), "by difference"),
+        ("controller + loop", f"{rest:.1f}", share(rest), "by difference"),
         ("bare C step(0.01), isolated", f"{m['bare_space_step_us']:.2f}", "", "pymunk alone, robot in free space"),
         ("bare Space.step(0.01), isolated", f"{m['bare_public_space_step_us']:.2f}", "",
          "the same through pymunk's public wrapper"),
