@@ -45,7 +45,9 @@ def instructions(cmd: list[str], cwd: Path) -> int:
         # string hashing is randomised per process, which moves a count by up to half a million
         env = {**os.environ, "PYTHONHASHSEED": "0"}
         # once without valgrind first: a process that compiles sources whose .pyc files are missing
-        # or stale would count the compiler too (tens of millions of instructions)
+        # or stale would count the compiler too (tens of millions of instructions); it must be free
+        # to write them (a shell that sets PYTHONDONTWRITEBYTECODE had counted 330 M of compiling)
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
         subprocess.run(cmd, cwd=cwd, capture_output=True, env=env)
         done = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *cmd],
                               cwd=cwd, capture_output=True, text=True, env=env)
