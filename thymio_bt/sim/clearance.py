@@ -112,7 +112,7 @@ class ClearanceTracker:
         # 1e5 times Chipmunk's rounding at these sizes (1e-17 m) and a millionth of the report's
         # (1 µm): a robot cruising beside a wall at exactly its record gap (a corridor's side wall),
         # or a hair above it, would otherwise take the exact path at every refresh
-        if not near.within(record - RESOLUTION):
+        if record <= RESOLUTION or not near.within(record - RESOLUTION):   # (a touch is the last record)
             return record
         tables = self.tables
         ax, ay = bx + self.axle_x * cos, by + self.axle_x * sin
