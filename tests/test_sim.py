@@ -251,7 +251,8 @@ def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch)
 
 
 def _eager(refresh):
-    """``Simulation._refresh_sensors`` that casts the rays at once (as before they were cast when read)."""
+    """``Simulation._refresh_sensors`` that casts the rays at every refresh, as the simulation did
+    before it cast them when first read."""
     def eager(sim, entity):
         refresh(sim, entity)
         sim.proximity()
