@@ -4,15 +4,15 @@ A long drive in the course maze (mazes/two_parts_maze.yaml) with a small reactiv
 written here: drive along the corridor (steering away from the closer side wall), and when the
 front reads close, turn in place toward the side with more room until the front is clear again.
 Commands at 10 Hz, ``sim.advance(0.1)`` per tick (10 x 100 Hz physics sub-steps and one 10 Hz
-refresh of the 7 proximity rays inside).
+sensor refresh inside; each ray is cast when the controller first reads its sensor).
 
 Measured:
   1. the whole loop (proximity -> controller -> drive -> advance(0.1)) for SIM_SECONDS,
      median of REPEATS -> real-time factor (target >= 2000x);
   2. where a tick's time goes, measured inside the same loop by wrapping the simulation's
      methods on the instance (µs per ``advance(0.1)``, per sensor refresh = pose + clearance
-     bookkeeping, per 7 ray queries cast when read, per C step; physics = advance - refresh), plus a bare step(0.01)
-     timed in isolation, through the C function and through pymunk's public ``Space.step``;
+     bookkeeping, the ray queries of a tick, per C step; physics = advance - refresh), plus a bare
+     step(0.01) timed in isolation, through the C function and through pymunk's public ``Space.step``;
   3. an untimed check run of the same (deterministic) drive that the robot really moves and
      never tunnels: it stays inside the maze box it started in, never crosses a wall's centre
      line between two ticks, and never overlaps a wall by more than PENETRATION_LIMIT.
@@ -28,6 +28,7 @@ import statistics
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pymunk
 
@@ -183,9 +184,9 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
 
     The simulation's methods are wrapped on the instance only (nothing in thymio_bt is changed):
     ``advance``, ``drive``, ``_refresh_sensors`` (the 10 Hz sensor refresh: the pose and the
-    clearance bookkeeping), ``_update_clearance`` (that bookkeeping alone), ``_cast`` (the 7 ray
-    queries and the scan dict, cast when ``proximity()`` first reads a refresh) and the C step
-    function (pymunk's, called through sim/fastpath.py).
+    clearance bookkeeping), ``_update_clearance`` (that bookkeeping alone), the ray reader (one ray
+    query each, cast when the controller first reads that sensor) and the C step function (pymunk's,
+    called through sim/fastpath.py).
     Each wrapper adds about 0.1 µs per call; the wrappers' own cost is measured and subtracted.
     Medians over ``repeats`` instrumented runs.
     """
@@ -194,15 +195,19 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
         sim = make_sim(spawn)
         timed = {"advance": _Timed(sim.advance), "drive": _Timed(sim.drive),
                  "refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
-                 "cast": _Timed(sim._cast), "step": _Timed(sim._step[0])}
+                 "ray": _Timed(sim._reader.read), "step": _Timed(sim._step[0])}
         sim.advance, sim.drive = timed["advance"], timed["drive"]
         sim._refresh_sensors, sim._update_clearance = timed["refresh"], timed["clearance"]
-        sim._cast, sim._step = timed["cast"], (timed["step"], sim._step[1])
+        sim._reader, sim._step = SimpleNamespace(names=sim._reader.names, read=timed["ray"]), \
+            (timed["step"], sim._step[1])
         t0 = perf_counter()
         drive(sim, round(seconds / TICK))
-        tick = (perf_counter() - t0) / timed["advance"].calls * 1e6
-        runs.append({k: t.us() for k, t in timed.items()} | {"steps_per_advance": timed["step"].calls
-                                                             / timed["advance"].calls, "tick": tick})
+        ticks = timed["advance"].calls
+        tick = (perf_counter() - t0) / ticks * 1e6
+        runs.append({k: t.us() for k, t in timed.items()} | {"steps_per_advance": timed["step"].calls / ticks,
+                                                             "rays_per_tick": timed["ray"].calls / ticks,
+                                                             "rays_us_per_tick": timed["ray"].total / ticks * 1e6,
+                                                             "tick": tick})
     # cost of one wrapper (two perf_counter calls + the call indirection)
     nop = _Timed(lambda *a: None)
     t0 = perf_counter()
@@ -217,7 +222,7 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     clearance = med["clearance"]
     step = med["step"]
     advance = med["advance"] - wrap * (steps + 2)
-    rays = med["cast"]
+    rays = med["rays_us_per_tick"] - wrap * med["rays_per_tick"]
     substep_python = (advance - refresh - steps * step) / steps
 
     # pymunk alone: a bare step(0.01) of the same space, robot in free space, velocity held; through
@@ -233,7 +238,8 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
         return per_call_us(steps_only, 10000)[0]
     bare_step, public_step = steps_of(*sim._step), steps_of(sim.space.step)
     return {"advance_0.1_us": advance, "drive_us": med["drive"] - wrap,
-            "sensor_refresh_us": refresh, "rays_7_us": rays, "clearance_us": clearance,
+            "sensor_refresh_us": refresh, "rays_us_per_tick": rays, "rays_per_tick": med["rays_per_tick"],
+            "clearance_us": clearance,
             "space_step_in_loop_us": step, "substeps_per_advance": steps,
             "substep_python_overhead_us": substep_python,
             "physics_per_advance_us": advance - refresh, "bare_space_step_us": bare_step,
@@ -270,7 +276,7 @@ def main(argv: list[str] | None = None) -> dict:
     m = breakdown(args.spawn, args.seconds, args.repeats)
     per_tick = loop / ticks * 1e6
     inst = m["instrumented_tick_less_wrappers_us"]
-    rest = inst - m["advance_0.1_us"] - m["drive_us"] - m["rays_7_us"]
+    rest = inst - m["advance_0.1_us"] - m["drive_us"] - m["rays_us_per_tick"]
 
     print(f"bench_sim: physics + sensing, no behaviour tree - {MAZE.name}, spawn '{args.spawn}', "
           f"{sim_time:.0f} s simulated, 10 Hz commands / 100 Hz physics, median of {args.repeats}")
@@ -306,8 +312,8 @@ def main(argv: list[str] | None = None) -> dict:
         ("    Python per sub-step x10", f"{m['substep_python_overhead_us'] * steps:.1f}",
          share(m["substep_python_overhead_us"] * steps),
          f"{m['substep_python_overhead_us']:.2f} us each (control-body update, counters)"),
-        ("7 ray queries + scan dict", f"{m['rays_7_us']:.1f}", share(m["rays_7_us"]),
-         "cast when proximity() first reads a refresh"),
+        ("ray queries", f"{m['rays_us_per_tick']:.1f}", share(m["rays_us_per_tick"]),
+         f"{m['rays_per_tick']:.1f} a tick: each sensor cast when first read"),
         ("drive(v, w)", f"{m['drive_us']:.1f}", share(m["drive_us"]), "wheel limits + seeding the body velocity"),
         ("controller + loop", f"{rest:.1f}", share(rest), "by difference"),
         ("bare C step(0.01), isolated", f"{m['bare_space_step_us']:.2f}", "", "pymunk alone, robot in free space"),

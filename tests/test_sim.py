@@ -1,6 +1,7 @@
 """The simulated Thymio against the course's numbers (robot.md, mazes.md)."""
 
 import math
+from types import MappingProxyType
 
 import pytest
 
@@ -251,42 +252,58 @@ def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch)
 
 
 def _eager(refresh):
-    """``Simulation._refresh_sensors`` that casts the rays at every refresh, as the simulation did
-    before it cast them when first read."""
+    """``Simulation._refresh_sensors`` that casts all the rays at every refresh in one fan, as the
+    simulation did before it cast each when first read."""
     def eager(sim, entity):
         refresh(sim, entity)
-        sim.proximity()
+        if sim._scan is None:
+            sim._scan = MappingProxyType(sim._cast(entity, *sim._sensed))
     return eager
 
 
 def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     """fastpath calls pymunk's C step and ray query directly; the public API must agree bit for bit,
-    through collisions, a delete and a respawn (the course mission) and with noise on."""
+    through collisions, a delete and a respawn (the course mission), with noise on (rays cast at
+    each refresh) and off (each ray cast when read)."""
     from thymio_bt.mission import load_mission
     from thymio_bt.runner import Run
     from thymio_bt.sim import world as world_module
+
+    def first_hit(space, x, y, cos, sin, ray, shape_filter):
+        sx, sy, ex, ey = ray
+        return space.segment_query_first((x + sx * cos - sy * sin, y + sx * sin + sy * cos),
+                                         (x + ex * cos - ey * sin, y + ex * sin + ey * cos), 0.0, shape_filter)
 
     class PublicRays:
         def __init__(self, space):
             self.space = space
 
         def fan(self, rays, x, y, cos, sin, shape_filter):
-            hits = [self.space.segment_query_first((x + sx * cos - sy * sin, y + sx * sin + sy * cos),
-                                                   (x + ex * cos - ey * sin, y + ex * sin + ey * cos),
-                                                   0.0, shape_filter) for sx, sy, ex, ey in rays]
+            hits = [first_hit(self.space, x, y, cos, sin, ray, shape_filter) for ray in rays]
             return [None if hit is None else hit.alpha for hit in hits]
 
-    mission = load_mission("missions/maze_part1_2.yaml", overrides={"noise.wheel": "0.027", "noise.range_sd": "0.001"})
+    class PublicReader:
+        def __init__(self, space, rays, reach, floor, shape_filter):
+            self.space, self.rays, self.names, self.reach, self.floor = space, rays, tuple(rays), reach, floor
+            self.filter = shape_filter
 
-    def run(seed):
-        result = Run(mission, seed=seed).run()
-        return result.trajectory, result.events, result.collisions
+        def read(self, name, x, y, cos, sin):
+            hit = first_hit(self.space, x, y, cos, sin, self.rays[name], self.filter)
+            return math.inf if hit is None else max(hit.alpha * self.reach, self.floor)
 
-    fast = [run(seed) for seed in (0, 7)]
+    noisy = load_mission("missions/maze_part1_2.yaml", overrides={"noise.wheel": "0.027", "noise.range_sd": "0.001"})
+    quiet = load_mission("missions/maze_part1_2.yaml")
+
+    def runs():
+        results = [Run(noisy, seed=seed).run() for seed in (0, 7)] + [Run(quiet).run()]
+        return [(result.trajectory, result.events, result.collisions) for result in results]
+
+    fast = runs()
     monkeypatch.setattr(world_module, "stepper", lambda space: (lambda _, dt: space.step(dt), None))
     monkeypatch.setattr(world_module, "RayCaster", PublicRays)
+    monkeypatch.setattr(world_module, "RayReader", PublicReader)
     monkeypatch.setattr(fastpath, "_memory", lambda body: None)      # bodies through Chipmunk's calls
-    assert [run(seed) for seed in (0, 7)] == fast
+    assert runs() == fast
 
 
 def test_bodies_are_read_and_written_in_chipmunks_memory_on_this_pymunk():

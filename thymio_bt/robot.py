@@ -93,7 +93,9 @@ class Collision:
 
 
 Scan = Mapping[str, float]
-"""Proximity ranges by sensor name, in metres; ``math.inf`` when nothing is in range."""
+"""Proximity ranges by sensor name, in metres; ``math.inf`` when nothing is in range. Treat it as
+read-only (the simulation's is: it casts each ray when first read); ``dict(scan)`` is a copy to keep
+or change."""
 
 
 class Robot(ABC):

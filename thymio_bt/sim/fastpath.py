@@ -18,6 +18,8 @@ Example::
     step(handle, 0.01)                         # same as space.step(0.01)
     rays = RayCaster(space)
     rays.fan([(0, 0, 1, 0)], 0, 0, 1, 0, shape_filter)   # [fraction along the segment of the first hit, or None]
+    reader = RayReader(space, {"ahead": (0, 0, 0.1, 0)}, 0.1, 0.0, shape_filter)
+    reader.read("ahead", 0, 0, 1, 0)           # metres to the first hit along it, or inf
     near = NearShapes(space, body, hull, shape_filter)
     near.within(0.02)                          # is any shape closer than 2 cm to the hull?
     distance = PointDistance()
@@ -188,18 +190,18 @@ def stepper(space: pymunk.Space) -> tuple[Callable[[Any, float], None], Any]:
 _write_segment = struct.Struct("4d").pack_into
 
 
-class RayCaster:
-    """First-hit segment queries in one space, with one result buffer and one C filter per filter.
+class _SegmentQuery:
+    """The buffers of first-hit segment queries in one space.
 
     A ray's two end points are packed into a preallocated ``cpVect[2]`` in one ``struct`` call (four
     memoryview stores cost twice that) and passed as C structs (cffi converts a Python tuple to a
     struct field by field: 2.7 k instructions per query, four times the query itself); the space is
     passed as an argument, not bound by ``functools.partial`` (which copies the arguments into a new
-    tuple per call); and the hit is read from the result's ``alpha``:
-    Chipmunk leaves it at 1.0 when nothing is hit and records only hits below it.
+    tuple per call); and the hit is read from the result's ``alpha``: Chipmunk leaves it at 1.0 when
+    nothing is hit and records only hits below it.
     """
 
-    __slots__ = ("_alpha", "_end", "_ends", "_filters", "_info", "_points", "_query", "_result", "_space", "_start")
+    __slots__ = ("_alpha", "_end", "_ends", "_info", "_points", "_query", "_result", "_space", "_start")
 
     def __init__(self, space: pymunk.Space) -> None:
         self._space, self._query = space._space, lib.cpSpaceSegmentQueryFirst
@@ -209,14 +211,23 @@ class RayCaster:
         self._ends = ffi.new("cpVect[2]")
         self._start, self._end = self._ends[0], self._ends[1]
         self._points = memoryview(ffi.buffer(self._ends)).cast("d")     # x0, y0, x1, y1
-        self._filters: dict[pymunk.ShapeFilter, Any] = {}
 
-    def _c_filter(self, shape_filter: pymunk.ShapeFilter) -> Any:
-        """``shape_filter`` as a C struct, converted once (cffi converts a tuple on every call)."""
-        owner = self._filters.get(shape_filter)
-        if owner is None:
-            owner = self._filters[shape_filter] = ffi.new("cpShapeFilter *", tuple(shape_filter))
-        return owner[0]
+
+def _c_filter(shape_filter: pymunk.ShapeFilter) -> tuple[Any, Any]:
+    """``shape_filter`` as a C struct (cffi converts a tuple on every call), with the memory that
+    owns it: keep both."""
+    owner = ffi.new("cpShapeFilter *", tuple(shape_filter))
+    return owner, owner[0]
+
+
+class RayCaster(_SegmentQuery):
+    """Fans of rays fixed in a body frame, cast together from the body's pose (see :class:`_SegmentQuery`)."""
+
+    __slots__ = ("_filters",)
+
+    def __init__(self, space: pymunk.Space) -> None:
+        super().__init__(space)
+        self._filters: dict[pymunk.ShapeFilter, tuple[Any, Any]] = {}
 
     def fan(self, rays: Sequence[tuple[float, float, float, float]], x: float, y: float, cos: float, sin: float,
             shape_filter: pymunk.ShapeFilter) -> list[float | None]:
@@ -225,7 +236,10 @@ class RayCaster:
         admits, or None."""
         query, space, info, start, end, points = self._query, self._space, self._info, self._start, self._end, \
             self._points
-        result, flt, alpha_at, write = self._result, self._c_filter(shape_filter), self._alpha, _write_segment
+        flt = self._filters.get(shape_filter)
+        if flt is None:
+            flt = self._filters[shape_filter] = _c_filter(shape_filter)
+        result, flt, alpha_at, write = self._result, flt[1], self._alpha, _write_segment
         alphas: list[float | None] = []
         hit = alphas.append
         for sx, sy, ex, ey in rays:
@@ -235,6 +249,37 @@ class RayCaster:
             alpha = result[alpha_at]
             hit(alpha if alpha < 1.0 else None)
         return alphas
+
+
+class RayReader(_SegmentQuery):
+    """Named rays fixed in a body frame, each ``reach`` long, read one at a time: the distance from a
+    ray's start to the first shape the filter admits, at least ``floor``, or ``inf``. Its floats are
+    :meth:`RayCaster.fan`'s (the same end points, query and ``alpha * reach``), for readings cast
+    when a behaviour reads them (:mod:`.readings`)."""
+
+    __slots__ = ("_filter", "_floor", "_owner", "_reach", "names", "rays")
+
+    def __init__(self, space: pymunk.Space, rays: dict[str, tuple[float, float, float, float]], reach: float,
+                 floor: float, shape_filter: pymunk.ShapeFilter) -> None:
+        super().__init__(space)
+        self.rays = rays
+        #: the rays' names, in their order
+        self.names = tuple(rays)
+        self._reach, self._floor = reach, floor
+        self._owner, self._filter = _c_filter(shape_filter)
+
+    def read(self, name: str, x: float, y: float, cos: float, sin: float) -> float:
+        """Ray ``name``'s reading, the body at ``(x, y)`` with a heading of this cosine and sine
+        (KeyError for a name it does not have)."""
+        sx, sy, ex, ey = self.rays[name]
+        _write_segment(self._points, 0, x + sx * cos - sy * sin, y + sx * sin + sy * cos,
+                       x + ex * cos - ey * sin, y + ex * sin + ey * cos)
+        self._query(self._space, self._start, self._end, 0.0, self._filter, self._info)
+        alpha = self._result[self._alpha]
+        if alpha < 1.0:
+            distance = alpha * self._reach
+            return self._floor if distance < self._floor else distance
+        return math.inf
 
 
 class PointDistance:

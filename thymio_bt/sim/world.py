@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Literal
 
 import pymunk
@@ -36,6 +37,7 @@ from .cone import APERTURE, ConeResponse
 from .fastpath import (
     NearShapes,
     RayCaster,
+    RayReader,
     body_driver,
     body_reader,
     control_aimer,
@@ -43,9 +45,12 @@ from .fastpath import (
     stepper,
 )
 from .noise import NoiseConfig, NoiseSource
+from .readings import lazy_scan
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
+#: shape categories: readings cast when read see walls (and obstacles) only
+_WALLS, _ROBOTS = 0b01, 0b10
 
 
 def _pose_of(x: float, y: float, angle: float) -> Pose:
@@ -112,7 +117,7 @@ class _Body:
         self.shape.friction = 0.1          # the skid's mu in the URDF
         self.shape.collision_type = _ROBOT_TYPE
         self.filter = pymunk.ShapeFilter(group=group)     # rays and queries skip the robot's own shape
-        self.shape.filter = self.filter
+        self.shape.filter = pymunk.ShapeFilter(group=group, categories=_ROBOTS)
         self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (model.axle_x, 0.0))
         pivot.max_bias = 0.0               # a pure velocity constraint: drift is not corrected
@@ -161,6 +166,7 @@ class Simulation(Backend):
             corners = self._shapes.polygons[index]
             shape = pymunk.Poly(self.space.static_body, corners)
             shape.collision_type = _WALL_TYPE
+            shape.filter = pymunk.ShapeFilter(categories=_WALLS)
             shape.friction = 1.0
             self.space.add(shape)
             tracked.append((shape, maze.walls[index] if index < walled else None, corners, self._shapes.boxes[index]))
@@ -196,8 +202,8 @@ class Simulation(Backend):
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
         self._scan: Scan | None = None
-        #: the last refresh's (entity, x, y, cos, sin), whose rays proximity() casts when _scan is None
-        self._sensed: tuple[_Body, float, float, float, float] | None = None
+        #: the last refresh's body pose (x, y, cos, sin), whose rays are cast when read when _scan is None
+        self._sensed: tuple[float, float, float, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
         self._contacts = 0
@@ -207,6 +213,9 @@ class Simulation(Backend):
         self._ray_names = [s.name for s in self.model.sensors]
         self._rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw))
                       for s in self.model.sensors]
+        #: noise-free metres, cast when read (walls only: see _refresh_sensors)
+        self._reader = RayReader(self.space, dict(zip(self._ray_names, self._rays)), reach, self._range_min,
+                                 pymunk.ShapeFilter(mask=_WALLS))
         self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
         self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
         if spawn is not None:
@@ -236,8 +245,8 @@ class Simulation(Backend):
         if self.robot_name not in self._entities:
             return None
         scan, sensed = self._scan, self._sensed
-        if scan is None and sensed is not None:        # the last refresh's rays, not cast yet
-            scan = self._scan = self._cast(*sensed)
+        if scan is None and sensed is not None:        # the last refresh's, each ray cast when read
+            scan = self._scan = lazy_scan(self._reader, sensed)
         return scan
 
     def proximity_raw(self) -> dict[str, int] | None:
@@ -389,16 +398,17 @@ class Simulation(Backend):
         cos, sin = math.cos(angle), math.sin(angle)
         if self._cone is not None:
             self._raw = self._cone.measure(self._ray, entity, bx, by, cos, sin)
-            self._scan = raw_scan_to_metres(self._raw, self.model.calibration)
-            self._update_clearance(entity, bx, by, cos, sin)
-            return
-        self._sensed = (entity, bx, by, cos, sin)
-        # noise-free metres depend on nothing but this pose and the walls: cast when first read (a
-        # quarter to all of a run's refreshes are never read); noise or other robots need them now
-        self._scan = None if self._lazy_scan and len(self._entities) == 1 else self._cast(*self._sensed)
+            self._scan = MappingProxyType(raw_scan_to_metres(self._raw, self.model.calibration))
+        elif self._lazy_scan and len(self._entities) == 1:
+            # noise-free metres alone in the maze depend on nothing but this pose and the walls: each
+            # ray is cast when first read (behaviours read few; a quarter of refreshes are not read),
+            # seeing walls only, so a robot spawned before the read stays unseen as it should
+            self._scan, self._sensed = None, (bx, by, cos, sin)
+        else:                      # noise (random streams in a fixed order) or other robots: now
+            self._scan = MappingProxyType(self._cast(entity, bx, by, cos, sin))
         self._update_clearance(entity, bx, by, cos, sin)
 
-    def _cast(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> Scan:
+    def _cast(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> dict[str, float]:
         """The seven rays' readings of ``entity`` at (bx, by), heading with this cosine and sine."""
         alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
         noise, raw, noisy = self._noise, self._raw_model, self._range_noise
@@ -419,8 +429,6 @@ class Simulation(Backend):
 
     # -------------------------------------------------------------- entities
     def _add_robot(self, name: str, pose: Pose) -> None:
-        if name != self.robot_name:
-            self.proximity()               # the robot's pending rays, cast before they could see the new one
         entity = _Body(self.space, pose, group=1 + len(self._entities), model=self.model)
         self._entities[name] = entity
         if name == self.robot_name:
