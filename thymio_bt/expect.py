@@ -24,7 +24,9 @@ Example::
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from fnmatch import fnmatchcase
+from operator import itemgetter
 from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field
@@ -101,11 +103,12 @@ def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[st
 
 def _true_pose_at(result: Any, event: dict) -> Pose:
     """Where the robot really was when ``event`` happened: the trajectory's true pose of that tick
-    (an event's own pose is the robot's odometry, which drifts on a real or late robot)."""
-    before = [s for s in result.trajectory if s[0] <= event["t"] + 1e-9]
+    (an event's own pose is the robot's odometry, which drifts on a real or late robot). The
+    trajectory's times ascend."""
+    before = bisect_right(result.trajectory, event["t"] + 1e-9, key=itemgetter(0))
     if not before:
         return Pose(event["pose"]["x"], event["pose"]["y"], event["pose"]["yaw"])
-    return Pose(*before[-1][1:4])
+    return Pose(*result.trajectory[before - 1][1:4])
 
 
 def front_gap(maze: Maze, model: RobotModel, pose: Pose) -> float:

@@ -133,12 +133,16 @@ def placement_problem(maze: Maze | MazeShapes, model: RobotModel, pose: Pose) ->
     return None
 
 
-def ray_distance(maze: Maze, ox: float, oy: float, yaw: float) -> float:
+def ray_distance(maze: Maze | MazeShapes, ox: float, oy: float, yaw: float) -> float:
     """How far from (ox, oy) along ``yaw`` the first wall or obstacle face is; inf when none is."""
+    shapes = maze if isinstance(maze, MazeShapes) else MazeShapes.of(maze)
     c, s = math.cos(yaw), math.sin(yaw)
     best = math.inf
-    for shape in (*maze.walls, *maze.obstacles):
-        corners = shape.corners()
+    for corners, (bx0, by0, bx1, by1) in zip(shapes.polygons, shapes.boxes):
+        # a box wholly behind the start along x or along y (by more than any rounding) is never hit
+        if ((c >= 0.0 and bx1 < ox - _APART) or (c <= 0.0 and bx0 > ox + _APART)
+                or (s >= 0.0 and by1 < oy - _APART) or (s <= 0.0 and by0 > oy + _APART)):
+            continue
         for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]]):
             hit = _ray_segment(ox, oy, c, s, x0, y0, x1, y1)
             if hit is not None and hit < best:
