@@ -124,3 +124,15 @@ def test_bonus_with_noise_reaches_the_last_pocket(seed):
     assert result.status == "SUCCESS" and turn_letters(result) == "RRRLRLLLLLR"
     assert result.final_pose["x"] == pytest.approx(1.7, abs=0.01)
     assert result.final_pose["y"] == pytest.approx(0.311, abs=0.01)
+
+
+def test_the_final_tree_shows_each_node_as_the_run_ended():
+    """Drawn when first read, yet as the run ended: a run cut by its time limit shows the node it
+    cut RUNNING (stopping it afterwards made it INVALID), a finished run each node's last status."""
+    cut = Run(load_mission("missions/maze_part1_2.yaml", overrides={"time_limit": "2"}))
+    assert cut.final_tree == ""
+    assert cut.run().status == "TIMEOUT" and cut.root.status.name == "INVALID"
+    assert "--> part 1 [*] -- no wall in range" in cut.final_tree.splitlines()[1]
+    done = Run(load_mission("missions/maze_part1_2.yaml"))
+    assert done.run().status == "SUCCESS"
+    assert "--> part 1 [✓] -- stopped at 0.0501 m" in done.final_tree.splitlines()[1]

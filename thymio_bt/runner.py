@@ -139,7 +139,7 @@ class Run:
         self.substituted = bool(substitutions)
         self.stats = NodeStats(self.period) if node_stats else None
         self.ticks = 0
-        self.final_tree = ""
+        self._final_tree: str | None = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
 
     def run(self, on_tick: TickHook | None = None, realtime: float | None = None,
@@ -201,8 +201,9 @@ class Run:
                 if lag > 0:
                     time.sleep(lag)  # realtime: pacing asked for with --realtime
         reason = code = failed_path = None
-        self.final_tree = py_trees.display.unicode_tree(root, show_status=True)
+        self._final_tree = None                 # drawn when read (the terminal viewer does)
         if status in ("TIMEOUT", "STOPPED", "INTERRUPTED", "CRASHED"):
+            self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
             running = root.tip()
             failed_path = node_path(running) if running is not None else None
             if status == "TIMEOUT":
@@ -235,6 +236,13 @@ class Run:
         if self.mission.expect is not None:
             self._check_expectations(result, places=not self.substituted)
         return result
+
+    @property
+    def final_tree(self) -> str:
+        """The tree with each node's status and feedback as the run ended ("" before it runs)."""
+        if self._final_tree is None:
+            self._final_tree = py_trees.display.unicode_tree(self.root, show_status=True)
+        return self._final_tree
 
     def _check_expectations(self, result: RunResult, places: bool) -> None:
         """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
