@@ -7,8 +7,14 @@ cancelled out. The checkouts are measured alternately, ``--rounds`` times, so th
 machine touches both alike (the counts should not move at all; a difference between rounds is
 reported). Also prints the whole-process count of ``thymio-bt run MISSION --quiet``.
 
+With ``--irsim``, IR-SIM 2.12's run of the same maze and simulated time (``bench_run.py``'s fastest
+variant, rectangles with ``stop``) is counted the same way: its steps alone (each mission's
+``irsim.make`` counted apart and taken off, as its wall time leaves the build out), for the instruction
+ratio beside the wall-time one.
+
     python benchmarks/bench_instructions.py                       # this checkout
     python benchmarks/bench_instructions.py --against HEAD~5      # before/after, alternated
+    python benchmarks/bench_instructions.py --irsim               # and IR-SIM's run (a few minutes)
 
 Needs valgrind (``apt-get install valgrind``); each count takes 10-30 s.
 """
@@ -36,6 +42,26 @@ for _ in range(int(sys.argv[2])):
     result = Run(mission).run()
 print(result.status, result.ticks)
 """
+#: argv: benchmarks folder, IR-SIM variant, simulated seconds, builds, missions
+IRSIM_RUNS = """
+import sys, tempfile
+from pathlib import Path
+sys.path.insert(0, sys.argv[1])
+import bench_run
+from thymio_bt.maze import load_maze
+shape, mode = bench_run.VARIANTS[sys.argv[2]]
+sim_time, builds, missions = float(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5])
+maze = load_maze(bench_run.MAZE)
+irsim = bench_run.import_irsim()
+with tempfile.TemporaryDirectory() as tmp:
+    world = Path(tmp) / "world.yaml"
+    bench_run.irsim_world(world, shape, mode, maze.spawn("part1"))
+    for _ in range(builds):
+        irsim.make(str(world), headless=True, log_level="ERROR").end(ending_time=0)
+    for _ in range(missions):
+        bench_run.irsim_mission(irsim, world, sim_time, maze.spawn("part2"))
+"""
+IRSIM_VARIANT = "rectangles, stop"
 
 
 def instructions(cmd: list[str], cwd: Path) -> int:
@@ -66,6 +92,22 @@ def measure(checkout: Path, python: str, extra_runs: int) -> dict[str, float]:
     return {"run_Ir": (more - one) / extra_runs, "process_Ir": cli, "setup_Ir": one - (more - one) / extra_runs}
 
 
+def measure_irsim(python: str, extra_runs: int) -> dict[str, float]:
+    """Instructions of IR-SIM's run of MISSION's maze for MISSION's simulated time: a mission (build
+    and steps) and a build, each by difference; the steps are the one less the other."""
+    from thymio_bt.mission import load_mission
+    from thymio_bt.runner import Run
+
+    sim_time = Run(load_mission(ROOT / MISSION)).run().sim_time
+    script = [python, "-c", IRSIM_RUNS, str(Path(__file__).resolve().parent), IRSIM_VARIANT, str(sim_time)]
+    base = instructions([*script, "0", "1"], ROOT)
+    missions = instructions([*script, "0", str(1 + extra_runs)], ROOT)
+    builds = instructions([*script, str(extra_runs), "1"], ROOT)
+    mission_ir, build_ir = (missions - base) / extra_runs, (builds - base) / extra_runs
+    return {"variant": IRSIM_VARIANT, "sim_time": sim_time, "mission_Ir": mission_ir, "build_Ir": build_ir,
+            "run_Ir": mission_ir - build_ir}
+
+
 def worktree(rev: str, into: Path) -> Path:
     subprocess.run(["git", "worktree", "add", "--detach", str(into), rev], cwd=ROOT, check=True,
                    capture_output=True)
@@ -77,6 +119,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--against", metavar="REV", help="also count this git revision, alternately")
     parser.add_argument("--rounds", type=int, default=2, help="alternations (default 2)")
     parser.add_argument("--extra-runs", type=int, default=2, help="K extra runs for the difference")
+    parser.add_argument("--irsim", action="store_true", help="also count IR-SIM's run (pip install -e .[bench])")
     args = parser.parse_args(argv)
     if shutil.which("valgrind") is None:
         raise SystemExit("valgrind is not installed (hint: apt-get install valgrind)")
@@ -110,6 +153,12 @@ def main(argv: list[str] | None = None) -> dict:
     if args.against:
         base, new = out[args.against]["run_Ir"], out["this checkout"]["run_Ir"]
         print(f"run(): {base / new:.2f}x fewer instructions than {args.against}")
+    if args.irsim:
+        irsim = out["irsim"] = measure_irsim(sys.executable, args.extra_runs)
+        irsim["ratio_over_thymio_bt"] = irsim["run_Ir"] / out["this checkout"]["run_Ir"]
+        print(f"IR-SIM 2.12 ({irsim['variant']}), the same walls for {irsim['sim_time']:.1f} s: "
+              f"{irsim['run_Ir'] / 1e6:.0f} M for its steps (+ {irsim['build_Ir'] / 1e6:.0f} M to build the world): "
+              f"{irsim['ratio_over_thymio_bt']:.1f}x this checkout's run()")
     save_results("instructions", out)
     return out
 

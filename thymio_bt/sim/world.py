@@ -202,7 +202,7 @@ class Simulation(Backend):
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
         self._scan: Scan | None = None
-        #: the last refresh's body pose (x, y, cos, sin), whose rays are cast when read when _scan is None
+        #: the last refresh's body pose (x, y, cos, sin) while _scan is None: proximity() reads from there
         self._sensed: tuple[float, float, float, float] | None = None
         self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
