@@ -12,7 +12,8 @@ clipped to [0, m] and read as an integer, as ``prox.horizontal``.
 Example::
 
     cone = ConeResponse()
-    cone.value(0.05, 0.05 / math.cos(math.radians(15)), 0.05 / math.cos(math.radians(15)))  # 3366.3
+    side = 0.05 / math.cos(APERTURE)           # a wall square to the sensor, 5 cm away
+    cone.value(side, 0.05, side)               # 3366.03, f(0.05): the centre ray alone
 """
 
 from __future__ import annotations
