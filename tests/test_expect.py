@@ -63,6 +63,27 @@ def test_the_front_gap_is_measured_by_geometry():
     assert math.isfinite(behind) and behind > 0.3
 
 
+@pytest.mark.parametrize("maze_file", ["mazes/two_parts_maze.yaml", "mazes/maze_6x6.yaml"])
+def test_a_ray_meets_the_nearest_face_of_every_wall_it_crosses(maze_file):
+    """ray_distance skips the walls behind the ray; it finds what trying every face finds, bit for bit,
+    along the axes (whose cosine or sine is a zero of either sign) and at any angle."""
+    import random
+
+    from thymio_bt.placement import _ray_segment, ray_distance
+
+    maze = load_maze(maze_file)
+    xmin, ymin, xmax, ymax = maze.bounds()
+    rng = random.Random(3)
+    yaws = [0.0, -0.0, math.pi / 2, -math.pi / 2, math.pi, -math.pi] + [rng.uniform(-4, 4) for _ in range(40)]
+    for yaw in yaws:
+        for _ in range(10):
+            x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
+            c, s = math.cos(yaw), math.sin(yaw)
+            every = [_ray_segment(x, y, c, s, *a, *b) for wall in maze.walls
+                     for a, b in zip(wall.corners(), [*wall.corners()[1:], wall.corners()[0]])]
+            assert ray_distance(maze, x, y, yaw) == min((d for d in every if d is not None), default=math.inf)
+
+
 def test_expectations_are_validated_with_units_and_places(tmp_path):
     path = tmp_path / "m.yaml"
     path.write_text("maze: arena\nstart: centre\nexpect:\n  goal: {centre: [1, 2], radius: 3 s}\n  colision: true\n"
