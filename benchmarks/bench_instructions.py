@@ -36,7 +36,7 @@ MISSION = "missions/maze_part1_2.yaml"
 RUNS = """
 import sys
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 mission = load_mission(sys.argv[1])
 for _ in range(int(sys.argv[2])):
     result = Run(mission).run()
@@ -96,7 +96,7 @@ def measure_irsim(python: str, extra_runs: int) -> dict[str, float]:
     """Instructions of IR-SIM's run of MISSION's maze for MISSION's simulated time: a mission (build
     and steps) and a build, each by difference; the steps are the one less the other."""
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     sim_time = Run(load_mission(ROOT / MISSION)).run().sim_time
     script = [python, "-c", IRSIM_RUNS, str(Path(__file__).resolve().parent), IRSIM_VARIANT, str(sim_time)]

@@ -11,7 +11,7 @@ import argparse
 
 from _common import ROOT, machine, save_results, table
 
-from thymio_bt.matrix import run_matrix
+from thymio_bt.run.matrix import run_matrix
 
 MISSIONS = ("maze_part1_2", "maze_bonus", "maze_6x6_left", "maze_6x6_right", "course_full", "square",
             "waypoints", "waypoints_obstacles")

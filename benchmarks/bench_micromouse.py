@@ -21,8 +21,8 @@ from _common import ROOT, machine, save_results, table
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import to_text
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import run_mission
-from thymio_bt.sim.noise import REALISTIC
+from thymio_bt.run.runner import run_mission
+from thymio_bt.backends.sim.noise import REALISTIC
 
 MISSION = ROOT / "missions" / "micromouse.yaml"
 

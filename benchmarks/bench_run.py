@@ -54,7 +54,7 @@ ROBOT_R = 0.055
 # ------------------------------------------------------------------ (a) in-process
 def bench_in_process(repeats: int) -> dict:
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     def once():
         t0 = time.perf_counter()
@@ -91,9 +91,9 @@ def breakdown_in_process(repeats: int) -> dict:
     methods wrapped by timers (on the instances, and the runner module's ``tick`` for the run's
     length; nothing in thymio_bt's files is changed); µs per tick, medians."""
     from bench_sim import _Timed
-    from thymio_bt import runner
+    from thymio_bt.run import runner
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     mission = load_mission(MISSION)
     expected = Run(mission).run()
@@ -215,7 +215,7 @@ def bench_process(runs: int) -> dict:
         whole, samples = time_process(cmd, runs, env)
         bare, _ = time_process([sys.executable, "-c", "pass"], runs, env)
         imports, _ = time_process([sys.executable, "-c", "import thymio_bt.cli"], runs, env)
-        run_imports, _ = time_process([sys.executable, "-c", "import thymio_bt.cli, thymio_bt.runner, "
+        run_imports, _ = time_process([sys.executable, "-c", "import thymio_bt.cli, thymio_bt.run.runner, "
                                        "thymio_bt.mission"], runs, env)
         offenders = import_offenders(env)
     with _pycache_aside(ROOT / "thymio_bt"):
@@ -234,7 +234,7 @@ def bench_process(runs: int) -> dict:
 def irsim_world(path: Path, shape: str, collision_mode: str, start) -> None:
     """Write an IR-SIM world YAML with the maze's walls and a Thymio-sized diff robot."""
     from thymio_bt.maze import load_maze
-    from thymio_bt.robot_model import COURSE
+    from thymio_bt.robot.model import COURSE
 
     maze = load_maze(MAZE)
     xmin, ymin, xmax, ymax = maze.bounds()
@@ -325,7 +325,7 @@ VARIANTS = {   # name: (wall shape, collision mode)
 def thymio_bt_run_s() -> float:
     """One in-process run() of the mission (Run built first, untimed), in seconds."""
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     run = Run(load_mission(MISSION))
     t0 = time.perf_counter()
@@ -426,7 +426,7 @@ def main(argv: list[str] | None = None) -> dict:
              f"thymio_bt recompiled each run: {verdict(nc, TARGET_PROCESS_S, False)}"),
             ("  python -c pass", f"{b['python_startup_s'] * 1e3:.0f} ms", "interpreter start-up"),
             ("  python -c 'import thymio_bt.cli'", f"{b['import_cli_s'] * 1e3:.0f} ms", "incl. start-up"),
-            ("  + import thymio_bt.runner, .mission", f"{b['import_cli_runner_mission_s'] * 1e3:.0f} ms",
+            ("  + import thymio_bt.run.runner, .mission", f"{b['import_cli_runner_mission_s'] * 1e3:.0f} ms",
              "incl. start-up: what `run` imports")]
     print(table(rows, ("process", "median", "note")))
     imp = b["importtime_top"]

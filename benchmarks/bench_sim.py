@@ -36,9 +36,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import ROOT, median_time, per_call_us, save_results, table, verdict  # noqa: E402
 
 from thymio_bt.maze import load_maze  # noqa: E402
-from thymio_bt.robot import Pose  # noqa: E402
-from thymio_bt.sim import Simulation  # noqa: E402
-from thymio_bt.robot_model import COURSE  # noqa: E402
+from thymio_bt.robot.interface import Pose  # noqa: E402
+from thymio_bt.backends.sim import Simulation  # noqa: E402
+from thymio_bt.robot.model import COURSE  # noqa: E402
 
 MAZE = ROOT / "mazes" / "two_parts_maze.yaml"
 TICK = 0.1                      # 10 Hz commands

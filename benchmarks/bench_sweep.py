@@ -12,7 +12,7 @@ import os
 
 from _common import ROOT, save_results, table, verdict
 
-from thymio_bt.sweep import LocalPool, sweep
+from thymio_bt.run.sweep import LocalPool, sweep
 
 TARGET = 5000.0
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from thymio_bt.mission import load_mission
-from thymio_bt.recording import Recorder
-from thymio_bt.runner import Run
+from thymio_bt.logs.recording import Recorder
+from thymio_bt.run.runner import Run
 from thymio_bt.viz import plots
 
 IMAGES = Path(__file__).parent / "images"

@@ -11,7 +11,7 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
-from thymio_bt.fields import AngularSpeed
+from thymio_bt.inputs.fields import AngularSpeed
 
 
 class SpinUntilClearParams(BehaviourParams):

@@ -12,13 +12,13 @@ import pytest
 from thymio_bt.errors import UserError
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse
 from thymio_bt.mission import load_mission
-from thymio_bt.playground.enki import EnkiRobot
-from thymio_bt.playground.process import Playground, free_port, listening
-from thymio_bt.playground.backend import SPEED_SCALE
-from thymio_bt.playground.world import playground_world
-from thymio_bt.real.aseba import AsebaNode, signed
-from thymio_bt.robot import Pose
-from thymio_bt.runner import Run
+from thymio_bt.backends.playground.enki import EnkiRobot
+from thymio_bt.backends.playground.process import Playground, free_port, listening
+from thymio_bt.backends.playground.backend import SPEED_SCALE
+from thymio_bt.backends.playground.world import playground_world
+from thymio_bt.backends.real.aseba import AsebaNode, signed
+from thymio_bt.robot.interface import Pose
+from thymio_bt.run.runner import Run
 
 CORRIDOR = maze_from_cells(parse_micromouse("""o---o---o---o---o---o
 | S                 |

@@ -10,8 +10,8 @@ import pytest
 from thymio_bt.backends import BUILTIN, backend_kind
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.robot_model import COURSE, ENKI, ROBOTS
-from thymio_bt.runner import Run
+from thymio_bt.robot.model import COURSE, ENKI, ROBOTS
+from thymio_bt.run.runner import Run
 
 
 def test_unknown_backend_names_the_nearest():
@@ -98,7 +98,7 @@ def test_cli_backend_errors_exit_2_without_traceback():
 
 
 def test_the_backend_base_serves_requests_through_two_hooks():
-    from thymio_bt.robot import Backend, Pose, RequestState
+    from thymio_bt.robot.interface import Backend, Pose, RequestState
 
     class Tiny(Backend):
         """A backend with one robot slot: just enough to check the request loop."""
@@ -134,7 +134,7 @@ def test_the_backend_base_serves_requests_through_two_hooks():
 
 
 def test_a_backend_that_raises_ends_the_run_failure_with_its_reason():
-    from thymio_bt.sim import Simulation
+    from thymio_bt.backends.sim import Simulation
 
     class Flaky(Simulation):
         def advance(self, dt):

@@ -5,7 +5,7 @@ import math
 import pytest
 
 from thymio_bt.maze.generate import perfect_maze
-from thymio_bt.robot_model import COURSE
+from thymio_bt.robot.model import COURSE
 
 AXLE_X = COURSE.axle_x
 from thymio_bt.testing import run_tree, world
@@ -85,7 +85,7 @@ def test_move_distance_within_two_millimetres(distance):
 
 @pytest.mark.parametrize("angle", ["90deg", "-90deg", "pi", "-45 deg", "2*pi", "10deg"])
 def test_turn_angle_within_half_a_degree_about_the_axle(angle):
-    from thymio_bt.units import parse_value
+    from thymio_bt.inputs.units import parse_value
 
     target = parse_value(angle).value
     result = run_tree({"TurnAngle": {"angle": angle}}, world("arena"), start=[0.6, 0.6, 0.2], seconds=20)
@@ -248,7 +248,7 @@ def late_run(tmp_path, latency, tree, preset="corridor"):
     import yaml
 
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
     from thymio_bt.testing import mission_text
 
     (tmp_path / "w.yaml").write_text(yaml.safe_dump(world(preset).to_yaml_dict()))

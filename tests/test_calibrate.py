@@ -7,11 +7,11 @@ import sys
 import _require
 import pytest
 
-from thymio_bt.calibrate import table_rows
+from thymio_bt.robot.calibrate import table_rows
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.robot_model import ENKI, robot_model
-from thymio_bt.runner import Run
+from thymio_bt.robot.model import ENKI, robot_model
+from thymio_bt.run.runner import Run
 
 
 def _calibrate(tmp_path, backend, *args):

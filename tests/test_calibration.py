@@ -8,10 +8,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from thymio_bt import calibration
-from thymio_bt.calibration import (ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable, RawProximityModel, metres_to_raw,
+from thymio_bt.robot import calibration
+from thymio_bt.robot.calibration import (ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable, RawProximityModel, metres_to_raw,
                                    raw_scan_to_metres, raw_to_metres)
-from thymio_bt.robot import SENSOR_NAMES
+from thymio_bt.robot.interface import SENSOR_NAMES
 
 TABLE = WEBOTS_THYMIO2
 #: The table as usually quoted: Webots' rows at 1..9 cm.

@@ -6,7 +6,7 @@ import math
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
-from thymio_bt.robot import SENSOR_NAMES
+from thymio_bt.robot.interface import SENSOR_NAMES
 
 
 def invoke(*args):

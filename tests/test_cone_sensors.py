@@ -5,13 +5,13 @@ import math
 
 import pytest
 
-from thymio_bt.calibration import ENKI_THYMIO2
+from thymio_bt.robot.calibration import ENKI_THYMIO2
 from thymio_bt.mission import load_mission
-from thymio_bt.robot import Pose
-from thymio_bt.robot_model import ENKI
-from thymio_bt.runner import Run
-from thymio_bt.sim import SimConfig, Simulation
-from thymio_bt.sim.cone import APERTURE, ConeResponse
+from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.model import ENKI
+from thymio_bt.run.runner import Run
+from thymio_bt.backends.sim import SimConfig, Simulation
+from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
 from thymio_bt.testing import world
 
 CONE = ConeResponse()

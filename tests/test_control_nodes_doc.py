@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "control_nodes.md"
 BLOCKS = re.findall(r"```yaml\n# result: (.*?)\n(.*?)```", DOC.read_text(), re.S)

@@ -6,7 +6,7 @@ import pytest
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
-from thymio_bt.sweep import LocalPool, sweep
+from thymio_bt.run.sweep import LocalPool, sweep
 
 distributed = _require.module("distributed")
 
@@ -19,7 +19,7 @@ def cluster():
 
 
 def test_a_dask_sweep_gives_the_local_pools_results(cluster):
-    from thymio_bt.distributed import DaskExecutor
+    from thymio_bt.run.distributed import DaskExecutor
 
     with distributed.Client(cluster) as client:
         on_dask = sweep("missions/maze_bonus.yaml", runs=6, executor=DaskExecutor(client))
@@ -29,7 +29,7 @@ def test_a_dask_sweep_gives_the_local_pools_results(cluster):
 
 
 def test_workers_read_a_mission_again_when_its_file_changes(cluster, tmp_path):
-    from thymio_bt.distributed import DaskExecutor
+    from thymio_bt.run.distributed import DaskExecutor
 
     path = tmp_path / "m.yaml"
     path.write_text("maze: arena\nstart: centre\ntree:\n  MoveDistance: {distance: 10cm}\n")

@@ -6,13 +6,13 @@ import math
 import pytest
 
 from thymio_bt.errors import UserError
-from thymio_bt.expect import front_gap
+from thymio_bt.mission.expect import front_gap
 from thymio_bt.maze import load_maze
 from thymio_bt.mission import load_mission
-from thymio_bt.robot import Pose
-from thymio_bt.robot_model import COURSE
-from thymio_bt.runner import Run
-from thymio_bt.sweep import sweep
+from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.model import COURSE
+from thymio_bt.run.runner import Run
+from thymio_bt.run.sweep import sweep
 
 MISSION = """\
 maze: two_parts_maze
@@ -69,7 +69,7 @@ def test_a_ray_meets_the_nearest_face_of_every_wall_it_crosses(maze_file):
     along the axes (whose cosine or sine is a zero of either sign) and at any angle."""
     import random
 
-    from thymio_bt.placement import _ray_segment, ray_distance
+    from thymio_bt.robot.placement import _ray_segment, ray_distance
 
     maze = load_maze(maze_file)
     xmin, ymin, xmax, ymax = maze.bounds()

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from thymio_bt.reading import LIMITS
+from thymio_bt.inputs.reading import LIMITS
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -10,10 +10,10 @@ import pytest
 from thymio_bt.behaviours import Context, MoveUntilWall
 from thymio_bt.behaviours.motion import DAMPED_GAIN_DELAY, late_gain
 from thymio_bt.behaviours.ticking import tick
-from thymio_bt.expect import Expect, check
+from thymio_bt.mission.expect import Expect, check
 from thymio_bt.maze import load_maze
-from thymio_bt.robot import SENSOR_NAMES, Pose
-from thymio_bt.robot_model import COURSE
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose
+from thymio_bt.robot.model import COURSE
 from py_trees.common import Status
 
 

@@ -10,7 +10,7 @@ import pytest
 @pytest.mark.parametrize("modules, absent", [
     ("thymio_bt.mission, thymio_bt.behaviours", ("pymunk",)),
     ("thymio_bt.cli", ("pymunk", "py_trees", "pydantic", "matplotlib", "pygame", "numpy", "tdmclient")),
-    ("thymio_bt.cli, thymio_bt.runner, thymio_bt.mission", ("matplotlib", "pygame", "numpy", "tdmclient")),
+    ("thymio_bt.cli, thymio_bt.run.runner, thymio_bt.mission", ("matplotlib", "pygame", "numpy", "tdmclient")),
 ])
 def test_imports_stay_in_their_layer(modules, absent):
     code = f"import sys, {modules}; print(','.join(m for m in {absent!r} if m in sys.modules))"
@@ -84,4 +84,4 @@ def test_no_import_cycle_among_the_package_modules():
 def test_only_the_simulator_imports_pymunk():
     _, graph = _import_graph()
     users = sorted(m for m, deps in graph.items() if any(d == "pymunk" or d.startswith("pymunk.") for d in deps))
-    assert users and all(m.startswith("thymio_bt.sim.") for m in users), users
+    assert users and all(m.startswith("thymio_bt.backends.sim.") for m in users), users

@@ -22,8 +22,8 @@ from hypothesis import strategies as st
 from thymio_bt.errors import UserError
 from thymio_bt.maze import load_maze
 from thymio_bt.mission import load_mission
-from thymio_bt.units import SI_UNIT, UNITS, Quantity, UnitError, parse_value
-from thymio_bt.yamlio import loads_yaml
+from thymio_bt.inputs.units import SI_UNIT, UNITS, Quantity, UnitError, parse_value
+from thymio_bt.inputs.yamlio import loads_yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 

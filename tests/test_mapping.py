@@ -9,8 +9,8 @@ from thymio_bt.behaviours.cellmap import CellMap, GridFrame, centre_cells
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse, to_text
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import run_mission
-from thymio_bt.sim.noise import REALISTIC
+from thymio_bt.run.runner import run_mission
+from thymio_bt.backends.sim.noise import REALISTIC
 from thymio_bt.testing import run_tree
 
 CELL = 0.18

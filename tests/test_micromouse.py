@@ -14,7 +14,7 @@ from thymio_bt.maze import load_maze
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import CELL, parse_micromouse, read_micromouse, to_text
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 
 EXAMPLE = "mazes/micromouse_4x4.txt"
 

@@ -187,7 +187,7 @@ def test_a_file_included_twice_is_read_once(tmp_path: Path) -> None:
 ])
 def test_yaml_that_python_cannot_hold_is_a_problem_at_its_place(text: str, where: tuple[int, int],
                                                                 message: str) -> None:
-    from thymio_bt.yamlio import loads_yaml
+    from thymio_bt.inputs.yamlio import loads_yaml
 
     with pytest.raises(UserError) as info:
         loads_yaml(text, "m.yaml")
@@ -196,7 +196,7 @@ def test_yaml_that_python_cannot_hold_is_a_problem_at_its_place(text: str, where
 
 
 def test_yaml_merge_keys_and_dates_are_plain_data() -> None:
-    from thymio_bt.yamlio import loads_yaml
+    from thymio_bt.inputs.yamlio import loads_yaml
 
     assert loads_yaml("base: &b {x: 1, y: 2}\nc:\n  <<: *b\n  x: 3\n")["c"] == {"x": 3, "y": 2}
     assert loads_yaml("when: 2020-02-30") == {"when": "2020-02-30"}     # not a date, and not a crash

@@ -9,8 +9,8 @@ import yaml
 from thymio_bt.maze import load_maze
 from thymio_bt.maze.generate import mirrored, path_maze, random_path, turns_along
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
-from thymio_bt.robot_model import COURSE
+from thymio_bt.run.runner import Run
+from thymio_bt.robot.model import COURSE
 
 AXLE_X = COURSE.axle_x
 

@@ -6,7 +6,7 @@ import pytest
 
 from thymio_bt.maze import Obstacle, load_maze
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 from thymio_bt.testing import run_tree, world
 
 ARENA = load_maze("mazes/report_arena.yaml")
@@ -44,7 +44,7 @@ def test_a_tolerance_tighter_than_the_controller_holds_fails_instead_of_spinning
 
 
 def test_speed_limits_are_respected():
-    from thymio_bt.recording import Recorder
+    from thymio_bt.logs.recording import Recorder
     mission = load_mission("missions/waypoints.yaml")
     recorder = Recorder()
     Run(mission).run(on_tick=recorder)

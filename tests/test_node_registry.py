@@ -12,7 +12,7 @@ from thymio_bt.cli import main
 from thymio_bt.errors import UserError
 from thymio_bt.mission import default_registry, load_mission
 from thymio_bt.mission.schema import mission_schema
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 
 
 def test_every_composite_and_decorator_is_in_the_registry():

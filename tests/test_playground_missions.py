@@ -13,11 +13,11 @@ from pathlib import Path
 import _require
 import pytest
 
-from thymio_bt.expect import front_gap
+from thymio_bt.mission.expect import front_gap
 from thymio_bt.mission import load_mission
-from thymio_bt.robot import Pose
-from thymio_bt.robot_model import ENKI
-from thymio_bt.runner import Run
+from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.model import ENKI
+from thymio_bt.run.runner import Run
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 

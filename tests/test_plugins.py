@@ -6,7 +6,7 @@ import pytest
 
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 
 
 def test_a_plugin_behaviour_runs_in_a_mission():
@@ -41,7 +41,7 @@ def test_a_missing_plugin_is_a_user_error(tmp_path):
 
 def test_a_plugin_behaviour_fails_with_its_own_code(tmp_path):
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     (tmp_path / "lost.py").write_text(
         "from thymio_bt.behaviours import RobotBehaviour\n"
@@ -57,7 +57,7 @@ def test_a_plugin_behaviour_fails_with_its_own_code(tmp_path):
 
 def test_a_plugin_behaviour_returning_no_status_fails_with_a_reason(tmp_path):
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     (tmp_path / "sloppy.py").write_text(
         "from thymio_bt.behaviours import RobotBehaviour\n"

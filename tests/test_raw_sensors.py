@@ -4,8 +4,8 @@ import pytest
 
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
-from thymio_bt.units import UnitError, parse_value
+from thymio_bt.run.runner import Run
+from thymio_bt.inputs.units import UnitError, parse_value
 
 
 def test_a_raw_threshold_is_the_distance_at_which_the_table_gives_that_reading():

@@ -1,4 +1,4 @@
-"""Noise-free readings cast when read (thymio_bt/sim/readings.py): the same floats as casting every
+"""Noise-free readings cast when read (thymio_bt/backends/sim/readings.py): the same floats as casting every
 ray at the refresh, each ray cast once and only if read, and a read-only mapping of all seven sensors
 whatever was read first."""
 
@@ -8,9 +8,9 @@ from types import SimpleNamespace
 import pytest
 
 from thymio_bt.maze import load_maze
-from thymio_bt.robot import SENSOR_NAMES, Pose
-from thymio_bt.sim import Simulation
-from thymio_bt.sim.readings import lazy_scan
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose
+from thymio_bt.backends.sim import Simulation
+from thymio_bt.backends.sim.readings import lazy_scan
 
 #: a reading per sensor, distinct: front_left 0.01, front_center_left 0.02, ...
 VALUES = {name: 0.01 * (i + 1) for i, name in enumerate(SENSOR_NAMES)}

@@ -9,7 +9,7 @@ from click.testing import CliRunner
 
 from thymio_bt.cli import main
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()

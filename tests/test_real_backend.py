@@ -13,11 +13,11 @@ from py_trees.common import Status
 
 from thymio_bt.behaviours import Context
 from thymio_bt.behaviours.motion import MoveUntilWall
-from thymio_bt.calibration import metres_to_raw
+from thymio_bt.robot.calibration import metres_to_raw
 from thymio_bt.errors import UserError
-from thymio_bt.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
-from thymio_bt.robot import SENSOR_NAMES, Entities, Pose, RequestState, Robot
-from thymio_bt.robot_model import COURSE
+from thymio_bt.backends.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
+from thymio_bt.robot.interface import SENSOR_NAMES, Entities, Pose, RequestState, Robot
+from thymio_bt.robot.model import COURSE
 
 AXLE_X = COURSE.axle_x
 SENSORS = tuple((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors)
@@ -360,7 +360,7 @@ def test_without_tdmclient_the_adapter_says_how_to_install_it(monkeypatch):
 
 
 def test_the_backend_imports_without_tdmclient():
-    code = ("import sys; sys.modules['tdmclient'] = None; import thymio_bt.real, thymio_bt.calibration; "
+    code = ("import sys; sys.modules['tdmclient'] = None; import thymio_bt.backends.real, thymio_bt.robot.calibration; "
             "print('ok')")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "ok"
 
@@ -493,7 +493,7 @@ class IdealWheels(FakeNode):
 
 def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it():
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     node = IdealWheels()
     robot, _, clock, operator, said = make(node, spawn=None)
@@ -510,7 +510,7 @@ def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it(
 
 def test_a_crash_inside_the_run_still_stops_the_motors():
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     node = IdealWheels()
     robot, *_ = make(node, spawn=None)
@@ -527,9 +527,9 @@ def test_a_crash_inside_the_run_still_stops_the_motors():
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_the_real_robot_and_ends_the_run_interrupted(sig):
-    from thymio_bt.interrupts import Interrupts
+    from thymio_bt.run.interrupts import Interrupts
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     node = IdealWheels()
     robot, *_ = make(node, spawn=None)
@@ -562,7 +562,7 @@ def test_cli_backend_tdm_without_a_device_manager_is_a_user_error(monkeypatch):
 
 def test_the_tdm_backend_takes_the_robot_model_and_its_options(monkeypatch):
     from thymio_bt.backends import backend_kind
-    from thymio_bt.robot_model import ENKI
+    from thymio_bt.robot.model import ENKI
 
     seen = {}
 

@@ -134,9 +134,9 @@ def test_every_mission_exports_to_xml_that_behaviortree_cpp_accepts(mission, tmp
 
 @pytest.mark.parametrize("mission", MISSIONS, ids=[m.stem for m in MISSIONS])
 def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_path):
-    from thymio_bt.btcpp import mission_xml
+    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     xml = tmp_path / f"{mission.stem}.xml"
     xml.write_text(mission_xml(load_mission(mission), xml))
@@ -154,7 +154,7 @@ def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_pat
     (("</root>", ""), "invalid XML", ""),
 ])
 def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message, hint):
-    from thymio_bt.btcpp import mission_xml
+    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.mission import load_mission
 
     text = mission_xml(load_mission("missions/maze_bonus.yaml"), tmp_path / "m.xml")
@@ -256,7 +256,7 @@ def _require_program_in_venv(name):
 
 
 def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
-    from thymio_bt.btcpp import mission_xml
+    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.errors import UserError
     from thymio_bt.mission import load_mission
 

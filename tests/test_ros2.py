@@ -26,11 +26,11 @@ import _require
 import pytest
 
 from thymio_bt.mission import load_mission
-from thymio_bt.robot import Pose
-from thymio_bt.ros2.messages import proximity_range, quaternion_of, stamp_ns, stamp_parts, yaw_of
-from thymio_bt.ros2.topics import COURSE_TOPICS, load_topics
-from thymio_bt.runner import Run
-from thymio_bt.sim.world import Simulation
+from thymio_bt.robot.interface import Pose
+from thymio_bt.backends.ros2.messages import proximity_range, quaternion_of, stamp_ns, stamp_parts, yaw_of
+from thymio_bt.backends.ros2.topics import COURSE_TOPICS, load_topics
+from thymio_bt.run.runner import Run
+from thymio_bt.backends.sim.world import Simulation
 
 ROOT = Path(__file__).resolve().parent.parent
 MISSIONS = ROOT / "missions"

@@ -6,9 +6,9 @@ from types import MappingProxyType
 import pytest
 
 from thymio_bt.maze import Maze, Wall, load_maze
-from thymio_bt.robot import SENSOR_NAMES, Pose
-from thymio_bt.sim import NoiseConfig, SimConfig, Simulation, fastpath
-from thymio_bt.robot_model import COURSE as thymio_model
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose
+from thymio_bt.backends.sim import NoiseConfig, SimConfig, Simulation, fastpath
+from thymio_bt.robot.model import COURSE as thymio_model
 from thymio_bt.testing import world
 
 COURSE = load_maze("mazes/two_parts_maze.yaml")
@@ -228,7 +228,7 @@ def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch)
     import glob
 
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
+    from thymio_bt.run.runner import Run
 
     def runs():
         out = []
@@ -266,8 +266,8 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     through collisions, a delete and a respawn (the course mission), with noise on (rays cast at
     each refresh) and off (each ray cast when read)."""
     from thymio_bt.mission import load_mission
-    from thymio_bt.runner import Run
-    from thymio_bt.sim import world as world_module
+    from thymio_bt.run.runner import Run
+    from thymio_bt.backends.sim import world as world_module
 
     def first_hit(space, x, y, cos, sin, ray, shape_filter):
         sx, sy, ex, ey = ray
@@ -329,7 +329,7 @@ def test_bodies_are_read_and_written_in_chipmunks_memory_on_this_pymunk():
 
 
 def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatch):
-    from thymio_bt.sim import world as world_module
+    from thymio_bt.backends.sim import world as world_module
 
     def crash():
         sim = Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0))

@@ -5,7 +5,7 @@ import random
 import pymunk
 
 from thymio_bt.maze import load_maze
-from thymio_bt.sim.walls import wall_grid
+from thymio_bt.backends.sim.walls import wall_grid
 
 
 def test_the_grid_serves_every_wall_a_space_point_query_finds():
@@ -29,9 +29,9 @@ def test_the_grid_serves_every_wall_a_space_point_query_finds():
 def test_placement_with_precomputed_shapes_gives_the_same_answers():
     """MazeShapes (the simulator's cached polygons, boxes skipped when far apart) answers as the maze does,
     also for poses that touch or nearly touch a wall."""
-    from thymio_bt.placement import MazeShapes, placement_problem
-    from thymio_bt.robot import Pose
-    from thymio_bt.robot_model import COURSE
+    from thymio_bt.robot.placement import MazeShapes, placement_problem
+    from thymio_bt.robot.interface import Pose
+    from thymio_bt.robot.model import COURSE
 
     maze = load_maze("mazes/two_parts_maze.yaml")
     shapes = MazeShapes.of(maze)
@@ -52,7 +52,7 @@ def test_maze_shapes_are_the_mazes_corners_and_bounds_and_shared_only_bit_for_bi
     import glob
 
     from thymio_bt.maze import Maze, Wall
-    from thymio_bt.placement import MazeShapes
+    from thymio_bt.robot.placement import MazeShapes
 
     for path in sorted(glob.glob("mazes/*.yaml")):
         maze = load_maze(path)

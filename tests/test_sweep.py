@@ -5,7 +5,7 @@ import json
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
-from thymio_bt.sweep import LocalPool, run_job, sweep
+from thymio_bt.run.sweep import LocalPool, run_job, sweep
 
 
 def test_sweep_json_contract_and_noise_on_by_default(tmp_path):
@@ -46,7 +46,7 @@ def test_noise_can_be_switched_off_with_set():
 
 
 def test_run_job_reports_the_first_stop_error():
-    from thymio_bt.sweep import Job
+    from thymio_bt.run.sweep import Job
 
     summary = run_job(Job("missions/maze_part1_2.yaml", 0))
     assert summary["status"] == "SUCCESS"

@@ -9,7 +9,7 @@ from py_trees.common import ParallelPolicy, Status
 
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.mission import load_mission
-from thymio_bt.runner import Run
+from thymio_bt.run.runner import Run
 
 MISSIONS = sorted((Path(__file__).resolve().parent.parent / "missions").glob("*.yaml"))
 

@@ -12,8 +12,8 @@ from thymio_bt.errors import UserError
 from thymio_bt.maze import Maze
 from thymio_bt.mission import load_mission
 from thymio_bt.logs import read_log
-from thymio_bt.recording import Recorder
-from thymio_bt.runner import Run
+from thymio_bt.logs.recording import Recorder
+from thymio_bt.run.runner import Run
 from thymio_bt.testing import world
 from thymio_bt.viz import window
 from thymio_bt.viz.window import Frame, Viewer, live_hook, replay

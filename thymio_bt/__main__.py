@@ -1,5 +1,5 @@
 """``python -m thymio_bt``: the same command line as ``thymio-bt``."""
 
-from .cli import main
+from thymio_bt.cli import main
 
 main(prog_name="thymio-bt")

@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
-from .errors import UserError
+from thymio_bt.errors import UserError
 
 STDOUT = "-"
 

@@ -41,6 +41,6 @@ def _thymio_bt_clean_blackboard() -> Iterator[None]:
 @pytest.fixture
 def thymio() -> SimpleNamespace:
     """The testing helpers: ``run_tree``, ``world``, ``run_mission_file``."""
-    from .testing import run_mission_file, run_tree, world
+    from thymio_bt.testing import run_mission_file, run_tree, world
 
     return SimpleNamespace(run_tree=run_tree, world=world, run_mission_file=run_mission_file)

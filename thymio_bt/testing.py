@@ -19,9 +19,9 @@ from typing import Any, Iterator
 import py_trees
 import yaml
 
-from .errors import UserError, did_you_mean
-from .maze import Maze, maze_from_grid
-from .runner import Run, RunResult
+from thymio_bt.errors import UserError, did_you_mean
+from thymio_bt.maze import Maze, maze_from_grid
+from thymio_bt.run.runner import Run, RunResult
 
 #: Small worlds of 0.2 m cells; ``>`` marks the start (base_link at the cell centre).
 PRESETS: dict[str, str] = {
@@ -101,7 +101,7 @@ def run_tree(tree: Any, maze: Maze, start: Any = "start", seconds: float = 60.0,
     ``substitute`` maps node-path globs to scripted stubs (see :func:`run_mission_file`);
     ``settings`` are more mission keys: ``parameters``, ``subtrees``, ``noise``, ``tick_hz``.
     """
-    from .mission import load_mission
+    from thymio_bt.mission import load_mission
 
     if isinstance(tree, str):
         tree = yaml.safe_load(tree)
@@ -124,7 +124,7 @@ def run_mission_file(path: str | Path, substitute: dict[str, Any] | None = None,
 
         result = run_mission_file("missions/maze_part1_2.yaml", substitute={"course/part 2": "success"})
     """
-    from .mission import load_mission
+    from thymio_bt.mission import load_mission
 
     mission = load_mission(path, overrides, **options)
     return Run(mission, seed, substitutions=substitute, node_stats=True).run()

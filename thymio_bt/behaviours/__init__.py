@@ -1,17 +1,16 @@
 """The built-in nodes: robot behaviours, one family per module (motion, maze, entities, navigation, mapping),
 and the composites and decorators that arrange them."""
 
-from .base import Context, EventLog, FailureCode, RobotBehaviour
-from .composites import COMPOSITES
-from .control import RepeatUntil, ScriptedStub, SimTimeout
-from .control_node import ControlNode
-from .decorators import DECORATORS
-from .entities import DeleteEntity, SpawnEntity
-from .mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
-from .maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
-from .motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
-from .navigation import (FollowWaypoints, GoToPose, ObstacleAhead, SetBlackboard, TurnBack, TurnUntilClear,
-                         WaypointsDone)
+from thymio_bt.behaviours.base import Context, EventLog, FailureCode, RobotBehaviour
+from thymio_bt.behaviours.composites import COMPOSITES
+from thymio_bt.behaviours.control import RepeatUntil, ScriptedStub, SimTimeout
+from thymio_bt.behaviours.control_node import ControlNode
+from thymio_bt.behaviours.decorators import DECORATORS
+from thymio_bt.behaviours.entities import DeleteEntity, SpawnEntity
+from thymio_bt.behaviours.mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
+from thymio_bt.behaviours.maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
+from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
+from thymio_bt.behaviours.navigation import FollowWaypoints, GoToPose, ObstacleAhead, SetBlackboard, TurnBack, TurnUntilClear, WaypointsDone
 
 #: Every built-in robot behaviour, in the order ``thymio-bt behaviours`` lists them.
 BUILTIN: tuple[type[RobotBehaviour], ...] = (

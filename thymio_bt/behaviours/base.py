@@ -29,8 +29,8 @@ import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..robot import Entities, Pose, Robot
-from ..fields import Duration
+from thymio_bt.robot.interface import Entities, Pose, Robot
+from thymio_bt.inputs.fields import Duration
 
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")

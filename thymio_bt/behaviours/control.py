@@ -13,7 +13,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from .ticking import tick
+from thymio_bt.behaviours.ticking import tick
 
 
 class SimTimeout(py_trees.decorators.Decorator):

@@ -30,7 +30,7 @@ from pydantic_core import PydanticCustomError
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
-    from .base import Context
+    from thymio_bt.behaviours.base import Context
 
 
 class ControlParams(BaseModel):

@@ -24,9 +24,9 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, Status
 from pydantic import Field, field_validator
 
-from ..fields import Duration
-from .control import RepeatUntil, SimTimeout
-from .control_node import ControlNode, ControlParams, refuse, whole
+from thymio_bt.inputs.fields import Duration
+from thymio_bt.behaviours.control import RepeatUntil, SimTimeout
+from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse, whole
 
 _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"
 _RETRY_EXAMPLE = "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'"

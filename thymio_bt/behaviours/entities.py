@@ -5,9 +5,9 @@ from __future__ import annotations
 from py_trees.common import Status
 from pydantic import Field
 
-from ..fields import Duration, Pose2D
-from ..robot import ROBOT_ENTITY, Pose, Request, RequestState
-from .base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
+from thymio_bt.inputs.fields import Duration, Pose2D
+from thymio_bt.robot.interface import ROBOT_ENTITY, Pose, Request, RequestState
+from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
 
 
 class DeleteEntityParams(BehaviourParams):

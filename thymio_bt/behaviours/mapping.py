@@ -39,12 +39,12 @@ from typing import Literal
 from py_trees.common import Access, Status
 from pydantic import Field
 
-from ..fields import Length, Speed
-from ..robot import wrap_angle
-from ..robot_model import COURSE, RobotModel
-from .base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
-from .cellmap import STEPS, Cell, CellMap, centre_cells
-from .motion import approach_speed
+from thymio_bt.inputs.fields import Length, Speed
+from thymio_bt.robot.interface import wrap_angle
+from thymio_bt.robot.model import COURSE, RobotModel
+from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.cellmap import STEPS, Cell, CellMap, centre_cells
+from thymio_bt.behaviours.motion import approach_speed
 
 Target = Literal["goal", "centre", "start"]
 Side = Literal["N", "E", "S", "W"]

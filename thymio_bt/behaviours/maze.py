@@ -15,12 +15,11 @@ from typing import Literal, Sequence
 from py_trees.common import Access, Status
 from pydantic import Field, model_validator
 
-from ..robot import Pose, wrap_angle
-from ..fields import AngularSpeed, Duration, Length, Speed
-from ..robot_model import COURSE
-from .base import (BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour,
-                   current_pose)
-from .motion import MIN_TURN_RATE, approach_speed, late_gain
+from thymio_bt.robot.interface import Pose, wrap_angle
+from thymio_bt.inputs.fields import AngularSpeed, Duration, Length, Speed
+from thymio_bt.robot.model import COURSE
+from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.motion import MIN_TURN_RATE, approach_speed, late_gain
 
 Side = Literal["left", "right"]
 _SENSOR = {s.name: (s.x, s.y, s.yaw) for s in COURSE.sensors}

@@ -1,6 +1,6 @@
 """Motion behaviours: drive to a wall, drive a distance, turn, stop, wait.
 
-All of them use odometry and the proximity scan only through :class:`~thymio_bt.robot.Robot`,
+All of them use odometry and the proximity scan only through :class:`~thymio_bt.robot.interface.Robot`,
 slow down near their goal so that a 10 Hz controller stops within a millimetre or a tenth of a
 degree, and never command more than the goal needs in one tick (no overshoot).
 """
@@ -14,10 +14,10 @@ from typing import Literal
 from py_trees.common import Status
 from pydantic import Field
 
-from ..robot import SENSOR_NAMES, Pose, wrap_angle
-from ..fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
-from ..robot_model import COURSE
-from .base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose, wrap_angle
+from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
+from thymio_bt.robot.model import COURSE
+from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
 
 SensorName = Literal["front_left", "front_center_left", "front_center", "front_center_right",
                      "front_right", "rear_left", "rear_right"]

@@ -16,11 +16,11 @@ from typing import Literal
 from py_trees.common import Access, Status
 from pydantic import Field
 
-from ..pid import PID
-from ..fields import Angle, AngularSpeed, Duration, Length, Point, Speed
-from ..robot import Pose, wrap_angle
-from .base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
-from .motion import approach_speed
+from thymio_bt.behaviours.pid import PID
+from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, Point, Speed
+from thymio_bt.robot.interface import Pose, wrap_angle
+from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.motion import approach_speed
 
 FRONT = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")
 #: The report's simulation thresholds for the 5 front sensors (Table 2), metres.

@@ -19,12 +19,12 @@ from importlib import import_module
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
-from ..errors import Problem, UserError
-from ..reading import check_regular
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.inputs.reading import check_regular
 
 if TYPE_CHECKING:
-    from ..recording import Recording
-    from .records import LogEnd, LogHeader, TickRecord
+    from thymio_bt.logs.recording import Recording
+    from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 ENTRY_POINT_GROUP = "thymio_bt.log_formats"
 

@@ -13,8 +13,8 @@ import struct
 from pathlib import Path
 from typing import IO
 
-from ..errors import UserError
-from .records import LogEnd, LogHeader, TickRecord
+from thymio_bt.errors import UserError
+from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 MAGIC = b"BTCPP4-FileLogger2"
 PROTOCOL = 1
@@ -36,8 +36,8 @@ class BtlogWriter:
         self._last: dict[str, str] = {}
 
     def header(self, header: LogHeader) -> None:
-        from ..btcpp import tree_xml
-        from ..mission import default_registry
+        from thymio_bt.mission.btcpp import tree_xml
+        from thymio_bt.mission import default_registry
 
         assert self._file is not None
         nodes = header["tree"]

@@ -14,12 +14,12 @@ from typing import IO, Any
 
 from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
 
-from ..errors import Problem, UserError
-from ..maze import Maze
-from ..reading import read_text
-from ..recording import Recording
-from ..validation import validate
-from .records import LogEnd, LogHeader, TickRecord
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.maze import Maze
+from thymio_bt.inputs.reading import read_text
+from thymio_bt.logs.recording import Recording
+from thymio_bt.inputs.validation import validate
+from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 
 class JsonlWriter:

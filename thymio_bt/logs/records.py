@@ -12,7 +12,7 @@ from typing import Any, Iterator, TypedDict
 
 from py_trees.behaviour import Behaviour
 
-from ..behaviours.base import node_path
+from thymio_bt.behaviours.base import node_path
 
 #: a node status in one letter, as logs store it
 STATUS_LETTER = {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}

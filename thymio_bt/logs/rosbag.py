@@ -24,9 +24,9 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from ..errors import Problem, UserError
-from ..recording import Recording
-from .records import LogEnd, LogHeader, TickRecord
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.logs.recording import Recording
+from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 _INSTALL = "pip install 'thymio-bt[rosbag]'"
 #: sensor name -> the course's topic prefix (../shared/course/robot.md)
@@ -172,8 +172,8 @@ def read_rosbag(path: Path) -> Recording:
     rosbags = _rosbags()
     from rosbags.highlevel import AnyReader
 
-    from ..maze import Maze
-    from ..validation import validate
+    from thymio_bt.maze import Maze
+    from thymio_bt.inputs.validation import validate
 
     header: dict[str, Any] = {}
     ticks: dict[int, dict[str, Any]] = {}

@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..data import MAZES
-from ..errors import Problem, UserError, did_you_mean
-from ..validation import validate
-from ..yamlio import MarkedDict, load_yaml
-from .grid import GridMazeFile, maze_from_grid_file
-from .model import Maze
+from thymio_bt.data import MAZES
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.validation import validate
+from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
+from thymio_bt.maze.grid import GridMazeFile, maze_from_grid_file
+from thymio_bt.maze.model import Maze
 
 def maze_dirs() -> list[Path]:
     """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the shipped ones."""
@@ -25,7 +25,7 @@ def load_maze(path: str | Path) -> Maze:
     """Load a maze file (YAML, the grid form with a ``grid:`` key, or a micromouse ``.txt``);
     errors give file:line."""
     if Path(path).suffix.lower() == ".txt":
-        from .micromouse import read_micromouse
+        from thymio_bt.maze.micromouse import read_micromouse
 
         return read_micromouse(path)
     data = load_yaml(path, "maze")

@@ -28,9 +28,9 @@ from xml.parsers import expat
 
 from pydantic import ValidationError
 
-from ..errors import Problem, UserError, did_you_mean
-from ..reading import read_bytes
-from .model import Maze, Spawn, Wall
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.reading import read_bytes
+from thymio_bt.maze.model import Maze, Spawn, Wall
 
 Vec = tuple[float, float, float]
 Mat = tuple[Vec, Vec, Vec]

@@ -16,10 +16,10 @@ import math
 import random
 from typing import TYPE_CHECKING
 
-from .model import Maze, Spawn, Wall
+from thymio_bt.maze.model import Maze, Spawn, Wall
 
 if TYPE_CHECKING:
-    from .micromouse import CellWalls
+    from thymio_bt.maze.micromouse import CellWalls
 
 Cell = tuple[int, int]
 _STEPS = {(1, 0): 0.0, (0, 1): math.pi / 2, (-1, 0): math.pi, (0, -1): -math.pi / 2}
@@ -133,7 +133,7 @@ def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> "CellWalls":
     backtracker) in which a fraction ``loops`` of the inner walls is then removed, so that wall
     following is defeated by loops and a map and a plan are needed.
     """
-    from .micromouse import CellWalls
+    from thymio_bt.maze.micromouse import CellWalls
 
     rng = random.Random(seed)
     half = size // 2

@@ -23,8 +23,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..errors import Problem, UserError
-from .model import Length, Maze, Point, Spawn, Wall
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.maze.model import Length, Maze, Point, Spawn, Wall
 
 _HEADINGS = {">": 0.0, "^": math.pi / 2, "<": math.pi, "v": -math.pi / 2}
 

@@ -28,9 +28,9 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import Problem, UserError
-from ..reading import read_text
-from .model import Area, Maze, Obstacle, Spawn, Wall
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.inputs.reading import read_text
+from thymio_bt.maze.model import Area, Maze, Obstacle, Spawn, Wall
 
 #: the classic contest's dimensions (m): 18 cm cells, 12 mm walls on 12 mm posts
 CELL, WALL, POST = 0.18, 0.012, 0.012

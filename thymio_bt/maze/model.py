@@ -21,13 +21,13 @@ from typing import Annotated, Any, Sequence
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..errors import Problem, UserError, did_you_mean, type_name
-from ..robot import Pose
-from ..units import UnitError, check_kind, kind_hint, parse_value
+from thymio_bt.errors import Problem, UserError, did_you_mean, type_name
+from thymio_bt.robot.interface import Pose
+from thymio_bt.inputs.units import UnitError, check_kind, kind_hint, parse_value
 
 
 def _problem(message: str, hint: str) -> PydanticCustomError:
-    """A validation error whose hint :func:`thymio_bt.validation.problems_from` shows."""
+    """A validation error whose hint :func:`thymio_bt.inputs.validation.problems_from` shows."""
     return PydanticCustomError("maze", "{message}", {"message": message, "hint": hint})
 
 

@@ -15,19 +15,19 @@ from typing import Any, Mapping
 
 from pydantic import ValidationError
 
-from ..errors import Problem, UserError, did_you_mean
-from ..expect import Expect
-from ..maze import Maze, load_maze, resolve_maze
-from ..placement import placement_problem
-from ..robot import Pose
-from ..robot_model import ROBOTS, robot_model
-from ..robot_profile import is_profile_path
-from ..sim.noise import NoiseConfig
-from ..units import Quantity, check_kind
-from ..validation import problems_from, validate
-from ..yamlio import MarkedDict, load_yaml
-from .checker import Checker, Scope, Where
-from .registry import Registry, default_registry
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.mission.expect import Expect
+from thymio_bt.maze import Maze, load_maze, resolve_maze
+from thymio_bt.robot.placement import placement_problem
+from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.model import ROBOTS, robot_model
+from thymio_bt.robot.profile import is_profile_path
+from thymio_bt.backends.sim.noise import NoiseConfig
+from thymio_bt.inputs.units import Quantity, check_kind
+from thymio_bt.inputs.validation import problems_from, validate
+from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
+from thymio_bt.mission.checker import Checker, Scope, Where
+from thymio_bt.mission.registry import Registry, default_registry
 
 #: the settings that are numbers: their kind and range, however they are given
 SETTING_RANGES = {"tick_hz": ("frequency", 1.0, 100.0), "time_limit": ("time", 0.1, 36000.0)}

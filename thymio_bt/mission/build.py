@@ -14,10 +14,10 @@ from typing import Any, Iterator, Mapping
 
 from py_trees.behaviour import Behaviour
 
-from ..behaviours import Context, ControlNode, ScriptedStub
-from ..errors import UserError, did_you_mean
-from .plan import NodePlan
-from .registry import Registry, default_registry
+from thymio_bt.behaviours import Context, ControlNode, ScriptedStub
+from thymio_bt.errors import UserError, did_you_mean
+from thymio_bt.mission.plan import NodePlan
+from thymio_bt.mission.registry import Registry, default_registry
 
 
 def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,

@@ -11,11 +11,11 @@ import math
 import typing
 from typing import Any, Mapping
 
-from ..errors import Problem, did_you_mean, type_name
-from ..maze import Maze
-from ..robot import Pose
-from ..units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
-from ..yamlio import MarkedDict, MarkedList
+from thymio_bt.errors import Problem, did_you_mean, type_name
+from thymio_bt.maze import Maze
+from thymio_bt.robot.interface import Pose
+from thymio_bt.inputs.units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
+from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
 
 Where = tuple[str, int, int]
 

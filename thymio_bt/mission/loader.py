@@ -1,6 +1,6 @@
 """Load a mission file into a validated :class:`~thymio_bt.mission.plan.Mission`, in passes:
 
-1. **read** — the YAML with the place of every key and value (:func:`thymio_bt.yamlio.load_yaml`), or
+1. **read** — the YAML with the place of every key and value (:func:`thymio_bt.inputs.yamlio.load_yaml`), or
    a BehaviorTree.CPP XML mission into the same form (:mod:`thymio_bt.mission.xml_reader`);
 2. **assemble** — includes, plugins, parameters, subtrees, settings and ``--set``, the maze and the
    start pose (:mod:`thymio_bt.mission.assemble`);
@@ -22,14 +22,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Mapping
 
-from ..data import MISSIONS
-from ..errors import Problem, UserError, did_you_mean
-from ..units import Quantity
-from ..yamlio import load_yaml
-from .assemble import Assembler
-from .plan import Mission
-from .planner import TreePlanner
-from .registry import Registry
+from thymio_bt.data import MISSIONS
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.units import Quantity
+from thymio_bt.inputs.yamlio import load_yaml
+from thymio_bt.mission.assemble import Assembler
+from thymio_bt.mission.plan import Mission
+from thymio_bt.mission.planner import TreePlanner
+from thymio_bt.mission.registry import Registry
 
 
 def resolve_mission(ref: str | Path) -> Path:
@@ -56,7 +56,7 @@ def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
     path = resolve_mission(path)
     file = str(path)
     if path.suffix.lower() == ".xml":
-        from .xml_reader import read_xml_mission         # BT.CPP XML: imported only for XML missions
+        from thymio_bt.mission.xml_reader import read_xml_mission         # BT.CPP XML: imported only for XML missions
 
         data = read_xml_mission(path)
     else:

@@ -13,9 +13,9 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from ..maze import Maze
-from ..robot import Pose
-from ..sim.noise import NoiseConfig
+from thymio_bt.maze import Maze
+from thymio_bt.robot.interface import Pose
+from thymio_bt.backends.sim.noise import NoiseConfig
 
 
 @dataclass
@@ -59,11 +59,11 @@ class Mission:
     seed: int
     noise: NoiseConfig
     parameters: dict[str, Any]
-    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.calibration)
+    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.robot.calibration)
     sensor_model: str
     tree: NodePlan
     registry: Any = None
-    #: the robot model's name (:data:`thymio_bt.robot_model.ROBOTS`)
+    #: the robot model's name (:data:`thymio_bt.robot.model.ROBOTS`)
     robot: str = "course"
     #: the backend kind's name (:mod:`thymio_bt.backends`) and its settings, as written
     backend: str = "sim"
@@ -72,5 +72,5 @@ class Mission:
     start_where: tuple[str, int, int] = ("", 0, 0)
     #: every file the mission was read from: itself, its includes, its maze and its .py plugins
     sources: tuple[Path, ...] = ()
-    #: what counts as success besides the tree's status (:mod:`thymio_bt.expect`), or None
+    #: what counts as success besides the tree's status (:mod:`thymio_bt.mission.expect`), or None
     expect: Any = None

@@ -2,7 +2,7 @@
 :class:`~thymio_bt.mission.plan.NodePlan`.
 
 Each node's type is looked up in the registry (a behaviour, a composite, a decorator) or among the
-mission's subtrees; its parameters are read by their declared types (thymio_bt.fields: units,
+mission's subtrees; its parameters are read by their declared types (thymio_bt.inputs.fields: units,
 tuples, spawn names) and validated by its pydantic model, so every problem is reported where it
 was written. Subtrees are expanded with their arguments in place.
 """
@@ -16,14 +16,14 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from ..behaviours import ControlNode
-from ..errors import did_you_mean, type_name
-from ..fields import SpawnName, Unit, field_metadata, metadata, unit_of
-from ..units import Quantity, UnitError, parse_value
-from ..yamlio import MarkedDict
-from .assemble import Assembly
-from .checker import Checker, Scope, Where, _parameter_hint
-from .plan import NodePlan
+from thymio_bt.behaviours import ControlNode
+from thymio_bt.errors import did_you_mean, type_name
+from thymio_bt.inputs.fields import SpawnName, Unit, field_metadata, metadata, unit_of
+from thymio_bt.inputs.units import Quantity, UnitError, parse_value
+from thymio_bt.inputs.yamlio import MarkedDict
+from thymio_bt.mission.assemble import Assembly
+from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
+from thymio_bt.mission.plan import NodePlan
 
 MAX_DEPTH = 64
 #: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
@@ -328,7 +328,7 @@ class TreePlanner(Checker):
     def convert(self, annotation: Any, extra: list[Any], raw: Any, scope: Scope, where: Where, path: str) -> Any:
         """A YAML value as the type ``annotation`` wants it: numbers through the unit parser (in the
         type's unit), tuples and lists element by element, spawn names for pose types; anything else
-        as written, for pydantic to check. The types (thymio_bt.fields) say everything: a new
+        as written, for pydantic to check. The types (thymio_bt.inputs.fields) say everything: a new
         parameter shape built from them needs no change here."""
         meta = metadata(annotation, extra)
         base = _strip_optional(annotation)

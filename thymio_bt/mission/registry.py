@@ -22,8 +22,8 @@ import sys
 from pathlib import Path
 from typing import Any, Iterator
 
-from ..behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
-from ..errors import Problem, UserError
+from thymio_bt.behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
+from thymio_bt.errors import Problem, UserError
 
 ENTRY_POINT_GROUP = "thymio_bt.behaviours"
 
@@ -135,7 +135,7 @@ class Registry:
 
     def _declare_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
         """Stand-ins for the nodes of plugin ``ref``, found by reading its source, not running it."""
-        from .unrun_plugins import plugin_node_names, stand_in
+        from thymio_bt.mission.unrun_plugins import plugin_node_names, stand_in
 
         file, line, col = where
         target, _, attr = ref.partition(":")

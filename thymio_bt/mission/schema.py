@@ -9,11 +9,11 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from ..behaviours import ControlNode
-from ..fields import unit_of
-from ..robot_model import ROBOTS
-from ..sim.noise import NoiseConfig
-from .registry import Registry, default_registry
+from thymio_bt.behaviours import ControlNode
+from thymio_bt.inputs.fields import unit_of
+from thymio_bt.robot.model import ROBOTS
+from thymio_bt.backends.sim.noise import NoiseConfig
+from thymio_bt.mission.registry import Registry, default_registry
 
 _VALUE = {"anyOf": [{"type": "number"}, {"type": "string"}],
           "description": "a number, optionally with a unit (5cm, 0.1 m/s, 90deg, pi/2) or a $parameter"}
@@ -89,7 +89,7 @@ def control_schema(cls: type[ControlNode], node_ref: dict[str, Any]) -> dict[str
     return {**long_form, "description": _summary(cls)}
 
 
-#: ``expect:`` (thymio_bt.expect): what counts as success besides the tree's status
+#: ``expect:`` (thymio_bt.mission.expect): what counts as success besides the tree's status
 _EXPECT = {"type": "object", "additionalProperties": False, "description": "success criteria checked after the run", "properties": {
     "goal": {"type": "object", "additionalProperties": False, "required": ["centre"],
              "properties": {"centre": {"type": "array", "prefixItems": [_VALUE, _VALUE], "minItems": 2, "maxItems": 2},

@@ -18,8 +18,8 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict
 from py_trees.common import Status
 
-from ..behaviours import RobotBehaviour
-from ..reading import read_text
+from thymio_bt.behaviours import RobotBehaviour
+from thymio_bt.inputs.reading import read_text
 
 #: base classes that make a plugin class a node
 NODE_BASES = ("RobotBehaviour", "ConditionBehaviour", "ControlNode")

@@ -4,7 +4,7 @@ data as a YAML mission, so the loader's passes check them with the same errors a
 The read pass for ``.xml`` files: the ``<BehaviorTree>`` named by ``main_tree_to_execute`` (or the
 only one) is the tree, ``<ThymioMission>`` holds the settings (``maze``, ``start``, ``tick_hz``,
 ``noise.wheel``...), ``<TreeNodesModel>`` is ignored. BT.CPP's built-ins map back to thymio-bt's
-composites and decorators (:data:`thymio_bt.btcpp.BUILTIN`), ``{key}`` ports to ``bb:key``.
+composites and decorators (:data:`thymio_bt.mission.btcpp.BUILTIN`), ``{key}`` ports to ``bb:key``.
 Elements and their attributes carry the element's line and column. The file is parsed with
 expat, with no DTD: entities are refused, so nothing is expanded or fetched.
 
@@ -21,10 +21,10 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
-from ..btcpp import BUILTIN, MISSION_TAG, RESERVED
-from ..errors import Problem, UserError
-from ..reading import read_bytes
-from ..yamlio import MarkedDict, MarkedList
+from thymio_bt.mission.btcpp import BUILTIN, MISSION_TAG, RESERVED
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.inputs.reading import read_bytes
+from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
 
 _FROM_BUILTIN = {ident: kind for kind, ident in BUILTIN.items()}
 #: BT.CPP nodes that thymio-bt cannot run, with what to use instead

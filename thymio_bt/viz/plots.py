@@ -16,9 +16,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ..errors import UserError
-from ..recording import Recording
-from ..robot_model import COURSE
+from thymio_bt.errors import UserError
+from thymio_bt.logs.recording import Recording
+from thymio_bt.robot.model import COURSE
 
 KEY_EVENTS = {"delete_entity": ("tab:red", "deleted"), "spawn_entity": ("tab:green", "spawned")}
 

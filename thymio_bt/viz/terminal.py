@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING, Any
 
 import py_trees
 
-from ..errors import UserError
+from thymio_bt.errors import UserError
 
 if TYPE_CHECKING:
-    from ..outputs import Output
+    from thymio_bt.outputs import Output
 
 
 class LiveTree:
@@ -45,8 +45,8 @@ def failing_tree(run: Any) -> str:
 def _build(mission_path: Path, run_plugins: bool = False) -> Any:
     """The mission's py_trees tree, to draw: built with no robot (behaviours touch it only when ticked);
     its plugins are read, not imported, unless ``run_plugins``."""
-    from ..behaviours import Context
-    from ..mission import build_tree, load_mission
+    from thymio_bt.behaviours import Context
+    from thymio_bt.mission import build_tree, load_mission
 
     mission = load_mission(mission_path, run_plugins=run_plugins)
     return build_tree(mission.tree, Context(robot=None, entities=None), mission.registry)  # type: ignore[arg-type]

@@ -8,7 +8,7 @@ only reads the simulation, so a run with a window ends exactly as one without. W
 
 Keys: SPACE pause/resume, N or RIGHT one tick (and pause), + / - double/halve the speed-up,
 Q or ESC close. Closing the window of a live run raises :class:`ViewerClosed`, a
-:class:`thymio_bt.runner.StopRun`: the run ends there as a FAILURE with code STOPPED, and its
+:class:`thymio_bt.run.runner.StopRun`: the run ends there as a FAILURE with code STOPPED, and its
 report, log and pictures are written as for any other ending.
 
 Example::
@@ -30,15 +30,15 @@ from typing import Any, Iterable
 
 import py_trees
 
-from ..errors import UserError
-from ..maze import Maze
-from ..logs.records import number
-from ..recording import Recording
-from ..behaviours.base import node_path
-from ..behaviours.cellmap import CellMap
-from ..runner import Run, RunResult, StopRun
-from ..robot_model import COURSE
-from .plots import _outline, _rays
+from thymio_bt.errors import UserError
+from thymio_bt.maze import Maze
+from thymio_bt.logs.records import number
+from thymio_bt.logs.recording import Recording
+from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.cellmap import CellMap
+from thymio_bt.run.runner import Run, RunResult, StopRun
+from thymio_bt.robot.model import COURSE
+from thymio_bt.viz.plots import _outline, _rays
 
 #: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
 BACKGROUND = (250, 250, 250)

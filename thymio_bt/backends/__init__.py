@@ -1,0 +1,159 @@
+"""Robot backends by name: what ``--backend NAME`` may be, and how each is made.
+
+A backend is a :class:`~thymio_bt.robot.interface.Backend` (the pymunk simulation, a Thymio over Aseba or
+ROS 2, ...). Each kind registers a :class:`BackendKind`: a name, a one-line summary, a pydantic model
+of its settings (``--backend-opt KEY=VALUE`` or a mission's ``backend:`` block), and a factory named
+as ``"module:function"`` so that choosing one backend never imports the others' libraries.
+Plugins add kinds through the ``thymio_bt.backends`` entry-point group, whose entries point to a
+:class:`BackendKind`.
+
+Example::
+
+    kind = backend_kind("sim")
+    backend = kind.create(mission, seed=0, options={"physics_hz": "200"})
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from importlib import import_module
+from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from thymio_bt.errors import Problem, UserError, did_you_mean
+
+if TYPE_CHECKING:
+    from thymio_bt.mission import Mission
+    from thymio_bt.robot.interface import Backend
+
+ENTRY_POINT_GROUP = "thymio_bt.backends"
+
+
+class BackendOptions(BaseModel):
+    """Settings of a backend; subclasses add fields (each with a description: ``--help`` shows it)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+@dataclass(frozen=True)
+class BackendKind:
+    """One kind of backend: ``factory(mission, seed, options)`` makes a connected, ready backend."""
+
+    name: str
+    summary: str
+    factory: str | Callable[["Mission", int, Any], "Backend"]
+    options: type[BackendOptions] = BackendOptions
+    #: whether runs on it take real time (a real robot, a real-time simulator)
+    realtime: bool = False
+
+    def parse_options(self, raw: Mapping[str, Any], where: tuple[str, int, int] = ("--backend-opt", 0, 0)) -> Any:
+        """Validate ``raw`` settings against :attr:`options`; :class:`UserError` says what is wrong."""
+        try:
+            return self.options.model_validate(dict(raw))
+        except ValidationError as exc:
+            fields = self.options.model_fields
+            problems = []
+            for error in exc.errors():
+                key = ".".join(str(p) for p in error["loc"])
+                if error["type"] == "extra_forbidden":
+                    hint = did_you_mean(key, fields) if fields else f"backend '{self.name}' takes no options"
+                    problems.append(Problem(f"backend '{self.name}' has no option '{key}'", *where, key, hint))
+                else:
+                    about = fields[key].description if key in fields else None
+                    problems.append(Problem(f"backend '{self.name}' option '{key}': {error['msg']}", *where, key,
+                                            f"{key}: {about}" if about else ""))
+            raise UserError(problems) from None
+
+    def create(self, mission: "Mission", seed: int, options: Mapping[str, Any] | None = None) -> "Backend":
+        """A backend of this kind for ``mission``, with ``options`` validated first."""
+        parsed = self.parse_options(options or {})
+        factory = self.factory
+        if isinstance(factory, str):
+            module, _, attr = factory.partition(":")
+            factory = getattr(import_module(module), attr)
+        return factory(mission, seed, parsed)
+
+
+class SimOptions(BackendOptions):
+    physics_hz: float = Field(100.0, ge=50.0, le=2000.0, description="physics sub-steps per simulated second")
+
+
+class TdmOptions(BackendOptions):
+    host: str | None = Field(None, description="Thymio Device Manager host (default: found on this machine)")
+    port: int | None = Field(None, ge=1, le=65535, description="Thymio Device Manager TCP port")
+    password: str | None = Field(None, description="Thymio Device Manager password, if it has one")
+
+
+class AsebaOptions(BackendOptions):
+    device: str = Field("", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for "
+                        "the only Thymio plugged in")
+    timeout: float = Field(5.0, gt=0, le=60, description="how long to wait for the robot to answer (s)")
+    latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
+                           "command acting (behaviours stop early by it); 0.2 was measured on the Playground, "
+                           "measure your robot's")
+
+
+class PlaygroundOptions(BackendOptions):
+    timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
+    latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
+                           "command acting, for the behaviours (measured: readings 40-120 ms behind the true "
+                           "pose, a new motor target acting ~100 ms later)")
+    speed_scale: float | None = Field(None, gt=0.5, le=2, description="the Playground's Thymio's speed per motor "
+                                      "unit over the robot model's; default: 0.985 (measured against its ground "
+                                      "truth) for a built-in model, 1 for a profile measured by thymio-bt calibrate")
+
+
+class Ros2Options(BackendOptions):
+    topics: str = Field("", description="a YAML topic map (default: the course's Gazebo topics and services)")
+    timeout: float = Field(5.0, gt=0, le=120, description="how long a topic may stay silent, or a service "
+                           "take to appear or answer, before the run fails (wall s)")
+    clock: Literal["auto", "sim", "wall"] = Field(
+        "auto", description="the run's time: the /clock of a simulator (sim), the wall clock (wall), or sim "
+        "when someone publishes /clock (auto)")
+    latency: float = Field(0.0, ge=0, le=2, description="seconds from the world a reading shows to a new command "
+                           "acting (behaviours stop early by it); measure a real robot's")
+    robot_xml: str = Field("", description="URDF/SDF file sent when spawning (default: /robot_description)")
+
+
+#: The backends that come with thymio-bt.
+BUILTIN: dict[str, BackendKind] = {kind.name: kind for kind in (
+    BackendKind("sim", "the pymunk simulation of the mission's maze (default; instant, deterministic)",
+                "thymio_bt.backends.sim.backend:create", SimOptions),
+    BackendKind("tdm", "a Thymio through Thymio Suite's Thymio Device Manager (needs thymio-bt[thymio]; "
+                "untested here: no registry has the Device Manager)", "thymio_bt.backends.real.thymio:create_tdm",
+                TdmOptions, realtime=True),
+    BackendKind("aseba", "a Thymio over its own Aseba protocol: on USB, or a simulated one on TCP "
+                "(needs thymio-bt[aseba])", "thymio_bt.backends.real.aseba:create_aseba", AsebaOptions, realtime=True),
+    BackendKind("playground", "the Aseba Playground (Enki) started headless on the mission's maze, driven "
+                "over Aseba like a real Thymio, in real time (needs the aseba package and thymio-bt[aseba])",
+                "thymio_bt.backends.playground.backend:create_playground", PlaygroundOptions, realtime=True),
+    BackendKind("ros2", "a Thymio through ROS 2 topics and services: the course's Gazebo, 'thymio-bt serve ros2' "
+                "or a robot's driver (needs rclpy: see scripts/ros2-env.sh)", "thymio_bt.backends.ros2.backend:create_ros2",
+                Ros2Options, realtime=True),
+)}
+
+
+def backend_kinds() -> dict[str, BackendKind]:
+    """Every backend kind: the built-in ones, then those of installed plugins (entry points)."""
+    from importlib.metadata import entry_points
+
+    kinds = dict(BUILTIN)
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        if ep.name not in kinds:
+            kind = ep.load()
+            if not isinstance(kind, BackendKind):
+                raise UserError(f"backend plugin '{ep.name}' ({ep.value}) is not a BackendKind "
+                                f"(hint: point the entry point at a thymio_bt.backends.BackendKind)")
+            kinds[ep.name] = kind
+    return kinds
+
+
+def backend_kind(name: str) -> BackendKind:
+    """The backend kind called ``name``; a :class:`UserError` naming the known ones otherwise."""
+    if name in BUILTIN:
+        return BUILTIN[name]
+    kinds = backend_kinds()
+    if name not in kinds:
+        raise UserError(Problem(f"no backend named '{name}'", "--backend", hint=did_you_mean(name, kinds)))
+    return kinds[name]

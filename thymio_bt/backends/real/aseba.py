@@ -1,0 +1,263 @@
+"""A Thymio over its own protocol (Aseba): a real robot on USB serial, or a simulated one on TCP.
+
+:class:`AsebaNode` implements the backend's :class:`~thymio_bt.backends.real.thymio.Node` with
+thymiodirect's :class:`Connection` (optional extra ``thymio-bt[aseba]``), avoiding the traps
+measured in ``research/aseba_playground.md``:
+
+- connecting has a deadline (thymiodirect's own ``Thymio.connect`` waits for ever on a closed port);
+- the connection's threads are daemons and are shut down on :meth:`AsebaNode.close` (thymiodirect's
+  are not, and keep a process alive);
+- the robot refreshes the few variables used (``prox.horizontal``, ``motor.*.speed``) by itself every
+  :data:`REFRESH` s; a read takes the latest values, a write is sent without waiting;
+- the wheel speeds are integrated as each refresh arrives (:meth:`AsebaNode.read_wheel_travel`),
+  not only at the backend's 10 Hz ticks: a speed that changes in a step (a turn starting) was
+  sampled a tick apart, and each 90° turn's odometry came out up to 5° off on the Playground;
+- values arrive as unsigned 16-bit words and are returned signed;
+- a robot that sends nothing for :data:`LOST_AFTER` seconds, or a connection that fails, raises
+  :class:`~thymio_bt.robot.interface.RobotLost` at the next read: the run ends as FAILURE ``ROBOT_LOST``.
+
+Example::
+
+    node = AsebaNode.connect("tcp:127.0.0.1:33333")     # or "/dev/ttyACM0", or "" for the only one
+    node.set_motors(100, 100)
+    node.read_prox()                                      # [0, 0, 1203, 0, 0, 0, 0]
+    node.close()
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import socket
+import threading
+import time
+from typing import Any
+
+from thymio_bt.errors import Problem, UserError, optional_module
+from thymio_bt.robot.interface import RobotLost
+from thymio_bt.backends.real.thymio import PROX_VARIABLE, SPEED_VARIABLES, TARGET_VARIABLES, Node
+
+#: A robot silent for this long (s) is lost; thymiodirect alone would wait 3 s and then say nothing.
+LOST_AFTER = 0.8
+#: How often the robot is asked for its variables (s), and how often it is looked for while connecting.
+REFRESH, DISCOVER = 0.03, 0.1
+_INSTALL_HINT = "pip install 'thymio-bt[aseba]'"
+
+
+def signed(word: int) -> int:
+    """An Aseba 16-bit word as the signed number it holds."""
+    return word - 0x10000 if word >= 0x8000 else word
+
+
+class _SocketIO(io.RawIOBase):
+    """A TCP socket as the byte stream thymiodirect reads. Reads time out so its thread can stop; a
+    failed link is recorded in ``failed`` (the node reports it as RobotLost) instead of raising in
+    thymiodirect's threads, which would end them with a traceback."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock = sock
+        self.failed: BaseException | None = None
+        sock.settimeout(0.2)
+
+    def read(self, n: int = -1) -> bytes:                  # type: ignore[override]
+        if self.failed is None:
+            try:
+                data = self.sock.recv(n)
+                if data:
+                    return data
+                self.failed = ConnectionError("the peer closed the connection")
+            except socket.timeout:
+                return b""
+            except OSError as exc:
+                self.failed = exc
+        time.sleep(0.05)          # realtime: a dead link (thymiodirect's reader would spin), not a sim step
+        return b""
+
+    def write(self, data: Any) -> int:                     # type: ignore[override]
+        if self.failed is None:
+            try:
+                self.sock.sendall(data)
+            except OSError as exc:
+                self.failed = exc
+        return len(data)
+
+    def close(self) -> None:
+        self.sock.close()
+        super().close()
+
+
+def _thymiodirect() -> Any:
+    return optional_module("thymiodirect.connection", "the 'aseba' backend", _INSTALL_HINT).Connection
+
+
+def _open_stream(device: str, timeout: float) -> Any:
+    """The byte stream to ``device``: ``tcp:HOST:PORT``, a serial port, or "" for the only Thymio on USB."""
+    Connection = _thymiodirect()
+    if device.startswith("tcp:"):
+        host, _, port = device[4:].rpartition(":")
+        try:
+            sock = socket.create_connection((host or "127.0.0.1", int(port)), timeout=timeout)
+        except ValueError:
+            raise UserError(Problem(f"bad device '{device}'", hint="write tcp:HOST:PORT, e.g. tcp:127.0.0.1:33333")) from None
+        except OSError as exc:
+            raise UserError(Problem(f"cannot reach a Thymio at {device}: {exc.strerror or exc}",
+                                    hint="start the Aseba Playground or the robot's TCP bridge, or check the port")) from None
+        return _SocketIO(sock)
+    import serial
+
+    port = device or _only_serial_port(Connection)
+    try:
+        return serial.Serial(port, timeout=0.2)
+    except (OSError, serial.SerialException) as exc:
+        raise UserError(Problem(f"cannot open the serial port {port}: {exc}",
+                                hint="plug the Thymio in (its USB cable or dongle); on Linux, join the dialout group")) from None
+
+
+def _only_serial_port(Connection: Any) -> str:
+    ports = Connection.serial_ports()
+    if len(ports) != 1:
+        found = ", ".join(ports) if ports else "none"
+        raise UserError(Problem(f"found {len(ports)} serial ports that may be a Thymio ({found})",
+                                hint="name one: --backend-opt device=/dev/ttyACM0 (or device=tcp:HOST:PORT)"))
+    return str(ports[0])
+
+
+class AsebaNode(Node):
+    """One Thymio on an Aseba connection (see the module docstring)."""
+
+    def __init__(self, connection: Any, node_id: int, loop: asyncio.AbstractEventLoop, device: str,
+                 thread: threading.Thread) -> None:
+        self.connection, self.node_id, self.loop, self.device = connection, node_id, loop, device
+        self.thread = thread
+        self._closed = False
+        self._lock = threading.Lock()
+        self._travel = (0.0, 0.0)                  # units x s, since connecting
+        self._last: tuple[float, int, int] | None = None    # the last speeds received, and when
+        connection.on_variables_received = self._received
+
+    async def _received(self, node_id: int) -> None:
+        """thymiodirect's callback (its event loop's thread): a set of variables arrived."""
+        if node_id != self.node_id:
+            return
+        remote = self.connection.remote_nodes.get(node_id)
+        if remote is None:
+            return
+        left, right = (signed(remote.get_var(name)) for name in SPEED_VARIABLES)
+        now = time.monotonic()
+        with self._lock:
+            if self._last is not None:
+                then, last_left, last_right = self._last
+                dt = now - then
+                self._travel = (self._travel[0] + (left + last_left) / 2.0 * dt,
+                                self._travel[1] + (right + last_right) / 2.0 * dt)
+            self._last = (now, left, right)
+
+    @classmethod
+    def connect(cls, device: str = "", timeout: float = 5.0) -> "AsebaNode":
+        """Open ``device``, wait (at most ``timeout`` s) for a Thymio to describe itself, and keep its
+        proximity and wheel speed variables refreshed. Raises :class:`UserError` with a hint."""
+        stream = _open_stream(device, timeout)
+        Connection = _thymiodirect()
+        made: dict[str, Any] = {}
+        ready = threading.Event()
+
+        def serve() -> None:            # a daemon thread: its children (thymiodirect's reader) are daemons too
+            loop = asyncio.new_event_loop()
+            asyncio.set_event_loop(loop)
+            connection = Connection(stream, refreshing_rate=REFRESH, discover_rate=DISCOVER, loop=loop)
+            connection.set_refreshing_coverage({PROX_VARIABLE, *SPEED_VARIABLES})
+            made.update(connection=connection, loop=loop)
+            ready.set()
+            loop.run_forever()
+
+        thread = threading.Thread(target=serve, name="aseba", daemon=True)
+        thread.start()
+        ready.wait(timeout)
+        connection = made.get("connection")
+        deadline = time.monotonic() + timeout
+        while connection is not None and not connection.remote_node_set and time.monotonic() < deadline:
+            time.sleep(0.02)    # realtime: connecting, waiting for the robot's description
+        if connection is None or not connection.remote_node_set:
+            if connection is not None:
+                connection.shutdown()
+            stream.close()
+            raise UserError(Problem(f"no Thymio answered on {device or 'the serial port'} within {timeout:g} s",
+                                    hint="switch the robot on; a simulated one needs the Playground running"))
+        node_id = next(iter(connection.remote_node_set))
+        node = cls(connection, node_id, made["loop"], device, thread)
+        deadline = time.monotonic() + timeout
+        while not node._has_variables() and time.monotonic() < deadline:
+            time.sleep(0.02)    # realtime: waiting for its first variables
+        node.set_motors(0, 0)
+        return node
+
+    def _has_variables(self) -> bool:
+        remote = self.connection.remote_nodes.get(self.node_id)
+        return remote is not None and bool(getattr(remote, "var_received", False))
+
+    def _remote(self) -> Any:
+        """The robot's variable cache; RobotLost when it has gone silent or the link failed."""
+        connection = self.connection
+        remote = connection.remote_nodes.get(self.node_id)
+        error = getattr(connection.io, "failed", None) or connection.comm_error or connection.input_thread.comm_error
+        if error is not None and not isinstance(error, TimeoutError):
+            raise RobotLost(f"the connection to the Thymio on {self.device or 'USB'} failed: {error}")
+        if remote is None or time.time() - remote.last_msg_time > LOST_AFTER:
+            raise RobotLost(f"the Thymio on {self.device or 'USB'} stopped answering (nothing for {LOST_AFTER:g} s)")
+        return remote
+
+    def set_motors(self, left: int, right: int) -> None:
+        if self._closed:
+            return
+        try:
+            for name, value in zip(TARGET_VARIABLES, (left, right)):
+                self.connection.set_var(self.node_id, name, int(value) & 0xFFFF)
+        except (OSError, KeyError):
+            pass                    # the link is gone: the next read says so (RobotLost)
+
+    def read_prox(self) -> list[int]:
+        return [signed(v) for v in self._remote().get_var_array(PROX_VARIABLE)]
+
+    def read_wheel_speeds(self) -> tuple[int, int]:
+        remote = self._remote()
+        left, right = (signed(remote.get_var(name)) for name in SPEED_VARIABLES)
+        return left, right
+
+    def read_wheel_travel(self) -> tuple[float, float]:
+        self._remote()                              # RobotLost when it has gone silent
+        with self._lock:
+            return self._travel
+
+    def close(self) -> None:
+        """Stop the motors, then the connection's threads and the stream (again: no effect)."""
+        if self._closed:
+            return
+        self.set_motors(0, 0)
+        self._closed = True
+        connection = self.connection
+        connection.shutdown()                      # its loops end within a read timeout or a refresh
+        connection.input_thread.join(1.0)
+        if self.loop.is_running():
+            self.loop.call_soon_threadsafe(self.loop.stop)
+        self.thread.join(1.0)
+        if not self.loop.is_running():             # end its pending handlers (else: "Task was destroyed")
+            pending = asyncio.all_tasks(self.loop)
+            for task in pending:
+                task.cancel()
+            if pending:
+                self.loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
+            self.loop.close()
+        connection.close()
+
+
+def create_aseba(mission: Any, seed: int, options: Any) -> Any:
+    """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model."""
+    from thymio_bt.robot.model import robot_model
+    from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
+
+    model = robot_model(mission.robot)
+    config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
+                        wheel_separation=model.wheel_separation, table=model.calibration)
+    robot = ThymioRobot(AsebaNode.connect(options.device, options.timeout), config=config)
+    robot.latency = options.latency
+    return robot

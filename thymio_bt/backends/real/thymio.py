@@ -1,0 +1,392 @@
+"""A real Thymio II (or Thymio Suite's simulated one) behind the :class:`Robot` and :class:`Entities`
+interfaces, so a mission written for the simulator drives it unchanged.
+
+The robot is reached through a small :class:`Node` protocol: motor targets, ``prox.horizontal`` and
+the measured wheel speeds. :class:`TdmNode` implements it with tdmclient (the Thymio Device Manager
+of Thymio Suite, optional extra ``thymio-bt[thymio]``); tests use a fake node.
+
+What the backend does with them:
+
+- ``drive(v, ω)``: wheel speeds as the diff-drive plugin computes them, both scaled down together
+  when one exceeds the limit (the turn radius is kept), converted to motor units and written at once;
+- ``proximity()``: the 7 readings converted to metres through :mod:`thymio_bt.robot.calibration`
+  (0, nothing seen, is ``math.inf``), refreshed at every :meth:`ThymioRobot.advance`;
+- ``pose()``: odometry, integrated from the measured wheel speeds (``motor.*.speed``) at every
+  :meth:`ThymioRobot.advance`; it drifts, and there is no ground truth;
+- ``time()``: wall-clock seconds since the backend started, minus the time spent waiting for the
+  operator. :meth:`ThymioRobot.advance` is the only place that really waits: until ``duration``
+  after the previous tick's deadline, so the runner's 10 Hz tick is paced by the robot's clock;
+- delete and spawn: there is nobody to lift the robot, so delete stops the motors and marks the robot
+  absent, and spawn asks the operator to place it at the pose, then resets odometry to that pose;
+- no collision detection (``collisions`` stays empty) and no clearance (``min_clearance`` is inf).
+
+Example::
+
+    with ThymioRobot.connect() as robot:         # Thymio Suite running, a robot connected
+        robot.request_spawn("thymio", Pose(0.1, 0.1, 0.0))
+        robot.advance(0.0)                       # prompts: place the robot, press Enter
+        robot.drive(0.1, 0.0)
+        for _ in range(10):
+            robot.advance(0.1)                   # 1 s later: about 0.1 m further
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any, Callable
+
+from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
+from thymio_bt.errors import Problem, UserError, optional_module
+from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
+from thymio_bt.robot.model import COURSE, integrate_arc
+
+#: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
+#: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.
+PROX_INDEX: dict[str, int] = {name: i for i, name in enumerate(SENSOR_NAMES)}
+
+#: The variables the backend reads and writes.
+PROX_VARIABLE = "prox.horizontal"
+SPEED_VARIABLES = ("motor.left.speed", "motor.right.speed")
+TARGET_VARIABLES = ("motor.left.target", "motor.right.target")
+
+_INSTALL_HINT = "pip install 'thymio-bt[thymio]'"
+
+
+@dataclass(frozen=True, slots=True)
+class RealConfig:
+    """The real robot's constants; each one is a parameter because robots differ.
+
+    - ``metres_per_unit``: wheel speed per motor unit. Mobsya's Thymio API doc: "500 approximately
+      corresponds to a linear speed of 20 cm/s", i.e. 0.0004 m/s, which Webots' model also gives
+      (9.53 rad/s x 0.021 m at 500). The ROS driver's calibration gives 1/2930 (0.000341) instead.
+    - ``max_units``: the documented target range, ±500 (the firmware itself clamps at ±1000).
+    - ``wheel_separation``: 0.0935 m, the course's diff-drive plugin and the ros-aseba URDF (robots
+      measure 0.0915-0.095 m).
+    - ``table``: the proximity calibration (:data:`thymio_bt.robot.calibration.WEBOTS_THYMIO2`).
+    """
+
+    metres_per_unit: float = 0.20 / 500
+    max_units: int = 500
+    wheel_separation: float = COURSE.wheel_separation
+    table: CalibrationTable = WEBOTS_THYMIO2
+
+    @property
+    def max_wheel_speed(self) -> float:
+        return self.max_units * self.metres_per_unit
+
+
+#: A simulated Thymio in Thymio Suite's Playground (Enki): 500 units are 16.6 cm/s, the wheels 9.4 cm
+#: apart (``DifferentialWheeled(9.4, 16.6, ...)``), and Enki's sensor curve (sim_anchors 1.1-1.2).
+PLAYGROUND = RealConfig(metres_per_unit=0.166 / 500, wheel_separation=0.094, table=ENKI_THYMIO2)
+
+
+class Node(ABC):
+    """The few robot variables the backend uses, in Thymio units."""
+
+    @abstractmethod
+    def set_motors(self, left: int, right: int) -> None:
+        """Write ``motor.left.target`` and ``motor.right.target`` (units, ±500) and send them now."""
+
+    @abstractmethod
+    def read_prox(self) -> list[int]:
+        """The latest ``prox.horizontal``: 7 readings, in :data:`PROX_INDEX` order."""
+
+    @abstractmethod
+    def read_wheel_speeds(self) -> tuple[int, int]:
+        """The latest measured ``motor.left.speed`` and ``motor.right.speed`` (units)."""
+
+    def read_wheel_travel(self) -> tuple[float, float] | None:
+        """How far each wheel has turned since the node connected (units x s), integrated at every
+        set of variables the robot sent; None for a node that only has the latest speeds (the
+        backend then integrates those at its ticks)."""
+        return None
+
+    def close(self) -> None:
+        """Release the robot (the default node holds nothing)."""
+
+
+def import_tdmclient() -> ModuleType:
+    """tdmclient, imported on first use so that the package works without the optional extra."""
+    return optional_module("tdmclient", "the 'tdm' backend", _INSTALL_HINT)
+
+
+class TdmNode(Node):
+    """A robot reached through the Thymio Device Manager with tdmclient's cached variables.
+
+    Reads come from the node's variable cache, which the TDM refreshes about every 100 ms while we
+    watch it (so at most ~10 Hz); writes go to the cache and :meth:`flush` sends them. ``client`` is
+    a ``tdmclient.ClientAsync`` and ``node`` a locked ``ClientAsyncCacheNode`` holding the variables
+    (:meth:`connect` makes both).
+    """
+
+    def __init__(self, client: Any, node: Any) -> None:
+        self.client = client
+        self.node = node
+
+    @classmethod
+    def connect(cls, tdm_addr: str | None = None, tdm_port: int | None = None, password: str | None = None,
+                robot_name: str | None = None, timeout: float = 10.0) -> "TdmNode":
+        """Connect to the TDM (local by default), lock the first robot (or ``robot_name``) and wait
+        for the variables. Raises :class:`UserError` with a hint when any of it is impossible."""
+        tdmclient = import_tdmclient()
+        try:
+            client = tdmclient.ClientAsync(tdm_addr=tdm_addr, tdm_port=tdm_port, password=password)
+        except OSError as exc:
+            where = f"{tdm_addr or '127.0.0.1'}:{tdm_port or 8596}"
+            raise UserError(Problem(f"cannot reach the Thymio Device Manager at {where}: {exc}",
+                                    hint="start Thymio Suite (it runs the device manager), or pass its address")) from None
+        found = tdmclient.aw(client.wait_for_node(timeout=timeout, node_name=robot_name))
+        if found is None:
+            client.disconnect()
+            which = f"named '{robot_name}' " if robot_name else ""
+            raise UserError(Problem(f"no Thymio {which}appeared within {timeout:g} s",
+                                    hint="switch the robot on and plug it (or its dongle) in, or start a "
+                                         "simulated robot from Thymio Suite's Playground"))
+        try:
+            node = tdmclient.aw(client.lock(node_name=robot_name))
+        except tdmclient.NodeLockError as exc:
+            client.disconnect()
+            raise UserError(Problem(f"cannot take control of the robot: {exc}",
+                                    hint="close the other program using it (a Thymio Suite editor?)")) from None
+        tdmclient.aw(node.wait_for_variables({PROX_VARIABLE, *SPEED_VARIABLES, *TARGET_VARIABLES}))
+        return cls(client, node)
+
+    def set_motors(self, left: int, right: int) -> None:
+        self.node[TARGET_VARIABLES[0]] = int(left)
+        self.node[TARGET_VARIABLES[1]] = int(right)
+        self.node.flush()
+
+    def read_prox(self) -> list[int]:
+        self.client.process_waiting_messages()
+        values = self.node[PROX_VARIABLE]
+        return [int(values[i]) for i in range(len(SENSOR_NAMES))]
+
+    def read_wheel_speeds(self) -> tuple[int, int]:
+        self.client.process_waiting_messages()
+        return int(self.node[SPEED_VARIABLES[0]]), int(self.node[SPEED_VARIABLES[1]])
+
+    def close(self) -> None:
+        """Stop the motors, unlock the robot and disconnect from the TDM."""
+        self.set_motors(0, 0)
+        self.node.send_unlock_node(ignore_disconnected_error=True)
+        self.client.disconnect()
+
+
+class ThymioRobot(Backend):
+    """A real Thymio as a thymio-bt backend (see the module docstring for what differs).
+
+    ``clock`` and ``sleep`` (wall-clock seconds, and waiting) and ``ask`` and ``say`` (the operator's
+    console) are injectable so tests run without waiting or typing. ``spawn`` starts with the robot
+    present at that pose; without it, the robot is absent until a spawn request is served.
+    """
+
+    def __init__(self, node: Node, config: RealConfig | None = None, spawn: Pose | None = None,
+                 robot_name: str = ROBOT_ENTITY, clock: Callable[[], float] = time.monotonic,
+                 sleep: Callable[[float], None] = time.sleep, ask: Callable[[str], str] = input,
+                 say: Callable[[str], None] = print) -> None:
+        super().__init__()
+        self.node = node
+        self.config = config or RealConfig()
+        self.robot_name = robot_name
+        self._clock, self._sleep, self._ask, self._say = clock, sleep, ask, say
+        self._start = clock()
+        self._paused = 0.0                      # seconds spent waiting for the operator
+        self._deadline = 0.0                    # backend time the current tick ends at
+        self._present = False
+        self._closed = False
+        self._cmd = Twist()
+        self._raw: dict[str, int] | None = None
+        self._scan: dict[str, float] | None = None
+        self._wheels = (0.0, 0.0)               # latest measured wheel speeds, m/s
+        self._travel: tuple[float, float] | None = None   # the node's wheel travel at the last reading
+        self._read_at = 0.0                     # backend time of that measurement
+        self._axle = (0.0, 0.0, 0.0)            # odometry of the axle centre: x, y, yaw
+        # no bumper: collisions stay empty (COLLISION never fires); no ground truth: min_clearance stays inf
+        node.set_motors(0, 0)
+        if spawn is not None:
+            self._place(spawn)
+
+    @classmethod
+    def connect(cls, tdm_addr: str | None = None, tdm_port: int | None = None, password: str | None = None,
+                node_name: str | None = None, timeout: float = 10.0, **kwargs: Any) -> "ThymioRobot":
+        """A backend over the first robot the local (or given) Thymio Device Manager knows."""
+        return cls(TdmNode.connect(tdm_addr, tdm_port, password, node_name, timeout), **kwargs)
+
+    def __enter__(self) -> "ThymioRobot":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop the motors and release the robot; call it however the run ends (again: no effect)."""
+        if self._closed:
+            return
+        self._closed = True
+        self.node.set_motors(0, 0)
+        self.node.close()
+
+    # ----------------------------------------------------------------- Robot
+    def drive(self, linear: float, angular: float) -> None:
+        if not self._present:
+            return
+        self._cmd = Twist(float(linear), float(angular))
+        self.node.set_motors(*self.motor_targets(self._cmd.linear, self._cmd.angular))
+
+    def motor_targets(self, linear: float, angular: float) -> tuple[int, int]:
+        """Motor units for a body velocity: limited as in the simulator (turn radius kept), rounded."""
+        cfg = self.config
+        half = angular * cfg.wheel_separation / 2.0
+        left, right = linear - half, linear + half
+        scale = min(1.0, cfg.max_wheel_speed / max(abs(left), abs(right), 1e-12))
+
+        def units(speed: float) -> int:
+            return max(-cfg.max_units, min(cfg.max_units, round(speed * scale / cfg.metres_per_unit)))
+
+        return units(left), units(right)
+
+    def exists(self) -> bool:
+        return self._present
+
+    def proximity(self) -> Scan | None:
+        return self._scan if self._present else None
+
+    def proximity_raw(self) -> dict[str, int] | None:
+        """The latest readings as the robot reported them, by sensor name."""
+        return self._raw if self._present else None
+
+    def pose(self) -> Pose | None:
+        if not self._present:
+            return None
+        base = COURSE.base_of(*self._axle)
+        return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
+
+    def true_pose(self) -> Pose | None:
+        """There is no ground truth on a real robot: the odometry pose, the best estimate there is."""
+        return self.pose()
+
+    def velocity(self) -> Twist:
+        if not self._present:
+            return Twist()
+        left, right = self._wheels
+        return Twist((left + right) / 2.0, (right - left) / self.config.wheel_separation)
+
+    def command(self) -> Twist:
+        return self._cmd
+
+    def time(self) -> float:
+        return self._clock() - self._start - self._paused
+
+    # -------------------------------------------------------------- Entities
+    def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why the robot cannot be spawned at ``pose`` (None when it can; walls are the operator's job)."""
+        if name != self.robot_name:
+            return f"a real robot backend has one entity, '{self.robot_name}', not '{name}'"
+        if self._present:
+            return f"an entity named '{name}' already exists: delete it first"
+        if not all(math.isfinite(v) for v in (pose.x, pose.y, pose.yaw)):
+            return "the pose must be finite numbers"
+        return None
+
+    # ------------------------------------------------------------- stepping
+    def advance(self, duration: float) -> None:
+        """Wait until ``duration`` seconds after the previous tick's deadline (no waiting when late:
+        the next tick is then timed from now), read the robot, and serve pending requests."""
+        self._deadline = max(self._deadline + duration, self.time())
+        lag = self._deadline - self.time()
+        if lag > 0.0:
+            self._sleep(lag)
+        if self._present:
+            self._read()
+        self.serve_requests()
+
+    def _read(self) -> None:
+        """Integrate odometry since the last reading, then take the proximity readings.
+
+        Wheel speeds are samples, so each interval moves at the mean of its two end samples (the
+        trapezoid rule), along the exact arc for that constant speed pair."""
+        previous = self._wheels
+        now = self._read_wheels()
+        travel = self.node.read_wheel_travel()
+        if travel is not None and self._travel is not None:    # the node's own, finer integral
+            metres = self.config.metres_per_unit
+            self._integrate((travel[0] - self._travel[0]) * metres, (travel[1] - self._travel[1]) * metres, 1.0)
+        else:
+            left, right = (previous[0] + self._wheels[0]) / 2.0, (previous[1] + self._wheels[1]) / 2.0
+            self._integrate(left, right, now - self._read_at)
+        self._travel = travel
+        self._read_at = now
+        self._read_prox()
+
+    def _read_wheels(self) -> float:
+        """Take the measured wheel speeds (m/s) and return the backend time they were read at."""
+        left_u, right_u = self.node.read_wheel_speeds()
+        self._wheels = (left_u * self.config.metres_per_unit, right_u * self.config.metres_per_unit)
+        return self.time()
+
+    def _read_prox(self) -> None:
+        values = self.node.read_prox()
+        if len(values) != len(SENSOR_NAMES):
+            raise ValueError(f"prox.horizontal has {len(values)} values, a Thymio II has {len(SENSOR_NAMES)}")
+        self._raw = {name: int(values[i]) for name, i in PROX_INDEX.items()}
+        self._scan = {name: self.config.table.to_metres(value) for name, value in self._raw.items()}
+
+    def _integrate(self, left: float, right: float, duration: float) -> None:
+        v = (left + right) / 2.0
+        w = (right - left) / self.config.wheel_separation
+        self._axle = integrate_arc(*self._axle, v, w, duration)
+
+    def _place(self, pose: Pose) -> None:
+        """The robot now stands at ``pose``: reset odometry and the command, take fresh readings."""
+        self._axle = COURSE.axle_of(pose)
+        self._cmd = Twist()
+        self._present = True
+        self._read_at = self._read_wheels()
+        self._travel = self.node.read_wheel_travel()
+        self._read_prox()
+
+    def _remove(self, name: str) -> str | None:
+        if name != self.robot_name or not self._present:
+            return f"no entity named '{name}' (existing: {self.robot_name if self._present else 'none'})"
+        self.node.set_motors(0, 0)
+        self._present, self._cmd = False, Twist()
+        self._say(f"[thymio-bt] '{name}' deleted: motors stopped, the robot may stay where it is")
+        return None
+
+    def _place_entity(self, name: str, pose: Pose) -> str | None:
+        problem = self._operator_places(pose)
+        if problem is None:
+            self._place(pose)
+        return problem
+
+    def _operator_places(self, pose: Pose) -> str | None:
+        """Ask the operator to put the robot at ``pose``; the clock is paused while they do."""
+        prompt = (f"[thymio-bt] place the Thymio with base_link (2.4 cm ahead of the wheel axle) at "
+                  f"x={pose.x:.3f} m, y={pose.y:.3f} m, facing {math.degrees(pose.yaw):.0f} deg, "
+                  f"then press Enter (or type 'q' to refuse): ")
+        asked = self._clock()
+        try:
+            answer = self._ask(prompt)
+        except EOFError:
+            answer = None
+        finally:
+            self._paused += self._clock() - asked
+        if answer is None:
+            return "no operator to place the robot (standard input is closed)"
+        if answer.strip().lower() in ("q", "quit", "n", "no"):
+            return "the operator refused to place the robot"
+        return None
+
+
+def create_tdm(mission: Any, seed: int, options: Any) -> ThymioRobot:
+    """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's robot model."""
+    from thymio_bt.robot.model import robot_model
+
+    model = robot_model(mission.robot)
+    config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
+                        wheel_separation=model.wheel_separation, table=model.calibration)
+    return ThymioRobot.connect(options.host, options.port, options.password, config=config)

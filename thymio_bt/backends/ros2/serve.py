@@ -1,0 +1,230 @@
+"""``thymio-bt serve ros2``: our simulation standing in for the course's Gazebo classic world.
+
+It offers what the course's launch file gives a student's node (``course/robot.md``), so a node
+written for the course runs against it unchanged:
+
+- ``/cmd_vel`` (geometry_msgs/Twist) in, held until the next one (no timeout);
+- ``/odom`` (nav_msgs/Odometry, frame ``odom`` -> ``base_footprint``, the true pose as Gazebo's
+  ``odometry_source WORLD``) and its TF at 50 Hz, the wheels' TF too;
+- ``/thymio_<prefix>_sensor`` (sensor_msgs/LaserScan, one ray, frame ``<prefix>_link``, ``inf``
+  when nothing is within 0.0975 m) for the 7 proximity sensors at 10 Hz;
+- ``/spawn_entity`` and ``/delete_entity`` (gazebo_msgs) for the robot ``thymio``;
+- ``/clock`` (rosgraph_msgs/Clock) at every physics step (100 Hz), ``/tf_static`` with the sensor
+  links, and ``/robot_description`` as robot_state_publisher gives it.
+
+The world runs at real time x ``speedup`` of the wall clock (that is the point of a stand-in); its
+physics is the same deterministic simulation as ``thymio-bt run``.
+
+Example::
+
+    thymio-bt serve ros2 --maze two_parts_maze --start 0.1,0.1,0 --speedup 2
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from typing import Any, Callable
+
+from thymio_bt.maze import Maze
+from thymio_bt.robot.interface import ROBOT_ENTITY, Pose
+from thymio_bt.robot.model import RobotModel
+from thymio_bt.backends.sim.world import SimConfig, Simulation
+from thymio_bt.backends.ros2 import import_rclpy
+from thymio_bt.backends.ros2.messages import quaternion_of, stamp_parts, yaw_of
+from thymio_bt.backends.ros2.topics import COURSE_TOPICS, PREFIXES, TopicMap
+
+#: what the course's diff-drive plugin reports as its covariances (x, y, yaw)
+ODOM_COVARIANCE = (0.00001, 0.00001, 0.001)
+#: the proximity rays' limits in the course's URDF (min, max) and their half-aperture (rad)
+RAY_MIN, RAY_HALF_ANGLE = 0.0005, 0.05
+SENSOR_Z = 0.035
+
+
+def robot_urdf(model: RobotModel) -> str:
+    """A URDF naming the course robot's frames (what /robot_description carries), from the model."""
+    links = ["base_footprint", "base_link", "left_wheel_link", "right_wheel_link",
+             *(f"{prefix}_link" for prefix in PREFIXES.values())]
+    joints = ['<joint name="base_joint" type="fixed"><parent link="base_footprint"/><child link="base_link"/>'
+              '<origin xyz="0 0 0"/></joint>']
+    for side, sign in (("left", 1), ("right", -1)):
+        joints.append(f'<joint name="{side}_wheel_joint" type="continuous"><parent link="base_link"/>'
+                      f'<child link="{side}_wheel_link"/><axis xyz="0 1 0"/><origin xyz="{model.axle_x} '
+                      f'{sign * model.wheel_separation / 2} {model.wheel_radius}"/></joint>')
+    for sensor in model.sensors:
+        prefix = PREFIXES[sensor.name]
+        joints.append(f'<joint name="{prefix}_joint" type="fixed"><parent link="base_link"/>'
+                      f'<child link="{prefix}_link"/><origin xyz="{sensor.x} {sensor.y} {SENSOR_Z}" '
+                      f'rpy="0 0 {sensor.yaw}"/></joint>')
+    body = "".join(f'<link name="{name}"/>' for name in links) + "".join(joints)
+    return f'<?xml version="1.0"?><robot name="thymio">{body}</robot>'
+
+
+class GazeboStandIn:
+    """A :class:`Simulation` behind the course's Gazebo topics and services (module docstring)."""
+
+    def __init__(self, maze: Maze, start: Pose | None, model: RobotModel, speedup: float = 1.0,
+                 physics_hz: float = 100.0, topics: TopicMap = COURSE_TOPICS) -> None:
+        rclpy = import_rclpy()
+        from gazebo_msgs.srv import DeleteEntity, SpawnEntity
+        from geometry_msgs.msg import Twist
+        from nav_msgs.msg import Odometry
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import QoSDurabilityPolicy, QoSProfile
+        from rclpy.signals import SignalHandlerOptions
+        from rosgraph_msgs.msg import Clock
+        from sensor_msgs.msg import LaserScan
+        from std_msgs.msg import String
+        from tf2_msgs.msg import TFMessage
+
+        self.maze, self.model, self.speedup, self.topics = maze, model, speedup, topics
+        self.sim = Simulation(maze, spawn=start, config=SimConfig(physics_hz=physics_hz, robot=model))
+        self.dt = 1.0 / physics_hz
+        self._odom_every = max(1, round(physics_hz / topics.odom_rate))
+        self._sensor_every = max(1, round(physics_hz / model.sensor_rate_hz))
+        self._lock = threading.Lock()
+        self._wheel_angles = [0.0, 0.0]
+        self._msgs = {"Clock": Clock, "Odometry": Odometry, "LaserScan": LaserScan, "TFMessage": TFMessage}
+        self._context = rclpy.Context()
+        rclpy.init(args=[], context=self._context, signal_handler_options=SignalHandlerOptions.NO)
+        node = self._node = rclpy.create_node("gazebo", context=self._context)
+        latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
+        self._clock_pub = node.create_publisher(Clock, topics.clock, 10)
+        self._odom_pub = node.create_publisher(Odometry, topics.odom, 10)
+        self._tf_pub = node.create_publisher(TFMessage, "/tf", 10)
+        self._scan_pubs = {name: node.create_publisher(LaserScan, topic, 10)    # reliable, as Gazebo's
+                           for name, topic in topics.sensors.items()}
+        node.create_publisher(TFMessage, "/tf_static", latched).publish(TFMessage(transforms=self._static_tf()))
+        node.create_publisher(String, topics.robot_description, latched).publish(String(data=robot_urdf(model)))
+        node.create_subscription(Twist, topics.cmd_vel, self._on_cmd_vel, 1)
+        node.create_service(SpawnEntity, topics.spawn, self._on_spawn)
+        node.create_service(DeleteEntity, topics.delete, self._on_delete)
+        self._executor = SingleThreadedExecutor(context=self._context)
+        self._executor.add_node(node)
+        self._spinner = threading.Thread(target=self._spin, name="thymio-bt-serve", daemon=True)
+        self._spinner.start()
+
+    def _spin(self) -> None:
+        try:
+            self._executor.spin()
+        except Exception:          # shut down under it: the stand-in is closing
+            pass
+
+    # ------------------------------------------------------------ requests (executor thread)
+    def _on_cmd_vel(self, msg: Any) -> None:
+        with self._lock:
+            self.sim.drive(msg.linear.x, msg.angular.z)
+
+    def _entity_request(self, ask: Callable[[], Any], response: Any) -> Any:
+        with self._lock:
+            request = ask()
+            self.sim.serve_requests()
+        response.success = request.state.name == "SUCCEEDED"
+        response.status_message = request.reason or ""
+        return response
+
+    def _on_spawn(self, request: Any, response: Any) -> Any:
+        if request.name != ROBOT_ENTITY:
+            response.success = False
+            response.status_message = f"this stand-in simulates one Thymio, named '{ROBOT_ENTITY}'"
+            return response
+        p, q = request.initial_pose.position, request.initial_pose.orientation
+        yaw = yaw_of(q.x, q.y, q.z, q.w)
+        return self._entity_request(lambda: self.sim.request_spawn(request.name, Pose(p.x, p.y, yaw)), response)
+
+    def _on_delete(self, request: Any, response: Any) -> Any:
+        return self._entity_request(lambda: self.sim.request_delete(request.name), response)
+
+    # ------------------------------------------------------------ publishing
+    def _transform(self, stamp: Any, parent: str, child: str, x: float, y: float, z: float,
+                   quaternion: tuple[float, float, float, float]) -> Any:
+        from geometry_msgs.msg import TransformStamped
+
+        tf = TransformStamped()
+        tf.header.stamp, tf.header.frame_id, tf.child_frame_id = stamp, parent, child
+        tf.transform.translation.x, tf.transform.translation.y, tf.transform.translation.z = x, y, z
+        r = tf.transform.rotation
+        r.x, r.y, r.z, r.w = quaternion
+        return tf
+
+    def _static_tf(self) -> list[Any]:
+        from builtin_interfaces.msg import Time
+
+        zero = Time()
+        tfs = [self._transform(zero, "base_footprint", "base_link", 0.0, 0.0, 0.0, quaternion_of(0.0))]
+        for sensor in self.model.sensors:
+            tfs.append(self._transform(zero, "base_link", f"{PREFIXES[sensor.name]}_link", sensor.x, sensor.y,
+                                       SENSOR_Z, quaternion_of(sensor.yaw)))
+        return tfs
+
+    def _publish(self, steps: int) -> None:
+        from builtin_interfaces.msg import Time
+
+        sim = self.sim
+        stamp = Time()
+        stamp.sec, stamp.nanosec = stamp_parts(round(sim.time() * 1e9))
+        pose = sim.true_pose()
+        if pose is not None and steps % self._odom_every == 0:
+            self._publish_odom(stamp, pose)
+        if pose is not None and steps % self._sensor_every == 0:
+            scan = sim.proximity() or {}
+            for name, publisher in self._scan_pubs.items():
+                publisher.publish(self._scan(stamp, name, scan.get(name, math.inf)))
+        self._clock_pub.publish(self._msgs["Clock"](clock=stamp))
+
+    def _publish_odom(self, stamp: Any, pose: Pose) -> None:
+        velocity = self.sim.velocity()
+        odom = self._msgs["Odometry"]()
+        odom.header.stamp, odom.header.frame_id, odom.child_frame_id = stamp, "odom", "base_footprint"
+        odom.pose.pose.position.x, odom.pose.pose.position.y = pose.x, pose.y
+        o = odom.pose.pose.orientation
+        o.x, o.y, o.z, o.w = quaternion_of(pose.yaw)
+        cx, cy, cyaw = ODOM_COVARIANCE
+        odom.pose.covariance[0], odom.pose.covariance[7], odom.pose.covariance[35] = cx, cy, cyaw
+        odom.twist.twist.linear.x, odom.twist.twist.angular.z = velocity.linear, velocity.angular
+        self._odom_pub.publish(odom)
+        period = self._odom_every * self.dt
+        tfs = [self._transform(stamp, "odom", "base_footprint", pose.x, pose.y, 0.0, quaternion_of(pose.yaw))]
+        for i, (side, sign) in enumerate((("left", 1), ("right", -1))):
+            wheel = velocity.linear - sign * velocity.angular * self.model.wheel_separation / 2
+            self._wheel_angles[i] += wheel / self.model.wheel_radius * period
+            half = self._wheel_angles[i] / 2
+            tfs.append(self._transform(stamp, "base_link", f"{side}_wheel_link", self.model.axle_x,
+                                       sign * self.model.wheel_separation / 2, self.model.wheel_radius,
+                                       (0.0, math.sin(half), 0.0, math.cos(half))))
+        self._tf_pub.publish(self._msgs["TFMessage"](transforms=tfs))
+
+    def _scan(self, stamp: Any, name: str, value: float) -> Any:
+        msg = self._msgs["LaserScan"]()
+        msg.header.stamp, msg.header.frame_id = stamp, f"{PREFIXES[name]}_link"
+        msg.angle_min, msg.angle_max, msg.angle_increment = -RAY_HALF_ANGLE, RAY_HALF_ANGLE, 2 * RAY_HALF_ANGLE
+        msg.range_min, msg.range_max = RAY_MIN, self.model.range_max
+        msg.ranges = [value if value >= RAY_MIN else -math.inf]
+        msg.intensities = [0.0]
+        return msg
+
+    # ------------------------------------------------------------ running
+    def run(self, stop: Callable[[], bool], on_second: Callable[[float, float], None] | None = None) -> None:
+        """Step and publish at real time x speedup until ``stop()``; ``on_second(sim_time, speed)``
+        is called once per simulated second with the speed-up achieved so far."""
+        wall_start = time.monotonic()
+        steps = 0
+        self._publish(0)
+        while not stop():
+            with self._lock:
+                self.sim.advance(self.dt)
+            steps += 1
+            self._publish(steps)
+            sim_time = steps * self.dt
+            lag = wall_start + sim_time / self.speedup - time.monotonic()
+            if lag > 0:
+                time.sleep(lag)  # realtime: a stand-in for Gazebo runs against the wall clock (x speedup)
+            if on_second is not None and steps % round(1.0 / self.dt) == 0:
+                on_second(sim_time, sim_time / max(time.monotonic() - wall_start, 1e-9))
+
+    def close(self) -> None:
+        self._executor.shutdown(timeout_sec=1.0)
+        self._node.destroy_node()
+        self._context.try_shutdown()
+        self._spinner.join(timeout=2.0)

@@ -1,0 +1,453 @@
+"""The pymunk backend: the course's Thymio in a maze, implementing :class:`Robot` and :class:`Entities`.
+
+Physics, in metres:
+
+- walls are static boxes (``Wall.corners``), the robot a dynamic convex hull (``RobotModel.hull``)
+  whose centre of gravity sits on the wheel axle, so spinning keeps the axle fixed;
+- the robot is pulled by a kinematic control body through a pivot joint at the axle and a gear
+  joint (pymunk's top-down "tank" recipe): it follows (v, ω) exactly in free space, while walls
+  push back instead of being tunnelled (a kinematic robot, or a dynamic one whose velocity is
+  overwritten every step, goes through walls);
+- ``collision_slop`` is 0.2 mm (pymunk's default 0.1 would be 10 cm in metres).
+
+Example::
+
+    sim = Simulation(load_maze("mazes/two_parts_maze.yaml"), spawn=Pose(0.1, 0.1, 0.0))
+    sim.drive(0.1, 0.0)
+    sim.advance(1.0)            # 1 s of simulated time in 100 Hz sub-steps
+    sim.pose()                  # Pose(x=0.2, y=0.1, yaw=0.0)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Literal
+
+import pymunk
+
+from thymio_bt.robot.calibration import RawProximityModel, raw_scan_to_metres
+from thymio_bt.maze import Maze
+from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
+from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose
+from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
+from thymio_bt.backends.sim.clearance import ClearanceTracker
+from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
+from thymio_bt.backends.sim.fastpath import NearShapes, RayCaster, RayReader, body_driver, body_reader, control_aimer, spinner, stepper
+from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
+from thymio_bt.backends.sim.readings import lazy_scan
+
+_ROBOT_TYPE = 1
+_WALL_TYPE = 2
+#: shape categories: readings cast when read see walls (and obstacles) only
+_WALLS, _ROBOTS = 0b01, 0b10
+
+
+def _pose_of(x: float, y: float, angle: float) -> Pose:
+    """A body's pose, its angle wrapped to [-pi, pi)."""
+    return new_pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
+
+
+def _raw_model(seed: int) -> RawProximityModel:
+    import numpy as np                 # only raw mode needs it: keeps ~50 ms off every start-up
+
+    return RawProximityModel(np.random.default_rng((seed, 1)))
+
+
+class _ConeSensors:
+    """The seven sensors as Enki's cones (:mod:`thymio_bt.backends.sim.cone`): 21 rays, noisy integer readings."""
+
+    def __init__(self, model: RobotModel, seed: int) -> None:
+        import numpy as np
+
+        self.response = ConeResponse()
+        reach = self.response.range
+        self.names = [s.name for s in model.sensors]
+        #: each sensor's three rays in turn, (start, end) in the body frame
+        self.rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
+                     for s in model.sensors for a in (APERTURE, 0.0, -APERTURE)]
+        self.rng = np.random.default_rng((seed, 2))
+
+    def measure(self, rays: RayCaster, entity: "_Body", bx: float, by: float, cos: float, sin: float) -> dict[str, int]:
+        """The readings of ``entity`` at (bx, by), heading with this cosine and sine."""
+        alphas = rays.fan(self.rays, bx, by, cos, sin, entity.filter)
+        reach, response = self.response.range, self.response
+        draws = self.rng.standard_normal(len(self.names))
+        readings = {}
+        for i, (name, z) in enumerate(zip(self.names, draws)):
+            hits = [None if alpha is None else alpha * reach for alpha in alphas[3 * i:3 * i + 3]]
+            readings[name] = response.reading(response.value(*hits), float(z))
+        return readings
+
+
+@dataclass(frozen=True, slots=True)
+class SimConfig:
+    """Simulation settings; the defaults are the course's Gazebo model (noise-free)."""
+
+    physics_hz: float = 100.0
+    noise: NoiseConfig = field(default_factory=NoiseConfig)
+    seed: int = 0
+    #: the robot simulated (geometry, sensor poses and range, speed limit)
+    robot: RobotModel = COURSE
+    #: the wheel-speed limit (m/s); None: the robot's own
+    max_wheel_speed: float | None = None
+    #: "metres": the course's ideal rays; "raw": what a real Thymio reports (noisy integer readings
+    #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does;
+    #: "cone": Enki's three-ray cones (:mod:`thymio_bt.backends.sim.cone`), read through the robot's calibration
+    sensor_model: Literal["metres", "raw", "cone"] = "metres"
+
+
+class _Body:
+    """One robot entity in the space: the hull body, its control body and joints."""
+
+    def __init__(self, space: pymunk.Space, pose: Pose, group: int, model: RobotModel) -> None:
+        self.body = pymunk.Body(model.mass, pymunk.moment_for_poly(model.mass, model.hull))
+        self.body.center_of_gravity = (model.axle_x, 0.0)
+        self.shape = pymunk.Poly(self.body, model.hull)
+        self.shape.friction = 0.1          # the skid's mu in the URDF
+        self.shape.collision_type = _ROBOT_TYPE
+        self.filter = pymunk.ShapeFilter(group=group)     # rays and queries skip the robot's own shape
+        self.shape.filter = pymunk.ShapeFilter(group=group, categories=_ROBOTS)
+        self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (model.axle_x, 0.0))
+        pivot.max_bias = 0.0               # a pure velocity constraint: drift is not corrected
+        pivot.max_force = 10.0             # traction: walls win against the wheels
+        gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
+        gear.max_bias = 0.0
+        gear.max_force = 0.1
+        self.joints = (pivot, gear)
+        self.near = NearShapes(space, self.body, model.hull, self.filter)   # for the clearance tracker
+        self.body.angle = pose.yaw
+        self.body.position = (pose.x, pose.y)
+        self.control.position = self.body.local_to_world((model.axle_x, 0.0))
+        self.control.angle = pose.yaw
+        space.add(self.body, self.shape, self.control, *self.joints)
+        self.read = body_reader(self.body)      # (x, y, angle), the hot path's way to read the body
+        self.aim = control_aimer(self.body, self.control)
+        self.spin = spinner(self.control)
+        self.drive = body_driver(self.body, self.control)
+
+    def remove(self, space: pymunk.Space) -> None:
+        space.remove(self.body, self.shape, self.control, *self.joints)
+
+    def pose(self) -> Pose:
+        return _pose_of(*self.read())
+
+
+class Simulation(Backend):
+    """A 2D simulation of one Thymio in a maze; advance it with :meth:`advance`."""
+
+    def __init__(self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None,
+                 robot_name: str = ROBOT_ENTITY) -> None:
+        self.maze = maze
+        super().__init__()
+        self.config = config or SimConfig()
+        self.model = self.config.robot
+        self._max_wheel = self.model.max_wheel_speed if self.config.max_wheel_speed is None \
+            else self.config.max_wheel_speed
+        self.robot_name = robot_name
+        self.space = pymunk.Space()
+        self.space.collision_slop = 0.0002
+        self.space.iterations = 10
+        self._shapes = MazeShapes.of(maze)       # walls, then obstacles: polygons and boxes
+        tracked = []
+        walled = len(maze.walls)
+        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):    # obstacles first
+            corners = self._shapes.polygons[index]
+            shape = pymunk.Poly(self.space.static_body, corners)
+            shape.collision_type = _WALL_TYPE
+            shape.filter = pymunk.ShapeFilter(categories=_WALLS)
+            shape.friction = 1.0
+            self.space.add(shape)
+            tracked.append((shape, maze.walls[index] if index < walled else None, corners, self._shapes.boxes[index]))
+        self.bounds = self._shapes.bounds
+        self._clearance = ClearanceTracker(self.model, tracked, self.bounds)
+        self._dt = 1.0 / self.config.physics_hz
+        self._step = stepper(self.space)
+        self._ray = RayCaster(self.space)
+        self._steps = 0
+        self._noise = NoiseSource(self.config.noise, self.config.seed)
+        self._drifts = bool(self.config.noise.odometry)      # odometry drifts from the true pose
+        if not self._drifts:
+            self.pose = self.true_pose         # the same answer, a call less (asked several times a tick)
+        self._noisy_wheels = bool(self.config.noise.wheel)
+        #: range noise on the metres (raw readings get the raw model's noise instead)
+        self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
+        #: noise-free metres are cast only when read (noise draws from streams whose order must hold)
+        self._lazy_scan = self.config.sensor_model == "metres" and not self._range_noise
+        self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
+        self._raw: dict[str, int] | None = None
+        self._entities: dict[str, _Body] = {}
+        self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)   # (step, entity, its pose)
+        #: the held command (linear, angular) as floats; command() makes it a Twist when asked
+        self._cmd = (0.0, 0.0)
+        #: the last drive() arguments and their floats: a behaviour cruising passes the same float
+        #: objects tick after tick
+        self._drive_args: tuple[object, object, tuple[float, float]] = (None, None, self._cmd)
+        self._applied = (0.0, 0.0)
+        self._wheels_of: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
+        #: the last command whose wheel speeds were worked out (limited), and those speeds
+        self._wheels_of_command: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
+        self._velocity = (0.0, 0.0)            # the body velocity (v, w) of the command, noise included
+        self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
+        self._pending = False
+        self._scan: Scan | None = None
+        #: the last refresh's body pose (x, y, cos, sin) while _scan is None: proximity() reads from there
+        self._sensed: tuple[float, float, float, float] | None = None
+        self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
+        self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
+        self._contacts = 0
+        self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
+        reach = self._range_max = self.model.range_max
+        self._range_min = self.model.range_min
+        self._ray_names = [s.name for s in self.model.sensors]
+        self._rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw))
+                      for s in self.model.sensors]
+        #: noise-free metres, cast when read (walls only: see _refresh_sensors)
+        self._reader = RayReader(self.space, dict(zip(self._ray_names, self._rays)), reach, self._range_min,
+                                 pymunk.ShapeFilter(mask=_WALLS))
+        self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
+        self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
+        if spawn is not None:
+            problem = self.spawn_problem(robot_name, spawn)
+            if problem:
+                raise ValueError(problem)
+            self._add_robot(robot_name, spawn)
+
+    # ----------------------------------------------------------------- Robot
+    def drive(self, linear: float, angular: float) -> None:
+        if self.robot_name not in self._entities:
+            return
+        last_linear, last_angular, cmd = self._drive_args
+        if linear is not last_linear or angular is not last_angular:
+            cmd = (float(linear), float(angular))
+            self._drive_args = (linear, angular, cmd)
+        self._cmd = cmd
+        if self._delay_steps:
+            self._pending = True           # applied a few physics steps into the next advance (Enki: one)
+        else:
+            self._apply_command()
+
+    def exists(self) -> bool:
+        return self.robot_name in self._entities
+
+    def proximity(self) -> Scan | None:
+        if self.robot_name not in self._entities:
+            return None
+        scan, sensed = self._scan, self._sensed
+        if scan is None and sensed is not None:        # the last refresh's, each ray cast when read
+            scan = self._scan = lazy_scan(self._reader, sensed)
+        return scan
+
+    def proximity_raw(self) -> dict[str, int] | None:
+        """The latest readings as a real Thymio's integers (``sensor_model="raw"`` only), or None."""
+        return self._raw if self.exists() else None
+
+    def pose(self) -> Pose | None:
+        if self._drifts:
+            return self._odometry_pose() if self.robot_name in self._entities else None
+        return self.true_pose()
+
+    def true_pose(self) -> Pose | None:
+        """The ground-truth pose (equal to :meth:`pose` unless odometry drift is on). Read once per
+        physics step and entity: behaviours ask for it several times a tick."""
+        entity = self._entities.get(self.robot_name)
+        if entity is None:
+            return None
+        step, body, pose = self._pose_read
+        if step != self._steps or body is not entity:
+            pose = entity.pose()
+            self._pose_read = (self._steps, entity, pose)
+        return pose
+
+    def velocity(self) -> Twist:
+        entity = self._entities.get(self.robot_name)
+        if entity is None:
+            return Twist()
+        body = entity.body
+        return Twist(body.velocity.dot(body.rotation_vector), body.angular_velocity)
+
+    def command(self) -> Twist:
+        return Twist(*self._cmd)
+
+    def time(self) -> float:
+        return self._steps * self._dt
+
+    # -------------------------------------------------------------- Entities
+    def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why a robot cannot be spawned at ``pose`` (None when it can): the maze's geometry
+        (:func:`~thymio_bt.robot.placement.placement_problem`), then the robots already there."""
+        if name in self._entities:
+            return f"an entity named '{name}' already exists: delete it first"
+        problem = placement_problem(self._shapes, self.model, pose)
+        if problem:
+            return problem
+        hull = self.model.hull_at(pose)
+        if any(convex_overlap(hull, self.model.hull_at(other.pose())) for other in self._entities.values()):
+            return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps another robot"
+        return None
+
+    # ------------------------------------------------------------- stepping
+    def advance(self, duration: float) -> None:
+        """Run the physics for ``duration`` seconds of simulated time, then serve pending requests."""
+        entity = self._entities.get(self.robot_name)
+        steps = round(duration / self._dt)
+        if self._pending:
+            self._pending = False
+            delay = min(self._delay_steps, steps)
+            self._run_steps(entity, delay)          # the old command still drives (the robot's command delay)
+            self._apply_command()
+            steps -= delay
+        self._run_steps(entity, steps)
+        if self._requests:
+            self.serve_requests()
+
+    def _run_steps(self, entity: "_Body | None", steps: int) -> None:
+        """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
+        (step, space), dt = self._step, self._dt
+        if entity is None:
+            for _ in range(steps):
+                step(space, dt)
+                self._steps += 1
+            return
+        if self._drifts:
+            self._integrate_odometry(steps * dt)
+        v, w = self._applied
+        turning = v != 0.0 and w != 0.0
+        every, done, aim = self._sensor_every, self._steps + steps, entity.aim
+        while self._steps < done:
+            first = self._steps
+            refresh = first + every - first % every            # the step count of the next sensor refresh
+            last = refresh if refresh < done else done
+            # during a step, _steps counts the steps before it (a collision's time)
+            for self._steps in range(first, last):
+                if turning or self._contacts:
+                    aim(v)             # keep the control body's velocity along the heading as it changes
+                    if self._contacts:
+                        entity.spin(w)
+                step(space, dt)
+            self._steps = last
+            if last == refresh:
+                self._refresh_sensors(entity)
+
+    def _apply_command(self) -> None:
+        """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
+        model, cmd = self.model, self._cmd
+        last, wheels = self._wheels_of_command
+        linear, angular = cmd
+        fresh = last is not cmd and (last is None or linear != last[0] or angular != last[1])
+        if fresh:                  # the limited wheel speeds are a function of the command: once per command
+            wheels = model.limited_wheel_speeds(linear, angular, self._max_wheel)
+            self._wheels_of_command = (cmd, wheels)
+        if fresh or self._noisy_wheels:
+            left, right = wheels
+            if self._noisy_wheels:              # noisy wheels err anew with every command sent
+                fl, fr = self._noise.wheel_factors()
+                left, right = left * fl, right * fr
+            self._velocity = model.body_velocity(left, right)
+        v, w = self._applied = self._velocity
+        entity = self._entities.get(self.robot_name)
+        if entity is not None:
+            # Chipmunk moves bodies before solving joints: out of contact, the body's velocity is
+            # seeded too, so motion starts now
+            entity.drive(v, w, self._contacts == 0)
+
+    def _integrate_odometry(self, duration: float) -> None:
+        """Dead-reckon the axle from the wheel speeds as encoders measure them (with a per-call error).
+
+        Encoders count wheel turns, not body motion: a robot whose wheels slip against a wall
+        believes it moves, as a real Thymio does. The arc is integrated exactly for the held command.
+        """
+        applied, wheels = self._wheels_of
+        if applied is not self._applied:             # the applied command's wheel speeds, once per command
+            wheels = self.model.wheel_speeds(*self._applied)
+            self._wheels_of = (self._applied, wheels)
+        left, right = wheels
+        fl, fr = self._noise.encoder_factors()
+        v, w = self.model.body_velocity(left * fl, right * fr)
+        self._odo = integrate_arc(*self._odo, v, w, duration)
+
+    def _odometry_pose(self) -> Pose:
+        """The pose odometry believes, computed once per dead-reckoning step (asked several times a tick)."""
+        odo, pose = self._odo_pose
+        if odo is not self._odo or pose is None:
+            base = self.model.base_of(*self._odo)
+            pose = Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
+            self._odo_pose = (self._odo, pose)
+        return pose
+
+    def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
+        gap = self._clearance.below(self.min_clearance, entity.near, entity.shape, bx, by, cos, sin)
+        if gap < self.min_clearance:
+            self.min_clearance = max(gap, 0.0)
+
+    def _refresh_sensors(self, entity: _Body) -> None:
+        """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
+        bx, by, angle = entity.read()
+        self._pose_read = (self._steps, entity, _pose_of(bx, by, angle))
+        cos, sin = math.cos(angle), math.sin(angle)
+        if self._cone is not None:
+            self._raw = self._cone.measure(self._ray, entity, bx, by, cos, sin)
+            self._scan = MappingProxyType(raw_scan_to_metres(self._raw, self.model.calibration))
+        elif self._lazy_scan and len(self._entities) == 1:
+            # noise-free metres alone in the maze depend on nothing but this pose and the walls: each
+            # ray is cast when first read (behaviours read few; a quarter of refreshes are not read),
+            # seeing walls only, so a robot spawned before the read stays unseen as it should
+            self._scan, self._sensed = None, (bx, by, cos, sin)
+        else:                      # noise (random streams in a fixed order) or other robots: now
+            self._scan = MappingProxyType(self._cast(entity, bx, by, cos, sin))
+        self._update_clearance(entity, bx, by, cos, sin)
+
+    def _cast(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> dict[str, float]:
+        """The seven rays' readings of ``entity`` at (bx, by), heading with this cosine and sine."""
+        alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
+        noise, raw, noisy = self._noise, self._raw_model, self._range_noise
+        lo, hi, inf = self._range_min, self._range_max, math.inf
+        scan: dict[str, float] = {}
+        for name, alpha in zip(self._ray_names, alphas):
+            if alpha is None:
+                scan[name] = inf
+                continue
+            value = alpha * hi
+            if value < lo:                 # max(value, lo) without a builtin call: 7 a tick
+                value = lo
+            scan[name] = noise.range(value, lo, hi) if noisy else value
+        if raw is not None:
+            self._raw = raw.measure_scan(scan)
+            scan = raw_scan_to_metres(self._raw, raw.table)
+        return scan
+
+    # -------------------------------------------------------------- entities
+    def _add_robot(self, name: str, pose: Pose) -> None:
+        entity = _Body(self.space, pose, group=1 + len(self._entities), model=self.model)
+        self._entities[name] = entity
+        if name == self.robot_name:
+            self._odo = self.model.axle_of(pose)
+            self._cmd = (0.0, 0.0)
+            self._applied = (0.0, 0.0)
+            self._refresh_sensors(entity)
+
+    def _remove(self, name: str) -> str | None:
+        entity = self._entities.pop(name, None)
+        if entity is None:
+            return f"no entity named '{name}' (existing: {', '.join(sorted(self._entities)) or 'none'})"
+        entity.remove(self.space)
+        if name == self.robot_name:
+            self._scan, self._cmd, self._contacts = None, (0.0, 0.0), 0
+        return None
+
+    def _place_entity(self, name: str, pose: Pose) -> str | None:
+        self._add_robot(name, pose)
+        return None
+
+    # ------------------------------------------------------------ collisions
+    def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self._contacts += 1
+        if self._contacts == 1:
+            points = arbiter.contact_point_set.points
+            x, y = points[0].point_a if points else arbiter.shapes[0].body.position
+            self.collisions.append(Collision(self.time(), x, y))
+
+    def _on_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
+        self._contacts = max(0, self._contacts - 1)

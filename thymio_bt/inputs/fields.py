@@ -1,0 +1,113 @@
+"""Parameter types that carry their unit: ``Length``, ``Angle``, ``Speed``, ``Duration``, ...
+
+A node's pydantic parameter model declares each field with one of these types, and everything else
+follows from the type: the mission loader converts ``5cm``, ``90deg`` or ``$cruise`` to SI and
+refuses a value of the wrong kind, ``thymio-bt behaviours`` prints the unit, and the JSON Schema
+carries it. Composite shapes are built from them (``tuple[Length, Length]`` is a point,
+``list[Point]`` a path), so a new parameter shape needs no change to the loader.
+
+Example::
+
+    class MoveParams(BehaviourParams):
+        distance: Length = Field(0.1, gt=0, description="how far to drive")
+        goal: Pose2D = Field(description="[x, y, yaw] or a named spawn of the maze")
+"""
+
+from __future__ import annotations
+
+import types
+import typing
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+from pydantic import BeforeValidator
+
+from thymio_bt.inputs.units import UnitError, parse_pose
+
+#: kinds of the SI units that parameters are declared in (others, like 1/s, are plain numbers)
+_KIND = {"m": "length", "rad": "angle", "s": "time", "m/s": "speed", "rad/s": "angular_speed", "Hz": "frequency"}
+
+
+@dataclass(frozen=True, slots=True)
+class Unit:
+    """Metadata of a number type: the SI unit it is expressed in."""
+
+    symbol: str
+
+    @property
+    def kind(self) -> str | None:
+        """The unit parser's kind (``length``, ``angle``...), None for a unit without one (``1/s``)."""
+        return _KIND.get(self.symbol)
+
+    def __get_pydantic_json_schema__(self, core_schema: Any, handler: Any) -> dict[str, Any]:
+        schema = handler(core_schema)
+        schema["unit"] = self.symbol
+        return schema
+
+
+@dataclass(frozen=True, slots=True)
+class SpawnName:
+    """Metadata of a pose type: a named spawn of the mission's maze may be written instead of numbers."""
+
+
+Length = Annotated[float, Unit("m")]
+Angle = Annotated[float, Unit("rad")]
+Speed = Annotated[float, Unit("m/s")]
+AngularSpeed = Annotated[float, Unit("rad/s")]
+Duration = Annotated[float, Unit("s")]
+#: a rate or gain per second (e.g. a heading correction)
+PerSecond = Annotated[float, Unit("1/s")]
+#: an angular-speed gain per metre of error
+PerSecondPerMetre = Annotated[float, Unit("rad/s/m")]
+Point = tuple[Length, Length]
+
+
+def _pose_text(value: Any) -> Any:
+    """``"0.5, 0.3, pi/2"`` written in Python (the loader converts YAML text itself)."""
+    if isinstance(value, str):
+        try:
+            return parse_pose(value)
+        except UnitError as exc:
+            raise ValueError(str(exc)) from None
+    return value
+
+
+#: x, y (m) and yaw (rad) of base_link; in a mission, also a named spawn of the maze
+Pose2D = Annotated[tuple[Length, Length, Angle], SpawnName(), BeforeValidator(_pose_text)]
+
+
+def metadata(annotation: Any, field_metadata: list[Any] | tuple[Any, ...] = ()) -> list[Any]:
+    """The metadata of a field: pydantic's own list, then an ``Annotated`` one (also inside ``X | None``)."""
+    found = list(field_metadata)
+    args = [a for a in typing.get_args(annotation) if a is not type(None)]
+    if typing.get_origin(annotation) is Annotated:
+        found += list(annotation.__metadata__)
+    elif len(args) == 1 and typing.get_origin(args[0]) is Annotated:
+        found += list(args[0].__metadata__)
+    return found
+
+
+def field_metadata(field: Any) -> list[Any]:
+    """A pydantic field's own metadata; a plugin written before these types, whose float field says
+    ``json_schema_extra={"unit": "m"}``, gets that unit as a :class:`Unit` too."""
+    extra = field.json_schema_extra if isinstance(field.json_schema_extra, dict) else {}
+    legacy = [Unit(extra["unit"])] if isinstance(extra.get("unit"), str) else []
+    return [*field.metadata, *legacy]
+
+
+def units_in(annotation: Any, field_metadata: list[Any] | tuple[Any, ...] = ()) -> list[str]:
+    """The unit symbols of a type, element by element for tuples and lists (``["m", "m", "rad"]``)."""
+    own = [m.symbol for m in metadata(annotation, field_metadata) if isinstance(m, Unit)]
+    if own:
+        return own
+    base = annotation.__origin__ if typing.get_origin(annotation) is Annotated else annotation
+    args = [a for a in typing.get_args(base) if a is not type(None) and a is not Ellipsis]
+    if typing.get_origin(base) in (typing.Union, types.UnionType, tuple, list):
+        return [u for a in args for u in units_in(a)]
+    return []
+
+
+def unit_of(field: Any) -> str:
+    """The unit of a pydantic field for docs: ``m``, ``m, m, rad`` for a pose, ``""`` without one."""
+    units = units_in(field.annotation, field_metadata(field))
+    return units[0] if len(set(units)) == 1 else ", ".join(units)

@@ -1,0 +1,286 @@
+"""A small, safe parser for values with units: ``pi/2``, ``90deg``, ``-45 deg``, ``5cm``, ``0.1 m/s``.
+
+Values are converted to SI (metres, radians, seconds). The grammar is arithmetic on numbers,
+``pi`` and ``$parameter`` references, with ``+ - * /`` and parentheses, optionally followed by one
+unit. Nothing is ever passed to ``eval``.
+
+Example::
+
+    >>> parse_value("pi/2").value
+    1.5707963267948966
+    >>> parse_value("5cm").value, parse_value("5cm").kind
+    (0.05, 'length')
+    >>> round(parse_value("-45 deg").value, 4)
+    -0.7854
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+from typing import Callable, Mapping
+
+from thymio_bt.errors import did_you_mean
+
+#: unit -> (factor to SI, kind)
+UNITS: dict[str, tuple[float, str]] = {
+    "m": (1.0, "length"),
+    "cm": (0.01, "length"),
+    "mm": (0.001, "length"),
+    "rad": (1.0, "angle"),
+    "deg": (math.pi / 180.0, "angle"),
+    "°": (math.pi / 180.0, "angle"),
+    "s": (1.0, "time"),
+    "ms": (0.001, "time"),
+    "min": (60.0, "time"),
+    "m/s": (1.0, "speed"),
+    "cm/s": (0.01, "speed"),
+    "mm/s": (0.001, "speed"),
+    "rad/s": (1.0, "angular_speed"),
+    "deg/s": (math.pi / 180.0, "angular_speed"),
+    "hz": (1.0, "frequency"),
+    "Hz": (1.0, "frequency"),
+}
+
+#: The SI unit printed for each kind.
+SI_UNIT = {"length": "m", "angle": "rad", "time": "s", "speed": "m/s",
+           "angular_speed": "rad/s", "frequency": "Hz"}
+
+_TOKEN = re.compile(
+    r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
+    r"|(?P<ref>\$[A-Za-z_][A-Za-z0-9_]*)"
+    r"|(?P<unit>(?:cm|mm|m|rad|deg)/s|[A-Za-z_°][A-Za-z0-9_]*)"
+    r"|(?P<op>[-+*/()]))"
+)
+
+
+#: How a value of each kind is written, for hints.
+EXAMPLES = {"length": "5cm, 0.05 m or 50mm", "angle": "90deg, pi/2 or 1.57 rad", "time": "2 s, 500ms or 1 min",
+            "speed": "10cm/s or 0.1 m/s", "angular_speed": "90deg/s or 1.5 rad/s", "frequency": "10 Hz"}
+
+#: A proximity threshold as a real Thymio's reading ("3400 raw"), converted to the distance at which
+#: the calibration table gives that reading. Not a factor: it stands alone, never in arithmetic.
+_RAW = re.compile(r"\s*(\d+(?:\.\d*)?)\s*raw\s*")
+
+#: Deepest nesting of parentheses accepted (a guard against pathological input, not a style rule).
+MAX_NESTING = 50
+
+
+class UnitError(ValueError):
+    """A value that does not parse; the message says what was expected, ``hint`` how to fix it."""
+
+    def __init__(self, message: str, hint: str = "") -> None:
+        super().__init__(message)
+        self.hint = hint
+
+
+@dataclass(frozen=True, slots=True)
+class Quantity:
+    """A parsed number in SI units, with the kind of its unit (None when it had no unit)."""
+
+    value: float
+    kind: str | None = None
+
+
+def _tokens(text: str) -> list[tuple[str, str]]:
+    pos, out = 0, []
+    text = text.strip()
+    while pos < len(text):
+        match = _TOKEN.match(text, pos)
+        if not match or match.end() == pos:
+            raise UnitError(f"unexpected '{text[pos:].strip()[:10]}' in '{text}'")
+        kind = match.lastgroup or ""
+        out.append((kind, match.group(kind)))
+        pos = match.end()
+    return out
+
+
+class _Parser:
+    """Recursive descent over tokens; every value carries its unit kind (None for plain numbers).
+
+    A unit binds to the number or parenthesis right before it (``2*$side - 10cm`` is
+    2·side − 0.1 m); adding quantities of different kinds, or multiplying two, is an error.
+    """
+
+    def __init__(self, text: str, resolve: Callable[[str], Quantity] | None) -> None:
+        self.text = text
+        self.toks = _tokens(text)
+        self.i = 0
+        self.depth = 0
+        self.resolve = resolve
+
+    def peek(self) -> tuple[str, str] | None:
+        return self.toks[self.i] if self.i < len(self.toks) else None
+
+    def take(self) -> tuple[str, str]:
+        tok = self.peek()
+        if tok is None:
+            raise UnitError(f"'{self.text}' ends too early")
+        self.i += 1
+        return tok
+
+    def parse(self) -> Quantity:
+        value, kind = self.expr()
+        if self.peek() is not None:
+            raise UnitError(f"unexpected '{self.peek()[1]}' in '{self.text}'")  # type: ignore[index]
+        return Quantity(value, kind)
+
+    def _combine(self, a: str | None, b: str | None, op: str) -> str | None:
+        if a and b and (op in "*/" or a != b):
+            what = "multiply or divide two values with units" if op in "*/" else f"add {_named(a)} and {_named(b)}"
+            raise UnitError(f"cannot {what} in '{self.text}'",
+                            "a unit binds to the number before it: write 2*$side - 10cm, not 2cm*3cm"
+                            if op in "*/" else "both sides of + and - need the same kind of unit")
+        return a or b
+
+    def expr(self) -> tuple[float, str | None]:
+        value, kind = self.term()
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":
+            self.i += 1
+            rhs, rkind = self.term()
+            kind = self._combine(kind, rkind, tok[1])
+            value = value + rhs if tok[1] == "+" else value - rhs
+        return value, kind
+
+    def term(self) -> tuple[float, str | None]:
+        value, kind = self.unary()
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "*/":
+            self.i += 1
+            rhs, rkind = self.unary()
+            kind = self._combine(kind, rkind, tok[1])
+            if tok[1] == "/":
+                if rhs == 0:
+                    raise UnitError(f"division by zero in '{self.text}'")
+                value /= rhs
+            else:
+                value *= rhs
+        return value, kind
+
+    def unary(self) -> tuple[float, str | None]:
+        sign = 1.0
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":     # a loop: '-----5' nests nothing
+            self.i += 1
+            sign = -sign if tok[1] == "-" else sign
+        value, kind = self.unit(*self.atom())
+        return sign * value, kind
+
+    def unit(self, value: float, kind: str | None) -> tuple[float, str | None]:
+        tok = self.peek()
+        if not tok or tok[0] != "unit" or tok[1] == "pi":
+            return value, kind
+        self.i += 1
+        if tok[1] == "raw":
+            raise UnitError(f"a raw reading cannot take part in arithmetic in '{self.text}'",
+                            "raw readings are not proportional to distance: write one reading alone, e.g. 3400 raw")
+        if tok[1] not in UNITS:
+            raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}'",
+                            did_you_mean(tok[1], [u for u in UNITS if u != "hz"]))
+        if kind is not None:
+            raise UnitError(f"'{tok[1]}' follows a value that already has a unit in '{self.text}'")
+        factor, unit_kind = UNITS[tok[1]]
+        return value * factor, unit_kind
+
+    def atom(self) -> tuple[float, str | None]:
+        kind, text = self.take()
+        if kind == "num":
+            return float(text), None
+        if kind == "op" and text == "(":
+            self.depth += 1
+            if self.depth > MAX_NESTING:
+                raise UnitError(f"more than {MAX_NESTING} nested parentheses in '{self.text[:40]}...'")
+            value = self.expr()
+            if self.peek() != ("op", ")"):
+                raise UnitError(f"missing ')' in '{self.text}'")
+            self.i += 1
+            self.depth -= 1
+            return value
+        if kind == "unit" and text == "pi":
+            return math.pi, None
+        if kind == "ref":
+            if self.resolve is None:
+                raise UnitError(f"'{text}' refers to a parameter, but none are defined here")
+            try:
+                quantity = self.resolve(text[1:])
+            except KeyError:
+                raise UnitError(f"unknown parameter '{text}' in '{self.text}'") from None
+            return quantity.value, quantity.kind
+        raise UnitError(f"expected a number in '{self.text}', found '{text}'")
+
+
+def parse_value(text: str | int | float, resolve: Callable[[str], Quantity] | None = None) -> Quantity:
+    """Parse a number with an optional unit into SI; raise :class:`UnitError` (a ``ValueError``).
+
+    ``resolve`` gives the value of a ``$name``; it may raise ``KeyError`` or :class:`UnitError`.
+    """
+    if isinstance(text, bool):
+        raise UnitError(f"expected a number, found {text!r}")
+    if isinstance(text, (int, float)):
+        if not math.isfinite(text):
+            raise UnitError(f"{text!r} is not a finite number")
+        return Quantity(float(text))
+    raw = _RAW.fullmatch(str(text))
+    if raw:
+        return _raw_reading(float(raw.group(1)))
+    quantity = _Parser(str(text), resolve).parse()
+    if not math.isfinite(quantity.value):
+        raise UnitError(f"'{text}' is not a finite number")
+    return quantity
+
+
+def _raw_reading(reading: float) -> Quantity:
+    """The distance at which a real Thymio's sensor gives ``reading`` (Webots' Thymio II table)."""
+    from thymio_bt.robot.calibration import WEBOTS_THYMIO2 as table
+
+    if not 0 < reading <= table.max_reading:
+        raise UnitError(f"a raw reading must be between 1 and {table.max_reading:g}, got {reading:g}",
+                        "0 means nothing in range; 4308 is as close as the table goes (e.g. 3400 raw is 3.2 cm)")
+    return Quantity(table.to_metres(reading), "length")
+
+
+def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> tuple[float, float, float]:
+    """Parse ``X,Y,YAW`` (e.g. ``0.5,0.3,pi/2`` or ``50cm, 30cm, 90deg``) into metres and radians."""
+    parts = [p for p in str(text).split(",")]
+    if len(parts) != 3:
+        raise UnitError(f"expected X,Y,YAW (three comma-separated values), got '{text}'")
+    x, y, yaw = (parse_value(p, resolve) for p in parts)
+    for name, q, kind in (("X", x, "length"), ("Y", y, "length"), ("YAW", yaw, "angle")):
+        if q.kind not in (None, kind):
+            raise UnitError(f"{name} must be {'a length' if kind == 'length' else 'an angle'}, "
+                              f"got '{text}'")
+    return x.value, y.value, yaw.value
+
+
+def check_kind(quantity: Quantity, expected: str | None) -> str | None:
+    """An error message when a value's unit does not fit the parameter, else None."""
+    if expected is None or quantity.kind is None or quantity.kind == expected:
+        return None
+    return f"expected {_named(expected)} (in {SI_UNIT.get(expected, '?')}), got {_named(quantity.kind)}"
+
+
+def kind_hint(kind: str | None) -> str:
+    """How a value of ``kind`` is written, e.g. 'write a length: 5cm, 0.05 m or 50mm'."""
+    if kind is None or kind not in EXAMPLES:
+        return ""
+    return f"write {_named(kind)}: {EXAMPLES[kind]}"
+
+
+def _named(kind: str) -> str:
+    """'a length', 'an angle', 'an angular speed'."""
+    words = kind.replace("_", " ")
+    return ("an " if words[0] in "aeiou" else "a ") + words
+
+
+ParamResolver = Callable[[str], Quantity]
+
+
+def resolver_from(values: Mapping[str, float | Quantity]) -> ParamResolver:
+    """A resolver for ``$name`` references from a mapping of already-parsed values."""
+
+    def resolve(name: str) -> Quantity:
+        if name not in values:
+            raise KeyError(name)
+        value = values[name]
+        return value if isinstance(value, Quantity) else Quantity(float(value))
+
+    return resolve

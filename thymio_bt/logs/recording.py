@@ -1,0 +1,139 @@
+"""Record a run tick by tick: in memory for plots and replays, and in a log of any format.
+
+The :class:`Recorder` is an ``on_tick`` hook: each tick it makes one
+:class:`~thymio_bt.logs.records.TickRecord` (time, pose, command, velocity, proximity, running
+nodes, the status of every node, blackboard values that changed), keeps it for plots, and hands it
+to the log writer that ``--log FILE``'s suffix picks (:mod:`thymio_bt.logs`). ``thymio-bt replay``
+redraws plots from a log without re-running.
+
+Example::
+
+    recorder = Recorder(log_path="run.mcap")
+    result = run.run(on_tick=recorder)
+    recording = recorder.finish(result)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import py_trees
+
+from thymio_bt.behaviours.base import node_path
+from thymio_bt.errors import UserError
+from thymio_bt.maze import Maze
+
+if TYPE_CHECKING:
+    from thymio_bt.logs import LogWriter
+    from thymio_bt.logs.records import LogEnd, TickRecord
+
+
+@dataclass
+class Recording:
+    """What a run (or a log) holds for plots and replays: ``header`` is the log header (mission,
+    rates, the tree), ``samples`` one :class:`~thymio_bt.logs.records.TickRecord` per tick."""
+
+    maze: Maze
+    mission: str = ""
+    samples: list[dict[str, Any]] = field(default_factory=list)
+    events: list[dict[str, Any]] = field(default_factory=list)
+    end: dict[str, Any] = field(default_factory=dict)
+    header: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def final_pose(self) -> dict[str, float] | None:
+        return self.end.get("final_pose")
+
+
+class Recorder:
+    """An ``on_tick`` hook for :meth:`thymio_bt.run.runner.Run.run` that records every tick."""
+
+    def __init__(self, log_path: str | Path | None = None, keep: bool = True) -> None:
+        self.keep = keep
+        self.samples: list[dict[str, Any]] = []
+        self._path = Path(log_path) if log_path else None
+        self._writer: LogWriter | None = None
+        self._blackboard: dict[str, Any] = {}
+        self._run: Any = None
+        self._header: dict[str, Any] = {}
+
+    def _open(self, run: Any) -> None:
+        from thymio_bt.logs.records import LogHeader, tree_nodes
+
+        self._run = run
+        mission = run.mission
+        self._header = dict(LogHeader(version=2, mission=mission.name, tick_hz=mission.tick_hz, seed=run.seed,
+                                      start=mission.start.as_dict(), maze=mission.maze.to_yaml_dict(),
+                                      tree=tree_nodes(run.root)))
+        if self._path is not None:
+            from thymio_bt.logs import open_writer
+
+            self._writer = open_writer(self._path)
+            self._writer.header(self._header)  # type: ignore[arg-type]
+
+    def __call__(self, run: Any) -> None:
+        from thymio_bt.logs.records import STATUS_LETTER, jsonable, number
+
+        if self._run is None:
+            self._open(run)
+        backend = run.backend
+        pose = backend.true_pose()
+        scan = backend.proximity()
+        cmd, vel = backend.command(), backend.velocity()
+        record: TickRecord = {
+            "t": round(backend.time(), 6), "tick": run.ticks,
+            "pose": None if pose is None else {k: round(v, 6) for k, v in pose.as_dict().items()},
+            "cmd": [round(cmd.linear, 6), round(cmd.angular, 6)],
+            "vel": [round(vel.linear, 6), round(vel.angular, 6)],
+            "prox": None if scan is None else {k: number(v) for k, v in scan.items()},
+            "running": [n.name for n in _running_leaves(run.root)],
+        }
+        if self._writer is not None:
+            record["nodes"] = {node_path(n): STATUS_LETTER[n.status.name] for n in run.root.iterate()}
+            storage = py_trees.blackboard.Blackboard.storage
+            changed = {k: jsonable(v) for k, v in storage.items() if self._blackboard.get(k, object()) != v}
+            self._blackboard = dict(storage)
+            if changed:
+                record["bb"] = changed
+            try:
+                self._writer.tick(record)
+            except OSError as exc:             # a full disk, a file size limit: end the run, keep the report
+                from thymio_bt.run.runner import StopRun
+
+                self._abandon()
+                raise StopRun(f"cannot write the log {self._path}: {exc.strerror or exc}") from None
+        if self.keep:
+            self.samples.append(dict(record))
+
+    def finish(self, result: Any) -> Recording:
+        """Write the log's end and close it; return the in-memory recording."""
+        end: LogEnd = {"status": result.status, "reason": result.reason, "code": result.code,
+                       "failed_path": result.failed_path, "sim_time": round(result.sim_time, 6),
+                       "final_pose": result.final_pose, "collisions": result.collisions}
+        if self._writer is not None:
+            try:
+                self._writer.end({**end, "events": result.events})
+                self._writer.close()
+            except OSError as exc:
+                self._abandon()
+                raise UserError(f"cannot write the end of the log {self._path}: {exc.strerror or exc}") from None
+            self._writer = None
+        maze = self._run.mission.maze if self._run is not None else Maze()
+        return Recording(maze=maze, mission=result.mission, samples=self.samples, events=result.events,
+                         end={**end, **({"map": result.maze_map} if result.maze_map else {})}, header=self._header)
+
+
+    def _abandon(self) -> None:
+        """Close a log that can no longer be written (what reached the disk stays readable)."""
+        writer, self._writer = self._writer, None
+        try:
+            if writer is not None:
+                writer.close()
+        except OSError:
+            pass
+
+
+def _running_leaves(root: Any) -> list[Any]:
+    return [n for n in root.iterate() if not getattr(n, "children", None) and n.status.name == "RUNNING"]

@@ -1,0 +1,200 @@
+"""A mission tree as BehaviorTree.CPP v4 XML: what Groot2 opens, and what a Groot2 log embeds.
+
+Composites and decorators become BT.CPP's built-ins where the semantics are the same
+(``sequence`` is ``SequenceWithMemory``, ``selector`` is ``Fallback``, ``invert`` is ``Inverter``,
+...); the others keep thymio-bt's name (``timeout`` and ``delay`` count simulated seconds, not
+BT.CPP's wall clock; a ``repeat`` with ``until`` is the control node ``RepeatUntil``). Behaviours
+are Actions, conditions Conditions, with their parameters as ports; a ``<TreeNodesModel>`` declares
+every non-built-in node with its ports, units and descriptions from the node registry, so Groot2
+can show and edit the tree. Nodes carry BT.CPP's pre-order ``_uid`` (1 = the root).
+
+Example::
+
+    xml = tree_xml(tree_nodes(root), registry, ports={3: {"distance": "0.05"}})
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any, Mapping
+
+from thymio_bt.behaviours import ControlNode
+from thymio_bt.behaviours.base import ConditionBehaviour
+from thymio_bt.inputs.fields import unit_of
+from thymio_bt.logs.records import TreeNode
+
+#: thymio-bt kind -> BT.CPP built-in of the same semantics
+BUILTIN = {"sequence": "SequenceWithMemory", "reactive_sequence": "ReactiveSequence", "selector": "Fallback",
+           "reactive_selector": "ReactiveFallback", "parallel": "Parallel", "invert": "Inverter",
+           "force_success": "ForceSuccess", "force_failure": "ForceFailure", "retry": "RetryUntilSuccessful",
+           "repeat": "Repeat"}
+#: the element that carries a mission's settings (maze, start, rates, noise); BT.CPP skips it
+MISSION_TAG = "ThymioMission"
+#: BT.CPP's own node IDs (besides BUILTIN's): a thymio-bt node of one of these names is exported as
+#: Thymio<name> so that it does not clash with the built-in
+RESERVED = frozenset({"SetBlackboard", "Sequence", "Fallback", "Delay", "Timeout", "Script", "Sleep",
+                      "AlwaysSuccess", "AlwaysFailure", "Precondition", "RunOnce", "SubTree", "Switch2",
+                      "WhileDoElse", "IfThenElse", "KeepRunningUntilFailure", "UnsetBlackboard"})
+#: thymio-bt parameter -> BT.CPP port of a built-in
+_BUILTIN_PORTS = {("repeat", "times"): "num_cycles", ("retry", "times"): "num_attempts"}
+
+
+def node_id(node: TreeNode, children: int) -> str:
+    """The BT.CPP node ID of a logged node."""
+    kind = node["kind"]
+    if kind == "repeat" and children == 2:
+        return "RepeatUntil"
+    if kind in RESERVED:
+        return "Thymio" + kind
+    return BUILTIN.get(kind, kind)
+
+
+def _port_value(value: Any) -> str:
+    """A parameter as a port's text: exact (``repr``) numbers, lists as JSON, so a read back is exact."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return json.dumps(value)
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, str]:
+    kind = node["kind"]
+    if ident == "RepeatUntil":
+        return {}                                  # the loop ends by its condition, not a count
+    if kind == "parallel":
+        one = params.get("policy") == "success_on_one"
+        ports = {"success_count": "1" if one else "-1", "failure_count": "1"}
+        return ports if params.get("synchronise", True) else {**ports, "synchronise": "false"}
+    if kind == "repeat" and params.get("times") == "forever":
+        return {"num_cycles": "-1"}
+    return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items() if v is not None}
+
+
+def tree_xml(nodes: list[TreeNode], registry: Any, params: Mapping[int, Mapping[str, Any]] | None = None,
+             tree_id: str = "MainTree", settings: Mapping[str, str] | None = None,
+             subtrees: Mapping[int, str] | None = None) -> str:
+    """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
+    lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
+    ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
+    tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node (see :func:`xml_uids`)."""
+    params, subtrees = params or {}, subtrees or {}
+    root = ET.Element("root", BTCPP_format="4", main_tree_to_execute=tree_id)
+    if settings:
+        ET.SubElement(root, MISSION_TAG, dict(settings))
+    tree = ET.SubElement(root, "BehaviorTree", ID=tree_id)
+    children = {n["uid"]: 0 for n in nodes}
+    for n in nodes:
+        if n["parent"] is not None:
+            children[n["parent"]] += 1
+    uids, wrappers = xml_uids(nodes, subtrees)
+    elements: dict[int, ET.Element] = {}
+    used: dict[str, str] = {}
+    for n in nodes:
+        parent = tree if n["parent"] is None else elements[n["parent"]]
+        if n["uid"] in subtrees:
+            sid = subtrees[n["uid"]]
+            ET.SubElement(parent, "SubTree", {"ID": sid, "name": n["name"], "_uid": str(wrappers[n["uid"]])})
+            parent = ET.SubElement(root, "BehaviorTree", ID=sid)
+        ident = node_id(n, children[n["uid"]])
+        used.setdefault(ident, n["kind"])
+        attrs = {"name": n["name"], **_ports(n, ident, params.get(n["uid"], {})), "_uid": str(uids[n["uid"]])}
+        elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
+    model = ET.SubElement(root, "TreeNodesModel")
+    for ident, kind in sorted(used.items()):
+        if ident in BUILTIN.values():
+            continue
+        cls = registry[kind] if kind in registry else None
+        tag = _category(cls, ident)
+        entry = ET.SubElement(model, tag, ID=ident)
+        if cls is not None:
+            for name, field in cls.Params.model_fields.items():
+                unit = unit_of(field)
+                text = (field.description or "") + (f" [{unit}]" if unit else "")
+                default = {} if field.is_required() else {"default": _port_value(field.default)}
+                port = ET.SubElement(entry, "input_port", name=name, **default)
+                port.text = text
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[int, int], dict[int, int]]:
+    """BT.CPP's pre-order uids once subtree instances are ``<SubTree>`` nodes: (the uid of each node,
+    by its uid in ``nodes``; the uid of the ``<SubTree>`` node above each subtree root)."""
+    uids, wrappers, count = {}, {}, 0
+    for n in nodes:
+        if n["uid"] in subtrees:
+            count += 1
+            wrappers[n["uid"]] = count
+        count += 1
+        uids[n["uid"]] = count
+    return uids, wrappers
+
+
+def _category(cls: Any, ident: str) -> str:
+    if ident == "RepeatUntil" or (isinstance(cls, type) and issubclass(cls, ControlNode)
+                                  and cls.category == "composite"):
+        return "Control"
+    if isinstance(cls, type) and issubclass(cls, ControlNode):
+        return "Decorator"
+    if isinstance(cls, type) and issubclass(cls, ConditionBehaviour):
+        return "Condition"
+    return "Action"
+
+
+def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
+    """A mission's settings as ``<ThymioMission>`` attributes (the maze's path relative to ``folder``)."""
+    pose = mission.start
+    settings = {"name": mission.name, "description": mission.description,
+                "maze": os.path.relpath(mission.maze_file, folder) if mission.maze_file else mission.maze.name,
+                "start": f"{pose.x!r}, {pose.y!r}, {pose.yaw!r}", "tick_hz": repr(mission.tick_hz),
+                "time_limit": repr(mission.time_limit), "seed": str(mission.seed),
+                "sensor_model": mission.sensor_model, "robot": mission.robot,
+                **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()}}
+    if mission.backend != "sim" or mission.backend_options:
+        settings["backend"] = json.dumps({"name": mission.backend, **mission.backend_options})
+    if mission.expect is not None:
+        settings["expect"] = json.dumps(mission.expect.model_dump(mode="json"))
+    return settings
+
+
+def mission_xml(mission: Any, output: Path | None = None) -> str:
+    """The BT.CPP XML of a loaded mission: its tree as planned, parameters as ports (in SI units),
+    each subtree instance as its own ``<BehaviorTree>`` used by a ``<SubTree>`` node, its settings
+    in a ``<ThymioMission>`` element (BT.CPP ignores it) so that the file runs as the mission did
+    (``thymio-bt run mission.xml``)."""
+    nodes, params, subtrees = mission_nodes(mission)
+    folder = (output or Path("mission.xml")).resolve().parent
+    return tree_xml(nodes, mission.registry, params, settings=mission_settings(mission, folder), subtrees=subtrees)
+
+
+def mission_nodes(mission: Any) -> tuple[list[TreeNode], dict[int, dict[str, Any]], dict[int, str]]:
+    """A mission's planned tree in pre-order (uids from 1, as the built py_trees tree walks), each
+    node's parameters, and the BehaviorTree ID of each subtree instance's root (``NAME``, then
+    ``NAME_2``... when a subtree is used several times)."""
+    nodes: list[TreeNode] = []
+    params: dict[int, dict[str, Any]] = {}
+    subtrees: dict[int, str] = {}
+    uses: dict[str, int] = {}
+
+    def visit(plan: Any, parent: int | None, prefix: str) -> None:
+        uid = len(nodes) + 1
+        path = f"{prefix}/{plan.name}" if prefix else plan.name
+        nodes.append(TreeNode(uid=uid, path=path, name=plan.name, kind=plan.behaviour or plan.kind, parent=parent))
+        if plan.subtree is not None:
+            uses[plan.subtree] = uses.get(plan.subtree, 0) + 1
+            subtrees[uid] = plan.subtree if uses[plan.subtree] == 1 else f"{plan.subtree}_{uses[plan.subtree]}"
+        if plan.params is not None:
+            values = plan.params.model_dump()
+            values.update({key: "{" + ref + "}" for key, ref in plan.blackboard_refs.items()})
+            params[uid] = values
+        for child in plan.children:
+            visit(child, uid, path)
+
+    visit(mission.tree, None, "")
+    return nodes, params, subtrees

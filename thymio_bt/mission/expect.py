@@ -1,0 +1,118 @@
+"""What a mission counts as success, besides its tree succeeding: ``expect:`` in the mission.
+
+A tree can succeed in the wrong place (a wall follower that stops in the wrong pocket, a stop 2 cm
+short because a sensor reads differently). So a mission may declare, checked on the run's
+ground truth after it ends:
+
+```yaml
+expect:
+  goal: {centre: [0.3, 0.489], radius: 1cm}        # where base_link must end
+  no_collision: true
+  max_time: 60s
+  gaps:                                            # the front gap to the wall, by geometry,
+    - {after: "course/part 1", distance: 5cm, tolerance: 3mm}   # when that node ended
+```
+
+A run whose tree succeeds but whose expectations do not all hold ends FAILURE with code
+``EXPECTATION`` and the failed ones in its reason; ``sweep`` counts it as a failure.
+
+Example::
+
+    problems = check(mission.expect, result, mission.maze, model)    # [] when all hold
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from fnmatch import fnmatchcase
+from operator import itemgetter
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from thymio_bt.maze import Maze
+from thymio_bt.maze.model import Length, Point, parsed_quantity
+from thymio_bt.robot.placement import ray_distance
+from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.model import RobotModel
+
+#: seconds, written with a unit or not (``60s``, ``2min``)
+Duration = Annotated[float, parsed_quantity("time")]
+
+
+class GoalRegion(BaseModel):
+    """A disc the robot's base_link must end in."""
+
+    model_config = ConfigDict(extra="forbid")
+    centre: Point = Field(description="the goal's centre [x, y]")
+    radius: Length = Field(0.01, gt=0, le=10, description="how far from the centre still counts")
+
+
+class GapExpectation(BaseModel):
+    """The front gap (robot's nose to the wall ahead, by geometry) when a node ended."""
+
+    model_config = ConfigDict(extra="forbid")
+    after: str = Field(description="the node's path, or a glob on paths (e.g. 'course/part 1')")
+    distance: Length = Field(gt=0, le=2, description="the gap expected")
+    tolerance: Length = Field(0.003, gt=0, le=1, description="how far off still counts")
+
+
+class Expect(BaseModel):
+    """A mission's success criteria beyond its tree's status."""
+
+    model_config = ConfigDict(extra="forbid")
+    goal: GoalRegion | None = Field(None, description="where base_link must end")
+    no_collision: bool = Field(False, description="no contact with a wall in the whole run")
+    max_time: Duration | None = Field(None, gt=0, le=36000, description="the mission must end within this")
+    gaps: list[GapExpectation] = Field(default_factory=list, description="front gaps when nodes end")
+
+    def without_places(self) -> "Expect":
+        """The criteria that hold anywhere (no goal, no gaps): for a run in another maze or start."""
+        return self.model_copy(update={"goal": None, "gaps": []})
+
+
+def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[str]:
+    """The expectations ``result`` (a :class:`~thymio_bt.run.runner.RunResult`) does not meet."""
+    failed = []
+    pose = result.final_pose
+    if expect.goal is not None:
+        if pose is None:
+            failed.append("goal: no robot at the end")
+        else:
+            off = math.dist((pose["x"], pose["y"]), expect.goal.centre)
+            if off > expect.goal.radius:
+                failed.append(f"goal: ended {1000 * off:.1f} mm from ({expect.goal.centre[0]:g}, "
+                              f"{expect.goal.centre[1]:g}), more than {1000 * expect.goal.radius:g} mm")
+    if expect.no_collision and result.collisions:
+        failed.append(f"no_collision: {result.collisions} collision{'s' * (result.collisions != 1)}")
+    if expect.max_time is not None and result.sim_time > expect.max_time + 1e-9:
+        failed.append(f"max_time: took {result.sim_time:.1f} s, more than {expect.max_time:g} s")
+    for gap in expect.gaps:
+        ended = next((e for e in result.events if e["kind"] == "behaviour_end" and e.get("pose")
+                      and fnmatchcase(e["path"], gap.after)), None)
+        if ended is None:
+            failed.append(f"gaps: no node matching '{gap.after}' ended with a robot")
+            continue
+        measured = front_gap(maze, model, _true_pose_at(result, ended))
+        if abs(measured - gap.distance) > gap.tolerance:
+            failed.append(f"gaps: after '{ended['path']}' the front gap was {100 * measured:.2f} cm, "
+                          f"not {100 * gap.distance:g} ± {100 * gap.tolerance:g} cm")
+    return failed
+
+
+def _true_pose_at(result: Any, event: dict) -> Pose:
+    """Where the robot really was when ``event`` happened: the trajectory's true pose of that tick
+    (an event's own pose is the robot's odometry, which drifts on a real or late robot). The
+    trajectory's times ascend."""
+    before = bisect_right(result.trajectory, event["t"] + 1e-9, key=itemgetter(0))
+    if not before:
+        return Pose(event["pose"]["x"], event["pose"]["y"], event["pose"]["yaw"])
+    return Pose(*result.trajectory[before - 1][1:4])
+
+
+def front_gap(maze: Maze, model: RobotModel, pose: Pose) -> float:
+    """The distance from the robot's nose (the front of its hull on its centre line) straight ahead
+    to the nearest wall or obstacle; inf when nothing is ahead."""
+    nose = max(x for x, _ in model.hull)
+    return ray_distance(maze, pose.x + nose * math.cos(pose.yaw), pose.y + nose * math.sin(pose.yaw), pose.yaw)

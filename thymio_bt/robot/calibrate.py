@@ -1,0 +1,177 @@
+"""``thymio-bt calibrate``: measure a robot's profile on any backend, as a file ``--robot`` takes.
+
+The robot stands in a straight corridor facing a wall (:func:`arena`: a simulator builds it, a real
+robot is placed by its operator at the printed pose) and does three things:
+
+1. **speed**: 2 s straight at 150 motor units: the distance it really covers (the backend's true
+   pose: a simulator's ground truth, else odometry) gives metres per unit;
+2. **proximity**: a slow approach (2 cm/s) to 8 mm from the wall, recording the front-centre
+   sensor's raw reading against its distance to the wall (the pose and the arena's geometry),
+   binned every 5 mm into a calibration table (median per bin, strictly decreasing, ending at 0);
+3. **wheel base**: back off 10 cm, spin 3 s at ±100 units per wheel: the turn rate it really makes
+   and the measured wheel speed give the wheel separation.
+
+Each measure skips its first half second (start-up, the robot's own delays). On a real robot without
+ground truth the pose is odometry, which counts wheel turns in the same units: the speed and wheel
+base then only check themselves, while the table is as good as the robot was placed.
+
+Example::
+
+    thymio-bt calibrate --backend playground --robot enki -o enki_measured.yaml
+    thymio-bt run missions/maze_part1_2.yaml --backend playground --robot enki_measured.yaml
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+from thymio_bt.maze import Maze
+from thymio_bt.robot.placement import ray_distance
+from thymio_bt.robot.interface import Backend, Pose
+from thymio_bt.robot.model import RobotModel
+from thymio_bt.robot.profile import Profile, TableRows
+
+TICK = 0.1
+#: the corridor: 0.2 m wide, its end wall's face at x = END (m), the robot 0.45 m from it
+END, WIDTH = 0.6, 0.2
+START = Pose(0.15, WIDTH / 2, 0.0)
+SPEED_UNITS, SPIN_UNITS = 150, 100
+APPROACH_SPEED, CLOSEST, BIN = 0.02, 0.008, 0.005
+
+
+def arena() -> Maze:
+    """The corridor calibrate runs in (walls 1 cm thick; the end wall's face at x = 0.6 - 0.005)."""
+    walls = [{"from": [0.0, 0.0], "to": [END, 0.0]}, {"from": [0.0, WIDTH], "to": [END, WIDTH]},
+             {"from": [END, 0.0], "to": [END, WIDTH]}, {"from": [0.0, 0.0], "to": [0.0, WIDTH]}]
+    return Maze.model_validate({"name": "calibration corridor", "walls": [{**w, "thickness": 0.01} for w in walls],
+                                "spawns": {"start": {"x": START.x, "y": START.y, "yaw": START.yaw}}})
+
+
+@dataclass
+class Calibration:
+    """What calibrate measured; :meth:`profile` makes the file."""
+
+    base: RobotModel
+    metres_per_unit: float
+    wheel_separation: float
+    samples: list[tuple[float, int]] = field(default_factory=list)      # (distance, raw)
+    rows: list[tuple[float, float]] = field(default_factory=list)        # the table
+
+    def profile(self, name: str) -> Profile:
+        return Profile(
+            base=self.base.name, name=name, metres_per_unit=round(self.metres_per_unit, 9),
+            wheel_separation=round(self.wheel_separation, 5),
+            calibration=TableRows(distances=[round(d, 4) for d, _ in self.rows], readings=[r for _, r in self.rows]),
+            measured={"speed_scale": round(self.metres_per_unit / self.base.metres_per_unit, 4),
+                      "wheel_separation_scale": round(self.wheel_separation / self.base.wheel_separation, 4),
+                      "proximity_samples": len(self.samples),
+                      "method": "thymio-bt calibrate: 2 s at 150 units, approach at 2 cm/s, 3 s spin at 100 units"})
+
+    def summary(self) -> list[str]:
+        """Lines comparing the measures with the base model's."""
+        base = self.base
+        lines = [f"speed: {self.metres_per_unit * 500:.4f} m/s at 500 units ({base.name}: "
+                 f"{base.metres_per_unit * 500:.4f}, {100 * (self.metres_per_unit / base.metres_per_unit - 1):+.1f} %)",
+                 f"wheel base: {self.wheel_separation * 100:.2f} cm ({base.name}: {base.wheel_separation * 100:.2f})",
+                 "front-centre reading (measured / " + base.name + "):"]
+        table = self.table()
+        for cm in (1, 2, 3, 4, 6, 8, 10, 12):
+            measured, expected = table.to_raw(cm / 100), base.calibration.to_raw(cm / 100)
+            off = f"{100 * (measured / expected - 1):+.1f} %" if expected else ""
+            lines.append(f"  {cm:2d} cm: {measured:6.0f} / {expected:6.0f} {off}")
+        return lines
+
+    def table(self) -> Any:
+        from thymio_bt.robot.calibration import CalibrationTable
+
+        return CalibrationTable(tuple(d for d, _ in self.rows), tuple(r for _, r in self.rows), source="calibrate")
+
+
+def table_rows(samples: list[tuple[float, int]]) -> list[tuple[float, float]]:
+    """A strictly decreasing table from (distance, raw) samples: the median of each 5 mm bin, rows
+    that would not decrease dropped, ending at the nearest bin reading 0 beyond the last seen."""
+    bins: dict[int, list[int]] = {}
+    for distance, raw in samples:
+        if math.isfinite(distance):
+            bins.setdefault(round(distance / BIN), []).append(raw)
+    rows: list[tuple[float, float]] = []
+    for index in sorted(bins):
+        reading = float(statistics.median(bins[index]))
+        distance = index * BIN
+        if reading <= 0:
+            if rows:
+                rows.append((distance, 0.0))
+                break
+            continue
+        if not rows or reading < rows[-1][1]:
+            rows.append((distance, reading))
+    if len(rows) < 2 or rows[-1][1] != 0.0:
+        raise ValueError("the approach never saw the wall go out of range, or never saw it: "
+                         f"{len(samples)} readings (is the robot facing the wall?)")
+    return rows
+
+
+def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[str], None] = print) -> Calibration:
+    """Run the three measures on ``backend`` (a robot of base ``model`` at :data:`START` in ``maze``)."""
+    sensor = model.sensor("front_center")
+    period = TICK
+
+    def truth() -> Pose:
+        pose = backend.true_pose()
+        if pose is None:
+            raise RuntimeError("the robot is gone")
+        return pose
+
+    def run_for(seconds: float, linear: float, angular: float) -> list[tuple[float, Pose]]:
+        out = []
+        for _ in range(round(seconds / period)):
+            backend.drive(linear, angular)      # again every tick: a robot whose motors vary per command averages
+            backend.advance(period)
+            out.append((backend.time(), truth()))
+        backend.drive(0.0, 0.0)
+        for _ in range(5):                  # let it come to rest
+            backend.advance(period)
+        return out
+
+    # 1. speed, straight at SPEED_UNITS
+    say("1/3 speed: 2 s straight")
+    speed_cmd = SPEED_UNITS * model.metres_per_unit
+    track = run_for(2.0, speed_cmd, 0.0)[5:]
+    (t0, p0), (t1, p1) = track[0], track[-1]
+    speed = math.hypot(p1.x - p0.x, p1.y - p0.y) / (t1 - t0)
+    metres_per_unit = model.metres_per_unit * speed / speed_cmd
+
+    # 2. proximity, a slow approach
+    say(f"2/3 proximity: approaching the wall at {APPROACH_SPEED * 100:g} cm/s")
+    raw_of = getattr(backend, "proximity_raw", None)
+    if raw_of is None:
+        raise ValueError(f"the backend {type(backend).__name__} gives no raw readings (a simulator with "
+                         f"sensor_model raw or cone, the aseba or playground backends do)")
+    samples: list[tuple[float, int]] = []
+    for _ in range(round(2 * END / APPROACH_SPEED / period)):
+        backend.drive(APPROACH_SPEED, 0.0)
+        backend.advance(period)
+        pose, raw = truth(), raw_of()
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        x, y = pose.x + sensor.x * c - sensor.y * s, pose.y + sensor.x * s + sensor.y * c
+        distance = ray_distance(maze, x, y, pose.yaw + sensor.yaw)
+        if raw is not None:
+            samples.append((distance, int(raw["front_center"])))
+        if distance <= CLOSEST:
+            break
+    backend.drive(0.0, 0.0)
+
+    # 3. wheel base, a spin after backing off
+    say("3/3 wheel base: backing off 10 cm, then 3 s turning")
+    run_for(2.0, -0.05, 0.0)
+    spin_wheel = SPIN_UNITS * model.metres_per_unit
+    track = run_for(3.0, 0.0, 2 * spin_wheel / model.wheel_separation)[5:]
+    turned = sum(math.remainder(b.yaw - a.yaw, math.tau) for (_, a), (_, b) in zip(track, track[1:]))
+    rate = turned / (track[-1][0] - track[0][0])
+    wheel_separation = 2 * SPIN_UNITS * metres_per_unit / rate
+    result = Calibration(model, metres_per_unit, wheel_separation, samples)
+    result.rows = table_rows(samples)
+    return result

@@ -1,0 +1,245 @@
+"""The abstract robot: what behaviours may use, and what a backend must provide.
+
+Behaviours talk to the robot only through these interfaces, so the same mission can drive the
+pymunk simulation (:mod:`thymio_bt.backends.sim`) or, later, a real Thymio. Units are metres, seconds and
+radians; the pose is the course's ``base_link`` in the world frame (0.0243 m ahead of the wheel
+axle the robot turns about).
+
+Example::
+
+    robot.drive(0.1, 0.0)          # held until changed, like cmd_vel
+    scan = robot.proximity()       # {"front_center": 0.05, ...}, inf when nothing in range
+    pose = robot.pose()            # Pose(x, y, yaw), or None while the robot does not exist
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from enum import Enum
+from typing import Mapping
+
+#: The 7 proximity sensors, front (left to right) then rear, as in the course URDF.
+SENSOR_NAMES: tuple[str, ...] = (
+    "front_left",
+    "front_center_left",
+    "front_center",
+    "front_center_right",
+    "front_right",
+    "rear_left",
+    "rear_right",
+)
+
+#: The entity name of the robot, as in the course's spawn service calls.
+ROBOT_ENTITY = "thymio"
+
+
+def wrap_angle(angle: float) -> float:
+    """Normalise an angle to [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+class RobotLost(Exception):
+    """Raised by a backend whose robot stopped answering: the run ends as FAILURE ``ROBOT_LOST``."""
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    """A planar pose: position in metres, yaw in radians (counter-clockwise from +x)."""
+
+    x: float
+    y: float
+    yaw: float
+
+    def as_dict(self) -> dict[str, float]:
+        return {"x": self.x, "y": self.y, "yaw": self.yaw}
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        return (self.x, self.y, self.yaw)
+
+    def distance_to(self, other: "Pose") -> float:
+        return math.hypot(other.x - self.x, other.y - self.y)
+
+
+_set_x, _set_y, _set_yaw = Pose.x.__set__, Pose.y.__set__, Pose.yaw.__set__   # type: ignore[attr-defined]
+
+
+def new_pose(x: float, y: float, yaw: float) -> Pose:
+    """``Pose(x, y, yaw)``, its slots filled directly: a frozen dataclass's ``__init__`` sets each
+    field through ``object.__setattr__``, twice the cost (a simulation makes one per sensor refresh)."""
+    pose = object.__new__(Pose)
+    _set_x(pose, x)
+    _set_y(pose, y)
+    _set_yaw(pose, yaw)
+    return pose
+
+
+@dataclass(frozen=True, slots=True)
+class Twist:
+    """A planar velocity: linear along the robot's heading (m/s), angular (rad/s, left positive)."""
+
+    linear: float = 0.0
+    angular: float = 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class Collision:
+    """The start of one contact episode between the robot and a wall: when (backend time) and where."""
+
+    t: float
+    x: float
+    y: float
+
+
+Scan = Mapping[str, float]
+"""Proximity ranges by sensor name, in metres; ``math.inf`` when nothing is in range. Treat it as
+read-only (the simulation's is: it casts each ray when first read); ``dict(scan)`` is a copy to keep
+or change."""
+
+
+class Robot(ABC):
+    """A differential-drive robot with 7 proximity sensors and odometry."""
+
+    @abstractmethod
+    def drive(self, linear: float, angular: float) -> None:
+        """Command a velocity; it is held until the next command (no timeout, like cmd_vel)."""
+
+    @abstractmethod
+    def exists(self) -> bool:
+        """Whether the robot entity currently exists (it does not between delete and spawn)."""
+
+    @abstractmethod
+    def proximity(self) -> Scan | None:
+        """The latest proximity scan (refreshed at 10 Hz), or None while the robot does not exist."""
+
+    @abstractmethod
+    def pose(self) -> Pose | None:
+        """The odometry pose of base_link, or None while the robot does not exist."""
+
+    @abstractmethod
+    def velocity(self) -> Twist:
+        """The measured velocity (zero while the robot does not exist)."""
+
+    @abstractmethod
+    def command(self) -> Twist:
+        """The drive command currently held."""
+
+    @abstractmethod
+    def time(self) -> float:
+        """The backend's clock in seconds (simulated time in the simulator)."""
+
+
+class RequestState(Enum):
+    PENDING = "pending"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+
+
+@dataclass(slots=True)
+class Request:
+    """An asynchronous entity request (like a ROS service call): poll ``state`` every tick."""
+
+    kind: str
+    entity: str
+    pose: Pose | None = None
+    state: RequestState = RequestState.PENDING
+    reason: str | None = None
+
+    @property
+    def done(self) -> bool:
+        return self.state is not RequestState.PENDING
+
+
+class Entities(ABC):
+    """Delete and spawn entities; requests complete over later ticks with success or a reason."""
+
+    @abstractmethod
+    def request_delete(self, name: str) -> Request:
+        """Ask to remove an entity; refused (FAILED) when no entity has that name."""
+
+    @abstractmethod
+    def request_spawn(self, name: str, pose: Pose) -> Request:
+        """Ask for a fresh robot at ``pose``; refused when the name is taken or the pose is not free."""
+
+
+class Backend(Robot, Entities):
+    """A robot and its world as the runner drives them: the pymunk simulation or a real Thymio.
+
+    Besides :class:`Robot` and :class:`Entities`, the runner needs to let time pass between ticks
+    (instantly in a simulation, by waiting on a real robot), a best-known pose for the report, and
+    what the backend knows of contacts with walls (a real Thymio has no bumper: nothing).
+
+    The base queues entity requests and serves them (:meth:`serve_requests`, from :meth:`advance`):
+    a backend only says how to remove and place a robot (:meth:`_remove`, :meth:`_place_entity`),
+    and keeps ``collisions`` and ``min_clearance`` up to date where it can measure them.
+    """
+
+    #: the entity name of the robot
+    robot_name: str = ROBOT_ENTITY
+    #: contact episodes so far, oldest first
+    collisions: list[Collision]
+    #: the smallest hull-to-wall gap so far in metres (inf when unknown)
+    min_clearance: float = math.inf
+    #: seconds from the world a reading shows to the moment a command sent now takes effect
+    #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
+    #: 0 for the simulation, whose behaviours see the world of this tick.
+    latency: float = 0.0
+    #: entity requests not yet served; :meth:`serve_requests` serves them
+    _requests: list[Request]
+
+    def __init__(self) -> None:
+        self._requests = []
+        self.collisions = []
+        self.min_clearance = math.inf
+
+    def request_delete(self, name: str) -> Request:
+        request = Request("delete", name)
+        self._requests.append(request)
+        return request
+
+    def request_spawn(self, name: str, pose: Pose) -> Request:
+        request = Request("spawn", name, pose)
+        self._requests.append(request)
+        return request
+
+    def serve_requests(self) -> None:
+        """Complete the queued requests in order, each SUCCEEDED or FAILED with a reason."""
+        if not self._requests:                 # the common case, every tick
+            return
+        pending, self._requests = self._requests, []
+        for request in pending:
+            if request.kind == "delete":
+                problem = self._remove(request.entity)
+            else:
+                assert request.pose is not None
+                problem = self.spawn_problem(request.entity, request.pose) or self._place_entity(
+                    request.entity, request.pose)
+            request.reason = problem
+            request.state = RequestState.FAILED if problem else RequestState.SUCCEEDED
+
+    def _remove(self, name: str) -> str | None:
+        """Remove entity ``name``; why it cannot be (e.g. no such entity), or None when done.
+        Every backend that keeps :meth:`serve_requests` must define it (one whose requests take
+        several ticks, like ROS 2 service calls, overrides :meth:`serve_requests` instead)."""
+        raise NotImplementedError(f"{type(self).__name__} serves requests without defining _remove")
+
+    def _place_entity(self, name: str, pose: Pose) -> str | None:
+        """Put a fresh robot ``name`` at ``pose`` (already checked by :meth:`spawn_problem`); why
+        it could not be (e.g. an operator refused), or None when done. See :meth:`_remove`."""
+        raise NotImplementedError(f"{type(self).__name__} serves requests without defining _place_entity")
+
+    @abstractmethod
+    def advance(self, duration: float) -> None:
+        """Let ``duration`` seconds of backend time pass, then serve pending entity requests."""
+
+    @abstractmethod
+    def true_pose(self) -> Pose | None:
+        """The robot's real pose where the backend knows it (a simulator), else its best estimate."""
+
+    @abstractmethod
+    def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why ``name`` cannot be spawned at ``pose`` now, or None when it can."""
+
+    def close(self) -> None:
+        """Release the robot (stop its motors); called however a run ends. Nothing to do by default."""

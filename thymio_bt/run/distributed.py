@@ -1,0 +1,37 @@
+"""Sweeps past one machine, on a Dask cluster.
+
+A sweep maps :func:`thymio_bt.run.sweep.run_job` over jobs through anything with
+``imap_unordered(fn, jobs)``. Ray's ``ray.util.multiprocessing.Pool`` has that method already; Dask
+needs this small adapter over ``Client.map`` (``pip install 'thymio-bt[dask]'``). Workers load a
+mission once and keep it, keyed on the content of its files and settings, so a file edited between
+two sweeps is read again.
+
+Example::
+
+    from distributed import Client
+    result = sweep("missions/maze_bonus.yaml", runs=10_000,
+                   executor=DaskExecutor(Client("tcp://scheduler:8786")))
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Iterable, Iterator
+
+from thymio_bt.run.sweep import Job
+
+
+class DaskExecutor:
+    """Runs a sweep's jobs on a ``distributed.Client``'s workers, yielding results as they finish."""
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+
+    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+        from distributed import as_completed
+
+        futures = self.client.map(fn, list(jobs), pure=False)
+        try:
+            for future in as_completed(futures):
+                yield future.result()
+        finally:
+            self.client.cancel(futures)       # an interrupted sweep leaves no work queued on the cluster

@@ -1,0 +1,57 @@
+"""Ctrl-C and SIGTERM as a request that the run loop honours at its next tick.
+
+A signal arriving in the middle of a physics step or of a write must not leave a half-updated world,
+a robot driving on, or a report unwritten. So the handler only notes the signal; :class:`~thymio_bt.
+runner.Run` and :func:`~thymio_bt.run.sweep.sweep` look at it once per tick (or per result), stop the
+robot, and end with status ``INTERRUPTED``, their report and log complete. A second signal while
+that happens raises :class:`KeyboardInterrupt` at once, for a loop stuck in a blocking call.
+
+Example::
+
+    with Interrupts() as interrupts:
+        result = Run(mission).run(interrupts=interrupts)
+    sys.exit(interrupts.exit_code if interrupts.signal else 0)
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from types import FrameType, TracebackType
+from typing import Any
+
+#: the signals handled, with the shell's exit codes for them (128 + the signal's number)
+SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+class Interrupts:
+    """While entered (in the main thread), notes SIGINT/SIGTERM in :attr:`signal` instead of dying."""
+
+    def __init__(self) -> None:
+        self.signal: int | None = None
+        self._previous: dict[int, Any] = {}
+
+    @property
+    def name(self) -> str:
+        return signal.Signals(self.signal).name if self.signal else ""
+
+    @property
+    def exit_code(self) -> int:
+        """130 after SIGINT, 143 after SIGTERM, as a shell reports a process those signals ended."""
+        return 128 + (self.signal or 0)
+
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
+        if self.signal is not None:            # asked twice: stop now, whatever is running
+            raise KeyboardInterrupt
+        self.signal = signum
+
+    def __enter__(self) -> "Interrupts":
+        if threading.current_thread() is threading.main_thread():
+            for sig in SIGNALS:
+                self._previous[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        for sig, previous in self._previous.items():
+            signal.signal(sig, previous)
+        self._previous.clear()

@@ -1,0 +1,305 @@
+"""The tick loop: tick the tree at the mission's rate in simulated time, advance the backend between
+ticks, stop on SUCCESS, FAILURE or the time limit, and produce a :class:`RunResult`.
+
+Example::
+
+    mission = load_mission("missions/maze_part1_2.yaml")
+    result = Run(mission).run()
+    result.status, round(result.sim_time, 1)        # ('SUCCESS', 61.3)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import py_trees
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from thymio_bt.backends import backend_kind
+from thymio_bt.behaviours import Context, EventLog
+from thymio_bt.behaviours.base import describe, node_path, snapshot
+from thymio_bt.behaviours.cellmap import CellMap
+from thymio_bt.behaviours.ticking import tick
+from thymio_bt.errors import Problem, UserError
+from thymio_bt.run.interrupts import Interrupts
+from thymio_bt.mission import Mission, build_tree
+from thymio_bt.run.phases import phases
+from thymio_bt.robot.placement import MazeShapes
+from thymio_bt.robot.interface import Backend, RequestState, RobotLost
+
+
+@dataclass
+class RunResult:
+    """What a run produced; :meth:`report` gives the run report JSON of DESIGN.md."""
+
+    mission: str
+    maze: str
+    status: str
+    reason: str | None
+    code: str | None
+    failed_path: str | None
+    sim_time: float
+    ticks: int
+    wall_time: float
+    seed: int
+    final_pose: dict[str, float] | None
+    final_proximity: dict[str, float | None] | None
+    events: list[dict[str, Any]]
+    collisions: int
+    min_clearance: float | None
+    trajectory: list[tuple[float, float, float, float]] = field(default_factory=list)
+    #: per node path: ticks, successes, failures, running_time (only with ``node_stats=True``)
+    node_stats: dict[str, dict[str, float]] | None = None
+    #: the mission's ``expect:`` criteria that failed ([] all held); None when it declares none
+    expectations: list[str] | None = None
+    #: for a maze with a goal region: whether base_link entered it, and when (s); else None
+    goal: dict[str, Any] | None = None
+    #: each subtree use that ran: when, how long, cells seen (:mod:`thymio_bt.run.phases`)
+    phases: list[dict[str, Any]] = field(default_factory=list)
+    #: the maze map the mapping behaviours learnt (:meth:`CellMap.summary`), if a run made one
+    maze_map: dict[str, Any] | None = None
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+    def report(self) -> dict[str, Any]:
+        expectations = {} if self.expectations is None else {
+            "expectations": {"met": not self.expectations, "failed": self.expectations}}
+        return {
+            "mission": self.mission,
+            "maze": self.maze,
+            "status": self.status,
+            "reason": self.reason,
+            "code": self.code,
+            "failed_path": self.failed_path,
+            "sim_time": round(self.sim_time, 6),
+            "ticks": self.ticks,
+            "wall_time": round(self.wall_time, 6),
+            "real_time_factor": round(self.real_time_factor, 1) if math.isfinite(self.real_time_factor) else None,
+            "seed": self.seed,
+            "final_pose": self.final_pose,
+            "final_proximity": self.final_proximity,
+            "collisions": self.collisions,
+            "min_clearance": None if self.min_clearance is None else round(self.min_clearance, 6),
+            "events": self.events,
+            **expectations,
+            **({} if self.goal is None else {"goal": self.goal}),
+            **({"phases": self.phases} if self.phases else {}),
+            **({"map": self.maze_map} if self.maze_map else {}),
+            "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
+        }
+
+
+TickHook = Callable[["Run"], None]
+
+
+class StopRun(Exception):
+    """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
+    as a FAILURE with code STOPPED and the message as its reason, with its report and log intact."""
+
+
+class Run:
+    """One prepared run of a mission on a backend (by default the pymunk simulation)."""
+
+    def __init__(self, mission: Mission, seed: int | None = None, substitutions: dict[str, Any] | None = None,
+                 node_stats: bool = False, backend: Backend | None = None) -> None:
+        """``backend`` defaults to the one the mission names (:mod:`thymio_bt.backends`; the pymunk
+        simulation of its maze unless it says otherwise); the robot is spawned at the mission's start."""
+        self.mission = mission
+        self.seed = mission.seed if seed is None else seed
+        self.backend: Backend = backend or backend_kind(mission.backend).create(
+            mission, self.seed, mission.backend_options)
+        problem = self.backend.spawn_problem(self.backend.robot_name, mission.start)
+        if problem:
+            raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",
+                                    "pick a free pose inside the maze, e.g. a named spawn of the maze"))
+        start = self.backend.request_spawn(self.backend.robot_name, mission.start)
+        #: why the run cannot start (code, reason): a robot that is not there, a start it was refused
+        self.unstarted: tuple[str, str] | None = None
+        try:
+            self.backend.advance(0.0)
+        except RobotLost as exc:
+            self.unstarted = ("ROBOT_LOST", str(exc))
+        if self.unstarted is None and start.state is RequestState.FAILED:
+            self.unstarted = ("ENTITY_ERROR", f"the robot could not be put at the start: {start.reason}")
+        self.period = 1.0 / mission.tick_hz
+        self.events = EventLog()
+        self.ctx = Context(robot=self.backend, entities=self.backend, events=self.events, tick_period=self.period,
+                           bounds=MazeShapes.of(mission.maze).bounds if mission.maze.walls else None,
+                           goal=tuple((min(a.start[0], a.end[0]), min(a.start[1], a.end[1]),
+                                       max(a.start[0], a.end[0]), max(a.start[1], a.end[1])) for a in mission.maze.goal),
+                           collision_count=lambda: len(self.backend.collisions))
+        py_trees.blackboard.Blackboard.clear()
+        self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
+        self.substituted = bool(substitutions)
+        self.stats = NodeStats(self.period) if node_stats else None
+        self.ticks = 0
+        self._final_tree: str | None = ""
+        self.trajectory: list[tuple[float, float, float, float]] = []
+
+    def run(self, on_tick: TickHook | None = None, realtime: float | None = None,
+            interrupts: Interrupts | None = None) -> RunResult:
+        """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time).
+        A signal noted in ``interrupts`` ends the run at the next tick with status INTERRUPTED.
+        The backend is closed (a real robot's motors stopped) however the run ends, even on Ctrl-C."""
+        try:
+            return self._run(on_tick, realtime, interrupts or Interrupts())
+        finally:
+            self.backend.close()
+
+    def _run(self, on_tick: TickHook | None, realtime: float | None, interrupts: Interrupts) -> RunResult:
+        sim, root, stats = self.backend, self.root, self.stats
+        limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
+        seen_collisions = 0
+        wall_start = time.perf_counter()
+        status = "TIMEOUT"
+        self._record()
+        if self.unstarted is not None:
+            status, (crash_code, crashed) = "CRASHED", self.unstarted
+            limit_ticks = 0
+        while self.ticks < limit_ticks:
+            # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
+            # every tick for "full" visitors, which cost ~15 % of a run here and we have none
+            if stats is None:
+                tick(root)                  # no visitor: the direct tick, without generators
+            else:
+                for node in root.tick():
+                    stats.run(node)
+            self.ticks += 1
+            if on_tick is not None:
+                try:
+                    on_tick(self)
+                except StopRun as stop:
+                    status, stopped = "STOPPED", str(stop) or "stopped by a tick hook"
+                    break
+            if root.status in (Status.SUCCESS, Status.FAILURE):
+                status = root.status.name
+                break
+            if interrupts.signal:
+                status = "INTERRUPTED"
+                break
+            try:
+                sim.advance(self.period)
+            except RobotLost as exc:                    # a real robot gone silent: its own code
+                status, crashed, crash_code = "CRASHED", str(exc), "ROBOT_LOST"
+                break
+            except (Exception, SystemExit) as exc:     # a backend's bug (a plugin's, say): end the run, say why
+                status, crashed, crash_code = "CRASHED", f"the backend raised {describe(exc)}", "BACKEND_ERROR"
+                break
+            if len(sim.collisions) > seen_collisions:
+                for c in sim.collisions[seen_collisions:]:
+                    self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
+                seen_collisions = len(sim.collisions)
+            self._record()
+            if realtime:
+                lag = sim.time() / realtime - (time.perf_counter() - wall_start)
+                if lag > 0:
+                    time.sleep(lag)  # realtime: pacing asked for with --realtime
+        reason = code = failed_path = None
+        self._final_tree = None                 # drawn when read (the terminal viewer does)
+        if status in ("TIMEOUT", "STOPPED", "INTERRUPTED", "CRASHED"):
+            self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
+            running = root.tip()
+            failed_path = node_path(running) if running is not None else None
+            if status == "TIMEOUT":
+                reason, code = f"time limit of {self.mission.time_limit:g} s reached", "TIMEOUT"
+            elif status == "INTERRUPTED":
+                reason, code = f"interrupted by {interrupts.name} at {sim.time():.1f} s", "INTERRUPTED"
+            elif status == "CRASHED":
+                reason, code, status = crashed, crash_code, "FAILURE"
+            else:
+                reason, code, status = stopped, "STOPPED", "FAILURE"
+            root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped
+        elif status == "FAILURE":
+            failed_path, code, reason = failing_branch(root)
+        wall = time.perf_counter() - wall_start
+        final = snapshot(sim)
+        true_pose = sim.true_pose()
+        result = RunResult(
+            mission=self.mission.name, maze=self.mission.maze.name, status=status, reason=reason, code=code,
+            failed_path=failed_path, sim_time=sim.time(), ticks=self.ticks, wall_time=wall, seed=self.seed,
+            final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
+            final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
+            min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
+            trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None,
+            phases=phases(self.mission.tree, self.events),
+            maze_map=next((v.summary() for v in py_trees.blackboard.Blackboard.storage.values()
+                           if isinstance(v, CellMap)), None))
+        if self.mission.maze.goal:
+            reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
+            result.goal = {"reached": reached is not None, "t": reached}
+        if self.mission.expect is not None:
+            self._check_expectations(result, places=not self.substituted)
+        return result
+
+    @property
+    def final_tree(self) -> str:
+        """The tree with each node's status and feedback as the run ended ("" before it runs)."""
+        if self._final_tree is None:
+            self._final_tree = py_trees.display.unicode_tree(self.root, show_status=True)
+        return self._final_tree
+
+    def _check_expectations(self, result: RunResult, places: bool) -> None:
+        """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
+        With nodes substituted (a test of part of a mission), where it ends is not checked."""
+        from thymio_bt.mission.expect import check
+        from thymio_bt.robot.model import robot_model
+
+        expect = self.mission.expect if places else self.mission.expect.without_places()
+        result.expectations = check(expect, result, self.mission.maze, robot_model(self.mission.robot))
+        if result.status == "SUCCESS" and result.expectations:
+            result.status, result.code, result.failed_path = "FAILURE", "EXPECTATION", "expect"
+            result.reason = "; ".join(result.expectations)
+
+    def _record(self) -> None:
+        pose = self.backend.true_pose()
+        if pose is not None:
+            self.trajectory.append((self.backend.time(), pose.x, pose.y, pose.yaw))
+
+
+class NodeStats(py_trees.visitors.VisitorBase):
+    """Per-node statistics (like BehaviorTree.CPP's TreeObserver): ticks, successes, failures, and
+    simulated time spent RUNNING, keyed by the node's path."""
+
+    def __init__(self, period: float) -> None:
+        super().__init__(full=False)
+        self.period = period
+        self.table: dict[str, dict[str, float]] = {}
+
+    def run(self, behaviour: Behaviour) -> None:
+        row = self.table.setdefault(node_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0})
+        row["ticks"] += 1
+        if behaviour.status == Status.SUCCESS:
+            row["successes"] += 1
+        elif behaviour.status == Status.FAILURE:
+            row["failures"] += 1
+        elif behaviour.status == Status.RUNNING:
+            row["running_time"] = round(row["running_time"] + self.period, 9)
+
+
+def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
+    """Follow FAILURE down from the root to the node that caused it: (path, code, reason)."""
+    node = root
+    while True:
+        failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
+        if not failed or getattr(node, "failure", None):
+            break
+        # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)
+        explained = [c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE
+                                              for n in c.iterate())]
+        node = (explained or failed)[-1]
+    failure = getattr(node, "failure", None)
+    if failure:
+        code, reason = failure
+        return node_path(node), code, reason
+    return node_path(node), "FAILED", node.feedback_message or f"'{node.name}' returned FAILURE"
+
+
+def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> RunResult:
+    """Build and run ``mission`` once."""
+    return Run(mission, seed).run(**kwargs)

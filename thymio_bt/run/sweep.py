@@ -1,0 +1,242 @@
+"""Run a mission many times with consecutive seeds and the noise models on, in parallel.
+
+The executor boundary is one picklable function, :func:`run_job`, mapped over :class:`Job` s by
+anything with ``imap_unordered(fn, iterable)``: the local process pool here, and the same call on
+``ray.util.multiprocessing.Pool`` (Ray) or a small adapter over ``dask.distributed.Client.map``
+(Dask) to go past one machine. Results are sorted by seed, so the same sweep gives the same table.
+
+Example::
+
+    result = sweep("missions/maze_bonus.yaml", runs=100)
+    result.success_rate        # 1.0
+"""
+
+from __future__ import annotations
+
+import hashlib
+import multiprocessing
+import os
+import shlex
+import signal
+import statistics
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import Any, Callable, Iterable, Iterator, Protocol
+
+from thymio_bt.run.interrupts import Interrupts
+from thymio_bt.backends.sim.noise import REALISTIC
+
+
+@dataclass(frozen=True)
+class Job:
+    """One run of a sweep: everything a worker needs, picklable."""
+
+    mission: str
+    seed: int
+    overrides: tuple[tuple[str, str], ...] = ()
+    maze: str | None = None
+    start: str | None = None
+    #: a digest of every file the mission is read from and of the settings: the workers' cache key, so
+    #: a file edited between two sweeps (same path) is read again by long-lived (Ray, Dask) workers
+    key: str = ""
+
+
+_CACHE: dict[tuple[Any, ...], Any] = {}
+
+
+def content_key(sources: Iterable[Path], *settings: Any) -> str:
+    """A digest of the files' contents and the settings (not their paths)."""
+    digest = hashlib.sha256(repr(settings).encode())
+    for source in sources:
+        digest.update(Path(source).read_bytes())
+    return digest.hexdigest()
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """Run one job and summarise it (the function executors map); missions are loaded once per worker."""
+    from thymio_bt.behaviours.base import describe
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.runner import Run
+
+    key = job.key or (job.mission, job.overrides, job.maze, job.start)
+    mission = _CACHE.get(key)
+    if mission is None:
+        mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
+    try:
+        result = Run(mission, job.seed).run()
+    except Exception as exc:              # that run fails, the sweep goes on and reports it
+        return {"seed": job.seed, "status": "FAILURE", "sim_time": 0.0, "final_pose": None,
+                "reason": f"the run raised {describe(exc)}", "code": "EXCEPTION", "failed_path": None,
+                "collisions": 0, "first_stop_error": None, "wall_time": 0.0}
+    stops = [abs(e["range"] - e["distance"]) for e in result.events
+             if e["kind"] == "behaviour_end" and e["name"] == "MoveUntilWall" and e["status"] == "SUCCESS"
+             and e.get("range") is not None]
+    return {"seed": job.seed, "status": result.status, "sim_time": round(result.sim_time, 6),
+            "final_pose": result.final_pose, "reason": result.reason, "code": result.code,
+            "failed_path": result.failed_path, "collisions": result.collisions,
+            "first_stop_error": None if not stops else round(stops[0], 6), "wall_time": result.wall_time}
+
+
+class Executor(Protocol):
+    """What a sweep needs from a pool: results of ``fn`` over ``jobs``, in any order."""
+
+    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]: ...
+
+
+class LocalPool:
+    """A process pool on this machine (one worker per core by default).
+
+    With ``interrupts`` (see :mod:`thymio_bt.run.interrupts`), a SIGINT/SIGTERM ends the iteration within
+    a tenth of a second: the workers (which ignore both signals themselves) are terminated and joined,
+    so none is left behind, and the results already yielded stand."""
+
+    def __init__(self, workers: int | None = None, interrupts: Interrupts | None = None) -> None:
+        self.workers = workers or os.cpu_count() or 1
+        self.interrupts = interrupts or Interrupts()
+
+    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+        jobs = list(jobs)
+        if self.workers == 1:
+            for job in jobs:
+                if self.interrupts.signal:
+                    return
+                yield fn(job)
+            return
+        size = max(1, min(4, len(jobs) // (self.workers * 8)))    # small: an interrupt loses little
+        chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+        pool = multiprocessing.Pool(self.workers, initializer=_worker_signals)
+        workers = list(pool._pool)             # type: ignore[attr-defined]  # to notice one that dies
+        try:
+            # chunks by hand: with chunksize > 1, Pool.imap_unordered returns a generator that cannot wait
+            # with a timeout, and the loop must look at the interrupts while it waits
+            results = pool.imap_unordered(partial(_map_chunk, fn), chunks)
+            for _ in chunks:
+                while True:
+                    if self.interrupts.signal:
+                        return
+                    try:
+                        done = results.next(timeout=0.1)
+                        break
+                    except multiprocessing.TimeoutError:
+                        # a dead worker's chunk never comes back: the pool would wait for ever
+                        dead = next((w for w in workers if w.exitcode is not None), None)
+                        if dead is not None:
+                            raise WorkerDied(dead.exitcode) from None
+                yield from done
+        finally:
+            pool.terminate()
+            pool.join()
+
+
+class WorkerDied(RuntimeError):
+    """A sweep worker process ended in the middle of its runs (killed, crashed, or ``os._exit``)."""
+
+    def __init__(self, exitcode: int | None) -> None:
+        how = f"killed by {signal.Signals(-exitcode).name}" if exitcode and exitcode < 0 else f"exit code {exitcode}"
+        super().__init__(f"a worker process died ({how})")
+
+
+def _map_chunk(fn: Callable[[Job], dict[str, Any]], jobs: list[Job]) -> list[dict[str, Any]]:
+    return [fn(job) for job in jobs]
+
+
+def _worker_signals() -> None:
+    """Workers leave Ctrl-C (sent to the whole terminal's process group) and SIGTERM to the parent,
+    which stops them itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+@dataclass
+class SweepResult:
+    """The sweep JSON of DESIGN.md, plus distributions."""
+
+    mission: str
+    runs: int
+    successes: int
+    seed_start: int
+    noise: dict[str, float]
+    results: list[dict[str, Any]] = field(default_factory=list)
+    wall_time: float = 0.0
+    #: runs asked for (``runs`` counts those completed: fewer when the sweep was interrupted)
+    requested: int = 0
+    #: what ended the sweep early: the signal ("SIGINT", "SIGTERM") or a worker's death; None
+    interrupted: str | None = None
+    #: the ``thymio-bt run`` arguments that reproduce one run, but its ``--seed``
+    command: tuple[str, ...] = ()
+
+    def reproduce(self, seed: int) -> str:
+        """The shell command that runs the sweep's run of ``seed`` again, noise settings included."""
+        return shlex.join(("thymio-bt", "run", *self.command, "--seed", str(seed)))
+
+    @property
+    def success_rate(self) -> float:
+        return self.successes / self.runs if self.runs else 0.0
+
+    def distribution(self, key: str) -> dict[str, float] | None:
+        values = sorted(r[key] for r in self.results if r.get(key) is not None)
+        if not values:
+            return None
+        q = statistics.quantiles(values, n=20, method="inclusive") if len(values) > 1 else [values[0]] * 19
+        return {"min": values[0], "p5": q[0], "median": statistics.median(values), "p95": q[-1],
+                "max": values[-1], "mean": statistics.fmean(values)}
+
+    def to_json(self) -> dict[str, Any]:
+        sim_total = sum(r["sim_time"] for r in self.results)
+        return {
+            "mission": self.mission, "runs": self.runs, "runs_requested": self.requested,
+            "interrupted": self.interrupted, "successes": self.successes,
+            "success_rate": round(self.success_rate, 6), "seed_start": self.seed_start, "noise": self.noise,
+            "sim_time": self.distribution("sim_time"), "first_stop_error": self.distribution("first_stop_error"),
+            "failures": {code: sum(1 for r in self.results if r["code"] == code)
+                         for code in sorted({r["code"] for r in self.results if r["code"]})},
+            "wall_time": round(self.wall_time, 3),
+            "aggregate_real_time_factor": round(sim_total / self.wall_time, 1) if self.wall_time else None,
+            "results": [{k: v for k, v in r.items() if k != "wall_time"}
+                        | ({} if r["status"] == "SUCCESS" else {"reproduce": self.reproduce(r["seed"])})
+                        for r in self.results],
+        }
+
+
+def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[str, str] | None = None,
+          maze: str | None = None, start: str | None = None, executor: Executor | None = None,
+          progress: Callable[[dict[str, Any]], None] | None = None,
+          interrupts: Interrupts | None = None) -> SweepResult:
+    """Run ``mission`` ``runs`` times with seeds ``seed_start``... and the realistic noise models on
+    (``overrides`` such as ``noise.wheel=0`` change them). A signal noted in ``interrupts`` ends it
+    early with the runs completed so far."""
+    import time
+
+    from thymio_bt.mission import load_mission
+
+    interrupts = interrupts or Interrupts()
+    settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
+    settings.update(overrides or {})
+    spec = load_mission(mission, settings, maze=maze, start=start)     # fail fast, in this process
+    overrides_key = tuple(sorted(settings.items()))
+    key = content_key(spec.sources, overrides_key, maze, start)
+    jobs = [Job(str(mission), seed, overrides_key, maze, start, key) for seed in range(seed_start, seed_start + runs)]
+    executor = executor or LocalPool(interrupts=interrupts)
+    results = []
+    began = time.perf_counter()
+    stopped = None
+    try:
+        for summary in executor.imap_unordered(run_job, jobs):
+            results.append(summary)
+            if progress is not None:
+                progress(summary)
+            if interrupts.signal:
+                break
+    except WorkerDied as exc:
+        stopped = str(exc)
+    results.sort(key=lambda r: r["seed"])
+    command = (str(mission), *(a for k, v in sorted(settings.items()) for a in ("--set", f"{k}={v}")),
+               *(("--maze", maze) if maze else ()), *(("--start", start) if start else ()))
+    return SweepResult(mission=spec.name, runs=len(results), successes=sum(r["status"] == "SUCCESS" for r in results),
+                       seed_start=seed_start, noise=spec.noise.model_dump(), results=results,
+                       wall_time=time.perf_counter() - began, requested=runs,
+                       interrupted=interrupts.name or stopped, command=command)
+
+
+__all__ = ["Executor", "Job", "LocalPool", "SweepResult", "run_job", "sweep"]

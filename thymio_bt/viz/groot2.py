@@ -1,0 +1,136 @@
+"""Watch a running mission in Groot2: BT.CPP's Groot2Publisher protocol (version 2) over ZeroMQ.
+
+``thymio-bt run MISSION --realtime 1 --groot2 [PORT]`` serves, on 127.0.0.1 only, a REP socket on
+PORT (default 1667, as BT.CPP) and a PUB socket on PORT+1. Every request's first frame is 6 bytes
+(u8 protocol 2, u8 type, u32 id); every reply's first frame echoes them and adds the tree's 16-byte
+id. Served: ``T`` the tree as ``thymio-bt tree --btcpp`` writes it (ports, ``_uid``s, TreeNodesModel), ``S`` the status of
+every node (u16 uid, u8 status; a node reset to IDLE reads 10 + the status it had), ``B`` the
+blackboard as msgpack (``{"MainTree": {key: value}}``; every blackboard when no name is asked), ``D`` the hooks (none), and ``A``/``X``
+(remove or disable hooks: nothing to do). Breakpoints and recording answer ``error``, as a
+publisher without them does. Needs ``thymio-bt[groot2]`` (pyzmq, msgpack).
+
+Example::
+
+    server = Groot2Server(1667)
+    run.run(on_tick=server, realtime=1.0)
+    server.close()
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+import threading
+import uuid
+from typing import Any
+
+from thymio_bt.errors import UserError
+from thymio_bt.logs.records import jsonable
+
+PROTOCOL = 2
+DEFAULT_PORT = 1667
+_STATUS = {"INVALID": 0, "RUNNING": 1, "SUCCESS": 2, "FAILURE": 3}
+
+
+def _zmq() -> tuple[Any, Any]:
+    try:
+        import msgpack
+        import zmq
+    except ImportError:
+        raise UserError("the Groot2 monitor needs pyzmq and msgpack (hint: pip install 'thymio-bt[groot2]')") from None
+    return zmq, msgpack
+
+
+class Groot2Server:
+    """An ``on_tick`` hook that serves the tree and its statuses to Groot2 from a background thread."""
+
+    def __init__(self, port: int = DEFAULT_PORT, host: str = "127.0.0.1") -> None:
+        self.zmq, self.msgpack = _zmq()
+        self.context = self.zmq.Context()
+        self.server = self.context.socket(self.zmq.REP)
+        self.publisher = self.context.socket(self.zmq.PUB)
+        for socket in (self.server, self.publisher):
+            socket.setsockopt(self.zmq.LINGER, 0)
+        try:
+            self.server.bind(f"tcp://{host}:{port}")
+            self.publisher.bind(f"tcp://{host}:{port + 1}")
+        except self.zmq.ZMQError as exc:
+            self.context.destroy()
+            raise UserError(f"cannot serve Groot2 on {host}:{port}-{port + 1}: {exc} "
+                            f"(hint: --groot2 with another port)") from None
+        self.server.setsockopt(self.zmq.RCVTIMEO, 100)
+        self.tree_id = uuid.uuid4().bytes
+        self.lock = threading.Lock()
+        self.xml = ""
+        self.uids: list[tuple[int, Any]] = []
+        self.status = b""
+        self.blackboard: dict[str, Any] = {}
+        self.running = True
+        self.thread = threading.Thread(target=self._serve, name="groot2", daemon=True)
+
+    def __call__(self, run: Any) -> None:
+        if not self.uids:
+            from thymio_bt.mission.btcpp import mission_nodes, mission_xml, xml_uids
+            from thymio_bt.logs.records import walk
+
+            self.xml = mission_xml(run.mission)      # as `tree --btcpp` writes it: ports and settings
+            nodes, _, subtrees = mission_nodes(run.mission)
+            uids, wrappers = xml_uids(nodes, subtrees)
+            # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's status
+            for plan_node, node in zip(nodes, walk(run.root)):
+                if plan_node["uid"] in wrappers:
+                    self.uids.append((wrappers[plan_node["uid"]], node))
+                self.uids.append((uids[plan_node["uid"]], node))
+            self.previous = {uid: 0 for uid, _ in self.uids}
+            self.thread.start()
+        import py_trees
+
+        records = []
+        for uid, node in self.uids:
+            status = _STATUS[node.status.name]
+            shown = 10 + self.previous[uid] if status == 0 and self.previous[uid] else status
+            self.previous[uid] = status
+            records.append(struct.pack("<HB", uid, shown))
+        storage = py_trees.blackboard.Blackboard.storage
+        with self.lock:
+            self.status = b"".join(records)
+            self.blackboard = {"MainTree": {k.lstrip("/"): jsonable(v) for k, v in storage.items()}}
+
+    def _serve(self) -> None:
+        zmq = self.zmq
+        while self.running:
+            try:
+                frames = self.server.recv_multipart()
+            except zmq.Again:
+                continue
+            except zmq.ZMQError:
+                return
+            head = frames[0]
+            if len(head) != 6:
+                self.server.send(b"error")
+                continue
+            protocol, kind = head[0], chr(head[1])
+            reply = [head + self.tree_id]
+            with self.lock:
+                if protocol != PROTOCOL:
+                    reply = [b"error"]
+                elif kind == "T":
+                    reply.append(self.xml.encode())
+                elif kind == "S":
+                    reply.append(self.status)
+                elif kind == "B":
+                    names = [n for n in frames[1].decode().split(";") if n] if len(frames) > 1 else []
+                    shown = {n: self.blackboard.get(n, {}) for n in names} if names else self.blackboard
+                    reply.append(self.msgpack.packb(shown))
+                elif kind == "D":
+                    reply.append(json.dumps([]).encode())
+                elif kind not in ("A", "X"):
+                    reply = [b"error"]
+            self.server.send_multipart(reply)
+
+    def close(self) -> None:
+        """Stop serving and release the ports."""
+        self.running = False
+        if self.thread.is_alive():
+            self.thread.join(timeout=1.0)
+        self.context.destroy(linger=0)
