@@ -14,9 +14,10 @@ import platform
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from importlib import metadata
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results.json"
@@ -67,8 +68,21 @@ def machine() -> dict[str, Any]:
         "platform": platform.platform(),
         "python": sys.version.split()[0],
         "loadavg_at_start": [round(x, 2) for x in load] if load else None,
-        "packages": {d: version(d) for d in ("thymio-bt", "pymunk", "py_trees", "pydantic", "numpy",
-                                             "PyYAML", "click", "ir-sim", "shapely", "matplotlib")},
+        "packages": {
+            d: version(d)
+            for d in (
+                "thymio-bt",
+                "pymunk",
+                "py_trees",
+                "pydantic",
+                "numpy",
+                "PyYAML",
+                "click",
+                "ir-sim",
+                "shapely",
+                "matplotlib",
+            )
+        },
     }
 
 
@@ -80,8 +94,7 @@ def save_results(section: str, data: dict[str, Any]) -> None:
         doc = {}
     doc["date"] = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
     doc["machine"] = machine()
-    doc.setdefault("results", {})[section] = {
-        "date": doc["date"], **data}
+    doc.setdefault("results", {})[section] = {"date": doc["date"], **data}
     RESULTS.write_text(json.dumps(doc, indent=1) + "\n")
 
 
@@ -89,8 +102,10 @@ def table(rows: list[tuple[str, ...]], header: tuple[str, ...]) -> str:
     """A plain-text table with columns padded to width."""
     cols = list(zip(header, *rows))
     widths = [max(len(str(c)) for c in col) for col in cols]
-    line = lambda r: "  ".join(str(c).ljust(w) if i == 0 else str(c).rjust(w)  # noqa: E731
-                               for i, (c, w) in enumerate(zip(r, widths)))
+    line = lambda r: "  ".join(
+        str(c).ljust(w) if i == 0 else str(c).rjust(w)  # noqa: E731
+        for i, (c, w) in enumerate(zip(r, widths))
+    )
     sep = "  ".join("-" * w for w in widths)
     return "\n".join([line(header), sep, *(line(r) for r in rows)])
 

@@ -75,8 +75,13 @@ def instructions(cmd: list[str], cwd: Path) -> int:
         # to write them (a shell that sets PYTHONDONTWRITEBYTECODE had counted 330 M of compiling)
         env.pop("PYTHONDONTWRITEBYTECODE", None)
         subprocess.run(cmd, cwd=cwd, capture_output=True, env=env)
-        done = subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *cmd],
-                              cwd=cwd, capture_output=True, text=True, env=env)
+        done = subprocess.run(
+            ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", *cmd],
+            cwd=cwd,
+            capture_output=True,
+            text=True,
+            env=env,
+        )
         if done.returncode != 0:
             raise SystemExit(f"{' '.join(cmd)} failed under callgrind:\n{done.stderr[-2000:]}")
         match = re.search(r"Collected : (\d+)", done.stderr) or re.search(r"summary: (\d+)", out.read_text())
@@ -104,13 +109,17 @@ def measure_irsim(python: str, extra_runs: int) -> dict[str, float]:
     missions = instructions([*script, "0", str(1 + extra_runs)], ROOT)
     builds = instructions([*script, str(extra_runs), "1"], ROOT)
     mission_ir, build_ir = (missions - base) / extra_runs, (builds - base) / extra_runs
-    return {"variant": IRSIM_VARIANT, "sim_time": sim_time, "mission_Ir": mission_ir, "build_Ir": build_ir,
-            "run_Ir": mission_ir - build_ir}
+    return {
+        "variant": IRSIM_VARIANT,
+        "sim_time": sim_time,
+        "mission_Ir": mission_ir,
+        "build_Ir": build_ir,
+        "run_Ir": mission_ir - build_ir,
+    }
 
 
 def worktree(rev: str, into: Path) -> Path:
-    subprocess.run(["git", "worktree", "add", "--detach", str(into), rev], cwd=ROOT, check=True,
-                   capture_output=True)
+    subprocess.run(["git", "worktree", "add", "--detach", str(into), rev], cwd=ROOT, check=True, capture_output=True)
     return into
 
 
@@ -133,21 +142,32 @@ def main(argv: list[str] | None = None) -> dict:
             for name, path in checkouts.items():
                 # python -c and -m put the working folder first on sys.path: each checkout's own sources
                 samples[name].append(measure(path, sys.executable, args.extra_runs))
-                print(f"round {round_ + 1}: {name}: {samples[name][-1]['run_Ir'] / 1e6:.1f} M per run",
-                      file=sys.stderr)
+                print(f"round {round_ + 1}: {name}: {samples[name][-1]['run_Ir'] / 1e6:.1f} M per run", file=sys.stderr)
     finally:
         if args.against:
-            subprocess.run(["git", "worktree", "remove", "--force", str(tmp / "against")], cwd=ROOT,
-                           capture_output=True)
+            subprocess.run(
+                ["git", "worktree", "remove", "--force", str(tmp / "against")], cwd=ROOT, capture_output=True
+            )
         shutil.rmtree(tmp, ignore_errors=True)
     rows, out = [], {}
     for name, runs in samples.items():
         run_ir = [r["run_Ir"] for r in runs]
         spread = max(run_ir) - min(run_ir)
-        out[name] = {"run_Ir": run_ir[0], "process_Ir": runs[0]["process_Ir"], "setup_Ir": runs[0]["setup_Ir"],
-                     "spread_Ir": spread}
-        rows.append((name, f"{run_ir[0] / 1e6:.1f} M", f"{runs[0]['setup_Ir'] / 1e6:.0f} M",
-                     f"{runs[0]['process_Ir'] / 1e6:.0f} M", f"{spread / 1e6:.2f} M"))
+        out[name] = {
+            "run_Ir": run_ir[0],
+            "process_Ir": runs[0]["process_Ir"],
+            "setup_Ir": runs[0]["setup_Ir"],
+            "spread_Ir": spread,
+        }
+        rows.append(
+            (
+                name,
+                f"{run_ir[0] / 1e6:.1f} M",
+                f"{runs[0]['setup_Ir'] / 1e6:.0f} M",
+                f"{runs[0]['process_Ir'] / 1e6:.0f} M",
+                f"{spread / 1e6:.2f} M",
+            )
+        )
     print(f"{MISSION}: instructions (callgrind Ir)")
     print(table(rows, ("checkout", "one run()", "imports+load", "whole CLI process", "spread over rounds")))
     if args.against:
@@ -156,9 +176,11 @@ def main(argv: list[str] | None = None) -> dict:
     if args.irsim:
         irsim = out["irsim"] = measure_irsim(sys.executable, args.extra_runs)
         irsim["ratio_over_thymio_bt"] = irsim["run_Ir"] / out["this checkout"]["run_Ir"]
-        print(f"IR-SIM 2.12 ({irsim['variant']}), the same walls for {irsim['sim_time']:.1f} s: "
-              f"{irsim['run_Ir'] / 1e6:.0f} M for its steps (+ {irsim['build_Ir'] / 1e6:.0f} M to build the world): "
-              f"{irsim['ratio_over_thymio_bt']:.1f}x this checkout's run()")
+        print(
+            f"IR-SIM 2.12 ({irsim['variant']}), the same walls for {irsim['sim_time']:.1f} s: "
+            f"{irsim['run_Ir'] / 1e6:.0f} M for its steps (+ {irsim['build_Ir'] / 1e6:.0f} M to build the world): "
+            f"{irsim['ratio_over_thymio_bt']:.1f}x this checkout's run()"
+        )
     save_results("instructions", out)
     return out
 

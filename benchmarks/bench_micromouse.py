@@ -18,11 +18,11 @@ from typing import Any
 
 from _common import ROOT, machine, save_results, table
 
+from thymio_bt.backends.sim.noise import REALISTIC
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import to_text
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import run_mission
-from thymio_bt.backends.sim.noise import REALISTIC
 
 MISSION = ROOT / "missions" / "micromouse.yaml"
 
@@ -33,11 +33,21 @@ def one(job: tuple[str, str, int]) -> dict[str, Any]:
     settings["robot"] = robot
     result = run_mission(load_mission(MISSION, settings, maze=maze), seed=seed)
     phases = {p["name"]: p for p in result.phases}
-    return {"maze": Path(maze).name, "robot": robot, "seed": seed, "status": result.status, "code": result.code,
-            "collisions": result.collisions, "goal": bool(result.goal and result.goal["reached"]),
-            "search": phases.get("search", {}).get("duration"), "cells": phases.get("search", {}).get("cells"),
-            "fast": phases.get("fast run", {}).get("duration"), "sim_time": result.sim_time,
-            "wall_time": result.wall_time, "min_clearance": result.min_clearance}
+    return {
+        "maze": Path(maze).name,
+        "robot": robot,
+        "seed": seed,
+        "status": result.status,
+        "code": result.code,
+        "collisions": result.collisions,
+        "goal": bool(result.goal and result.goal["reached"]),
+        "search": phases.get("search", {}).get("duration"),
+        "cells": phases.get("search", {}).get("cells"),
+        "fast": phases.get("fast run", {}).get("duration"),
+        "sim_time": result.sim_time,
+        "wall_time": result.wall_time,
+        "min_clearance": result.min_clearance,
+    }
 
 
 def main() -> None:
@@ -62,20 +72,45 @@ def main() -> None:
         mine = [r for r in runs if r["robot"] == robot]
         big = [r for r in mine if r["maze"] != "micromouse_4x4.txt"]
         ok = [r for r in mine if r["status"] == "SUCCESS"]
-        rows.append((robot, f"{len(ok)}/{len(mine)}", f"{sum(r['goal'] for r in mine)}/{len(mine)}",
-                     sum(1 for r in mine if r["collisions"]),
-                     sum(1 for r in ok if r["fast"] is not None and r["fast"] > r["search"]),
-                     f"{statistics.median(r['search'] for r in ok):.0f}" if ok else "-",
-                     f"{statistics.median(r['fast'] for r in ok):.0f}" if ok else "-",
-                     f"{statistics.median(r['cells'] for r in ok):.0f}" if ok else "-",
-                     f"{statistics.median(r['wall_time'] for r in big):.2f} / {max(r['wall_time'] for r in big):.2f}",
-                     ", ".join(f"{r['maze']}:{r['code']}" for r in mine if r["status"] != "SUCCESS") or "-"))
-    print(f"{len(mazes)} mazes (the 4 x 4 example and {args.mazes} generated 16 x 16 from seed {args.first}, "
-          f"loops {args.loops:g}), realistic noise, seed = maze index")
-    print(table(rows, ("robot", "success", "goal", "collided", "fast > search", "search s (median)",
-                       "fast s (median)", "cells seen", "wall s 16x16 (median / max)", "failures")))
-    save_results("micromouse", {"machine": machine(), "mazes": args.mazes, "first": args.first,
-                                "loops": args.loops, "runs": runs})
+        rows.append(
+            (
+                robot,
+                f"{len(ok)}/{len(mine)}",
+                f"{sum(r['goal'] for r in mine)}/{len(mine)}",
+                sum(1 for r in mine if r["collisions"]),
+                sum(1 for r in ok if r["fast"] is not None and r["fast"] > r["search"]),
+                f"{statistics.median(r['search'] for r in ok):.0f}" if ok else "-",
+                f"{statistics.median(r['fast'] for r in ok):.0f}" if ok else "-",
+                f"{statistics.median(r['cells'] for r in ok):.0f}" if ok else "-",
+                f"{statistics.median(r['wall_time'] for r in big):.2f} / {max(r['wall_time'] for r in big):.2f}",
+                ", ".join(f"{r['maze']}:{r['code']}" for r in mine if r["status"] != "SUCCESS") or "-",
+            )
+        )
+    print(
+        f"{len(mazes)} mazes (the 4 x 4 example and {args.mazes} generated 16 x 16 from seed {args.first}, "
+        f"loops {args.loops:g}), realistic noise, seed = maze index"
+    )
+    print(
+        table(
+            rows,
+            (
+                "robot",
+                "success",
+                "goal",
+                "collided",
+                "fast > search",
+                "search s (median)",
+                "fast s (median)",
+                "cells seen",
+                "wall s 16x16 (median / max)",
+                "failures",
+            ),
+        )
+    )
+    save_results(
+        "micromouse",
+        {"machine": machine(), "mazes": args.mazes, "first": args.first, "loops": args.loops, "runs": runs},
+    )
 
 
 if __name__ == "__main__":

@@ -35,16 +35,16 @@ import pymunk
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _common import ROOT, median_time, per_call_us, save_results, table, verdict  # noqa: E402
 
+from thymio_bt.backends.sim import Simulation  # noqa: E402
 from thymio_bt.maze import load_maze  # noqa: E402
 from thymio_bt.robot.interface import Pose  # noqa: E402
-from thymio_bt.backends.sim import Simulation  # noqa: E402
 from thymio_bt.robot.model import COURSE  # noqa: E402
 
 MAZE = ROOT / "mazes" / "two_parts_maze.yaml"
-TICK = 0.1                      # 10 Hz commands
+TICK = 0.1  # 10 Hz commands
 TARGET_RTF = 2000.0
-IDEAL_RTF = 2900.0              # ../shared/research/perf_baseline.md, "physics + scans + trivial controller"
-PENETRATION_LIMIT = 0.005       # half a wall's thickness: deeper means the hull is past the centre line
+IDEAL_RTF = 2900.0  # ../shared/research/perf_baseline.md, "physics + scans + trivial controller"
+PENETRATION_LIMIT = 0.005  # half a wall's thickness: deeper means the hull is past the centre line
 
 
 class Reactive:
@@ -104,6 +104,7 @@ def drive(sim: Simulation, ticks: int, on_tick=None) -> None:
 def _segments_cross(p, q, a, b) -> bool:
     def orient(o, s, t):
         return (s[0] - o[0]) * (t[1] - o[1]) - (s[1] - o[1]) * (t[0] - o[0])
+
     d1, d2 = orient(a, b, p), orient(a, b, q)
     d3, d4 = orient(p, q, a), orient(p, q, b)
     return d1 * d2 < 0 and d3 * d4 < 0
@@ -144,18 +145,26 @@ def check_drive(spawn: str, seconds: float) -> dict:
 
     ticks = round(seconds / TICK)
     drive(sim, ticks, record)
-    crossings = sum(_segments_cross((p.x, p.y), (q.x, q.y), a, b)
-                    for p, q in zip(poses, poses[1:]) for a, b in walls)
+    crossings = sum(_segments_cross((p.x, p.y), (q.x, q.y), a, b) for p, q in zip(poses, poses[1:]) for a, b in walls)
     outside = sum(not (box[0] < p.x < box[2] and box[1] < p.y < box[3]) for p in poses)
     deepest = max(_penetration(sim, p) for p in poses)
     path = sum(math.dist((p.x, p.y), (q.x, q.y)) for p, q in zip(poses, poses[1:]))
     cells = {(int(p.x / 0.2), int(p.y / 0.2)) for p in poses}
     ok = crossings == 0 and outside == 0 and deepest <= PENETRATION_LIMIT
-    return {"sim_time": sim.time(), "ticks": ticks, "path_m": round(path, 3), "cells_visited": len(cells),
-            "moving_ticks": stats["moving_ticks"], "turning_ticks": stats["turning_ticks"],
-            "collisions": len(sim.collisions), "wall_crossings": crossings, "poses_outside_box": outside,
-            "max_penetration_m": round(deepest, 5), "no_tunnelling": ok,
-            "final_pose": {k: round(v, 4) for k, v in sim.true_pose().as_dict().items()}}
+    return {
+        "sim_time": sim.time(),
+        "ticks": ticks,
+        "path_m": round(path, 3),
+        "cells_visited": len(cells),
+        "moving_ticks": stats["moving_ticks"],
+        "turning_ticks": stats["turning_ticks"],
+        "collisions": len(sim.collisions),
+        "wall_crossings": crossings,
+        "poses_outside_box": outside,
+        "max_penetration_m": round(deepest, 5),
+        "no_tunnelling": ok,
+        "final_pose": {k: round(v, 4) for k, v in sim.true_pose().as_dict().items()},
+    }
 
 
 # ------------------------------------------------------------------ cost breakdown
@@ -193,21 +202,33 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     runs = []
     for _ in range(repeats):
         sim = make_sim(spawn)
-        timed = {"advance": _Timed(sim.advance), "drive": _Timed(sim.drive),
-                 "refresh": _Timed(sim._refresh_sensors), "clearance": _Timed(sim._update_clearance),
-                 "ray": _Timed(sim._reader.read), "step": _Timed(sim._step[0])}
+        timed = {
+            "advance": _Timed(sim.advance),
+            "drive": _Timed(sim.drive),
+            "refresh": _Timed(sim._refresh_sensors),
+            "clearance": _Timed(sim._update_clearance),
+            "ray": _Timed(sim._reader.read),
+            "step": _Timed(sim._step[0]),
+        }
         sim.advance, sim.drive = timed["advance"], timed["drive"]
         sim._refresh_sensors, sim._update_clearance = timed["refresh"], timed["clearance"]
-        sim._reader, sim._step = SimpleNamespace(names=sim._reader.names, read=timed["ray"]), \
-            (timed["step"], sim._step[1])
+        sim._reader, sim._step = (
+            SimpleNamespace(names=sim._reader.names, read=timed["ray"]),
+            (timed["step"], sim._step[1]),
+        )
         t0 = perf_counter()
         drive(sim, round(seconds / TICK))
         ticks = timed["advance"].calls
         tick = (perf_counter() - t0) / ticks * 1e6
-        runs.append({k: t.us() for k, t in timed.items()} | {"steps_per_advance": timed["step"].calls / ticks,
-                                                             "rays_per_tick": timed["ray"].calls / ticks,
-                                                             "rays_us_per_tick": timed["ray"].total / ticks * 1e6,
-                                                             "tick": tick})
+        runs.append(
+            {k: t.us() for k, t in timed.items()}
+            | {
+                "steps_per_advance": timed["step"].calls / ticks,
+                "rays_per_tick": timed["ray"].calls / ticks,
+                "rays_us_per_tick": timed["ray"].total / ticks * 1e6,
+                "tick": tick,
+            }
+        )
     # cost of one wrapper (two perf_counter calls + the call indirection)
     nop = _Timed(lambda *a: None)
     t0 = perf_counter()
@@ -228,24 +249,34 @@ def breakdown(spawn: str, seconds: float, repeats: int) -> dict:
     # pymunk alone: a bare step(0.01) of the same space, robot in free space, velocity held; through
     # the C function as the simulation calls it, and through pymunk's public Space.step for scale
     sim = make_sim(spawn)
-    sim.drive(0.0, 1.0)          # turning in place: no wall contact
+    sim.drive(0.0, 1.0)  # turning in place: no wall contact
     sim.advance(0.1)
 
     def steps_of(step, *handle):
         def steps_only(n):
             for _ in range(n):
                 step(*handle, 0.01)
+
         return per_call_us(steps_only, 10000)[0]
+
     bare_step, public_step = steps_of(*sim._step), steps_of(sim.space.step)
-    return {"advance_0.1_us": advance, "drive_us": med["drive"] - wrap,
-            "sensor_refresh_us": refresh, "rays_us_per_tick": rays, "rays_per_tick": med["rays_per_tick"],
-            "clearance_us": clearance,
-            "space_step_in_loop_us": step, "substeps_per_advance": steps,
-            "substep_python_overhead_us": substep_python,
-            "physics_per_advance_us": advance - refresh, "bare_space_step_us": bare_step,
-            "bare_public_space_step_us": public_step,
-            "wrapper_overhead_us": wrap, "instrumented_tick_us": med["tick"],
-            "instrumented_tick_less_wrappers_us": med["tick"] - wrap * (steps + 4)}
+    return {
+        "advance_0.1_us": advance,
+        "drive_us": med["drive"] - wrap,
+        "sensor_refresh_us": refresh,
+        "rays_us_per_tick": rays,
+        "rays_per_tick": med["rays_per_tick"],
+        "clearance_us": clearance,
+        "space_step_in_loop_us": step,
+        "substeps_per_advance": steps,
+        "substep_python_overhead_us": substep_python,
+        "physics_per_advance_us": advance - refresh,
+        "bare_space_step_us": bare_step,
+        "bare_public_space_step_us": public_step,
+        "wrapper_overhead_us": wrap,
+        "instrumented_tick_us": med["tick"],
+        "instrumented_tick_less_wrappers_us": med["tick"] - wrap * (steps + 4),
+    }
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -261,11 +292,12 @@ def main(argv: list[str] | None = None) -> dict:
     sims: list[Simulation] = []
 
     def one_run():
-        sim = make_sim(args.spawn)          # build is outside the timed loop below
+        sim = make_sim(args.spawn)  # build is outside the timed loop below
         t0 = time.perf_counter()
         drive(sim, ticks)
         sims.append(sim)
         return time.perf_counter() - t0
+
     one_run()  # warm-up
     loop_s = [one_run() for _ in range(args.repeats)]
     loop = statistics.median(loop_s)
@@ -278,56 +310,104 @@ def main(argv: list[str] | None = None) -> dict:
     inst = m["instrumented_tick_less_wrappers_us"]
     rest = inst - m["advance_0.1_us"] - m["drive_us"] - m["rays_us_per_tick"]
 
-    print(f"bench_sim: physics + sensing, no behaviour tree - {MAZE.name}, spawn '{args.spawn}', "
-          f"{sim_time:.0f} s simulated, 10 Hz commands / 100 Hz physics, median of {args.repeats}")
-    print(f"drive check: path {check['path_m']} m, {check['cells_visited']} cells of 0.2 m visited, "
-          f"{check['moving_ticks']} ticks forward / {check['turning_ticks']} turning in place, "
-          f"{check['collisions']} wall contacts, max overlap {check['max_penetration_m'] * 1000:.2f} mm, "
-          f"{check['wall_crossings']} wall crossings -> "
-          f"{'no tunnelling' if check['no_tunnelling'] else 'TUNNELLING / ESCAPE DETECTED'}")
+    print(
+        f"bench_sim: physics + sensing, no behaviour tree - {MAZE.name}, spawn '{args.spawn}', "
+        f"{sim_time:.0f} s simulated, 10 Hz commands / 100 Hz physics, median of {args.repeats}"
+    )
+    print(
+        f"drive check: path {check['path_m']} m, {check['cells_visited']} cells of 0.2 m visited, "
+        f"{check['moving_ticks']} ticks forward / {check['turning_ticks']} turning in place, "
+        f"{check['collisions']} wall contacts, max overlap {check['max_penetration_m'] * 1000:.2f} mm, "
+        f"{check['wall_crossings']} wall crossings -> "
+        f"{'no tunnelling' if check['no_tunnelling'] else 'TUNNELLING / ESCAPE DETECTED'}"
+    )
     print()
     rows = [
         ("loop wall time", f"{loop * 1e3:.1f} ms", f"{ticks} ticks"),
-        ("real-time factor", f"{rtf:.0f}x", f"target >= {TARGET_RTF:.0f}x: {verdict(rtf, TARGET_RTF)} "
-                                            f"(ideal loop in perf_baseline: ~{IDEAL_RTF:.0f}x)"),
+        (
+            "real-time factor",
+            f"{rtf:.0f}x",
+            f"target >= {TARGET_RTF:.0f}x: {verdict(rtf, TARGET_RTF)} (ideal loop in perf_baseline: ~{IDEAL_RTF:.0f}x)",
+        ),
         ("per tick", f"{per_tick:.1f} us", "proximity + controller + drive + advance(0.1)"),
     ]
     print(table(rows, ("whole loop", "value", "note")))
     print()
-    print(f"Where the time goes: the same drive with the simulation's methods wrapped by timers "
-          f"(median of {args.repeats}; {inst:.1f} us per tick once the wrappers' own cost is removed, "
-          f"against {per_tick:.1f} us unwrapped)")
+    print(
+        f"Where the time goes: the same drive with the simulation's methods wrapped by timers "
+        f"(median of {args.repeats}; {inst:.1f} us per tick once the wrappers' own cost is removed, "
+        f"against {per_tick:.1f} us unwrapped)"
+    )
     share = lambda us: f"{us / inst * 100:.0f} %"  # noqa: E731
     steps = m["substeps_per_advance"]
     rows = [
-        ("advance(0.1)", f"{m['advance_0.1_us']:.1f}", share(m["advance_0.1_us"]),
-         f"{steps:.0f} sub-steps + 1 sensor refresh"),
-        ("  sensor refresh", f"{m['sensor_refresh_us']:.1f}", share(m["sensor_refresh_us"]),
-         "per 10 Hz refresh: the pose and"),
+        (
+            "advance(0.1)",
+            f"{m['advance_0.1_us']:.1f}",
+            share(m["advance_0.1_us"]),
+            f"{steps:.0f} sub-steps + 1 sensor refresh",
+        ),
+        (
+            "  sensor refresh",
+            f"{m['sensor_refresh_us']:.1f}",
+            share(m["sensor_refresh_us"]),
+            "per 10 Hz refresh: the pose and",
+        ),
         ("    clearance tracking", f"{m['clearance_us']:.1f}", share(m["clearance_us"]), "min_clearance bookkeeping"),
-        ("  physics (advance - refresh)", f"{m['physics_per_advance_us']:.1f}", share(m["physics_per_advance_us"]),
-         f"= {m['physics_per_advance_us'] / steps:.2f} us per sub-step:"),
-        ("    C step(0.01) x10", f"{m['space_step_in_loop_us'] * steps:.1f}",
-         share(m["space_step_in_loop_us"] * steps), f"{m['space_step_in_loop_us']:.2f} us each in the loop"),
-        ("    Python per sub-step x10", f"{m['substep_python_overhead_us'] * steps:.1f}",
-         share(m["substep_python_overhead_us"] * steps),
-         f"{m['substep_python_overhead_us']:.2f} us each (control-body update, counters)"),
-        ("ray queries", f"{m['rays_us_per_tick']:.1f}", share(m["rays_us_per_tick"]),
-         f"{m['rays_per_tick']:.1f} a tick: each sensor cast when first read"),
+        (
+            "  physics (advance - refresh)",
+            f"{m['physics_per_advance_us']:.1f}",
+            share(m["physics_per_advance_us"]),
+            f"= {m['physics_per_advance_us'] / steps:.2f} us per sub-step:",
+        ),
+        (
+            "    C step(0.01) x10",
+            f"{m['space_step_in_loop_us'] * steps:.1f}",
+            share(m["space_step_in_loop_us"] * steps),
+            f"{m['space_step_in_loop_us']:.2f} us each in the loop",
+        ),
+        (
+            "    Python per sub-step x10",
+            f"{m['substep_python_overhead_us'] * steps:.1f}",
+            share(m["substep_python_overhead_us"] * steps),
+            f"{m['substep_python_overhead_us']:.2f} us each (control-body update, counters)",
+        ),
+        (
+            "ray queries",
+            f"{m['rays_us_per_tick']:.1f}",
+            share(m["rays_us_per_tick"]),
+            f"{m['rays_per_tick']:.1f} a tick: each sensor cast when first read",
+        ),
         ("drive(v, w)", f"{m['drive_us']:.1f}", share(m["drive_us"]), "wheel limits + seeding the body velocity"),
         ("controller + loop", f"{rest:.1f}", share(rest), "by difference"),
         ("bare C step(0.01), isolated", f"{m['bare_space_step_us']:.2f}", "", "pymunk alone, robot in free space"),
-        ("bare Space.step(0.01), isolated", f"{m['bare_public_space_step_us']:.2f}", "",
-         "the same through pymunk's public wrapper"),
+        (
+            "bare Space.step(0.01), isolated",
+            f"{m['bare_public_space_step_us']:.2f}",
+            "",
+            "the same through pymunk's public wrapper",
+        ),
         ("load_maze(two_parts_maze)", f"{load * 1e6:.0f}", "", "once per run, not in the loop"),
         ("Simulation(maze, spawn)", f"{build * 1e6:.0f}", "", "once per run, not in the loop"),
     ]
     print(table(rows, ("per tick, in the loop", "us", "share", "note")))
-    result = {"maze": MAZE.name, "spawn": args.spawn, "sim_seconds": sim_time, "ticks": ticks,
-              "repeats": args.repeats, "loop_s_median": loop, "loop_s_samples": loop_s,
-              "real_time_factor": rtf, "target_rtf": TARGET_RTF, "target_met": rtf >= TARGET_RTF,
-              "us_per_tick": per_tick, "load_maze_s_median": load, "build_s_median": build,
-              "breakdown_us": m, "drive_check": check}
+    result = {
+        "maze": MAZE.name,
+        "spawn": args.spawn,
+        "sim_seconds": sim_time,
+        "ticks": ticks,
+        "repeats": args.repeats,
+        "loop_s_median": loop,
+        "loop_s_samples": loop_s,
+        "real_time_factor": rtf,
+        "target_rtf": TARGET_RTF,
+        "target_met": rtf >= TARGET_RTF,
+        "us_per_tick": per_tick,
+        "load_maze_s_median": load,
+        "build_s_median": build,
+        "breakdown_us": m,
+        "drive_check": check,
+    }
     save_results("sim", result)
     if not check["no_tunnelling"]:
         print("WARNING: the drive check failed; the timing above is not a valid benchmark.", file=sys.stderr)

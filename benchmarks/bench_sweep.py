@@ -27,18 +27,37 @@ def main() -> None:
         result = sweep(ROOT / args.mission, args.runs, executor=LocalPool(workers))
         data = result.to_json()
         samples[workers] = data
-        rows.append((f"{workers} worker(s)", f"{data['wall_time']:.2f} s",
-                     f"{data['aggregate_real_time_factor']:,.0f}x", f"{data['successes']}/{data['runs']}"))
+        rows.append(
+            (
+                f"{workers} worker(s)",
+                f"{data['wall_time']:.2f} s",
+                f"{data['aggregate_real_time_factor']:,.0f}x",
+                f"{data['successes']}/{data['runs']}",
+            )
+        )
     best = samples[max(samples)]
     rtf = best["aggregate_real_time_factor"]
     print(f"bench_sweep: {args.runs} runs of {args.mission}, noise {best['noise']}")
     print(table(rows, ("pool", "wall", "aggregate RTF", "succeeded")))
     print(f"aggregate real-time factor on all cores: {rtf:,.0f}x (target >= {TARGET:,.0f}x: {verdict(rtf, TARGET)})")
-    save_results("sweep", {
-        "mission": args.mission, "runs": args.runs, "noise": best["noise"],
-        "by_workers": {str(w): {"wall_time": d["wall_time"], "aggregate_real_time_factor": d["aggregate_real_time_factor"],
-                               "successes": d["successes"]} for w, d in samples.items()},
-        "target": TARGET, "met": rtf >= TARGET})
+    save_results(
+        "sweep",
+        {
+            "mission": args.mission,
+            "runs": args.runs,
+            "noise": best["noise"],
+            "by_workers": {
+                str(w): {
+                    "wall_time": d["wall_time"],
+                    "aggregate_real_time_factor": d["aggregate_real_time_factor"],
+                    "successes": d["successes"],
+                }
+                for w, d in samples.items()
+            },
+            "target": TARGET,
+            "met": rtf >= TARGET,
+        },
+    )
 
 
 if __name__ == "__main__":

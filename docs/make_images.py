@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from thymio_bt.mission import load_mission
 from thymio_bt.logs.recording import Recorder
+from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
 from thymio_bt.viz import plots
 

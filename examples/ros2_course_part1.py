@@ -21,9 +21,9 @@ from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-STOP_DISTANCE = 0.05     # m, from the front of the robot
-SPEED = 0.1              # m/s while nothing is in range
-CAUTIOUS_SPEED = 0.02    # m/s once the wall is seen
+STOP_DISTANCE = 0.05  # m, from the front of the robot
+SPEED = 0.1  # m/s while nothing is in range
+CAUTIOUS_SPEED = 0.02  # m/s once the wall is seen
 
 
 class Part1(Node):
@@ -38,7 +38,7 @@ class Part1(Node):
         self.robot_description = ""
         self.delete_client = self.create_client(DeleteEntity, "/delete_entity")
         self.spawn_client = self.create_client(SpawnEntity, "/spawn_entity")
-        self.front = float("inf")     # no reading yet: nothing in range
+        self.front = float("inf")  # no reading yet: nothing in range
         self.x = self.y = None
         self.state = "MOVE_UNTIL_WALL"
         self.timer = self.create_timer(0.1, self.step)
@@ -57,7 +57,7 @@ class Part1(Node):
             return
         cmd = Twist()
         if self.front <= STOP_DISTANCE:
-            self.cmd_pub.publish(cmd)            # zero: stop
+            self.cmd_pub.publish(cmd)  # zero: stop
             self.get_logger().info(f"stopped: front {self.front:.4f} m, odom x={self.x:.4f} y={self.y:.4f}")
             print(f"STOPPED front={self.front:.4f} x={self.x:.4f} y={self.y:.4f}", flush=True)
             self.state = "DELETING"

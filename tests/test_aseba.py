@@ -9,21 +9,24 @@ import time
 import _require
 import pytest
 
+from thymio_bt.backends.playground.backend import SPEED_SCALE
+from thymio_bt.backends.playground.enki import EnkiRobot
+from thymio_bt.backends.playground.process import Playground, free_port, listening
+from thymio_bt.backends.playground.world import playground_world
+from thymio_bt.backends.real.aseba import AsebaNode, signed
 from thymio_bt.errors import UserError
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse
 from thymio_bt.mission import load_mission
-from thymio_bt.backends.playground.enki import EnkiRobot
-from thymio_bt.backends.playground.process import Playground, free_port, listening
-from thymio_bt.backends.playground.backend import SPEED_SCALE
-from thymio_bt.backends.playground.world import playground_world
-from thymio_bt.backends.real.aseba import AsebaNode, signed
 from thymio_bt.robot.interface import Pose
 from thymio_bt.run.runner import Run
 
-CORRIDOR = maze_from_cells(parse_micromouse("""o---o---o---o---o---o
+CORRIDOR = maze_from_cells(
+    parse_micromouse("""o---o---o---o---o---o
 | S                 |
 o---o---o---o---o---o
-"""), "corridor")
+"""),
+    "corridor",
+)
 
 
 def test_words_are_signed():
@@ -73,7 +76,7 @@ def enki(playground):
 
 
 def settle(seconds):
-    time.sleep(seconds)          # the Playground runs in real time
+    time.sleep(seconds)  # the Playground runs in real time
 
 
 def test_reads_give_seven_proximity_values_and_two_wheel_speeds(node):
@@ -133,8 +136,10 @@ def corridor_mission(tmp_path, tree_yaml):
 | S                 |
 o---o---o---o---o---o
 """)
-    (tmp_path / "m.yaml").write_text(f"name: corridor\nmaze: corridor.txt\nstart: start\nrobot: enki\n"
-                                     f"backend: {{name: playground}}\ntime_limit: 30\ntree:\n{tree_yaml}")
+    (tmp_path / "m.yaml").write_text(
+        f"name: corridor\nmaze: corridor.txt\nstart: start\nrobot: enki\n"
+        f"backend: {{name: playground}}\ntime_limit: 30\ntree:\n{tree_yaml}"
+    )
     return load_mission(tmp_path / "m.yaml")
 
 
@@ -168,18 +173,31 @@ def test_a_playground_that_dies_mid_run_ends_it_as_robot_lost_within_a_second(tm
     assert result.sim_time - killed["t"] < 1.2
 
 
-
 def test_maze_export_writes_a_playground_world_with_the_robot_at_a_spawn(tmp_path):
     from click.testing import CliRunner
 
     from thymio_bt.cli import main
 
     out = tmp_path / "maze.playground"
-    result = CliRunner().invoke(main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground",
-                                       "--spawn", "part2", "--port", "40123", "-o", str(out)])
+    result = CliRunner().invoke(
+        main,
+        [
+            "maze",
+            "export",
+            "mazes/two_parts_maze.yaml",
+            "--playground",
+            "--spawn",
+            "part2",
+            "--port",
+            "40123",
+            "-o",
+            str(out),
+        ],
+    )
     assert result.exit_code == 0, result.output
     text = out.read_text()
     assert text.count("<wall ") == 21 and 'port="40123"' in text and 'angle="1.570796"' in text
-    missing = CliRunner().invoke(main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground", "--spawn", "nope"])
+    missing = CliRunner().invoke(
+        main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground", "--spawn", "nope"]
+    )
     assert missing.exit_code == 2 and "nope" in missing.output
-

@@ -35,23 +35,28 @@ def test_sim_backend_takes_physics_rate_and_robot_model():
 
 def test_a_mission_names_its_backend_and_robot(tmp_path):
     path = tmp_path / "m.yaml"
-    path.write_text(textwrap.dedent("""\
+    path.write_text(
+        textwrap.dedent("""\
         maze: arena
         start: [0.6, 0.6, 0]
         robot: enki
         backend: {name: sim, physics_hz: 200}
         tree: {Wait: {seconds: 1}}
-        """))
+        """)
+    )
     mission = load_mission(path)
     assert (mission.robot, mission.backend, mission.backend_options) == ("enki", "sim", {"physics_hz": 200})
     run = Run(mission)
     assert run.backend.model is ENKI and run.backend.config.physics_hz == 200.0
 
 
-@pytest.mark.parametrize("text, message", [
-    ("robot: enkki", "robot must be one of course, enki, real or a profile file (.yaml), got 'enkki'"),
-    ("backend: [sim]", "backend must be a name or a mapping with 'name'"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("robot: enkki", "robot must be one of course, enki, real or a profile file (.yaml), got 'enkki'"),
+        ("backend: [sim]", "backend must be a name or a mapping with 'name'"),
+    ],
+)
 def test_bad_robot_or_backend_in_a_mission_is_located(tmp_path, text, message):
     path = tmp_path / "m.yaml"
     path.write_text(f"maze: arena\nstart: [0.6, 0.6, 0]\n{text}\ntree: {{wait: {{seconds: 1}}}}\n")
@@ -64,7 +69,7 @@ def test_robot_models_differ_where_robots_do():
     assert set(ROBOTS) == {"course", "enki", "real"}
     assert COURSE.range_max == 0.0975 and ENKI.range_max == 0.14
     assert ENKI.wheel_separation == 0.094 and ENKI.max_wheel_speed == 0.166
-    assert ENKI.sensor("front_center").x == pytest.approx(0.0552)        # 7.95 cm ahead of Enki's axle
+    assert ENKI.sensor("front_center").x == pytest.approx(0.0552)  # 7.95 cm ahead of Enki's axle
     for model in ROBOTS.values():
         pose = model.base_of(*model.axle_of(load_mission("missions/square.yaml").start))
         assert pose.x == pytest.approx(load_mission("missions/square.yaml").start.x, abs=1e-12)
@@ -79,21 +84,29 @@ def test_the_robot_model_changes_the_simulated_robot():
     course, enki = final_proximity("course"), final_proximity("enki")
     # Enki's ±40° sensors sit elsewhere and see the side walls at other distances
     assert course["front_left"] != pytest.approx(enki["front_left"], abs=1e-3)
-    assert course["front_center"] == pytest.approx(enki["front_center"], abs=1e-3)     # both stop at 5 cm
+    assert course["front_center"] == pytest.approx(enki["front_center"], abs=1e-3)  # both stop at 5 cm
 
 
 def test_cli_lists_backends_and_robot_models():
-    out = subprocess.run([sys.executable, "-m", "thymio_bt.cli", "backends"], capture_output=True, text=True,
-                         check=True).stdout
+    out = subprocess.run(
+        [sys.executable, "-m", "thymio_bt.cli", "backends"], capture_output=True, text=True, check=True
+    ).stdout
     for name in [*BUILTIN, *ROBOTS, "physics_hz"]:
         assert name in out
 
 
 def test_cli_backend_errors_exit_2_without_traceback():
-    for args in (["--backend", "nope"], ["--backend-opt", "physics=1"], ["--backend-opt", "novalue"],
-                 ["--robot", "nope"]):
-        done = subprocess.run([sys.executable, "-m", "thymio_bt.cli", "run", "missions/square.yaml", *args],
-                              capture_output=True, text=True)
+    for args in (
+        ["--backend", "nope"],
+        ["--backend-opt", "physics=1"],
+        ["--backend-opt", "novalue"],
+        ["--robot", "nope"],
+    ):
+        done = subprocess.run(
+            [sys.executable, "-m", "thymio_bt.cli", "run", "missions/square.yaml", *args],
+            capture_output=True,
+            text=True,
+        )
         assert done.returncode == 2 and "Traceback" not in done.stderr and done.stderr.startswith("error:"), args
 
 
@@ -128,7 +141,11 @@ def test_the_backend_base_serves_requests_through_two_hooks():
     gone, missing = backend.request_delete("thymio"), backend.request_delete("thymio")
     backend.serve_requests()
     assert (first.state, again.state, gone.state, missing.state) == (
-        RequestState.SUCCEEDED, RequestState.FAILED, RequestState.SUCCEEDED, RequestState.FAILED)
+        RequestState.SUCCEEDED,
+        RequestState.FAILED,
+        RequestState.SUCCEEDED,
+        RequestState.FAILED,
+    )
     assert again.reason == "taken" and missing.reason == "no entity named 'thymio'"
     assert backend.placed == [Pose(1, 2, 0)] and backend.collisions == [] and backend.min_clearance == math.inf
 

@@ -40,7 +40,7 @@ def test_stopping_at_1_5_cm_then_turning_centres_the_axle_in_the_next_corridor()
     result = run_tree(tree, world("L"), seconds=30)
     x, y = axle(result.final_pose)
     assert result.status == "SUCCESS"
-    assert x == pytest.approx(0.5, abs=0.005)           # the centre line of the corridor going down
+    assert x == pytest.approx(0.5, abs=0.005)  # the centre line of the corridor going down
     assert result.final_pose["yaw"] == pytest.approx(-math.pi / 2, abs=math.radians(0.5))
 
 
@@ -57,9 +57,15 @@ def test_move_until_wall_fails_with_no_wall_when_nothing_comes_into_range():
 
 
 def test_deleting_the_robot_mid_move_fails_with_no_robot():
-    tree = {"parallel": {"policy": "success_on_all", "children": [
-        {"MoveUntilWall": {"speed": "2cm/s"}},
-        {"sequence": [{"Wait": {"seconds": 1}}, {"DeleteEntity": {}}]}]}}
+    tree = {
+        "parallel": {
+            "policy": "success_on_all",
+            "children": [
+                {"MoveUntilWall": {"speed": "2cm/s"}},
+                {"sequence": [{"Wait": {"seconds": 1}}, {"DeleteEntity": {}}]},
+            ],
+        }
+    }
     result = run_tree(tree, world("corridor"), seconds=20)
     assert result.status == "FAILURE" and result.code == "NO_ROBOT"
     assert result.failed_path.endswith("MoveUntilWall")
@@ -98,14 +104,19 @@ def test_turn_angle_within_half_a_degree_about_the_axle(angle):
 
 
 def test_turn_with_snap_lands_on_the_grid_heading():
-    result = run_tree({"TurnAngle": {"angle": "90deg", "snap": "90deg"}}, world("arena"),
-                      start=[0.6, 0.6, 0.03], seconds=20)
+    result = run_tree(
+        {"TurnAngle": {"angle": "90deg", "snap": "90deg"}}, world("arena"), start=[0.6, 0.6, 0.03], seconds=20
+    )
     assert result.final_pose["yaw"] == pytest.approx(math.pi / 2, abs=1e-3)
 
 
 def test_turn_by_rear_sensors_squares_the_robot_to_the_wall_behind():
-    tree = {"sequence": [{"MoveUntilWall": {"distance": "3cm"}},
-                         {"TurnAngle": {"angle": "pi", "mode": "rear_sensors", "tolerance": "0.2deg"}}]}
+    tree = {
+        "sequence": [
+            {"MoveUntilWall": {"distance": "3cm"}},
+            {"TurnAngle": {"angle": "pi", "mode": "rear_sensors", "tolerance": "0.2deg"}},
+        ]
+    }
     result = run_tree(tree, world("corridor"), start=[0.4, 0.1, 0.04], seconds=30)
     assert result.status == "SUCCESS"
     scan = result.final_proximity
@@ -114,32 +125,43 @@ def test_turn_by_rear_sensors_squares_the_robot_to_the_wall_behind():
 
 
 def test_turn_by_rear_sensors_fails_without_a_wall_behind():
-    result = run_tree({"TurnAngle": {"angle": "90deg", "mode": "rear_sensors"}}, world("arena"),
-                      start=[0.6, 0.6, 0], seconds=20)
+    result = run_tree(
+        {"TurnAngle": {"angle": "90deg", "mode": "rear_sensors"}}, world("arena"), start=[0.6, 0.6, 0], seconds=20
+    )
     assert result.status == "FAILURE" and result.code == "NO_WALL"
     assert "rear sensors" in result.reason
 
 
-@pytest.mark.parametrize("grid, start, decision", [
-    ("L", "start", "right"),
-    (MIRRORED_L, "start", "left"),
-    ("pocket", "start", "dead_end"),
-])
+@pytest.mark.parametrize(
+    "grid, start, decision",
+    [
+        ("L", "start", "right"),
+        (MIRRORED_L, "start", "left"),
+        ("pocket", "start", "dead_end"),
+    ],
+)
 def test_choose_turn_decides_when_the_wall_first_comes_into_range(grid, start, decision):
-    tree = {"parallel": {"policy": "success_on_all", "children": [
-        {"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}]}}
+    tree = {
+        "parallel": {
+            "policy": "success_on_all",
+            "children": [{"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}],
+        }
+    }
     result = run_tree(tree, world(grid), start=start, seconds=20)
     choose = ends(result, "ChooseTurn")[0]
     assert result.status == "SUCCESS"
     assert choose["decision"] == decision
-    assert choose["proximity"]["front_center"] is not None       # decided with the wall in range
+    assert choose["proximity"]["front_center"] is not None  # decided with the wall in range
     assert choose["proximity"]["front_center"] > 0.085
 
 
 def test_turn_angle_reads_its_angle_from_the_blackboard():
-    tree = {"sequence": [
-        {"parallel": {"children": [{"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}]}},
-        {"TurnAngle": {"angle": "bb:turn_angle"}}]}
+    tree = {
+        "sequence": [
+            {"parallel": {"children": [{"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}]}},
+            {"TurnAngle": {"angle": "bb:turn_angle"}},
+        ]
+    }
     result = run_tree(tree, world("L"), seconds=30)
     assert result.status == "SUCCESS"
     assert ends(result, "TurnAngle")[0]["angle"] == pytest.approx(-math.pi / 2, abs=1e-3)
@@ -174,8 +196,9 @@ def test_wait_and_timeout_use_simulated_time():
 def test_spawn_fails_clearly_while_the_name_exists_and_after_delete_succeeds():
     taken = run_tree({"SpawnEntity": {"pose": [0.3, 0.3, 0]}}, world("arena"), seconds=5)
     assert taken.status == "FAILURE" and taken.code == "ENTITY_ERROR" and "already exists" in taken.reason
-    moved = run_tree({"sequence": [{"DeleteEntity": {}}, {"SpawnEntity": {"pose": "0.3, 0.3, pi/2"}}]},
-                     world("arena"), seconds=5)
+    moved = run_tree(
+        {"sequence": [{"DeleteEntity": {}}, {"SpawnEntity": {"pose": "0.3, 0.3, pi/2"}}]}, world("arena"), seconds=5
+    )
     kinds = [e["kind"] for e in moved.events if e["kind"] in ("delete_entity", "spawn_entity")]
     assert moved.status == "SUCCESS" and kinds == ["delete_entity", "spawn_entity"]
     assert moved.final_pose == pytest.approx({"x": 0.3, "y": 0.3, "yaw": round(math.pi / 2, 6)})
@@ -185,8 +208,15 @@ def test_stop_and_events_carry_pose_and_proximity():
     result = run_tree({"sequence": [{"MoveDistance": {"distance": 0.1}}, {"Stop": {}}]}, world("arena"), seconds=5)
     end = ends(result, "Stop")[0]
     assert end["status"] == "SUCCESS" and set(end["pose"]) == {"x", "y", "yaw"}
-    assert set(end["proximity"]) == {"front_left", "front_center_left", "front_center", "front_center_right",
-                                     "front_right", "rear_left", "rear_right"}
+    assert set(end["proximity"]) == {
+        "front_left",
+        "front_center_left",
+        "front_center",
+        "front_center_right",
+        "front_right",
+        "rear_left",
+        "rear_right",
+    }
     starts = [e for e in result.events if e["kind"] == "behaviour_start"]
     assert [e["name"] for e in starts] == ["MoveDistance", "Stop"]
 
@@ -199,7 +229,7 @@ def test_wall_follow_leaves_generated_perfect_mazes(side, seed):
     xmin, ymin, xmax, ymax = maze.bounds()
     assert result.status == "SUCCESS", result.reason
     assert result.collisions == 0
-    assert result.final_pose["y"] > ymax                 # out through the gap in the top wall
+    assert result.final_pose["y"] > ymax  # out through the gap in the top wall
     follow = ends(result, "WallFollow")[0]
     assert "LL" in follow["turns"] or "RR" in follow["turns"] or len(follow["turns"]) > 3
 
@@ -210,10 +240,16 @@ def test_wall_follow_leaves_generated_mazes_on_other_robots_with_noise(robot, si
     """Enki's cones (and its motor noise) or a real robot's noisy readings: the same behaviour, no
     collision, with every noise model on."""
     maze = perfect_maze(5, 5, seed=seed)
-    result = run_tree({"WallFollow": {"side": side}}, maze, seconds=600, seed=seed, robot=robot,
-                      noise={"wheel": 0.027, "odometry": 0.01, "range_sd": 0.001})
+    result = run_tree(
+        {"WallFollow": {"side": side}},
+        maze,
+        seconds=600,
+        seed=seed,
+        robot=robot,
+        noise={"wheel": 0.027, "odometry": 0.01, "range_sd": 0.001},
+    )
     assert result.status == "SUCCESS", result.reason
-    assert result.collisions == 0 and result.final_pose["y"] > maze.bounds()[3] - 0.02   # by odometry: drift
+    assert result.collisions == 0 and result.final_pose["y"] > maze.bounds()[3] - 0.02  # by odometry: drift
 
 
 def test_wall_follow_turns_around_in_dead_ends():
@@ -225,22 +261,25 @@ def test_wall_follow_turns_around_in_dead_ends():
 +--+--+--+
 """)
     # start facing a dead end (west): it must turn around (two turns away from the wall side)
-    result = run_tree({"WallFollow": {"side": "left", "until": "goal", "goal": [0.5, 0.1]}},
-                      dead_end_first, start=[0.3, 0.3, "pi"], seconds=120)
+    result = run_tree(
+        {"WallFollow": {"side": "left", "until": "goal", "goal": [0.5, 0.1]}},
+        dead_end_first,
+        start=[0.3, 0.3, "pi"],
+        seconds=120,
+    )
     assert result.status == "SUCCESS", result.reason
     assert ends(result, "WallFollow")[0]["turns"].startswith("RR")
 
 
 def test_move_until_wall_with_centre_steers_to_the_corridor_middle():
-    start = [0.1, 0.085, 0.05]                   # 15 mm right of the centre line, heading 2.9 deg to the left
+    start = [0.1, 0.085, 0.05]  # 15 mm right of the centre line, heading 2.9 deg to the left
     off = run_tree({"MoveUntilWall": {"distance": "5cm"}}, world("corridor"), start=start, seconds=20)
     on = run_tree({"MoveUntilWall": {"distance": "5cm", "centre": True}}, world("corridor"), start=start, seconds=20)
     assert off.status == on.status == "SUCCESS"
-    assert abs(off.final_pose["y"] - 0.1) > 0.01             # heading held: it drifts across the corridor
-    assert abs(on.final_pose["y"] - 0.1) < 0.003             # centred within 3 mm over 0.5 m
+    assert abs(off.final_pose["y"] - 0.1) > 0.01  # heading held: it drifts across the corridor
+    assert abs(on.final_pose["y"] - 0.1) < 0.003  # centred within 3 mm over 0.5 m
     assert abs(on.final_pose["yaw"]) < 0.02
     assert on.final_proximity["front_center"] == pytest.approx(0.05, abs=0.001)
-
 
 
 def late_run(tmp_path, latency, tree, preset="corridor"):

@@ -9,8 +9,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from thymio_bt.robot import calibration
-from thymio_bt.robot.calibration import (ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable, RawProximityModel, metres_to_raw,
-                                   raw_scan_to_metres, raw_to_metres)
+from thymio_bt.robot.calibration import (
+    ENKI_THYMIO2,
+    WEBOTS_THYMIO2,
+    CalibrationTable,
+    RawProximityModel,
+    metres_to_raw,
+    raw_scan_to_metres,
+    raw_to_metres,
+)
 from thymio_bt.robot.interface import SENSOR_NAMES
 
 TABLE = WEBOTS_THYMIO2
@@ -79,7 +86,7 @@ def test_integer_readings_lose_at_most_0_17_mm(distance):
 
 def test_a_table_must_be_invertible():
     with pytest.raises(ValueError, match="decrease strictly"):
-        CalibrationTable((0.0, 0.01, 0.02), (4235.0, 4308.0, 0.0))        # Webots' own 0 m row
+        CalibrationTable((0.0, 0.01, 0.02), (4235.0, 4308.0, 0.0))  # Webots' own 0 m row
     with pytest.raises(ValueError, match="last reading must be 0"):
         CalibrationTable((0.01, 0.02), (3000.0, 1000.0))
     with pytest.raises(ValueError, match="two"):
@@ -100,7 +107,7 @@ def test_without_noise_the_model_reads_the_rounded_table():
     assert model.measure(0.05) == 2570
     assert model.measure(0.025) == 3857
     assert model.measure(math.inf) == 0
-    assert model.measure(0.0933) == 11            # 9.33 cm: the last millimetres of the ramp
+    assert model.measure(0.0933) == 11  # 9.33 cm: the last millimetres of the ramp
 
 
 def test_the_model_is_deterministic_for_a_seed():
@@ -144,13 +151,13 @@ def test_through_raw_gives_metres_back_within_the_noise():
     back = model.through_raw(scan)
     assert tuple(back) == SENSOR_NAMES
     assert back["rear_left"] == math.inf
-    assert back["rear_right"] == math.inf              # 9.55 cm: in the course's range, beyond the table's
+    assert back["rear_right"] == math.inf  # 9.55 cm: in the course's range, beyond the table's
     for name in ("front_left", "front_center_left", "front_center"):
         assert back[name] == pytest.approx(scan[name], abs=0.003)
 
 
 def test_the_enki_table_is_its_closed_form_and_sees_to_14_cm():
-    m, x0, c = 4505, 0.03, 73                                    # IRSensor parameters, distances in cm
+    m, x0, c = 4505, 0.03, 73  # IRSensor parameters, distances in cm
     for cm in range(14):
         assert metres_to_raw(cm / 100, ENKI_THYMIO2) == round(m * (c - x0**2) / (cm**2 - 2 * x0 * cm + c))
     assert metres_to_raw(0.1399, ENKI_THYMIO2) == pytest.approx(1226, abs=2)

@@ -19,7 +19,9 @@ def test_run_writes_the_report_of_the_contract_and_exits_0(tmp_path):
     assert result.exit_code == 0 and result.output == ""
     report = json.loads(out.read_text())
     assert report["status"] == "SUCCESS" and report["reason"] is None and report["seed"] == 3
-    assert report["ticks"] == round(report["sim_time"] * 10) + 1 and report["wall_time"] > 0   # ticks at 0 and at the end
+    assert (
+        report["ticks"] == round(report["sim_time"] * 10) + 1 and report["wall_time"] > 0
+    )  # ticks at 0 and at the end
     assert set(report["final_pose"]) == {"x", "y", "yaw"}
     assert set(report["final_proximity"]) == set(SENSOR_NAMES)
     assert report["collisions"] == 0 and report["min_clearance"] > 0
@@ -37,15 +39,23 @@ def test_a_run_that_hits_its_time_limit_exits_1_and_names_the_running_node(tmp_p
     assert result.exit_code == 1
     report = json.loads(out.read_text())
     assert report["status"] == "TIMEOUT" and "time limit" in report["reason"]
-    assert report["failed_path"] == "course/part 1"      # the MoveUntilWall named 'part 1'
+    assert report["failed_path"] == "course/part 1"  # the MoveUntilWall named 'part 1'
     assert report["code"] == "TIMEOUT"
     assert "failed at:" in result.output
 
 
 def test_maze_and_start_override_the_mission(tmp_path):
     out = tmp_path / "report.json"
-    result = invoke("run", "missions/square.yaml", "--maze", "mazes/report_arena.yaml", "--start=-0.3,-0.3,pi/2",
-                    "--report", out, "-q")
+    result = invoke(
+        "run",
+        "missions/square.yaml",
+        "--maze",
+        "mazes/report_arena.yaml",
+        "--start=-0.3,-0.3,pi/2",
+        "--report",
+        out,
+        "-q",
+    )
     assert result.exit_code == 0, result.output
     report = json.loads(out.read_text())
     t, x, y, yaw = report["trajectory"][0]
@@ -62,8 +72,10 @@ def test_validate_checks_missions_and_maze_files():
 
 def test_validate_reports_every_impossible_spawn_of_a_maze_with_its_line(tmp_path):
     maze = tmp_path / "maze.yaml"
-    maze.write_text("name: box\nwalls:\n  - {from: [0, 0], to: [0.4, 0]}\n  - {from: [0, 0.4], to: [0.4, 0.4]}\n"
-                    "spawns:\n  inside: [0.2, 0.2, 0]\n  in_wall: [0.2, 0.01, 0]\n  outside: [0.9, 0.2, 0]\n")
+    maze.write_text(
+        "name: box\nwalls:\n  - {from: [0, 0], to: [0.4, 0]}\n  - {from: [0, 0.4], to: [0.4, 0.4]}\n"
+        "spawns:\n  inside: [0.2, 0.2, 0]\n  in_wall: [0.2, 0.01, 0]\n  outside: [0.9, 0.2, 0]\n"
+    )
     result = invoke("validate", maze)
     assert result.exit_code == 2
     assert f"{maze}:7:3: spawn 'in_wall' is impossible" in result.output
@@ -83,7 +95,7 @@ def test_colour_follows_no_color_and_the_color_option(monkeypatch):
     def status_line(*args, color=False):
         return CliRunner().invoke(main, [*args, "run", "missions/square.yaml"], color=color).output.splitlines()[0]
 
-    assert "\x1b[" in status_line(color=True)                       # a terminal: coloured
+    assert "\x1b[" in status_line(color=True)  # a terminal: coloured
     assert "\x1b[" not in status_line("--color", "never", color=True)
     monkeypatch.setenv("NO_COLOR", "1")
     assert "\x1b[" not in status_line(color=True)

@@ -5,13 +5,13 @@ import math
 
 import pytest
 
-from thymio_bt.robot.calibration import ENKI_THYMIO2
+from thymio_bt.backends.sim import SimConfig, Simulation
+from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
 from thymio_bt.mission import load_mission
+from thymio_bt.robot.calibration import ENKI_THYMIO2
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI
 from thymio_bt.run.runner import Run
-from thymio_bt.backends.sim import SimConfig, Simulation
-from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
 from thymio_bt.testing import world
 
 CONE = ConeResponse()
@@ -35,7 +35,7 @@ def test_a_square_wall_reads_enkis_curve(d_cm, enki):
 def test_a_slanted_wall_reads_weaker_than_a_square_one():
     d = 0.11
     square = CONE.value(d / math.cos(APERTURE), d, d / math.cos(APERTURE))
-    slanted = CONE.value(None, d, d * 0.9)          # 30 degrees: one side ray misses, the other hits sooner
+    slanted = CONE.value(None, d, d * 0.9)  # 30 degrees: one side ray misses, the other hits sooner
     assert slanted < 0.5 * square
 
 
@@ -56,7 +56,7 @@ def test_the_simulated_cone_reads_enkis_value_and_the_enki_calibration_gives_the
     sim = sim_facing_wall(d)
     sim.advance(0.1)
     raw = sim.proximity_raw()["front_center"]
-    assert abs(raw - ENKI_THYMIO2.to_raw(d)) < 15               # Enki's noise sd is 2.87
+    assert abs(raw - ENKI_THYMIO2.to_raw(d)) < 15  # Enki's noise sd is 2.87
     assert sim.proximity()["front_center"] == pytest.approx(d, abs=0.0015)
     assert sim.proximity_raw()["rear_left"] < 20 and math.isinf(sim.proximity()["rear_left"])
 
@@ -64,7 +64,7 @@ def test_the_simulated_cone_reads_enkis_value_and_the_enki_calibration_gives_the
 def slanted_wall(d: float, incidence_deg: float) -> float:
     """The noise-free reading of a flat wall whose normal is ``incidence_deg`` off the centre ray,
     ``d`` metres away along that ray."""
-    p = d * math.cos(math.radians(incidence_deg))          # the wall's perpendicular distance
+    p = d * math.cos(math.radians(incidence_deg))  # the wall's perpendicular distance
     rays = []
     for phi in (-15.0, 0.0, 15.0):
         a = math.radians(incidence_deg + phi)
@@ -95,7 +95,7 @@ def test_the_cone_and_a_single_ray_see_the_end_of_a_side_wall_at_different_place
             sim.advance(0.01)
             assert sim.time() < 10
         lost[model_name] = sim.true_pose().x
-    assert abs(lost["cone"] - lost["metres"]) > 0.01          # 1.5 cm here
+    assert abs(lost["cone"] - lost["metres"]) > 0.01  # 1.5 cm here
 
 
 def test_enkis_profile_is_its_cones_its_command_delay_and_its_motor_noise():
@@ -103,14 +103,14 @@ def test_enkis_profile_is_its_cones_its_command_delay_and_its_motor_noise():
     assert mission.sensor_model == "cone" and mission.noise.wheel == 0.027
     quiet = load_mission("missions/square.yaml", {"robot": "enki", "noise.wheel": "0", "sensor_model": "metres"})
     assert quiet.sensor_model == "metres" and quiet.noise.wheel == 0.0
-    assert load_mission("missions/square.yaml").sensor_model == "metres"          # the course's rays
+    assert load_mission("missions/square.yaml").sensor_model == "metres"  # the course's rays
 
 
 def test_a_command_is_applied_one_physics_step_late_on_enki():
     sim = Simulation(world("arena"), spawn=Pose(0.3, 0.3, 0.0), config=SimConfig(robot=ENKI))
     sim.drive(0.1, 0.0)
     sim.advance(1.0)
-    assert sim.true_pose().x - 0.3 == pytest.approx(0.099, abs=2e-4)        # 10 ms late: 9.9 cm, not 10
+    assert sim.true_pose().x - 0.3 == pytest.approx(0.099, abs=2e-4)  # 10 ms late: 9.9 cm, not 10
     course = Simulation(world("arena"), spawn=Pose(0.3, 0.3, 0.0))
     course.drive(0.1, 0.0)
     course.advance(1.0)

@@ -39,16 +39,19 @@ def damaged(lines, tmp_path, how):
     return path
 
 
-@pytest.mark.parametrize("how, line, message", [
-    ("empty", 0, "the log is empty"),
-    ("foreign", 1, "not a thymio-bt log: invalid JSON"),
-    ("binary", 0, "not UTF-8 text"),
-    ("json list", 1, "the first line must be its header"),
-    ("header without maze", 1, "header line: maze: Field required"),
-    ("line 5 not JSON", 5, "damaged log line: invalid JSON"),
-    ("line 5 wrong type", 5, "tick line: pose"),
-    ("line 5 unknown kind", 5, "unknown line kind 'tock'"),
-])
+@pytest.mark.parametrize(
+    "how, line, message",
+    [
+        ("empty", 0, "the log is empty"),
+        ("foreign", 1, "not a thymio-bt log: invalid JSON"),
+        ("binary", 0, "not UTF-8 text"),
+        ("json list", 1, "the first line must be its header"),
+        ("header without maze", 1, "header line: maze: Field required"),
+        ("line 5 not JSON", 5, "damaged log line: invalid JSON"),
+        ("line 5 wrong type", 5, "tick line: pose"),
+        ("line 5 unknown kind", 5, "unknown line kind 'tock'"),
+    ],
+)
 @pytest.mark.parametrize("command", [["replay"], ["export", "-o", "{tmp}/out.mcap"]])
 def test_a_damaged_log_is_one_message_naming_the_line(good_log, tmp_path, how, line, message, command):
     path = damaged(good_log, tmp_path, how)

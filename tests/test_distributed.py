@@ -13,8 +13,9 @@ distributed = _require.module("distributed")
 
 @pytest.fixture(scope="module")
 def cluster():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as local:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as local:
         yield local
 
 
@@ -35,14 +36,16 @@ def test_workers_read_a_mission_again_when_its_file_changes(cluster, tmp_path):
     path.write_text("maze: arena\nstart: centre\ntree:\n  MoveDistance: {distance: 10cm}\n")
     with distributed.Client(cluster) as client:
         first = sweep(path, runs=4, executor=DaskExecutor(client))
-        path.write_text("maze: arena\nstart: centre\ntree:\n  MoveDistance: {distance: 20cm}\n")   # same path
+        path.write_text("maze: arena\nstart: centre\ntree:\n  MoveDistance: {distance: 20cm}\n")  # same path
         second = sweep(path, runs=4, executor=DaskExecutor(client))
     assert {round(r["final_pose"]["x"], 1) for r in first.results} == {0.7}
     assert {round(r["final_pose"]["x"], 1) for r in second.results} == {0.8}
 
 
 def test_the_cli_sweeps_on_a_dask_scheduler(cluster):
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "4", "--dask", cluster.scheduler_address])
+    result = CliRunner().invoke(
+        main, ["sweep", "missions/square.yaml", "--runs", "4", "--dask", cluster.scheduler_address]
+    )
     assert result.exit_code == 0 and "4/4 succeeded" in result.output
 
 

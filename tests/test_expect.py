@@ -6,9 +6,9 @@ import math
 import pytest
 
 from thymio_bt.errors import UserError
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.maze import load_maze
 from thymio_bt.mission import load_mission
+from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.runner import Run
@@ -31,17 +31,23 @@ def run(tmp_path, expect: str):
 
 
 def test_all_criteria_met_is_a_success_with_the_check_in_the_report(tmp_path):
-    result = run(tmp_path, "  goal: {centre: [0.4893, 0.1], radius: 2mm}\n  no_collision: true\n  max_time: 10s\n"
-                           "  gaps: [{after: MoveUntilWall, distance: 5cm, tolerance: 1mm}]")
+    result = run(
+        tmp_path,
+        "  goal: {centre: [0.4893, 0.1], radius: 2mm}\n  no_collision: true\n  max_time: 10s\n"
+        "  gaps: [{after: MoveUntilWall, distance: 5cm, tolerance: 1mm}]",
+    )
     assert result.status == "SUCCESS" and result.report()["expectations"] == {"met": True, "failed": []}
 
 
-@pytest.mark.parametrize("expect, message", [
-    ("  goal: {centre: [0.3, 0.1], radius: 1cm}", "goal: ended 189.2 mm from (0.3, 0.1), more than 10 mm"),
-    ("  max_time: 2s", "max_time: took 4.3 s, more than 2 s"),
-    ("  gaps: [{after: MoveUntilWall, distance: 4cm}]", "the front gap was 5.01 cm, not 4 ± 0.3 cm"),
-    ("  gaps: [{after: Nothing, distance: 4cm}]", "gaps: no node matching 'Nothing' ended with a robot"),
-])
+@pytest.mark.parametrize(
+    "expect, message",
+    [
+        ("  goal: {centre: [0.3, 0.1], radius: 1cm}", "goal: ended 189.2 mm from (0.3, 0.1), more than 10 mm"),
+        ("  max_time: 2s", "max_time: took 4.3 s, more than 2 s"),
+        ("  gaps: [{after: MoveUntilWall, distance: 4cm}]", "the front gap was 5.01 cm, not 4 ± 0.3 cm"),
+        ("  gaps: [{after: Nothing, distance: 4cm}]", "gaps: no node matching 'Nothing' ended with a robot"),
+    ],
+)
 def test_a_tree_success_that_misses_an_expectation_is_a_failure_naming_it(tmp_path, expect, message):
     result = run(tmp_path, expect)
     assert (result.status, result.code, result.failed_path) == ("FAILURE", "EXPECTATION", "expect")
@@ -50,8 +56,10 @@ def test_a_tree_success_that_misses_an_expectation_is_a_failure_naming_it(tmp_pa
 
 def test_a_collision_fails_no_collision(tmp_path):
     path = tmp_path / "m.yaml"
-    path.write_text("maze: two_parts_maze\nstart: part1\nexpect: {no_collision: true}\n"
-                    "tree:\n  force_success: {MoveDistance: {distance: 50cm, timeout: 10}}\n")
+    path.write_text(
+        "maze: two_parts_maze\nstart: part1\nexpect: {no_collision: true}\n"
+        "tree:\n  force_success: {MoveDistance: {distance: 50cm, timeout: 10}}\n"
+    )
     result = Run(load_mission(path)).run()
     assert (result.status, result.code) == ("FAILURE", "EXPECTATION") and "no_collision: 1 collision" in result.reason
 
@@ -59,7 +67,7 @@ def test_a_collision_fails_no_collision(tmp_path):
 def test_the_front_gap_is_measured_by_geometry():
     maze = load_maze("mazes/two_parts_maze.yaml")
     assert front_gap(maze, COURSE, Pose(0.4893, 0.1, 0.0)) == pytest.approx(0.0500, abs=2e-4)
-    behind = front_gap(maze, COURSE, Pose(0.4893, 0.1, math.pi))          # the west wall, far behind
+    behind = front_gap(maze, COURSE, Pose(0.4893, 0.1, math.pi))  # the west wall, far behind
     assert math.isfinite(behind) and behind > 0.3
 
 
@@ -79,15 +87,19 @@ def test_a_ray_meets_the_nearest_face_of_every_wall_it_crosses(maze_file):
         for _ in range(10):
             x, y = rng.uniform(xmin, xmax), rng.uniform(ymin, ymax)
             c, s = math.cos(yaw), math.sin(yaw)
-            every = [_ray_segment(x, y, c, s, *a, *b) for wall in maze.walls
-                     for a, b in zip(wall.corners(), [*wall.corners()[1:], wall.corners()[0]])]
+            every = [
+                _ray_segment(x, y, c, s, *a, *b)
+                for wall in maze.walls
+                for a, b in zip(wall.corners(), [*wall.corners()[1:], wall.corners()[0]])
+            ]
             assert ray_distance(maze, x, y, yaw) == min((d for d in every if d is not None), default=math.inf)
 
 
 def test_expectations_are_validated_with_units_and_places(tmp_path):
     path = tmp_path / "m.yaml"
-    path.write_text("maze: arena\nstart: centre\nexpect:\n  goal: {centre: [1, 2], radius: 3 s}\n  colision: true\n"
-                    "tree: Stop\n")
+    path.write_text(
+        "maze: arena\nstart: centre\nexpect:\n  goal: {centre: [1, 2], radius: 3 s}\n  colision: true\ntree: Stop\n"
+    )
     with pytest.raises(UserError) as err:
         load_mission(path)
     messages = [(p.line, p.message) for p in err.value.problems]

@@ -12,7 +12,7 @@ from thymio_bt.errors import UserError
 from thymio_bt.maze import load_maze
 from thymio_bt.maze.gazebo import import_world
 
-COURSE = Path(__file__).resolve().parent / "data" / "course"      # the course package's worlds and walls
+COURSE = Path(__file__).resolve().parent / "data" / "course"  # the course package's worlds and walls
 WORLDS = COURSE
 MAZES = Path(__file__).resolve().parents[1] / "mazes"
 
@@ -24,8 +24,9 @@ GROUND = """
     </model>"""
 
 
-def link(name: str, pose: str, size: str = "0.61 0.01 0.1", offset: str = "0 0 0.05 0 -0 0",
-         geometry: str | None = None) -> str:
+def link(
+    name: str, pose: str, size: str = "0.61 0.01 0.1", offset: str = "0 0 0.05 0 -0 0", geometry: str | None = None
+) -> str:
     """A wall link as Gazebo's building editor writes it (collision pose before the link pose)."""
     geometry = geometry or f"<box><size>{size}</size></box>"
     return f"""
@@ -41,8 +42,10 @@ def link(name: str, pose: str, size: str = "0.61 0.01 0.1", offset: str = "0 0 0
 
 def world(tmp_path: Path, body: str, state: str = "", name: str = "test.world") -> Path:
     path = tmp_path / name
-    path.write_text(f"<?xml version='1.0'?>\n<sdf version='1.7'>\n  <world name='default'>{GROUND}"
-                    f"{body}\n{state}  </world>\n</sdf>\n")
+    path.write_text(
+        f"<?xml version='1.0'?>\n<sdf version='1.7'>\n  <world name='default'>{GROUND}"
+        f"{body}\n{state}  </world>\n</sdf>\n"
+    )
     return path
 
 
@@ -62,10 +65,17 @@ def approx_segment(wall, start, end, tol=1e-6) -> None:
 
 # --- (a) composition of poses -----------------------------------------------------------------
 
+
 def test_model_pose_then_link_pose(tmp_path):
-    path = world(tmp_path, model("maze", "1 2 0 0 -0 1.5707963267948966",
-                                 link("Wall_0", "0.5 0 0 0 -0 0", "0.41 0.01 0.1"),
-                                 link("Wall_1", "0 0 0 0 -0 1.5707963267948966", "0.21 0.01 0.1")))
+    path = world(
+        tmp_path,
+        model(
+            "maze",
+            "1 2 0 0 -0 1.5707963267948966",
+            link("Wall_0", "0.5 0 0 0 -0 0", "0.41 0.01 0.1"),
+            link("Wall_1", "0 0 0 0 -0 1.5707963267948966", "0.21 0.01 0.1"),
+        ),
+    )
     maze = import_world(path)
     assert [w.name for w in maze.walls] == ["Wall_0", "Wall_1"]
     w0, w1 = maze.walls
@@ -79,8 +89,10 @@ def test_model_pose_then_link_pose(tmp_path):
 
 def test_collision_offset_is_in_the_link_frame(tmp_path):
     # like Wall_8 / Wall_21 of the course: the box is offset along the link's own x axis
-    path = world(tmp_path, model("maze", "0 0 0 0 0 0",
-                                 link("Wall_8", "1 0 0 0 0 1.5707963267948966", offset="0.1 0 0.05 0 0 0")))
+    path = world(
+        tmp_path,
+        model("maze", "0 0 0 0 0 0", link("Wall_8", "1 0 0 0 0 1.5707963267948966", offset="0.1 0 0.05 0 0 0")),
+    )
     (wall,) = import_world(path).walls
     approx_segment(wall, (1.0, -0.2), (1.0, 0.4))
 
@@ -107,8 +119,9 @@ def test_state_link_poses_are_world_poses(tmp_path):
         <link name='W'><pose>2 3 0 0 -0 1.5707963267948966</pose></link>
       </model>
     </state>\n"""
-    path = world(tmp_path, model("maze", "0 0 0 0 0 0", link("W", "9 9 0 0 0 0", "0.41 0.01 0.1",
-                                                             offset="0.1 0 0 0 0 0")), state)
+    path = world(
+        tmp_path, model("maze", "0 0 0 0 0 0", link("W", "9 9 0 0 0 0", "0.41 0.01 0.1", offset="0.1 0 0 0 0 0")), state
+    )
     (wall,) = import_world(path).walls
     # not composed with the model's state pose (1, 0): Gazebo sets the link's world pose
     approx_segment(wall, (2.0, 2.9), (2.0, 3.3))
@@ -119,9 +132,9 @@ def test_names_sorted_naturally_and_values_rounded(tmp_path):
     links.append(link("Wall_0", "0 0 0 0 0 1.5708", "0.21 0.01 0.1"))  # x ends at -3.7e-7 and +3.7e-7
     maze = import_world(world(tmp_path, model("maze", "0 0 0 0 0 0", *links)))
     assert [w.name for w in maze.walls] == ["Wall_0", "Wall_1", "Wall_2", "Wall_10"]
-    assert maze.walls[0].start[1] < maze.walls[0].end[1]          # vertical walls point towards +y
+    assert maze.walls[0].start[1] < maze.walls[0].end[1]  # vertical walls point towards +y
     for w in maze.walls[1:]:
-        assert w.start[0] < w.end[0]                              # horizontal ones towards +x
+        assert w.start[0] < w.end[0]  # horizontal ones towards +x
     for w in maze.walls:
         for v in (*w.start, *w.end):
             assert v == round(v, 6)
@@ -130,8 +143,10 @@ def test_names_sorted_naturally_and_values_rounded(tmp_path):
 
 
 def test_pick_one_model_or_all(tmp_path):
-    path = world(tmp_path, model("a", "0 0 0 0 0 0", link("W", "0 0 0 0 0 0"))
-                 + model("b", "0 1 0 0 0 0", link("W", "0 0 0 0 0 0")))
+    path = world(
+        tmp_path,
+        model("a", "0 0 0 0 0 0", link("W", "0 0 0 0 0 0")) + model("b", "0 1 0 0 0 0", link("W", "0 0 0 0 0 0")),
+    )
     assert [w.name for w in import_world(path).walls] == ["a::W", "b::W"]
     (wall,) = import_world(path, model="b").walls
     assert wall.name == "W" and wall.start[1] == pytest.approx(1.0)
@@ -147,6 +162,7 @@ def test_spawns_argument(tmp_path):
 
 
 # --- (b) user errors --------------------------------------------------------------------------
+
 
 def test_missing_file(tmp_path):
     with pytest.raises(UserError, match="world file not found") as exc:
@@ -172,18 +188,23 @@ def test_not_sdf(tmp_path):
 def test_no_box_walls(tmp_path):
     with pytest.raises(UserError, match="no box walls found") as exc:
         import_world(world(tmp_path, ""))
-    assert exc.value.problems[0].line == 3           # the <world> element
+    assert exc.value.problems[0].line == 3  # the <world> element
 
 
 def test_non_box_geometry_in_a_wall_model(tmp_path):
     cylinder = "<cylinder><radius>0.1</radius><length>0.1</length></cylinder>"
-    path = world(tmp_path, model("maze", "0 0 0 0 0 0", link("W", "0 0 0 0 0 0"),
-                                 link("Pillar", "0 0 0 0 0 0", geometry=cylinder)))
+    path = world(
+        tmp_path,
+        model("maze", "0 0 0 0 0 0", link("W", "0 0 0 0 0 0"), link("Pillar", "0 0 0 0 0 0", geometry=cylinder)),
+    )
     with pytest.raises(UserError, match="link 'Pillar' has a <cylinder>") as exc:
         import_world(path)
     problem = exc.value.problems[0]
-    assert problem.line == path.read_text().splitlines().index(
-        next(ln for ln in path.read_text().splitlines() if "<cylinder>" in ln)) + 1
+    assert (
+        problem.line
+        == path.read_text().splitlines().index(next(ln for ln in path.read_text().splitlines() if "<cylinder>" in ln))
+        + 1
+    )
     with pytest.raises(UserError, match="<plane>"):
         import_world(path, model="ground_plane")
 
@@ -197,9 +218,11 @@ def test_bad_numbers_point_at_the_line(tmp_path):
 
 def test_doctype_and_entities_are_refused(tmp_path):
     path = tmp_path / "lol.world"
-    path.write_text('<?xml version="1.0"?>\n<!DOCTYPE lolz [\n <!ENTITY lol "lol">\n'
-                    ' <!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;">\n]>\n'
-                    "<sdf><world name='w'><model name='m'><link name='&lol2;'/></model></world></sdf>\n")
+    path.write_text(
+        '<?xml version="1.0"?>\n<!DOCTYPE lolz [\n <!ENTITY lol "lol">\n'
+        ' <!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;">\n]>\n'
+        "<sdf><world name='w'><model name='m'><link name='&lol2;'/></model></world></sdf>\n"
+    )
     with pytest.raises(UserError, match="DOCTYPE and ENTITY declarations are not allowed") as exc:
         import_world(path)
     assert exc.value.problems[0].line == 2
@@ -215,6 +238,7 @@ def test_tilted_and_square_boxes(tmp_path):
 
 
 # --- (c) the course worlds --------------------------------------------------------------------
+
 
 def course(name: str) -> tuple[Path, dict]:
     return WORLDS / f"{name}.world", json.loads((COURSE / f"{name}.json").read_text())
@@ -242,17 +266,18 @@ def test_course_state_pose_and_offsets():
     path, _ = course("maze_6x6")
     walls = {w.name: w for w in import_world(path).walls}
     # <state> puts the model at (-0.2, -0.4, yaw -pi), not at its own <pose> (0.6, 0.6)
-    approx_segment(walls["Wall_21"], (-0.8, -1.0), (0.4, -1.0), tol=1e-5)   # offset 0.4 along it
+    approx_segment(walls["Wall_21"], (-0.8, -1.0), (0.4, -1.0), tol=1e-5)  # offset 0.4 along it
     path, _ = course("two_parts_maze")
     walls = {w.name: w for w in import_world(path).walls}
-    approx_segment(walls["Wall_8"], (0.0, 0.2), (0.6, 0.2), tol=1e-5)       # offset 0.1 along it
+    approx_segment(walls["Wall_8"], (0.0, 0.2), (0.6, 0.2), tol=1e-5)  # offset 0.1 along it
 
 
 # --- (d) the committed mazes ------------------------------------------------------------------
 
-SPAWNS = {"two_parts_maze": {"part1": (0.1, 0.1, 0.0), "part2": (0.5, 0.3, math.pi / 2),
-                             "bonus": (1.3, 0.1, math.pi)},
-          "maze_6x6": {"start": (0.1, 0.1, 0.0)}}
+SPAWNS = {
+    "two_parts_maze": {"part1": (0.1, 0.1, 0.0), "part2": (0.5, 0.3, math.pi / 2), "bonus": (1.3, 0.1, math.pi)},
+    "maze_6x6": {"start": (0.1, 0.1, 0.0)},
+}
 
 
 @pytest.mark.parametrize("name", sorted(SPAWNS))
@@ -260,8 +285,10 @@ def test_committed_maze_files(name):
     maze = load_maze(MAZES / f"{name}.yaml")
     assert maze.name == name and maze.description and maze.source == f"{name}.world"
     assert {k: (s.x, s.y, s.yaw) for k, s in maze.spawns.items()} == {
-        k: pytest.approx(v, abs=1e-6) for k, v in SPAWNS[name].items()}
+        k: pytest.approx(v, abs=1e-6) for k, v in SPAWNS[name].items()
+    }
     path, _ = course(name)
     imported = import_world(path)
-    assert [(w.name, w.start, w.end, w.thickness) for w in maze.walls] == \
-        [(w.name, w.start, w.end, w.thickness) for w in imported.walls]
+    assert [(w.name, w.start, w.end, w.thickness) for w in maze.walls] == [
+        (w.name, w.start, w.end, w.thickness) for w in imported.walls
+    ]

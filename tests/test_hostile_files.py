@@ -27,8 +27,9 @@ COMMANDS = {
 
 
 def cli(args, cwd):
-    return subprocess.run([sys.executable, "-m", "thymio_bt", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=60)
+    return subprocess.run(
+        [sys.executable, "-m", "thymio_bt", *args], cwd=cwd, capture_output=True, text=True, timeout=60
+    )
 
 
 def make(kind: str, tmp_path: Path, suffix: str, what: str) -> str:
@@ -40,18 +41,27 @@ def make(kind: str, tmp_path: Path, suffix: str, what: str) -> str:
     elif kind == "folder":
         path.mkdir()
     elif kind == "huge":
-        with open(path, "wb") as file:                      # sparse: no disk used
+        with open(path, "wb") as file:  # sparse: no disk used
             file.truncate(LIMITS[what] + 1)
     elif kind == "binary":
         path.write_bytes(b"name: x\n\xff\xfe\x00binary")
     return str(path)
 
 
-KINDS = {"device": "not a regular file", "fifo": "not a regular file", "folder": "is a folder", "huge": "cap for",
-         "binary": "not UTF-8 text"}
+KINDS = {
+    "device": "not a regular file",
+    "fifo": "not a regular file",
+    "folder": "is a folder",
+    "huge": "cap for",
+    "binary": "not UTF-8 text",
+}
 # XML declares its own encoding, so the XML parser judges a binary .xml/.world (tested below)
-CASES = [(command, kind) for command in COMMANDS for kind in KINDS
-         if not (kind == "binary" and COMMANDS[command][1] in (".xml", ".world"))]
+CASES = [
+    (command, kind)
+    for command in COMMANDS
+    for kind in KINDS
+    if not (kind == "binary" and COMMANDS[command][1] in (".xml", ".world"))
+]
 
 
 @pytest.mark.parametrize("command, kind", CASES)
@@ -92,9 +102,10 @@ FOREIGN = {
 @pytest.mark.parametrize("suffix, args", [(".world", ["maze", "import"]), (".xml", ["validate"])])
 def test_a_foreign_or_tricky_xml_file_is_a_message_and_nothing_is_fetched(tmp_path, case, suffix, args):
     path = tmp_path / f"input{suffix}"
-    path.write_text(FOREIGN[case].replace("<sdf", "<root").replace("</sdf>", "</root>") if suffix == ".xml"
-                    else FOREIGN[case])
+    path.write_text(
+        FOREIGN[case].replace("<sdf", "<root").replace("</sdf>", "</root>") if suffix == ".xml" else FOREIGN[case]
+    )
     done = cli([*args, str(path)], tmp_path)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert str(path) in done.stderr and len(done.stderr.splitlines()) <= 2
-    assert "root:" not in done.stderr + done.stdout                     # /etc/passwd was not read
+    assert "root:" not in done.stderr + done.stdout  # /etc/passwd was not read

@@ -18,21 +18,24 @@ def invoke(*args):
     return CliRunner().invoke(main, list(args))
 
 
-@pytest.mark.parametrize("setting, message", [
-    ("time_limit=-5", "time_limit must be between 0.1 and 36000, got -5"),
-    ("time_limit=0", "time_limit must be between"),
-    ("time_limit=99999999999999999999999", "time_limit must be between 0.1 and 36000, got 1e+23"),
-    ("time_limit=1e400", "is not a finite number"),
-    ("time_limit=nan", "expected a number"),
-    ("tick_hz=0", "tick_hz must be between 1 and 100, got 0"),
-    ("tick_hz=1e9", "tick_hz must be between 1 and 100"),
-    ("seed=-3", "seed must be a whole number >= 0"),
-    ("seed=1.5", "seed must be a whole number >= 0"),
-    ("seed=99999999999999999999999", "seed must be a whole number >= 0"),
-    ("noise.wheel=nan", "finite number"),
-    ("noise.wheel=-1", "greater than or equal to 0"),
-    ("cruise=inf", "not a number"),
-])
+@pytest.mark.parametrize(
+    "setting, message",
+    [
+        ("time_limit=-5", "time_limit must be between 0.1 and 36000, got -5"),
+        ("time_limit=0", "time_limit must be between"),
+        ("time_limit=99999999999999999999999", "time_limit must be between 0.1 and 36000, got 1e+23"),
+        ("time_limit=1e400", "is not a finite number"),
+        ("time_limit=nan", "expected a number"),
+        ("tick_hz=0", "tick_hz must be between 1 and 100, got 0"),
+        ("tick_hz=1e9", "tick_hz must be between 1 and 100"),
+        ("seed=-3", "seed must be a whole number >= 0"),
+        ("seed=1.5", "seed must be a whole number >= 0"),
+        ("seed=99999999999999999999999", "seed must be a whole number >= 0"),
+        ("noise.wheel=nan", "finite number"),
+        ("noise.wheel=-1", "greater than or equal to 0"),
+        ("cruise=inf", "not a number"),
+    ],
+)
 @pytest.mark.parametrize("command", ["run", "validate", "sweep"])
 def test_set_is_checked_like_the_file_before_anything_runs(command, setting, message):
     mission = "missions/maze_part1_2.yaml" if setting.startswith("cruise") else SQUARE
@@ -41,13 +44,16 @@ def test_set_is_checked_like_the_file_before_anything_runs(command, setting, mes
     assert "Traceback" not in result.output and "SUCCESS" not in result.output
 
 
-@pytest.mark.parametrize("text, message", [
-    ("time_limit: .nan", "nan is not a finite number"),
-    ("time_limit: 1e9", "time_limit must be between"),
-    ("tick_hz: .inf", "inf is not a finite number"),
-    ("seed: 99999999999999999999999999999", "seed must be a whole number"),
-    ("seed: -1", "seed must be a whole number"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("time_limit: .nan", "nan is not a finite number"),
+        ("time_limit: 1e9", "time_limit must be between"),
+        ("tick_hz: .inf", "inf is not a finite number"),
+        ("seed: 99999999999999999999999999999", "seed must be a whole number"),
+        ("seed: -1", "seed must be a whole number"),
+    ],
+)
 def test_settings_in_the_file_are_checked(tmp_path, text, message):
     path = tmp_path / "m.yaml"
     path.write_text(f"maze: arena\nstart: centre\n{text}\ntree: Stop\n")
@@ -63,9 +69,19 @@ def test_a_valid_seed_from_set_is_the_same_as_the_option():
     assert by_set.stdout.split('"wall_time"')[0] == by_option.stdout.split('"wall_time"')[0]
 
 
-@pytest.mark.parametrize("option", [["--realtime", "0"], ["--realtime", "-1"], ["--realtime", "nan"],
-                                    ["--realtime", "inf"], ["--speedup", "0"], ["--speedup", "nan"],
-                                    ["--seed", "-1"], ["--seed", "1e3"]])
+@pytest.mark.parametrize(
+    "option",
+    [
+        ["--realtime", "0"],
+        ["--realtime", "-1"],
+        ["--realtime", "nan"],
+        ["--realtime", "inf"],
+        ["--speedup", "0"],
+        ["--speedup", "nan"],
+        ["--seed", "-1"],
+        ["--seed", "1e3"],
+    ],
+)
 def test_option_numbers_are_finite_and_in_range(option):
     result = invoke("run", SQUARE, "-q", *option)
     assert result.exit_code == 2 and f"Invalid value for '{option[0]}'" in result.output
@@ -86,16 +102,21 @@ def test_a_yaw_is_normalised_and_a_yaw_in_range_kept_exactly(tmp_path):
     assert load_mission(path, start="0.6,0.6,pi/2").start.yaw == math.pi / 2
 
 
-@pytest.mark.parametrize("start, reason", [
-    ("0.6,0.6,0", "overlaps"),                    # on the big block in the middle
-    ("0.3,0.6,0", "overlaps"),                    # the hull over its edge, the centre outside it
-    ("5,5,0", "outside the maze"),
-])
+@pytest.mark.parametrize(
+    "start, reason",
+    [
+        ("0.6,0.6,0", "overlaps"),  # on the big block in the middle
+        ("0.3,0.6,0", "overlaps"),  # the hull over its edge, the centre outside it
+        ("5,5,0", "outside the maze"),
+    ],
+)
 def test_a_start_in_or_over_an_obstacle_is_refused(tmp_path, start, reason):
     maze = tmp_path / "block.yaml"
-    maze.write_text("name: block\nwalls:\n"
-                    "  - {from: [0, 0], to: [1.2, 0]}\n  - {from: [1.2, 0], to: [1.2, 1.2]}\n"
-                    "  - {from: [1.2, 1.2], to: [0, 1.2]}\n  - {from: [0, 1.2], to: [0, 0]}\n"
-                    "obstacles:\n  - {polygon: [[0.35, 0.35], [0.85, 0.35], [0.85, 0.85], [0.35, 0.85]]}\n")
+    maze.write_text(
+        "name: block\nwalls:\n"
+        "  - {from: [0, 0], to: [1.2, 0]}\n  - {from: [1.2, 0], to: [1.2, 1.2]}\n"
+        "  - {from: [1.2, 1.2], to: [0, 1.2]}\n  - {from: [0, 1.2], to: [0, 0]}\n"
+        "obstacles:\n  - {polygon: [[0.35, 0.35], [0.85, 0.35], [0.85, 0.85], [0.35, 0.85]]}\n"
+    )
     result = invoke("run", SQUARE, "--maze", str(maze), "--start", start)
     assert result.exit_code == 2 and "impossible start pose" in result.output and reason in result.output

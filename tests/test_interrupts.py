@@ -73,7 +73,7 @@ def test_sweep_stops_within_a_second_keeps_results_and_leaves_no_worker(tmp_path
     out, err = proc.communicate(timeout=10)
     stopped_in = time.monotonic() - sent
     assert proc.returncode == code, err
-    assert stopped_in < 5.0          # measured ~0.05 s; a 2-worker batch of this sweep is ~65 s
+    assert stopped_in < 5.0  # measured ~0.05 s; a 2-worker batch of this sweep is ~65 s
     assert not [pid for pid in workers if alive(pid)]
     data = json.loads((tmp_path / "s.json").read_text())
     assert data["interrupted"] == signal.Signals(sig).name and data["runs_requested"] == 2000
@@ -83,8 +83,26 @@ def test_sweep_stops_within_a_second_keeps_results_and_leaves_no_worker(tmp_path
 
 def test_a_failing_sweep_run_prints_the_command_that_reproduces_it(tmp_path):
     mission = str(ROOT / "missions/maze_part1_2.yaml")
-    done = subprocess.run([*CLI, "sweep", mission, "--runs", "2", "--seed-start", "5", "--workers", "1",
-                           "--set", "time_limit=12", "--out", "s.json"], cwd=tmp_path, capture_output=True, text=True)
+    done = subprocess.run(
+        [
+            *CLI,
+            "sweep",
+            mission,
+            "--runs",
+            "2",
+            "--seed-start",
+            "5",
+            "--workers",
+            "1",
+            "--set",
+            "time_limit=12",
+            "--out",
+            "s.json",
+        ],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode == 0, done.stderr
     failed = json.loads((tmp_path / "s.json").read_text())["results"][0]
     assert failed["status"] == "TIMEOUT" and f"reproduce: {failed['reproduce']}" in done.stdout
@@ -108,13 +126,23 @@ class DieOnSeed3(RobotBehaviour):
 """
 
 
-@pytest.mark.parametrize("body, message", [("os._exit(3)", "a worker process died (exit code 3)"),
-                                           ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL")])
+@pytest.mark.parametrize(
+    "body, message",
+    [
+        ("os._exit(3)", "a worker process died (exit code 3)"),
+        ("os.kill(os.getpid(), signal.SIGKILL)", "killed by SIGKILL"),
+    ],
+)
 def test_a_sweep_worker_that_dies_is_reported_not_a_traceback(tmp_path, body, message):
     (tmp_path / "dying.py").write_text(PLUGIN.replace("BODY", body))
     (tmp_path / "m.yaml").write_text("maze: arena\nstart: centre\nplugins: [dying.py]\ntree: DieOnSeed3\n")
-    done = subprocess.run([*CLI, "sweep", "m.yaml", "--runs", "40", "--workers", "2", "--out", "s.json"], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=60)
+    done = subprocess.run(
+        [*CLI, "sweep", "m.yaml", "--runs", "40", "--workers", "2", "--out", "s.json"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert done.returncode == 1 and message in done.stderr and "Traceback" not in done.stderr
     data = json.loads((tmp_path / "s.json").read_text())
     assert data["interrupted"].startswith("a worker process died") and data["runs"] < 40

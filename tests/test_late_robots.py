@@ -6,15 +6,15 @@ import math
 from types import SimpleNamespace
 
 import pytest
+from py_trees.common import Status
 
 from thymio_bt.behaviours import Context, MoveUntilWall
 from thymio_bt.behaviours.motion import DAMPED_GAIN_DELAY, late_gain
 from thymio_bt.behaviours.ticking import tick
-from thymio_bt.mission.expect import Expect, check
 from thymio_bt.maze import load_maze
+from thymio_bt.mission.expect import Expect, check
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 from thymio_bt.robot.model import COURSE
-from py_trees.common import Status
 
 
 class ScriptedRobot:
@@ -55,7 +55,7 @@ def test_one_glint_right_after_nothing_does_not_stop_move_until_wall():
         tick(node)
         statuses.append(node.status)
         robot.advance()
-    assert statuses == [Status.RUNNING] * 5          # held still for the glint's tick, then on its way
+    assert statuses == [Status.RUNNING] * 5  # held still for the glint's tick, then on its way
     assert robot.v == pytest.approx(0.1)
 
 
@@ -64,7 +64,7 @@ def test_a_wall_that_stays_near_stops_it_a_tick_later():
     node = MoveUntilWall("approach", MoveUntilWall.Params(distance=0.05), Context(robot=robot, entities=robot))
     tick(node)
     robot.advance()
-    tick(node)                                       # 4 cm right after nothing: checked, robot held
+    tick(node)  # 4 cm right after nothing: checked, robot held
     assert node.status == Status.RUNNING and robot.v == 0.0
     robot.advance()
     tick(node)
@@ -80,12 +80,20 @@ def test_approach_gains_are_capped_by_latency_only_on_late_robots():
 
 def test_expected_gaps_are_measured_on_the_true_pose_not_odometry():
     maze = load_maze("mazes/two_parts_maze.yaml")
-    truth = 0.595 - 0.05 - max(x for x, _ in COURSE.hull)          # base_link 5 cm from part 1's wall
-    event = {"t": 4.0, "kind": "behaviour_end", "path": "course/part 1",
-             "pose": {"x": truth + 0.013, "y": 0.1, "yaw": 0.0}}     # odometry 1.3 cm too far
-    result = SimpleNamespace(final_pose={"x": truth, "y": 0.1, "yaw": 0.0}, collisions=0, sim_time=5.0,
-                             events=[event], trajectory=[(3.9, truth - 0.001, 0.1, 0.0), (4.0, truth, 0.1, 0.0),
-                                                         (4.1, truth, 0.1, 0.0)])
+    truth = 0.595 - 0.05 - max(x for x, _ in COURSE.hull)  # base_link 5 cm from part 1's wall
+    event = {
+        "t": 4.0,
+        "kind": "behaviour_end",
+        "path": "course/part 1",
+        "pose": {"x": truth + 0.013, "y": 0.1, "yaw": 0.0},
+    }  # odometry 1.3 cm too far
+    result = SimpleNamespace(
+        final_pose={"x": truth, "y": 0.1, "yaw": 0.0},
+        collisions=0,
+        sim_time=5.0,
+        events=[event],
+        trajectory=[(3.9, truth - 0.001, 0.1, 0.0), (4.0, truth, 0.1, 0.0), (4.1, truth, 0.1, 0.0)],
+    )
     expect = Expect.model_validate({"gaps": [{"after": "course/part 1", "distance": 0.05, "tolerance": 0.001}]})
     assert check(expect, result, maze, COURSE) == []
 
@@ -95,15 +103,15 @@ def test_wall_follow_is_not_out_of_the_maze_while_a_wall_is_in_front():
     from thymio_bt.behaviours import WallFollow
 
     robot = ScriptedRobot([0.05, 0.05, math.inf])
-    robot.x = 1.2                                           # beyond the box by odometry
+    robot.x = 1.2  # beyond the box by odometry
     ctx = Context(robot=robot, entities=robot, bounds=(0.0, 0.0, 1.0, 1.0))
     node = WallFollow("follow", WallFollow.Params(), ctx)
     tick(node)
-    assert node.status == Status.RUNNING                    # a wall ahead: still inside
+    assert node.status == Status.RUNNING  # a wall ahead: still inside
     robot.advance()
     robot.advance()
     tick(node)
-    assert node.status == Status.SUCCESS                    # nothing in front any more: out
+    assert node.status == Status.SUCCESS  # nothing in front any more: out
 
 
 class DriftingCorridor:
@@ -159,7 +167,7 @@ def test_wall_follow_retakes_the_corridor_heading_from_the_side_walls(bias_deg):
     robot = DriftingCorridor(math.radians(bias_deg))
     node = WallFollow("follow", WallFollow.Params(), Context(robot=robot, entities=robot, bounds=(0, -1, 5, 1)))
     tick(node)
-    assert node.heading == 0.0                                        # odometry's yaw at the start
+    assert node.heading == 0.0  # odometry's yaw at the start
     for _ in range(10):
         robot.advance()
         tick(node)
@@ -183,7 +191,7 @@ def test_wall_follow_holds_on_a_glint_after_a_far_reading_and_does_not_turn():
         speeds.append(robot.v)
         robot.advance()
     assert node.turns == [] and node.mode == "forward"
-    assert speeds[2] == 0.0 and speeds[3] > 0.0           # held for the glint's tick, then on its way
+    assert speeds[2] == 0.0 and speeds[3] > 0.0  # held for the glint's tick, then on its way
 
 
 def test_wall_follow_takes_a_reading_of_zero_for_nothing():

@@ -7,30 +7,38 @@ import sys
 import pytest
 
 
-@pytest.mark.parametrize("modules, absent", [
-    ("thymio_bt.mission, thymio_bt.behaviours", ("pymunk",)),
-    ("thymio_bt.cli", ("pymunk", "py_trees", "pydantic", "matplotlib", "pygame", "numpy", "tdmclient")),
-    ("thymio_bt.cli, thymio_bt.run.runner, thymio_bt.mission", ("matplotlib", "pygame", "numpy", "tdmclient")),
-])
+@pytest.mark.parametrize(
+    "modules, absent",
+    [
+        ("thymio_bt.mission, thymio_bt.behaviours", ("pymunk",)),
+        ("thymio_bt.cli", ("pymunk", "py_trees", "pydantic", "matplotlib", "pygame", "numpy", "tdmclient")),
+        ("thymio_bt.cli, thymio_bt.run.runner, thymio_bt.mission", ("matplotlib", "pygame", "numpy", "tdmclient")),
+    ],
+)
 def test_imports_stay_in_their_layer(modules, absent):
     code = f"import sys, {modules}; print(','.join(m for m in {absent!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""
 
 
-@pytest.mark.parametrize("args", [
-    ["validate", "missions/maze_part1_2.yaml", "mazes/two_parts_maze.yaml"],
-    ["tree", "missions/maze_bonus.yaml", "-o", "{tmp}/t.dot"],
-    ["schema"],
-    ["behaviours", "parallel"],
-    ["backends"],
-])
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["validate", "missions/maze_part1_2.yaml", "mazes/two_parts_maze.yaml"],
+        ["tree", "missions/maze_bonus.yaml", "-o", "{tmp}/t.dot"],
+        ["schema"],
+        ["behaviours", "parallel"],
+        ["backends"],
+    ],
+)
 def test_commands_that_run_nothing_load_no_physics_engine(args, tmp_path):
     args = [a.replace("{tmp}", str(tmp_path)) for a in args]
-    code = ("import sys\nfrom thymio_bt.cli import main\n"
-            f"sys.argv = ['thymio-bt', *{args!r}]\n"
-            "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
-            "print('pymunk' in sys.modules, file=sys.stderr)")
+    code = (
+        "import sys\nfrom thymio_bt.cli import main\n"
+        f"sys.argv = ['thymio-bt', *{args!r}]\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        "print('pymunk' in sys.modules, file=sys.stderr)"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip().splitlines()[-1] == "False", args
@@ -45,8 +53,12 @@ def _import_graph():
     graph = {}
     for module, path in files.items():
         tree = ast.parse(path.read_text())
-        hidden = {id(n) for node in ast.walk(tree) if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
-                  for n in ast.walk(node)}
+        hidden = {
+            id(n)
+            for node in ast.walk(tree)
+            if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
+            for n in ast.walk(node)
+        }
         package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
         imported = set()
         for node in ast.walk(tree):
@@ -57,7 +69,7 @@ def _import_graph():
             elif isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:
-                    base = ".".join(package[:len(package) - node.level + 1] + ([base] if base else []))
+                    base = ".".join(package[: len(package) - node.level + 1] + ([base] if base else []))
                 imported |= {f"{base}.{a.name}" if f"{base}.{a.name}" in files else base for a in node.names}
         graph[module] = imported
     return files, graph

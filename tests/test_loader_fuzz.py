@@ -20,33 +20,96 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from thymio_bt.errors import UserError
-from thymio_bt.maze import load_maze
-from thymio_bt.mission import load_mission
 from thymio_bt.inputs.units import SI_UNIT, UNITS, Quantity, UnitError, parse_value
 from thymio_bt.inputs.yamlio import loads_yaml
+from thymio_bt.maze import load_maze
+from thymio_bt.mission import load_mission
 
 ROOT = Path(__file__).resolve().parents[1]
 
-FUZZ = settings(derandomize=True, deadline=timedelta(seconds=2), database=None,
-                suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+FUZZ = settings(
+    derandomize=True,
+    deadline=timedelta(seconds=2),
+    database=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
+)
 
 
 def fuzz(examples: int) -> settings:
     """Deterministic settings; the deadline catches a hang (a load takes ~10 ms)."""
     return settings(FUZZ, max_examples=examples)
 
+
 #: Characters that matter to YAML, plus a few that are not allowed in it at all.
 YAML_CHARS = list(" :-[]{},&*!|>'\"#%@`?\n\t\\.0123456789abcdefxyz_$/") + ["\x00", "\x07", "\ufeff", "\u2028", "é"]
 
 #: Values a student (or a cat on the keyboard) might write where a value goes.
 NASTY_VALUES = [
-    "", "~", "null", "true", "no", "-1", "0", "1e999", "-1e999", ".nan", ".inf", "9" * 5000, "0x1F", "0o17",
-    "2020-02-30", "12:30:00", "[1, 2]", "{a: 1}", "[]", "{}", "[0.5, 0.3]", "[0.5, 0.3, pi/2, 1]", "[x, y, z]",
-    "pi/", "5 parsecs", "5cm + 90deg", "2cm*3cm", "1/0", "((((1)))", ")", "-" * 100 + "1", "(" * 100 + "1",
-    "$nope", "$", "bb:", "bb:turn_angle", "*undefined", "&a x", "!!python/object/apply:os.system ['true']",
-    "!!int abc", "!!float x", "!!binary ===", "!!timestamp nope", "!!set {a}", "!unknown x", "|", ">",
-    "'unterminated", '"\\x00"', '"\\u0007"', "part9", "thymio", "forever", "success_on_one", "lib/maze_legs.yaml",
-    "../mazes/two_parts_maze.yaml", "/", "..", ".", "-90deg", "360deg", "1e-400", "5 cm/s", "10 Hz", "90°",
+    "",
+    "~",
+    "null",
+    "true",
+    "no",
+    "-1",
+    "0",
+    "1e999",
+    "-1e999",
+    ".nan",
+    ".inf",
+    "9" * 5000,
+    "0x1F",
+    "0o17",
+    "2020-02-30",
+    "12:30:00",
+    "[1, 2]",
+    "{a: 1}",
+    "[]",
+    "{}",
+    "[0.5, 0.3]",
+    "[0.5, 0.3, pi/2, 1]",
+    "[x, y, z]",
+    "pi/",
+    "5 parsecs",
+    "5cm + 90deg",
+    "2cm*3cm",
+    "1/0",
+    "((((1)))",
+    ")",
+    "-" * 100 + "1",
+    "(" * 100 + "1",
+    "$nope",
+    "$",
+    "bb:",
+    "bb:turn_angle",
+    "*undefined",
+    "&a x",
+    "!!python/object/apply:os.system ['true']",
+    "!!int abc",
+    "!!float x",
+    "!!binary ===",
+    "!!timestamp nope",
+    "!!set {a}",
+    "!unknown x",
+    "|",
+    ">",
+    "'unterminated",
+    '"\\x00"',
+    '"\\u0007"',
+    "part9",
+    "thymio",
+    "forever",
+    "success_on_one",
+    "lib/maze_legs.yaml",
+    "../mazes/two_parts_maze.yaml",
+    "/",
+    "..",
+    ".",
+    "-90deg",
+    "360deg",
+    "1e-400",
+    "5 cm/s",
+    "10 Hz",
+    "90°",
 ]
 
 #: File to mutate (relative to the checkout) -> how to load after mutating it.
@@ -87,6 +150,7 @@ def load_target(sandbox: Path, target: str) -> None:
 
 # ------------------------------------------------------------------------------------- arbitrary text
 
+
 @fuzz(250)
 @given(st.one_of(st.text(), st.text(alphabet=st.sampled_from(YAML_CHARS), max_size=200)))
 def test_yaml_loader_on_arbitrary_text(text: str) -> None:
@@ -102,6 +166,7 @@ def test_mission_loader_on_arbitrary_text(sandbox: Path, text: str) -> None:
 
 
 # ------------------------------------------------------------------------------------- mutations
+
 
 def _mutate(lines: list[str], data: st.DataObject) -> list[str]:
     lines = list(lines)
@@ -122,7 +187,7 @@ def _mutate(lines: list[str], data: st.DataObject) -> list[str]:
             pos = data.draw(st.integers(0, len(line)), label="column")
             new = data.draw(st.sampled_from(YAML_CHARS), label="character")
             cut = data.draw(st.integers(0, 1), label="replace")
-            lines[i] = line[:pos] + new + line[pos + cut:]
+            lines[i] = line[:pos] + new + line[pos + cut :]
         elif edit == "value":
             line = lines[i]
             if ":" in line:
@@ -147,13 +212,16 @@ def test_loaders_on_mutated_real_files(sandbox: Path, target: str, data: st.Data
 
 
 @fuzz(250)
-@given(target=st.sampled_from([t for t in sorted(TARGETS) if TARGETS[t][0] == "mission"]),
-       value=st.sampled_from(NASTY_VALUES), data=st.data())
-def test_every_value_of_a_mission_replaced_by_a_nasty_one(sandbox: Path, target: str, value: str,
-                                                          data: st.DataObject) -> None:
+@given(
+    target=st.sampled_from([t for t in sorted(TARGETS) if TARGETS[t][0] == "mission"]),
+    value=st.sampled_from(NASTY_VALUES),
+    data=st.data(),
+)
+def test_every_value_of_a_mission_replaced_by_a_nasty_one(
+    sandbox: Path, target: str, value: str, data: st.DataObject
+) -> None:
     original = (ROOT / target).read_text(encoding="utf-8")
-    places = [i for i, line in enumerate(original.split("\n"))
-              if ":" in line and not line.lstrip().startswith("#")]
+    places = [i for i, line in enumerate(original.split("\n")) if ":" in line and not line.lstrip().startswith("#")]
     i = data.draw(st.sampled_from(places), label="line")
     lines = original.split("\n")
     key = lines[i].partition(":")[0]
@@ -171,20 +239,35 @@ def test_every_value_of_a_mission_replaced_by_a_nasty_one(sandbox: Path, target:
         path.write_text(original, encoding="utf-8")
 
 
-_OVERRIDE_NAMES = ["cruise", "final_stop", "tick_hz", "time_limit", "seed", "noise.wheel", "noise.range_sd",
-                   "noise.x", "noise.", "nope", ""]
+_OVERRIDE_NAMES = [
+    "cruise",
+    "final_stop",
+    "tick_hz",
+    "time_limit",
+    "seed",
+    "noise.wheel",
+    "noise.range_sd",
+    "noise.x",
+    "noise.",
+    "nope",
+    "",
+]
 _TEXT_OR_NASTY = st.sampled_from(NASTY_VALUES) | st.text(max_size=20)
 
 
 @fuzz(150)
-@given(overrides=st.dictionaries(st.sampled_from(_OVERRIDE_NAMES) | st.text(max_size=8), _TEXT_OR_NASTY, max_size=3),
-       start=st.none() | _TEXT_OR_NASTY,
-       maze=st.none() | st.sampled_from(["../mazes/arena.yaml", "arena", "nope", "", "/", "\0", "missions"]))
-def test_mission_loader_with_arbitrary_command_line_values(overrides: dict[str, str], start: str | None,
-                                                           maze: str | None) -> None:
+@given(
+    overrides=st.dictionaries(st.sampled_from(_OVERRIDE_NAMES) | st.text(max_size=8), _TEXT_OR_NASTY, max_size=3),
+    start=st.none() | _TEXT_OR_NASTY,
+    maze=st.none() | st.sampled_from(["../mazes/arena.yaml", "arena", "nope", "", "/", "\0", "missions"]),
+)
+def test_mission_loader_with_arbitrary_command_line_values(
+    overrides: dict[str, str], start: str | None, maze: str | None
+) -> None:
     # what --set NAME=VALUE, --start X,Y,YAW and --maze FILE pass to the loader
-    must_not_crash(lambda: load_mission(ROOT / "missions" / "maze_part1_2.yaml", overrides=overrides,
-                                        start=start, maze=maze))
+    must_not_crash(
+        lambda: load_mission(ROOT / "missions" / "maze_part1_2.yaml", overrides=overrides, start=start, maze=maze)
+    )
 
 
 def test_the_sandbox_loads_the_unmutated_files(sandbox: Path) -> None:
@@ -196,8 +279,33 @@ def test_the_sandbox_loads_the_unmutated_files(sandbox: Path) -> None:
 
 # ------------------------------------------------------------------------------------- units
 
-_TOKENS = [*UNITS, "pi", "$side", "$zero", "$nope", "+", "-", "*", "/", "(", ")", " ", "1", "0", "2.5", ".5", "1e3",
-           "1e999", "e", "x", "°", "/s", "1.", "m/", "--"]
+_TOKENS = [
+    *UNITS,
+    "pi",
+    "$side",
+    "$zero",
+    "$nope",
+    "+",
+    "-",
+    "*",
+    "/",
+    "(",
+    ")",
+    " ",
+    "1",
+    "0",
+    "2.5",
+    ".5",
+    "1e3",
+    "1e999",
+    "e",
+    "x",
+    "°",
+    "/s",
+    "1.",
+    "m/",
+    "--",
+]
 
 
 def _resolve(name: str) -> Quantity:
@@ -223,8 +331,18 @@ def test_parse_value_raises_only_unit_errors(text: str) -> None:
     _check_parse(text)
 
 
-@pytest.mark.parametrize("text", ["(" * 10_000 + "1" + ")" * 10_000, "-" * 100_000 + "1", "1" * 100_000,
-                                  "1e308*1e308", "1e308*1e308-1e308*1e308", "1/1e-400", "$" + "a" * 10_000])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "(" * 10_000 + "1" + ")" * 10_000,
+        "-" * 100_000 + "1",
+        "1" * 100_000,
+        "1e308*1e308",
+        "1e308*1e308-1e308*1e308",
+        "1/1e-400",
+        "$" + "a" * 10_000,
+    ],
+)
 def test_parse_value_survives_pathological_text(text: str) -> None:
     _check_parse(text)
 

@@ -5,12 +5,12 @@ import math
 
 import pytest
 
+from thymio_bt.backends.sim.noise import REALISTIC
 from thymio_bt.behaviours.cellmap import CellMap, GridFrame, centre_cells
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse, to_text
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import run_mission
-from thymio_bt.backends.sim.noise import REALISTIC
 from thymio_bt.testing import run_tree
 
 CELL = 0.18
@@ -24,7 +24,7 @@ def test_marking_a_side_marks_the_neighbours_side_too_and_the_outline_is_a_wall(
     cells = CellMap(3, 2)
     cells.mark((0, 0), "E", True)
     assert cells.wall((1, 0), "W") is True
-    assert cells.wall((0, 0), "N") is None              # not seen yet
+    assert cells.wall((0, 0), "N") is None  # not seen yet
     assert cells.wall((0, 0), "S") is True and cells.wall((2, 1), "E") is True
 
 
@@ -32,7 +32,7 @@ def test_flood_fill_counts_steps_around_known_walls_and_assumes_unknown_sides_op
     cells = CellMap(3, 1)
     assert cells.distances({(2, 0)}) == {(2, 0): 0, (1, 0): 1, (0, 0): 2}
     cells.mark((1, 0), "E", True)
-    assert (0, 0) not in cells.distances({(2, 0)})      # the only way is walled off: no path
+    assert (0, 0) not in cells.distances({(2, 0)})  # the only way is walled off: no path
     assert cells.distances({(2, 0)}, known_only=True) == {(2, 0): 0}
 
 
@@ -43,7 +43,7 @@ def test_the_next_side_goes_downhill_straight_on_when_as_good_and_a_straight_run
     cells.mark((3, 0), "N", False)
     distance = cells.distances({(3, 1)}, known_only=True)
     assert cells.next_side((0, 0), "E", distance, known_only=True) == "E"
-    assert cells.straight_run((0, 0), "E", distance) == 3   # to (3, 0), where the path turns north
+    assert cells.straight_run((0, 0), "E", distance) == 3  # to (3, 0), where the path turns north
     open_map = CellMap(2, 2)
     both = open_map.distances({(1, 1)})
     assert open_map.next_side((0, 0), "N", both) == "N" and open_map.next_side((0, 0), "E", both) == "E"
@@ -80,13 +80,19 @@ def test_map_walls_marks_an_opening_ahead_and_the_cell_visited():
 
 def test_plan_move_then_move_cells_drives_to_the_goal_cell_centre():
     maze = text_maze(DEAD_END.replace("        |", "      G |"))
-    tree = {"sequence": [{"MapWalls": {}}, {"PlanMove": {"target": "goal", "known_only": False}},
-                         {"MoveDistance": {"distance": "bb:move_centre"}}, {"TurnAngle": {"angle": "bb:move_turn"}},
-                         {"MoveCells": {"distance": "bb:move_distance"}}]}
+    tree = {
+        "sequence": [
+            {"MapWalls": {}},
+            {"PlanMove": {"target": "goal", "known_only": False}},
+            {"MoveDistance": {"distance": "bb:move_centre"}},
+            {"TurnAngle": {"angle": "bb:move_turn"}},
+            {"MoveCells": {"distance": "bb:move_distance"}},
+        ]
+    }
     result = run_tree(tree, maze, seconds=20)
     assert result.status == "SUCCESS" and result.collisions == 0
     axle_x = result.final_pose["x"] - 0.0243 * math.cos(result.final_pose["yaw"])
-    assert axle_x == pytest.approx(1.5 * CELL, abs=0.002)        # one cell on: (1, 0)'s centre
+    assert axle_x == pytest.approx(1.5 * CELL, abs=0.002)  # one cell on: (1, 0)'s centre
 
 
 def test_plan_move_fails_with_no_path_when_the_map_closes_the_way():
@@ -95,8 +101,14 @@ o---o---o---o
 | S     | G |
 o---o---o---o
 """
-    tree = {"sequence": [{"MapWalls": {}}, {"MoveCells": {"distance": "18cm"}}, {"MapWalls": {}},
-                         {"PlanMove": {"target": "goal"}}]}
+    tree = {
+        "sequence": [
+            {"MapWalls": {}},
+            {"MoveCells": {"distance": "18cm"}},
+            {"MapWalls": {}},
+            {"PlanMove": {"target": "goal"}},
+        ]
+    }
     result = run_tree(tree, text_maze(closed), seconds=5)
     assert result.status == "FAILURE" and result.code == "NO_PATH"
 
@@ -148,8 +160,8 @@ o---o---o---o---o
     assert result.status == "SUCCESS" and result.collisions == 0
     # the corridor is the row y in [0.18, 0.36]; its north side is the outline, known from the start
     walls = {tuple(w) for w in result.maze_map["walls"]}
-    assert walls == {(0.36, 0.18, 0.54, 0.18), (0.54, 0.18, 0.72, 0.18)}   # south of cells (2, 1), (3, 1)
-    assert result.maze_map["open_sides"] == 1                               # south of (1, 1)
+    assert walls == {(0.36, 0.18, 0.54, 0.18), (0.54, 0.18, 0.72, 0.18)}  # south of cells (2, 1), (3, 1)
+    assert result.maze_map["open_sides"] == 1  # south of (1, 1)
 
 
 def test_the_side_bias_is_a_median_that_a_few_wild_readings_do_not_move():
@@ -173,7 +185,7 @@ def test_the_mission_solves_a_16x16_contest_maze_with_noise_on_every_robot_model
 def test_the_report_map_has_the_distances_to_the_goal_and_the_shortest_known_path():
     result = run_mission(load_mission("missions/micromouse.yaml"))
     cells = result.maze_map
-    assert cells["goal"] == [[0, 3]]                       # the 4 x 4 example's G cell
+    assert cells["goal"] == [[0, 3]]  # the 4 x 4 example's G cell
     path = cells["path"]
     assert path[0] == [0, 0] and path[-1] == [0, 3]
     steps = {(i, j): d for i, j, d in cells["distances"]}

@@ -23,11 +23,11 @@ def test_the_example_reads_in_the_issues_coordinates():
     maze = read_micromouse(EXAMPLE)
     assert maze.bounds() == pytest.approx((-0.006, -0.006, 4 * CELL + 0.006, 4 * CELL + 0.006))
     start = maze.spawns["start"]
-    assert (start.x, start.y, start.yaw) == pytest.approx((0.09, 0.09, math.pi / 2))   # S opens north
-    assert [(a.start, a.end) for a in maze.goal] == [((0.0, 0.54), (0.18, 0.72))]      # G: cell (0, 3)
+    assert (start.x, start.y, start.yaw) == pytest.approx((0.09, 0.09, math.pi / 2))  # S opens north
+    assert [(a.start, a.end) for a in maze.goal] == [((0.0, 0.54), (0.18, 0.72))]  # G: cell (0, 3)
     walls = {(w.start, w.end) for w in maze.walls}
-    assert ((0.18, 0.0), (0.18, 0.18)) in walls            # the wall east of S
-    assert ((0.0, 0.36), (0.18, 0.36)) in walls            # the line 'o---o---o---o   o' is y = 2 cells
+    assert ((0.18, 0.0), (0.18, 0.18)) in walls  # the wall east of S
+    assert ((0.0, 0.36), (0.18, 0.36)) in walls  # the line 'o---o---o---o   o' is y = 2 cells
     assert all(w.thickness == 0.012 for w in maze.walls)
 
 
@@ -36,16 +36,19 @@ def test_text_round_trips():
     assert to_text(parse_micromouse(text)) == text
 
 
-@pytest.mark.parametrize("text, line, col, message", [
-    ("o---o---o\n|   |   |\no   o\n| S     |\no---o---o\n", 3, 9, "a post 'o' is missing"),
-    ("o---o---o\n| S |   |   x\no---o---o\n", 2, 10, "this line has 13 characters"),
-    ("o---o---o\n|       |\no---o---o\n", 1, 1, "no start cell 'S'"),
-    ("o---o---o\n| S      \no---o---o\n", 2, 9, "the outline is open"),
-    ("o---o   o\n| S     |\no---o---o\n", 1, 6, "the outline is open"),
-    ("o---o---o\n| S   X |\no---o---o\n", 2, 7, "unexpected 'X' in a cell"),
-    ("o---o---o\n| S | S |\no---o---o\n", 2, 7, "a second start cell"),
-    ("o--o\n", 1, 1, "not a micromouse maze"),
-])
+@pytest.mark.parametrize(
+    "text, line, col, message",
+    [
+        ("o---o---o\n|   |   |\no   o\n| S     |\no---o---o\n", 3, 9, "a post 'o' is missing"),
+        ("o---o---o\n| S |   |   x\no---o---o\n", 2, 10, "this line has 13 characters"),
+        ("o---o---o\n|       |\no---o---o\n", 1, 1, "no start cell 'S'"),
+        ("o---o---o\n| S      \no---o---o\n", 2, 9, "the outline is open"),
+        ("o---o   o\n| S     |\no---o---o\n", 1, 6, "the outline is open"),
+        ("o---o---o\n| S   X |\no---o---o\n", 2, 7, "unexpected 'X' in a cell"),
+        ("o---o---o\n| S | S |\no---o---o\n", 2, 7, "a second start cell"),
+        ("o--o\n", 1, 1, "not a micromouse maze"),
+    ],
+)
 def test_broken_mazes_are_located(tmp_path, text, line, col, message):
     path = tmp_path / "bad.txt"
     path.write_text(text)
@@ -74,12 +77,16 @@ def test_generated_contest_mazes_have_the_contests_shape(seed):
     cells = contest_maze(seed)
     assert (cells.cols, cells.rows) == (16, 16) and cells.goal == {(7, 7), (8, 7), (7, 8), (8, 8)}
     assert cells.open_sides(0, 0) == ["N"]
-    assert len(reachable(cells, cells.start)) == 256                        # every cell reachable
-    entrances = sum(1 for i, j in cells.goal for s in cells.open_sides(i, j)
-                    if (i + {"E": 1, "W": -1}.get(s, 0), j + {"N": 1, "S": -1}.get(s, 0)) not in cells.goal)
+    assert len(reachable(cells, cells.start)) == 256  # every cell reachable
+    entrances = sum(
+        1
+        for i, j in cells.goal
+        for s in cells.open_sides(i, j)
+        if (i + {"E": 1, "W": -1}.get(s, 0), j + {"N": 1, "S": -1}.get(s, 0)) not in cells.goal
+    )
     assert entrances == 1
     passages = sum(len(cells.open_sides(i, j)) for i in range(16) for j in range(16)) // 2
-    assert passages > 255                                                    # loops: more than a tree
+    assert passages > 255  # loops: more than a tree
     assert parse_micromouse(to_text(cells)) == cells
 
 

@@ -34,8 +34,10 @@ MAZE_CASES = sorted((BROKEN / "mazes").glob("*.yaml"))
 CASES = MISSION_CASES + MAZE_CASES
 MISSIONS = sorted((ROOT / "missions").glob("*.yaml"))
 
-_EXPECT = re.compile(r"# expect: (?:(?P<file>[^\s:]+):)?(?P<line>\d+):(?P<col>\d+) (?P<message>.+?)"
-                     r"(?: \| hint: (?P<hint>.+))?")
+_EXPECT = re.compile(
+    r"# expect: (?:(?P<file>[^\s:]+):)?(?P<line>\d+):(?P<col>\d+) (?P<message>.+?)"
+    r"(?: \| hint: (?P<hint>.+))?"
+)
 _CLI_ERROR = re.compile(r"error: (?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (?P<message>.*)")
 
 
@@ -98,6 +100,7 @@ def check_case(path: Path) -> list[Problem]:
 
 # ------------------------------------------------------------------------------------- the corpus
 
+
 def test_the_corpus_is_large_enough() -> None:
     assert len(MISSION_CASES) >= 30 and len(MAZE_CASES) >= 5
 
@@ -114,9 +117,16 @@ def test_a_case_without_expectation_fails(tmp_path: Path) -> None:
         check_case(case)
 
 
-@pytest.mark.parametrize("wrong", ["7:8 unknown node type", "8:7 unknown node type", "7:7 unknown behaviour",
-                                   "7:7 unknown node type | hint: did you mean 'MoveDistance'?",
-                                   "7:7 unknown node type 'MoveUntilWal'"])   # the hint is not named
+@pytest.mark.parametrize(
+    "wrong",
+    [
+        "7:8 unknown node type",
+        "8:7 unknown node type",
+        "7:7 unknown behaviour",
+        "7:7 unknown node type | hint: did you mean 'MoveDistance'?",
+        "7:7 unknown node type 'MoveUntilWal'",
+    ],
+)  # the hint is not named
 def test_a_wrong_expectation_fails(tmp_path: Path, wrong: str) -> None:
     lines = (BROKEN / "typo_behaviour.yaml").read_text().split("\n")
     case = tmp_path / "typo_behaviour.yaml"
@@ -162,31 +172,38 @@ def test_an_impossible_start_override_is_reported_as_such() -> None:
     with pytest.raises(UserError) as info:
         load_mission(ROOT / "missions" / "maze_part1_2.yaml", start="0.3,0.2,0")
     [problem] = info.value.problems
-    assert (problem.file, problem.message) == ("--start", "impossible start pose: pose (0.300, 0.200, yaw 0.000) "
-                                                          "overlaps a wall")
+    assert (problem.file, problem.message) == (
+        "--start",
+        "impossible start pose: pose (0.300, 0.200, yaw 0.000) overlaps a wall",
+    )
 
 
 def test_a_file_included_twice_is_read_once(tmp_path: Path) -> None:
     (tmp_path / "hop.yaml").write_text("subtrees:\n  hop:\n    tree: {MoveDistance: {distance: 5cm}}\n")
     (tmp_path / "a.yaml").write_text("include: hop.yaml\n")
     (tmp_path / "b.yaml").write_text("include: hop.yaml\n")
-    (tmp_path / "mission.yaml").write_text("maze: two_parts_maze\nstart: part1\ninclude: [a.yaml, b.yaml]\n"
-                                           "tree: {sequence: [hop, hop]}\n")
+    (tmp_path / "mission.yaml").write_text(
+        "maze: two_parts_maze\nstart: part1\ninclude: [a.yaml, b.yaml]\ntree: {sequence: [hop, hop]}\n"
+    )
     mission = load_mission(tmp_path / "mission.yaml")
     assert [n.behaviour for n in mission.tree.walk() if n.kind == "behaviour"] == ["MoveDistance"] * 2
 
 
-@pytest.mark.parametrize(("text", "where", "message"), [
-    ("a: !!int abc", (1, 4), "invalid !!int value"),
-    ("a: !!float x", (1, 4), "invalid !!float value"),
-    ("a: " + "1" * 5000, (1, 4), "invalid !!int value"),
-    ("a: &x [1, *x]", (1, 11), "the alias *x refers to the node that contains it"),
-    ("a: " + "[" * 300 + "]" * 300, (1, 203), "nesting is deeper than 200 levels"),
-    ("a: !!python/name:os.system", (1, 4), "the tag !!python/name:os.system is not allowed"),
-    ("base: &b {x: 1}\nc:\n  <<: *b\n  x: 2\n  x: 3\n", (5, 3), "duplicate key 'x'"),
-])
-def test_yaml_that_python_cannot_hold_is_a_problem_at_its_place(text: str, where: tuple[int, int],
-                                                                message: str) -> None:
+@pytest.mark.parametrize(
+    ("text", "where", "message"),
+    [
+        ("a: !!int abc", (1, 4), "invalid !!int value"),
+        ("a: !!float x", (1, 4), "invalid !!float value"),
+        ("a: " + "1" * 5000, (1, 4), "invalid !!int value"),
+        ("a: &x [1, *x]", (1, 11), "the alias *x refers to the node that contains it"),
+        ("a: " + "[" * 300 + "]" * 300, (1, 203), "nesting is deeper than 200 levels"),
+        ("a: !!python/name:os.system", (1, 4), "the tag !!python/name:os.system is not allowed"),
+        ("base: &b {x: 1}\nc:\n  <<: *b\n  x: 2\n  x: 3\n", (5, 3), "duplicate key 'x'"),
+    ],
+)
+def test_yaml_that_python_cannot_hold_is_a_problem_at_its_place(
+    text: str, where: tuple[int, int], message: str
+) -> None:
     from thymio_bt.inputs.yamlio import loads_yaml
 
     with pytest.raises(UserError) as info:
@@ -199,10 +216,11 @@ def test_yaml_merge_keys_and_dates_are_plain_data() -> None:
     from thymio_bt.inputs.yamlio import loads_yaml
 
     assert loads_yaml("base: &b {x: 1, y: 2}\nc:\n  <<: *b\n  x: 3\n")["c"] == {"x": 3, "y": 2}
-    assert loads_yaml("when: 2020-02-30") == {"when": "2020-02-30"}     # not a date, and not a crash
+    assert loads_yaml("when: 2020-02-30") == {"when": "2020-02-30"}  # not a date, and not a crash
 
 
 # ------------------------------------------------------------------------------------- the CLI
+
 
 def _assert_cli_errors(stderr: str, path: Path) -> None:
     """stderr lists every expected problem as 'error: FILE:LINE:COL: message', with no traceback."""
@@ -235,8 +253,7 @@ def _console_script() -> str:
 @pytest.mark.parametrize("command", ["validate", "run"])
 def test_console_script_reports_a_broken_mission(command: str) -> None:
     path = BROKEN / "many_errors_everywhere.yaml"
-    proc = subprocess.run([_console_script(), command, str(path)], capture_output=True, text=True, timeout=60,
-                          cwd=ROOT)
+    proc = subprocess.run([_console_script(), command, str(path)], capture_output=True, text=True, timeout=60, cwd=ROOT)
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr + proc.stdout
     _assert_cli_errors(proc.stderr, path)
@@ -244,8 +261,9 @@ def test_console_script_reports_a_broken_mission(command: str) -> None:
 
 
 def test_console_script_validates_the_course_missions() -> None:
-    proc = subprocess.run([_console_script(), "validate", *map(str, MISSIONS)], capture_output=True, text=True,
-                          timeout=60, cwd=ROOT)
+    proc = subprocess.run(
+        [_console_script(), "validate", *map(str, MISSIONS)], capture_output=True, text=True, timeout=60, cwd=ROOT
+    )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.count("ok: ") == len(MISSIONS) and proc.stderr == ""
 
@@ -266,6 +284,7 @@ def test_validate_checks_every_file_and_fails_if_one_is_broken() -> None:
 
 
 # ------------------------------------------------------------------------------------- no global state
+
 
 def _blackboard_state() -> tuple[dict, dict, dict]:
     board = py_trees.blackboard.Blackboard

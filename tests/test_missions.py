@@ -9,8 +9,8 @@ import yaml
 from thymio_bt.maze import load_maze
 from thymio_bt.maze.generate import mirrored, path_maze, random_path, turns_along
 from thymio_bt.mission import load_mission
-from thymio_bt.run.runner import Run
 from thymio_bt.robot.model import COURSE
+from thymio_bt.run.runner import Run
 
 AXLE_X = COURSE.axle_x
 
@@ -22,8 +22,7 @@ def run(name, **kwargs):
 
 
 def ends(result, name):
-    return [e for e in result.events if e["kind"] == "behaviour_end" and e["name"] == name
-            and e["status"] == "SUCCESS"]
+    return [e for e in result.events if e["kind"] == "behaviour_end" and e["name"] == name and e["status"] == "SUCCESS"]
 
 
 def turn_letters(result):
@@ -63,7 +62,7 @@ def test_part2_ends_in_the_pocket_with_the_axle_centred_after_every_turn():
     assert result.final_proximity["front_center"] == pytest.approx(0.05, abs=0.001)
     turns = ends(result, "TurnAngle")
     assert turn_letters(result) == "LLLL"
-    expected = [(0.5, 0.7), (0.1, 0.7), (0.1, 0.3), (0.3, 0.3)]      # mazes.md turn points
+    expected = [(0.5, 0.7), (0.1, 0.7), (0.1, 0.3), (0.3, 0.3)]  # mazes.md turn points
     for event, point in zip(turns, expected):
         assert axle(event["pose"]) == pytest.approx(point, abs=0.005)
 

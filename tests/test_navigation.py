@@ -31,20 +31,23 @@ def test_follow_waypoints_visits_every_waypoint_in_order():
         assert math.dist((event["pose"]["x"], event["pose"]["y"]), point) <= 0.01
 
 
-@pytest.mark.parametrize("node", ["GoToPose: {goal: [0.9, 0.8], tolerance: 0.2mm}",
-                                  "FollowWaypoints: {waypoints: [[0.9, 0.8]], tolerance: 0.2mm}"])
+@pytest.mark.parametrize(
+    "node",
+    ["GoToPose: {goal: [0.9, 0.8], tolerance: 0.2mm}", "FollowWaypoints: {waypoints: [[0.9, 0.8]], tolerance: 0.2mm}"],
+)
 def test_a_tolerance_tighter_than_the_controller_holds_fails_instead_of_spinning(tmp_path, node):
     path = tmp_path / "m.yaml"
     path.write_text(f"maze: arena\nstart: centre\ntree:\n  {node}\n")
     result = Run(load_mission(path)).run()
-    assert (result.status, result.code) == ("FAILURE", "NO_PROGRESS")        # not a 300 s TIMEOUT
+    assert (result.status, result.code) == ("FAILURE", "NO_PROGRESS")  # not a 300 s TIMEOUT
     assert result.sim_time < 30 and "tighter than the controller can hold (try tolerance: 5mm)" in result.reason
     path.write_text(f"maze: arena\nstart: centre\ntree:\n  {node.replace('0.2mm', '5mm')}\n")
-    assert Run(load_mission(path)).run().status == "SUCCESS"                    # the suggestion works
+    assert Run(load_mission(path)).run().status == "SUCCESS"  # the suggestion works
 
 
 def test_speed_limits_are_respected():
     from thymio_bt.logs.recording import Recorder
+
     mission = load_mission("missions/waypoints.yaml")
     recorder = Recorder()
     Run(mission).run(on_tick=recorder)
@@ -56,7 +59,7 @@ def test_waypoint_mission_reaches_every_waypoint_in_the_reports_time():
     result = Run(load_mission("missions/waypoints.yaml")).run()
     assert result.status == "SUCCESS" and result.collisions == 0
     assert len(events(result, "waypoint_reached")) == 5
-    assert 60 < result.sim_time < 150         # ~4.2 m at <= 5 cm/s: the report's order of magnitude
+    assert 60 < result.sim_time < 150  # ~4.2 m at <= 5 cm/s: the report's order of magnitude
 
 
 def test_the_block_is_bypassed_on_the_left_without_collision():
@@ -90,8 +93,8 @@ def test_turn_back_returns_the_counter_to_zero_or_fails_when_blocked():
 
 
 def test_obstacle_ahead_uses_the_reports_thresholds():
-    near = run_tree({"ObstacleAhead": {}}, world("corridor"), start=[0.72, 0.1, 0], seconds=1)   # 2.3 cm
-    far = run_tree({"ObstacleAhead": {}}, world("corridor"), start=[0.70, 0.1, 0], seconds=1)    # 4.3 cm
+    near = run_tree({"ObstacleAhead": {}}, world("corridor"), start=[0.72, 0.1, 0], seconds=1)  # 2.3 cm
+    far = run_tree({"ObstacleAhead": {}}, world("corridor"), start=[0.70, 0.1, 0], seconds=1)  # 4.3 cm
     assert (near.status, far.status) == ("SUCCESS", "FAILURE")
 
 
@@ -102,13 +105,14 @@ def test_corner_case_left_is_the_long_way_round(tmp_path):
     maze = ARENA.model_copy(update={"obstacles": [Obstacle(center=(0.0, 0.1), size=(0.04, 0.5))]})
     maze_file = tmp_path / "corner.yaml"
     import yaml
+
     maze_file.write_text(yaml.safe_dump(maze.to_yaml_dict()))
-    mission = load_mission("missions/waypoints_obstacles.yaml", maze=maze_file, start="-0.5,0,0",
-                           overrides={})
-    mission.tree.children[0].children[1].params = mission.tree.children[0].children[1].params.model_copy(
-        update={"waypoints": [(0.5, 0.0)]})
+    mission = load_mission("missions/waypoints_obstacles.yaml", maze=maze_file, start="-0.5,0,0", overrides={})
+    mission.tree.children[0].children[1].params = (
+        mission.tree.children[0].children[1].params.model_copy(update={"waypoints": [(0.5, 0.0)]})
+    )
     result = Run(mission).run()
     assert result.status == "SUCCESS" and result.collisions == 0
     path = sum(math.dist(a[1:3], b[1:3]) for a, b in zip(result.trajectory, result.trajectory[1:]))
-    assert path > 1.5                            # the straight line is 1.0 m; round the short end ~1.2 m
-    assert max(y for _, x, y, _ in result.trajectory) > 0.4       # went round the far (left) end
+    assert path > 1.5  # the straight line is 1.0 m; round the short end ~1.2 m
+    assert max(y for _, x, y, _ in result.trajectory) > 0.4  # went round the far (left) end

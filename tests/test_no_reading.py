@@ -25,8 +25,8 @@ def no_reading_values(obj):
 
 
 def test_the_robot_interface_says_inf_and_never_none():
-    from thymio_bt.robot.interface import Pose
     from thymio_bt.backends.sim import Simulation
+    from thymio_bt.robot.interface import Pose
 
     sim = Simulation(world("arena"), spawn=Pose(0.3, 0.3, 0.0))
     scan = sim.proximity()

@@ -20,15 +20,23 @@ def test_every_composite_and_decorator_is_in_the_registry():
     for cls in CONTROL:
         assert registry[cls.yaml_name] is cls
     assert {n for n, _ in registry.control("composite")} == {
-        "sequence", "reactive_sequence", "selector", "reactive_selector", "parallel"}
+        "sequence",
+        "reactive_sequence",
+        "selector",
+        "reactive_selector",
+        "parallel",
+    }
     assert "delay" in {n for n, _ in registry.control("decorator")}
 
 
-@pytest.mark.parametrize("name, words", [
-    ("parallel", ["success_on_one", "synchronise", "A composite"]),
-    ("repeat", ["times", "until: NODE", "forever"]),
-    ("delay", ["seconds", "simulated"]),
-])
+@pytest.mark.parametrize(
+    "name, words",
+    [
+        ("parallel", ["success_on_one", "synchronise", "A composite"]),
+        ("repeat", ["times", "until: NODE", "forever"]),
+        ("delay", ["seconds", "simulated"]),
+    ],
+)
 def test_cli_documents_control_nodes(name, words):
     out = CliRunner().invoke(main, ["behaviours", name]).output
     for word in words:
@@ -44,7 +52,8 @@ def test_schema_describes_control_nodes_from_their_parameter_models():
 
 
 def test_a_plugin_decorator_is_one_class(tmp_path):
-    (tmp_path / "twice.py").write_text(textwrap.dedent('''
+    (tmp_path / "twice.py").write_text(
+        textwrap.dedent('''
         import py_trees
         from thymio_bt.behaviours import ControlNode
 
@@ -56,10 +65,10 @@ def test_a_plugin_decorator_is_one_class(tmp_path):
             @classmethod
             def build(cls, name, params, children, ctx):
                 return py_trees.decorators.Repeat(name=name, child=children[0], num_success=2)
-        '''))
+        ''')
+    )
     mission = tmp_path / "m.yaml"
-    mission.write_text("maze: arena\nstart: centre\nplugins: [twice.py]\n"
-                       "tree: {twice: {Wait: {seconds: 1}}}\n")
+    mission.write_text("maze: arena\nstart: centre\nplugins: [twice.py]\ntree: {twice: {Wait: {seconds: 1}}}\n")
     result = Run(load_mission(mission)).run()
     assert result.status == "SUCCESS"
     assert sum(1 for e in result.events if e["kind"] == "behaviour_start") == 2
@@ -69,14 +78,17 @@ def test_a_plugin_decorator_is_one_class(tmp_path):
         load_mission(bad)
 
 
-@pytest.mark.parametrize("tree, message", [
-    ("{delay: {do: Stop}}", "delay needs 'seconds'"),
-    ("{delay: {seconds: -1, do: Stop}}", "greater than 0"),
-    ("{delay: Stop}", "delay needs a mapping with seconds, do"),
-    ("{guard: {do: Stop}}", "guard needs a condition"),
-    ("{repeat: {times: 2, until: Stop, do: Stop}}", "repeat takes either times or until, not both"),
-    ("{until: {status: maybe, do: Stop}}", "until status must be success or failure"),
-])
+@pytest.mark.parametrize(
+    "tree, message",
+    [
+        ("{delay: {do: Stop}}", "delay needs 'seconds'"),
+        ("{delay: {seconds: -1, do: Stop}}", "greater than 0"),
+        ("{delay: Stop}", "delay needs a mapping with seconds, do"),
+        ("{guard: {do: Stop}}", "guard needs a condition"),
+        ("{repeat: {times: 2, until: Stop, do: Stop}}", "repeat takes either times or until, not both"),
+        ("{until: {status: maybe, do: Stop}}", "until status must be success or failure"),
+    ],
+)
 def test_control_node_parameters_are_checked_where_they_are_written(tmp_path, tree, message):
     path = tmp_path / "m.yaml"
     path.write_text(f"maze: arena\nstart: centre\ntree: {tree}\n")

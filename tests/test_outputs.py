@@ -24,16 +24,17 @@ def test_report_dash_is_standard_output(tmp_path, monkeypatch):
     result = invoke("run", SQUARE, "--quiet", "--report", "-")
     assert result.exit_code == 0
     assert json.loads(result.stdout)["status"] == "SUCCESS"
-    assert list(tmp_path.iterdir()) == []                       # no file named '-'
+    assert list(tmp_path.iterdir()) == []  # no file named '-'
 
 
-@pytest.mark.parametrize("command", [["run", SQUARE, "--report"], ["sweep", SQUARE, "--runs", "1", "--out"],
-                                     ["schema", "-o"]])
+@pytest.mark.parametrize(
+    "command", [["run", SQUARE, "--report"], ["sweep", SQUARE, "--runs", "1", "--out"], ["schema", "-o"]]
+)
 def test_a_missing_folder_is_refused_before_any_work(tmp_path, command):
     result = invoke(*command, str(tmp_path / "nowhere" / "out.json"))
     assert result.exit_code == 2
     assert "does not exist" in result.output and "Traceback" not in result.output
-    assert "succeeded" not in result.output and "SUCCESS" not in result.output      # nothing ran
+    assert "succeeded" not in result.output and "SUCCESS" not in result.output  # nothing ran
 
 
 def test_a_fifo_or_a_folder_is_never_replaced(tmp_path):
@@ -50,11 +51,10 @@ def test_writes_are_atomic_and_leave_no_temporary(tmp_path):
     target = tmp_path / "report.json"
     target.write_text("old")
     out = Output(target, "--report")
-    with pytest.raises(RuntimeError):
-        with out.staged() as tmp:
-            tmp.write_text("half")
-            raise RuntimeError("crash while writing")
-    assert target.read_text() == "old"                          # the old file survives a failed write
+    with pytest.raises(RuntimeError), out.staged() as tmp:
+        tmp.write_text("half")
+        raise RuntimeError("crash while writing")
+    assert target.read_text() == "old"  # the old file survives a failed write
     out.write_text("new")
     assert target.read_text() == "new"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["report.json"]
@@ -71,8 +71,9 @@ def test_a_write_error_names_the_target(tmp_path, monkeypatch):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("option, name", [("--gif", "x.webm"), ("--gif", "x.bmp"), ("--gif", "noext"),
-                                          ("--plot", "x.gif")])
+@pytest.mark.parametrize(
+    "option, name", [("--gif", "x.webm"), ("--gif", "x.bmp"), ("--gif", "noext"), ("--plot", "x.gif")]
+)
 def test_an_unsupported_picture_format_is_refused_before_the_run(tmp_path, option, name):
     result = invoke("run", SQUARE, option, str(tmp_path / name))
     assert result.exit_code == 2
@@ -100,12 +101,17 @@ def test_a_log_that_cannot_be_written_mid_run_ends_the_run_and_keeps_the_report(
     import subprocess
     import sys
 
-    def small_files():                       # like a full disk: writes past 200 kB fail with EFBIG
+    def small_files():  # like a full disk: writes past 200 kB fail with EFBIG
         resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
 
     mission = str(Path(__file__).resolve().parents[1] / "missions" / "maze_6x6_left.yaml")
-    done = subprocess.run([sys.executable, "-m", "thymio_bt", "run", mission, "--log", "big.jsonl",
-                           "--report", "r.json"], cwd=tmp_path, capture_output=True, text=True, preexec_fn=small_files)
+    done = subprocess.run(
+        [sys.executable, "-m", "thymio_bt", "run", mission, "--log", "big.jsonl", "--report", "r.json"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        preexec_fn=small_files,
+    )
     assert done.returncode == 1 and "Traceback" not in done.stderr
     report = json.loads((tmp_path / "r.json").read_text())
     assert report["code"] == "STOPPED" and "cannot write the log big.jsonl: File too large" in report["reason"]

@@ -4,10 +4,10 @@ checkout, runs a shipped mission by name and a mission of its own that names a s
 
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import pytest
+import tomllib
 
 import thymio_bt
 
@@ -25,8 +25,11 @@ tree:
 def installed(tmp_path_factory) -> Path:
     """A fresh virtual environment with thymio-bt installed from a wheel built from this checkout."""
     tmp = tmp_path_factory.mktemp("wheel")
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", str(ROOT), "-w", str(tmp / "dist")],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", str(ROOT), "-w", str(tmp / "dist")],
+        check=True,
+        capture_output=True,
+    )
     wheel = next((tmp / "dist").glob("thymio_bt-*.whl"))
     subprocess.run([sys.executable, "-m", "venv", str(tmp / "env")], check=True)
     subprocess.run([str(tmp / "env/bin/pip"), "install", "-q", str(wheel)], check=True, capture_output=True)
@@ -42,7 +45,7 @@ def test_the_wheel_runs_a_shipped_mission_by_name_from_any_folder(installed, tmp
     assert done.returncode == 0, done.stderr
     assert "SUCCESS" in done.stdout and (tmp_path / "r.json").is_file()
     imported = run_in(tmp_path, str(installed / "python"), "-c", "import thymio_bt; print(thymio_bt.__file__)")
-    assert str(ROOT) not in imported.stdout                    # the installed copy, not this checkout
+    assert str(ROOT) not in imported.stdout  # the installed copy, not this checkout
 
 
 def test_the_wheel_runs_an_own_mission_naming_a_shipped_maze(installed, tmp_path):
@@ -67,6 +70,8 @@ def test_metadata_has_one_version_a_licence_and_the_python_ci_runs():
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert "version" in project["dynamic"] and "version" not in project
     assert (ROOT / "LICENSE").read_text().startswith("MIT License")
-    assert f"Programming Language :: Python :: {sys.version_info.major}.{sys.version_info.minor}" in project["classifiers"]
+    assert (
+        f"Programming Language :: Python :: {sys.version_info.major}.{sys.version_info.minor}" in project["classifiers"]
+    )
     low = tuple(int(part) for part in project["requires-python"].removeprefix(">=").split("."))
     assert low <= sys.version_info[:2]

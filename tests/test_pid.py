@@ -19,7 +19,7 @@ def simulate(pid, setpoint=1.0, steps=300, dt=0.05, gain=1.0, tau=0.5, disturban
 
 def test_proportional_step_response_settles_with_the_expected_offset():
     trace = simulate(PID(kp=3.0))
-    assert trace[-1][1] == pytest.approx(3 / 4, abs=1e-3)     # P only: x = kp/(1+kp)
+    assert trace[-1][1] == pytest.approx(3 / 4, abs=1e-3)  # P only: x = kp/(1+kp)
 
 
 def test_integral_removes_the_offset():
@@ -48,7 +48,7 @@ def test_anti_windup_recovers_faster_than_a_plain_integrator():
         x, peak = 0.0, 0.0
         for _ in range(400):
             u = pid(1.0 - x, 0.05)
-            u = max(-1.2, min(1.2, u))            # the actuator saturates either way
+            u = max(-1.2, min(1.2, u))  # the actuator saturates either way
             x += 0.05 * (u - x) / 0.5
             peak = max(peak, x)
         return peak, pid.integrator

@@ -13,8 +13,8 @@ from pathlib import Path
 import _require
 import pytest
 
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.mission import load_mission
+from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI
 from thymio_bt.run.runner import Run
@@ -53,8 +53,9 @@ def _problems(mission, report):
     mission's own, tighter, goal radius aside), end within 2 cm of the course's end point and never
     touch a wall."""
     found = []
-    if report["code"] not in (None, "EXPECTATION") or (report["code"] == "EXPECTATION" and not all(
-            f.startswith("goal:") for f in report["expectations"]["failed"])):
+    if report["code"] not in (None, "EXPECTATION") or (
+        report["code"] == "EXPECTATION" and not all(f.startswith("goal:") for f in report["expectations"]["failed"])
+    ):
         found.append(f"[{report['code']}] {report['reason']}")
     end = report["final_pose"]
     off = math.dist((end["x"], end["y"]), mission.expect.goal.centre) if end else math.inf
@@ -80,8 +81,11 @@ def _part1_2_problems(mission, report):
 
 
 def _bonus_problems(mission, report):
-    turns = "".join(e["decision"][0].upper() for e in report["events"] if e["kind"] == "behaviour_end"
-                    and e["name"] == "ChooseTurn" and e.get("decision") in ("left", "right"))
+    turns = "".join(
+        e["decision"][0].upper()
+        for e in report["events"]
+        if e["kind"] == "behaviour_end" and e["name"] == "ChooseTurn" and e.get("decision") in ("left", "right")
+    )
     return _problems(mission, report) + ([] if turns == "RRRLRLLLLLR" else [f"turns {turns}"])
 
 

@@ -20,8 +20,10 @@ def test_a_plugin_behaviour_runs_in_a_mission():
 def test_plugin_parameters_are_validated_like_builtins(tmp_path):
     plugin = Path("examples/spin_until_clear.py").resolve()
     mission = tmp_path / "m.yaml"
-    mission.write_text(f"maze: {Path('mazes/arena.yaml').resolve()}\nstart: centre\nplugins: [{plugin}]\n"
-                       "tree:\n  SpinUntilClear: {rate: 9 m}\n")
+    mission.write_text(
+        f"maze: {Path('mazes/arena.yaml').resolve()}\nstart: centre\nplugins: [{plugin}]\n"
+        "tree:\n  SpinUntilClear: {rate: 9 m}\n"
+    )
     with pytest.raises(UserError) as err:
         load_mission(mission)
     problem = err.value.problems[0]
@@ -48,7 +50,8 @@ def test_a_plugin_behaviour_fails_with_its_own_code(tmp_path):
         "class LoseLine(RobotBehaviour):\n"
         "    '''Fail with a code of its own.'''\n"
         "    def step(self):\n"
-        "        return self.fail('LINE_LOST', 'no line under the robot')\n")
+        "        return self.fail('LINE_LOST', 'no line under the robot')\n"
+    )
     mission = tmp_path / "m.yaml"
     mission.write_text("maze: arena\nstart: centre\nplugins: [lost.py]\ntree: LoseLine\n")
     result = Run(load_mission(mission)).run()
@@ -64,7 +67,8 @@ def test_a_plugin_behaviour_returning_no_status_fails_with_a_reason(tmp_path):
         "class Sloppy(RobotBehaviour):\n"
         "    '''Forgets to return a status.'''\n"
         "    def step(self):\n"
-        "        pass\n")
+        "        pass\n"
+    )
     mission = tmp_path / "m.yaml"
     mission.write_text("maze: arena\nstart: centre\nplugins: [sloppy.py]\ntree: Sloppy\n")
     result = Run(load_mission(mission)).run()
@@ -72,12 +76,15 @@ def test_a_plugin_behaviour_returning_no_status_fails_with_a_reason(tmp_path):
     assert result.reason == "Sloppy returned None, not a Status"
 
 
-@pytest.mark.parametrize("body, shown", [
-    ("raise ValueError('first line\\nthe last line')", "ValueError: the last line (at crashing.py:5)"),
-    ("return self.step()", "RecursionError: maximum recursion depth exceeded"),
-    ("raise MemoryError", "MemoryError (at crashing.py:5)"),
-    ("import sys; sys.exit(3)", "SystemExit: 3 (at crashing.py:5)"),
-])
+@pytest.mark.parametrize(
+    "body, shown",
+    [
+        ("raise ValueError('first line\\nthe last line')", "ValueError: the last line (at crashing.py:5)"),
+        ("return self.step()", "RecursionError: maximum recursion depth exceeded"),
+        ("raise MemoryError", "MemoryError (at crashing.py:5)"),
+        ("import sys; sys.exit(3)", "SystemExit: 3 (at crashing.py:5)"),
+    ],
+)
 def test_a_plugin_that_raises_ends_the_run_failure_with_report_and_log(tmp_path, body, shown):
     import json
 
@@ -90,12 +97,16 @@ def test_a_plugin_that_raises_ends_the_run_failure_with_report_and_log(tmp_path,
         "class Crashing(RobotBehaviour):\n"
         "    '''Has a bug.'''\n"
         "    def step(self):\n"
-        f"        {body}\n")
+        f"        {body}\n"
+    )
     mission = tmp_path / "m.yaml"
-    mission.write_text("maze: arena\nstart: centre\nplugins: [crashing.py]\n"
-                       "tree:\n  sequence: [{MoveDistance: {distance: 5cm}}, Crashing]\n")
-    result = CliRunner().invoke(main, ["run", str(mission), "--report", str(tmp_path / "r.json"),
-                                       "--log", str(tmp_path / "r.jsonl")])
+    mission.write_text(
+        "maze: arena\nstart: centre\nplugins: [crashing.py]\n"
+        "tree:\n  sequence: [{MoveDistance: {distance: 5cm}}, Crashing]\n"
+    )
+    result = CliRunner().invoke(
+        main, ["run", str(mission), "--report", str(tmp_path / "r.json"), "--log", str(tmp_path / "r.jsonl")]
+    )
     assert result.exit_code == 1 and "Traceback" not in result.output
     report = json.loads((tmp_path / "r.json").read_text())
     assert (report["status"], report["code"]) == ("FAILURE", "EXCEPTION")
@@ -144,7 +155,9 @@ def test_validate_and_tree_read_plugins_without_running_their_code(tmp_path, com
 
     (tmp_path / "marker.py").write_text(MARKER_PLUGIN)
     mission = tmp_path / "m.yaml"
-    mission.write_text("maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n")
+    mission.write_text(
+        "maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n"
+    )
     result = CliRunner().invoke(main, [command[0], str(mission), *command[1:]])
     assert result.exit_code == 0, result.output
     assert "MarkIt" in result.output or command[0] == "validate"
@@ -160,7 +173,9 @@ def test_validate_plugins_imports_them_and_checks_their_parameters(tmp_path):
 
     (tmp_path / "marker.py").write_text(MARKER_PLUGIN)
     mission = tmp_path / "m.yaml"
-    mission.write_text("maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n")
+    mission.write_text(
+        "maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n"
+    )
     result = CliRunner().invoke(main, ["validate", "--plugins", str(mission)])
     assert result.exit_code == 2 and "MarkIt has no parameter 'x'" in result.output
     assert (tmp_path / "IMPORTED").exists()

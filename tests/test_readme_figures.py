@@ -21,14 +21,16 @@ def mission_row(name: str) -> str:
 
 @pytest.fixture(scope="module")
 def runs():
-    return {name: Run(load_mission(ROOT / "missions" / f"{name}.yaml")).run()
-            for name in ("maze_part1_2", "maze_bonus", "waypoints", "waypoints_obstacles")}
+    return {
+        name: Run(load_mission(ROOT / "missions" / f"{name}.yaml")).run()
+        for name in ("maze_part1_2", "maze_bonus", "waypoints", "waypoints_obstacles")
+    }
 
 
 def test_the_quick_start_output_is_what_run_prints():
     shown = re.search(r"maze_part1_2\.yaml\n```\n\n```text\n(.*?)```", README, re.S).group(1).splitlines()
     printed = CliRunner().invoke(main, ["run", str(ROOT / "missions/maze_part1_2.yaml")]).output.splitlines()
-    wall = re.compile(r"\([\d.]+ s wall, [\d,]+x real time\)")        # the only figures that vary
+    wall = re.compile(r"\([\d.]+ s wall, [\d,]+x real time\)")  # the only figures that vary
     assert [wall.sub("", line) for line in printed[:3]] == [wall.sub("", line) for line in shown]
 
 
@@ -39,13 +41,20 @@ def test_the_mission_table_figures(runs):
     pose = part.final_pose
     assert f"({pose['x']:.3f}, {pose['y']:.3f})" in mission_row("maze_part1_2")
     bonus = runs["maze_bonus"]
-    turns = " ".join(e["decision"][0].upper() for e in bonus.events if e.get("name") == "ChooseTurn"
-                     and e["kind"] == "behaviour_end" and e.get("decision") in ("left", "right"))
-    assert f"turns {turns}, stops at ({bonus.final_pose['x']:.3f}, {bonus.final_pose['y']:.3f})" in mission_row("maze_bonus")
+    turns = " ".join(
+        e["decision"][0].upper()
+        for e in bonus.events
+        if e.get("name") == "ChooseTurn" and e["kind"] == "behaviour_end" and e.get("decision") in ("left", "right")
+    )
+    assert f"turns {turns}, stops at ({bonus.final_pose['x']:.3f}, {bonus.final_pose['y']:.3f})" in mission_row(
+        "maze_bonus"
+    )
     assert f"5 waypoints in {runs['waypoints'].sim_time:.1f} s" in mission_row("waypoints")
     obstacles = runs["waypoints_obstacles"]
-    assert (f"5 waypoints in {obstacles.sim_time:.1f} s, no collision, closest approach "
-            f"{obstacles.min_clearance * 1000:.1f} mm") in mission_row("waypoints_obstacles")
+    assert (
+        f"5 waypoints in {obstacles.sim_time:.1f} s, no collision, closest approach "
+        f"{obstacles.min_clearance * 1000:.1f} mm"
+    ) in mission_row("waypoints_obstacles")
     assert all(r.collisions == 0 for r in runs.values())
 
 

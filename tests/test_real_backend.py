@@ -11,11 +11,11 @@ import _require
 import pytest
 from py_trees.common import Status
 
+from thymio_bt.backends.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
 from thymio_bt.behaviours import Context
 from thymio_bt.behaviours.motion import MoveUntilWall
-from thymio_bt.robot.calibration import metres_to_raw
 from thymio_bt.errors import UserError
-from thymio_bt.backends.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
+from thymio_bt.robot.calibration import metres_to_raw
 from thymio_bt.robot.interface import SENSOR_NAMES, Entities, Pose, RequestState, Robot
 from thymio_bt.robot.model import COURSE
 
@@ -83,8 +83,9 @@ def make(node=None, spawn=START, answer="", config=None, **fields):
     clock = FakeClock()
     operator = Operator(clock, answer)
     said: list[str] = []
-    robot = ThymioRobot(node, config or RealConfig(**fields), spawn=spawn, clock=clock, sleep=clock.sleep,
-                        ask=operator, say=said.append)
+    robot = ThymioRobot(
+        node, config or RealConfig(**fields), spawn=spawn, clock=clock, sleep=clock.sleep, ask=operator, say=said.append
+    )
     return robot, node, clock, operator, said
 
 
@@ -95,7 +96,7 @@ def test_it_is_a_robot_backend_with_what_the_runner_uses():
     assert robot.robot_name == "thymio"
     assert robot.collisions == [] and robot.min_clearance == math.inf
     assert robot.true_pose() == robot.pose() == START
-    assert node.writes == [(0, 0)]                      # the motors are stopped on start
+    assert node.writes == [(0, 0)]  # the motors are stopped on start
 
 
 def test_driving_straight_writes_equal_targets_500_units_per_20_cm_s():
@@ -109,7 +110,7 @@ def test_driving_straight_writes_equal_targets_500_units_per_20_cm_s():
 
 def test_turning_writes_the_wheel_speed_differential():
     robot, node, *_ = make()
-    robot.drive(0.1, 1.0)                       # wheels 0.1 -/+ 1.0 * 0.0935 / 2 m/s
+    robot.drive(0.1, 1.0)  # wheels 0.1 -/+ 1.0 * 0.0935 / 2 m/s
     assert node.writes[-1] == (round(0.05325 / 0.0004), round(0.14675 / 0.0004)) == (133, 367)
     robot.drive(0.0, -1.0)
     assert node.writes[-1] == (117, -117)
@@ -128,7 +129,7 @@ def test_clamping_to_500_units_keeps_the_turn_radius():
 
 
 def test_the_speed_constant_is_a_parameter():
-    robot, node, *_ = make(metres_per_unit=1 / 2930)          # the ROS driver's calibration
+    robot, node, *_ = make(metres_per_unit=1 / 2930)  # the ROS driver's calibration
     robot.drive(0.1, 0.0)
     assert node.writes[-1] == (293, 293)
     robot.drive(0.5, 0.0)
@@ -138,14 +139,21 @@ def test_the_speed_constant_is_a_parameter():
 def test_the_playground_preset_uses_enkis_speed_and_sensor_curve():
     robot, node, *_ = make(FakeNode(prox=[[0, 0, 3366, 0, 0, 0, 0]]), config=PLAYGROUND)
     robot.drive(0.1, 0.0)
-    assert node.writes[-1] == (301, 301)                       # 500 units = 16.6 cm/s
+    assert node.writes[-1] == (301, 301)  # 500 units = 16.6 cm/s
     assert robot.proximity()["front_center"] == pytest.approx(0.05)
 
 
 # --------------------------------------------------------------- proximity
 def test_prox_horizontal_indices_are_the_sensor_names_in_order():
-    assert PROX_INDEX == {"front_left": 0, "front_center_left": 1, "front_center": 2, "front_center_right": 3,
-                          "front_right": 4, "rear_left": 5, "rear_right": 6}
+    assert PROX_INDEX == {
+        "front_left": 0,
+        "front_center_left": 1,
+        "front_center": 2,
+        "front_center_right": 3,
+        "front_right": 4,
+        "rear_left": 5,
+        "rear_right": 6,
+    }
     assert tuple(PROX_INDEX) == SENSOR_NAMES == tuple(name for name, *_ in SENSORS)
 
 
@@ -180,9 +188,9 @@ def test_odometry_integrates_a_quarter_turn_exactly():
     k = math.pi / 4 * 0.0935 / 200
     wheels = [(0, 0)] + [(100, 300)] * 20 + [(0, 0)]
     robot, node, clock, *_ = make(FakeNode(wheels=wheels), metres_per_unit=k)
-    for _ in range(21):        # ramp up and down over half a tick each: 20 ticks' worth at full speed
+    for _ in range(21):  # ramp up and down over half a tick each: 20 ticks' worth at full speed
         robot.advance(0.1)
-    radius = 200 * k / (math.pi / 4)                       # v / w = the wheel separation
+    radius = 200 * k / (math.pi / 4)  # v / w = the wheel separation
     assert radius == pytest.approx(0.0935)
     axle = (START.x + AXLE_X + radius, START.y + radius)
     pose = robot.pose()
@@ -218,10 +226,10 @@ def test_advance_waits_for_the_next_tick_and_never_catches_up_when_late():
     assert robot.time() == 0.0
     robot.advance(0.1)
     assert clock.sleeps == [pytest.approx(0.1)] and robot.time() == pytest.approx(0.1)
-    clock.now += 0.03                           # the tree took 30 ms to tick
+    clock.now += 0.03  # the tree took 30 ms to tick
     robot.advance(0.1)
     assert clock.sleeps[-1] == pytest.approx(0.07) and robot.time() == pytest.approx(0.2)
-    clock.now += 0.5                            # a slow tick: no wait, the next tick is timed from now
+    clock.now += 0.5  # a slow tick: no wait, the next tick is timed from now
     robot.advance(0.1)
     assert len(clock.sleeps) == 2 and robot.time() == pytest.approx(0.7)
     robot.advance(0.1)
@@ -233,14 +241,14 @@ def test_delete_stops_the_motors_and_marks_the_robot_absent():
     robot, node, clock, operator, said = make()
     robot.drive(0.1, 0.0)
     request = robot.request_delete("thymio")
-    assert request.state is RequestState.PENDING        # served at the next advance, as in the simulator
+    assert request.state is RequestState.PENDING  # served at the next advance, as in the simulator
     robot.advance(0.1)
     assert request.state is RequestState.SUCCEEDED
     assert node.writes[-1] == (0, 0)
     assert not robot.exists()
     assert robot.pose() is None and robot.proximity() is None and robot.proximity_raw() is None
     assert "deleted" in said[-1]
-    robot.drive(0.1, 0.0)                               # ignored while absent
+    robot.drive(0.1, 0.0)  # ignored while absent
     assert node.writes[-1] == (0, 0)
     again = robot.request_delete("thymio")
     robot.advance(0.1)
@@ -268,9 +276,9 @@ def test_spawn_prompts_the_operator_then_resets_odometry_with_the_clock_paused()
     assert "x=0.500 m, y=0.300 m, facing 90 deg" in operator.prompts[-1]
     assert robot.pose() == pytest.approx(target)
     assert robot.command().linear == 0.0
-    assert robot.time() == pytest.approx(before)        # 30 s at the prompt do not count
-    robot.advance(0.1)                                  # and the odometry starts from the new pose
-    assert robot.pose().y == pytest.approx(0.3 + 0.01, abs=1e-9)      # 0.1 m/s for 0.1 s
+    assert robot.time() == pytest.approx(before)  # 30 s at the prompt do not count
+    robot.advance(0.1)  # and the odometry starts from the new pose
+    assert robot.pose().y == pytest.approx(0.3 + 0.01, abs=1e-9)  # 0.1 m/s for 0.1 s
 
 
 def test_the_runner_start_is_a_spawn_prompt():
@@ -360,8 +368,10 @@ def test_without_tdmclient_the_adapter_says_how_to_install_it(monkeypatch):
 
 
 def test_the_backend_imports_without_tdmclient():
-    code = ("import sys; sys.modules['tdmclient'] = None; import thymio_bt.backends.real, thymio_bt.robot.calibration; "
-            "print('ok')")
+    code = (
+        "import sys; sys.modules['tdmclient'] = None; import thymio_bt.backends.real, thymio_bt.robot.calibration; "
+        "print('ok')"
+    )
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "ok"
 
 
@@ -405,15 +415,23 @@ def test_connect_locks_the_robot_and_waits_for_the_variables(monkeypatch):
     monkeypatch.setitem(sys.modules, "tdmclient", fake.module)
     node = TdmNode.connect()
     assert node.node is fake
-    assert fake.waited_for == {"prox.horizontal", "motor.left.speed", "motor.right.speed",
-                               "motor.left.target", "motor.right.target"}
+    assert fake.waited_for == {
+        "prox.horizontal",
+        "motor.left.speed",
+        "motor.right.speed",
+        "motor.left.target",
+        "motor.right.target",
+    }
 
 
-@pytest.mark.parametrize("fake, message", [
-    (FakeTdm(refuse=True), "cannot reach the Thymio Device Manager at 127.0.0.1:8596"),
-    (FakeTdm(node=None), "no Thymio appeared within 10 s"),
-    (FakeTdm(node=object(), busy=True), "cannot take control of the robot"),
-])
+@pytest.mark.parametrize(
+    "fake, message",
+    [
+        (FakeTdm(refuse=True), "cannot reach the Thymio Device Manager at 127.0.0.1:8596"),
+        (FakeTdm(node=None), "no Thymio appeared within 10 s"),
+        (FakeTdm(node=object(), busy=True), "cannot take control of the robot"),
+    ],
+)
 def test_connect_failures_are_user_errors_with_hints(monkeypatch, fake, message):
     monkeypatch.setitem(sys.modules, "tdmclient", fake.module)
     with pytest.raises(UserError) as error:
@@ -463,23 +481,31 @@ def test_tdm_node_on_tdmclients_cache_node():
     client = FakeClient()
     cache = tdmclient.ClientAsyncCacheNode(client, {"node_id": [7] * 16, "node_id_str": "fake", "status": 2})
     client.node = cache
-    cache.notify_variables_changed(cache, {"prox.horizontal": [0] * 7, "motor.left.speed": [0],
-                                           "motor.right.speed": [0], "motor.left.target": [0],
-                                           "motor.right.target": [0]})
+    cache.notify_variables_changed(
+        cache,
+        {
+            "prox.horizontal": [0] * 7,
+            "motor.left.speed": [0],
+            "motor.right.speed": [0],
+            "motor.left.target": [0],
+            "motor.right.target": [0],
+        },
+    )
     node = TdmNode(client, cache)
     robot = ThymioRobot(node, spawn=START, clock=FakeClock(), sleep=lambda s: None)
     assert sent_variables(tdmclient, client.packets[-1]) == {"motor.left.target": [0], "motor.right.target": [0]}
     robot.drive(0.1, 1.0)
     assert sent_variables(tdmclient, client.packets[-1]) == {"motor.left.target": [133], "motor.right.target": [367]}
-    client.updates.append({"prox.horizontal": [0, 0, 3515, 0, 0, 2570, 0], "motor.left.speed": [131],
-                           "motor.right.speed": [369]})
+    client.updates.append(
+        {"prox.horizontal": [0, 0, 3515, 0, 0, 2570, 0], "motor.left.speed": [131], "motor.right.speed": [369]}
+    )
     robot.advance(0.1)
     assert robot.proximity_raw()["front_center"] == 3515
     assert robot.proximity()["rear_left"] == pytest.approx(0.05)
     assert robot.velocity().linear == pytest.approx((131 + 369) / 2 * 0.0004)
     robot.close()
     assert sent_variables(tdmclient, client.packets[-2]) == {"motor.left.target": [0], "motor.right.target": [0]}
-    assert sent_variables(tdmclient, client.packets[-1]) is None            # the unlock request
+    assert sent_variables(tdmclient, client.packets[-1]) is None  # the unlock request
     assert client.disconnected
 
 
@@ -500,12 +526,12 @@ def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it(
     mission = load_mission("missions/square.yaml")
     result = Run(mission, backend=robot).run()
     assert result.status == "SUCCESS"
-    assert len(operator.prompts) == 1                       # place the robot at the start
+    assert len(operator.prompts) == 1  # place the robot at the start
     start = mission.start
     assert math.hypot(result.final_pose["x"] - start.x, result.final_pose["y"] - start.y) < 0.005
-    assert node.closed and node.writes[-1] == (0, 0)        # motors stopped, robot released
+    assert node.closed and node.writes[-1] == (0, 0)  # motors stopped, robot released
     assert result.collisions == 0 and result.min_clearance is None
-    assert sum(clock.sleeps) == pytest.approx(result.sim_time, abs=0.2)     # it ran in real time
+    assert sum(clock.sleeps) == pytest.approx(result.sim_time, abs=0.2)  # it ran in real time
 
 
 def test_a_crash_inside_the_run_still_stops_the_motors():
@@ -527,8 +553,8 @@ def test_a_crash_inside_the_run_still_stops_the_motors():
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
 def test_a_signal_stops_the_real_robot_and_ends_the_run_interrupted(sig):
-    from thymio_bt.run.interrupts import Interrupts
     from thymio_bt.mission import load_mission
+    from thymio_bt.run.interrupts import Interrupts
     from thymio_bt.run.runner import Run
 
     node = IdealWheels()
@@ -543,7 +569,7 @@ def test_a_signal_stops_the_real_robot_and_ends_the_run_interrupted(sig):
         result = run.run(on_tick=signal_at_tick_20, interrupts=interrupts)
     assert result.status == "INTERRUPTED" and result.code == "INTERRUPTED" and result.ticks == 20
     assert signal.Signals(sig).name in result.reason and interrupts.exit_code == 128 + sig
-    assert node.closed and node.writes[-1] == (0, 0)        # motors stopped, robot released
+    assert node.closed and node.writes[-1] == (0, 0)  # motors stopped, robot released
     assert result.report()["sim_time"] == pytest.approx(1.9)
 
 

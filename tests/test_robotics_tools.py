@@ -17,8 +17,9 @@ MISSIONS = sorted(Path("missions").glob("*.yaml"))
 
 
 def thymio_bt(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "thymio_bt.cli", *map(str, args)], capture_output=True,
-                          text=True, cwd=cwd)
+    return subprocess.run(
+        [sys.executable, "-m", "thymio_bt.cli", *map(str, args)], capture_output=True, text=True, cwd=cwd
+    )
 
 
 @pytest.fixture(scope="module")
@@ -26,8 +27,9 @@ def part1_2(tmp_path_factory):
     """One run of maze_part1_2 with a JSON-lines log and a bag, and its report."""
     module("rosbags")
     folder = tmp_path_factory.mktemp("run")
-    done = thymio_bt("run", "missions/maze_part1_2.yaml", "--log", folder / "run.mcap", "--report",
-                     folder / "report.json", "-q")
+    done = thymio_bt(
+        "run", "missions/maze_part1_2.yaml", "--log", folder / "run.mcap", "--report", folder / "report.json", "-q"
+    )
     assert done.returncode == 0, done.stderr
     done = thymio_bt("run", "missions/maze_part1_2.yaml", "--log", folder / "run.jsonl", "-q")
     assert done.returncode == 0, done.stderr
@@ -44,7 +46,7 @@ def test_the_bag_odometry_is_the_report_trajectory(part1_2):
             p, q = m.ros_msg.pose.pose.position, m.ros_msg.pose.pose.orientation
             odom.append((m.log_time_ns / 1e9, p.x, p.y, 2 * math.atan2(q.z, q.w)))
     trajectory = {round(s[0], 6): s[1:] for s in report["trajectory"]}
-    assert len(odom) == len(trajectory) == 328           # 329 ticks, one without a robot (deleted)
+    assert len(odom) == len(trajectory) == 328  # 329 ticks, one without a robot (deleted)
     for t, x, y, yaw in odom:
         rx, ry, ryaw = trajectory[round(t, 6)]
         assert (x, y) == pytest.approx((rx, ry), abs=1e-6)
@@ -72,7 +74,7 @@ def test_replay_and_export_read_a_bag_back(part1_2, tmp_path):
     folder, report = part1_2
     done = thymio_bt("replay", folder / "run.mcap")
     assert done.returncode == 0 and "SUCCESS" in done.stdout and "329 ticks" in done.stdout
-    done = thymio_bt("export", folder / "run.jsonl", "-o", tmp_path / "converted")      # a rosbag2 folder
+    done = thymio_bt("export", folder / "run.jsonl", "-o", tmp_path / "converted")  # a rosbag2 folder
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "converted" / "metadata.yaml").is_file()
     again = thymio_bt("replay", tmp_path / "converted")
@@ -83,12 +85,14 @@ def parse_btlog(data: bytes):
     """FileLogger2's layout, read from its description (BehaviorTree.CPP bt_file_logger_v2.cpp)."""
     assert data[:18] == b"BTCPP4-FileLogger2" and data[18] == 1
     (size,) = struct.unpack_from("<i", data, 19)
-    xml = data[23:23 + size].decode()
+    xml = data[23 : 23 + size].decode()
     (start,) = struct.unpack_from("<q", data, 23 + size)
-    body = data[31 + size:]
+    body = data[31 + size :]
     assert len(body) % 9 == 0
-    records = [(int.from_bytes(body[i:i + 6], "little"), *struct.unpack_from("<HB", body, i + 6))
-               for i in range(0, len(body), 9)]
+    records = [
+        (int.from_bytes(body[i : i + 6], "little"), *struct.unpack_from("<HB", body, i + 6))
+        for i in range(0, len(body), 9)
+    ]
     return xml, start, records
 
 
@@ -109,7 +113,7 @@ def test_the_groot2_log_holds_one_record_per_status_change(part1_2, tmp_path):
                 last[path] = status
                 expected.append((round(tick["t"] * 1e6), tree[path], code[status]))
     assert records == expected and len(records) > 100
-    assert (0, 1, 1) in records and records[-1][2] == 2   # the root (uid 1) runs from t = 0; the run succeeds
+    assert (0, 1, 1) in records and records[-1][2] == 2  # the root (uid 1) runs from t = 0; the run succeeds
 
 
 @pytest.mark.parametrize("mission", MISSIONS, ids=[m.stem for m in MISSIONS])
@@ -121,21 +125,24 @@ def test_every_mission_exports_to_xml_that_behaviortree_cpp_accepts(mission, tmp
     xml = out.read_text()
     factory = bt.BehaviorTreeFactory()
     model = re.search(r"<TreeNodesModel>(.*)</TreeNodesModel>", xml, re.S).group(1)
-    register = {"Action": factory.register_simple_action, "Condition": factory.register_simple_condition,
-                "Decorator": factory.register_simple_decorator}
+    register = {
+        "Action": factory.register_simple_action,
+        "Condition": factory.register_simple_condition,
+        "Decorator": factory.register_simple_decorator,
+    }
     for tag, ident in re.findall(r'<(Action|Condition|Decorator|Control) ID="([^"]+)"', model):
         if tag in register:
             register[tag](ident, lambda *args: bt.NodeStatus.SUCCESS)
     # behaviortreepy cannot register a Python control node: check RepeatUntil's place as a sequence
     checked = xml.replace("<RepeatUntil ", "<SequenceWithMemory ").replace("</RepeatUntil>", "</SequenceWithMemory>")
-    factory.register_behavior_tree_from_text(checked)        # BT.CPP's own verification; raises if invalid
+    factory.register_behavior_tree_from_text(checked)  # BT.CPP's own verification; raises if invalid
     assert "MainTree" in factory.registered_behavior_trees()
 
 
 @pytest.mark.parametrize("mission", MISSIONS, ids=[m.stem for m in MISSIONS])
 def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_path):
-    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.mission import load_mission
+    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.run.runner import Run
 
     xml = tmp_path / f"{mission.stem}.xml"
@@ -147,15 +154,18 @@ def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_pat
     assert thymio_bt("validate", xml).returncode == 0
 
 
-@pytest.mark.parametrize("change, message, hint", [
-    (("<MoveUntilWall ", "<MoveUntilWal "), "unknown node type 'MoveUntilWal'", "did you mean 'MoveUntilWall'?"),
-    (('distance="0.05"', 'distance="5 apples"'), "unknown unit 'apples'", ""),
-    (("<Parallel ", "<Timeout msec=\"100\" "), "BT.CPP node <Timeout> is not supported", "simulated"),
-    (("</root>", ""), "invalid XML", ""),
-])
+@pytest.mark.parametrize(
+    "change, message, hint",
+    [
+        (("<MoveUntilWall ", "<MoveUntilWal "), "unknown node type 'MoveUntilWal'", "did you mean 'MoveUntilWall'?"),
+        (('distance="0.05"', 'distance="5 apples"'), "unknown unit 'apples'", ""),
+        (("<Parallel ", '<Timeout msec="100" '), "BT.CPP node <Timeout> is not supported", "simulated"),
+        (("</root>", ""), "invalid XML", ""),
+    ],
+)
 def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message, hint):
-    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.mission import load_mission
+    from thymio_bt.mission.btcpp import mission_xml
 
     text = mission_xml(load_mission("missions/maze_bonus.yaml"), tmp_path / "m.xml")
     old, new = change
@@ -175,8 +185,10 @@ def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message,
 
 def test_an_xml_file_with_entities_is_refused(tmp_path):
     path = tmp_path / "bomb.xml"
-    path.write_text('<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaa"><!ENTITY b "&a;&a;&a;">]>'
-                    '<root BTCPP_format="4"><BehaviorTree ID="T"><Stop name="&b;"/></BehaviorTree></root>')
+    path.write_text(
+        '<?xml version="1.0"?><!DOCTYPE r [<!ENTITY a "aaaa"><!ENTITY b "&a;&a;&a;">]>'
+        '<root BTCPP_format="4"><BehaviorTree ID="T"><Stop name="&b;"/></BehaviorTree></root>'
+    )
     done = thymio_bt("validate", path)
     assert done.returncode == 2 and "DTDs and entities are not allowed" in done.stderr and f"{path}:1:" in done.stderr
 
@@ -203,29 +215,32 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
     mission = Path("missions/maze_part1_2.yaml").resolve()
     xml = tmp_path / "tree.xml"
     thymio_bt("tree", mission, "--btcpp", xml)
-    run = subprocess.Popen([sys.executable, "-m", "thymio_bt.cli", "run", str(mission),
-                            "--realtime", "2", "--groot2", str(port), "-q"], cwd=tmp_path)
+    run = subprocess.Popen(
+        [sys.executable, "-m", "thymio_bt.cli", "run", str(mission), "--realtime", "2", "--groot2", str(port), "-q"],
+        cwd=tmp_path,
+    )
     try:
-        for _ in range(100):             # the server starts with the first tick
+        for _ in range(100):  # the server starts with the first tick
             try:
                 head, tree = _groot2_request(zmq, port, "T")
                 break
             except zmq.Again:
                 assert run.poll() is None, "the run ended before serving"
         assert head[:6] == struct.pack("<BBI", 2, ord("T"), 7) and len(head) == 22
-        assert tree.decode() == xml.read_text()      # the same XML as `tree --btcpp`, uids and all
+        assert tree.decode() == xml.read_text()  # the same XML as `tree --btcpp`, uids and all
         uids = [int(u) for u in re.findall(r'_uid="(\d+)"', tree.decode())]
         head, statuses = _groot2_request(zmq, port, "S")
         records = [struct.unpack_from("<HB", statuses, i) for i in range(0, len(statuses), 3)]
-        assert sorted(uid for uid, _ in records) == sorted(uids) and records[0][1] == 1   # the root is RUNNING
+        assert sorted(uid for uid, _ in records) == sorted(uids) and records[0][1] == 1  # the root is RUNNING
         assert all(status in (0, 1, 2, 3, 11, 12, 13) for _, status in records)
         head, board = _groot2_request(zmq, port, "B", b"MainTree")
         assert set(msgpack.unpackb(board)) == {"MainTree"}
         assert _groot2_request(zmq, port, "Z") == [b"error"]
-        shown = subprocess.run([btview, "snapshot", "-p", str(port), "--ascii", "--no-color"],
-                               capture_output=True, text=True, timeout=30)
+        shown = subprocess.run(
+            [btview, "snapshot", "-p", str(port), "--ascii", "--no-color"], capture_output=True, text=True, timeout=30
+        )
         assert "part 1 [MoveUntilWall]" in shown.stdout and "16 nodes" in shown.stdout, shown.stderr
-        assert "part 2 [SubTree]" in shown.stdout               # the subtree as Groot2 shows one
+        assert "part 2 [SubTree]" in shown.stdout  # the subtree as Groot2 shows one
     finally:
         run.terminate()
         run.wait(timeout=10)
@@ -234,6 +249,7 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
 def _free_port_pair():
     """A loopback port N with N+1 free too (Groot2 serves on both)."""
     import socket
+
     for _ in range(50):
         with socket.socket() as first, socket.socket() as second:
             first.bind(("127.0.0.1", 0))
@@ -251,27 +267,37 @@ def _require_program_in_venv(name):
     path = Path(sys.executable).parent / name
     if not path.exists():
         from _require import missing
+
         missing(f"program {name}")
     return str(path)
 
 
 def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
-    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.errors import UserError
     from thymio_bt.mission import load_mission
+    from thymio_bt.mission.btcpp import mission_xml
 
     xml = mission_xml(load_mission("missions/course_full.yaml"))
-    assert re.findall(r'<BehaviorTree ID="([^"]+)"', xml) == ["MainTree", "respawn", "to_dead_end", "respawn_2",
-                                                               "to_dead_end_2"]
+    assert re.findall(r'<BehaviorTree ID="([^"]+)"', xml) == [
+        "MainTree",
+        "respawn",
+        "to_dead_end",
+        "respawn_2",
+        "to_dead_end_2",
+    ]
     assert '<SubTree ID="to_dead_end" name="part 2"' in xml
     uids = sorted(int(u) for u in re.findall(r'_uid="(\d+)"', xml))
-    assert uids == list(range(1, 35))                          # BT.CPP's pre-order, SubTree nodes included
+    assert uids == list(range(1, 35))  # BT.CPP's pre-order, SubTree nodes included
     bad = tmp_path / "bad.xml"
-    for body, message in (('<SubTree ID="nowhere"/>', 'names no <BehaviorTree ID="nowhere">'),
-                          ('<SubTree ID="loop"/>', "subtree 'loop' uses itself"),
-                          ('<SubTree ID="loop" speed="{v}"/>', "with ports (speed) is not supported")):
-        bad.write_text(f'<root BTCPP_format="4" main_tree_to_execute="MainTree">\n'
-                       f'<BehaviorTree ID="MainTree">{body}</BehaviorTree>\n'
-                       f'<BehaviorTree ID="loop"><SubTree ID="loop"/></BehaviorTree>\n</root>\n')
+    for body, message in (
+        ('<SubTree ID="nowhere"/>', 'names no <BehaviorTree ID="nowhere">'),
+        ('<SubTree ID="loop"/>', "subtree 'loop' uses itself"),
+        ('<SubTree ID="loop" speed="{v}"/>', "with ports (speed) is not supported"),
+    ):
+        bad.write_text(
+            f'<root BTCPP_format="4" main_tree_to_execute="MainTree">\n'
+            f'<BehaviorTree ID="MainTree">{body}</BehaviorTree>\n'
+            f'<BehaviorTree ID="loop"><SubTree ID="loop"/></BehaviorTree>\n</root>\n'
+        )
         with pytest.raises(UserError, match=re.escape(message)):
             load_mission(bad)

@@ -18,19 +18,19 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
 
 import _require
 import pytest
 
-from thymio_bt.mission import load_mission
-from thymio_bt.robot.interface import Pose
 from thymio_bt.backends.ros2.messages import proximity_range, quaternion_of, stamp_ns, stamp_parts, yaw_of
 from thymio_bt.backends.ros2.topics import COURSE_TOPICS, load_topics
-from thymio_bt.run.runner import Run
 from thymio_bt.backends.sim.world import Simulation
+from thymio_bt.mission import load_mission
+from thymio_bt.robot.interface import Pose
+from thymio_bt.run.runner import Run
 
 ROOT = Path(__file__).resolve().parent.parent
 MISSIONS = ROOT / "missions"
@@ -67,8 +67,15 @@ def test_a_topic_map_file_replaces_keys(tmp_path):
 def test_a_bad_topic_map_is_located(tmp_path):
     path = tmp_path / "bad.yaml"
     path.write_text("odom: /odom\nsensor_typo: Range\nsensors: {front_middle: /x}\n")
-    result = _cli(sys.executable, "run", str(MISSIONS / "maze_part1_2.yaml"), "--backend", "ros2",
-                  "--backend-opt", f"topics={path}")
+    result = _cli(
+        sys.executable,
+        "run",
+        str(MISSIONS / "maze_part1_2.yaml"),
+        "--backend",
+        "ros2",
+        "--backend-opt",
+        f"topics={path}",
+    )
     assert result.returncode == 2
     assert f"{path}:2:1: unknown key 'sensor_typo'" in result.stderr and "did you mean 'sensor_type'?" in result.stderr
     assert f"{path}:3:1:" in result.stderr and "no sensor named 'front_middle'" in result.stderr
@@ -91,11 +98,27 @@ def test_the_package_declares_python_3_10_and_keeps_to_it():
     import tomllib
 
     assert tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["requires-python"] == ">=3.10"
-    vermin = _require.program("vermin") if not (Path(sys.executable).parent / "vermin").exists() \
+    vermin = (
+        _require.program("vermin")
+        if not (Path(sys.executable).parent / "vermin").exists()
         else str(Path(sys.executable).parent / "vermin")
-    result = subprocess.run([vermin, "--no-tips", "--violations", "--eval-annotations", "--target=3.10-",
-                             "--backport", "typing_extensions", str(ROOT / "thymio_bt"), str(ROOT / "examples")],
-                            capture_output=True, text=True, timeout=300)
+    )
+    result = subprocess.run(
+        [
+            vermin,
+            "--no-tips",
+            "--violations",
+            "--eval-annotations",
+            "--target=3.10-",
+            "--backport",
+            "typing_extensions",
+            str(ROOT / "thymio_bt"),
+            str(ROOT / "examples"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert result.returncode == 0, result.stdout + result.stderr
 
 
@@ -117,17 +140,30 @@ def _environment(domain: int | None = None) -> dict[str, str]:
     return env
 
 
-def _cli(python: str | Path, *args: str, domain: int | None = None, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([str(python), "-m", "thymio_bt", *args], capture_output=True, text=True, timeout=timeout,
-                          env=_environment(domain), cwd=ROOT)
+def _cli(
+    python: str | Path, *args: str, domain: int | None = None, timeout: float = 300
+) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [str(python), "-m", "thymio_bt", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=_environment(domain),
+        cwd=ROOT,
+    )
 
 
 @contextmanager
 def serving(env: Path, *args: str, speedup: float = SPEEDUP) -> Iterator[int]:
     """A ``thymio-bt serve ros2`` in its own domain, ready; stopped (SIGINT) at the end."""
     domain = next(_domains)
-    proc = subprocess.Popen([str(env / "bin" / "thymio-bt"), "serve", "ros2", "--speedup", str(speedup), *args],
-                            stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, text=True, env=_environment(domain))
+    proc = subprocess.Popen(
+        [str(env / "bin" / "thymio-bt"), "serve", "ros2", "--speedup", str(speedup), *args],
+        stderr=subprocess.PIPE,
+        stdout=subprocess.DEVNULL,
+        text=True,
+        env=_environment(domain),
+    )
     try:
         deadline = time.monotonic() + 30
         line = ""
@@ -135,7 +171,7 @@ def serving(env: Path, *args: str, speedup: float = SPEEDUP) -> Iterator[int]:
             assert proc.poll() is None, f"serve ended: {proc.stderr.read() if proc.stderr else ''}"
             assert time.monotonic() < deadline, "serve did not start within 30 s"
             if select.select([proc.stderr], [], [], 0.5)[0]:
-                line = proc.stderr.readline()   # type: ignore[union-attr]
+                line = proc.stderr.readline()  # type: ignore[union-attr]
         yield domain
     finally:
         proc.send_signal(signal.SIGINT)
@@ -148,8 +184,17 @@ def serving(env: Path, *args: str, speedup: float = SPEEDUP) -> Iterator[int]:
 
 def _run(env: Path, mission: str, domain: int, tmp_path: Path, *args: str) -> tuple[int, dict]:
     report = tmp_path / f"{mission}.json"
-    result = _cli(env / "bin" / "python", "run", str(MISSIONS / f"{mission}.yaml"), "--backend", "ros2",
-                  "--report", str(report), *args, domain=domain)
+    result = _cli(
+        env / "bin" / "python",
+        "run",
+        str(MISSIONS / f"{mission}.yaml"),
+        "--backend",
+        "ros2",
+        "--report",
+        str(report),
+        *args,
+        domain=domain,
+    )
     assert "Traceback" not in result.stderr, result.stderr
     return result.returncode, json.loads(report.read_text())
 
@@ -159,8 +204,11 @@ def _direct(mission: str) -> dict:
 
 
 def _turns(report: dict) -> str:
-    return "".join(e["decision"][0].upper() for e in report["events"]
-                   if e["kind"] == "behaviour_end" and e["name"] == "ChooseTurn" and e.get("decision") in ("left", "right"))
+    return "".join(
+        e["decision"][0].upper()
+        for e in report["events"]
+        if e["kind"] == "behaviour_end" and e["name"] == "ChooseTurn" and e.get("decision") in ("left", "right")
+    )
 
 
 def _pose_at(report: dict, t: float) -> Pose:
@@ -179,7 +227,7 @@ def test_maze_part1_2_through_ros2_matches_the_direct_run(ros2_env, tmp_path):
     events = {e["kind"]: e for e in report["events"] if e["kind"] in ("delete_entity", "spawn_entity")}
     mission = load_mission(MISSIONS / "maze_part1_2.yaml")
     stop = _pose_at(report, events["delete_entity"]["t"])
-    gap = Simulation(mission.maze, spawn=stop).proximity()["front_center"]    # the true gap, from geometry
+    gap = Simulation(mission.maze, spawn=stop).proximity()["front_center"]  # the true gap, from geometry
     assert gap == pytest.approx(0.050, abs=0.002)
     respawn = _pose_after(report, events["spawn_entity"]["t"])
     assert (respawn.x, respawn.y, respawn.yaw) == pytest.approx((0.5, 0.3, math.pi / 2), abs=1e-3)
@@ -189,7 +237,7 @@ def test_maze_part1_2_through_ros2_matches_the_direct_run(ros2_env, tmp_path):
 
 
 def test_maze_bonus_through_ros2_turns_as_the_course_says(ros2_env, tmp_path):
-    with serving(ros2_env) as domain:       # the robot starts at part 1's spawn: the run respawns it
+    with serving(ros2_env) as domain:  # the robot starts at part 1's spawn: the run respawns it
         code, report = _run(ros2_env, "maze_bonus", domain, tmp_path)
     assert code == 0 and report["status"] == "SUCCESS", report["reason"]
     assert _turns(report) == "RRRLRLLLLLR"
@@ -198,9 +246,14 @@ def test_maze_bonus_through_ros2_turns_as_the_course_says(ros2_env, tmp_path):
 
 
 def test_the_course_students_node_runs_against_serve(ros2_env):
-    with serving(ros2_env, speedup=1.0) as domain:       # real time, as the course's Gazebo: its timer is wall-clock
-        result = subprocess.run([str(ros2_env / "bin" / "python"), str(ROOT / "examples" / "ros2_course_part1.py")],
-                                capture_output=True, text=True, timeout=120, env=_environment(domain))
+    with serving(ros2_env, speedup=1.0) as domain:  # real time, as the course's Gazebo: its timer is wall-clock
+        result = subprocess.run(
+            [str(ros2_env / "bin" / "python"), str(ROOT / "examples" / "ros2_course_part1.py")],
+            capture_output=True,
+            text=True,
+            timeout=120,
+            env=_environment(domain),
+        )
     assert result.returncode == 0, result.stderr
     stopped = next(line for line in result.stdout.splitlines() if line.startswith("STOPPED"))
     fields = dict(item.split("=") for item in stopped.split()[1:])
@@ -220,12 +273,19 @@ def test_nothing_to_drive_fails_quickly_with_a_reason(ros2_env, tmp_path):
 
 def _probe_speed(env: Path, domain: int) -> float:
     """The robot's speed now, from /odom, read by a separate ROS node."""
-    script = ("import rclpy, sys\nfrom nav_msgs.msg import Odometry\nrclpy.init()\nn = rclpy.create_node('probe')\n"
-              "got = []\nn.create_subscription(Odometry, '/odom', lambda m: got.append(m), 10)\n"
-              "while len(got) < 5: rclpy.spin_once(n, timeout_sec=1.0)\n"
-              "t = got[-1].twist.twist\nprint(abs(t.linear.x) + abs(t.angular.z))\n")
-    result = subprocess.run([str(env / "bin" / "python"), "-c", script], capture_output=True, text=True,
-                            timeout=60, env=_environment(domain))
+    script = (
+        "import rclpy, sys\nfrom nav_msgs.msg import Odometry\nrclpy.init()\nn = rclpy.create_node('probe')\n"
+        "got = []\nn.create_subscription(Odometry, '/odom', lambda m: got.append(m), 10)\n"
+        "while len(got) < 5: rclpy.spin_once(n, timeout_sec=1.0)\n"
+        "t = got[-1].twist.twist\nprint(abs(t.linear.x) + abs(t.angular.z))\n"
+    )
+    result = subprocess.run(
+        [str(env / "bin" / "python"), "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=_environment(domain),
+    )
     assert result.returncode == 0, result.stderr
     return float(result.stdout.strip())
 
@@ -234,8 +294,16 @@ def test_a_missing_service_fails_the_run_and_stops_the_motors(ros2_env, tmp_path
     topics = tmp_path / "no_delete.yaml"
     topics.write_text("delete: /no_such_delete\n")
     with serving(ros2_env) as domain:
-        code, report = _run(ros2_env, "maze_part1_2", domain, tmp_path, "--backend-opt", f"topics={topics}",
-                            "--backend-opt", "timeout=0.5")     # before DeleteEntity's own 5 s (sim) limit
+        code, report = _run(
+            ros2_env,
+            "maze_part1_2",
+            domain,
+            tmp_path,
+            "--backend-opt",
+            f"topics={topics}",
+            "--backend-opt",
+            "timeout=0.5",
+        )  # before DeleteEntity's own 5 s (sim) limit
         assert code == 1 and report["status"] == "FAILURE" and report["code"] == "ENTITY_ERROR"
         assert "/no_such_delete is not available" in report["reason"]
         assert _probe_speed(ros2_env, domain) == 0.0
@@ -243,11 +311,20 @@ def test_a_missing_service_fails_the_run_and_stops_the_motors(ros2_env, tmp_path
 
 def test_a_silent_sensor_topic_ends_the_run_as_robot_lost(ros2_env, tmp_path):
     topics = tmp_path / "silent.yaml"
-    topics.write_text("sensors:\n  front_left: /nobody_publishes_this\n  front_center: "
-                      "/thymio_front_center_proximity_sensor\n")
+    topics.write_text(
+        "sensors:\n  front_left: /nobody_publishes_this\n  front_center: /thymio_front_center_proximity_sensor\n"
+    )
     with serving(ros2_env) as domain:
-        code, report = _run(ros2_env, "maze_part1_2", domain, tmp_path, "--backend-opt", f"topics={topics}",
-                            "--backend-opt", "timeout=2")
+        code, report = _run(
+            ros2_env,
+            "maze_part1_2",
+            domain,
+            tmp_path,
+            "--backend-opt",
+            f"topics={topics}",
+            "--backend-opt",
+            "timeout=2",
+        )
         assert code == 1 and report["code"] == "ROBOT_LOST"
         assert "/nobody_publishes_this" in report["reason"]
 
@@ -255,8 +332,19 @@ def test_a_silent_sensor_topic_ends_the_run_as_robot_lost(ros2_env, tmp_path):
 def test_a_run_stopped_while_driving_stops_the_robot(ros2_env, tmp_path):
     report = tmp_path / "report.json"
     with serving(ros2_env) as domain:
-        run = subprocess.Popen([str(ros2_env / "bin" / "thymio-bt"), "run", str(MISSIONS / "maze_part1_2.yaml"),
-                                "--backend", "ros2", "--report", str(report), "-q"], env=_environment(domain))
+        run = subprocess.Popen(
+            [
+                str(ros2_env / "bin" / "thymio-bt"),
+                "run",
+                str(MISSIONS / "maze_part1_2.yaml"),
+                "--backend",
+                "ros2",
+                "--report",
+                str(report),
+                "-q",
+            ],
+            env=_environment(domain),
+        )
         try:
             deadline = time.monotonic() + 30
             while _probe_speed(ros2_env, domain) == 0.0:
@@ -273,25 +361,49 @@ def test_a_run_stopped_while_driving_stops_the_robot(ros2_env, tmp_path):
 def test_a_driver_publishing_range_in_wall_time(ros2_env, tmp_path):
     """A real robot's layout: no /clock, Range messages on its own names, no spawn service."""
     topics = tmp_path / "driver.yaml"
-    topics.write_text("sensor_type: Range\nspawn: ''\ndelete: ''\nsensors:\n" + "".join(
-        f"  {name}: /proximity/{topic}\n" for name, topic in (
-            ("front_left", "left"), ("front_center_left", "center_left"), ("front_center", "center"),
-            ("front_center_right", "center_right"), ("front_right", "right"), ("rear_left", "rear_left"),
-            ("rear_right", "rear_right"))))
+    topics.write_text(
+        "sensor_type: Range\nspawn: ''\ndelete: ''\nsensors:\n"
+        + "".join(
+            f"  {name}: /proximity/{topic}\n"
+            for name, topic in (
+                ("front_left", "left"),
+                ("front_center_left", "center_left"),
+                ("front_center", "center"),
+                ("front_center_right", "center_right"),
+                ("front_right", "right"),
+                ("rear_left", "rear_left"),
+                ("rear_right", "rear_right"),
+            )
+        )
+    )
     mission = tmp_path / "approach.yaml"
-    mission.write_text(f"name: approach\nmaze: {ROOT / 'mazes' / 'two_parts_maze.yaml'}\nstart: part1\n"
-                       "time_limit: 20\ntree:\n  MoveUntilWall: {distance: 5cm}\n")
+    mission.write_text(
+        f"name: approach\nmaze: {ROOT / 'mazes' / 'two_parts_maze.yaml'}\nstart: part1\n"
+        "time_limit: 20\ntree:\n  MoveUntilWall: {distance: 5cm}\n"
+    )
     domain = next(_domains)
-    driver = subprocess.Popen([str(ros2_env / "bin" / "python"), str(ROOT / "tests" / "data" / "ros2_range_driver.py")],
-                              env=_environment(domain))
+    driver = subprocess.Popen(
+        [str(ros2_env / "bin" / "python"), str(ROOT / "tests" / "data" / "ros2_range_driver.py")],
+        env=_environment(domain),
+    )
     try:
         report = tmp_path / "report.json"
-        result = _cli(ros2_env / "bin" / "python", "run", str(mission), "--backend", "ros2", "--backend-opt",
-                      f"topics={topics}", "--report", str(report), domain=domain)
+        result = _cli(
+            ros2_env / "bin" / "python",
+            "run",
+            str(mission),
+            "--backend",
+            "ros2",
+            "--backend-opt",
+            f"topics={topics}",
+            "--report",
+            str(report),
+            domain=domain,
+        )
     finally:
         driver.terminate()
         driver.wait(timeout=10)
     assert result.returncode == 0, result.stderr
     data = json.loads(report.read_text())
     gap = 0.595 - data["final_pose"]["x"] - 0.0557
-    assert gap == pytest.approx(0.05, abs=0.01)      # wall time: the readings are up to 0.1 s old
+    assert gap == pytest.approx(0.05, abs=0.01)  # wall time: the readings are up to 0.1 s old

@@ -42,8 +42,9 @@ FIXES: dict[str, list[tuple[str, str]]] = {
     "wrong_type_choice.yaml": [("front_centre", "front_center")],
     "parallel_bad_policy.yaml": [("success_on_some", "success_on_one")],
     "repeat_bad_times.yaml": [("times: 0", "times: 2")],
-    "retry_without_times.yaml": [("retry: {MoveDistance: {distance: 5cm}}",
-                                  "retry: {times: 2, do: {MoveDistance: {distance: 5cm}}}")],
+    "retry_without_times.yaml": [
+        ("retry: {MoveDistance: {distance: 5cm}}", "retry: {times: 2, do: {MoveDistance: {distance: 5cm}}}")
+    ],
     "node_with_two_keys.yaml": [("      TurnAngle:", "    - TurnAngle:")],
     "empty_children.yaml": [("children: []", "children: [Stop]")],
     "parameter_is_a_list.yaml": [("[10cm/s]", "10cm/s")],
@@ -89,8 +90,18 @@ def test_the_schema_command_writes_the_committed_file(tmp_path: Path) -> None:
 
 def test_the_schema_knows_every_behaviour_composite_and_decorator(schema: dict[str, Any]) -> None:
     node_names = set(schema["$defs"]["node"]["anyOf"][1]["properties"])
-    assert {"MoveUntilWall", "TurnAngle", "WallFollow", "sequence", "reactive_selector", "parallel", "repeat",
-            "timeout", "guard", "one_shot"} <= node_names
+    assert {
+        "MoveUntilWall",
+        "TurnAngle",
+        "WallFollow",
+        "sequence",
+        "reactive_selector",
+        "parallel",
+        "repeat",
+        "timeout",
+        "guard",
+        "one_shot",
+    } <= node_names
 
 
 def _errors(validator: jsonschema.protocols.Validator, data: Any) -> list[str]:
@@ -98,8 +109,9 @@ def _errors(validator: jsonschema.protocols.Validator, data: Any) -> list[str]:
 
 
 @pytest.mark.parametrize("path", MISSIONS + LIBRARIES, ids=lambda p: str(p.relative_to(ROOT)))
-def test_every_mission_is_valid_against_the_schema(path: Path, schema: dict[str, Any],
-                                                   validator: jsonschema.protocols.Validator) -> None:
+def test_every_mission_is_valid_against_the_schema(
+    path: Path, schema: dict[str, Any], validator: jsonschema.protocols.Validator
+) -> None:
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
     if _is_mission(data):
         assert _errors(validator, data) == []
@@ -121,8 +133,9 @@ def test_every_mission_names_the_schema_on_its_first_line(path: Path) -> None:
 
 
 @pytest.mark.parametrize("name", sorted(FIXES))
-def test_the_schema_rejects_a_broken_mission_and_accepts_it_fixed(name: str, tmp_path: Path,
-                                                                  validator: jsonschema.protocols.Validator) -> None:
+def test_the_schema_rejects_a_broken_mission_and_accepts_it_fixed(
+    name: str, tmp_path: Path, validator: jsonschema.protocols.Validator
+) -> None:
     broken = (BROKEN / name).read_text(encoding="utf-8")
     assert not validator.is_valid(yaml.safe_load(broken)), f"the schema accepts {name}"
     fixed = broken
@@ -133,4 +146,4 @@ def test_the_schema_rejects_a_broken_mission_and_accepts_it_fixed(name: str, tmp
     assert errors == [], f"{name} fixed is still rejected"
     path = tmp_path / name
     path.write_text("\n".join(line for line in fixed.split("\n") if not line.startswith("# expect")))
-    load_mission(path)          # and the loader agrees that the fix was the only problem
+    load_mission(path)  # and the loader agrees that the fix was the only problem

@@ -5,9 +5,9 @@ from types import MappingProxyType
 
 import pytest
 
+from thymio_bt.backends.sim import NoiseConfig, SimConfig, Simulation, fastpath
 from thymio_bt.maze import Maze, Wall, load_maze
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
-from thymio_bt.backends.sim import NoiseConfig, SimConfig, Simulation, fastpath
 from thymio_bt.robot.model import COURSE as thymio_model
 from thymio_bt.testing import world
 
@@ -17,7 +17,7 @@ COURSE = load_maze("mazes/two_parts_maze.yaml")
 def test_front_ray_reads_the_course_stop_distance():
     sim = Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0))
     assert sim.proximity()["front_center"] == pytest.approx(0.0500, abs=0.0002)
-    sim = Simulation(COURSE, spawn=Pose(0.4793, 0.1, 0.0))        # 1 cm further back
+    sim = Simulation(COURSE, spawn=Pose(0.4793, 0.1, 0.0))  # 1 cm further back
     assert sim.proximity()["front_center"] == pytest.approx(0.0600, abs=0.0002)
     sim = Simulation(COURSE, spawn=Pose(0.4893 - 0.048, 0.1, 0.0))  # gap 0.098 > range 0.0975
     assert sim.proximity()["front_center"] == math.inf
@@ -37,7 +37,7 @@ def test_centred_in_a_corridor_the_38_degree_rays_read_0_074():
 
 
 def test_rear_rays_read_equal_when_square_to_a_wall_behind():
-    sim = Simulation(COURSE, spawn=Pose(0.5, 0.1, math.pi))         # rear faces Wall_4 at x = 0.6
+    sim = Simulation(COURSE, spawn=Pose(0.5, 0.1, math.pi))  # rear faces Wall_4 at x = 0.6
     scan = sim.proximity()
     assert math.isfinite(scan["rear_left"])
     # Gazebo's wall yaw is 1.5708, not pi/2: the wall is tilted by 3.7e-6 rad, i.e. 0.2 um here
@@ -69,11 +69,11 @@ def test_spinning_keeps_the_axle_fixed_and_base_link_on_a_0_0243_circle():
 
 def test_command_is_held_and_limited_to_the_wheel_speed_keeping_the_radius():
     assert thymio_model.limited_wheel_speeds(0.3, 0.0) == pytest.approx((0.2, 0.2))
-    assert thymio_model.limited_wheel_speeds(0.05, 0.1) == thymio_model.wheel_speeds(0.05, 0.1)   # within the limit
+    assert thymio_model.limited_wheel_speeds(0.05, 0.1) == thymio_model.wheel_speeds(0.05, 0.1)  # within the limit
     left, right = thymio_model.limited_wheel_speeds(0.2, 2.0)
     assert max(abs(left), abs(right)) == pytest.approx(0.2)
     v, w = thymio_model.body_velocity(left, right)
-    assert v / w == pytest.approx(0.2 / 2.0)           # same turn radius
+    assert v / w == pytest.approx(0.2 / 2.0)  # same turn radius
     sim = Simulation(world("arena"), spawn=Pose(0.3, 0.6, 0.0))
     sim.drive(1.0, 0.0)
     sim.advance(1.0)
@@ -86,7 +86,7 @@ def test_driving_into_a_wall_stops_without_tunnelling_and_counts_one_collision(s
     sim.drive(speed, 0.0)
     sim.advance(12.0)
     nose = sim.pose().x + 0.0557
-    assert nose == pytest.approx(0.595, abs=0.001)       # the face of Wall_4
+    assert nose == pytest.approx(0.595, abs=0.001)  # the face of Wall_4
     assert len(sim.collisions) == 1
     assert sim.collisions[0].x == pytest.approx(0.595, abs=0.001)
     assert sim.min_clearance == 0.0
@@ -104,18 +104,21 @@ def test_a_collision_episode_is_counted_once_per_contact():
 
 def test_clearance_is_the_hull_to_wall_gap():
     sim = Simulation(COURSE, spawn=Pose(0.2243, 0.1, 0.0))
-    assert sim.min_clearance == pytest.approx(0.095 - 0.0559, abs=1e-6)   # sides, centred
+    assert sim.min_clearance == pytest.approx(0.095 - 0.0559, abs=1e-6)  # sides, centred
     sim.drive(0.1, 0.0)
-    sim.advance(3.0)                                  # nose from 0.280 to 0.580: 15 mm from Wall_4
+    sim.advance(3.0)  # nose from 0.280 to 0.580: 15 mm from Wall_4
     assert sim.min_clearance == pytest.approx(0.015, abs=1e-4)
 
 
-@pytest.mark.parametrize("pose, why", [
-    (Pose(0.6, 0.1, 0.0), "overlaps a wall"),
-    (Pose(0.05, 0.1, 0.0), "overlaps a wall"),
-    (Pose(2.5, 0.1, 0.0), "outside the maze"),
-    (Pose(0.1, 0.1, math.nan), "finite"),
-])
+@pytest.mark.parametrize(
+    "pose, why",
+    [
+        (Pose(0.6, 0.1, 0.0), "overlaps a wall"),
+        (Pose(0.05, 0.1, 0.0), "overlaps a wall"),
+        (Pose(2.5, 0.1, 0.0), "outside the maze"),
+        (Pose(0.1, 0.1, math.nan), "finite"),
+    ],
+)
 def test_impossible_spawns_are_refused_and_change_nothing(pose, why):
     sim = Simulation(COURSE)
     request = sim.request_spawn("thymio", pose)
@@ -133,7 +136,7 @@ def test_delete_and_spawn_complete_over_ticks_and_names_are_checked():
     sim.advance(0.1)
     assert "already exists" in taken.reason and "no entity named 'robot2'" in unknown.reason
     assert delete.state.value == "succeeded" and not sim.exists()
-    sim.drive(0.1, 0.0)                                   # dropped while no robot exists
+    sim.drive(0.1, 0.0)  # dropped while no robot exists
     assert sim.command().linear == 0.0
     spawn = sim.request_spawn("thymio", Pose(0.5, 0.3, math.pi / 2))
     sim.advance(0.1)
@@ -159,8 +162,9 @@ def test_same_seed_same_trajectory_bit_for_bit_and_noise_is_opt_in():
 
 
 def test_drifting_odometry_differs_from_the_true_pose_only_when_enabled():
-    sim = Simulation(world("arena"), spawn=Pose(0.6, 0.6, 0.0),
-                     config=SimConfig(noise=NoiseConfig(odometry=0.05), seed=1))
+    sim = Simulation(
+        world("arena"), spawn=Pose(0.6, 0.6, 0.0), config=SimConfig(noise=NoiseConfig(odometry=0.05), seed=1)
+    )
     for _ in range(30):
         sim.drive(0.1, 0.2)
         sim.advance(0.1)
@@ -169,10 +173,9 @@ def test_drifting_odometry_differs_from_the_true_pose_only_when_enabled():
 
 
 def test_wheels_slipping_against_a_wall_make_odometry_drift():
-    sim = Simulation(COURSE, spawn=Pose(0.5, 0.1, 0.0),
-                     config=SimConfig(noise=NoiseConfig(odometry=1e-6), seed=1))
+    sim = Simulation(COURSE, spawn=Pose(0.5, 0.1, 0.0), config=SimConfig(noise=NoiseConfig(odometry=1e-6), seed=1))
     sim.drive(0.1, 0.0)
-    sim.advance(1.0)                     # blocked by Wall_4 after 3.9 cm; the wheels keep turning
+    sim.advance(1.0)  # blocked by Wall_4 after 3.9 cm; the wheels keep turning
     assert sim.true_pose().x == pytest.approx(0.5393, abs=0.001)
     assert sim.pose().x == pytest.approx(0.6, abs=0.001)
 
@@ -196,11 +199,11 @@ def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
         probe = Simulation(maze)
         if probe.spawn_problem("thymio", pose):
             continue
-        sim = Simulation(maze, spawn=pose)               # the spawn computes the clearance once
+        sim = Simulation(maze, spawn=pose)  # the spawn computes the clearance once
         tracker, entity = sim._clearance, sim._entities["thymio"]
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         exact = tracker.exact(list(tracker.walls), entity.shape, pose.x, pose.y, c, s)
-        if exact < 0.05:                                 # within the tracked horizon
+        if exact < 0.05:  # within the tracked horizon
             assert sim.min_clearance == pytest.approx(exact, abs=1e-9)
             checked += 1
 
@@ -238,15 +241,15 @@ def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch)
         return out
 
     def in_front(sim):
-        sim.advance(0.1)                                            # a refresh, not read
-        sim.request_spawn("other", Pose(0.25, 0.1, math.pi))      # 6 cm ahead of the front sensors
-        sim.advance(0.0)                                            # served: no physics step
+        sim.advance(0.1)  # a refresh, not read
+        sim.request_spawn("other", Pose(0.25, 0.1, math.pi))  # 6 cm ahead of the front sensors
+        sim.advance(0.0)  # served: no physics step
         seen_after_spawn = dict(sim.proximity())
         sim.advance(0.1)
         return seen_after_spawn, dict(sim.proximity())
 
     lazy = runs(), in_front(Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0)))
-    assert lazy[1][1]["front_center"] < lazy[1][0]["front_center"]   # seen from the next refresh on
+    assert lazy[1][1]["front_center"] < lazy[1][0]["front_center"]  # seen from the next refresh on
     monkeypatch.setattr(Simulation, "_refresh_sensors", _eager(Simulation._refresh_sensors))
     assert (runs(), in_front(Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0)))) == lazy
 
@@ -254,10 +257,12 @@ def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch)
 def _eager(refresh):
     """``Simulation._refresh_sensors`` that casts all the rays at every refresh in one fan, as the
     simulation did before it cast each when first read."""
+
     def eager(sim, entity):
         refresh(sim, entity)
         if sim._scan is None:
             sim._scan = MappingProxyType(sim._cast(entity, *sim._sensed))
+
     return eager
 
 
@@ -265,14 +270,18 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     """fastpath calls pymunk's C step and ray query directly; the public API must agree bit for bit,
     through collisions, a delete and a respawn (the course mission), with noise on (rays cast at
     each refresh) and off (each ray cast when read)."""
+    from thymio_bt.backends.sim import world as world_module
     from thymio_bt.mission import load_mission
     from thymio_bt.run.runner import Run
-    from thymio_bt.backends.sim import world as world_module
 
     def first_hit(space, x, y, cos, sin, ray, shape_filter):
         sx, sy, ex, ey = ray
-        return space.segment_query_first((x + sx * cos - sy * sin, y + sx * sin + sy * cos),
-                                         (x + ex * cos - ey * sin, y + ex * sin + ey * cos), 0.0, shape_filter)
+        return space.segment_query_first(
+            (x + sx * cos - sy * sin, y + sx * sin + sy * cos),
+            (x + ex * cos - ey * sin, y + ex * sin + ey * cos),
+            0.0,
+            shape_filter,
+        )
 
     class PublicRays:
         def __init__(self, space):
@@ -302,7 +311,7 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
     monkeypatch.setattr(world_module, "stepper", lambda space: (lambda _, dt: space.step(dt), None))
     monkeypatch.setattr(world_module, "RayCaster", PublicRays)
     monkeypatch.setattr(world_module, "RayReader", PublicReader)
-    monkeypatch.setattr(fastpath, "_memory", lambda body: None)      # bodies through Chipmunk's calls
+    monkeypatch.setattr(fastpath, "_memory", lambda body: None)  # bodies through Chipmunk's calls
     assert runs() == fast
 
 
@@ -349,14 +358,14 @@ def test_a_wall_crash_is_the_same_on_the_fast_path_and_the_public_api(monkeypatc
 
 def test_the_raw_sensor_model_reports_a_real_thymios_readings_and_their_metres():
     config = SimConfig(sensor_model="raw", seed=4)
-    sim = Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0), config=config)     # 5 cm from the wall
+    sim = Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0), config=config)  # 5 cm from the wall
     raw = sim.proximity_raw()
     assert set(raw) == set(SENSOR_NAMES) and all(isinstance(v, int) for v in raw.values())
-    assert 2450 < raw["front_center"] < 2700                  # Webots' table: 2570 at 5 cm, 1 % noise
+    assert 2450 < raw["front_center"] < 2700  # Webots' table: 2570 at 5 cm, 1 % noise
     assert sim.proximity()["front_center"] == pytest.approx(0.05, abs=0.001)
-    far = Simulation(COURSE, spawn=Pose(0.4893 - 0.0445, 0.1, 0.0), config=config)   # 9.45 cm: ray hits
+    far = Simulation(COURSE, spawn=Pose(0.4893 - 0.0445, 0.1, 0.0), config=config)  # 9.45 cm: ray hits
     assert far.proximity_raw()["front_center"] == 0 and far.proximity()["front_center"] == math.inf
-    assert Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0)).proximity_raw() is None   # metres by default
+    assert Simulation(COURSE, spawn=Pose(0.4893, 0.1, 0.0)).proximity_raw() is None  # metres by default
 
 
 def test_raw_readings_are_seeded():

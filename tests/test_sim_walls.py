@@ -4,8 +4,8 @@ import random
 
 import pymunk
 
-from thymio_bt.maze import load_maze
 from thymio_bt.backends.sim.walls import wall_grid
+from thymio_bt.maze import load_maze
 
 
 def test_the_grid_serves_every_wall_a_space_point_query_finds():
@@ -15,8 +15,10 @@ def test_the_grid_serves_every_wall_a_space_point_query_finds():
     for wall in maze.walls:
         shapes.append(pymunk.Poly(space.static_body, wall.corners()))
         space.add(shapes[-1])
-    boxes = tuple((min(x for x, _ in c), min(y for _, y in c), max(x for x, _ in c), max(y for _, y in c))
-                  for c in (w.corners() for w in maze.walls))
+    boxes = tuple(
+        (min(x for x, _ in c), min(y for _, y in c), max(x for x, _ in c), max(y for _, y in c))
+        for c in (w.corners() for w in maze.walls)
+    )
     grid = wall_grid(boxes, 0.05, 0.13)
     xmin, ymin, xmax, ymax = maze.bounds()
     rng = random.Random(3)
@@ -29,9 +31,9 @@ def test_the_grid_serves_every_wall_a_space_point_query_finds():
 def test_placement_with_precomputed_shapes_gives_the_same_answers():
     """MazeShapes (the simulator's cached polygons, boxes skipped when far apart) answers as the maze does,
     also for poses that touch or nearly touch a wall."""
-    from thymio_bt.robot.placement import MazeShapes, placement_problem
     from thymio_bt.robot.interface import Pose
     from thymio_bt.robot.model import COURSE
+    from thymio_bt.robot.placement import MazeShapes, placement_problem
 
     maze = load_maze("mazes/two_parts_maze.yaml")
     shapes = MazeShapes.of(maze)

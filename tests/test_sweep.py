@@ -10,15 +10,17 @@ from thymio_bt.run.sweep import LocalPool, run_job, sweep
 
 def test_sweep_json_contract_and_noise_on_by_default(tmp_path):
     out = tmp_path / "sweep.json"
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "6", "--seed-start", "10",
-                                       "--out", str(out), "--workers", "2"])
+    result = CliRunner().invoke(
+        main,
+        ["sweep", "missions/square.yaml", "--runs", "6", "--seed-start", "10", "--out", str(out), "--workers", "2"],
+    )
     assert result.exit_code == 0, result.output
     data = json.loads(out.read_text())
     assert data["runs"] == 6 and data["successes"] == 6 and data["success_rate"] == 1.0
     assert [r["seed"] for r in data["results"]] == list(range(10, 16))
     assert set(data["results"][0]) >= {"seed", "status", "sim_time", "final_pose"}
     assert data["noise"]["wheel"] > 0 and data["noise"]["range_sd"] > 0
-    assert len({json.dumps(r["final_pose"]) for r in data["results"]}) == 6     # the noise did something
+    assert len({json.dumps(r["final_pose"]) for r in data["results"]}) == 6  # the noise did something
     assert "6/6 succeeded" in result.output
 
 
@@ -31,7 +33,7 @@ def test_the_same_sweep_gives_the_same_results_serial_or_parallel():
 
 
 def test_any_pool_with_imap_unordered_can_run_a_sweep():
-    class Reversed:                        # stands for Ray's or Dask's pool: results out of order
+    class Reversed:  # stands for Ray's or Dask's pool: results out of order
         def imap_unordered(self, fn, jobs):
             return iter([fn(job) for job in reversed(list(jobs))])
 
@@ -40,8 +42,12 @@ def test_any_pool_with_imap_unordered_can_run_a_sweep():
 
 
 def test_noise_can_be_switched_off_with_set():
-    result = sweep("missions/square.yaml", 2, overrides={"noise.wheel": "0", "noise.range_sd": "0",
-                                                          "noise.odometry": "0"}, executor=LocalPool(1))
+    result = sweep(
+        "missions/square.yaml",
+        2,
+        overrides={"noise.wheel": "0", "noise.range_sd": "0", "noise.odometry": "0"},
+        executor=LocalPool(1),
+    )
     assert result.results[0]["final_pose"] == result.results[1]["final_pose"]
 
 
@@ -61,14 +67,31 @@ def test_a_matrix_sweeps_every_combination_and_tabulates_it(tmp_path):
     from thymio_bt.cli import main
 
     out = tmp_path / "m.json"
-    result = CliRunner().invoke(main, ["sweep", "missions/maze_bonus.yaml", "--runs", "3", "--workers", "1",
-                                       "--matrix", "robot=course,enki", "--matrix", "sensor_model=rays,cone",
-                                       "--out", str(out)])
+    result = CliRunner().invoke(
+        main,
+        [
+            "sweep",
+            "missions/maze_bonus.yaml",
+            "--runs",
+            "3",
+            "--workers",
+            "1",
+            "--matrix",
+            "robot=course,enki",
+            "--matrix",
+            "sensor_model=rays,cone",
+            "--out",
+            str(out),
+        ],
+    )
     assert result.exit_code == 0, result.output
     data = json.loads(out.read_text())
     assert [c["settings"] for c in data["cells"]] == [
-        {"robot": "course", "sensor_model": "rays"}, {"robot": "course", "sensor_model": "cone"},
-        {"robot": "enki", "sensor_model": "rays"}, {"robot": "enki", "sensor_model": "cone"}]
+        {"robot": "course", "sensor_model": "rays"},
+        {"robot": "course", "sensor_model": "cone"},
+        {"robot": "enki", "sensor_model": "rays"},
+        {"robot": "enki", "sensor_model": "cone"},
+    ]
     assert all(c["runs"] == 3 for c in data["cells"])
     assert data["cells"][0]["success_rate"] == 1.0 and data["cells"][0]["final_error_max"] < 0.01
     assert "median err" in result.output and result.output.count("course") >= 2

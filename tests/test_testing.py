@@ -13,17 +13,22 @@ def test_presets_are_closed_worlds_with_a_start(preset):
 
 
 def test_the_plugin_fixture_runs_a_behaviour_and_gives_node_statistics(thymio):
-    result = thymio.run_tree({"sequence": [{"MoveUntilWall": {"distance": "5cm"}}, {"TurnAngle": {"angle": "90deg"}}]},
-                             thymio.world("corridor"), seconds=30)
+    result = thymio.run_tree(
+        {"sequence": [{"MoveUntilWall": {"distance": "5cm"}}, {"TurnAngle": {"angle": "90deg"}}]},
+        thymio.world("corridor"),
+        seconds=30,
+    )
     stats = result.node_stats
     assert stats["sequence/MoveUntilWall"]["successes"] == 1
-    assert stats["sequence/MoveUntilWall"]["ticks"] == pytest.approx(stats["sequence/MoveUntilWall"]["running_time"] * 10 + 1)
+    assert stats["sequence/MoveUntilWall"]["ticks"] == pytest.approx(
+        stats["sequence/MoveUntilWall"]["running_time"] * 10 + 1
+    )
     assert stats["sequence/TurnAngle"]["running_time"] > 1.0
 
 
 def test_the_blackboard_starts_empty_in_every_test():
     assert py_trees.blackboard.Blackboard.storage == {}
-    py_trees.blackboard.Blackboard.set("/left_over", 1)       # the next test must not see this
+    py_trees.blackboard.Blackboard.set("/left_over", 1)  # the next test must not see this
 
 
 def test_the_blackboard_was_cleared_after_the_previous_test():
@@ -37,8 +42,9 @@ def test_substitution_replaces_nodes_by_path_pattern():
 
 
 def test_a_scripted_stub_runs_for_simulated_seconds_then_returns_its_status():
-    result = run_mission_file("missions/maze_part1_2.yaml",
-                              substitute={"*/DeleteEntity": {"status": "success", "seconds": 2}})
+    result = run_mission_file(
+        "missions/maze_part1_2.yaml", substitute={"*/DeleteEntity": {"status": "success", "seconds": 2}}
+    )
     # the real robot was never deleted, so the real spawn must refuse the taken name
     assert result.status == "FAILURE" and result.code == "ENTITY_ERROR"
     assert "already exists" in result.reason
@@ -46,8 +52,9 @@ def test_a_scripted_stub_runs_for_simulated_seconds_then_returns_its_status():
 
 
 def test_a_status_list_is_returned_one_per_tick():
-    result = run_mission_file("missions/square.yaml",
-                              substitute={"four sides/side/TurnAngle": ["running", "running", "failure"]})
+    result = run_mission_file(
+        "missions/square.yaml", substitute={"four sides/side/TurnAngle": ["running", "running", "failure"]}
+    )
     assert result.status == "FAILURE"
     assert result.node_stats["four sides/side/TurnAngle"]["ticks"] == 3
 
@@ -56,8 +63,10 @@ def test_the_plugin_imports_nothing_heavy():
     import subprocess
     import sys
 
-    code = ("import sys, thymio_bt.pytest_plugin; "
-            "print(sorted(m for m in ('py_trees', 'pymunk', 'pydantic', 'numpy', 'thymio_bt.testing') if m in sys.modules))")
+    code = (
+        "import sys, thymio_bt.pytest_plugin; "
+        "print(sorted(m for m in ('py_trees', 'pymunk', 'pydantic', 'numpy', 'thymio_bt.testing') if m in sys.modules))"
+    )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
 

@@ -50,17 +50,21 @@ R, S, F = Status.RUNNING, Status.SUCCESS, Status.FAILURE
 
 def _trees(log):
     """Small trees of every kind the direct tick handles, with leaves that change their minds."""
+
     def leaves(prefix, *scripts):
         return [Scripted(f"{prefix}{i}", s, log) for i, s in enumerate(scripts)]
+
     return [
         py_trees.composites.Sequence("seq", memory=True, children=leaves("a", [R, S], [S], [R, F])),
         py_trees.composites.Sequence("rseq", memory=False, children=leaves("b", [S, S, F], [R, R, S], [S])),
         py_trees.composites.Selector("sel", memory=True, children=leaves("c", [F], [R, F], [R, S])),
         py_trees.composites.Selector("rsel", memory=False, children=leaves("d", [F, F, S], [R, S, R], [S])),
-        py_trees.composites.Parallel("all", policy=ParallelPolicy.SuccessOnAll(synchronise=True),
-                                     children=leaves("e", [R, S], [R, R, S], [S])),
-        py_trees.composites.Parallel("one", policy=ParallelPolicy.SuccessOnOne(),
-                                     children=leaves("f", [R, R, R, S], [R, F])),
+        py_trees.composites.Parallel(
+            "all", policy=ParallelPolicy.SuccessOnAll(synchronise=True), children=leaves("e", [R, S], [R, R, S], [S])
+        ),
+        py_trees.composites.Parallel(
+            "one", policy=ParallelPolicy.SuccessOnOne(), children=leaves("f", [R, R, R, S], [R, F])
+        ),
         py_trees.decorators.Inverter("inv", child=Scripted("g", [R, S], log)),
         py_trees.decorators.FailureIsSuccess("fis", child=Scripted("h", [R, F], log)),
     ]

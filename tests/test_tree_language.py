@@ -21,8 +21,8 @@ def test_sequence_resumes_at_the_running_child_but_reactive_sequence_rechecks_co
     condition = {"invert": {"WallAhead": {"distance": "3cm"}}}
     plain = run_tree({"sequence": [condition, moving]}, ARENA, seconds=30)
     reactive = run_tree({"reactive_sequence": [condition, moving]}, ARENA, seconds=30)
-    assert plain.status == "FAILURE" and plain.code == "COLLISION"       # never re-checked: hits the wall
-    assert reactive.status == "FAILURE" and reactive.collisions == 0      # stopped 3 cm from the wall
+    assert plain.status == "FAILURE" and plain.code == "COLLISION"  # never re-checked: hits the wall
+    assert reactive.status == "FAILURE" and reactive.collisions == 0  # stopped 3 cm from the wall
     assert reactive.final_proximity["front_center"] < 0.03
 
 
@@ -34,13 +34,17 @@ def test_selector_tries_alternatives_in_order():
 
 def test_reactive_selector_interrupts_a_lower_priority_child():
     # a higher-priority condition becomes true while the lower child runs: it takes over
-    tree = {"reactive_selector": [{"WallAhead": {"distance": "5cm"}},
-                                  {"MoveDistance": {"distance": 0.6, "speed": "10cm/s"}}]}
+    tree = {
+        "reactive_selector": [
+            {"WallAhead": {"distance": "5cm"}},
+            {"MoveDistance": {"distance": 0.6, "speed": "10cm/s"}},
+        ]
+    }
     result = run_tree(tree, ARENA, seconds=30)
     assert result.status == "SUCCESS" and result.collisions == 0
     assert 0.045 < result.final_proximity["front_center"] <= 0.05
     ends = [e for e in result.events if e["kind"] == "behaviour_end" and e["name"] == "MoveDistance"]
-    assert ends[0]["status"] == "INVALID"                                # interrupted, and stopped
+    assert ends[0]["status"] == "INVALID"  # interrupted, and stopped
 
 
 def test_parallel_policies():
@@ -54,8 +58,9 @@ def test_repeat_times_forever_and_until():
     assert times.status == "SUCCESS" and starts(times, "Wait") == 3
     forever = run_tree({"repeat": {"times": "forever", "do": wait(0.5)}}, ARENA, seconds=3)
     assert forever.status == "TIMEOUT" and starts(forever, "Wait") >= 5
-    until = run_tree({"repeat": {"until": {"WallAhead": {}}, "do": {"MoveDistance": {"distance": 0.1}}}},
-                     ARENA, seconds=60)
+    until = run_tree(
+        {"repeat": {"until": {"WallAhead": {}}, "do": {"MoveDistance": {"distance": 0.1}}}}, ARENA, seconds=60
+    )
     assert until.status == "SUCCESS" and until.final_proximity["front_center"] is not None
 
 
@@ -77,14 +82,21 @@ def test_invert_force_success_force_failure():
 
 
 def test_until_reruns_its_child_until_the_status():
-    result = run_tree({"until": {"status": "success", "do": {"sequence": [
-        {"MoveDistance": {"distance": 0.1}}, {"WallAhead": {}}]}}}, ARENA, seconds=60)
+    result = run_tree(
+        {"until": {"status": "success", "do": {"sequence": [{"MoveDistance": {"distance": 0.1}}, {"WallAhead": {}}]}}},
+        ARENA,
+        seconds=60,
+    )
     assert result.status == "SUCCESS" and starts(result, "MoveDistance") >= 3
 
 
 def test_guard_stops_its_child_when_the_condition_turns_false():
-    tree = {"guard": {"condition": {"invert": {"WallAhead": {"distance": "4cm"}}},
-                      "do": {"MoveDistance": {"distance": 0.6}}}}
+    tree = {
+        "guard": {
+            "condition": {"invert": {"WallAhead": {"distance": "4cm"}}},
+            "do": {"MoveDistance": {"distance": 0.6}},
+        }
+    }
     result = run_tree(tree, ARENA, seconds=30)
     assert result.status == "FAILURE" and result.collisions == 0
     assert 0.03 < result.final_proximity["front_center"] <= 0.04
@@ -106,8 +118,13 @@ def test_subtrees_with_parameters_and_defaults():
 
 
 def test_parameters_and_expressions():
-    result = run_tree({"MoveDistance": {"distance": "2*$side - 10cm"}}, ARENA, start=[0.3, 0.6, 0], seconds=20,
-                      parameters={"side": "15cm"})
+    result = run_tree(
+        {"MoveDistance": {"distance": "2*$side - 10cm"}},
+        ARENA,
+        start=[0.3, 0.6, 0],
+        seconds=20,
+        parameters={"side": "15cm"},
+    )
     assert result.final_pose["x"] == pytest.approx(0.5, abs=0.001)
 
 
@@ -115,6 +132,6 @@ def test_delay_waits_in_simulated_time_then_runs_the_child():
     result = run_tree({"delay": {"seconds": 2, "do": wait(1)}}, ARENA, seconds=10)
     assert result.status == "SUCCESS" and result.sim_time == pytest.approx(3.0, abs=0.11)
     started = [e["t"] for e in result.events if e["kind"] == "behaviour_start" and e["name"] == "Wait"]
-    assert started == [pytest.approx(2.0, abs=0.11)]                      # the child starts after the delay
+    assert started == [pytest.approx(2.0, abs=0.11)]  # the child starts after the delay
     failing = run_tree({"delay": {"seconds": "500ms", "do": {"invert": wait(0.2)}}}, ARENA, seconds=10)
-    assert failing.status == "FAILURE"                                    # the child's result is passed on
+    assert failing.status == "FAILURE"  # the child's result is passed on

@@ -9,16 +9,16 @@ import numpy as np
 import pytest
 
 from thymio_bt.errors import UserError
-from thymio_bt.maze import Maze
-from thymio_bt.mission import load_mission
 from thymio_bt.logs import read_log
 from thymio_bt.logs.recording import Recorder
+from thymio_bt.maze import Maze
+from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
 from thymio_bt.testing import world
 from thymio_bt.viz import window
 from thymio_bt.viz.window import Frame, Viewer, live_hook, replay
 
-FAST = 1e9          # a speed-up at which the pacing never waits
+FAST = 1e9  # a speed-up at which the pacing never waits
 
 
 @pytest.fixture
@@ -50,7 +50,7 @@ def test_a_live_view_draws_every_tick_and_leaves_the_run_unchanged(pg, tmp_path)
 
     result = run.run(on_tick=hook)
     view.finish(result)
-    assert view.viewer.frames == result.ticks + 1                     # every tick, and the outcome
+    assert view.viewer.frames == result.ticks + 1  # every tick, and the outcome
     assert result.final_pose == plain.final_pose and result.trajectory == plain.trajectory
     colours = _colours(pg, screenshot)
     assert len(colours) > 5 and {window.WALL, window.ROBOT_FILL, window.TRAIL} <= colours
@@ -67,7 +67,7 @@ def test_frames_come_no_earlier_than_their_time_divided_by_the_speedup(pg):
 
 def test_rays_are_drawn_at_the_pose_hit_ones_in_red_with_y_up(pg, tmp_path):
     viewer = Viewer(world("corridor"), FAST, max_fps=None)
-    assert viewer.to_screen(0.0, 0.2)[1] < viewer.to_screen(0.0, 0.0)[1]      # y up
+    assert viewer.to_screen(0.0, 0.2)[1] < viewer.to_screen(0.0, 0.0)[1]  # y up
     pose = {"x": 0.1, "y": 0.1, "yaw": 0.0}
     viewer.show(Frame(0.0, pose, {"front_center": None}))
     assert window.RAY_HIT not in _colours(pg, viewer.save(tmp_path / "free.png"))
@@ -100,12 +100,12 @@ def test_pause_waits_and_single_step_advances_one_tick(pg):
     pose = {"x": 0.0, "y": 0.0, "yaw": 0.0}
     for key in (pg.K_SPACE, pg.K_n, pg.K_RIGHT):
         _key(pg, key)
-    viewer.show(Frame(0.0, pose, {}))           # SPACE pauses, N steps past this tick
-    viewer.show(Frame(0.1, pose, {}))           # RIGHT steps past this one
+    viewer.show(Frame(0.0, pose, {}))  # SPACE pauses, N steps past this tick
+    viewer.show(Frame(0.1, pose, {}))  # RIGHT steps past this one
     assert viewer.paused and viewer.shown == 2
     pg.time.set_timer(pg.event.Event(pg.KEYDOWN, key=pg.K_SPACE), 150, 1)
     began = time.perf_counter()
-    viewer.show(Frame(0.2, pose, {}))           # no key queued: waits, paused, until SPACE resumes
+    viewer.show(Frame(0.2, pose, {}))  # no key queued: waits, paused, until SPACE resumes
     assert time.perf_counter() - began >= 0.1 and not viewer.paused
     viewer.close()
 
@@ -130,14 +130,14 @@ def test_closing_the_window_stops_a_live_run(pg, close):
     result = run.run(on_tick=view)
     assert run.ticks == 1
     assert (result.status, result.code, result.reason) == ("FAILURE", "STOPPED", "the viewer window was closed")
-    assert result.failed_path and not run.backend.command().linear      # the running behaviour stopped the robot
+    assert result.failed_path and not run.backend.command().linear  # the running behaviour stopped the robot
 
 
 def test_a_replay_closed_early_just_ends(pg, tmp_path):
     run = Run(load_mission("missions/square.yaml"))
     recorder = Recorder()
     recording = recorder.finish(run.run(on_tick=recorder))
-    pg.display.init()                           # to queue the key before replay opens its window
+    pg.display.init()  # to queue the key before replay opens its window
     _key(pg, pg.K_q)
     assert replay(recording, FAST).shown == 1
 
@@ -179,8 +179,9 @@ def test_closing_the_window_still_writes_the_report_and_the_log(pg, tmp_path, mo
 
     monkeypatch.setattr(Viewer, "show", close_at_the_fifth_frame)
     report, log = tmp_path / "report.json", tmp_path / "run.jsonl"
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view", "--speedup", "1e9",
-                                       "--report", str(report), "--log", str(log)])
+    result = CliRunner().invoke(
+        main, ["run", "missions/square.yaml", "--view", "--speedup", "1e9", "--report", str(report), "--log", str(log)]
+    )
     assert result.exit_code == 1 and "STOPPED" in result.output
     assert json.loads(report.read_text())["code"] == "STOPPED"
     assert read_log(log).end["code"] == "STOPPED" and len(read_log(log).samples) == 5

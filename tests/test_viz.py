@@ -18,10 +18,25 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def bonus_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("viz")
-    result = CliRunner().invoke(main, [
-        "run", "missions/maze_bonus.yaml", "--report", str(out / "report.json"), "--log", str(out / "run.jsonl"),
-        "--plot", str(out / "path.png"), "--plot-signals", str(out / "signals.png"),
-        "--gif", str(out / "run.gif"), "--speedup", "20"])
+    result = CliRunner().invoke(
+        main,
+        [
+            "run",
+            "missions/maze_bonus.yaml",
+            "--report",
+            str(out / "report.json"),
+            "--log",
+            str(out / "run.jsonl"),
+            "--plot",
+            str(out / "path.png"),
+            "--plot-signals",
+            str(out / "signals.png"),
+            "--gif",
+            str(out / "run.gif"),
+            "--speedup",
+            "20",
+        ],
+    )
     assert result.exit_code == 0, result.output
     return out
 
@@ -30,7 +45,7 @@ def test_plots_are_real_pictures(bonus_run):
     for name, min_size in (("path.png", (800, 500)), ("signals.png", (800, 800))):
         image = PIL.open(bonus_run / name)
         assert image.size[0] >= min_size[0] and image.size[1] >= min_size[1]
-        assert len(image.getcolors(maxcolors=1 << 20) or []) > 20       # not a blank canvas
+        assert len(image.getcolors(maxcolors=1 << 20) or []) > 20  # not a blank canvas
 
 
 def test_gif_is_animated(bonus_run):
@@ -60,7 +75,7 @@ def test_replay_reproduces_the_final_pose_exactly(bonus_run):
 def test_a_truncated_log_is_still_readable(bonus_run, tmp_path):
     text = (bonus_run / "run.jsonl").read_text()
     cut = tmp_path / "crashed.jsonl"
-    cut.write_text(text[: len(text) // 2])               # a run that died mid-line
+    cut.write_text(text[: len(text) // 2])  # a run that died mid-line
     recording = read_log(cut)
     assert recording.end["status"] == "INCOMPLETE" and len(recording.samples) > 100
 
@@ -82,7 +97,7 @@ def test_tree_prints_the_tree_and_writes_nothing_unasked(tmp_path, monkeypatch):
 def test_tree_writes_dot_by_flag_or_suffix_and_to_standard_output(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     mission = str(ROOT / "missions/maze_bonus.yaml")
-    assert CliRunner().invoke(main, ["tree", mission, "--dot"]).exit_code == 0       # default: ./maze_bonus.dot
+    assert CliRunner().invoke(main, ["tree", mission, "--dot"]).exit_code == 0  # default: ./maze_bonus.dot
     assert (tmp_path / "maze_bonus.dot").read_text().startswith("digraph")
     assert CliRunner().invoke(main, ["tree", mission, "-o", "t.dot"]).exit_code == 0
     assert "MoveUntilWall" in (tmp_path / "t.dot").read_text()
@@ -97,7 +112,7 @@ def test_tree_draws_svg_with_graphviz(tmp_path):
     result = CliRunner().invoke(main, ["tree", "missions/maze_bonus.yaml", "--svg", "-o", str(tmp_path / "t.svg")])
     assert result.exit_code == 0, result.output
     assert "<svg" in (tmp_path / "t.svg").read_text() and "MoveUntilWall" in (tmp_path / "t.svg").read_text()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.svg"]            # no .dot or temporary left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.svg"]  # no .dot or temporary left
 
 
 def test_tree_explains_missing_graphviz(tmp_path, monkeypatch):
@@ -126,6 +141,8 @@ def test_the_signals_plot_unwraps_yaw():
 
     yaws = [3.0, 3.1, -3.1, -3.0, float("nan"), 3.1, -3.1]
     out = unwrapped(yaws)
-    assert out[:4] == pytest.approx([3.0, 3.1, 3.1 + (2 * 3.141592653589793 - 6.2), 3.0 + (2 * 3.141592653589793 - 6.0)])
+    assert out[:4] == pytest.approx(
+        [3.0, 3.1, 3.1 + (2 * 3.141592653589793 - 6.2), 3.0 + (2 * 3.141592653589793 - 6.0)]
+    )
     assert all(abs(b - a) < 0.5 for a, b in zip(out[:3], out[1:4]))
-    assert out[5] == 3.1 and abs(out[6] - out[5]) < 0.5            # after a gap: restarts where it is
+    assert out[5] == 3.1 and abs(out[6] - out[5]) < 0.5  # after a gap: restarts where it is

@@ -12,22 +12,40 @@ import importlib.abc
 import importlib.util
 import sys
 import warnings
+from collections.abc import Sequence
 from importlib.machinery import ModuleSpec
 from types import ModuleType
-from typing import Sequence
 
 #: Old module name -> new module name (a package's submodules follow it).
 MOVED: dict[str, str] = {
     f"thymio_bt.{old}": f"thymio_bt.{new}"
     for old, new in {
-        "robot_model": "robot.model", "robot_profile": "robot.profile", "calibration": "robot.calibration",
-        "calibrate": "robot.calibrate", "placement": "robot.placement",
-        "sim": "backends.sim", "real": "backends.real", "playground": "backends.playground", "ros2": "backends.ros2",
-        "runner": "run.runner", "interrupts": "run.interrupts", "phases": "run.phases", "sweep": "run.sweep",
-        "matrix": "run.matrix", "distributed": "run.distributed", "recording": "logs.recording",
-        "expect": "mission.expect", "btcpp": "mission.btcpp", "docs": "mission.node_docs", "pid": "behaviours.pid",
-        "groot2": "viz.groot2", "yamlio": "inputs.yamlio", "reading": "inputs.reading", "units": "inputs.units",
-        "fields": "inputs.fields", "validation": "inputs.validation",
+        "robot_model": "robot.model",
+        "robot_profile": "robot.profile",
+        "calibration": "robot.calibration",
+        "calibrate": "robot.calibrate",
+        "placement": "robot.placement",
+        "sim": "backends.sim",
+        "real": "backends.real",
+        "playground": "backends.playground",
+        "ros2": "backends.ros2",
+        "runner": "run.runner",
+        "interrupts": "run.interrupts",
+        "phases": "run.phases",
+        "sweep": "run.sweep",
+        "matrix": "run.matrix",
+        "distributed": "run.distributed",
+        "recording": "logs.recording",
+        "expect": "mission.expect",
+        "btcpp": "mission.btcpp",
+        "docs": "mission.node_docs",
+        "pid": "behaviours.pid",
+        "groot2": "viz.groot2",
+        "yamlio": "inputs.yamlio",
+        "reading": "inputs.reading",
+        "units": "inputs.units",
+        "fields": "inputs.fields",
+        "validation": "inputs.validation",
     }.items()
 }
 
@@ -68,7 +86,9 @@ class _Alias(importlib.abc.Loader):
 class MovedFinder(importlib.abc.MetaPathFinder):
     """Finds old module names and loads them as their new modules."""
 
-    def find_spec(self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None) -> ModuleSpec | None:
+    def find_spec(
+        self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
+    ) -> ModuleSpec | None:
         """A spec for an old name (:data:`MOVED`), None for every other module."""
         target_name = new_name(fullname)
         if target_name is None:
@@ -79,4 +99,4 @@ class MovedFinder(importlib.abc.MetaPathFinder):
 def install() -> None:
     """Put the finder on :data:`sys.meta_path` once, first (it answers only for old names)."""
     if not any(isinstance(f, MovedFinder) for f in sys.meta_path):
-        sys.meta_path.insert(0, MovedFinder())     # first: before the path finder finds old.sub files
+        sys.meta_path.insert(0, MovedFinder())  # first: before the path finder finds old.sub files

@@ -8,9 +8,10 @@ from __future__ import annotations
 
 import difflib
 import importlib
+from collections.abc import Iterable
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any, Iterable
+from typing import Any
 
 
 @dataclass(frozen=True, slots=True)
@@ -32,7 +33,7 @@ class Problem:
         if self.path:
             text += f" [at {self.path}]"
         if self.hint:
-            text += f" (hint: {self.hint})"     # one line per problem: the CLI contract
+            text += f" (hint: {self.hint})"  # one line per problem: the CLI contract
         return text
 
 
@@ -82,5 +83,6 @@ def optional_module(name: str, needed_by: str, hint: str) -> ModuleType:
     try:
         return importlib.import_module(name)
     except ImportError as exc:
-        raise UserError(Problem(f"{needed_by} needs {name.partition('.')[0]}, which is not installed ({exc})",
-                                hint=hint)) from None
+        raise UserError(
+            Problem(f"{needed_by} needs {name.partition('.')[0]}, which is not installed ({exc})", hint=hint)
+        ) from None

@@ -20,9 +20,9 @@ from __future__ import annotations
 import os
 import sys
 import tempfile
+from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Iterator
 
 from thymio_bt.errors import UserError
 
@@ -62,8 +62,9 @@ class Output:
     def staged(self) -> Iterator[Path]:
         """A temporary path (same folder and suffix) to write; renamed over the target on success,
         removed on any failure. A write error becomes a UserError naming the target."""
-        fd, name = tempfile.mkstemp(prefix=f".{self.path.stem}.", suffix=f".tmp{self.path.suffix}",
-                                    dir=self.path.parent)
+        fd, name = tempfile.mkstemp(
+            prefix=f".{self.path.stem}.", suffix=f".tmp{self.path.suffix}", dir=self.path.parent
+        )
         os.close(fd)
         tmp = Path(name)
         try:
@@ -78,11 +79,14 @@ class Output:
 def check_writable(path: Path, option: str) -> None:
     """Refuse, before any work, a target that cannot be written or must not be replaced."""
     if path.is_dir():
-        raise UserError(f"{option} {path}: is a folder (hint: give a file name, e.g. {path / 'out'}"
-                        f"{path.suffix or '.json'})")
+        raise UserError(
+            f"{option} {path}: is a folder (hint: give a file name, e.g. {path / 'out'}{path.suffix or '.json'})"
+        )
     if path.exists() and not path.is_file():
-        raise UserError(f"{option} {path}: not a regular file (a FIFO or a device); refusing to replace it "
-                        f"(hint: write to a regular file)")
+        raise UserError(
+            f"{option} {path}: not a regular file (a FIFO or a device); refusing to replace it "
+            f"(hint: write to a regular file)"
+        )
     folder = path.parent
     if not folder.is_dir():
         raise UserError(f"{option} {path}: the folder {folder} does not exist (hint: mkdir -p {folder})")

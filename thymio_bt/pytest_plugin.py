@@ -16,8 +16,8 @@ Example::
 from __future__ import annotations
 
 import sys
+from collections.abc import Iterator
 from types import SimpleNamespace
-from typing import Iterator
 
 import pytest
 
@@ -32,7 +32,7 @@ def _behaviours_so_far() -> int:
 def _thymio_bt_clean_blackboard() -> Iterator[None]:
     before = _behaviours_so_far()
     yield
-    if _behaviours_so_far() != before:        # this test made thymio-bt behaviours: remove what they left
+    if _behaviours_so_far() != before:  # this test made thymio-bt behaviours: remove what they left
         import py_trees
 
         py_trees.blackboard.Blackboard.clear()

@@ -13,8 +13,9 @@ Example::
 from __future__ import annotations
 
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import py_trees
 import yaml
@@ -70,8 +71,10 @@ PRESETS: dict[str, str] = {
 def world(preset_or_grid: str, cell: float = 0.2) -> Maze:
     """A preset world (corridor, L, T, pocket, arena) or a grid drawn in ASCII (see maze.grid)."""
     if preset_or_grid not in PRESETS and "\n" not in preset_or_grid.strip():
-        raise UserError(f"no preset world named '{preset_or_grid}' (hint: {did_you_mean(preset_or_grid, PRESETS)}, "
-                        f"or draw one as a grid of several lines)")
+        raise UserError(
+            f"no preset world named '{preset_or_grid}' (hint: {did_you_mean(preset_or_grid, PRESETS)}, "
+            f"or draw one as a grid of several lines)"
+        )
     text = PRESETS.get(preset_or_grid, preset_or_grid)
     return maze_from_grid(text, cell=cell, name=preset_or_grid if preset_or_grid in PRESETS else "grid")
 
@@ -84,16 +87,28 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def mission_text(tree: Any, maze_file: str, start: Any = "start", seconds: float = 60.0,
-                 **settings: Any) -> str:
+def mission_text(tree: Any, maze_file: str, start: Any = "start", seconds: float = 60.0, **settings: Any) -> str:
     """The YAML text of a one-tree mission (useful to test the loader too)."""
-    doc = {"name": "test", "maze": maze_file, "start": _plain(start), "time_limit": seconds,
-           **{k: _plain(v) for k, v in settings.items() if v is not None}, "tree": _plain(tree)}
+    doc = {
+        "name": "test",
+        "maze": maze_file,
+        "start": _plain(start),
+        "time_limit": seconds,
+        **{k: _plain(v) for k, v in settings.items() if v is not None},
+        "tree": _plain(tree),
+    }
     return yaml.safe_dump(doc, sort_keys=False)
 
 
-def run_tree(tree: Any, maze: Maze, start: Any = "start", seconds: float = 60.0, seed: int = 0,
-             substitute: dict[str, Any] | None = None, **settings: Any) -> RunResult:
+def run_tree(
+    tree: Any,
+    maze: Maze,
+    start: Any = "start",
+    seconds: float = 60.0,
+    seed: int = 0,
+    substitute: dict[str, Any] | None = None,
+    **settings: Any,
+) -> RunResult:
     """Run ``tree`` (a node as written in mission YAML, as a dict or YAML text) for at most
     ``seconds`` of simulated time in ``maze``; returns the run report's :class:`RunResult` with
     per-node statistics in ``result.node_stats``.
@@ -114,8 +129,13 @@ def run_tree(tree: Any, maze: Maze, start: Any = "start", seconds: float = 60.0,
     return Run(mission, seed, substitutions=substitute, node_stats=True).run()
 
 
-def run_mission_file(path: str | Path, substitute: dict[str, Any] | None = None, seed: int | None = None,
-                     overrides: dict[str, str] | None = None, **options: Any) -> RunResult:
+def run_mission_file(
+    path: str | Path,
+    substitute: dict[str, Any] | None = None,
+    seed: int | None = None,
+    overrides: dict[str, str] | None = None,
+    **options: Any,
+) -> RunResult:
     """Run a mission file with parts replaced: ``substitute`` maps glob patterns on node paths
     (names from the root joined by ``/``, e.g. ``"course/part 2/*"`` or ``"*/DeleteEntity"``) to a
     status (``"success"``), a list of statuses one per tick, or ``{"status": ..., "seconds": ...}``.

@@ -57,5 +57,5 @@ if __name__ == "__main__":
 
     try:
         main()
-    except (KeyboardInterrupt, ExternalShutdownException):     # stopped by the test: quietly
+    except (KeyboardInterrupt, ExternalShutdownException):  # stopped by the test: quietly
         pass

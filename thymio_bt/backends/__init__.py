@@ -15,9 +15,10 @@ Example::
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from importlib import import_module
-from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -42,7 +43,7 @@ class BackendKind:
 
     name: str
     summary: str
-    factory: str | Callable[["Mission", int, Any], "Backend"]
+    factory: str | Callable[[Mission, int, Any], Backend]
     options: type[BackendOptions] = BackendOptions
     #: whether runs on it take real time (a real robot, a real-time simulator)
     realtime: bool = False
@@ -61,11 +62,17 @@ class BackendKind:
                     problems.append(Problem(f"backend '{self.name}' has no option '{key}'", *where, key, hint))
                 else:
                     about = fields[key].description if key in fields else None
-                    problems.append(Problem(f"backend '{self.name}' option '{key}': {error['msg']}", *where, key,
-                                            f"{key}: {about}" if about else ""))
+                    problems.append(
+                        Problem(
+                            f"backend '{self.name}' option '{key}': {error['msg']}",
+                            *where,
+                            key,
+                            f"{key}: {about}" if about else "",
+                        )
+                    )
             raise UserError(problems) from None
 
-    def create(self, mission: "Mission", seed: int, options: Mapping[str, Any] | None = None) -> "Backend":
+    def create(self, mission: Mission, seed: int, options: Mapping[str, Any] | None = None) -> Backend:
         """A backend of this kind for ``mission``, with ``options`` validated first."""
         parsed = self.parse_options(options or {})
         factory = self.factory
@@ -86,52 +93,107 @@ class TdmOptions(BackendOptions):
 
 
 class AsebaOptions(BackendOptions):
-    device: str = Field("", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for "
-                        "the only Thymio plugged in")
+    device: str = Field(
+        "", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for the only Thymio plugged in"
+    )
     timeout: float = Field(5.0, gt=0, le=60, description="how long to wait for the robot to answer (s)")
-    latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
-                           "command acting (behaviours stop early by it); 0.2 was measured on the Playground, "
-                           "measure your robot's")
+    latency: float = Field(
+        0.2,
+        ge=0,
+        le=2,
+        description="seconds from the world a reading shows to a new "
+        "command acting (behaviours stop early by it); 0.2 was measured on the Playground, "
+        "measure your robot's",
+    )
 
 
 class PlaygroundOptions(BackendOptions):
     timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
-    latency: float = Field(0.2, ge=0, le=2, description="seconds from the world a reading shows to a new "
-                           "command acting, for the behaviours (measured: readings 40-120 ms behind the true "
-                           "pose, a new motor target acting ~100 ms later)")
-    speed_scale: float | None = Field(None, gt=0.5, le=2, description="the Playground's Thymio's speed per motor "
-                                      "unit over the robot model's; default: 0.985 (measured against its ground "
-                                      "truth) for a built-in model, 1 for a profile measured by thymio-bt calibrate")
+    latency: float = Field(
+        0.2,
+        ge=0,
+        le=2,
+        description="seconds from the world a reading shows to a new "
+        "command acting, for the behaviours (measured: readings 40-120 ms behind the true "
+        "pose, a new motor target acting ~100 ms later)",
+    )
+    speed_scale: float | None = Field(
+        None,
+        gt=0.5,
+        le=2,
+        description="the Playground's Thymio's speed per motor "
+        "unit over the robot model's; default: 0.985 (measured against its ground "
+        "truth) for a built-in model, 1 for a profile measured by thymio-bt calibrate",
+    )
 
 
 class Ros2Options(BackendOptions):
     topics: str = Field("", description="a YAML topic map (default: the course's Gazebo topics and services)")
-    timeout: float = Field(5.0, gt=0, le=120, description="how long a topic may stay silent, or a service "
-                           "take to appear or answer, before the run fails (wall s)")
+    timeout: float = Field(
+        5.0,
+        gt=0,
+        le=120,
+        description="how long a topic may stay silent, or a service "
+        "take to appear or answer, before the run fails (wall s)",
+    )
     clock: Literal["auto", "sim", "wall"] = Field(
-        "auto", description="the run's time: the /clock of a simulator (sim), the wall clock (wall), or sim "
-        "when someone publishes /clock (auto)")
-    latency: float = Field(0.0, ge=0, le=2, description="seconds from the world a reading shows to a new command "
-                           "acting (behaviours stop early by it); measure a real robot's")
+        "auto",
+        description="the run's time: the /clock of a simulator (sim), the wall clock (wall), or sim "
+        "when someone publishes /clock (auto)",
+    )
+    latency: float = Field(
+        0.0,
+        ge=0,
+        le=2,
+        description="seconds from the world a reading shows to a new command "
+        "acting (behaviours stop early by it); measure a real robot's",
+    )
     robot_xml: str = Field("", description="URDF/SDF file sent when spawning (default: /robot_description)")
 
 
 #: The backends that come with thymio-bt.
-BUILTIN: dict[str, BackendKind] = {kind.name: kind for kind in (
-    BackendKind("sim", "the pymunk simulation of the mission's maze (default; instant, deterministic)",
-                "thymio_bt.backends.sim.backend:create", SimOptions),
-    BackendKind("tdm", "a Thymio through Thymio Suite's Thymio Device Manager (needs thymio-bt[thymio]; "
-                "untested here: no registry has the Device Manager)", "thymio_bt.backends.real.thymio:create_tdm",
-                TdmOptions, realtime=True),
-    BackendKind("aseba", "a Thymio over its own Aseba protocol: on USB, or a simulated one on TCP "
-                "(needs thymio-bt[aseba])", "thymio_bt.backends.real.aseba:create_aseba", AsebaOptions, realtime=True),
-    BackendKind("playground", "the Aseba Playground (Enki) started headless on the mission's maze, driven "
-                "over Aseba like a real Thymio, in real time (needs the aseba package and thymio-bt[aseba])",
-                "thymio_bt.backends.playground.backend:create_playground", PlaygroundOptions, realtime=True),
-    BackendKind("ros2", "a Thymio through ROS 2 topics and services: the course's Gazebo, 'thymio-bt serve ros2' "
-                "or a robot's driver (needs rclpy: see scripts/ros2-env.sh)", "thymio_bt.backends.ros2.backend:create_ros2",
-                Ros2Options, realtime=True),
-)}
+BUILTIN: dict[str, BackendKind] = {
+    kind.name: kind
+    for kind in (
+        BackendKind(
+            "sim",
+            "the pymunk simulation of the mission's maze (default; instant, deterministic)",
+            "thymio_bt.backends.sim.backend:create",
+            SimOptions,
+        ),
+        BackendKind(
+            "tdm",
+            "a Thymio through Thymio Suite's Thymio Device Manager (needs thymio-bt[thymio]; "
+            "untested here: no registry has the Device Manager)",
+            "thymio_bt.backends.real.thymio:create_tdm",
+            TdmOptions,
+            realtime=True,
+        ),
+        BackendKind(
+            "aseba",
+            "a Thymio over its own Aseba protocol: on USB, or a simulated one on TCP (needs thymio-bt[aseba])",
+            "thymio_bt.backends.real.aseba:create_aseba",
+            AsebaOptions,
+            realtime=True,
+        ),
+        BackendKind(
+            "playground",
+            "the Aseba Playground (Enki) started headless on the mission's maze, driven "
+            "over Aseba like a real Thymio, in real time (needs the aseba package and thymio-bt[aseba])",
+            "thymio_bt.backends.playground.backend:create_playground",
+            PlaygroundOptions,
+            realtime=True,
+        ),
+        BackendKind(
+            "ros2",
+            "a Thymio through ROS 2 topics and services: the course's Gazebo, 'thymio-bt serve ros2' "
+            "or a robot's driver (needs rclpy: see scripts/ros2-env.sh)",
+            "thymio_bt.backends.ros2.backend:create_ros2",
+            Ros2Options,
+            realtime=True,
+        ),
+    )
+}
 
 
 def backend_kinds() -> dict[str, BackendKind]:
@@ -143,8 +205,10 @@ def backend_kinds() -> dict[str, BackendKind]:
         if ep.name not in kinds:
             kind = ep.load()
             if not isinstance(kind, BackendKind):
-                raise UserError(f"backend plugin '{ep.name}' ({ep.value}) is not a BackendKind "
-                                f"(hint: point the entry point at a thymio_bt.backends.BackendKind)")
+                raise UserError(
+                    f"backend plugin '{ep.name}' ({ep.value}) is not a BackendKind "
+                    f"(hint: point the entry point at a thymio_bt.backends.BackendKind)"
+                )
             kinds[ep.name] = kind
     return kinds
 

@@ -10,19 +10,57 @@ from thymio_bt.behaviours.entities import DeleteEntity, SpawnEntity
 from thymio_bt.behaviours.mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
 from thymio_bt.behaviours.maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
 from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
-from thymio_bt.behaviours.navigation import FollowWaypoints, GoToPose, ObstacleAhead, SetBlackboard, TurnBack, TurnUntilClear, WaypointsDone
+from thymio_bt.behaviours.navigation import (
+    FollowWaypoints,
+    GoToPose,
+    ObstacleAhead,
+    SetBlackboard,
+    TurnBack,
+    TurnUntilClear,
+    WaypointsDone,
+)
 
 #: Every built-in robot behaviour, in the order ``thymio-bt behaviours`` lists them.
 BUILTIN: tuple[type[RobotBehaviour], ...] = (
-    MoveUntilWall, MoveDistance, TurnAngle, Stop, Wait,
-    DeleteEntity, SpawnEntity,
-    ChooseTurn, WallAhead, SideOpen, IsDeadEnd, WallFollow,
-    GoToPose, FollowWaypoints, WaypointsDone, ObstacleAhead, TurnUntilClear, TurnBack, SetBlackboard,
-    MapWalls, PlanMove, MoveCells, WallMapped, AtTarget,
+    MoveUntilWall,
+    MoveDistance,
+    TurnAngle,
+    Stop,
+    Wait,
+    DeleteEntity,
+    SpawnEntity,
+    ChooseTurn,
+    WallAhead,
+    SideOpen,
+    IsDeadEnd,
+    WallFollow,
+    GoToPose,
+    FollowWaypoints,
+    WaypointsDone,
+    ObstacleAhead,
+    TurnUntilClear,
+    TurnBack,
+    SetBlackboard,
+    MapWalls,
+    PlanMove,
+    MoveCells,
+    WallMapped,
+    AtTarget,
 )
 
 #: Every built-in composite and decorator.
 CONTROL: tuple[type[ControlNode], ...] = (*COMPOSITES, *DECORATORS)
 
-__all__ = ["BUILTIN", "CONTROL", "ControlNode", "Context", "EventLog", "FailureCode", "RobotBehaviour", "RepeatUntil",
-           "ScriptedStub", "SimTimeout", *(cls.__name__ for cls in BUILTIN)]
+__all__ = [
+    "BUILTIN",
+    "CONTROL",
+    "ControlNode",
+    "Context",
+    "EventLog",
+    "FailureCode",
+    "RobotBehaviour",
+    "RepeatUntil",
+    "ScriptedStub",
+    "SimTimeout",
+    *(cls.__name__ for cls in BUILTIN),
+]

@@ -20,18 +20,18 @@ from __future__ import annotations
 import math
 import re
 import traceback
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from enum import Enum
 from pathlib import Path
-from typing import Any, Callable, ClassVar, Iterator
+from typing import Any, ClassVar
 
 import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, Field
 
-from thymio_bt.robot.interface import Entities, Pose, Robot
 from thymio_bt.inputs.fields import Duration
-
+from thymio_bt.robot.interface import Entities, Pose, Robot
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
 RUNNING = Status.RUNNING
@@ -112,8 +112,7 @@ def snapshot(robot: Robot) -> dict[str, Any]:
     scan = robot.proximity()
     return {
         "pose": None if pose is None else {k: round(v, 6) for k, v in pose.as_dict().items()},
-        "proximity": None if scan is None else {k: (None if math.isinf(v) else round(v, 6))
-                                                for k, v in scan.items()},
+        "proximity": None if scan is None else {k: (None if math.isinf(v) else round(v, 6)) for k, v in scan.items()},
     }
 
 
@@ -146,8 +145,9 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
     created = 0
 
-    def __init__(self, name: str, params: BaseModel, ctx: Context,
-                 blackboard_refs: dict[str, str] | None = None) -> None:
+    def __init__(
+        self, name: str, params: BaseModel, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
         super().__init__(name=name)
         RobotBehaviour.created += 1
         self.declared = params
@@ -189,9 +189,9 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             if self.status is not RUNNING:
                 self.initialise()
             new_status = self.update()
-        except (Exception, SystemExit) as exc:        # a plugin's bug (or ours): fail the node, say where
+        except (Exception, SystemExit) as exc:  # a plugin's bug (or ours): fail the node, say where
             new_status = self.fail(FailureCode.EXCEPTION, f"{self.yaml_name} raised {describe(exc)}")
-        if new_status.__class__ is not Status:        # a plugin's bug: fail the node, say why
+        if new_status.__class__ is not Status:  # a plugin's bug: fail the node, say why
             new_status = self.fail(FailureCode.FAILED, f"{self.yaml_name} returned {new_status!r}, not a Status")
         if new_status is not RUNNING:
             self.stop(new_status)

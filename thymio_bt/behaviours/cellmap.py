@@ -118,7 +118,7 @@ class CellMap:
         out = {t: 0 for t in targets if self.inside(t)}
         todo = deque(out)
         sides, cols, rows, steps = self.sides, self.cols, self.rows, tuple(STEPS.items())
-        while todo:                         # passable() inlined: this runs at every cell of every plan
+        while todo:  # passable() inlined: this runs at every cell of every plan
             cell = todo.popleft()
             i, j = cell
             for side, (di, dj) in steps:
@@ -138,11 +138,16 @@ class CellMap:
         known openings and the shortest known ``path`` (cells) from the start."""
         ox, oy = self.origin
         out: dict[str, Any] = {
-            "cols": self.cols, "rows": self.rows, "cell": self.cell, "origin": [round(ox, 6), round(oy, 6)],
+            "cols": self.cols,
+            "rows": self.rows,
+            "cell": self.cell,
+            "origin": [round(ox, 6), round(oy, 6)],
             "walls": [list(w) for w in sorted(self.wall_segments())],
             "visited": sorted([list(v) for v in self.visited]),
-            "open_sides": len({_edge(i, j, side) for (i, j, side), wall in self.sides.items()
-                               if not wall and self.inside((i, j))})}
+            "open_sides": len(
+                {_edge(i, j, side) for (i, j, side), wall in self.sides.items() if not wall and self.inside((i, j))}
+            ),
+        }
         if self.goal:
             distance = self.distances(self.goal, known_only=True)
             out["goal"] = sorted([list(g) for g in self.goal])
@@ -157,8 +162,12 @@ class CellMap:
         for (i, j, side), wall in self.sides.items():
             if wall and self.inside((i, j)):
                 x0, y0 = ox + i * c, oy + j * c
-                end = {"N": (x0, y0 + c, x0 + c, y0 + c), "S": (x0, y0, x0 + c, y0),
-                       "E": (x0 + c, y0, x0 + c, y0 + c), "W": (x0, y0, x0, y0 + c)}[side]
+                end = {
+                    "N": (x0, y0 + c, x0 + c, y0 + c),
+                    "S": (x0, y0, x0 + c, y0),
+                    "E": (x0 + c, y0, x0 + c, y0 + c),
+                    "W": (x0, y0, x0, y0 + c),
+                }[side]
                 walls.add(tuple(round(v, 6) for v in end))
         return walls
 

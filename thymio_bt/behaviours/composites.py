@@ -73,7 +73,8 @@ class ReactiveSelector(ControlNode):
 
 class ParallelParams(ControlParams):
     policy: Literal["success_on_all", "success_on_one"] = Field(
-        "success_on_all", description="success_on_all (every child must succeed) or success_on_one")
+        "success_on_all", description="success_on_all (every child must succeed) or success_on_one"
+    )
     synchronise: bool = Field(True, description="with success_on_all: children that succeeded are not ticked again")
 
     @field_validator("policy", mode="before")
@@ -101,8 +102,11 @@ class Parallel(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
-        policy = (ParallelPolicy.SuccessOnAll(synchronise=params.synchronise) if params.policy == "success_on_all"
-                  else ParallelPolicy.SuccessOnOne())
+        policy = (
+            ParallelPolicy.SuccessOnAll(synchronise=params.synchronise)
+            if params.policy == "success_on_all"
+            else ParallelPolicy.SuccessOnOne()
+        )
         return py_trees.composites.Parallel(name, policy=policy, children=children)
 
 

@@ -7,7 +7,8 @@ runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock in
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour

@@ -64,7 +64,7 @@ class ControlNode:
         return (*cls.Params.model_fields, *cls.node_keys, "do")
 
     @classmethod
-    def build(cls, name: str, params: Any, children: list["Behaviour"], ctx: "Context") -> "Behaviour":
+    def build(cls, name: str, params: Any, children: list[Behaviour], ctx: Context) -> Behaviour:
         """The py_trees node: ``children`` are the built ``do`` child then the ``node_keys`` ones in
         order (a composite: its children)."""
         raise NotImplementedError

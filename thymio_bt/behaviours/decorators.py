@@ -24,9 +24,9 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, Status
 from pydantic import Field, field_validator
 
-from thymio_bt.inputs.fields import Duration
 from thymio_bt.behaviours.control import RepeatUntil, SimTimeout
 from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse, whole
+from thymio_bt.inputs.fields import Duration
 
 _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"
 _RETRY_EXAMPLE = "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'"
@@ -34,7 +34,8 @@ _RETRY_EXAMPLE = "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'"
 
 class RepeatParams(ControlParams):
     times: Annotated[int, Field(ge=1)] | Literal["forever"] = Field(
-        "forever", description="how many successes of the child end the loop, or forever")
+        "forever", description="how many successes of the child end the loop, or forever"
+    )
 
     @field_validator("times", mode="before")
     @classmethod
@@ -176,7 +177,9 @@ class ForceFailure(ControlNode):
 
 
 class UntilParams(ControlParams):
-    status: Literal["success", "failure"] = Field(description="the child's result that ends the wait: success or failure")
+    status: Literal["success", "failure"] = Field(
+        description="the child's result that ends the wait: success or failure"
+    )
 
     @field_validator("status", mode="before")
     @classmethod
@@ -220,8 +223,9 @@ class Guard(ControlNode):
 
 
 class OneShotParams(ControlParams):
-    on: Literal["success", "completion"] = Field("success", description="success: only a success counts; "
-                                                 "completion: any result")
+    on: Literal["success", "completion"] = Field(
+        "success", description="success: only a success counts; completion: any result"
+    )
 
     @field_validator("on", mode="before")
     @classmethod
@@ -246,5 +250,15 @@ class OneShot(ControlNode):
 
 
 #: The decorators, in the order docs list them.
-DECORATORS: tuple[type[ControlNode], ...] = (Repeat, Retry, Timeout, Delay, Invert, ForceSuccess, ForceFailure,
-                                             Until, Guard, OneShot)
+DECORATORS: tuple[type[ControlNode], ...] = (
+    Repeat,
+    Retry,
+    Timeout,
+    Delay,
+    Invert,
+    ForceSuccess,
+    ForceFailure,
+    Until,
+    Guard,
+    OneShot,
+)

@@ -5,9 +5,9 @@ from __future__ import annotations
 from py_trees.common import Status
 from pydantic import Field
 
+from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
 from thymio_bt.inputs.fields import Duration, Pose2D
 from thymio_bt.robot.interface import ROBOT_ENTITY, Pose, Request, RequestState
-from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
 
 
 class DeleteEntityParams(BehaviourParams):
@@ -52,7 +52,8 @@ class SpawnEntityParams(BehaviourParams):
 
     entity: str = Field(ROBOT_ENTITY, description="the entity's name")
     pose: Pose2D = Field(
-        description="x, y (m) and yaw (rad) of base_link, e.g. [0.5, 0.3, pi/2] or a named spawn of the maze")
+        description="x, y (m) and yaw (rad) of base_link, e.g. [0.5, 0.3, pi/2] or a named spawn of the maze"
+    )
     timeout: Duration = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds")
 
 
@@ -80,7 +81,11 @@ class SpawnEntity(RobotBehaviour):
             return Status.RUNNING
         if self.request.state is RequestState.FAILED:
             return self.fail(FailureCode.ENTITY_ERROR, self.request.reason or "spawn refused")
-        self.ctx.events.emit(self.ctx.now(), "spawn_entity", entity=self.params.entity,
-                             pose={k: round(v, 6) for k, v in self.target.as_dict().items()})
+        self.ctx.events.emit(
+            self.ctx.now(),
+            "spawn_entity",
+            entity=self.params.entity,
+            pose={k: round(v, 6) for k, v in self.target.as_dict().items()},
+        )
         self.feedback_message = f"spawned '{self.params.entity}' at ({self.target.x:g}, {self.target.y:g})"
         return Status.SUCCESS

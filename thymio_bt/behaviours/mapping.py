@@ -39,12 +39,19 @@ from typing import Literal
 from py_trees.common import Access, Status
 from pydantic import Field
 
+from thymio_bt.behaviours.base import (
+    BehaviourParams,
+    ConditionBehaviour,
+    Context,
+    FailureCode,
+    RobotBehaviour,
+    current_pose,
+)
+from thymio_bt.behaviours.cellmap import STEPS, Cell, CellMap, centre_cells
+from thymio_bt.behaviours.motion import approach_speed
 from thymio_bt.inputs.fields import Length, Speed
 from thymio_bt.robot.interface import wrap_angle
 from thymio_bt.robot.model import COURSE, RobotModel
-from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
-from thymio_bt.behaviours.cellmap import STEPS, Cell, CellMap, centre_cells
-from thymio_bt.behaviours.motion import approach_speed
 
 Target = Literal["goal", "centre", "start"]
 Side = Literal["N", "E", "S", "W"]
@@ -69,10 +76,20 @@ class MazeMapParams(BehaviourParams):
 class SensingParams(MazeMapParams):
     """How far the proximity sensors are believed for a position fix."""
 
-    trusted_from: Length = Field(0.025, ge=0, le=0.05, description="front readings closer than this are not "
-                                 "used to correct the pose (a real Thymio's calibration is off by mm there)")
-    trusted_to: Length = Field(0.08, ge=0.02, le=0.2, description="nor readings further than this (noisy near "
-                               "the end of the range, and a cone sensor sees more than the wall ahead there)")
+    trusted_from: Length = Field(
+        0.025,
+        ge=0,
+        le=0.05,
+        description="front readings closer than this are not "
+        "used to correct the pose (a real Thymio's calibration is off by mm there)",
+    )
+    trusted_to: Length = Field(
+        0.08,
+        ge=0.02,
+        le=0.2,
+        description="nor readings further than this (noisy near "
+        "the end of the range, and a cone sensor sees more than the wall ahead there)",
+    )
 
 
 class _OnGrid(RobotBehaviour):
@@ -161,8 +178,11 @@ class _OnGrid(RobotBehaviour):
                 assert not isinstance(self.grid, str)
                 ox, oy = self.grid[2], self.grid[3]
                 centres = {(i, j): self.centre_of((i, j)) for i in range(cells.cols) for j in range(cells.rows)}
-                self._goal = {cell for cell, (cx, cy) in centres.items()
-                              if any(x0 <= ox + cx <= x1 and y0 <= oy + cy <= y1 for x0, y0, x1, y1 in self.ctx.goal)}
+                self._goal = {
+                    cell
+                    for cell, (cx, cy) in centres.items()
+                    if any(x0 <= ox + cx <= x1 and y0 <= oy + cy <= y1 for x0, y0, x1, y1 in self.ctx.goal)
+                }
             cells.goal = self._goal
             return self._goal
         if target == "start":
@@ -176,8 +196,9 @@ class _Sensing(_OnGrid):
 
     Params = SensingParams
 
-    def wall_fix(self, front: float, left: float, right: float, side: str,
-                 face: float) -> tuple[float | None, float | None]:
+    def wall_fix(
+        self, front: float, left: float, right: float, side: str, face: float
+    ) -> tuple[float | None, float | None]:
         """What a wall square ahead, its face at ``face`` along the heading of ``side``, says of the
         robot: (heading, axle coordinate along that heading), each None when the readings do not
         tell (out of range, or nearer than ``trusted_from``)."""
@@ -192,7 +213,7 @@ class _Sensing(_OnGrid):
                 sensor = self.model.sensor(name)
                 hits.append((sensor.x + reading * math.cos(sensor.yaw), sensor.y + reading * math.sin(sensor.yaw)))
             (lx, ly), (rx, ry) = hits
-            tilt = math.atan2(lx - rx, ly - ry)           # > 0: turned left of the wall's normal
+            tilt = math.atan2(lx - rx, ly - ry)  # > 0: turned left of the wall's normal
             if abs(tilt) < _MAX_TILT:
                 heading = _HEADING[side] + tilt
             else:
@@ -201,8 +222,15 @@ class _Sensing(_OnGrid):
         reach = (self.model.sensor("front_center").x - self.model.axle_x + front) * math.cos(tilt)
         return heading, face - reach
 
-    def fix_from_wall(self, readings: tuple[float, float, float], centre: tuple[float, float], side: str,
-                      gain: float, turn_gain: float, gate: float) -> None:
+    def fix_from_wall(
+        self,
+        readings: tuple[float, float, float],
+        centre: tuple[float, float],
+        side: str,
+        gain: float,
+        turn_gain: float,
+        gate: float,
+    ) -> None:
         """Take ``gain`` of what the wall on ``side`` of the cell centred at ``centre`` says (front,
         ±20° readings) into the map's pose; a shift along the heading over ``gate`` is not believed."""
         heading = _HEADING[side]
@@ -219,8 +247,9 @@ class _Sensing(_OnGrid):
 class MapWallsParams(SensingParams):
     """How the wall ahead is read."""
 
-    readings: int = Field(3, ge=1, le=20, description="stationary readings per look; three times as many "
-                          "at most when they disagree")
+    readings: int = Field(
+        3, ge=1, le=20, description="stationary readings per look; three times as many at most when they disagree"
+    )
 
 
 class MapWalls(_Sensing):
@@ -252,9 +281,10 @@ class MapWalls(_Sensing):
         near = [s[0] < p.cell / 2 for s in self.samples]
         cells, here, side = self.cell_map(), self.cell(), self.facing()
         known = cells.wall(here, side)
-        confirmed = known is not None and near == [known]       # one reading agrees with the map: done
-        if not confirmed and (len(self.samples) < p.readings
-                              or (0 < sum(near) < len(near) and len(near) < 3 * p.readings)):
+        confirmed = known is not None and near == [known]  # one reading agrees with the map: done
+        if not confirmed and (
+            len(self.samples) < p.readings or (0 < sum(near) < len(near) and len(near) < 3 * p.readings)
+        ):
             self.feedback_message = f"reading ({len(self.samples)})"
             return Status.RUNNING
         wall = known if confirmed else 2 * sum(near) > len(near)
@@ -277,11 +307,15 @@ class MapWalls(_Sensing):
 class PlanMoveParams(MazeMapParams):
     """Where to go, and on which map."""
 
-    target: Target = Field("goal", description="the maze's goal region, the centre (the contest's goal "
-                           "block) or the start cell")
-    known_only: bool = Field(False, description="plan over known openings only and run straight through "
-                             "as many cells as the path goes straight (the fast run); else walls not "
-                             "seen yet are assumed open and the robot stops at every cell to look (exploration)")
+    target: Target = Field(
+        "goal", description="the maze's goal region, the centre (the contest's goal block) or the start cell"
+    )
+    known_only: bool = Field(
+        False,
+        description="plan over known openings only and run straight through "
+        "as many cells as the path goes straight (the fast run); else walls not "
+        "seen yet are assumed open and the robot stops at every cell to look (exploration)",
+    )
 
 
 class PlanMove(_OnGrid):
@@ -335,8 +369,9 @@ class PlanMove(_OnGrid):
 class MoveCellsParams(SensingParams):
     """Drive along the grid line the robot faces."""
 
-    distance: Length = Field(description="how far from the centre of the robot's cell (from the blackboard: "
-                             "move_distance)", ge=-10, le=10)
+    distance: Length = Field(
+        description="how far from the centre of the robot's cell (from the blackboard: move_distance)", ge=-10, le=10
+    )
     speed: Speed = Field(0.1, gt=0, le=0.2, description="cruise speed")
     tolerance: Length = Field(0.0005, gt=0, le=0.01, description="done when within this of the goal")
 
@@ -385,11 +420,14 @@ class MoveCells(_Sensing):
         self.side = self.facing()
         self.heading = _HEADING[self.side]
         x, y = self.centre_of(self.cell())
-        self.goal = (x + self.params.distance * math.cos(self.heading), y + self.params.distance * math.sin(self.heading))
-        self.line = self._left(x, y)                # the grid line through the robot's cell
-        self.steady = {"front_left": 0, "front_right": 0}      # ticks each side wall has been in view
-        self.votes: dict[tuple[Cell, str], list[int]] = {}    # (cell, side) -> [wall, open] readings
-        self.outliers: deque[float] = deque(maxlen=_PERSIST)   # the latest side fixes beyond the gate
+        self.goal = (
+            x + self.params.distance * math.cos(self.heading),
+            y + self.params.distance * math.sin(self.heading),
+        )
+        self.line = self._left(x, y)  # the grid line through the robot's cell
+        self.steady = {"front_left": 0, "front_right": 0}  # ticks each side wall has been in view
+        self.votes: dict[tuple[Cell, str], list[int]] = {}  # (cell, side) -> [wall, open] readings
+        self.outliers: deque[float] = deque(maxlen=_PERSIST)  # the latest side fixes beyond the gate
 
     def _left(self, x: float, y: float) -> float:
         """The coordinate of (x, y) to the left of the heading (y facing E, -x facing N, ...)."""
@@ -407,7 +445,7 @@ class MoveCells(_Sensing):
         if abs(remaining) <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             return Status.SUCCESS
-        off = self._left(x, y) - self.line                               # > 0: left of the line
+        off = self._left(x, y) - self.line  # > 0: left of the line
         direction = math.copysign(1.0, remaining)
         wanted = self.heading - direction * max(-_LINE_MAX, min(_LINE_MAX, _LINE_GAIN * off))
         error = wrap_angle(wanted - yaw)
@@ -427,7 +465,7 @@ class MoveCells(_Sensing):
         c = self.params.cell
         half = (c - self.params.wall) / 2
         along = (math.cos(self.heading), math.sin(self.heading))
-        normal = (-along[1], along[0])                         # to the left of the heading
+        normal = (-along[1], along[0])  # to the left of the heading
         front = scan["front_center"] + self.model.sensor("front_center").x - self.model.axle_x
         for name, sign in (("front_left", 1.0), ("front_right", -1.0)):
             sensor = self.model.sensor(name)
@@ -438,21 +476,20 @@ class MoveCells(_Sensing):
             if across * sign <= 0.0:
                 continue
             lateral = px * normal[0] + py * normal[1] - self.line
-            expected = (sign * half - lateral) / across         # the ray's length to the side wall's face
-            qx, qy = px + expected * dx, py + expected * dy     # where it would meet it
+            expected = (sign * half - lateral) / across  # the ray's length to the side wall's face
+            qx, qy = px + expected * dx, py + expected * dy  # where it would meet it
             ahead = (qx - x) * along[0] + (qy - y) * along[1]
             position = (qx * along[0] + qy * along[1]) / c
-            if (expected > 0.8 * self.model.range_max or front < ahead + _FIX_GATE
-                    or not 0.3 <= position % 1.0 <= 0.7):
+            if expected > 0.8 * self.model.range_max or front < ahead + _FIX_GATE or not 0.3 <= position % 1.0 <= 0.7:
                 continue
             reading = scan[name]
             if reading < expected + 0.03:
-                seen = 0                                        # a wall
+                seen = 0  # a wall
             elif reading > expected + 0.06:
-                seen = 1                                        # nothing there (inf, or a wall beyond)
+                seen = 1  # nothing there (inf, or a wall beyond)
             else:
                 continue
-            ox, oy = qx - sign * half * normal[0], qy - sign * half * normal[1]   # back onto the centre line
+            ox, oy = qx - sign * half * normal[0], qy - sign * half * normal[1]  # back onto the centre line
             cell = (math.floor(ox / c), math.floor(oy / c))
             side = (_LEFT if sign > 0 else _RIGHT)[self.side]
             votes = self.votes.setdefault((cell, side), [0, 0])
@@ -470,7 +507,7 @@ class MoveCells(_Sensing):
         half = (self.params.cell - self.params.wall) / 2
         front = scan["front_center"] + self.model.sensor("front_center").x - self.model.axle_x
         reach: dict[str, float] = {}
-        tilt = wrap_angle(self.pose()[2] - self.heading)          # the robot's angle to the corridor
+        tilt = wrap_angle(self.pose()[2] - self.heading)  # the robot's angle to the corridor
         cos, sin = math.cos(tilt), math.sin(tilt)
         for name in ("front_left", "front_right"):
             sensor, reading = self.model.sensor(name), scan[name]
@@ -481,17 +518,17 @@ class MoveCells(_Sensing):
                 hx = sensor.x - self.model.axle_x + reading * math.cos(sensor.yaw)
                 hy = sensor.y + reading * math.sin(sensor.yaw)
                 reach[name] = abs(hx * sin + hy * cos)
-        for name in ("front_left", "front_right"):        # a wall's end seen by a cone is not a wall yet
+        for name in ("front_left", "front_right"):  # a wall's end seen by a cone is not a wall yet
             self.steady[name] = self.steady[name] + 1 if name in reach else 0
             if self.steady[name] < _STEADY:
                 reach.pop(name, None)
         cells = self.cell_map()
         if len(reach) == 2:
-            offset = (reach["front_right"] - reach["front_left"]) / 2        # > 0: the robot is left of the centre
+            offset = (reach["front_right"] - reach["front_left"]) / 2  # > 0: the robot is left of the centre
             bias = (reach["front_right"] + reach["front_left"]) / 2 - half
             cells.side_bias.add(bias)
             if cells.side_bias.count >= _BIAS_SAMPLES and abs(bias - cells.side_bias.median) > _WIDTH_GATE:
-                return                      # the corridor reads too wide or narrow: a wall's end, a post
+                return  # the corridor reads too wide or narrow: a wall's end, a post
             gain, gate = _FIX_BOTH, _SIDE_GATE
         elif reach and cells.side_bias.count >= _BIAS_SAMPLES:
             name, value = next(iter(reach.items()))
@@ -513,8 +550,14 @@ class MoveCells(_Sensing):
     def _fix_along(self, scan: dict[str, float]) -> None:
         """Where the wall at the end of the move says the robot is along it (and how it is turned to
         it), taken into the map's pose."""
-        self.fix_from_wall((scan["front_center"], scan["front_center_left"], scan["front_center_right"]),
-                           self.goal, self.side, _FIX_BOTH, _FIX_TILT, 2 * _FIX_GATE)
+        self.fix_from_wall(
+            (scan["front_center"], scan["front_center_left"], scan["front_center_right"]),
+            self.goal,
+            self.side,
+            _FIX_BOTH,
+            _FIX_TILT,
+            2 * _FIX_GATE,
+        )
 
 
 class WallMappedParams(MazeMapParams):
@@ -539,8 +582,9 @@ class WallMapped(ConditionBehaviour, _OnGrid):
 class AtTargetParams(MazeMapParams):
     """Is the robot in the target region?"""
 
-    target: Target = Field("goal", description="the maze's goal region, the centre (the contest's goal "
-                           "block) or the start cell")
+    target: Target = Field(
+        "goal", description="the maze's goal region, the centre (the contest's goal block) or the start cell"
+    )
 
 
 class AtTarget(ConditionBehaviour, _OnGrid):

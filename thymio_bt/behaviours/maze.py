@@ -10,16 +10,24 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Literal, Sequence
+from collections.abc import Sequence
+from typing import Literal
 
 from py_trees.common import Access, Status
 from pydantic import Field, model_validator
 
-from thymio_bt.robot.interface import Pose, wrap_angle
-from thymio_bt.inputs.fields import AngularSpeed, Duration, Length, Speed
-from thymio_bt.robot.model import COURSE
-from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.base import (
+    BehaviourParams,
+    ConditionBehaviour,
+    Context,
+    FailureCode,
+    RobotBehaviour,
+    current_pose,
+)
 from thymio_bt.behaviours.motion import MIN_TURN_RATE, approach_speed, late_gain
+from thymio_bt.inputs.fields import AngularSpeed, Duration, Length, Speed
+from thymio_bt.robot.interface import Pose, wrap_angle
+from thymio_bt.robot.model import COURSE
 
 Side = Literal["left", "right"]
 _SENSOR = {s.name: (s.x, s.y, s.yaw) for s in COURSE.sensors}
@@ -222,14 +230,15 @@ class WallFollowParams(BehaviourParams):
     turn_speed: AngularSpeed = Field(1.0, gt=0, le=4.0, description="fastest turn rate")
     cell: Length = Field(0.2, ge=0.17, le=1.0, description="the maze's grid pitch (wall centre to centre)")
     wall_thickness: Length = Field(0.01, gt=0, le=0.05, description="the maze's wall thickness")
-    until: Literal["exit", "goal"] = Field("exit", description="stop when leaving the maze's bounding "
-                                           "box, or on reaching the goal")
+    until: Literal["exit", "goal"] = Field(
+        "exit", description="stop when leaving the maze's bounding box, or on reaching the goal"
+    )
     goal: tuple[float, float] | None = Field(None, description="goal position [x, y] for until: goal")
     goal_radius: Length = Field(0.05, gt=0, le=1.0, description="how close to the goal counts")
     timeout: Duration = Field(600.0, gt=0, le=36000, description="time limit in simulated seconds")
 
     @model_validator(mode="after")
-    def _goal_given(self) -> "WallFollowParams":
+    def _goal_given(self) -> WallFollowParams:
         if self.until == "goal" and self.goal is None:
             raise ValueError("until: goal needs a goal: [x, y]")
         return self
@@ -255,7 +264,7 @@ class WallFollow(RobotBehaviour):
 
     def start(self) -> None:
         p = self.params
-        model = getattr(self.robot, "model", COURSE)          # this robot's own sensor poses
+        model = getattr(self.robot, "model", COURSE)  # this robot's own sensor poses
         self.sensors = {s.name: (s.x, s.y, s.yaw) for s in model.sensors}
         sx, sy, syaw = _SENSOR[side_ray(p.side)]
         self.sign = 1.0 if p.side == "left" else -1.0
@@ -267,15 +276,15 @@ class WallFollow(RobotBehaviour):
         self.stop_distance = self.corridor / 2 - (_SENSOR["front_center"][0] - AXLE_X)
         start = current_pose(self.robot)
         self.heading = start.yaw
-        self.start = (*self._axle(start), start.yaw)        # the maze frame's origin (axle) and x axis
+        self.start = (*self._axle(start), start.yaw)  # the maze frame's origin (axle) and x axis
         self.turns: list[str] = []
         self.mode = "forward"
         self.aligned = False
         # where the axle is in the maze's frame (start heading = +x), from the distance covered along
         # each corridor: unlike 2D odometry, it gains no sideways error when the heading drifts
-        self.quarter = 0                                    # the corridor's direction, in quarter turns
+        self.quarter = 0  # the corridor's direction, in quarter turns
         self.position = (0.0, 0.0)
-        self.anchor: tuple[float, float] | None = None     # a cell centre (axle, maze frame)
+        self.anchor: tuple[float, float] | None = None  # a cell centre (axle, maze frame)
         # a late robot (see Backend.latency) stops early by what its last command still covers,
         # approaches with a damped gain and settles a turn within what its slowest turn covers
         self.latency = getattr(self.robot, "latency", 0.0)
@@ -283,7 +292,7 @@ class WallFollow(RobotBehaviour):
         self.turn_tolerance = math.radians(0.1)
         if self.latency:
             self.turn_tolerance = max(self.turn_tolerance, MIN_TURN_RATE * (self.ctx.tick_period + self.latency))
-        self.speed = self.rate = 0.0                       # the speed and turn rate last commanded
+        self.speed = self.rate = 0.0  # the speed and turn rate last commanded
         self._new_segment()
         if p.until == "exit" and self.ctx.bounds is None:
             self._bad_input = "until: exit needs the maze's bounds, and this backend has none"
@@ -293,10 +302,11 @@ class WallFollow(RobotBehaviour):
     def _new_segment(self) -> None:
         self.origin = self._axle(current_pose(self.robot))
         self.segment_start = self.position
-        self.last_front = math.inf             # the front sensor's reading last tick
+        self.last_front = math.inf  # the front sensor's reading last tick
         # where each side ray met its wall (odometry frame), while it reads one straight wall
         self.wall_points: dict[str, deque[tuple[float, float]]] = {
-            name: deque(maxlen=12) for name in ("front_left", "front_right")}
+            name: deque(maxlen=12) for name in ("front_left", "front_right")
+        }
         self.wall_seen = False
         self.last_hit = 0.0
         self.target: float | None = None
@@ -322,8 +332,7 @@ class WallFollow(RobotBehaviour):
         x0, y0, yaw0 = self.start
         (mx, my), c, s = self.position, math.cos(yaw0), math.sin(yaw0)
         heading = yaw0 + self.quarter * math.pi / 2
-        return (x0 + c * mx - s * my - AXLE_X * math.cos(heading),
-                y0 + s * mx + c * my - AXLE_X * math.sin(heading))
+        return (x0 + c * mx - s * my - AXLE_X * math.cos(heading), y0 + s * mx + c * my - AXLE_X * math.sin(heading))
 
     def _done(self) -> bool:
         p = self.params
@@ -368,10 +377,10 @@ class WallFollow(RobotBehaviour):
             if math.isfinite(side):
                 self.wall_seen = True
                 self.last_hit = s + self.ray_ahead + side * self.ray_cos
-            elif self.wall_seen:       # the side wall just ended: the opening starts in between
+            elif self.wall_seen:  # the side wall just ended: the opening starts in between
                 edge = (self.last_hit + s + self.probe) / 2
                 self.target = self._on_grid(edge + self.corridor / 2, s)
-            elif self.aligned:         # open from the cell centre on: the opening is the next cell
+            elif self.aligned:  # open from the cell centre on: the opening is the next cell
                 self.target = p.cell
         front = scan["front_center"]
         lead = self.speed * self.latency
@@ -385,8 +394,9 @@ class WallFollow(RobotBehaviour):
             self.speed = 0.0
             return Status.RUNNING
         self.last_front = front
-        if self.target is not None and (self.target - s - lead <= tol or
-                                        (front_left <= tol and self.target - s < p.cell / 2)):
+        if self.target is not None and (
+            self.target - s - lead <= tol or (front_left <= tol and self.target - s < p.cell / 2)
+        ):
             return self._begin_turn(self.sign, "opening")
         if front_left <= tol:
             self.robot.drive(0.0, 0.0)
@@ -400,8 +410,11 @@ class WallFollow(RobotBehaviour):
         self._retake_heading(pose, scan)
         self.robot.drive(limit, self._steer(pose, scan))
         self.speed = limit
-        self.feedback_message = (f"following the {p.side} wall" if self.target is None
-                                 else f"opening on the {p.side} in {self.target - s:.3f} m")
+        self.feedback_message = (
+            f"following the {p.side} wall"
+            if self.target is None
+            else f"opening on the {p.side} in {self.target - s:.3f} m"
+        )
         return Status.RUNNING
 
     def _on_grid(self, estimate: float, s: float) -> float:
@@ -417,7 +430,7 @@ class WallFollow(RobotBehaviour):
         """
         if self.anchor is None:
             return estimate
-        axis = self.quarter % 2                             # 0: along x, 1: along y
+        axis = self.quarter % 2  # 0: along x, 1: along y
         origin, anchor = self.segment_start[axis], self.anchor[axis]
         direction = _QUARTERS[self.quarter][axis]
         world = origin + estimate * direction
@@ -463,8 +476,9 @@ class WallFollow(RobotBehaviour):
                 continue
             x, y, yaw = self.sensors[name]
             angle = pose.yaw + yaw
-            points.append((pose.x + c * x - s * y + reading * math.cos(angle),
-                           pose.y + s * x + c * y + reading * math.sin(angle)))
+            points.append(
+                (pose.x + c * x - s * y + reading * math.cos(angle), pose.y + s * x + c * y + reading * math.sin(angle))
+            )
             if math.dist(points[0], points[-1]) < WALL_SPAN:
                 continue
             direction, residual = line_direction(points)
@@ -474,7 +488,7 @@ class WallFollow(RobotBehaviour):
                 points.append(last)
                 continue
             error = wrap_angle(direction - self.heading)
-            error = wrap_angle(error - math.pi) if abs(error) > math.pi / 2 else error   # the line has two directions
+            error = wrap_angle(error - math.pi) if abs(error) > math.pi / 2 else error  # the line has two directions
             if RETAKE_ANGLE < abs(error) < RETAKE_MAX:
                 self.heading = wrap_angle(self.heading + error)
                 for other in self.wall_points.values():
@@ -505,9 +519,9 @@ class WallFollow(RobotBehaviour):
         readings = [sum(r[i] for r in self.squaring) / len(self.squaring) for i in (0, 1, 2)]
         near = self.params.cell / 2
         if self.square_then_turn and not readings[2] < near:
-            self.mode = "forward"           # no wall ahead after all (a glint stopped the robot): go on
+            self.mode = "forward"  # no wall ahead after all (a glint stopped the robot): go on
             return Status.RUNNING
-        if readings[0] < near and readings[1] < near:    # both on the wall across, in this cell
+        if readings[0] < near and readings[1] < near:  # both on the wall across, in this cell
             self._square_to_wall(pose, readings[:2])
         if self.square_then_turn:
             return self._begin_turn(-self.sign, "wall")
@@ -520,7 +534,7 @@ class WallFollow(RobotBehaviour):
             x, y, yaw = self.sensors[name]
             hits.append((x + reading * math.cos(yaw), y + reading * math.sin(yaw)))
         (lx, ly), (rx, ry) = hits
-        error = math.atan2(lx - rx, ly - ry)          # > 0: the robot is turned left of the wall's normal
+        error = math.atan2(lx - rx, ly - ry)  # > 0: the robot is turned left of the wall's normal
         if abs(error) < RETAKE_MAX:
             self.heading = wrap_angle(pose.yaw - error)
 
@@ -550,9 +564,9 @@ class WallFollow(RobotBehaviour):
             # still a wall ahead, in this cell: a dead end; square to that wall, and turn again
             return self._begin_square(FRONT_PAIR, then_turn=True)
         if self.turn_reason == "wall":
-            self.anchor = self.position           # stopped by a wall: the axle is in a cell centre
+            self.anchor = self.position  # stopped by a wall: the axle is in a cell centre
         if all(scan[name] < self.params.cell / 2 for name in REAR_PAIR):
-            return self._begin_square(REAR_PAIR, then_turn=False)   # a wall behind, across the corridor
+            return self._begin_square(REAR_PAIR, then_turn=False)  # a wall behind, across the corridor
         return self._drive_on()
 
     def _drive_on(self) -> Status:

@@ -14,13 +14,14 @@ from typing import Literal
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.robot.interface import SENSOR_NAMES, Pose, wrap_angle
-from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
-from thymio_bt.robot.model import COURSE
 from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose, wrap_angle
+from thymio_bt.robot.model import COURSE
 
-SensorName = Literal["front_left", "front_center_left", "front_center", "front_center_right",
-                     "front_right", "rear_left", "rear_right"]
+SensorName = Literal[
+    "front_left", "front_center_left", "front_center", "front_center_right", "front_right", "rear_left", "rear_right"
+]
 assert set(SensorName.__args__) == set(SENSOR_NAMES)  # type: ignore[attr-defined]
 
 #: Readings of the ±38° rays closer than this count as centred (about 0.15 mm off the centre line),
@@ -65,17 +66,23 @@ class MoveUntilWallParams(BehaviourParams):
     """Drive forward until a proximity sensor reads ``distance``."""
 
     speed: Speed = Field(0.1, gt=0, le=0.2, description="cruise speed")
-    distance: Length = Field(0.05, ge=COURSE.range_min, le=COURSE.range_max, description="stop when the sensor reads this")
+    distance: Length = Field(
+        0.05, ge=COURSE.range_min, le=COURSE.range_max, description="stop when the sensor reads this"
+    )
     sensor: SensorName = Field("front_center", description="the sensor that watches the wall")
     approach_gain: PerSecond = Field(5.0, gt=0, le=10, description="slow-down gain once the wall is in range")
     min_speed: Speed = Field(0.005, gt=0, le=0.05, description="slowest approach speed")
     tolerance: Length = Field(0.0005, gt=0, le=0.01, description="stop when within this of distance")
     hold_heading: bool = Field(True, description="steer to keep the heading the robot had at the start")
-    centre: bool = Field(False, description="steer to the middle of the corridor while both ±38° rays see its "
-                         "side walls and no wall is ahead (cancels the lateral drift odometry errors build "
-                         "up between turns)")
-    centre_gain: PerSecondPerMetre = Field(5.0, gt=0, le=50, description="steering per metre of difference between the "
-                               "left and right ±38° readings")
+    centre: bool = Field(
+        False,
+        description="steer to the middle of the corridor while both ±38° rays see its "
+        "side walls and no wall is ahead (cancels the lateral drift odometry errors build "
+        "up between turns)",
+    )
+    centre_gain: PerSecondPerMetre = Field(
+        5.0, gt=0, le=50, description="steering per metre of difference between the left and right ±38° readings"
+    )
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
@@ -105,20 +112,19 @@ class MoveUntilWall(RobotBehaviour):
         self.heading = pose.yaw
         self.wall_seen = False
         self.origin = (pose.x, pose.y)
-        self.walls: deque[float] = deque(maxlen=WALL_READINGS)   # the wall's place along the heading, per reading
-        self.speed = 0.0                                        # the speed last commanded
-        self.saw_nothing = False                                # the last reading was out of range
+        self.walls: deque[float] = deque(maxlen=WALL_READINGS)  # the wall's place along the heading, per reading
+        self.speed = 0.0  # the speed last commanded
+        self.saw_nothing = False  # the last reading was out of range
         # a backend's latency and the approach gain it allows: fixed for the run
         self.latency = getattr(self.robot, "latency", 0.0)
         self.gain = late_gain(self.params.approach_gain, self.robot, self.ctx.tick_period)
 
     def _travelled(self, pose: Pose) -> float:
-        return ((pose.x - self.origin[0]) * math.cos(self.heading)
-                + (pose.y - self.origin[1]) * math.sin(self.heading))
+        return (pose.x - self.origin[0]) * math.cos(self.heading) + (pose.y - self.origin[1]) * math.sin(self.heading)
 
     def step(self) -> Status:
         p = self.params
-        pose = current_pose(self.robot)           # read once: nothing moves the robot within a tick
+        pose = current_pose(self.robot)  # read once: nothing moves the robot within a tick
         scan = self.robot.proximity()
         assert scan is not None
         reading = scan[p.sensor]
@@ -150,13 +156,19 @@ class MoveUntilWall(RobotBehaviour):
             self.robot.drive(0.0, 0.0)
             self.say("stopped at {:.4f} m", reading)
             return Status.SUCCESS
-        speed = p.speed if infinite else approach_speed(remaining, p.speed, self.gain, p.min_speed,
-                                                        self.ctx.tick_period)
+        speed = (
+            p.speed if infinite else approach_speed(remaining, p.speed, self.gain, p.min_speed, self.ctx.tick_period)
+        )
         left, right = scan["front_left"], scan["front_right"]
-        if (p.centre and math.isfinite(left) and math.isfinite(right) and math.isinf(scan["front_center"])
-                and abs(left - right) > CENTRE_DEADBAND):
-            turn = max(-0.5, min(0.5, p.centre_gain * (left - right)))   # nearer the right wall: turn left
-            self.heading = pose.yaw                                       # hold this once a wall drops out
+        if (
+            p.centre
+            and math.isfinite(left)
+            and math.isfinite(right)
+            and math.isinf(scan["front_center"])
+            and abs(left - right) > CENTRE_DEADBAND
+        ):
+            turn = max(-0.5, min(0.5, p.centre_gain * (left - right)))  # nearer the right wall: turn left
+            self.heading = pose.yaw  # hold this once a wall drops out
         else:
             turn = heading_hold(pose.yaw, self.heading) if p.hold_heading else 0.0
         self.robot.drive(speed, turn)
@@ -174,8 +186,10 @@ class MoveUntilWall(RobotBehaviour):
 
     def on_timeout(self) -> Status:
         if not self.wall_seen:
-            return self.fail(FailureCode.NO_WALL, f"no wall came within {COURSE.range_max} m of "
-                             f"{self.params.sensor} in {self.params.timeout:g} s")
+            return self.fail(
+                FailureCode.NO_WALL,
+                f"no wall came within {COURSE.range_max} m of {self.params.sensor} in {self.params.timeout:g} s",
+            )
         return super().on_timeout()
 
 
@@ -190,7 +204,7 @@ def heading_hold(yaw: float, heading: float, gain: float = 3.0) -> float:
     error = wrap_angle(heading - yaw)
     if -HEADING_DEADBAND < error < HEADING_DEADBAND:
         return 0.0
-    turn = gain * error                  # max(-0.5, min(0.5, turn)) without builtin calls (hot path)
+    turn = gain * error  # max(-0.5, min(0.5, turn)) without builtin calls (hot path)
     if not turn < 0.5:
         turn = 0.5
     return turn if turn > -0.5 else -0.5
@@ -229,7 +243,7 @@ class MoveDistance(RobotBehaviour):
 
     def step(self) -> Status:
         p = self.params
-        pose = current_pose(self.robot)           # read once: nothing moves the robot within a tick
+        pose = current_pose(self.robot)  # read once: nothing moves the robot within a tick
         done = self.travelled(pose)
         remaining = p.distance - done
         self.done, self.extra = done, self._end_fields
@@ -248,19 +262,36 @@ class MoveDistance(RobotBehaviour):
 class TurnAngleParams(BehaviourParams):
     """Turn in place by a relative angle."""
 
-    angle: Angle = Field(description="relative angle, left positive (may come from the blackboard)", ge=-2 * math.pi, le=2 * math.pi)
+    angle: Angle = Field(
+        description="relative angle, left positive (may come from the blackboard)", ge=-2 * math.pi, le=2 * math.pi
+    )
     mode: Literal["odometry", "rear_sensors"] = Field(
-        "odometry", description="end by odometry, or when the two rear rays read equal")
+        "odometry", description="end by odometry, or when the two rear rays read equal"
+    )
     speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="fastest turn rate")
-    tolerance: Angle = Field(0.0005, gt=0, le=0.2,
-                             description="odometry: done within this angle; rear_sensors: "
-                                         "done when the rear rays differ by less than spacing*tan(tolerance)")
-    snap: Angle = Field(0.0, ge=0, le=math.pi, description="if > 0, round the target heading to a multiple "
-                        "of this (e.g. 90deg) so errors do not add up turn after turn")
-    pivot: Length = Field(0.0, ge=0, le=0.05, description="turn about the point of the axle line this far "
-                          "outside the turn, not the axle's centre: the axle backs away along an arc, so the "
-                          "front sweeps this much further from the walls ahead and on the turning side "
-                          "(a tight cell)")
+    tolerance: Angle = Field(
+        0.0005,
+        gt=0,
+        le=0.2,
+        description="odometry: done within this angle; rear_sensors: "
+        "done when the rear rays differ by less than spacing*tan(tolerance)",
+    )
+    snap: Angle = Field(
+        0.0,
+        ge=0,
+        le=math.pi,
+        description="if > 0, round the target heading to a multiple "
+        "of this (e.g. 90deg) so errors do not add up turn after turn",
+    )
+    pivot: Length = Field(
+        0.0,
+        ge=0,
+        le=0.05,
+        description="turn about the point of the axle line this far "
+        "outside the turn, not the axle's centre: the axle backs away along an arc, so the "
+        "front sweeps this much further from the walls ahead and on the turning side "
+        "(a tight cell)",
+    )
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
@@ -291,15 +322,18 @@ class TurnAngle(RobotBehaviour):
         target = yaw + self.params.angle
         if self.params.snap:
             target = round(target / self.params.snap) * self.params.snap
-        self.goal = target - yaw          # the signed angle to turn, unwrapped (may exceed pi)
+        self.goal = target - yaw  # the signed angle to turn, unwrapped (may exceed pi)
         self.last_yaw = yaw
         self.turned = 0.0
-        self.rate = 0.0                   # the turn rate last commanded
+        self.rate = 0.0  # the turn rate last commanded
         latency = self.latency = getattr(self.robot, "latency", 0.0)
         self.gain = late_gain(5.0, self.robot, self.ctx.tick_period)
         # a late robot cannot stop finer than its slowest turn covers in a tick and its latency
-        self.tolerance = max(self.params.tolerance, MIN_TURN_RATE * (self.ctx.tick_period + latency)) \
-            if latency else self.params.tolerance
+        self.tolerance = (
+            max(self.params.tolerance, MIN_TURN_RATE * (self.ctx.tick_period + latency))
+            if latency
+            else self.params.tolerance
+        )
 
     def step(self) -> Status:
         yaw = current_pose(self.robot).yaw
@@ -322,8 +356,7 @@ class TurnAngle(RobotBehaviour):
             self.robot.drive(0.0, 0.0)
             self.say("turned {:.2f} deg", math.degrees(self.turned))
             return Status.SUCCESS
-        rate = approach_speed(abs(error), p.speed, self.gain, MIN_TURN_RATE,
-                              self.ctx.tick_period)
+        rate = approach_speed(abs(error), p.speed, self.gain, MIN_TURN_RATE, self.ctx.tick_period)
         # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
         self.rate = math.copysign(rate, error)
         self.robot.drive(-rate * p.pivot, self.rate)

@@ -16,11 +16,18 @@ from typing import Literal
 from py_trees.common import Access, Status
 from pydantic import Field
 
+from thymio_bt.behaviours.base import (
+    BehaviourParams,
+    ConditionBehaviour,
+    Context,
+    FailureCode,
+    RobotBehaviour,
+    current_pose,
+)
+from thymio_bt.behaviours.motion import approach_speed
 from thymio_bt.behaviours.pid import PID
 from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, Point, Speed
 from thymio_bt.robot.interface import Pose, wrap_angle
-from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour, current_pose
-from thymio_bt.behaviours.motion import approach_speed
 
 FRONT = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")
 #: The report's simulation thresholds for the 5 front sensors (Table 2), metres.
@@ -40,8 +47,9 @@ class PIDGains(BehaviourParams):
     distance_kd: float = Field(0.0, ge=0, le=100, description="distance PID: derivative gain")
     max_speed: Speed = Field(0.05, gt=0, le=0.2, description="forward speed limit")
     max_turn: AngularSpeed = Field(math.pi, gt=0, le=4.3, description="turn rate limit")
-    turn_in_place_above: Angle = Field(math.pi / 90, gt=0, le=math.pi,
-                                       description="turn in place while the heading error exceeds this")
+    turn_in_place_above: Angle = Field(
+        math.pi / 90, gt=0, le=math.pi, description="turn in place while the heading error exceeds this"
+    )
     tolerance: Length = Field(0.01, gt=0, le=0.5, description="a goal counts as reached within this distance")
     timeout: Duration = Field(300.0, gt=0, le=36000, description="time limit in simulated seconds")
 
@@ -60,8 +68,8 @@ class _Navigator:
         self.heading = PID(p.heading_kp, p.heading_ki, p.heading_kd, p.max_turn)
         self.distance = PID(p.distance_kp, p.distance_ki, p.distance_kd, p.max_speed)
         self.stalled: str | None = None
-        self._best = math.inf          # the closest to the goal so far
-        self._turned = 0.0             # how far the robot turned since then (rad)
+        self._best = math.inf  # the closest to the goal so far
+        self._turned = 0.0  # how far the robot turned since then (rad)
         self._yaw: float | None = None
 
     def command(self, pose: Pose, goal: tuple[float, float], dt: float) -> tuple[float, float] | None:
@@ -79,10 +87,12 @@ class _Navigator:
         elif self._yaw is not None:
             self._turned += abs(wrap_angle(pose.yaw - self._yaw))
             if self._turned > math.tau:
-                self.stalled = (f"turned a full circle without getting closer to ({goal[0]:g}, {goal[1]:g}) than "
-                                f"{1000 * self._best:.1f} mm: a tolerance of {1000 * self.p.tolerance:g} mm is "
-                                f"tighter than the controller can hold (try tolerance: "
-                                f"{max(5.0, math.ceil(2000 * self._best)):g}mm)")
+                self.stalled = (
+                    f"turned a full circle without getting closer to ({goal[0]:g}, {goal[1]:g}) than "
+                    f"{1000 * self._best:.1f} mm: a tolerance of {1000 * self.p.tolerance:g} mm is "
+                    f"tighter than the controller can hold (try tolerance: "
+                    f"{max(5.0, math.ceil(2000 * self._best)):g}mm)"
+                )
                 return None
         self._yaw = pose.yaw
         error = wrap_angle(math.atan2(dy, dx) - pose.yaw)
@@ -127,8 +137,11 @@ class FollowWaypointsParams(PIDGains):
     """Visit waypoints in order with the report's PID controllers."""
 
     waypoints: list[Point] = Field(min_length=1, description="the points [[x, y], ...] to visit")
-    key: str = Field("waypoint", description="blackboard key holding the index of the next waypoint, so the "
-                     "behaviour resumes where it was after an interruption (e.g. by obstacle avoidance)")
+    key: str = Field(
+        "waypoint",
+        description="blackboard key holding the index of the next waypoint, so the "
+        "behaviour resumes where it was after an interruption (e.g. by obstacle avoidance)",
+    )
 
 
 class FollowWaypoints(RobotBehaviour):
@@ -175,9 +188,13 @@ class FollowWaypoints(RobotBehaviour):
                 self.feedback_message = f"to waypoint {self.index + 1}/{len(waypoints)} {waypoints[self.index]}"
                 self.extra = {"waypoint": self.index}
                 return Status.RUNNING
-            self.ctx.events.emit(self.ctx.now(), "waypoint_reached", index=self.index,
-                                 target=list(waypoints[self.index]),
-                                 pose={k: round(v, 6) for k, v in pose.as_dict().items()})
+            self.ctx.events.emit(
+                self.ctx.now(),
+                "waypoint_reached",
+                index=self.index,
+                target=list(waypoints[self.index]),
+                pose={k: round(v, 6) for k, v in pose.as_dict().items()},
+            )
             self.index += 1
             self._publish()
         self.robot.drive(0.0, 0.0)
@@ -277,8 +294,13 @@ class TurnUntilClearParams(_CounterParams):
     """turning_left: turn until no front sensor is below its threshold."""
 
     direction: Literal["left", "right"] = Field("left", description="which way to turn")
-    margin: Angle = Field(0.0, ge=0, le=math.pi / 2, description="keep turning this much more once clear, so "
-                          "the body (which the angled sensors do not see) clears a corner too")
+    margin: Angle = Field(
+        0.0,
+        ge=0,
+        le=math.pi / 2,
+        description="keep turning this much more once clear, so "
+        "the body (which the angled sensors do not see) clears a corner too",
+    )
 
 
 class TurnUntilClear(_CountingTurn):

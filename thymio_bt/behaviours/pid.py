@@ -36,7 +36,7 @@ class PID:
         u = self.kp * error + self.ki * self.integrator + self.kd * derivative
         if abs(u) > self.limit:
             if self.ki != 0.0:
-                self.integrator -= step          # anti-windup: no integration while saturated
+                self.integrator -= step  # anti-windup: no integration while saturated
             u = math.copysign(self.limit, u)
         self.previous = error
         return u

@@ -20,7 +20,7 @@ Example::
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import ParallelPolicy, Status
@@ -92,8 +92,8 @@ def _sequence(seq: Sequence) -> None:
         _TICK[child.__class__](child)
         status = child.status
         if status is not SUCCESS:
-            if not seq.memory:                  # invalidate the rest: no dangling runners
-                for later in children[index + 1:]:
+            if not seq.memory:  # invalidate the rest: no dangling runners
+                for later in children[index + 1 :]:
                     if later.status is not INVALID:
                         later.stop(INVALID)
             if status is not RUNNING:
@@ -151,7 +151,7 @@ def _parallel(par: Parallel) -> None:
     success on one); another policy goes through the generator."""
     policy = par.policy
     if policy.__class__ is not _SUCCESS_ON_ALL and policy.__class__ is not _SUCCESS_ON_ONE:
-        _generator(par)            # SuccessOnSelected (whose configuration its tick validates) or another
+        _generator(par)  # SuccessOnSelected (whose configuration its tick validates) or another
         return
     children = par.children
     if par.status is not RUNNING:

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Callable, Mapping
 
 from thymio_bt.errors import did_you_mean
 
@@ -44,8 +44,7 @@ UNITS: dict[str, tuple[float, str]] = {
 }
 
 #: The SI unit printed for each kind.
-SI_UNIT = {"length": "m", "angle": "rad", "time": "s", "speed": "m/s",
-           "angular_speed": "rad/s", "frequency": "Hz"}
+SI_UNIT = {"length": "m", "angle": "rad", "time": "s", "speed": "m/s", "angular_speed": "rad/s", "frequency": "Hz"}
 
 _TOKEN = re.compile(
     r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
@@ -56,8 +55,14 @@ _TOKEN = re.compile(
 
 
 #: How a value of each kind is written, for hints.
-EXAMPLES = {"length": "5cm, 0.05 m or 50mm", "angle": "90deg, pi/2 or 1.57 rad", "time": "2 s, 500ms or 1 min",
-            "speed": "10cm/s or 0.1 m/s", "angular_speed": "90deg/s or 1.5 rad/s", "frequency": "10 Hz"}
+EXAMPLES = {
+    "length": "5cm, 0.05 m or 50mm",
+    "angle": "90deg, pi/2 or 1.57 rad",
+    "time": "2 s, 500ms or 1 min",
+    "speed": "10cm/s or 0.1 m/s",
+    "angular_speed": "90deg/s or 1.5 rad/s",
+    "frequency": "10 Hz",
+}
 
 #: A proximity threshold as a real Thymio's reading ("3400 raw"), converted to the distance at which
 #: the calibration table gives that reading. Not a factor: it stands alone, never in arithmetic.
@@ -129,9 +134,12 @@ class _Parser:
     def _combine(self, a: str | None, b: str | None, op: str) -> str | None:
         if a and b and (op in "*/" or a != b):
             what = "multiply or divide two values with units" if op in "*/" else f"add {_named(a)} and {_named(b)}"
-            raise UnitError(f"cannot {what} in '{self.text}'",
-                            "a unit binds to the number before it: write 2*$side - 10cm, not 2cm*3cm"
-                            if op in "*/" else "both sides of + and - need the same kind of unit")
+            raise UnitError(
+                f"cannot {what} in '{self.text}'",
+                "a unit binds to the number before it: write 2*$side - 10cm, not 2cm*3cm"
+                if op in "*/"
+                else "both sides of + and - need the same kind of unit",
+            )
         return a or b
 
     def expr(self) -> tuple[float, str | None]:
@@ -159,7 +167,7 @@ class _Parser:
 
     def unary(self) -> tuple[float, str | None]:
         sign = 1.0
-        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":     # a loop: '-----5' nests nothing
+        while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":  # a loop: '-----5' nests nothing
             self.i += 1
             sign = -sign if tok[1] == "-" else sign
         value, kind = self.unit(*self.atom())
@@ -171,11 +179,14 @@ class _Parser:
             return value, kind
         self.i += 1
         if tok[1] == "raw":
-            raise UnitError(f"a raw reading cannot take part in arithmetic in '{self.text}'",
-                            "raw readings are not proportional to distance: write one reading alone, e.g. 3400 raw")
+            raise UnitError(
+                f"a raw reading cannot take part in arithmetic in '{self.text}'",
+                "raw readings are not proportional to distance: write one reading alone, e.g. 3400 raw",
+            )
         if tok[1] not in UNITS:
-            raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}'",
-                            did_you_mean(tok[1], [u for u in UNITS if u != "hz"]))
+            raise UnitError(
+                f"unknown unit '{tok[1]}' in '{self.text}'", did_you_mean(tok[1], [u for u in UNITS if u != "hz"])
+            )
         if kind is not None:
             raise UnitError(f"'{tok[1]}' follows a value that already has a unit in '{self.text}'")
         factor, unit_kind = UNITS[tok[1]]
@@ -233,8 +244,10 @@ def _raw_reading(reading: float) -> Quantity:
     from thymio_bt.robot.calibration import WEBOTS_THYMIO2 as table
 
     if not 0 < reading <= table.max_reading:
-        raise UnitError(f"a raw reading must be between 1 and {table.max_reading:g}, got {reading:g}",
-                        "0 means nothing in range; 4308 is as close as the table goes (e.g. 3400 raw is 3.2 cm)")
+        raise UnitError(
+            f"a raw reading must be between 1 and {table.max_reading:g}, got {reading:g}",
+            "0 means nothing in range; 4308 is as close as the table goes (e.g. 3400 raw is 3.2 cm)",
+        )
     return Quantity(table.to_metres(reading), "length")
 
 
@@ -246,8 +259,7 @@ def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> t
     x, y, yaw = (parse_value(p, resolve) for p in parts)
     for name, q, kind in (("X", x, "length"), ("Y", y, "length"), ("YAW", yaw, "angle")):
         if q.kind not in (None, kind):
-            raise UnitError(f"{name} must be {'a length' if kind == 'length' else 'an angle'}, "
-                              f"got '{text}'")
+            raise UnitError(f"{name} must be {'a length' if kind == 'length' else 'an angle'}, got '{text}'")
     return x.value, y.value, yaw.value
 
 

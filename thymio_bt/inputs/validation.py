@@ -5,7 +5,8 @@ The data must come from :func:`thymio_bt.inputs.yamlio.load_yaml`, whose dicts a
 
 from __future__ import annotations
 
-from typing import Any, Sequence, TypeVar
+from collections.abc import Sequence
+from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
@@ -66,8 +67,9 @@ def _model_at(model: type[BaseModel], loc: Sequence[Any]) -> type[BaseModel] | N
     return current if isinstance(current, type) else None
 
 
-def problems_from(exc: ValidationError, data: Any, filename: str, model: type[BaseModel],
-                  prefix: str = "") -> list[Problem]:
+def problems_from(
+    exc: ValidationError, data: Any, filename: str, model: type[BaseModel], prefix: str = ""
+) -> list[Problem]:
     """One :class:`Problem` per pydantic error, with place, path and hint."""
     problems = []
     for err in exc.errors(include_url=False):

@@ -68,27 +68,34 @@ class _Loader(yaml.SafeLoader):
         self.filename = filename
         self.alias_count = 0
         self.problems: list[Problem] = []
-        self._open_anchors: list[str] = []     # anchors of the nodes being composed, outermost first
+        self._open_anchors: list[str] = []  # anchors of the nodes being composed, outermost first
 
     def _event_problem(self, message: str, hint: str) -> UserError:
         event = self.peek_event()
-        return UserError(Problem(message, self.filename, event.start_mark.line + 1,
-                                 event.start_mark.column + 1, hint=hint))
+        return UserError(
+            Problem(message, self.filename, event.start_mark.line + 1, event.start_mark.column + 1, hint=hint)
+        )
 
     def compose_node(self, parent: Node | None, index: Any) -> Node:  # type: ignore[override]
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent):
             self.alias_count += 1
             if self.alias_count > MAX_ALIASES:
-                raise self._event_problem(f"too many aliases (more than {MAX_ALIASES})",
-                                          "use subtrees: or include: to reuse parts of a mission")
+                raise self._event_problem(
+                    f"too many aliases (more than {MAX_ALIASES})",
+                    "use subtrees: or include: to reuse parts of a mission",
+                )
             if event.anchor in self._open_anchors:
-                raise self._event_problem(f"the alias *{event.anchor} refers to the node that contains it",
-                                          "recursive YAML structures are not allowed")
+                raise self._event_problem(
+                    f"the alias *{event.anchor} refers to the node that contains it",
+                    "recursive YAML structures are not allowed",
+                )
             return super().compose_node(parent, index)
         if len(self._open_anchors) >= MAX_NESTING:
-            raise self._event_problem(f"the YAML nesting is deeper than {MAX_NESTING} levels",
-                                      "flatten the structure; use subtrees: to split a deep tree")
+            raise self._event_problem(
+                f"the YAML nesting is deeper than {MAX_NESTING} levels",
+                "flatten the structure; use subtrees: to split a deep tree",
+            )
         self._open_anchors.append(getattr(event, "anchor", None) or "")
         try:
             return super().compose_node(parent, index)
@@ -100,8 +107,14 @@ class _Loader(yaml.SafeLoader):
         try:
             return super().construct_object(node, deep)
         except (ValueError, TypeError, AttributeError, OverflowError) as exc:
-            raise UserError(Problem(f"invalid {_tag_name(node.tag)} value: {exc}", self.filename,
-                                    *_mark(node), hint="quote the value to keep it as text")) from None
+            raise UserError(
+                Problem(
+                    f"invalid {_tag_name(node.tag)} value: {exc}",
+                    self.filename,
+                    *_mark(node),
+                    hint="quote the value to keep it as text",
+                )
+            ) from None
 
     def construct_timestamp_as_text(self, node: ScalarNode) -> str:
         """Dates and times stay text: missions have no use for them, and bad dates must not crash."""
@@ -109,7 +122,7 @@ class _Loader(yaml.SafeLoader):
 
     def construct_mapping(self, node: MappingNode, deep: bool = False) -> MarkedDict:  # type: ignore[override]
         own = sum(1 for key_node, _ in node.value if key_node.tag != _STANDARD_TAG + "merge")
-        self.flatten_mapping(node)          # merged pairs ('<<: *base') first, then the mapping's own
+        self.flatten_mapping(node)  # merged pairs ('<<: *base') first, then the mapping's own
         merged = len(node.value) - own
         result = MarkedDict()
         result.mark = _mark(node)
@@ -119,17 +132,21 @@ class _Loader(yaml.SafeLoader):
             try:
                 hash(key)
             except TypeError:
-                self.problems.append(Problem("a mapping key must be a plain value", self.filename,
-                                             *_mark(key_node)))
+                self.problems.append(Problem("a mapping key must be a plain value", self.filename, *_mark(key_node)))
                 continue
             if i >= merged and key in written:
                 first = result.marks[key]
-                self.problems.append(Problem(
-                    f"duplicate key '{key}'", self.filename, *_mark(key_node),
-                    hint=f"'{key}' is already given at line {first[0]}; YAML would silently keep only one"))
+                self.problems.append(
+                    Problem(
+                        f"duplicate key '{key}'",
+                        self.filename,
+                        *_mark(key_node),
+                        hint=f"'{key}' is already given at line {first[0]}; YAML would silently keep only one",
+                    )
+                )
                 continue
             if i >= merged:
-                written.add(key)        # a key of its own overrides a merged one; twice is a mistake
+                written.add(key)  # a key of its own overrides a merged one; twice is a mistake
             result[key] = self.construct_object(value_node, deep=True)
             result.marks[key] = _mark(key_node)
             result.value_marks[key] = _mark(value_node)
@@ -142,14 +159,19 @@ class _Loader(yaml.SafeLoader):
         return result
 
     def construct_undefined(self, node: Node) -> Any:
-        raise UserError(Problem(
-            f"the tag {_tag_name(node.tag)} is not allowed", self.filename, *_mark(node),
-            hint="mission and maze files are plain data: remove the '!' tag"))
+        raise UserError(
+            Problem(
+                f"the tag {_tag_name(node.tag)} is not allowed",
+                self.filename,
+                *_mark(node),
+                hint="mission and maze files are plain data: remove the '!' tag",
+            )
+        )
 
 
 def _tag_name(tag: str) -> str:
     """A tag as it is written: ``!!python/object`` rather than ``tag:yaml.org,2002:python/object``."""
-    return "!!" + tag[len(_STANDARD_TAG):] if tag.startswith(_STANDARD_TAG) else tag
+    return "!!" + tag[len(_STANDARD_TAG) :] if tag.startswith(_STANDARD_TAG) else tag
 
 
 _Loader.add_constructor(_STANDARD_TAG + "map", _Loader.construct_mapping)
@@ -191,26 +213,43 @@ def _expanded_size(root: Node) -> tuple[int, int] | None:
 def loads_yaml(text: str, filename: str = "<input>") -> Any:
     """Parse YAML text safely; raise :class:`UserError` with file:line:col on any problem."""
     try:
-        loader = _Loader(text, filename)     # the reader rejects control characters right here
+        loader = _Loader(text, filename)  # the reader rejects control characters right here
     except yaml.reader.ReaderError as exc:
         pos = exc.position
         line, col = text.count("\n", 0, pos) + 1, pos - text.rfind("\n", 0, pos)
         char = f"U+{exc.character:04X}" if isinstance(exc.character, int) else repr(exc.character)
-        raise UserError(Problem(f"invalid YAML: the character {char} is not allowed", filename, line, col,
-                                hint="remove it (YAML files may not hold control characters)")) from None
+        raise UserError(
+            Problem(
+                f"invalid YAML: the character {char} is not allowed",
+                filename,
+                line,
+                col,
+                hint="remove it (YAML files may not hold control characters)",
+            )
+        ) from None
     try:
         node = loader.get_single_node()
         if node is None:
             return None
         sizes = _expanded_size(node)
-        if sizes is None:       # composing already refuses an alias inside its own anchor; kept as a guard
-            raise UserError(Problem("an alias refers to the node that contains it", filename,
-                                    *_mark(node), hint="recursive YAML structures are not allowed"))
+        if sizes is None:  # composing already refuses an alias inside its own anchor; kept as a guard
+            raise UserError(
+                Problem(
+                    "an alias refers to the node that contains it",
+                    filename,
+                    *_mark(node),
+                    hint="recursive YAML structures are not allowed",
+                )
+            )
         if sizes[1] - sizes[0] > MAX_ALIAS_EXPANSION:
-            raise UserError(Problem(
-                f"the aliases expand to too many nodes ({sizes[1]:,} from {sizes[0]:,} written)",
-                filename, *_mark(node),
-                hint="aliases of aliases multiply; use subtrees: or include: to reuse parts of a mission"))
+            raise UserError(
+                Problem(
+                    f"the aliases expand to too many nodes ({sizes[1]:,} from {sizes[0]:,} written)",
+                    filename,
+                    *_mark(node),
+                    hint="aliases of aliases multiply; use subtrees: or include: to reuse parts of a mission",
+                )
+            )
         data = loader.construct_document(node)
     except yaml.MarkedYAMLError as exc:
         raise UserError(_syntax_problem(exc, filename)) from None

@@ -32,11 +32,11 @@ ENTRY_POINT_GROUP = "thymio_bt.log_formats"
 class LogWriter(Protocol):
     """Writes one run: the header first, a record per tick, the end; ``close`` however the run ends."""
 
-    def header(self, header: "LogHeader") -> None: ...
+    def header(self, header: LogHeader) -> None: ...
 
-    def tick(self, record: "TickRecord") -> None: ...
+    def tick(self, record: TickRecord) -> None: ...
 
-    def end(self, end: "LogEnd") -> None: ...
+    def end(self, end: LogEnd) -> None: ...
 
     def close(self) -> None: ...
 
@@ -62,13 +62,29 @@ class LogFormat:
 
 
 BUILTIN: tuple[LogFormat, ...] = (
-    LogFormat("jsonl", "JSON lines: thymio-bt's own log, every field of every tick", (".jsonl",),
-              "thymio_bt.logs.jsonl:JsonlWriter", "thymio_bt.logs.jsonl:read_jsonl", partial=True),
-    LogFormat("rosbag2", "rosbag2 with MCAP storage: /cmd_vel, /odom, /tf, the 7 proximity scans, /clock, "
-              "tree state and events (Foxglove, PlotJuggler, ros2 bag; needs thymio-bt[rosbag])", (".mcap",),
-              "thymio_bt.logs.rosbag:RosbagWriter", "thymio_bt.logs.rosbag:read_rosbag", folder=True),
-    LogFormat("btlog", "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes)", (".btlog",),
-              "thymio_bt.logs.btlog:BtlogWriter"),
+    LogFormat(
+        "jsonl",
+        "JSON lines: thymio-bt's own log, every field of every tick",
+        (".jsonl",),
+        "thymio_bt.logs.jsonl:JsonlWriter",
+        "thymio_bt.logs.jsonl:read_jsonl",
+        partial=True,
+    ),
+    LogFormat(
+        "rosbag2",
+        "rosbag2 with MCAP storage: /cmd_vel, /odom, /tf, the 7 proximity scans, /clock, "
+        "tree state and events (Foxglove, PlotJuggler, ros2 bag; needs thymio-bt[rosbag])",
+        (".mcap",),
+        "thymio_bt.logs.rosbag:RosbagWriter",
+        "thymio_bt.logs.rosbag:read_rosbag",
+        folder=True,
+    ),
+    LogFormat(
+        "btlog",
+        "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes)",
+        (".btlog",),
+        "thymio_bt.logs.btlog:BtlogWriter",
+    ),
 )
 
 
@@ -80,8 +96,10 @@ def formats() -> list[LogFormat]:
     for ep in entry_points(group=ENTRY_POINT_GROUP):
         fmt = ep.load()
         if not isinstance(fmt, LogFormat):
-            raise UserError(f"log format plugin '{ep.name}' ({ep.value}) is not a LogFormat "
-                            f"(hint: point the entry point at a thymio_bt.logs.LogFormat)")
+            raise UserError(
+                f"log format plugin '{ep.name}' ({ep.value}) is not a LogFormat "
+                f"(hint: point the entry point at a thymio_bt.logs.LogFormat)"
+            )
         found.append(fmt)
     return found
 
@@ -100,8 +118,13 @@ def format_for(path: str | Path, *, reading: bool = False) -> LogFormat:
                 break
             return fmt
     usable = [s for f in available if (f.reader if reading else f.writer) for s in f.suffixes]
-    raise UserError(Problem(f"no log format {'reads' if reading else 'writes'} '{suffix or path.name}' files",
-                            str(path), hint=f"use {', '.join(usable)}{' or a folder' if not reading else ''}"))
+    raise UserError(
+        Problem(
+            f"no log format {'reads' if reading else 'writes'} '{suffix or path.name}' files",
+            str(path),
+            hint=f"use {', '.join(usable)}{' or a folder' if not reading else ''}",
+        )
+    )
 
 
 def open_writer(path: str | Path) -> LogWriter:
@@ -111,12 +134,12 @@ def open_writer(path: str | Path) -> LogWriter:
     return fmt.load(fmt.writer)(Path(path))
 
 
-def read_log(path: str | Path, partial: bool = False) -> "Recording":
+def read_log(path: str | Path, partial: bool = False) -> Recording:
     """Read a log of any format that has a reader; ``partial``: what is readable of a damaged one."""
     path = Path(path)
     if not path.exists():
         raise UserError(Problem(f"log not found: {path}", str(path), hint="write one with run --log FILE.jsonl"))
-    check_regular(path, "log", folder_ok=True)           # a rosbag2 bag may be a folder
+    check_regular(path, "log", folder_ok=True)  # a rosbag2 bag may be a folder
     fmt = format_for(path, reading=True)
     assert fmt.reader is not None
     if partial and not fmt.partial:

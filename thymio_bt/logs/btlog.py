@@ -36,8 +36,8 @@ class BtlogWriter:
         self._last: dict[str, str] = {}
 
     def header(self, header: LogHeader) -> None:
-        from thymio_bt.mission.btcpp import tree_xml
         from thymio_bt.mission import default_registry
+        from thymio_bt.mission.btcpp import tree_xml
 
         assert self._file is not None
         nodes = header["tree"]

@@ -15,11 +15,11 @@ from typing import IO, Any
 from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
 
 from thymio_bt.errors import Problem, UserError
-from thymio_bt.maze import Maze
 from thymio_bt.inputs.reading import read_text
-from thymio_bt.logs.recording import Recording
 from thymio_bt.inputs.validation import validate
+from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+from thymio_bt.maze import Maze
 
 
 class JsonlWriter:
@@ -27,7 +27,7 @@ class JsonlWriter:
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        self._owned = str(path) != "-"                      # "-": standard output, left open
+        self._owned = str(path) != "-"  # "-": standard output, left open
         self._file: IO[str] | None = sys.stdout
         if not self._owned:
             return
@@ -98,27 +98,44 @@ def read_jsonl(path: Path, partial: bool = False) -> Recording:
     ``partial``, where the reading stops, keeping what came before."""
     lines = read_text(path, "log").splitlines()
     if not lines:
-        raise UserError(Problem("the log is empty", str(path), hint="logs are written by thymio-bt run --log FILE.jsonl"))
+        raise UserError(
+            Problem("the log is empty", str(path), hint="logs are written by thymio-bt run --log FILE.jsonl")
+        )
     recording: Recording | None = None
     for number, line in enumerate(lines, 1):
         try:
             kind, obj = _line(line, number == 1)
         except ValueError as exc:
             if number == 1:
-                raise UserError(Problem(f"not a thymio-bt log: {exc}", str(path), 1, 1,
-                                        hint="logs are written by thymio-bt run --log FILE.jsonl")) from None
+                raise UserError(
+                    Problem(
+                        f"not a thymio-bt log: {exc}",
+                        str(path),
+                        1,
+                        1,
+                        hint="logs are written by thymio-bt run --log FILE.jsonl",
+                    )
+                ) from None
             if number == len(lines) and "invalid JSON" in str(exc):
-                break                      # the run crashed mid-line: keep what came before
+                break  # the run crashed mid-line: keep what came before
             if partial:
                 assert recording is not None
                 recording.header["damaged_at"] = number
                 break
-            raise UserError(Problem(f"damaged log line: {exc}", str(path), number, 1,
-                                    hint=f"replay the {number - 2} ticks before it with --partial")) from None
+            raise UserError(
+                Problem(
+                    f"damaged log line: {exc}",
+                    str(path),
+                    number,
+                    1,
+                    hint=f"replay the {number - 2} ticks before it with --partial",
+                )
+            ) from None
         if kind == "header":
             header = {k: v for k, v in obj.items() if k != "kind"}
-            recording = Recording(maze=validate(Maze, obj["maze"], str(path)), mission=obj.get("mission", ""),
-                                  header=header)
+            recording = Recording(
+                maze=validate(Maze, obj["maze"], str(path)), mission=obj.get("mission", ""), header=header
+            )
         elif kind == "tick":
             assert recording is not None
             recording.samples.append({k: v for k, v in obj.items() if k != "kind"})

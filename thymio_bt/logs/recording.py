@@ -64,9 +64,17 @@ class Recorder:
 
         self._run = run
         mission = run.mission
-        self._header = dict(LogHeader(version=2, mission=mission.name, tick_hz=mission.tick_hz, seed=run.seed,
-                                      start=mission.start.as_dict(), maze=mission.maze.to_yaml_dict(),
-                                      tree=tree_nodes(run.root)))
+        self._header = dict(
+            LogHeader(
+                version=2,
+                mission=mission.name,
+                tick_hz=mission.tick_hz,
+                seed=run.seed,
+                start=mission.start.as_dict(),
+                maze=mission.maze.to_yaml_dict(),
+                tree=tree_nodes(run.root),
+            )
+        )
         if self._path is not None:
             from thymio_bt.logs import open_writer
 
@@ -83,7 +91,8 @@ class Recorder:
         scan = backend.proximity()
         cmd, vel = backend.command(), backend.velocity()
         record: TickRecord = {
-            "t": round(backend.time(), 6), "tick": run.ticks,
+            "t": round(backend.time(), 6),
+            "tick": run.ticks,
             "pose": None if pose is None else {k: round(v, 6) for k, v in pose.as_dict().items()},
             "cmd": [round(cmd.linear, 6), round(cmd.angular, 6)],
             "vel": [round(vel.linear, 6), round(vel.angular, 6)],
@@ -99,7 +108,7 @@ class Recorder:
                 record["bb"] = changed
             try:
                 self._writer.tick(record)
-            except OSError as exc:             # a full disk, a file size limit: end the run, keep the report
+            except OSError as exc:  # a full disk, a file size limit: end the run, keep the report
                 from thymio_bt.run.runner import StopRun
 
                 self._abandon()
@@ -109,9 +118,15 @@ class Recorder:
 
     def finish(self, result: Any) -> Recording:
         """Write the log's end and close it; return the in-memory recording."""
-        end: LogEnd = {"status": result.status, "reason": result.reason, "code": result.code,
-                       "failed_path": result.failed_path, "sim_time": round(result.sim_time, 6),
-                       "final_pose": result.final_pose, "collisions": result.collisions}
+        end: LogEnd = {
+            "status": result.status,
+            "reason": result.reason,
+            "code": result.code,
+            "failed_path": result.failed_path,
+            "sim_time": round(result.sim_time, 6),
+            "final_pose": result.final_pose,
+            "collisions": result.collisions,
+        }
         if self._writer is not None:
             try:
                 self._writer.end({**end, "events": result.events})
@@ -121,9 +136,14 @@ class Recorder:
                 raise UserError(f"cannot write the end of the log {self._path}: {exc.strerror or exc}") from None
             self._writer = None
         maze = self._run.mission.maze if self._run is not None else Maze()
-        return Recording(maze=maze, mission=result.mission, samples=self.samples, events=result.events,
-                         end={**end, **({"map": result.maze_map} if result.maze_map else {})}, header=self._header)
-
+        return Recording(
+            maze=maze,
+            mission=result.mission,
+            samples=self.samples,
+            events=result.events,
+            end={**end, **({"map": result.maze_map} if result.maze_map else {})},
+            header=self._header,
+        )
 
     def _abandon(self) -> None:
         """Close a log that can no longer be written (what reached the disk stays readable)."""

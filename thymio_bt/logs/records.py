@@ -8,7 +8,8 @@ export needs nothing else. Times are simulated seconds, poses base_link in the w
 from __future__ import annotations
 
 import math
-from typing import Any, Iterator, TypedDict
+from collections.abc import Iterator
+from typing import Any, TypedDict
 
 from py_trees.behaviour import Behaviour
 

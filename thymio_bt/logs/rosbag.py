@@ -30,13 +30,28 @@ from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 _INSTALL = "pip install 'thymio-bt[rosbag]'"
 #: sensor name -> the course's topic prefix (../shared/course/robot.md)
-_PREFIX = {name: f"{name}_proximity" for name in ("front_left", "front_center_left", "front_center",
-                                                   "front_center_right", "front_right", "rear_left", "rear_right")}
-_TYPES = {"/clock": "rosgraph_msgs/msg/Clock", "/cmd_vel": "geometry_msgs/msg/Twist",
-          "/odom": "nav_msgs/msg/Odometry", "/tf": "tf2_msgs/msg/TFMessage",
-          "/behavior_tree/status": "std_msgs/msg/String", "/behavior_tree/events": "std_msgs/msg/String",
-          "/thymio_bt/header": "std_msgs/msg/String",
-          **{f"/thymio_{prefix}_sensor": "sensor_msgs/msg/LaserScan" for prefix in _PREFIX.values()}}
+_PREFIX = {
+    name: f"{name}_proximity"
+    for name in (
+        "front_left",
+        "front_center_left",
+        "front_center",
+        "front_center_right",
+        "front_right",
+        "rear_left",
+        "rear_right",
+    )
+}
+_TYPES = {
+    "/clock": "rosgraph_msgs/msg/Clock",
+    "/cmd_vel": "geometry_msgs/msg/Twist",
+    "/odom": "nav_msgs/msg/Odometry",
+    "/tf": "tf2_msgs/msg/TFMessage",
+    "/behavior_tree/status": "std_msgs/msg/String",
+    "/behavior_tree/events": "std_msgs/msg/String",
+    "/thymio_bt/header": "std_msgs/msg/String",
+    **{f"/thymio_{prefix}_sensor": "sensor_msgs/msg/LaserScan" for prefix in _PREFIX.values()},
+}
 
 
 def _rosbags() -> Any:
@@ -63,19 +78,24 @@ class RosbagWriter:
             if path.suffix:
                 shutil.rmtree(self.folder)
             else:
-                raise UserError(Problem(f"{path} exists: rosbag2 writes a new folder", str(path),
-                                        hint="remove it, or give another path"))
+                raise UserError(
+                    Problem(
+                        f"{path} exists: rosbag2 writes a new folder", str(path), hint="remove it, or give another path"
+                    )
+                )
         self.store = rosbags.typesys.get_typestore(rosbags.typesys.Stores.ROS2_HUMBLE)
         self.types = self.store.types
         try:
             self.folder.parent.mkdir(parents=True, exist_ok=True)
-            self.writer = rosbags.rosbag2.Writer(self.folder, version=9,
-                                                 storage_plugin=rosbags.rosbag2.StoragePlugin.MCAP)
+            self.writer = rosbags.rosbag2.Writer(
+                self.folder, version=9, storage_plugin=rosbags.rosbag2.StoragePlugin.MCAP
+            )
             self.writer.open()
         except (OSError, rosbags.rosbag2.WriterError) as exc:
             raise UserError(f"cannot write the log {path}: {exc}") from None
-        self.connections = {topic: self.writer.add_connection(topic, msgtype, typestore=self.store)
-                            for topic, msgtype in _TYPES.items()}
+        self.connections = {
+            topic: self.writer.add_connection(topic, msgtype, typestore=self.store) for topic, msgtype in _TYPES.items()
+        }
         self.frames: dict[str, str] = {}
 
     def _write(self, topic: str, t: float, msg: Any) -> None:
@@ -99,8 +119,11 @@ class RosbagWriter:
         v3, q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
         self._write("/clock", t, T["rosgraph_msgs/msg/Clock"](clock=self._stamp(t)))
         cmd = record["cmd"]
-        self._write("/cmd_vel", t, T["geometry_msgs/msg/Twist"](linear=v3(x=cmd[0], y=0.0, z=0.0),
-                                                                angular=v3(x=0.0, y=0.0, z=cmd[1])))
+        self._write(
+            "/cmd_vel",
+            t,
+            T["geometry_msgs/msg/Twist"](linear=v3(x=cmd[0], y=0.0, z=0.0), angular=v3(x=0.0, y=0.0, z=cmd[1])),
+        )
         pose = record.get("pose")
         if pose is not None:
             half = pose["yaw"] / 2.0
@@ -109,46 +132,67 @@ class RosbagWriter:
             vel = record["vel"]
             covariance = _zeros(36)
             odom = T["nav_msgs/msg/Odometry"](
-                header=self._header(t, "odom"), child_frame_id="base_footprint",
+                header=self._header(t, "odom"),
+                child_frame_id="base_footprint",
                 pose=T["geometry_msgs/msg/PoseWithCovariance"](
-                    pose=T["geometry_msgs/msg/Pose"](position=point, orientation=orientation),
-                    covariance=covariance),
+                    pose=T["geometry_msgs/msg/Pose"](position=point, orientation=orientation), covariance=covariance
+                ),
                 twist=T["geometry_msgs/msg/TwistWithCovariance"](
-                    twist=T["geometry_msgs/msg/Twist"](linear=v3(x=vel[0], y=0.0, z=0.0),
-                                                       angular=v3(x=0.0, y=0.0, z=vel[1])),
-                    covariance=covariance))
+                    twist=T["geometry_msgs/msg/Twist"](
+                        linear=v3(x=vel[0], y=0.0, z=0.0), angular=v3(x=0.0, y=0.0, z=vel[1])
+                    ),
+                    covariance=covariance,
+                ),
+            )
             self._write("/odom", t, odom)
             transform = T["geometry_msgs/msg/TransformStamped"](
-                header=self._header(t, "odom"), child_frame_id="base_footprint",
-                transform=T["geometry_msgs/msg/Transform"](translation=v3(x=pose["x"], y=pose["y"], z=0.0),
-                                                           rotation=orientation))
+                header=self._header(t, "odom"),
+                child_frame_id="base_footprint",
+                transform=T["geometry_msgs/msg/Transform"](
+                    translation=v3(x=pose["x"], y=pose["y"], z=0.0), rotation=orientation
+                ),
+            )
             self._write("/tf", t, T["tf2_msgs/msg/TFMessage"](transforms=[transform]))
         for name, value in (record.get("prox") or {}).items():
             prefix = _PREFIX.get(name)
             if prefix is None:
                 continue
             scan = T["sensor_msgs/msg/LaserScan"](
-                header=self._header(t, f"{prefix}_link"), angle_min=-0.05, angle_max=0.05, angle_increment=0.1,
-                time_increment=0.0, scan_time=0.1, range_min=0.0005, range_max=0.0975,
-                ranges=_ranges(value), intensities=_zeros(0, 'float32'))
+                header=self._header(t, f"{prefix}_link"),
+                angle_min=-0.05,
+                angle_max=0.05,
+                angle_increment=0.1,
+                time_increment=0.0,
+                scan_time=0.1,
+                range_min=0.0005,
+                range_max=0.0975,
+                ranges=_ranges(value),
+                intensities=_zeros(0, "float32"),
+            )
             self._write(f"/thymio_{prefix}_sensor", t, scan)
         if "nodes" in record:
-            self._write("/behavior_tree/status", t, self._string({"tick": record["tick"], "nodes": record["nodes"],
-                                                                  "running": record["running"]}))
+            self._write(
+                "/behavior_tree/status",
+                t,
+                self._string({"tick": record["tick"], "nodes": record["nodes"], "running": record["running"]}),
+            )
 
     def end(self, end: LogEnd) -> None:
         for event in end.get("events", []):
             self._write("/behavior_tree/events", float(event.get("t", 0.0)), self._string(event))
         last = end.get("sim_time", 0.0)
-        self._write("/behavior_tree/events", last, self._string({"t": last, "kind": "end",
-                                                                 **{k: v for k, v in end.items() if k != "events"}}))
+        self._write(
+            "/behavior_tree/events",
+            last,
+            self._string({"t": last, "kind": "end", **{k: v for k, v in end.items() if k != "events"}}),
+        )
 
     def close(self) -> None:
         if self.writer is None:
             return
         self.writer.close()
         self.writer = None
-        if self.path.suffix:                   # one MCAP file: the bag's only file, renamed
+        if self.path.suffix:  # one MCAP file: the bag's only file, renamed
             (mcap,) = self.folder.glob("*.mcap")
             mcap.replace(self.path)
             shutil.rmtree(self.folder)
@@ -172,8 +216,8 @@ def read_rosbag(path: Path) -> Recording:
     rosbags = _rosbags()
     from rosbags.highlevel import AnyReader
 
-    from thymio_bt.maze import Maze
     from thymio_bt.inputs.validation import validate
+    from thymio_bt.maze import Maze
 
     header: dict[str, Any] = {}
     ticks: dict[int, dict[str, Any]] = {}
@@ -181,8 +225,9 @@ def read_rosbag(path: Path) -> Recording:
     end: dict[str, Any] = {}
     by_topic = {f"/thymio_{prefix}_sensor": name for name, prefix in _PREFIX.items()}
     try:
-        with AnyReader([path], default_typestore=rosbags.typesys.get_typestore(
-                rosbags.typesys.Stores.ROS2_HUMBLE)) as reader:
+        with AnyReader(
+            [path], default_typestore=rosbags.typesys.get_typestore(rosbags.typesys.Stores.ROS2_HUMBLE)
+        ) as reader:
             for connection, stamp, raw in reader.messages():
                 msg = reader.deserialize(raw, connection.msgtype)
                 sample = ticks.setdefault(stamp, {"t": round(stamp / 1e9, 6), "pose": None, "prox": {}})
@@ -210,12 +255,23 @@ def read_rosbag(path: Path) -> Recording:
     except UserError:
         raise
     except Exception as exc:  # rosbags' own errors: a damaged or foreign bag
-        raise UserError(Problem(f"cannot read the bag: {type(exc).__name__}: {exc}", str(path),
-                                hint="bags are written by thymio-bt run --log FILE.mcap")) from None
+        raise UserError(
+            Problem(
+                f"cannot read the bag: {type(exc).__name__}: {exc}",
+                str(path),
+                hint="bags are written by thymio-bt run --log FILE.mcap",
+            )
+        ) from None
     if not header:
         raise UserError(Problem("not a thymio-bt bag: no /thymio_bt/header message", str(path)))
     samples = [s for _, s in sorted(ticks.items()) if "tick" in s]
     for s in samples:
         s["prox"] = s["prox"] or None
-    return Recording(maze=validate(Maze, header["maze"], str(path)), mission=header.get("mission", ""),
-                     samples=samples, events=events, end=end, header=header)
+    return Recording(
+        maze=validate(Maze, header["maze"], str(path)),
+        mission=header.get("mission", ""),
+        samples=samples,
+        events=events,
+        end=end,
+        header=header,
+    )

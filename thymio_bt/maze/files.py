@@ -15,6 +15,7 @@ from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
 from thymio_bt.maze.grid import GridMazeFile, maze_from_grid_file
 from thymio_bt.maze.model import Maze
 
+
 def maze_dirs() -> list[Path]:
     """Where named mazes (``maze: two_parts_maze``) are looked up: ./mazes, then the shipped ones."""
     dirs = [Path.cwd() / "mazes", MAZES]
@@ -30,11 +31,16 @@ def load_maze(path: str | Path) -> Maze:
         return read_micromouse(path)
     data = load_yaml(path, "maze")
     if not isinstance(data, MarkedDict):
-        raise UserError(Problem("a maze file must be a mapping with 'walls:' (or 'grid:')", str(path),
-                                *getattr(data, "mark", (1, 1)),
-                                hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)"))
+        raise UserError(
+            Problem(
+                "a maze file must be a mapping with 'walls:' (or 'grid:')",
+                str(path),
+                *getattr(data, "mark", (1, 1)),
+                hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)",
+            )
+        )
     if "grid" in data:
-        header = validate(GridMazeFile, data, str(path))      # units and types, before the art is read
+        header = validate(GridMazeFile, data, str(path))  # units and types, before the art is read
         return maze_from_grid_file(header, data.value_marks["grid"], str(path))
     return validate(Maze, data, str(path))
 
@@ -49,9 +55,15 @@ def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
     if ref_path.suffix == "" and len(ref_path.parts) == 1:
         candidates += [d / f"{ref}{suffix}" for d in maze_dirs() for suffix in (".yaml", ".txt")]
     for candidate in candidates:
-        if candidate.exists():             # a folder or a FIFO too: reading it says what is wrong
+        if candidate.exists():  # a folder or a FIFO too: reading it says what is wrong
             return candidate
     known = sorted({p.stem for d in maze_dirs() for p in (*d.glob("*.yaml"), *d.glob("*.txt"))})
-    raise UserError(Problem(f"maze not found: '{ref}'",
-                            hint=("a path relative to the mission file, or a named maze: "
-                                  + (did_you_mean(ref, known) if known else "none installed"))))
+    raise UserError(
+        Problem(
+            f"maze not found: '{ref}'",
+            hint=(
+                "a path relative to the mission file, or a named maze: "
+                + (did_you_mean(ref, known) if known else "none installed")
+            ),
+        )
+    )

@@ -21,9 +21,10 @@ from __future__ import annotations
 import math
 import re
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 from xml.parsers import expat
 
 from pydantic import ValidationError
@@ -45,7 +46,7 @@ class _Pose:
     p: Vec = (0.0, 0.0, 0.0)
     r: Mat = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
-    def __mul__(self, child: "_Pose") -> "_Pose":
+    def __mul__(self, child: _Pose) -> _Pose:
         """``self ∘ child``: the child's pose expressed in self's parent frame."""
         a, b = self.r, child.r
         p = tuple(self.p[i] + sum(a[i][k] * child.p[k] for k in range(3)) for i in range(3))
@@ -57,9 +58,14 @@ def _rpy(x: float, y: float, z: float, roll: float, pitch: float, yaw: float) ->
     """SDF's ``x y z roll pitch yaw``: R = Rz(yaw) Ry(pitch) Rx(roll)."""
     cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
     cy, sy = math.cos(yaw), math.sin(yaw)
-    return _Pose((x, y, z), ((cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
-                             (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
-                             (-sp, cp * sr, cp * cr)))
+    return _Pose(
+        (x, y, z),
+        (
+            (cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr),
+            (sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr),
+            (-sp, cp * sr, cp * cr),
+        ),
+    )
 
 
 @dataclass
@@ -89,8 +95,11 @@ class _Doc:
         if el is None or not (el.text or "").strip():
             return _Pose()
         if el.get("relative_to") or el.get("frame"):
-            raise self.error("poses relative to a named frame are not supported", el,
-                             hint="save the world from Gazebo classic, which writes plain poses")
+            raise self.error(
+                "poses relative to a named frame are not supported",
+                el,
+                hint="save the world from Gazebo classic, which writes plain poses",
+            )
         if el.get("rotation_format", "euler_rpy") != "euler_rpy":
             raise self.error("only 'x y z roll pitch yaw' poses are supported", el)
         v = self.floats(el, 6, "x y z roll pitch yaw")
@@ -111,9 +120,15 @@ def _parse(path: Path) -> _Doc:
         marks[builder.start(tag, attrs)] = (parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
 
     def refuse(*_: Any) -> None:
-        raise UserError(Problem("DOCTYPE and ENTITY declarations are not allowed in a world file",
-                                file, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1,
-                                hint="SDF files never need them; remove the <!DOCTYPE ...> block"))
+        raise UserError(
+            Problem(
+                "DOCTYPE and ENTITY declarations are not allowed in a world file",
+                file,
+                parser.CurrentLineNumber,
+                parser.CurrentColumnNumber + 1,
+                hint="SDF files never need them; remove the <!DOCTYPE ...> block",
+            )
+        )
 
     parser.buffer_text = True
     parser.StartElementHandler = start
@@ -124,12 +139,25 @@ def _parse(path: Path) -> _Doc:
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
-        raise UserError(Problem(f"not a valid XML file: {expat.ErrorString(exc.code)}", file,
-                                exc.lineno, exc.offset + 1,
-                                hint="a Gazebo .world file is SDF (XML) starting with <sdf version=...>")) from None
-    except (LookupError, ValueError) as exc:        # an encoding expat does not know, e.g. EBCDIC
-        raise UserError(Problem(f"cannot read the XML: {exc}", file, 1, 1,
-                                hint="save the world as UTF-8 (<?xml version=\"1.0\" encoding=\"UTF-8\"?>)")) from None
+        raise UserError(
+            Problem(
+                f"not a valid XML file: {expat.ErrorString(exc.code)}",
+                file,
+                exc.lineno,
+                exc.offset + 1,
+                hint="a Gazebo .world file is SDF (XML) starting with <sdf version=...>",
+            )
+        ) from None
+    except (LookupError, ValueError) as exc:  # an encoding expat does not know, e.g. EBCDIC
+        raise UserError(
+            Problem(
+                f"cannot read the XML: {exc}",
+                file,
+                1,
+                1,
+                hint='save the world as UTF-8 (<?xml version="1.0" encoding="UTF-8"?>)',
+            )
+        ) from None
     root = builder.close()
     doc = _Doc(file, root, marks)
     if root.tag != "sdf":
@@ -144,7 +172,7 @@ class _State:
     pose: ET.Element | None = None
     scale: ET.Element | None = None
     links: dict[str, ET.Element] = field(default_factory=dict)
-    models: dict[str, "_State"] = field(default_factory=dict)
+    models: dict[str, _State] = field(default_factory=dict)
 
     def merge(self, el: ET.Element) -> None:
         self.pose = el.find("pose") if el.find("pose") is not None else self.pose
@@ -160,14 +188,12 @@ def _has_box(model: ET.Element) -> bool:
     return any(c.find("geometry/box") is not None for c in model.iter("collision"))
 
 
-def _walls(doc: _Doc, model: ET.Element, parent: _Pose, state: _State | None,
-           prefix: str) -> list[Wall]:
+def _walls(doc: _Doc, model: ET.Element, parent: _Pose, state: _State | None, prefix: str) -> list[Wall]:
     """The walls of one model (and its nested models), in world coordinates."""
     if state is not None and state.scale is not None and doc.floats(state.scale, 3, "x y z") != [1, 1, 1]:
-        raise doc.error(f"model '{model.get('name')}' is scaled in <state>; scaling is not supported",
-                        state.scale)
+        raise doc.error(f"model '{model.get('name')}' is scaled in <state>; scaling is not supported", state.scale)
     if state is not None and state.pose is not None:
-        pose = doc.pose(state.pose)                     # a world pose
+        pose = doc.pose(state.pose)  # a world pose
     else:
         pose = parent * doc.pose(model.find("pose"))
     walls: list[Wall] = []
@@ -180,10 +206,12 @@ def _walls(doc: _Doc, model: ET.Element, parent: _Pose, state: _State | None,
             geometry = col.find("geometry")
             shape = geometry[0] if geometry is not None and len(geometry) else None
             if shape is None or shape.tag != "box":
-                raise doc.error(f"link '{name}' has a {'<' + shape.tag + '>' if shape is not None else 'missing'}"
-                                " collision geometry; only boxes can become walls",
-                                shape if shape is not None else col,
-                                hint="import only the wall model with model=..., or make it a <box>")
+                raise doc.error(
+                    f"link '{name}' has a {'<' + shape.tag + '>' if shape is not None else 'missing'}"
+                    " collision geometry; only boxes can become walls",
+                    shape if shape is not None else col,
+                    hint="import only the wall model with model=..., or make it a <box>",
+                )
             size = shape.find("size")
             if size is None:
                 raise doc.error(f"the <box> of link '{name}' has no <size>", shape)
@@ -208,8 +236,11 @@ def _box_wall(doc: _Doc, size_el: ET.Element, pose: _Pose, name: str) -> Wall:
     long, short = (a, b) if size[a] >= size[b] else (b, a)
     length, thickness = size[long], size[short]
     if length - thickness < 1e-9:
-        raise doc.error(f"box of '{name}' is square in plan ({length} x {thickness}); its direction is unknown",
-                        size_el, hint="a wall box is longer than it is thick")
+        raise doc.error(
+            f"box of '{name}' is square in plan ({length} x {thickness}); its direction is unknown",
+            size_el,
+            hint="a wall box is longer than it is thick",
+        )
     ux, uy = r[0][long], r[1][long]
     norm = math.hypot(ux, uy)
     ux, uy = ux / norm, uy / norm
@@ -222,8 +253,12 @@ def _box_wall(doc: _Doc, size_el: ET.Element, pose: _Pose, name: str) -> Wall:
         return round(v, 6) + 0.0
 
     try:
-        return Wall(start=(rnd(cx - ux * half), rnd(cy - uy * half)),
-                    end=(rnd(cx + ux * half), rnd(cy + uy * half)), thickness=rnd(thickness), name=name)
+        return Wall(
+            start=(rnd(cx - ux * half), rnd(cy - uy * half)),
+            end=(rnd(cx + ux * half), rnd(cy + uy * half)),
+            thickness=rnd(thickness),
+            name=name,
+        )
     except ValidationError as exc:
         raise doc.error(f"box of '{name}' cannot be a wall: {exc.errors()[0]['msg']}", size_el) from None
 
@@ -232,9 +267,14 @@ def _natural(name: str | None) -> list[Any]:
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", name or "")]
 
 
-def import_world(path: str | Path, model: str | None = None, *,
-                 spawns: Mapping[str, Spawn | Mapping[str, Any] | tuple[Any, Any, Any]] | None = None,
-                 name: str | None = None, description: str = "") -> Maze:
+def import_world(
+    path: str | Path,
+    model: str | None = None,
+    *,
+    spawns: Mapping[str, Spawn | Mapping[str, Any] | tuple[Any, Any, Any]] | None = None,
+    name: str | None = None,
+    description: str = "",
+) -> Maze:
     """Read the box walls of a Gazebo classic world into a :class:`Maze`.
 
     ``model`` picks one model by name; by default every model with a box collision is imported
@@ -253,8 +293,13 @@ def import_world(path: str | Path, model: str | None = None, *,
     if model is not None:
         chosen = [m for m in models if m.get("name") == model]
         if not chosen:
-            raise UserError(Problem(f"no model named '{model}' in the world", doc.file,
-                                    hint=did_you_mean(model, names) if names else "the world has no <model>"))
+            raise UserError(
+                Problem(
+                    f"no model named '{model}' in the world",
+                    doc.file,
+                    hint=did_you_mean(model, names) if names else "the world has no <model>",
+                )
+            )
     else:
         chosen = [m for m in models if _has_box(m)]
     walls: list[Wall] = []
@@ -263,10 +308,13 @@ def import_world(path: str | Path, model: str | None = None, *,
         walls += _walls(doc, m, _Pose(), state.get(m.get("name", "")), prefix)
     if not walls:
         includes = doc.root.find(".//include") is not None
-        raise doc.error(f"no box walls found in {'model ' + repr(model) if model else 'the world'}",
-                        worlds[0] if worlds else doc.root,
-                        hint="<include>d models are not followed: paste their <model> into the world"
-                        if includes else "walls are <link>s with a <collision><geometry><box>")
+        raise doc.error(
+            f"no box walls found in {'model ' + repr(model) if model else 'the world'}",
+            worlds[0] if worlds else doc.root,
+            hint="<include>d models are not followed: paste their <model> into the world"
+            if includes
+            else "walls are <link>s with a <collision><geometry><box>",
+        )
     walls.sort(key=lambda w: _natural(w.name))
     try:
         checked = {k: v if isinstance(v, Spawn) else Spawn.model_validate(v) for k, v in (spawns or {}).items()}

@@ -25,15 +25,25 @@ Cell = tuple[int, int]
 _STEPS = {(1, 0): 0.0, (0, 1): math.pi / 2, (-1, 0): math.pi, (0, -1): -math.pi / 2}
 
 
-def _walls_from_open(cols: int, rows: int, passages: set[frozenset[Cell]], cell: float,
-                     thickness: float, inside: set[Cell] | None = None,
-                     gaps: set[frozenset[Cell]] = frozenset()) -> list[Wall]:
+def _walls_from_open(
+    cols: int,
+    rows: int,
+    passages: set[frozenset[Cell]],
+    cell: float,
+    thickness: float,
+    inside: set[Cell] | None = None,
+    gaps: set[frozenset[Cell]] = frozenset(),
+) -> list[Wall]:
     """A wall on every cell edge that is not a passage (only edges touching ``inside`` cells)."""
     inside = inside if inside is not None else {(c, r) for c in range(cols) for r in range(rows)}
-    edges: set[tuple[int, int, str]] = set()   # (col, row, 'h'|'v'): lower/left edge of (col, row)
+    edges: set[tuple[int, int, str]] = set()  # (col, row, 'h'|'v'): lower/left edge of (col, row)
     for c, r in inside:
-        for (dc, dr), kind, at in (((0, -1), "h", (c, r)), ((0, 1), "h", (c, r + 1)),
-                                   ((-1, 0), "v", (c, r)), ((1, 0), "v", (c + 1, r))):
+        for (dc, dr), kind, at in (
+            ((0, -1), "h", (c, r)),
+            ((0, 1), "h", (c, r + 1)),
+            ((-1, 0), "v", (c, r)),
+            ((1, 0), "v", (c + 1, r)),
+        ):
             pair = frozenset({(c, r), (c + dc, r + dr)})
             if pair not in passages and pair not in gaps:
                 edges.add((at[0], at[1], kind))
@@ -45,16 +55,26 @@ def _walls_from_open(cols: int, rows: int, passages: set[frozenset[Cell]], cell:
     return walls
 
 
-def perfect_maze(cols: int, rows: int, seed: int, cell: float = 0.2, thickness: float = 0.01,
-                 start: Cell = (0, 0), exit_cell: Cell | None = None) -> Maze:
+def perfect_maze(
+    cols: int,
+    rows: int,
+    seed: int,
+    cell: float = 0.2,
+    thickness: float = 0.01,
+    start: Cell = (0, 0),
+    exit_cell: Cell | None = None,
+) -> Maze:
     """A random perfect maze with one exit gap in the top wall (above ``exit_cell``)."""
     rng = random.Random(seed)
     passages: set[frozenset[Cell]] = set()
     seen, stack = {start}, [start]
     while stack:
         c, r = stack[-1]
-        options = [(c + dc, r + dr) for dc, dr in _STEPS if 0 <= c + dc < cols and 0 <= r + dr < rows
-                   and (c + dc, r + dr) not in seen]
+        options = [
+            (c + dc, r + dr)
+            for dc, dr in _STEPS
+            if 0 <= c + dc < cols and 0 <= r + dr < rows and (c + dc, r + dr) not in seen
+        ]
         if not options:
             stack.pop()
             continue
@@ -65,11 +85,16 @@ def perfect_maze(cols: int, rows: int, seed: int, cell: float = 0.2, thickness: 
     exit_cell = exit_cell or (rng.randrange(cols), rows - 1)
     gap = frozenset({exit_cell, (exit_cell[0], rows)})
     walls = _walls_from_open(cols, rows, passages, cell, thickness, gaps={gap})
-    heading = next(math.atan2(dr, dc) for dc, dr in _STEPS
-                   if frozenset({start, (start[0] + dc, start[1] + dr)}) in passages)
+    heading = next(
+        math.atan2(dr, dc) for dc, dr in _STEPS if frozenset({start, (start[0] + dc, start[1] + dr)}) in passages
+    )
     spawn = Spawn(x=(start[0] + 0.5) * cell, y=(start[1] + 0.5) * cell, yaw=heading)
-    return Maze(name=f"perfect_{cols}x{rows}_seed{seed}", walls=walls, spawns={"start": spawn},
-                description=f"random perfect maze, exit above cell {exit_cell}")
+    return Maze(
+        name=f"perfect_{cols}x{rows}_seed{seed}",
+        walls=walls,
+        spawns={"start": spawn},
+        description=f"random perfect maze, exit above cell {exit_cell}",
+    )
 
 
 def random_path(length: int, seed: int, cols: int = 8, rows: int = 8) -> list[Cell]:
@@ -79,10 +104,15 @@ def random_path(length: int, seed: int, cols: int = 8, rows: int = 8) -> list[Ce
         path = [(rng.randrange(cols), rng.randrange(rows))]
         while len(path) < length:
             c, r = path[-1]
-            options = [(c + dc, r + dr) for dc, dr in _STEPS if 0 <= c + dc < cols and 0 <= r + dr < rows
-                       and (c + dc, r + dr) not in path
-                       # never touch the path sideways: the corridor must have walls on both sides
-                       and sum((c + dc + a, r + dr + b) in path for a, b in _STEPS) == 1]
+            options = [
+                (c + dc, r + dr)
+                for dc, dr in _STEPS
+                if 0 <= c + dc < cols
+                and 0 <= r + dr < rows
+                and (c + dc, r + dr) not in path
+                # never touch the path sideways: the corridor must have walls on both sides
+                and sum((c + dc + a, r + dr + b) in path for a, b in _STEPS) == 1
+            ]
             if not options:
                 break
             path.append(rng.choice(options))
@@ -116,16 +146,25 @@ def turns_along(path: list[Cell]) -> str:
 
 def mirrored(maze: Maze, axis_x: float) -> Maze:
     """The maze mirrored about the vertical line x = ``axis_x`` (left turns become right turns)."""
-    walls = [Wall(start=(round(2 * axis_x - w.start[0], 9), w.start[1]),
-                  end=(round(2 * axis_x - w.end[0], 9), w.end[1]), thickness=w.thickness, name=w.name)
-             for w in maze.walls]
-    spawns = {k: Spawn(x=round(2 * axis_x - s.x, 9), y=s.y, yaw=math.atan2(math.sin(math.pi - s.yaw),
-                                                                          math.cos(math.pi - s.yaw)))
-              for k, s in maze.spawns.items()}
+    walls = [
+        Wall(
+            start=(round(2 * axis_x - w.start[0], 9), w.start[1]),
+            end=(round(2 * axis_x - w.end[0], 9), w.end[1]),
+            thickness=w.thickness,
+            name=w.name,
+        )
+        for w in maze.walls
+    ]
+    spawns = {
+        k: Spawn(
+            x=round(2 * axis_x - s.x, 9), y=s.y, yaw=math.atan2(math.sin(math.pi - s.yaw), math.cos(math.pi - s.yaw))
+        )
+        for k, s in maze.spawns.items()
+    }
     return Maze(name=f"{maze.name}_mirrored", walls=walls, spawns=spawns, description=f"{maze.name} mirrored")
 
 
-def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> "CellWalls":
+def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> CellWalls:
     """A maze of the micromouse contest kind, as cells and walls (:mod:`.micromouse` makes the geometry).
 
     The start is the bottom-left cell, open only to the north; the goal is the 2 x 2 block at the
@@ -138,34 +177,55 @@ def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> "CellWalls":
     rng = random.Random(seed)
     half = size // 2
     goal = {(half - 1, half - 1), (half, half - 1), (half - 1, half), (half, half)}
-    passages: set[frozenset[Cell]] = {frozenset(p) for p in (((half - 1, half - 1), (half, half - 1)),
-                                                               ((half - 1, half), (half, half)),
-                                                               ((half - 1, half - 1), (half - 1, half)),
-                                                               ((half, half - 1), (half, half)))}
+    passages: set[frozenset[Cell]] = {
+        frozenset(p)
+        for p in (
+            ((half - 1, half - 1), (half, half - 1)),
+            ((half - 1, half), (half, half)),
+            ((half - 1, half - 1), (half - 1, half)),
+            ((half, half - 1), (half, half)),
+        )
+    }
     start = (0, 0)
     passages.add(frozenset({start, (0, 1)}))
     seen, stack = {start, (0, 1)}, [(0, 1)]
     while stack:
         c, r = stack[-1]
-        options = [(c + dc, r + dr) for dc, dr in _STEPS if 0 <= c + dc < size and 0 <= r + dr < size
-                   and (c + dc, r + dr) not in seen and (c + dc, r + dr) != start]
+        options = [
+            (c + dc, r + dr)
+            for dc, dr in _STEPS
+            if 0 <= c + dc < size and 0 <= r + dr < size and (c + dc, r + dr) not in seen and (c + dc, r + dr) != start
+        ]
         if not options:
             stack.pop()
             continue
         nxt = rng.choice(options)
-        if nxt in goal:                    # the goal block is entered once, then counts as visited
+        if nxt in goal:  # the goal block is entered once, then counts as visited
             seen |= goal
         else:
             seen.add(nxt)
             stack.append(nxt)
         passages.add(frozenset({(c, r), nxt}))
-    inner = [frozenset({(c, r), (c + dc, r + dr)}) for c in range(size) for r in range(size)
-             for dc, dr in ((1, 0), (0, 1)) if c + dc < size and r + dr < size]
+    inner = [
+        frozenset({(c, r), (c + dc, r + dr)})
+        for c in range(size)
+        for r in range(size)
+        for dc, dr in ((1, 0), (0, 1))
+        if c + dc < size and r + dr < size
+    ]
     walls = [pair for pair in inner if pair not in passages and not (pair & goal) and start not in pair]
     for pair in rng.sample(walls, int(len(walls) * loops)):
         passages.add(pair)
-    horizontal = {(c, r) for c in range(size) for r in range(size + 1)
-                  if r in (0, size) or frozenset({(c, r - 1), (c, r)}) not in passages}
-    vertical = {(c, r) for c in range(size + 1) for r in range(size)
-                if c in (0, size) or frozenset({(c - 1, r), (c, r)}) not in passages}
+    horizontal = {
+        (c, r)
+        for c in range(size)
+        for r in range(size + 1)
+        if r in (0, size) or frozenset({(c, r - 1), (c, r)}) not in passages
+    }
+    vertical = {
+        (c, r)
+        for c in range(size + 1)
+        for r in range(size)
+        if c in (0, size) or frozenset({(c - 1, r), (c, r)}) not in passages
+    }
     return CellWalls(size, size, frozenset(horizontal), frozenset(vertical), start, frozenset(goal))

@@ -29,9 +29,16 @@ from thymio_bt.maze.model import Length, Maze, Point, Spawn, Wall
 _HEADINGS = {">": 0.0, "^": math.pi / 2, "<": math.pi, "v": -math.pi / 2}
 
 
-def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (0.0, 0.0),
-                   thickness: float = 0.01, name: str = "grid", filename: str = "<grid>",
-                   first_line: int = 1, first_col: int = 1) -> Maze:
+def maze_from_grid(
+    text: str,
+    cell: float = 0.2,
+    origin: tuple[float, float] = (0.0, 0.0),
+    thickness: float = 0.01,
+    name: str = "grid",
+    filename: str = "<grid>",
+    first_line: int = 1,
+    first_col: int = 1,
+) -> Maze:
     """Build a :class:`Maze` from ASCII art; bad art is a :class:`UserError` pointing at the line and
     column (``first_line``/``first_col``: where the art starts in its file)."""
     lines = [ln.rstrip() for ln in text.splitlines()]
@@ -41,16 +48,37 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
     while lines and not lines[-1].strip():
         lines.pop()
     if len(lines) < 3 or len(lines) % 2 == 0:
-        raise UserError(Problem("a grid needs an odd number of lines (corner lines around cell lines)",
-                                filename, first_line, first_col, hint="start and end with a '+--+' line"))
+        raise UserError(
+            Problem(
+                "a grid needs an odd number of lines (corner lines around cell lines)",
+                filename,
+                first_line,
+                first_col,
+                hint="start and end with a '+--+' line",
+            )
+        )
     corner_cols = sorted({i for ln in lines[::2] for i, ch in enumerate(ln) if ch == "+"})
     if len(corner_cols) < 2:
-        raise UserError(Problem("no '+' corners found", filename, first_line, first_col,
-                                hint="draw cells between '+' corners, e.g. '+--+--+'"))
+        raise UserError(
+            Problem(
+                "no '+' corners found",
+                filename,
+                first_line,
+                first_col,
+                hint="draw cells between '+' corners, e.g. '+--+--+'",
+            )
+        )
     widths = {b - a for a, b in zip(corner_cols, corner_cols[1:])}
     if len(widths) != 1:
-        raise UserError(Problem("corners '+' must be evenly spaced", filename, first_line, first_col,
-                                hint="every cell must be drawn the same width, e.g. '+--+--+'"))
+        raise UserError(
+            Problem(
+                "corners '+' must be evenly spaced",
+                filename,
+                first_line,
+                first_col,
+                hint="every cell must be drawn the same width, e.g. '+--+--+'",
+            )
+        )
     width = widths.pop()
     base = corner_cols[0]
     n_rows = (len(lines) - 1) // 2
@@ -65,14 +93,20 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
         y_corner = round(oy + (n_rows - r // 2) * cell, 9)
         if r % 2 == 0:  # corner line: horizontal walls
             for col in corner_cols[:-1]:
-                seg = line[col + 1: col + width] if col + 1 < len(line) else ""
+                seg = line[col + 1 : col + width] if col + 1 < len(line) else ""
                 if seg.strip("-") == "" and seg.count("-") == width - 1:
                     x0 = round(ox + (col - base) // width * cell, 9)
                     walls.append(Wall(start=(x0, y_corner), end=(round(x0 + cell, 9), y_corner), thickness=thickness))
                 elif seg.strip():
-                    raise UserError(Problem(f"unexpected '{seg.strip()}' in a corner line", filename,
-                                            first_line + r, first_col + col + 1,
-                                            hint="use '-' for walls, spaces for gaps"))
+                    raise UserError(
+                        Problem(
+                            f"unexpected '{seg.strip()}' in a corner line",
+                            filename,
+                            first_line + r,
+                            first_col + col + 1,
+                            hint="use '-' for walls, spaces for gaps",
+                        )
+                    )
         else:  # cell line: vertical walls and start arrows
             y0 = round(oy + (n_rows - 1 - r // 2) * cell, 9)
             for col in corner_cols:
@@ -81,15 +115,28 @@ def maze_from_grid(text: str, cell: float = 0.2, origin: tuple[float, float] = (
                     x = round(ox + (col - base) // width * cell, 9)
                     walls.append(Wall(start=(x, y0), end=(x, round(y0 + cell, 9)), thickness=thickness))
                 elif ch not in " ":
-                    raise UserError(Problem(f"unexpected '{ch}' on a wall column", filename,
-                                            first_line + r, first_col + col, hint="use '|' for a wall or a space"))
+                    raise UserError(
+                        Problem(
+                            f"unexpected '{ch}' on a wall column",
+                            filename,
+                            first_line + r,
+                            first_col + col,
+                            hint="use '|' for a wall or a space",
+                        )
+                    )
             for i, col in enumerate(corner_cols[:-1]):
-                inside = line[col + 1: col + width]
+                inside = line[col + 1 : col + width]
                 stray = next((k for k, ch in enumerate(inside) if ch != " " and ch not in _HEADINGS), None)
                 if stray is not None:
-                    raise UserError(Problem(f"unexpected '{inside[stray]}' inside a cell", filename, first_line + r,
-                                            first_col + col + 1 + stray,
-                                            hint="a cell holds spaces, or one of > < ^ v for the start"))
+                    raise UserError(
+                        Problem(
+                            f"unexpected '{inside[stray]}' inside a cell",
+                            filename,
+                            first_line + r,
+                            first_col + col + 1 + stray,
+                            hint="a cell holds spaces, or one of > < ^ v for the start",
+                        )
+                    )
                 marks = [ch for ch in inside if ch in _HEADINGS]
                 if marks:
                     cx, cy = round(ox + (i + 0.5) * cell, 9), round(y0 + cell / 2, 9)
@@ -109,8 +156,10 @@ def _merge(walls: list[Wall]) -> list[Wall]:
         else:
             vertical.setdefault(round(x0, 9), []).append((min(y0, y1), max(y0, y1)))
     merged: list[Wall] = []
-    for table, make in ((horizontal, lambda c, a, b: Wall(start=(a, c), end=(b, c), thickness=thickness)),
-                        (vertical, lambda c, a, b: Wall(start=(c, a), end=(c, b), thickness=thickness))):
+    for table, make in (
+        (horizontal, lambda c, a, b: Wall(start=(a, c), end=(b, c), thickness=thickness)),
+        (vertical, lambda c, a, b: Wall(start=(c, a), end=(c, b), thickness=thickness)),
+    ):
         for coord in sorted(table):
             spans = sorted(table[coord])
             a, b = spans[0]
@@ -141,14 +190,22 @@ def maze_from_grid_file(header: GridMazeFile, mark: tuple[int, int], filename: s
     """The maze of a validated grid-form file; ``mark`` is where the ``grid:`` value starts, so
     errors in the art point at the file's own line and column (a ``grid: |`` block is indented)."""
     line, col = mark
-    if "\n" in header.grid:                      # a block: the art starts on the next line
+    if "\n" in header.grid:  # a block: the art starts on the next line
         line += 1
         try:
-            source = Path(filename).read_text(encoding="utf-8").splitlines()[line - 1:]
+            source = Path(filename).read_text(encoding="utf-8").splitlines()[line - 1 :]
         except OSError:
             source = []
         first = next((text for text in source if text.strip()), "")
         col = len(first) - len(first.lstrip(" ")) + 1
-    maze = maze_from_grid(header.grid, cell=header.cell, origin=header.origin, thickness=header.thickness,
-                          name=header.name, filename=filename, first_line=line, first_col=col)
+    maze = maze_from_grid(
+        header.grid,
+        cell=header.cell,
+        origin=header.origin,
+        thickness=header.thickness,
+        name=header.name,
+        filename=filename,
+        first_line=line,
+        first_col=col,
+    )
     return maze.model_copy(update={"spawns": {**maze.spawns, **header.spawns}, "description": header.description})

@@ -52,8 +52,12 @@ class CellWalls:
 
     def open_sides(self, i: int, j: int) -> list[str]:
         """The sides of cell (i, j) without a wall, in N, E, S, W order."""
-        walls = {"N": (i, j + 1) in self.horizontal, "E": (i + 1, j) in self.vertical,
-                 "S": (i, j) in self.horizontal, "W": (i, j) in self.vertical}
+        walls = {
+            "N": (i, j + 1) in self.horizontal,
+            "E": (i + 1, j) in self.vertical,
+            "S": (i, j) in self.horizontal,
+            "W": (i, j) in self.vertical,
+        }
         return [side for side in "NESW" if not walls[side]]
 
 
@@ -64,13 +68,22 @@ def parse_micromouse(text: str, file: str = "") -> CellWalls:
         lines.pop()
     first = next((n for n, line in enumerate(lines) if line.strip()), None)
     if first is None:
-        raise UserError(Problem("the maze file is empty", file, 1, 1, hint="posts 'o', walls '---' and '|', cells S and G"))
+        raise UserError(
+            Problem("the maze file is empty", file, 1, 1, hint="posts 'o', walls '---' and '|', cells S and G")
+        )
     lines = lines[first:]
     width = len(lines[0])
     if width < 5 or (width - 1) % 4 or len(lines) < 3 or len(lines) % 2 == 0:
-        raise UserError(Problem(f"not a micromouse maze: {len(lines)} lines of {width} characters", file, first + 1, 1,
-                                hint="each cell is 4 characters wide ('o---'), rows alternate posts and cells, "
-                                     "and the last line is posts"))
+        raise UserError(
+            Problem(
+                f"not a micromouse maze: {len(lines)} lines of {width} characters",
+                file,
+                first + 1,
+                1,
+                hint="each cell is 4 characters wide ('o---'), rows alternate posts and cells, "
+                "and the last line is posts",
+            )
+        )
     cols, rows = (width - 1) // 4, (len(lines) - 1) // 2
     problems = []
     horizontal, vertical, goal = set(), set(), set()
@@ -78,24 +91,32 @@ def parse_micromouse(text: str, file: str = "") -> CellWalls:
     for n, line in enumerate(lines):
         where = first + n + 1
         if len(line) > width:
-            problems.append(Problem(f"this line has {len(line)} characters, the first has {width}", file, where,
-                                    width + 1, hint="every line of the maze is as long as the first"))
+            problems.append(
+                Problem(
+                    f"this line has {len(line)} characters, the first has {width}",
+                    file,
+                    where,
+                    width + 1,
+                    hint="every line of the maze is as long as the first",
+                )
+            )
             continue
-        line = line.ljust(width)            # trailing blanks may have been trimmed
-        j = rows - 1 - n // 2               # the cell row below a post row, or this cell row
+        line = line.ljust(width)  # trailing blanks may have been trimmed
+        j = rows - 1 - n // 2  # the cell row below a post row, or this cell row
         for col, char in enumerate(line):
-            if n % 2 == 0:                  # posts and horizontal walls
+            if n % 2 == 0:  # posts and horizontal walls
                 if col % 4 == 0:
                     if char != "o":
                         problems.append(Problem(f"a post 'o' is missing here, found {char!r}", file, where, col + 1))
                 elif col % 4 == 1:
-                    segment = line[col:col + 3]
+                    segment = line[col : col + 3]
                     if segment == "---":
                         horizontal.add((col // 4, j + 1))
                     elif segment.strip():
-                        problems.append(Problem(f"a horizontal wall is '---' or blanks, found {segment!r}", file,
-                                                where, col + 1))
-            elif col % 4 == 0:              # vertical walls
+                        problems.append(
+                            Problem(f"a horizontal wall is '---' or blanks, found {segment!r}", file, where, col + 1)
+                        )
+            elif col % 4 == 0:  # vertical walls
                 if char == "|":
                     vertical.add((col // 4, j))
                 elif char != " ":
@@ -108,21 +129,44 @@ def parse_micromouse(text: str, file: str = "") -> CellWalls:
                 else:
                     goal.add((col // 4, j))
             elif char != " ":
-                problems.append(Problem(f"unexpected {char!r} in a cell", file, where, col + 1,
-                                        hint="a cell holds S (start), G (goal) or nothing"))
+                problems.append(
+                    Problem(
+                        f"unexpected {char!r} in a cell",
+                        file,
+                        where,
+                        col + 1,
+                        hint="a cell holds S (start), G (goal) or nothing",
+                    )
+                )
     last = first + len(lines)
     for i in range(cols):
         for j, line_no in ((0, last), (rows, first + 1)):
             if (i, j) not in horizontal:
-                problems.append(Problem("the outline is open: a wall is missing on the maze's border", file, line_no,
-                                        4 * i + 2, hint="close the border with '---'"))
+                problems.append(
+                    Problem(
+                        "the outline is open: a wall is missing on the maze's border",
+                        file,
+                        line_no,
+                        4 * i + 2,
+                        hint="close the border with '---'",
+                    )
+                )
     for j in range(rows):
         for i, col in ((0, 1), (cols, 4 * cols + 1)):
             if (i, j) not in vertical:
-                problems.append(Problem("the outline is open: a wall is missing on the maze's border", file,
-                                        first + 2 * (rows - 1 - j) + 2, col, hint="close the border with '|'"))
+                problems.append(
+                    Problem(
+                        "the outline is open: a wall is missing on the maze's border",
+                        file,
+                        first + 2 * (rows - 1 - j) + 2,
+                        col,
+                        hint="close the border with '|'",
+                    )
+                )
     if start is None and not problems:
-        problems.append(Problem("no start cell 'S'", file, first + 1, 1, hint="mark the start cell with S at its centre"))
+        problems.append(
+            Problem("no start cell 'S'", file, first + 1, 1, hint="mark the start cell with S at its centre")
+        )
     if problems:
         raise UserError(problems)
     assert start is not None
@@ -132,8 +176,9 @@ def parse_micromouse(text: str, file: str = "") -> CellWalls:
     return maze
 
 
-def maze_from_cells(cells: CellWalls, name: str, cell: float = CELL, wall: float = WALL, post: float = POST,
-                    source: str = "") -> Maze:
+def maze_from_cells(
+    cells: CellWalls, name: str, cell: float = CELL, wall: float = WALL, post: float = POST, source: str = ""
+) -> Maze:
     """The geometry of ``cells``: walls from post centre to post centre, free posts as small boxes."""
     walls, touched = [], set()
     for i, j in sorted(cells.horizontal):
@@ -142,14 +187,25 @@ def maze_from_cells(cells: CellWalls, name: str, cell: float = CELL, wall: float
     for i, j in sorted(cells.vertical):
         walls.append(Wall(start=(i * cell, j * cell), end=(i * cell, (j + 1) * cell), thickness=wall))
         touched |= {(i, j), (i, j + 1)}
-    posts = [Obstacle(center=(i * cell, j * cell), size=(post, post))
-             for i in range(cells.cols + 1) for j in range(cells.rows + 1) if (i, j) not in touched]
+    posts = [
+        Obstacle(center=(i * cell, j * cell), size=(post, post))
+        for i in range(cells.cols + 1)
+        for j in range(cells.rows + 1)
+        if (i, j) not in touched
+    ]
     si, sj = cells.start
     facing = cells.open_sides(si, sj)[0]
     spawn = Spawn(x=(si + 0.5) * cell, y=(sj + 0.5) * cell, yaw=_HEADINGS[facing])
     goal = [Area(start=(i * cell, j * cell), end=((i + 1) * cell, (j + 1) * cell)) for i, j in sorted(cells.goal)]
-    return Maze(name=name, description=f"micromouse maze, {cells.cols} x {cells.rows} cells of {cell * 100:g} cm",
-                source=source, walls=walls, obstacles=posts, spawns={"start": spawn}, goal=goal)
+    return Maze(
+        name=name,
+        description=f"micromouse maze, {cells.cols} x {cells.rows} cells of {cell * 100:g} cm",
+        source=source,
+        walls=walls,
+        obstacles=posts,
+        spawns={"start": spawn},
+        goal=goal,
+    )
 
 
 def read_micromouse(path: str | Path, cell: float = CELL, wall: float = WALL, post: float = POST) -> Maze:

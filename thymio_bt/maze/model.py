@@ -16,14 +16,15 @@ Example (``mazes/corridor.yaml``)::
 from __future__ import annotations
 
 import math
-from typing import Annotated, Any, Sequence
+from collections.abc import Sequence
+from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 from pydantic_core import PydanticCustomError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean, type_name
-from thymio_bt.robot.interface import Pose
 from thymio_bt.inputs.units import UnitError, check_kind, kind_hint, parse_value
+from thymio_bt.robot.interface import Pose
 
 
 def _problem(message: str, hint: str) -> PydanticCustomError:
@@ -33,6 +34,7 @@ def _problem(message: str, hint: str) -> PydanticCustomError:
 
 def parsed_quantity(kind: str) -> BeforeValidator:
     """Accept a number or a text with units (``20cm``, ``pi/2``) of ``kind``; errors carry a hint."""
+
     def parse(value: Any) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
             raise _problem(f"expected a number, got {type_name(value)}", kind_hint(kind))
@@ -44,6 +46,7 @@ def parsed_quantity(kind: str) -> BeforeValidator:
         if error:
             raise _problem(error, kind_hint(kind))
         return quantity.value
+
     return BeforeValidator(parse)
 
 
@@ -62,10 +65,12 @@ class Wall(BaseModel):
     name: str | None = None
 
     @model_validator(mode="after")
-    def _not_degenerate(self) -> "Wall":
+    def _not_degenerate(self) -> Wall:
         if self.start == self.end:
-            raise _problem("a wall needs two different end points",
-                           "a wall goes from one point to another, e.g. {from: [0, 0], to: [0.6, 0]}")
+            raise _problem(
+                "a wall needs two different end points",
+                "a wall goes from one point to another, e.g. {from: [0, 0], to: [0.6, 0]}",
+            )
         return self
 
     @property
@@ -84,10 +89,14 @@ def wall_corners(start: Sequence[float], end: Sequence[float], thickness: float)
     length = math.dist(start, end)
     ux, uy = (x1 - x0) / length, (y1 - y0) / length
     h = thickness / 2.0
-    ex, ey = ux * h, uy * h          # extension past the ends
-    nx, ny = -uy * h, ux * h         # half thickness across
-    return [(x0 - ex - nx, y0 - ey - ny), (x1 + ex - nx, y1 + ey - ny),
-            (x1 + ex + nx, y1 + ey + ny), (x0 - ex + nx, y0 - ey + ny)]
+    ex, ey = ux * h, uy * h  # extension past the ends
+    nx, ny = -uy * h, ux * h  # half thickness across
+    return [
+        (x0 - ex - nx, y0 - ey - ny),
+        (x1 + ex - nx, y1 + ey - ny),
+        (x1 + ex + nx, y1 + ey + ny),
+        (x0 - ex + nx, y0 - ey + ny),
+    ]
 
 
 class Obstacle(BaseModel):
@@ -101,7 +110,7 @@ class Obstacle(BaseModel):
     polygon: list[Point] | None = None
 
     @model_validator(mode="after")
-    def _one_shape(self) -> "Obstacle":
+    def _one_shape(self) -> Obstacle:
         if (self.polygon is None) == (self.center is None or self.size is None):
             raise ValueError("an obstacle is either a box (center and size) or a polygon (a list of points)")
         if self.size is not None and min(self.size) <= 0:
@@ -111,12 +120,16 @@ class Obstacle(BaseModel):
             if len(points) < 3:
                 raise ValueError("a polygon needs at least 3 points")
             n = len(points)
-            turns = [(points[(i + 1) % n][0] - points[i][0]) * (points[(i + 2) % n][1] - points[(i + 1) % n][1])
-                     - (points[(i + 1) % n][1] - points[i][1]) * (points[(i + 2) % n][0] - points[(i + 1) % n][0])
-                     for i in range(n)]
+            turns = [
+                (points[(i + 1) % n][0] - points[i][0]) * (points[(i + 2) % n][1] - points[(i + 1) % n][1])
+                - (points[(i + 1) % n][1] - points[i][1]) * (points[(i + 2) % n][0] - points[(i + 1) % n][0])
+                for i in range(n)
+            ]
             if not (all(t > 0 for t in turns) or all(t < 0 for t in turns)):
-                raise _problem("the polygon must be convex with no repeated points",
-                               "split a concave obstacle into several convex ones")
+                raise _problem(
+                    "the polygon must be convex with no repeated points",
+                    "split a concave obstacle into several convex ones",
+                )
         return self
 
     def corners(self) -> list[tuple[float, float]]:
@@ -125,8 +138,10 @@ class Obstacle(BaseModel):
         assert self.center is not None and self.size is not None
         (cx, cy), (w, h) = self.center, self.size
         c, s = math.cos(self.yaw), math.sin(self.yaw)
-        return [(cx + x * c - y * s, cy + x * s + y * c)
-                for x, y in ((-w / 2, -h / 2), (w / 2, -h / 2), (w / 2, h / 2), (-w / 2, h / 2))]
+        return [
+            (cx + x * c - y * s, cy + x * s + y * c)
+            for x, y in ((-w / 2, -h / 2), (w / 2, -h / 2), (w / 2, h / 2), (-w / 2, h / 2))
+        ]
 
 
 class Spawn(BaseModel):
@@ -188,13 +203,19 @@ class Maze(BaseModel):
     def spawn(self, name: str) -> Pose:
         """The pose of a named spawn; an unknown name is a :class:`UserError` with a hint."""
         if name not in self.spawns:
-            raise UserError(Problem(f"maze '{self.name}' has no spawn named '{name}'",
-                                    hint=did_you_mean(name, self.spawns) if self.spawns else
-                                    "this maze defines no spawns: give a pose [x, y, yaw] instead"))
+            raise UserError(
+                Problem(
+                    f"maze '{self.name}' has no spawn named '{name}'",
+                    hint=did_you_mean(name, self.spawns)
+                    if self.spawns
+                    else "this maze defines no spawns: give a pose [x, y, yaw] instead",
+                )
+            )
         return self.spawns[name].pose()
 
     def to_yaml_dict(self) -> dict[str, Any]:
         """A plain dict in the file format, with values rounded to 0.1 mm."""
+
         def r(v: float) -> float:
             return round(v, 6) + 0.0
 
@@ -203,13 +224,21 @@ class Maze(BaseModel):
             out["description"] = self.description
         if self.source:
             out["source"] = self.source
-        out["walls"] = [{**({"name": w.name} if w.name else {}),
-                         "from": [r(w.start[0]), r(w.start[1])], "to": [r(w.end[0]), r(w.end[1])],
-                         "thickness": r(w.thickness)} for w in self.walls]
+        out["walls"] = [
+            {
+                **({"name": w.name} if w.name else {}),
+                "from": [r(w.start[0]), r(w.start[1])],
+                "to": [r(w.end[0]), r(w.end[1])],
+                "thickness": r(w.thickness),
+            }
+            for w in self.walls
+        ]
         if self.obstacles:
             out["obstacles"] = [o.model_dump(exclude_none=True, exclude_defaults=True) for o in self.obstacles]
         if self.spawns:
             out["spawns"] = {k: {"x": r(s.x), "y": r(s.y), "yaw": r(s.yaw)} for k, s in self.spawns.items()}
         if self.goal:
-            out["goal"] = [{"from": [r(a.start[0]), r(a.start[1])], "to": [r(a.end[0]), r(a.end[1])]} for a in self.goal]
+            out["goal"] = [
+                {"from": [r(a.start[0]), r(a.start[1])], "to": [r(a.end[0]), r(a.end[1])]} for a in self.goal
+            ]
         return out

@@ -18,8 +18,9 @@ from __future__ import annotations
 import json
 import os
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.behaviours.base import ConditionBehaviour
@@ -27,17 +28,43 @@ from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
 
 #: thymio-bt kind -> BT.CPP built-in of the same semantics
-BUILTIN = {"sequence": "SequenceWithMemory", "reactive_sequence": "ReactiveSequence", "selector": "Fallback",
-           "reactive_selector": "ReactiveFallback", "parallel": "Parallel", "invert": "Inverter",
-           "force_success": "ForceSuccess", "force_failure": "ForceFailure", "retry": "RetryUntilSuccessful",
-           "repeat": "Repeat"}
+BUILTIN = {
+    "sequence": "SequenceWithMemory",
+    "reactive_sequence": "ReactiveSequence",
+    "selector": "Fallback",
+    "reactive_selector": "ReactiveFallback",
+    "parallel": "Parallel",
+    "invert": "Inverter",
+    "force_success": "ForceSuccess",
+    "force_failure": "ForceFailure",
+    "retry": "RetryUntilSuccessful",
+    "repeat": "Repeat",
+}
 #: the element that carries a mission's settings (maze, start, rates, noise); BT.CPP skips it
 MISSION_TAG = "ThymioMission"
 #: BT.CPP's own node IDs (besides BUILTIN's): a thymio-bt node of one of these names is exported as
 #: Thymio<name> so that it does not clash with the built-in
-RESERVED = frozenset({"SetBlackboard", "Sequence", "Fallback", "Delay", "Timeout", "Script", "Sleep",
-                      "AlwaysSuccess", "AlwaysFailure", "Precondition", "RunOnce", "SubTree", "Switch2",
-                      "WhileDoElse", "IfThenElse", "KeepRunningUntilFailure", "UnsetBlackboard"})
+RESERVED = frozenset(
+    {
+        "SetBlackboard",
+        "Sequence",
+        "Fallback",
+        "Delay",
+        "Timeout",
+        "Script",
+        "Sleep",
+        "AlwaysSuccess",
+        "AlwaysFailure",
+        "Precondition",
+        "RunOnce",
+        "SubTree",
+        "Switch2",
+        "WhileDoElse",
+        "IfThenElse",
+        "KeepRunningUntilFailure",
+        "UnsetBlackboard",
+    }
+)
 #: thymio-bt parameter -> BT.CPP port of a built-in
 _BUILTIN_PORTS = {("repeat", "times"): "num_cycles", ("retry", "times"): "num_attempts"}
 
@@ -66,7 +93,7 @@ def _port_value(value: Any) -> str:
 def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, str]:
     kind = node["kind"]
     if ident == "RepeatUntil":
-        return {}                                  # the loop ends by its condition, not a count
+        return {}  # the loop ends by its condition, not a count
     if kind == "parallel":
         one = params.get("policy") == "success_on_one"
         ports = {"success_count": "1" if one else "-1", "failure_count": "1"}
@@ -76,9 +103,14 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, s
     return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items() if v is not None}
 
 
-def tree_xml(nodes: list[TreeNode], registry: Any, params: Mapping[int, Mapping[str, Any]] | None = None,
-             tree_id: str = "MainTree", settings: Mapping[str, str] | None = None,
-             subtrees: Mapping[int, str] | None = None) -> str:
+def tree_xml(
+    nodes: list[TreeNode],
+    registry: Any,
+    params: Mapping[int, Mapping[str, Any]] | None = None,
+    tree_id: str = "MainTree",
+    settings: Mapping[str, str] | None = None,
+    subtrees: Mapping[int, str] | None = None,
+) -> str:
     """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
     lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
     ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
@@ -137,8 +169,9 @@ def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[i
 
 
 def _category(cls: Any, ident: str) -> str:
-    if ident == "RepeatUntil" or (isinstance(cls, type) and issubclass(cls, ControlNode)
-                                  and cls.category == "composite"):
+    if ident == "RepeatUntil" or (
+        isinstance(cls, type) and issubclass(cls, ControlNode) and cls.category == "composite"
+    ):
         return "Control"
     if isinstance(cls, type) and issubclass(cls, ControlNode):
         return "Decorator"
@@ -150,12 +183,18 @@ def _category(cls: Any, ident: str) -> str:
 def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
     """A mission's settings as ``<ThymioMission>`` attributes (the maze's path relative to ``folder``)."""
     pose = mission.start
-    settings = {"name": mission.name, "description": mission.description,
-                "maze": os.path.relpath(mission.maze_file, folder) if mission.maze_file else mission.maze.name,
-                "start": f"{pose.x!r}, {pose.y!r}, {pose.yaw!r}", "tick_hz": repr(mission.tick_hz),
-                "time_limit": repr(mission.time_limit), "seed": str(mission.seed),
-                "sensor_model": mission.sensor_model, "robot": mission.robot,
-                **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()}}
+    settings = {
+        "name": mission.name,
+        "description": mission.description,
+        "maze": os.path.relpath(mission.maze_file, folder) if mission.maze_file else mission.maze.name,
+        "start": f"{pose.x!r}, {pose.y!r}, {pose.yaw!r}",
+        "tick_hz": repr(mission.tick_hz),
+        "time_limit": repr(mission.time_limit),
+        "seed": str(mission.seed),
+        "sensor_model": mission.sensor_model,
+        "robot": mission.robot,
+        **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()},
+    }
     if mission.backend != "sim" or mission.backend_options:
         settings["backend"] = json.dumps({"name": mission.backend, **mission.backend_options})
     if mission.expect is not None:

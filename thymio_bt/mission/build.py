@@ -9,8 +9,9 @@ BehaviorTree.CPP's substitution rules).
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping
 from fnmatch import fnmatchcase
-from typing import Any, Iterator, Mapping
+from typing import Any
 
 from py_trees.behaviour import Behaviour
 
@@ -20,8 +21,13 @@ from thymio_bt.mission.plan import NodePlan
 from thymio_bt.mission.registry import Registry, default_registry
 
 
-def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
-               substitutions: Mapping[str, Any] | None = None, parent: str = "") -> Behaviour:
+def build_tree(
+    plan: NodePlan,
+    ctx: Context,
+    registry: Registry | None = None,
+    substitutions: Mapping[str, Any] | None = None,
+    parent: str = "",
+) -> Behaviour:
     """Instantiate the behaviours of ``plan`` (recursively) against ``ctx``. A substitution pattern
     that matches no node is a :class:`UserError` naming it (a misspelt path would test nothing)."""
     registry = registry or default_registry()
@@ -29,8 +35,10 @@ def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
         paths = list(node_paths(plan))
         for pattern in substitutions:
             if not any(fnmatchcase(p, pattern) for p in paths):
-                raise UserError(f"substitution '{pattern}' matches no node of the tree "
-                                f"(hint: {did_you_mean(pattern, paths)}; paths are node names joined by '/')")
+                raise UserError(
+                    f"substitution '{pattern}' matches no node of the tree "
+                    f"(hint: {did_you_mean(pattern, paths)}; paths are node names joined by '/')"
+                )
     path = f"{parent}/{plan.name}" if parent else plan.name
     for pattern, script in (substitutions or {}).items():
         if fnmatchcase(path, pattern):
@@ -39,7 +47,7 @@ def build_tree(plan: NodePlan, ctx: Context, registry: Registry | None = None,
     cls = registry[plan.behaviour if plan.kind == "behaviour" else plan.kind]
     if issubclass(cls, ControlNode):
         node = cls.build(plan.name, plan.params, children, ctx)
-        node.yaml_name = cls.yaml_name            # what logs and exports call it
+        node.yaml_name = cls.yaml_name  # what logs and exports call it
         return node
     assert plan.params is not None
     return cls(plan.name, plan.params, ctx, blackboard_refs=plan.blackboard_refs)

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 import typing
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from thymio_bt.errors import Problem, did_you_mean, type_name
-from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose
 from thymio_bt.inputs.units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
+from thymio_bt.maze import Maze
+from thymio_bt.robot.interface import Pose
 
 Where = tuple[str, int, int]
 
@@ -23,7 +24,7 @@ Where = tuple[str, int, int]
 class Scope:
     """Parameter values visible at one place: mission parameters, overlaid by a subtree's."""
 
-    def __init__(self, values: Mapping[str, Any], parent: "Scope | None" = None) -> None:
+    def __init__(self, values: Mapping[str, Any], parent: Scope | None = None) -> None:
         self.values = dict(values)
         self.parent = parent
 
@@ -68,19 +69,26 @@ class Checker:
             return (where[0], *items.marks[index])
         return where
 
-    def check_keys(self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str,
-                   what: str) -> None:
+    def check_keys(self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str, what: str) -> None:
         allowed = list(allowed)
         for key in data:
             if key not in allowed:
-                self.problem(f"unknown key '{key}' in {what}", self.where_key(data, key, file),
-                             path, did_you_mean(str(key), allowed))
+                self.problem(
+                    f"unknown key '{key}' in {what}",
+                    self.where_key(data, key, file),
+                    path,
+                    did_you_mean(str(key), allowed),
+                )
 
     def quantity(self, value: Any, scope: Scope, where: Where, path: str, kind: str | None) -> float | None:
         """Parse a number-with-unit or expression in ``scope``; None (and a problem) when it fails."""
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-            self.problem(f"expected a number, got {type_name(value)}", where, path,
-                         "write a number, optionally with a unit: 0.1, 10cm/s, pi/2, 90deg")
+            self.problem(
+                f"expected a number, got {type_name(value)}",
+                where,
+                path,
+                "write a number, optionally with a unit: 0.1, 10cm/s, pi/2, 90deg",
+            )
             return None
 
         def resolve(name: str) -> Quantity:
@@ -97,8 +105,12 @@ class Checker:
         try:
             q = parse_value(value, resolve)
         except UnitError as exc:
-            self.problem(str(exc), where, path, exc.hint or "numbers may carry a unit (5cm, 90deg, 0.1 m/s) "
-                         "and use + - * / ( ) pi and $parameters")
+            self.problem(
+                str(exc),
+                where,
+                path,
+                exc.hint or "numbers may carry a unit (5cm, 90deg, 0.1 m/s) and use + - * / ( ) pi and $parameters",
+            )
             return None
         error = check_kind(q, kind)
         if error:
@@ -117,8 +129,12 @@ class Checker:
                 return value
         if isinstance(value, bool):
             return value
-        self.problem(f"a parameter must be a number, a string or true/false, got {type_name(value)}",
-                     where, path, "e.g. cruise: 10cm/s, side: pi/2, turn: bb:turn_angle or enabled: true")
+        self.problem(
+            f"a parameter must be a number, a string or true/false, got {type_name(value)}",
+            where,
+            path,
+            "e.g. cruise: 10cm/s, side: pi/2, turn: bb:turn_angle or enabled: true",
+        )
         return None
 
     def pose(self, raw: Any, where: Where, path: str, scope: Scope, maze: Maze | None) -> Pose | None:
@@ -128,8 +144,12 @@ class Checker:
                 return None
             if raw in maze.spawns:
                 return maze.spawns[raw].pose()
-            self.problem(f"maze '{maze.name}' has no spawn named '{raw}'", where, path,
-                         did_you_mean(raw, maze.spawns) if maze.spawns else "give [x, y, yaw] instead")
+            self.problem(
+                f"maze '{maze.name}' has no spawn named '{raw}'",
+                where,
+                path,
+                did_you_mean(raw, maze.spawns) if maze.spawns else "give [x, y, yaw] instead",
+            )
             return None
         if isinstance(raw, str):
             try:
@@ -139,11 +159,17 @@ class Checker:
                 return None
         if not isinstance(raw, list) or len(raw) != 3:
             spawns = f", or one of the maze's spawns: {', '.join(maze.spawns)}" if maze and maze.spawns else ""
-            self.problem("a pose is [x, y, yaw] or the name of a maze spawn", where, path,
-                         "e.g. [0.5, 0.3, pi/2] or [50cm, 30cm, 90deg]" + spawns)
+            self.problem(
+                "a pose is [x, y, yaw] or the name of a maze spawn",
+                where,
+                path,
+                "e.g. [0.5, 0.3, pi/2] or [50cm, 30cm, 90deg]" + spawns,
+            )
             return None
-        parts = [self.quantity(v, scope, self.where_item(raw, i, where), path, kind)
-                 for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle")))]
+        parts = [
+            self.quantity(v, scope, self.where_item(raw, i, where), path, kind)
+            for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle")))
+        ]
         if any(p is None for p in parts):
             return None
         return self._heading(Pose(*parts), where, path)  # type: ignore[arg-type]
@@ -152,8 +178,12 @@ class Checker:
         """The pose with its yaw in [-pi, pi] (exactly as given when it already is); a yaw of more
         than ten turns is surely a mistake (degrees written as radians, a stray exponent)."""
         if abs(pose.yaw) > MAX_YAW:
-            self.problem(f"yaw {pose.yaw:g} rad is more than ten turns", where, path,
-                         "give a heading such as 90deg, pi/2 or -45deg")
+            self.problem(
+                f"yaw {pose.yaw:g} rad is more than ten turns",
+                where,
+                path,
+                "give a heading such as 90deg, pi/2 or -45deg",
+            )
             return None
         return Pose(pose.x, pose.y, math.remainder(pose.yaw, math.tau))
 

@@ -33,9 +33,9 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from thymio_bt.maze import Maze
 from thymio_bt.maze.model import Length, Point, parsed_quantity
-from thymio_bt.robot.placement import ray_distance
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
+from thymio_bt.robot.placement import ray_distance
 
 #: seconds, written with a unit or not (``60s``, ``2min``)
 Duration = Annotated[float, parsed_quantity("time")]
@@ -67,7 +67,7 @@ class Expect(BaseModel):
     max_time: Duration | None = Field(None, gt=0, le=36000, description="the mission must end within this")
     gaps: list[GapExpectation] = Field(default_factory=list, description="front gaps when nodes end")
 
-    def without_places(self) -> "Expect":
+    def without_places(self) -> Expect:
         """The criteria that hold anywhere (no goal, no gaps): for a run in another maze or start."""
         return self.model_copy(update={"goal": None, "gaps": []})
 
@@ -82,22 +82,32 @@ def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[st
         else:
             off = math.dist((pose["x"], pose["y"]), expect.goal.centre)
             if off > expect.goal.radius:
-                failed.append(f"goal: ended {1000 * off:.1f} mm from ({expect.goal.centre[0]:g}, "
-                              f"{expect.goal.centre[1]:g}), more than {1000 * expect.goal.radius:g} mm")
+                failed.append(
+                    f"goal: ended {1000 * off:.1f} mm from ({expect.goal.centre[0]:g}, "
+                    f"{expect.goal.centre[1]:g}), more than {1000 * expect.goal.radius:g} mm"
+                )
     if expect.no_collision and result.collisions:
         failed.append(f"no_collision: {result.collisions} collision{'s' * (result.collisions != 1)}")
     if expect.max_time is not None and result.sim_time > expect.max_time + 1e-9:
         failed.append(f"max_time: took {result.sim_time:.1f} s, more than {expect.max_time:g} s")
     for gap in expect.gaps:
-        ended = next((e for e in result.events if e["kind"] == "behaviour_end" and e.get("pose")
-                      and fnmatchcase(e["path"], gap.after)), None)
+        ended = next(
+            (
+                e
+                for e in result.events
+                if e["kind"] == "behaviour_end" and e.get("pose") and fnmatchcase(e["path"], gap.after)
+            ),
+            None,
+        )
         if ended is None:
             failed.append(f"gaps: no node matching '{gap.after}' ended with a robot")
             continue
         measured = front_gap(maze, model, _true_pose_at(result, ended))
         if abs(measured - gap.distance) > gap.tolerance:
-            failed.append(f"gaps: after '{ended['path']}' the front gap was {100 * measured:.2f} cm, "
-                          f"not {100 * gap.distance:g} ± {100 * gap.tolerance:g} cm")
+            failed.append(
+                f"gaps: after '{ended['path']}' the front gap was {100 * measured:.2f} cm, "
+                f"not {100 * gap.distance:g} ± {100 * gap.tolerance:g} cm"
+            )
     return failed
 
 

@@ -19,8 +19,8 @@ Example::
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Mapping
 
 from thymio_bt.data import MISSIONS
 from thymio_bt.errors import Problem, UserError, did_you_mean
@@ -43,20 +43,28 @@ def resolve_mission(ref: str | Path) -> Path:
         if (folder / f"{ref}.yaml").is_file():
             return folder / f"{ref}.yaml"
     known = sorted({p.stem for folder in folders if folder.is_dir() for p in folder.glob("*.yaml")})
-    raise UserError(Problem(f"mission not found: '{ref}'", hint=f"a mission file, or a shipped mission: "
-                                                                 f"{did_you_mean(str(ref), known)}"))
+    raise UserError(
+        Problem(
+            f"mission not found: '{ref}'", hint=f"a mission file, or a shipped mission: {did_you_mean(str(ref), known)}"
+        )
+    )
 
 
-def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
-                 maze: str | Path | None = None, start: str | None = None,
-                 registry: Registry | None = None, run_plugins: bool = True) -> Mission:
+def load_mission(
+    path: str | Path,
+    overrides: Mapping[str, str] | None = None,
+    maze: str | Path | None = None,
+    start: str | None = None,
+    registry: Registry | None = None,
+    run_plugins: bool = True,
+) -> Mission:
     """Load and validate a mission file (or a shipped mission by name); raise :class:`UserError`
     listing every problem. ``run_plugins=False`` reads the mission's plugins without importing them
     (see :mod:`thymio_bt.mission.unrun_plugins`): for tools that must not run a stranger's code."""
     path = resolve_mission(path)
     file = str(path)
     if path.suffix.lower() == ".xml":
-        from thymio_bt.mission.xml_reader import read_xml_mission         # BT.CPP XML: imported only for XML missions
+        from thymio_bt.mission.xml_reader import read_xml_mission  # BT.CPP XML: imported only for XML missions
 
         data = read_xml_mission(path)
     else:
@@ -64,12 +72,25 @@ def load_mission(path: str | Path, overrides: Mapping[str, str] | None = None,
     assembly = Assembler(registry, run_plugins).assemble(path, data, overrides, maze, start)
     tree = TreePlanner(assembly).plan(assembly.data, file)
     if assembly.problems:
-        raise UserError(sorted(dict.fromkeys(assembly.problems),      # in reading order, this file first
-                               key=lambda p: (p.file != file, p.file, p.line, p.column)))
+        raise UserError(
+            sorted(
+                dict.fromkeys(assembly.problems),  # in reading order, this file first
+                key=lambda p: (p.file != file, p.file, p.line, p.column),
+            )
+        )
     assert tree is not None and assembly.start is not None and assembly.maze is not None
     data = assembly.data
-    return Mission(name=str(data.get("name", path.stem)), description=str(data.get("description", "")),
-                   file=path, maze=assembly.maze, maze_file=assembly.maze_file, start=assembly.start, tree=tree,
-                   parameters={k: (v.value if isinstance(v, Quantity) else v) for k, v in assembly.parameters.items()},
-                   registry=assembly.registry, start_where=assembly.start_where, sources=assembly.sources,
-                   **assembly.settings)
+    return Mission(
+        name=str(data.get("name", path.stem)),
+        description=str(data.get("description", "")),
+        file=path,
+        maze=assembly.maze,
+        maze_file=assembly.maze_file,
+        start=assembly.start,
+        tree=tree,
+        parameters={k: (v.value if isinstance(v, Quantity) else v) for k, v in assembly.parameters.items()},
+        registry=assembly.registry,
+        start_where=assembly.start_where,
+        sources=assembly.sources,
+        **assembly.settings,
+    )

@@ -48,8 +48,16 @@ def parameter_rows(cls: Any) -> list[tuple[str, str, str, str, str, str]]:
     """(name, type, unit, default, range, description) for each parameter."""
     rows = []
     for name, field in cls.Params.model_fields.items():
-        rows.append((name, _type_name(field.annotation), unit_of(field), _default(field),
-                     _range(field), field.description or ""))
+        rows.append(
+            (
+                name,
+                _type_name(field.annotation),
+                unit_of(field),
+                _default(field),
+                _range(field),
+                field.description or "",
+            )
+        )
     return rows
 
 
@@ -74,18 +82,31 @@ def behaviour_help(cls: Any) -> str:
     rows = parameter_rows(cls)
     lines = [f"{cls.yaml_name}", "", doc]
     if issubclass(cls, ControlNode):
-        lines += ["", f"A {cls.category}: " + ("children: [NODE, ...]" if cls.category == "composite" else
-                                                 ", ".join(f"{k}: NODE" for k in ("do", *cls.node_keys))
-                                                 + (" (or written 'NAME: NODE')" if cls.short_form else "")),
-                  cls.example]
+        lines += [
+            "",
+            f"A {cls.category}: "
+            + (
+                "children: [NODE, ...]"
+                if cls.category == "composite"
+                else ", ".join(f"{k}: NODE" for k in ("do", *cls.node_keys))
+                + (" (or written 'NAME: NODE')" if cls.short_form else "")
+            ),
+            cls.example,
+        ]
     if rows:
         header = ("parameter", "type", "unit", "default", "range", "description")
         widths = [max(len(r[i]) for r in [header, *rows]) for i in range(5)]
-        lines += ["", "Parameters:",
-                  "  " + "  ".join(h.ljust(w) for h, w in zip(header[:5], widths)) + "  " + header[5]]
+        lines += [
+            "",
+            "Parameters:",
+            "  " + "  ".join(h.ljust(w) for h, w in zip(header[:5], widths)) + "  " + header[5],
+        ]
         for row in rows:
             lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(row[:5], widths)) + "  " + row[5])
     if not issubclass(cls, ControlNode):
-        lines += ["", "Values accept units and expressions: 5cm, 0.1 m/s, 90deg, pi/2, $parameter; "
-                  "bb:KEY reads a value from the blackboard when the behaviour starts."]
+        lines += [
+            "",
+            "Values accept units and expressions: 5cm, 0.1 m/s, 90deg, pi/2, $parameter; "
+            "bb:KEY reads a value from the blackboard when the behaviour starts.",
+        ]
     return "\n".join(lines)

@@ -13,9 +13,9 @@ from typing import Any
 
 from pydantic import BaseModel
 
+from thymio_bt.backends.sim.noise import NoiseConfig
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
-from thymio_bt.backends.sim.noise import NoiseConfig
 
 
 @dataclass
@@ -33,7 +33,7 @@ class NodePlan:
     params: BaseModel | None = None
     blackboard_refs: dict[str, str] = field(default_factory=dict)
     options: dict[str, Any] = field(default_factory=dict)
-    children: list["NodePlan"] = field(default_factory=list)
+    children: list[NodePlan] = field(default_factory=list)
     where: tuple[str, int, int] = ("", 0, 0)
     #: the subtree (``subtrees:``) this node is the root of an instance of, or None
     subtree: str | None = None

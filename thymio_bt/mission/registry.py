@@ -19,8 +19,9 @@ import importlib
 import importlib.util
 import inspect
 import sys
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from thymio_bt.behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
 from thymio_bt.errors import Problem, UserError
@@ -33,8 +34,9 @@ Node = type[RobotBehaviour] | type[ControlNode]
 
 def is_node(cls: Any) -> bool:
     """Whether ``cls`` can be registered: a robot behaviour or a composite/decorator kind."""
-    return inspect.isclass(cls) and issubclass(cls, (RobotBehaviour, ControlNode)) and bool(
-        getattr(cls, "Params", None))
+    return (
+        inspect.isclass(cls) and issubclass(cls, (RobotBehaviour, ControlNode)) and bool(getattr(cls, "Params", None))
+    )
 
 
 class Registry:
@@ -59,7 +61,7 @@ class Registry:
             cls.yaml_name = name
         self._classes[name] = cls
 
-    def copy(self) -> "Registry":
+    def copy(self) -> Registry:
         other = Registry()
         other._classes = dict(self._classes)
         other.plugin_files = list(self.plugin_files)
@@ -97,8 +99,15 @@ class Registry:
             if target.endswith(".py"):
                 path = (base_dir / target).resolve()
                 if not path.is_file():
-                    raise UserError(Problem(f"plugin file not found: {target}", file, line, col,
-                                            hint="plugin paths are relative to the mission file"))
+                    raise UserError(
+                        Problem(
+                            f"plugin file not found: {target}",
+                            file,
+                            line,
+                            col,
+                            hint="plugin paths are relative to the mission file",
+                        )
+                    )
                 self.plugin_files.append(path)
                 name = f"thymio_bt_plugin_{abs(hash(str(path)))}"
                 module = sys.modules.get(name)
@@ -113,20 +122,30 @@ class Registry:
         except UserError:
             raise
         except Exception as exc:  # the plugin's own import error: report it, do not crash
-            raise UserError(Problem(f"cannot import plugin '{ref}': {type(exc).__name__}: {exc}",
-                                    file, line, col,
-                                    hint="check the module name, or give a .py path relative to the mission")) from None
+            raise UserError(
+                Problem(
+                    f"cannot import plugin '{ref}': {type(exc).__name__}: {exc}",
+                    file,
+                    line,
+                    col,
+                    hint="check the module name, or give a .py path relative to the mission",
+                )
+            ) from None
         if attr:
             cls = getattr(module, attr, None)
             if cls is None:
                 raise UserError(Problem(f"plugin '{target}' has no attribute '{attr}'", file, line, col))
             candidates = [cls]
         else:
-            candidates = [c for _, c in inspect.getmembers(module, inspect.isclass)
-                          if is_node(c) and c.__module__ == module.__name__]
+            candidates = [
+                c
+                for _, c in inspect.getmembers(module, inspect.isclass)
+                if is_node(c) and c.__module__ == module.__name__
+            ]
             if not candidates:
-                raise UserError(Problem(f"plugin '{ref}' defines no RobotBehaviour or ControlNode subclass",
-                                        file, line, col))
+                raise UserError(
+                    Problem(f"plugin '{ref}' defines no RobotBehaviour or ControlNode subclass", file, line, col)
+                )
         for cls in candidates:
             try:
                 self.register(cls)
@@ -145,20 +164,35 @@ class Registry:
             if target.endswith(".py"):
                 path: Path | None = (base_dir / target).resolve()
                 if not path.is_file():
-                    raise UserError(Problem(f"plugin file not found: {target}", file, line, col,
-                                            hint="plugin paths are relative to the mission file"))
+                    raise UserError(
+                        Problem(
+                            f"plugin file not found: {target}",
+                            file,
+                            line,
+                            col,
+                            hint="plugin paths are relative to the mission file",
+                        )
+                    )
                 self.plugin_files.append(path)
             else:
                 spec = importlib.util.find_spec(target) if "." not in target else None
                 path = Path(spec.origin) if spec and spec.origin and spec.origin.endswith(".py") else None
                 if path is None:
-                    raise UserError(Problem(f"cannot find plugin '{ref}' without importing it", file, line, col,
-                                            hint="name its class (module:Class), or check with --plugins"))
+                    raise UserError(
+                        Problem(
+                            f"cannot find plugin '{ref}' without importing it",
+                            file,
+                            line,
+                            col,
+                            hint="name its class (module:Class), or check with --plugins",
+                        )
+                    )
             try:
                 names = plugin_node_names(path)
             except SyntaxError as exc:
-                raise UserError(Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0,
-                                        exc.offset or 0)) from None
+                raise UserError(
+                    Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0, exc.offset or 0)
+                ) from None
         for name in names:
             if name not in self._classes:
                 self._classes[name] = stand_in(name)

@@ -15,8 +15,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict
 from py_trees.common import Status
+from pydantic import BaseModel, ConfigDict
 
 from thymio_bt.behaviours import RobotBehaviour
 from thymio_bt.inputs.reading import read_text
@@ -43,12 +43,21 @@ def plugin_node_names(path: Path) -> list[str]:
 
 def stand_in(name: str) -> type[RobotBehaviour]:
     """A node class standing for the plugin node ``name`` (never ticked: validate and tree only)."""
+
     def step(self: RobotBehaviour) -> Status:
         raise RuntimeError(f"{name} is a stand-in: its plugin was not imported")
 
-    return type(name, (RobotBehaviour,), {
-        "__doc__": f"{name}, from a plugin that was not imported (its parameters are not checked).",
-        "yaml_name": name, "Params": UncheckedParams, "step": step, "unrun_plugin": True})
+    return type(
+        name,
+        (RobotBehaviour,),
+        {
+            "__doc__": f"{name}, from a plugin that was not imported (its parameters are not checked).",
+            "yaml_name": name,
+            "Params": UncheckedParams,
+            "step": step,
+            "unrun_plugin": True,
+        },
+    )
 
 
 def _base_name(base: ast.expr) -> str:
@@ -57,7 +66,11 @@ def _base_name(base: ast.expr) -> str:
 
 def _yaml_name(cls: ast.ClassDef) -> str | None:
     for stmt in cls.body:
-        if (isinstance(stmt, ast.Assign) and any(isinstance(t, ast.Name) and t.id == "yaml_name" for t in stmt.targets)
-                and isinstance(stmt.value, ast.Constant) and isinstance(stmt.value.value, str)):
+        if (
+            isinstance(stmt, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == "yaml_name" for t in stmt.targets)
+            and isinstance(stmt.value, ast.Constant)
+            and isinstance(stmt.value.value, str)
+        ):
             return stmt.value.value
     return None

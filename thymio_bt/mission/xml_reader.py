@@ -21,17 +21,18 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
-from thymio_bt.mission.btcpp import BUILTIN, MISSION_TAG, RESERVED
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
+from thymio_bt.mission.btcpp import BUILTIN, MISSION_TAG, RESERVED
 
 _FROM_BUILTIN = {ident: kind for kind, ident in BUILTIN.items()}
 #: BT.CPP nodes that thymio-bt cannot run, with what to use instead
 _UNSUPPORTED = {
     "Timeout": "BT.CPP's Timeout counts wall-clock milliseconds: use thymio-bt's timeout (seconds: simulated)",
     "Delay": "BT.CPP's Delay counts wall-clock milliseconds: use thymio-bt's delay (seconds: simulated)",
-    "Sleep": "use Wait (seconds: simulated)", "Script": "scripts are not supported: use SetBlackboard",
+    "Sleep": "use Wait (seconds: simulated)",
+    "Script": "scripts are not supported: use SetBlackboard",
     "Sequence": "BT.CPP's Sequence differs from both thymio-bt sequences: use SequenceWithMemory or ReactiveSequence",
 }
 MAX_DEPTH = 200
@@ -43,7 +44,7 @@ class _Element:
     attrs: dict[str, str]
     line: int
     column: int
-    children: list["_Element"] = field(default_factory=list)
+    children: list[_Element] = field(default_factory=list)
 
 
 def _parse(path: Path) -> _Element:
@@ -54,13 +55,26 @@ def _parse(path: Path) -> _Element:
     roots: list[_Element] = []
 
     def refuse(*_: Any) -> None:
-        raise UserError(Problem("DTDs and entities are not allowed in a mission", file, parser.CurrentLineNumber,
-                                parser.CurrentColumnNumber + 1, hint="remove the <!DOCTYPE ...> part"))
+        raise UserError(
+            Problem(
+                "DTDs and entities are not allowed in a mission",
+                file,
+                parser.CurrentLineNumber,
+                parser.CurrentColumnNumber + 1,
+                hint="remove the <!DOCTYPE ...> part",
+            )
+        )
 
     def start(tag: str, attrs: dict[str, str]) -> None:
         if len(stack) >= MAX_DEPTH:
-            raise UserError(Problem(f"the XML is nested deeper than {MAX_DEPTH} levels", file,
-                                    parser.CurrentLineNumber, parser.CurrentColumnNumber + 1))
+            raise UserError(
+                Problem(
+                    f"the XML is nested deeper than {MAX_DEPTH} levels",
+                    file,
+                    parser.CurrentLineNumber,
+                    parser.CurrentColumnNumber + 1,
+                )
+            )
         element = _Element(tag, attrs, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
         (stack[-1].children if stack else roots).append(element)
         stack.append(element)
@@ -72,14 +86,35 @@ def _parse(path: Path) -> _Element:
     try:
         parser.Parse(data, True)
     except expat.ExpatError as exc:
-        raise UserError(Problem(f"invalid XML: {expat.errors.messages[exc.code]}", file, exc.lineno,
-                                exc.offset + 1, hint="check that every <Node ...> is closed (<Node/> or </Node>)")) from None
-    except (LookupError, ValueError) as exc:        # an encoding expat does not know, e.g. EBCDIC
-        raise UserError(Problem(f"cannot read the XML: {exc}", file, 1, 1,
-                                hint="save the mission as UTF-8 (<?xml version=\"1.0\" encoding=\"UTF-8\"?>)")) from None
+        raise UserError(
+            Problem(
+                f"invalid XML: {expat.errors.messages[exc.code]}",
+                file,
+                exc.lineno,
+                exc.offset + 1,
+                hint="check that every <Node ...> is closed (<Node/> or </Node>)",
+            )
+        ) from None
+    except (LookupError, ValueError) as exc:  # an encoding expat does not know, e.g. EBCDIC
+        raise UserError(
+            Problem(
+                f"cannot read the XML: {exc}",
+                file,
+                1,
+                1,
+                hint='save the mission as UTF-8 (<?xml version="1.0" encoding="UTF-8"?>)',
+            )
+        ) from None
     if not roots or roots[0].tag != "root":
-        raise UserError(Problem("a BT.CPP XML mission starts with <root BTCPP_format=\"4\">", file, 1, 1,
-                                hint="export one with: thymio-bt tree MISSION.yaml --btcpp OUT.xml"))
+        raise UserError(
+            Problem(
+                'a BT.CPP XML mission starts with <root BTCPP_format="4">',
+                file,
+                1,
+                1,
+                hint="export one with: thymio-bt tree MISSION.yaml --btcpp OUT.xml",
+            )
+        )
     return roots[0]
 
 
@@ -116,22 +151,29 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
     the root of that ``<BehaviorTree>`` (named as the SubTree, when it is)."""
     ident = element.tag
     if ident in _UNSUPPORTED:
-        raise UserError(Problem(f"BT.CPP node <{ident}> is not supported", file, element.line, element.column,
-                                hint=_UNSUPPORTED[ident]))
+        raise UserError(
+            Problem(
+                f"BT.CPP node <{ident}> is not supported", file, element.line, element.column, hint=_UNSUPPORTED[ident]
+            )
+        )
     if ident == "SubTree":
         return _subtree(element, file, trees, stack)
     attrs = {k: v for k, v in element.attrs.items() if not k.startswith("_")}
     children = [_node(child, file, trees, stack) for child in element.children]
-    kind = _FROM_BUILTIN.get(ident, ident[len("Thymio"):] if ident.startswith("Thymio") and
-                             ident[len("Thymio"):] in RESERVED else ident)
+    kind = _FROM_BUILTIN.get(
+        ident, ident[len("Thymio") :] if ident.startswith("Thymio") and ident[len("Thymio") :] in RESERVED else ident
+    )
     body: dict[str, Any] = {}
     if "name" in attrs:
         body["name"] = attrs.pop("name")
     if ident == "RepeatUntil":
         kind = "repeat"
         if len(children) != 2:
-            raise UserError(Problem("RepeatUntil takes two children: the body, then the condition", file,
-                                    element.line, element.column))
+            raise UserError(
+                Problem(
+                    "RepeatUntil takes two children: the body, then the condition", file, element.line, element.column
+                )
+            )
         body.update(do=children[0], until=children[1])
     elif kind == "parallel":
         body["policy"] = "success_on_one" if attrs.pop("success_count", "-1").strip() == "1" else "success_on_all"
@@ -139,7 +181,7 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
         body.update({k: _value(v) for k, v in attrs.items()}, children=_list(children, element))
     elif kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
         body.update({k: _value(v) for k, v in attrs.items()}, children=_list(children, element))
-    elif children:                                              # a decorator
+    elif children:  # a decorator
         renamed = {"num_cycles": "times", "num_attempts": "times"}
         body.update({renamed.get(k, k): _value(v) for k, v in attrs.items()})
         if body.get("times") == -1:
@@ -148,7 +190,7 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
         body["do"] = children[0]
         if extra and len(children) > 1:
             body[extra] = children[1]
-    else:                                                       # a behaviour or condition
+    else:  # a behaviour or condition
         body.update({k: _value(v) for k, v in attrs.items()})
     return _marked({kind: _marked(body, element)}, element)
 
@@ -157,20 +199,40 @@ def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tu
     ident = element.attrs.get("ID", "")
     ports = sorted(k for k in element.attrs if k not in ("ID", "name") and not k.startswith("_"))
     if ports:
-        raise UserError(Problem(f"<SubTree ID=\"{ident}\"> with ports ({', '.join(ports)}) is not supported",
-                                file, element.line, element.column,
-                                hint="write the values in the subtree's nodes (one <BehaviorTree> per use)"))
+        raise UserError(
+            Problem(
+                f'<SubTree ID="{ident}"> with ports ({", ".join(ports)}) is not supported',
+                file,
+                element.line,
+                element.column,
+                hint="write the values in the subtree's nodes (one <BehaviorTree> per use)",
+            )
+        )
     if ident not in trees:
-        raise UserError(Problem(f"<SubTree> names no <BehaviorTree ID=\"{ident}\">", file, element.line,
-                                element.column, hint=f"the file's trees: {', '.join(sorted(trees)) or 'none'}"))
+        raise UserError(
+            Problem(
+                f'<SubTree> names no <BehaviorTree ID="{ident}">',
+                file,
+                element.line,
+                element.column,
+                hint=f"the file's trees: {', '.join(sorted(trees)) or 'none'}",
+            )
+        )
     if ident in stack:
-        raise UserError(Problem(f"subtree '{ident}' uses itself ({' -> '.join([*stack, ident])})", file,
-                                element.line, element.column, hint="a subtree may not contain itself"))
+        raise UserError(
+            Problem(
+                f"subtree '{ident}' uses itself ({' -> '.join([*stack, ident])})",
+                file,
+                element.line,
+                element.column,
+                hint="a subtree may not contain itself",
+            )
+        )
     tree = trees[ident]
     if len(tree.children) != 1:
         raise UserError(Problem("a <BehaviorTree> holds exactly one root node", file, tree.line, tree.column))
     node = _node(tree.children[0], file, trees, (*stack, ident))
-    node.subtree_use = ident            # the plan remembers it: the report's phases, the export's <SubTree>
+    node.subtree_use = ident  # the plan remembers it: the report's phases, the export's <SubTree>
     if "name" in element.attrs:
         body = next(iter(node.values()))
         if isinstance(body, MarkedDict):
@@ -190,15 +252,28 @@ def read_xml_mission(path: Path) -> MarkedDict:
     file = str(path)
     root = _parse(path)
     if root.attrs.get("BTCPP_format", "4") != "4":
-        raise UserError(Problem(f"BTCPP_format {root.attrs['BTCPP_format']} is not supported", file, root.line,
-                                root.column, hint="Groot2 and BehaviorTree.CPP 4 write format 4"))
+        raise UserError(
+            Problem(
+                f"BTCPP_format {root.attrs['BTCPP_format']} is not supported",
+                file,
+                root.line,
+                root.column,
+                hint="Groot2 and BehaviorTree.CPP 4 write format 4",
+            )
+        )
     trees = [e for e in root.children if e.tag == "BehaviorTree"]
     main = root.attrs.get("main_tree_to_execute")
     chosen = [t for t in trees if t.attrs.get("ID") == main] if main else trees
     if len(chosen) != 1:
-        raise UserError(Problem("cannot tell which <BehaviorTree> is the mission" if chosen else
-                                "no <BehaviorTree> to run", file, root.line, root.column,
-                                hint="one <BehaviorTree ID=...>, or main_tree_to_execute naming one"))
+        raise UserError(
+            Problem(
+                "cannot tell which <BehaviorTree> is the mission" if chosen else "no <BehaviorTree> to run",
+                file,
+                root.line,
+                root.column,
+                hint="one <BehaviorTree ID=...>, or main_tree_to_execute naming one",
+            )
+        )
     tree = chosen[0]
     if len(tree.children) != 1:
         raise UserError(Problem("a <BehaviorTree> holds exactly one root node", file, tree.line, tree.column))
@@ -208,13 +283,20 @@ def read_xml_mission(path: Path) -> MarkedDict:
         element = mission
         for key, text in mission.attrs.items():
             if key.startswith("noise."):
-                settings.setdefault("noise", {})[key[len("noise."):]] = _value(text)
+                settings.setdefault("noise", {})[key[len("noise.") :]] = _value(text)
             elif key in ("backend", "expect") and text.strip().startswith("{"):
                 try:
                     settings[key] = json.loads(text)
                 except json.JSONDecodeError as exc:
-                    raise UserError(Problem(f"{key}: invalid JSON: {exc.msg}", file, mission.line, mission.column,
-                                            hint=f"write {key} as a JSON object, e.g. {key}='{{\"name\": \"sim\"}}'"))
+                    raise UserError(
+                        Problem(
+                            f"{key}: invalid JSON: {exc.msg}",
+                            file,
+                            mission.line,
+                            mission.column,
+                            hint=f'write {key} as a JSON object, e.g. {key}=\'{{"name": "sim"}}\'',
+                        )
+                    )
             elif key in ("name", "description", "maze", "start", "sensor_model", "robot"):
                 settings[key] = text
             else:

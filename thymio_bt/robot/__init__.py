@@ -24,5 +24,19 @@ from thymio_bt.robot.interface import (
     wrap_angle,
 )
 
-__all__ = ["ROBOT_ENTITY", "SENSOR_NAMES", "Backend", "Collision", "Entities", "Pose", "Request", "RequestState",
-           "Robot", "RobotLost", "Scan", "Twist", "new_pose", "wrap_angle"]
+__all__ = [
+    "ROBOT_ENTITY",
+    "SENSOR_NAMES",
+    "Backend",
+    "Collision",
+    "Entities",
+    "Pose",
+    "Request",
+    "RequestState",
+    "Robot",
+    "RobotLost",
+    "Scan",
+    "Twist",
+    "new_pose",
+    "wrap_angle",
+]

@@ -25,13 +25,14 @@ from __future__ import annotations
 
 import math
 import statistics
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 from thymio_bt.maze import Maze
-from thymio_bt.robot.placement import ray_distance
 from thymio_bt.robot.interface import Backend, Pose
 from thymio_bt.robot.model import RobotModel
+from thymio_bt.robot.placement import ray_distance
 from thymio_bt.robot.profile import Profile, TableRows
 
 TICK = 0.1
@@ -44,10 +45,19 @@ APPROACH_SPEED, CLOSEST, BIN = 0.02, 0.008, 0.005
 
 def arena() -> Maze:
     """The corridor calibrate runs in (walls 1 cm thick; the end wall's face at x = 0.6 - 0.005)."""
-    walls = [{"from": [0.0, 0.0], "to": [END, 0.0]}, {"from": [0.0, WIDTH], "to": [END, WIDTH]},
-             {"from": [END, 0.0], "to": [END, WIDTH]}, {"from": [0.0, 0.0], "to": [0.0, WIDTH]}]
-    return Maze.model_validate({"name": "calibration corridor", "walls": [{**w, "thickness": 0.01} for w in walls],
-                                "spawns": {"start": {"x": START.x, "y": START.y, "yaw": START.yaw}}})
+    walls = [
+        {"from": [0.0, 0.0], "to": [END, 0.0]},
+        {"from": [0.0, WIDTH], "to": [END, WIDTH]},
+        {"from": [END, 0.0], "to": [END, WIDTH]},
+        {"from": [0.0, 0.0], "to": [0.0, WIDTH]},
+    ]
+    return Maze.model_validate(
+        {
+            "name": "calibration corridor",
+            "walls": [{**w, "thickness": 0.01} for w in walls],
+            "spawns": {"start": {"x": START.x, "y": START.y, "yaw": START.yaw}},
+        }
+    )
 
 
 @dataclass
@@ -57,26 +67,33 @@ class Calibration:
     base: RobotModel
     metres_per_unit: float
     wheel_separation: float
-    samples: list[tuple[float, int]] = field(default_factory=list)      # (distance, raw)
-    rows: list[tuple[float, float]] = field(default_factory=list)        # the table
+    samples: list[tuple[float, int]] = field(default_factory=list)  # (distance, raw)
+    rows: list[tuple[float, float]] = field(default_factory=list)  # the table
 
     def profile(self, name: str) -> Profile:
         return Profile(
-            base=self.base.name, name=name, metres_per_unit=round(self.metres_per_unit, 9),
+            base=self.base.name,
+            name=name,
+            metres_per_unit=round(self.metres_per_unit, 9),
             wheel_separation=round(self.wheel_separation, 5),
             calibration=TableRows(distances=[round(d, 4) for d, _ in self.rows], readings=[r for _, r in self.rows]),
-            measured={"speed_scale": round(self.metres_per_unit / self.base.metres_per_unit, 4),
-                      "wheel_separation_scale": round(self.wheel_separation / self.base.wheel_separation, 4),
-                      "proximity_samples": len(self.samples),
-                      "method": "thymio-bt calibrate: 2 s at 150 units, approach at 2 cm/s, 3 s spin at 100 units"})
+            measured={
+                "speed_scale": round(self.metres_per_unit / self.base.metres_per_unit, 4),
+                "wheel_separation_scale": round(self.wheel_separation / self.base.wheel_separation, 4),
+                "proximity_samples": len(self.samples),
+                "method": "thymio-bt calibrate: 2 s at 150 units, approach at 2 cm/s, 3 s spin at 100 units",
+            },
+        )
 
     def summary(self) -> list[str]:
         """Lines comparing the measures with the base model's."""
         base = self.base
-        lines = [f"speed: {self.metres_per_unit * 500:.4f} m/s at 500 units ({base.name}: "
-                 f"{base.metres_per_unit * 500:.4f}, {100 * (self.metres_per_unit / base.metres_per_unit - 1):+.1f} %)",
-                 f"wheel base: {self.wheel_separation * 100:.2f} cm ({base.name}: {base.wheel_separation * 100:.2f})",
-                 "front-centre reading (measured / " + base.name + "):"]
+        lines = [
+            f"speed: {self.metres_per_unit * 500:.4f} m/s at 500 units ({base.name}: "
+            f"{base.metres_per_unit * 500:.4f}, {100 * (self.metres_per_unit / base.metres_per_unit - 1):+.1f} %)",
+            f"wheel base: {self.wheel_separation * 100:.2f} cm ({base.name}: {base.wheel_separation * 100:.2f})",
+            "front-centre reading (measured / " + base.name + "):",
+        ]
         table = self.table()
         for cm in (1, 2, 3, 4, 6, 8, 10, 12):
             measured, expected = table.to_raw(cm / 100), base.calibration.to_raw(cm / 100)
@@ -109,8 +126,10 @@ def table_rows(samples: list[tuple[float, int]]) -> list[tuple[float, float]]:
         if not rows or reading < rows[-1][1]:
             rows.append((distance, reading))
     if len(rows) < 2 or rows[-1][1] != 0.0:
-        raise ValueError("the approach never saw the wall go out of range, or never saw it: "
-                         f"{len(samples)} readings (is the robot facing the wall?)")
+        raise ValueError(
+            "the approach never saw the wall go out of range, or never saw it: "
+            f"{len(samples)} readings (is the robot facing the wall?)"
+        )
     return rows
 
 
@@ -128,11 +147,11 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     def run_for(seconds: float, linear: float, angular: float) -> list[tuple[float, Pose]]:
         out = []
         for _ in range(round(seconds / period)):
-            backend.drive(linear, angular)      # again every tick: a robot whose motors vary per command averages
+            backend.drive(linear, angular)  # again every tick: a robot whose motors vary per command averages
             backend.advance(period)
             out.append((backend.time(), truth()))
         backend.drive(0.0, 0.0)
-        for _ in range(5):                  # let it come to rest
+        for _ in range(5):  # let it come to rest
             backend.advance(period)
         return out
 
@@ -148,8 +167,10 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     say(f"2/3 proximity: approaching the wall at {APPROACH_SPEED * 100:g} cm/s")
     raw_of = getattr(backend, "proximity_raw", None)
     if raw_of is None:
-        raise ValueError(f"the backend {type(backend).__name__} gives no raw readings (a simulator with "
-                         f"sensor_model raw or cone, the aseba or playground backends do)")
+        raise ValueError(
+            f"the backend {type(backend).__name__} gives no raw readings (a simulator with "
+            f"sensor_model raw or cone, the aseba or playground backends do)"
+        )
     samples: list[tuple[float, int]] = []
     for _ in range(round(2 * END / APPROACH_SPEED / period)):
         backend.drive(APPROACH_SPEED, 0.0)

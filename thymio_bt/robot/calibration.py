@@ -51,10 +51,11 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Mapping
+from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:                      # numpy is only needed by whoever makes the generator
+if TYPE_CHECKING:  # numpy is only needed by whoever makes the generator
     import numpy as np
 
 
@@ -111,17 +112,40 @@ class CalibrationTable:
             return math.inf
         if reading >= r[0]:
             return float(d[0])
-        i = len(r) - bisect_right(self._ascending, reading)      # first row reading ``reading`` or less
+        i = len(r) - bisect_right(self._ascending, reading)  # first row reading ``reading`` or less
         t = (reading - r[i - 1]) / (r[i] - r[i - 1])
         return d[i - 1] + t * (d[i] - d[i - 1])
 
 
 _WEBOTS_ROWS = (
-    (0.00333, 4308), (0.00666, 4298), (0.01, 4279), (0.01333, 4253), (0.01666, 4201), (0.02, 4139),
-    (0.02333, 3981), (0.02666, 3733), (0.03, 3515), (0.03333, 3326), (0.03666, 3141), (0.04, 2965),
-    (0.04333, 2860), (0.04666, 2696), (0.05, 2570), (0.05333, 2475), (0.05666, 2344), (0.06, 2248),
-    (0.06333, 2182), (0.06666, 2044), (0.07, 1941), (0.07333, 1835), (0.07666, 1689), (0.08, 1597),
-    (0.08333, 1473), (0.08666, 1345), (0.09, 1195), (0.09333, 0),
+    (0.00333, 4308),
+    (0.00666, 4298),
+    (0.01, 4279),
+    (0.01333, 4253),
+    (0.01666, 4201),
+    (0.02, 4139),
+    (0.02333, 3981),
+    (0.02666, 3733),
+    (0.03, 3515),
+    (0.03333, 3326),
+    (0.03666, 3141),
+    (0.04, 2965),
+    (0.04333, 2860),
+    (0.04666, 2696),
+    (0.05, 2570),
+    (0.05333, 2475),
+    (0.05666, 2344),
+    (0.06, 2248),
+    (0.06333, 2182),
+    (0.06666, 2044),
+    (0.07, 1941),
+    (0.07333, 1835),
+    (0.07666, 1689),
+    (0.08, 1597),
+    (0.08333, 1473),
+    (0.08666, 1345),
+    (0.09, 1195),
+    (0.09333, 0),
 )
 
 #: The default table: Webots' Thymio II proximity lookup table without its 0 m row (see above).
@@ -133,9 +157,22 @@ WEBOTS_THYMIO2 = CalibrationTable(
 
 
 _ENKI_ROWS = (
-    (0.0, 4505), (0.01, 4448), (0.02, 4278), (0.03, 4019), (0.04, 3705), (0.05, 3366), (0.06, 3027),
-    (0.07, 2705), (0.08, 2409), (0.09, 2143), (0.10, 1908), (0.11, 1701), (0.12, 1521), (0.13, 1363),
-    (0.139999, 1226), (0.14, 0),
+    (0.0, 4505),
+    (0.01, 4448),
+    (0.02, 4278),
+    (0.03, 4019),
+    (0.04, 3705),
+    (0.05, 3366),
+    (0.06, 3027),
+    (0.07, 2705),
+    (0.08, 2409),
+    (0.09, 2143),
+    (0.10, 1908),
+    (0.11, 1701),
+    (0.12, 1521),
+    (0.13, 1363),
+    (0.139999, 1226),
+    (0.14, 0),
 )
 
 #: Enki's (Thymio Suite's simulator) response at 1 cm steps; the Playground reads 0 from 14 cm on.
@@ -143,7 +180,7 @@ ENKI_THYMIO2 = CalibrationTable(
     distances=tuple(d for d, _ in _ENKI_ROWS),
     readings=tuple(float(r) for _, r in _ENKI_ROWS),
     source="enki-community/enki enki/robots/thymio2/Thymio2.cpp @ bb486bfb (IRSensor m=4505, x0=0.03, c=73)",
-    floor=20.0,                # empty sensors read 0-8 (noise sd 2.87): 20 is 7 sd
+    floor=20.0,  # empty sensors read 0-8 (noise sd 2.87): 20 is 7 sd
 )
 
 
@@ -190,8 +227,10 @@ class RawProximityModel:
     def measure_scan(self, scan: Mapping[str, float]) -> dict[str, int]:
         """Noisy readings for a scan in metres (by sensor name, inf when nothing is in range)."""
         draws = self.rng.standard_normal(len(scan))
-        return {name: self._reading(self.table.to_raw(distance), float(z))
-                for (name, distance), z in zip(scan.items(), draws)}
+        return {
+            name: self._reading(self.table.to_raw(distance), float(z))
+            for (name, distance), z in zip(scan.items(), draws)
+        }
 
     def through_raw(self, scan: Mapping[str, float]) -> dict[str, float]:
         """A metric scan as a real robot would see it: measured as readings, converted back to metres."""

@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
-from typing import Mapping
 
 #: The 7 proximity sensors, front (left to right) then rear, as in the course URDF.
 SENSOR_NAMES: tuple[str, ...] = (
@@ -58,11 +58,11 @@ class Pose:
     def as_tuple(self) -> tuple[float, float, float]:
         return (self.x, self.y, self.yaw)
 
-    def distance_to(self, other: "Pose") -> float:
+    def distance_to(self, other: Pose) -> float:
         return math.hypot(other.x - self.x, other.y - self.y)
 
 
-_set_x, _set_y, _set_yaw = Pose.x.__set__, Pose.y.__set__, Pose.yaw.__set__   # type: ignore[attr-defined]
+_set_x, _set_y, _set_yaw = Pose.x.__set__, Pose.y.__set__, Pose.yaw.__set__  # type: ignore[attr-defined]
 
 
 def new_pose(x: float, y: float, yaw: float) -> Pose:
@@ -205,7 +205,7 @@ class Backend(Robot, Entities):
 
     def serve_requests(self) -> None:
         """Complete the queued requests in order, each SUCCEEDED or FAILED with a reason."""
-        if not self._requests:                 # the common case, every tick
+        if not self._requests:  # the common case, every tick
             return
         pending, self._requests = self._requests, []
         for request in pending:
@@ -214,7 +214,8 @@ class Backend(Robot, Entities):
             else:
                 assert request.pose is not None
                 problem = self.spawn_problem(request.entity, request.pose) or self._place_entity(
-                    request.entity, request.pose)
+                    request.entity, request.pose
+                )
             request.reason = problem
             request.state = RequestState.FAILED if problem else RequestState.SUCCEEDED
 

@@ -87,7 +87,9 @@ class RobotModel:
         """Linear and angular velocity from wheel rim speeds."""
         return (left + right) / 2.0, (right - left) / self.wheel_separation
 
-    def limited_wheel_speeds(self, linear: float, angular: float, max_wheel: float | None = None) -> tuple[float, float]:
+    def limited_wheel_speeds(
+        self, linear: float, angular: float, max_wheel: float | None = None
+    ) -> tuple[float, float]:
         """The wheel speeds of a command, both scaled down when one would exceed ``max_wheel`` (the
         robot's limit by default), which keeps the turn radius."""
         limit = self.max_wheel_speed if max_wheel is None else max_wheel
@@ -119,15 +121,17 @@ class RobotModel:
         return self.sensors[SENSOR_NAMES.index(name)]
 
 
-def integrate_arc(x: float, y: float, yaw: float, v: float, w: float,
-                  duration: float) -> tuple[float, float, float]:
+def integrate_arc(x: float, y: float, yaw: float, v: float, w: float, duration: float) -> tuple[float, float, float]:
     """Dead reckoning: where a point moving at (v, w) for ``duration`` ends, along the exact arc."""
     turn = w * duration
     if abs(turn) < 1e-9:
         return x + v * duration * math.cos(yaw), y + v * duration * math.sin(yaw), yaw + turn
     radius = v / w
-    return (x + radius * (math.sin(yaw + turn) - math.sin(yaw)),
-            y - radius * (math.cos(yaw + turn) - math.cos(yaw)), yaw + turn)
+    return (
+        x + radius * (math.sin(yaw + turn) - math.sin(yaw)),
+        y - radius * (math.cos(yaw + turn) - math.cos(yaw)),
+        yaw + turn,
+    )
 
 
 def _course_hull() -> tuple[tuple[float, float], ...]:
@@ -139,11 +143,11 @@ def _course_hull() -> tuple[tuple[float, float], ...]:
     centre = (nose**2 - arc_start**2 - side**2) / (2 * (nose - arc_start))
     radius = nose - centre
     half = math.atan2(side, arc_start - centre)
-    arc = [(centre + radius * math.cos(a), radius * math.sin(a))
-           for a in (-half + 2 * half * i / 12 for i in range(13))]
+    arc = [
+        (centre + radius * math.cos(a), radius * math.sin(a)) for a in (-half + 2 * half * i / 12 for i in range(13))
+    ]
     chamfer = 0.001
-    return ((rear, -side + chamfer), (rear + chamfer, -side), *arc,
-            (rear + chamfer, side), (rear, side - chamfer))
+    return ((rear, -side + chamfer), (rear + chamfer, -side), *arc, (rear + chamfer, side), (rear, side - chamfer))
 
 
 #: The course's Thymio, number for number (../shared/course/robot.md: the URDF, Gazebo plugins).
@@ -153,10 +157,10 @@ COURSE = RobotModel(
     axle_x=-0.0243,
     wheel_separation=0.0935,
     wheel_radius=0.022,
-    max_wheel_speed=0.20,          # a real Thymio's limit: 500 motor units ≈ 20 cm/s (Mobsya's API doc)
-    mass=0.2599,                   # base 0.2052 + two wheels 0.027 + 7 sensor links
+    max_wheel_speed=0.20,  # a real Thymio's limit: 500 motor units ≈ 20 cm/s (Mobsya's API doc)
+    mass=0.2599,  # base 0.2052 + two wheels 0.027 + 7 sensor links
     hull=_course_hull(),
-    sensors=(                      # URDF proximity_sensors.xacro, in base_link
+    sensors=(  # URDF proximity_sensors.xacro, in base_link
         SensorPose("front_left", 0.0387, 0.0493, 0.66323),
         SensorPose("front_center_left", 0.0513, 0.0261, 0.33161),
         SensorPose("front_center", 0.0557, 0.0, 0.0),
@@ -231,7 +235,7 @@ REAL = replace(
 
 #: The robot models a run can name, by name.
 ROBOTS: dict[str, RobotModel] = {m.name: m for m in (COURSE, ENKI, REAL)}
-_MODELS = tuple(ROBOTS.items())      # hashable, for the profile cache
+_MODELS = tuple(ROBOTS.items())  # hashable, for the profile cache
 
 
 def robot_model(name: str) -> RobotModel:

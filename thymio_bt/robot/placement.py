@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Iterable, Sequence
 
 from thymio_bt.maze import Maze
 from thymio_bt.maze.model import wall_corners
@@ -71,15 +71,16 @@ def _wall_shapes(geometry: bytes) -> MazeShapes:
     """The shapes of walls given as (x0, y0, x1, y1, thickness) doubles: keyed by their bytes, so two
     mazes share them only when every float is the same, bit for bit (0.0 and -0.0 differ)."""
     values = struct.unpack(f"{len(geometry) // 8}d", geometry)
-    polygons = tuple(tuple(wall_corners(values[i:i + 2], values[i + 2:i + 4], values[i + 4]))
-                     for i in range(0, len(values), 5))
+    polygons = tuple(
+        tuple(wall_corners(values[i : i + 2], values[i + 2 : i + 4], values[i + 4])) for i in range(0, len(values), 5)
+    )
     boxes = tuple(_box(p) for p in polygons)
     return MazeShapes(polygons, boxes, _union(boxes), bool(polygons))
 
 
 def _axes(polygon: Polygon) -> Iterable[tuple[float, float]]:
     for (x0, y0), (x1, y1) in zip(polygon, [*polygon[1:], polygon[0]]):
-        yield y0 - y1, x1 - x0                       # the edge's normal (not normalised: only signs matter)
+        yield y0 - y1, x1 - x0  # the edge's normal (not normalised: only signs matter)
 
 
 def convex_overlap(a: Polygon, b: Polygon) -> bool:
@@ -88,7 +89,7 @@ def convex_overlap(a: Polygon, b: Polygon) -> bool:
         pa = [x * nx + y * ny for x, y in a]
         pb = [x * nx + y * ny for x, y in b]
         if max(pa) <= min(pb) or max(pb) <= min(pa):
-            return False                             # a separating axis
+            return False  # a separating axis
     return True
 
 
@@ -103,8 +104,12 @@ def convex_gap(a: Polygon, b: Polygon) -> float:
     """The distance between two convex polygons (0 when they touch or overlap)."""
     if convex_overlap(a, b):
         return 0.0
-    return min(_point_segment(px, py, p, q) for one, other in ((a, b), (b, a))
-               for px, py in one for p, q in zip(other, [*other[1:], other[0]]))
+    return min(
+        _point_segment(px, py, p, q)
+        for one, other in ((a, b), (b, a))
+        for px, py in one
+        for p, q in zip(other, [*other[1:], other[0]])
+    )
 
 
 def clearance(maze: Maze, model: RobotModel, pose: Pose) -> float:
@@ -122,8 +127,10 @@ def placement_problem(maze: Maze | MazeShapes, model: RobotModel, pose: Pose) ->
     if shapes.walled:
         xmin, ymin, xmax, ymax = shapes.bounds
         if not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
-            return (f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
-                    f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])")
+            return (
+                f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
+                f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])"
+            )
     hx0, hy0, hx1, hy1 = _box(hull)
     for polygon, (x0, y0, x1, y1) in zip(shapes.polygons, shapes.boxes):
         if x0 - hx1 > _APART or hx0 - x1 > _APART or y0 - hy1 > _APART or hy0 - y1 > _APART:
@@ -140,8 +147,12 @@ def ray_distance(maze: Maze | MazeShapes, ox: float, oy: float, yaw: float) -> f
     best = math.inf
     for corners, (bx0, by0, bx1, by1) in zip(shapes.polygons, shapes.boxes):
         # a box wholly behind the start along x or along y (by more than any rounding) is never hit
-        if ((c >= 0.0 and bx1 < ox - _APART) or (c <= 0.0 and bx0 > ox + _APART)
-                or (s >= 0.0 and by1 < oy - _APART) or (s <= 0.0 and by0 > oy + _APART)):
+        if (
+            (c >= 0.0 and bx1 < ox - _APART)
+            or (c <= 0.0 and bx0 > ox + _APART)
+            or (s >= 0.0 and by1 < oy - _APART)
+            or (s <= 0.0 and by0 > oy + _APART)
+        ):
             continue
         for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]]):
             hit = _ray_segment(ox, oy, c, s, x0, y0, x1, y1)
@@ -150,8 +161,9 @@ def ray_distance(maze: Maze | MazeShapes, ox: float, oy: float, yaw: float) -> f
     return best
 
 
-def _ray_segment(ox: float, oy: float, dx: float, dy: float,
-                 x0: float, y0: float, x1: float, y1: float) -> float | None:
+def _ray_segment(
+    ox: float, oy: float, dx: float, dy: float, x0: float, y0: float, x1: float, y1: float
+) -> float | None:
     """Distance along the ray (o, d) to the segment, or None when it misses."""
     ex, ey = x1 - x0, y1 - y0
     denom = dx * ey - dy * ex

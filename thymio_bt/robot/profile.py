@@ -26,8 +26,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.robot.calibration import CalibrationTable
 
 #: the suffixes that make a ``--robot`` value a profile file rather than a model's name
 PROFILE_SUFFIXES = (".yaml", ".yml")
@@ -55,7 +55,6 @@ class Profile(BaseModel):
     measured: dict[str, Any] = Field(default_factory=dict)
 
 
-
 def is_profile_path(name: str) -> bool:
     return name.lower().endswith(PROFILE_SUFFIXES)
 
@@ -75,8 +74,14 @@ def read_profile(path: str, models: tuple[tuple[str, Any], ...]) -> Any:
     marks = data.marks if isinstance(data, MarkedDict) else {}
     problems = []
     if "base" in data and data["base"] not in named:
-        problems.append(Problem(f"'base': no built-in robot model {data['base']!r}", str(path),
-                                *marks.get("base", (1, 1)), hint=did_you_mean(str(data["base"]), named)))
+        problems.append(
+            Problem(
+                f"'base': no built-in robot model {data['base']!r}",
+                str(path),
+                *marks.get("base", (1, 1)),
+                hint=did_you_mean(str(data["base"]), named),
+            )
+        )
     try:
         profile = Profile.model_validate(dict(data))
     except ValidationError as exc:
@@ -87,8 +92,11 @@ def read_profile(path: str, models: tuple[tuple[str, Any], ...]) -> Any:
     if problems:
         raise UserError(problems)
     base = named[profile.base]
-    changes: dict[str, Any] = {"name": profile.name, "description": profile.description or
-                               f"{profile.name}: {profile.base} with measured numbers ({Path(path).name})"}
+    changes: dict[str, Any] = {
+        "name": profile.name,
+        "description": profile.description
+        or f"{profile.name}: {profile.base} with measured numbers ({Path(path).name})",
+    }
     if profile.metres_per_unit is not None:
         changes["metres_per_unit"] = profile.metres_per_unit
         changes["max_wheel_speed"] = profile.metres_per_unit * base.max_units
@@ -96,8 +104,9 @@ def read_profile(path: str, models: tuple[tuple[str, Any], ...]) -> Any:
         changes["wheel_separation"] = profile.wheel_separation
     if profile.calibration is not None:
         try:
-            changes["calibration"] = CalibrationTable(tuple(profile.calibration.distances),
-                                                      tuple(profile.calibration.readings), source=str(path))
+            changes["calibration"] = CalibrationTable(
+                tuple(profile.calibration.distances), tuple(profile.calibration.readings), source=str(path)
+            )
         except ValueError as exc:
             raise UserError(Problem(f"'calibration': {exc}", str(path), *marks.get("calibration", (1, 1)))) from None
     return replace(base, **changes)
@@ -109,4 +118,5 @@ def profile_text(profile: Profile) -> str:
 
     data = profile.model_dump(exclude_none=True)
     return "# A robot profile (thymio-bt calibrate); use it with --robot THIS_FILE\n" + yaml.safe_dump(
-        data, sort_keys=False)
+        data, sort_keys=False
+    )

@@ -15,7 +15,8 @@ Example::
 
 from __future__ import annotations
 
-from typing import Any, Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
+from typing import Any
 
 from thymio_bt.run.sweep import Job
 
@@ -34,4 +35,4 @@ class DaskExecutor:
             for future in as_completed(futures):
                 yield future.result()
         finally:
-            self.client.cancel(futures)       # an interrupted sweep leaves no work queued on the cluster
+            self.client.cancel(futures)  # an interrupted sweep leaves no work queued on the cluster

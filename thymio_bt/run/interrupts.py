@@ -41,11 +41,11 @@ class Interrupts:
         return 128 + (self.signal or 0)
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
-        if self.signal is not None:            # asked twice: stop now, whatever is running
+        if self.signal is not None:  # asked twice: stop now, whatever is running
             raise KeyboardInterrupt
         self.signal = signum
 
-    def __enter__(self) -> "Interrupts":
+    def __enter__(self) -> Interrupts:
         if threading.current_thread() is threading.main_thread():
             for sig in SIGNALS:
                 self._previous[sig] = signal.signal(sig, self._handle)

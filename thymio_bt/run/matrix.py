@@ -16,9 +16,10 @@ from __future__ import annotations
 import itertools
 import math
 import statistics
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 from thymio_bt.errors import UserError
 from thymio_bt.run.sweep import SweepResult, sweep
@@ -37,15 +38,20 @@ class Cell:
         """Each run's distance from the reference final pose (m); inf when it ended without a robot."""
         if self.reference is None:
             return []
-        return [math.inf if r["final_pose"] is None else
-                math.hypot(r["final_pose"]["x"] - self.reference["x"], r["final_pose"]["y"] - self.reference["y"])
-                for r in self.result.results]
+        return [
+            math.inf
+            if r["final_pose"] is None
+            else math.hypot(r["final_pose"]["x"] - self.reference["x"], r["final_pose"]["y"] - self.reference["y"])
+            for r in self.result.results
+        ]
 
     def row(self) -> dict[str, Any]:
         errors = sorted(self.errors())
         finite = [e for e in errors if math.isfinite(e)]
         return {
-            "settings": self.settings, "runs": self.result.runs, "success_rate": round(self.result.success_rate, 6),
+            "settings": self.settings,
+            "runs": self.result.runs,
+            "success_rate": round(self.result.success_rate, 6),
             "runs_with_collision": sum(1 for r in self.result.results if r["collisions"]),
             "final_error_median": round(statistics.median(finite), 6) if finite else None,
             "final_error_max": round(errors[-1], 6) if errors and math.isfinite(errors[-1]) else None,
@@ -60,17 +66,27 @@ def parse_axes(specs: tuple[str, ...] | list[str]) -> dict[str, list[str]]:
         name, sep, values = spec.partition("=")
         choices = [v.strip() for v in values.split(",") if v.strip()]
         if not sep or not name.strip() or not choices:
-            raise UserError(f"--matrix expects NAME=VALUE,VALUE..., got '{spec}' (hint: --matrix robot=course,enki,real)")
+            raise UserError(
+                f"--matrix expects NAME=VALUE,VALUE..., got '{spec}' (hint: --matrix robot=course,enki,real)"
+            )
         if name.strip() in axes:
             raise UserError(f"--matrix {name.strip()} is given twice (hint: list all its values in one --matrix)")
         axes[name.strip()] = choices
     return axes
 
 
-def run_matrix(mission: str | Path, runs: int, axes: dict[str, list[str]], seed_start: int = 0,
-               overrides: dict[str, str] | None = None, maze: str | None = None, start: str | None = None,
-               executor: Any = None, progress: Callable[[dict[str, Any]], None] | None = None,
-               interrupts: Any = None) -> list[Cell]:
+def run_matrix(
+    mission: str | Path,
+    runs: int,
+    axes: dict[str, list[str]],
+    seed_start: int = 0,
+    overrides: dict[str, str] | None = None,
+    maze: str | None = None,
+    start: str | None = None,
+    executor: Any = None,
+    progress: Callable[[dict[str, Any]], None] | None = None,
+    interrupts: Any = None,
+) -> list[Cell]:
     """The sweep of ``mission`` in every combination of ``axes`` (a ``--set`` name → its values)."""
     from thymio_bt.mission import load_mission
     from thymio_bt.run.runner import Run
@@ -83,8 +99,17 @@ def run_matrix(mission: str | Path, runs: int, axes: dict[str, list[str]], seed_
     names = list(axes)
     for values in itertools.product(*(axes[n] for n in names)):
         settings = dict(zip(names, values))
-        result = sweep(mission, runs, seed_start, {**base, **settings}, maze, start, executor=executor,
-                       progress=progress, interrupts=interrupts)
+        result = sweep(
+            mission,
+            runs,
+            seed_start,
+            {**base, **settings},
+            maze,
+            start,
+            executor=executor,
+            progress=progress,
+            interrupts=interrupts,
+        )
         cells.append(Cell(settings, result, reference))
         if result.interrupted:
             break

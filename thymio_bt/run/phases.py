@@ -36,8 +36,14 @@ def phases(plan: NodePlan, events: list[dict[str, Any]]) -> list[dict[str, Any]]
         if not inside:
             continue
         start, end = inside[0]["t"], inside[-1]["t"]
-        entry: dict[str, Any] = {"name": node.name, "path": path, "start": start, "end": end, "duration": round(end - start, 6),
-                                 "status": inside[-1].get("status")}
+        entry: dict[str, Any] = {
+            "name": node.name,
+            "path": path,
+            "start": start,
+            "end": end,
+            "duration": round(end - start, 6),
+            "status": inside[-1].get("status"),
+        }
         cells = {tuple(e["cell"]) for e in inside if isinstance(e.get("cell"), list)}
         if cells:
             entry["cells"] = len(cells)

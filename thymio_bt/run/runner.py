@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -25,11 +26,11 @@ from thymio_bt.behaviours.base import describe, node_path, snapshot
 from thymio_bt.behaviours.cellmap import CellMap
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import Problem, UserError
-from thymio_bt.run.interrupts import Interrupts
 from thymio_bt.mission import Mission, build_tree
-from thymio_bt.run.phases import phases
-from thymio_bt.robot.placement import MazeShapes
 from thymio_bt.robot.interface import Backend, RequestState, RobotLost
+from thymio_bt.robot.placement import MazeShapes
+from thymio_bt.run.interrupts import Interrupts
+from thymio_bt.run.phases import phases
 
 
 @dataclass
@@ -68,8 +69,11 @@ class RunResult:
         return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
 
     def report(self) -> dict[str, Any]:
-        expectations = {} if self.expectations is None else {
-            "expectations": {"met": not self.expectations, "failed": self.expectations}}
+        expectations = (
+            {}
+            if self.expectations is None
+            else {"expectations": {"met": not self.expectations, "failed": self.expectations}}
+        )
         return {
             "mission": self.mission,
             "maze": self.maze,
@@ -106,18 +110,31 @@ class StopRun(Exception):
 class Run:
     """One prepared run of a mission on a backend (by default the pymunk simulation)."""
 
-    def __init__(self, mission: Mission, seed: int | None = None, substitutions: dict[str, Any] | None = None,
-                 node_stats: bool = False, backend: Backend | None = None) -> None:
+    def __init__(
+        self,
+        mission: Mission,
+        seed: int | None = None,
+        substitutions: dict[str, Any] | None = None,
+        node_stats: bool = False,
+        backend: Backend | None = None,
+    ) -> None:
         """``backend`` defaults to the one the mission names (:mod:`thymio_bt.backends`; the pymunk
         simulation of its maze unless it says otherwise); the robot is spawned at the mission's start."""
         self.mission = mission
         self.seed = mission.seed if seed is None else seed
         self.backend: Backend = backend or backend_kind(mission.backend).create(
-            mission, self.seed, mission.backend_options)
+            mission, self.seed, mission.backend_options
+        )
         problem = self.backend.spawn_problem(self.backend.robot_name, mission.start)
         if problem:
-            raise UserError(Problem(f"impossible start pose: {problem}", *mission.start_where, "start",
-                                    "pick a free pose inside the maze, e.g. a named spawn of the maze"))
+            raise UserError(
+                Problem(
+                    f"impossible start pose: {problem}",
+                    *mission.start_where,
+                    "start",
+                    "pick a free pose inside the maze, e.g. a named spawn of the maze",
+                )
+            )
         start = self.backend.request_spawn(self.backend.robot_name, mission.start)
         #: why the run cannot start (code, reason): a robot that is not there, a start it was refused
         self.unstarted: tuple[str, str] | None = None
@@ -129,11 +146,23 @@ class Run:
             self.unstarted = ("ENTITY_ERROR", f"the robot could not be put at the start: {start.reason}")
         self.period = 1.0 / mission.tick_hz
         self.events = EventLog()
-        self.ctx = Context(robot=self.backend, entities=self.backend, events=self.events, tick_period=self.period,
-                           bounds=MazeShapes.of(mission.maze).bounds if mission.maze.walls else None,
-                           goal=tuple((min(a.start[0], a.end[0]), min(a.start[1], a.end[1]),
-                                       max(a.start[0], a.end[0]), max(a.start[1], a.end[1])) for a in mission.maze.goal),
-                           collision_count=lambda: len(self.backend.collisions))
+        self.ctx = Context(
+            robot=self.backend,
+            entities=self.backend,
+            events=self.events,
+            tick_period=self.period,
+            bounds=MazeShapes.of(mission.maze).bounds if mission.maze.walls else None,
+            goal=tuple(
+                (
+                    min(a.start[0], a.end[0]),
+                    min(a.start[1], a.end[1]),
+                    max(a.start[0], a.end[0]),
+                    max(a.start[1], a.end[1]),
+                )
+                for a in mission.maze.goal
+            ),
+            collision_count=lambda: len(self.backend.collisions),
+        )
         py_trees.blackboard.Blackboard.clear()
         self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
         self.substituted = bool(substitutions)
@@ -142,8 +171,9 @@ class Run:
         self._final_tree: str | None = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
 
-    def run(self, on_tick: TickHook | None = None, realtime: float | None = None,
-            interrupts: Interrupts | None = None) -> RunResult:
+    def run(
+        self, on_tick: TickHook | None = None, realtime: float | None = None, interrupts: Interrupts | None = None
+    ) -> RunResult:
         """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time).
         A signal noted in ``interrupts`` ends the run at the next tick with status INTERRUPTED.
         The backend is closed (a real robot's motors stopped) however the run ends, even on Ctrl-C."""
@@ -166,7 +196,7 @@ class Run:
             # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
             # every tick for "full" visitors, which cost ~15 % of a run here and we have none
             if stats is None:
-                tick(root)                  # no visitor: the direct tick, without generators
+                tick(root)  # no visitor: the direct tick, without generators
             else:
                 for node in root.tick():
                     stats.run(node)
@@ -185,10 +215,10 @@ class Run:
                 break
             try:
                 sim.advance(self.period)
-            except RobotLost as exc:                    # a real robot gone silent: its own code
+            except RobotLost as exc:  # a real robot gone silent: its own code
                 status, crashed, crash_code = "CRASHED", str(exc), "ROBOT_LOST"
                 break
-            except (Exception, SystemExit) as exc:     # a backend's bug (a plugin's, say): end the run, say why
+            except (Exception, SystemExit) as exc:  # a backend's bug (a plugin's, say): end the run, say why
                 status, crashed, crash_code = "CRASHED", f"the backend raised {describe(exc)}", "BACKEND_ERROR"
                 break
             if len(sim.collisions) > seen_collisions:
@@ -201,7 +231,7 @@ class Run:
                 if lag > 0:
                     time.sleep(lag)  # realtime: pacing asked for with --realtime
         reason = code = failed_path = None
-        self._final_tree = None                 # drawn when read (the terminal viewer does)
+        self._final_tree = None  # drawn when read (the terminal viewer does)
         if status in ("TIMEOUT", "STOPPED", "INTERRUPTED", "CRASHED"):
             self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
             running = root.tip()
@@ -214,22 +244,35 @@ class Run:
                 reason, code, status = crashed, crash_code, "FAILURE"
             else:
                 reason, code, status = stopped, "STOPPED", "FAILURE"
-            root.stop(Status.INVALID)       # ends the running behaviours: events, robot stopped
+            root.stop(Status.INVALID)  # ends the running behaviours: events, robot stopped
         elif status == "FAILURE":
             failed_path, code, reason = failing_branch(root)
         wall = time.perf_counter() - wall_start
         final = snapshot(sim)
         true_pose = sim.true_pose()
         result = RunResult(
-            mission=self.mission.name, maze=self.mission.maze.name, status=status, reason=reason, code=code,
-            failed_path=failed_path, sim_time=sim.time(), ticks=self.ticks, wall_time=wall, seed=self.seed,
+            mission=self.mission.name,
+            maze=self.mission.maze.name,
+            status=status,
+            reason=reason,
+            code=code,
+            failed_path=failed_path,
+            sim_time=sim.time(),
+            ticks=self.ticks,
+            wall_time=wall,
+            seed=self.seed,
             final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
-            final_proximity=final["proximity"], events=list(self.events), collisions=len(sim.collisions),
+            final_proximity=final["proximity"],
+            events=list(self.events),
+            collisions=len(sim.collisions),
             min_clearance=None if math.isinf(sim.min_clearance) else sim.min_clearance,
-            trajectory=self.trajectory, node_stats=self.stats.table if self.stats else None,
+            trajectory=self.trajectory,
+            node_stats=self.stats.table if self.stats else None,
             phases=phases(self.mission.tree, self.events),
-            maze_map=next((v.summary() for v in py_trees.blackboard.Blackboard.storage.values()
-                           if isinstance(v, CellMap)), None))
+            maze_map=next(
+                (v.summary() for v in py_trees.blackboard.Blackboard.storage.values() if isinstance(v, CellMap)), None
+            ),
+        )
         if self.mission.maze.goal:
             reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
             result.goal = {"reached": reached is not None, "t": reached}
@@ -272,7 +315,9 @@ class NodeStats(py_trees.visitors.VisitorBase):
         self.table: dict[str, dict[str, float]] = {}
 
     def run(self, behaviour: Behaviour) -> None:
-        row = self.table.setdefault(node_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0})
+        row = self.table.setdefault(
+            node_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0}
+        )
         row["ticks"] += 1
         if behaviour.status == Status.SUCCESS:
             row["successes"] += 1
@@ -290,8 +335,9 @@ def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
         if not failed or getattr(node, "failure", None):
             break
         # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)
-        explained = [c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE
-                                              for n in c.iterate())]
+        explained = [
+            c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE for n in c.iterate())
+        ]
         node = (explained or failed)[-1]
     failure = getattr(node, "failure", None)
     if failure:

@@ -19,13 +19,14 @@ import os
 import shlex
 import signal
 import statistics
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator, Protocol
+from typing import Any, Protocol
 
-from thymio_bt.run.interrupts import Interrupts
 from thymio_bt.backends.sim.noise import REALISTIC
+from thymio_bt.run.interrupts import Interrupts
 
 
 @dataclass(frozen=True)
@@ -65,17 +66,39 @@ def run_job(job: Job) -> dict[str, Any]:
         mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
     try:
         result = Run(mission, job.seed).run()
-    except Exception as exc:              # that run fails, the sweep goes on and reports it
-        return {"seed": job.seed, "status": "FAILURE", "sim_time": 0.0, "final_pose": None,
-                "reason": f"the run raised {describe(exc)}", "code": "EXCEPTION", "failed_path": None,
-                "collisions": 0, "first_stop_error": None, "wall_time": 0.0}
-    stops = [abs(e["range"] - e["distance"]) for e in result.events
-             if e["kind"] == "behaviour_end" and e["name"] == "MoveUntilWall" and e["status"] == "SUCCESS"
-             and e.get("range") is not None]
-    return {"seed": job.seed, "status": result.status, "sim_time": round(result.sim_time, 6),
-            "final_pose": result.final_pose, "reason": result.reason, "code": result.code,
-            "failed_path": result.failed_path, "collisions": result.collisions,
-            "first_stop_error": None if not stops else round(stops[0], 6), "wall_time": result.wall_time}
+    except Exception as exc:  # that run fails, the sweep goes on and reports it
+        return {
+            "seed": job.seed,
+            "status": "FAILURE",
+            "sim_time": 0.0,
+            "final_pose": None,
+            "reason": f"the run raised {describe(exc)}",
+            "code": "EXCEPTION",
+            "failed_path": None,
+            "collisions": 0,
+            "first_stop_error": None,
+            "wall_time": 0.0,
+        }
+    stops = [
+        abs(e["range"] - e["distance"])
+        for e in result.events
+        if e["kind"] == "behaviour_end"
+        and e["name"] == "MoveUntilWall"
+        and e["status"] == "SUCCESS"
+        and e.get("range") is not None
+    ]
+    return {
+        "seed": job.seed,
+        "status": result.status,
+        "sim_time": round(result.sim_time, 6),
+        "final_pose": result.final_pose,
+        "reason": result.reason,
+        "code": result.code,
+        "failed_path": result.failed_path,
+        "collisions": result.collisions,
+        "first_stop_error": None if not stops else round(stops[0], 6),
+        "wall_time": result.wall_time,
+    }
 
 
 class Executor(Protocol):
@@ -103,10 +126,10 @@ class LocalPool:
                     return
                 yield fn(job)
             return
-        size = max(1, min(4, len(jobs) // (self.workers * 8)))    # small: an interrupt loses little
-        chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+        size = max(1, min(4, len(jobs) // (self.workers * 8)))  # small: an interrupt loses little
+        chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
         pool = multiprocessing.Pool(self.workers, initializer=_worker_signals)
-        workers = list(pool._pool)             # type: ignore[attr-defined]  # to notice one that dies
+        workers = list(pool._pool)  # type: ignore[attr-defined]  # to notice one that dies
         try:
             # chunks by hand: with chunksize > 1, Pool.imap_unordered returns a generator that cannot wait
             # with a timeout, and the loop must look at the interrupts while it waits
@@ -179,30 +202,53 @@ class SweepResult:
         if not values:
             return None
         q = statistics.quantiles(values, n=20, method="inclusive") if len(values) > 1 else [values[0]] * 19
-        return {"min": values[0], "p5": q[0], "median": statistics.median(values), "p95": q[-1],
-                "max": values[-1], "mean": statistics.fmean(values)}
+        return {
+            "min": values[0],
+            "p5": q[0],
+            "median": statistics.median(values),
+            "p95": q[-1],
+            "max": values[-1],
+            "mean": statistics.fmean(values),
+        }
 
     def to_json(self) -> dict[str, Any]:
         sim_total = sum(r["sim_time"] for r in self.results)
         return {
-            "mission": self.mission, "runs": self.runs, "runs_requested": self.requested,
-            "interrupted": self.interrupted, "successes": self.successes,
-            "success_rate": round(self.success_rate, 6), "seed_start": self.seed_start, "noise": self.noise,
-            "sim_time": self.distribution("sim_time"), "first_stop_error": self.distribution("first_stop_error"),
-            "failures": {code: sum(1 for r in self.results if r["code"] == code)
-                         for code in sorted({r["code"] for r in self.results if r["code"]})},
+            "mission": self.mission,
+            "runs": self.runs,
+            "runs_requested": self.requested,
+            "interrupted": self.interrupted,
+            "successes": self.successes,
+            "success_rate": round(self.success_rate, 6),
+            "seed_start": self.seed_start,
+            "noise": self.noise,
+            "sim_time": self.distribution("sim_time"),
+            "first_stop_error": self.distribution("first_stop_error"),
+            "failures": {
+                code: sum(1 for r in self.results if r["code"] == code)
+                for code in sorted({r["code"] for r in self.results if r["code"]})
+            },
             "wall_time": round(self.wall_time, 3),
             "aggregate_real_time_factor": round(sim_total / self.wall_time, 1) if self.wall_time else None,
-            "results": [{k: v for k, v in r.items() if k != "wall_time"}
-                        | ({} if r["status"] == "SUCCESS" else {"reproduce": self.reproduce(r["seed"])})
-                        for r in self.results],
+            "results": [
+                {k: v for k, v in r.items() if k != "wall_time"}
+                | ({} if r["status"] == "SUCCESS" else {"reproduce": self.reproduce(r["seed"])})
+                for r in self.results
+            ],
         }
 
 
-def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[str, str] | None = None,
-          maze: str | None = None, start: str | None = None, executor: Executor | None = None,
-          progress: Callable[[dict[str, Any]], None] | None = None,
-          interrupts: Interrupts | None = None) -> SweepResult:
+def sweep(
+    mission: str | Path,
+    runs: int,
+    seed_start: int = 0,
+    overrides: dict[str, str] | None = None,
+    maze: str | None = None,
+    start: str | None = None,
+    executor: Executor | None = None,
+    progress: Callable[[dict[str, Any]], None] | None = None,
+    interrupts: Interrupts | None = None,
+) -> SweepResult:
     """Run ``mission`` ``runs`` times with seeds ``seed_start``... and the realistic noise models on
     (``overrides`` such as ``noise.wheel=0`` change them). A signal noted in ``interrupts`` ends it
     early with the runs completed so far."""
@@ -213,7 +259,7 @@ def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[s
     interrupts = interrupts or Interrupts()
     settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
     settings.update(overrides or {})
-    spec = load_mission(mission, settings, maze=maze, start=start)     # fail fast, in this process
+    spec = load_mission(mission, settings, maze=maze, start=start)  # fail fast, in this process
     overrides_key = tuple(sorted(settings.items()))
     key = content_key(spec.sources, overrides_key, maze, start)
     jobs = [Job(str(mission), seed, overrides_key, maze, start, key) for seed in range(seed_start, seed_start + runs)]
@@ -231,12 +277,24 @@ def sweep(mission: str | Path, runs: int, seed_start: int = 0, overrides: dict[s
     except WorkerDied as exc:
         stopped = str(exc)
     results.sort(key=lambda r: r["seed"])
-    command = (str(mission), *(a for k, v in sorted(settings.items()) for a in ("--set", f"{k}={v}")),
-               *(("--maze", maze) if maze else ()), *(("--start", start) if start else ()))
-    return SweepResult(mission=spec.name, runs=len(results), successes=sum(r["status"] == "SUCCESS" for r in results),
-                       seed_start=seed_start, noise=spec.noise.model_dump(), results=results,
-                       wall_time=time.perf_counter() - began, requested=runs,
-                       interrupted=interrupts.name or stopped, command=command)
+    command = (
+        str(mission),
+        *(a for k, v in sorted(settings.items()) for a in ("--set", f"{k}={v}")),
+        *(("--maze", maze) if maze else ()),
+        *(("--start", start) if start else ()),
+    )
+    return SweepResult(
+        mission=spec.name,
+        runs=len(results),
+        successes=sum(r["status"] == "SUCCESS" for r in results),
+        seed_start=seed_start,
+        noise=spec.noise.model_dump(),
+        results=results,
+        wall_time=time.perf_counter() - began,
+        requested=runs,
+        interrupted=interrupts.name or stopped,
+        command=command,
+    )
 
 
 __all__ = ["Executor", "Job", "LocalPool", "SweepResult", "run_job", "sweep"]

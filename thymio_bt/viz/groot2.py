@@ -56,8 +56,9 @@ class Groot2Server:
             self.publisher.bind(f"tcp://{host}:{port + 1}")
         except self.zmq.ZMQError as exc:
             self.context.destroy()
-            raise UserError(f"cannot serve Groot2 on {host}:{port}-{port + 1}: {exc} "
-                            f"(hint: --groot2 with another port)") from None
+            raise UserError(
+                f"cannot serve Groot2 on {host}:{port}-{port + 1}: {exc} (hint: --groot2 with another port)"
+            ) from None
         self.server.setsockopt(self.zmq.RCVTIMEO, 100)
         self.tree_id = uuid.uuid4().bytes
         self.lock = threading.Lock()
@@ -70,10 +71,10 @@ class Groot2Server:
 
     def __call__(self, run: Any) -> None:
         if not self.uids:
-            from thymio_bt.mission.btcpp import mission_nodes, mission_xml, xml_uids
             from thymio_bt.logs.records import walk
+            from thymio_bt.mission.btcpp import mission_nodes, mission_xml, xml_uids
 
-            self.xml = mission_xml(run.mission)      # as `tree --btcpp` writes it: ports and settings
+            self.xml = mission_xml(run.mission)  # as `tree --btcpp` writes it: ports and settings
             nodes, _, subtrees = mission_nodes(run.mission)
             uids, wrappers = xml_uids(nodes, subtrees)
             # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's status

@@ -63,17 +63,41 @@ def _draw_cell_map(ax: Any, cells: dict[str, Any]) -> None:
     maze, each cell's steps to the goal over known openings, and the shortest known path."""
     c, (ox, oy) = cells["cell"], cells["origin"]
     for n, (i, j) in enumerate(cells["visited"]):
-        ax.add_patch(_pyplot().Rectangle((ox + i * c, oy + j * c), c, c, color="tab:green", alpha=0.12, lw=0,
-                                         label="cell visited (map)" if n == 0 else None))
+        ax.add_patch(
+            _pyplot().Rectangle(
+                (ox + i * c, oy + j * c),
+                c,
+                c,
+                color="tab:green",
+                alpha=0.12,
+                lw=0,
+                label="cell visited (map)" if n == 0 else None,
+            )
+        )
     for n, (x0, y0, x1, y1) in enumerate(cells["walls"]):
         ax.plot([x0, x1], [y0, y1], color="tab:red", lw=2.2, alpha=0.8, label="wall on the map" if n == 0 else None)
     for i, j, steps in cells.get("distances", []):
-        ax.annotate(str(steps), (ox + (i + 0.5) * c, oy + (j + 0.5) * c), ha="center", va="center",
-                    fontsize=5, color="tab:green", alpha=0.9)
+        ax.annotate(
+            str(steps),
+            (ox + (i + 0.5) * c, oy + (j + 0.5) * c),
+            ha="center",
+            va="center",
+            fontsize=5,
+            color="tab:green",
+            alpha=0.9,
+        )
     path = cells.get("path", [])
     if len(path) > 1:
-        ax.plot([ox + (i + 0.5) * c for i, _ in path], [oy + (j + 0.5) * c for _, j in path], color="tab:green",
-                lw=2.0, ls="--", alpha=0.9, zorder=5, label="shortest known path (map)")
+        ax.plot(
+            [ox + (i + 0.5) * c for i, _ in path],
+            [oy + (j + 0.5) * c for _, j in path],
+            color="tab:green",
+            lw=2.0,
+            ls="--",
+            alpha=0.9,
+            zorder=5,
+            label="shortest known path (map)",
+        )
 
 
 def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None = None, alpha: float = 0.9) -> Any:
@@ -84,15 +108,22 @@ def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None 
     return patch
 
 
-def _rays(pose: dict[str, float], prox: dict[str, float | None]) -> list[tuple[tuple[float, float], tuple[float, float], bool]]:
+def _rays(
+    pose: dict[str, float], prox: dict[str, float | None]
+) -> list[tuple[tuple[float, float], tuple[float, float], bool]]:
     c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
     out = []
     for name, x, y, a in ((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors):
         reading = prox.get(name)
         length = COURSE.range_max if reading is None else reading
         ox, oy = pose["x"] + x * c - y * s, pose["y"] + x * s + y * c
-        out.append(((ox, oy), (ox + length * math.cos(pose["yaw"] + a), oy + length * math.sin(pose["yaw"] + a)),
-                    reading is not None))
+        out.append(
+            (
+                (ox, oy),
+                (ox + length * math.cos(pose["yaw"] + a), oy + length * math.sin(pose["yaw"] + a)),
+                reading is not None,
+            )
+        )
     return out
 
 
@@ -104,8 +135,13 @@ def _segments(recording: Recording) -> list[list[dict[str, Any]]]:
             if parts[-1]:
                 parts.append([])
             continue
-        if parts[-1] and math.dist((parts[-1][-1]["pose"]["x"], parts[-1][-1]["pose"]["y"]),
-                                   (sample["pose"]["x"], sample["pose"]["y"])) > 0.05:
+        if (
+            parts[-1]
+            and math.dist(
+                (parts[-1][-1]["pose"]["x"], parts[-1][-1]["pose"]["y"]), (sample["pose"]["x"], sample["pose"]["y"])
+            )
+            > 0.05
+        ):
             parts.append([])
         parts[-1].append(sample)
     return [p for p in parts if p]
@@ -119,8 +155,13 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
     if recording.end.get("map"):
         _draw_cell_map(ax, recording.end["map"])
     for i, part in enumerate(_segments(recording)):
-        ax.plot([s["pose"]["x"] for s in part], [s["pose"]["y"] for s in part], color="tab:blue", lw=1.4,
-                label="trajectory (base_link)" if i == 0 else None)
+        ax.plot(
+            [s["pose"]["x"] for s in part],
+            [s["pose"]["y"] for s in part],
+            color="tab:blue",
+            lw=1.4,
+            label="trajectory (base_link)" if i == 0 else None,
+        )
     labelled: set[str] = set()
     for event in recording.events:
         kind = event["kind"]
@@ -130,7 +171,15 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
         elif kind == "behaviour_end" and event.get("name") == "TurnAngle" and event.get("status") == "SUCCESS" and pose:
             colour, label = "tab:orange", "after a turn"
         elif kind == "collision":
-            ax.plot(event["x"], event["y"], "x", color="red", ms=9, mew=2, label=None if "collision" in labelled else "collision")
+            ax.plot(
+                event["x"],
+                event["y"],
+                "x",
+                color="red",
+                ms=9,
+                mew=2,
+                label=None if "collision" in labelled else "collision",
+            )
             labelled.add("collision")
             continue
         elif kind == "waypoint_reached" and "target" in event:
@@ -147,8 +196,13 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
     if last is not None:
         _draw_robot(ax, last["pose"], "black", "end")
         for start, end, hit in _rays(last["pose"], last["prox"] or {}):
-            ax.plot([start[0], end[0]], [start[1], end[1]], color="tab:red" if hit else "0.6",
-                    lw=1.0, ls="-" if hit else ":")
+            ax.plot(
+                [start[0], end[0]],
+                [start[1], end[1]],
+                color="tab:red" if hit else "0.6",
+                lw=1.0,
+                ls="-" if hit else ":",
+            )
     status = recording.end.get("status", "")
     ax.set_title(title or f"{recording.mission}: {status}, {recording.end.get('sim_time', 0):.1f} s simulated")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
@@ -232,8 +286,16 @@ def plot_signals(recording: Recording, path: str | Path) -> Path:
         colour = colours[names.index(name) % len(colours)]
         for a in axes:
             a.axvspan(start, end, color=colour, alpha=0.15, lw=0)
-        axes[0].text((start + end) / 2, 1.0, name, transform=axes[0].get_xaxis_transform(), fontsize=6,
-                     rotation=90, va="bottom", ha="center")
+        axes[0].text(
+            (start + end) / 2,
+            1.0,
+            name,
+            transform=axes[0].get_xaxis_transform(),
+            fontsize=6,
+            rotation=90,
+            va="bottom",
+            ha="center",
+        )
     for a in axes:
         a.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
         a.grid(True, lw=0.3, alpha=0.5)

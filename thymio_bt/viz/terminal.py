@@ -56,7 +56,7 @@ def tree_text(mission_path: Path, run_plugins: bool = False) -> str:
     return py_trees.display.unicode_tree(_build(mission_path, run_plugins))
 
 
-def export_tree(mission_path: Path, out: "Output", fmt: str, run_plugins: bool = False) -> None:
+def export_tree(mission_path: Path, out: Output, fmt: str, run_plugins: bool = False) -> None:
     """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``."""
     source = py_trees.display.dot_tree(_build(mission_path, run_plugins)).to_string()
     if fmt == "dot":
@@ -64,11 +64,14 @@ def export_tree(mission_path: Path, out: "Output", fmt: str, run_plugins: bool =
         return
     program = shutil.which("dot")
     if program is None:
-        raise UserError(f"a .{fmt} needs Graphviz's 'dot' program (hint: apt-get install graphviz, "
-                        f"or write the .dot: thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot)")
+        raise UserError(
+            f"a .{fmt} needs Graphviz's 'dot' program (hint: apt-get install graphviz, "
+            f"or write the .dot: thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot)"
+        )
     if out.is_stdout:
-        sys.stdout.buffer.write(subprocess.run([program, f"-T{fmt}"], input=source.encode(), check=True,
-                                               capture_output=True).stdout)
+        sys.stdout.buffer.write(
+            subprocess.run([program, f"-T{fmt}"], input=source.encode(), check=True, capture_output=True).stdout
+        )
         return
     with out.staged() as tmp:
         subprocess.run([program, f"-T{fmt}", "-o", str(tmp)], input=source.encode(), check=True)

@@ -24,20 +24,21 @@ from __future__ import annotations
 import math
 import os
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 
 import py_trees
 
-from thymio_bt.errors import UserError
-from thymio_bt.maze import Maze
-from thymio_bt.logs.records import number
-from thymio_bt.logs.recording import Recording
 from thymio_bt.behaviours.base import node_path
 from thymio_bt.behaviours.cellmap import CellMap
-from thymio_bt.run.runner import Run, RunResult, StopRun
+from thymio_bt.errors import UserError
+from thymio_bt.logs.recording import Recording
+from thymio_bt.logs.records import number
+from thymio_bt.maze import Maze
 from thymio_bt.robot.model import COURSE
+from thymio_bt.run.runner import Run, RunResult, StopRun
 from thymio_bt.viz.plots import _outline, _rays
 
 #: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
@@ -87,7 +88,7 @@ class Frame:
 
 def _pygame() -> Any:
     """pygame, imported on first use, or a :class:`UserError` telling how to install it."""
-    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")   # no banner on stdout
+    os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # no banner on stdout
     try:
         import pygame
     except ImportError:
@@ -105,9 +106,16 @@ class Viewer:
     unless the video driver is ``dummy`` or ``offscreen`` (nobody could close it).
     """
 
-    def __init__(self, maze: Maze, speedup: float = 1.0, title: str = "thymio-bt",
-                 size: tuple[int, int] = (1000, 640), include: Iterable[tuple[float, float]] = (),
-                 max_fps: float | None = 60.0, hold: bool | None = None) -> None:
+    def __init__(
+        self,
+        maze: Maze,
+        speedup: float = 1.0,
+        title: str = "thymio-bt",
+        size: tuple[int, int] = (1000, 640),
+        include: Iterable[tuple[float, float]] = (),
+        max_fps: float | None = 60.0,
+        hold: bool | None = None,
+    ) -> None:
         if not speedup > 0:
             raise UserError(f"the speed-up must be > 0, got {speedup:g} (hint: --speedup 4)")
         self.pg = pg = _pygame()
@@ -115,8 +123,10 @@ class Viewer:
             pg.display.init()
             self.screen = pg.display.set_mode(size, pg.RESIZABLE)
         except pg.error as exc:
-            raise UserError(f"cannot open a window: {exc} (hint: run where there is a display, "
-                            "or set SDL_VIDEODRIVER=dummy to draw offscreen)") from None
+            raise UserError(
+                f"cannot open a window: {exc} (hint: run where there is a display, "
+                "or set SDL_VIDEODRIVER=dummy to draw offscreen)"
+            ) from None
         pg.font.init()
         pg.display.set_caption(title)
         self.font = pg.font.Font(None, 22)
@@ -124,13 +134,13 @@ class Viewer:
         self.maze = maze
         self.speedup = float(speedup)
         self.paused = False
-        self.frames = 0            # frames drawn
-        self.shown = 0             # frames given to show()
+        self.frames = 0  # frames drawn
+        self.shown = 0  # frames given to show()
         self.outcome = ""
         self.hold = pg.display.get_driver() not in ("dummy", "offscreen") if hold is None else hold
         self._min_interval = 1.0 / max_fps if max_fps else 0.0
         self._last_draw = -math.inf
-        self._anchor: tuple[float, float] | None = None   # (simulated t, wall time) of the pacing origin
+        self._anchor: tuple[float, float] | None = None  # (simulated t, wall time) of the pacing origin
         self._frame: Frame | None = None
         self._trail: list[list[tuple[float, float]]] = []
         self._open = True
@@ -150,8 +160,10 @@ class Viewer:
         x0, y0, x1, y1 = self._box
         span_x, span_y = max(x1 - x0, 0.3), max(y1 - y0, 0.3)
         self.scale = max(min(width / span_x, (height - BAR_HEIGHT) / span_y), 1e-6)
-        self._origin = (width / 2 - (x0 + x1) / 2 * self.scale,
-                        BAR_HEIGHT + (height - BAR_HEIGHT) / 2 + (y0 + y1) / 2 * self.scale)
+        self._origin = (
+            width / 2 - (x0 + x1) / 2 * self.scale,
+            BAR_HEIGHT + (height - BAR_HEIGHT) / 2 + (y0 + y1) / 2 * self.scale,
+        )
         self._background = self._draw_background()
 
     def to_screen(self, x: float, y: float) -> tuple[float, float]:
@@ -164,8 +176,12 @@ class Viewer:
         x0, y0, x1, y1 = self._box
         if x0 <= pose["x"] - reach and pose["x"] + reach <= x1 and y0 <= pose["y"] - reach and pose["y"] + reach <= y1:
             return
-        self._box = (min(x0, pose["x"] - reach), min(y0, pose["y"] - reach),
-                     max(x1, pose["x"] + reach), max(y1, pose["y"] + reach))
+        self._box = (
+            min(x0, pose["x"] - reach),
+            min(y0, pose["y"] - reach),
+            max(x1, pose["x"] + reach),
+            max(y1, pose["y"] + reach),
+        )
         self._fit()
 
     # ------------------------------------------------------------------ drawing
@@ -232,7 +248,7 @@ class Viewer:
             text = f"t = {frame.t:6.1f} s   x{self.speedup:g}   {frame.node}{robot}"
             self.screen.blit(self.font.render(text, True, BAR_TEXT), (8, 5))
         right = "PAUSED" if self.paused else self.outcome
-        if right:               # over the end of a long node path
+        if right:  # over the end of a long node path
             label = self.font.render(right, True, PAUSED_TEXT, BAR)
             self.screen.blit(label, (width - label.get_width() - 8, 5))
         help_ = self.small.render(KEYS_HELP, True, WALL)
@@ -310,7 +326,7 @@ class Viewer:
                 self.speedup /= 2
             else:
                 return False
-            self._anchor = (t, time.perf_counter())    # resumed or new speed: pace from here
+            self._anchor = (t, time.perf_counter())  # resumed or new speed: pace from here
         return False
 
     def finish(self, outcome: str = "") -> None:
@@ -322,8 +338,9 @@ class Viewer:
         self.draw()
         while self.hold:
             event = self.pg.event.wait()
-            if event.type == self.pg.QUIT or (event.type == self.pg.KEYDOWN
-                                              and event.key in (self.pg.K_q, self.pg.K_ESCAPE)):
+            if event.type == self.pg.QUIT or (
+                event.type == self.pg.KEYDOWN and event.key in (self.pg.K_q, self.pg.K_ESCAPE)
+            ):
                 break
             if event.type in (self.pg.VIDEORESIZE, self.pg.WINDOWSIZECHANGED):
                 self._fit()
@@ -351,18 +368,28 @@ class LiveView:
 
     def __init__(self, run: Run, speedup: float, **options: Any) -> None:
         start = run.mission.start
-        self.viewer = Viewer(run.mission.maze, speedup, title=f"thymio-bt: {run.mission.name}",
-                             include=[(start.x, start.y)], **options)
+        self.viewer = Viewer(
+            run.mission.maze, speedup, title=f"thymio-bt: {run.mission.name}", include=[(start.x, start.y)], **options
+        )
         self.cells: Any = None
 
     def __call__(self, run: Run) -> None:
         sim = run.backend
         pose = sim.true_pose()
         scan = sim.proximity() or {}
-        if self.cells is None:          # a mapping mission's map, once one of its behaviours made it
-            self.cells = next((v for v in py_trees.blackboard.Blackboard.storage.values() if isinstance(v, CellMap)), None)
-        self.viewer.show(Frame(sim.time(), None if pose is None else pose.as_dict(),
-                               {name: number(value) for name, value in scan.items()}, _node_text(run), self.cells))
+        if self.cells is None:  # a mapping mission's map, once one of its behaviours made it
+            self.cells = next(
+                (v for v in py_trees.blackboard.Blackboard.storage.values() if isinstance(v, CellMap)), None
+            )
+        self.viewer.show(
+            Frame(
+                sim.time(),
+                None if pose is None else pose.as_dict(),
+                {name: number(value) for name, value in scan.items()},
+                _node_text(run),
+                self.cells,
+            )
+        )
 
     def finish(self, result: RunResult) -> None:
         """Show the run's outcome; with ``hold``, wait until the window is closed."""

@@ -16,17 +16,16 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from thymio_bt.maze import Maze
-from thymio_bt.robot.placement import ContactTracker, placement_problem
-from thymio_bt.backends.real.aseba import AsebaNode
-from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
-from thymio_bt.robot.interface import Pose, RobotLost
-from thymio_bt.robot.model import RobotModel, robot_model
-from thymio_bt.robot.profile import is_profile_path
 from thymio_bt.backends.playground.enki import EnkiRobot
 from thymio_bt.backends.playground.process import Playground, free_port
 from thymio_bt.backends.playground.world import PlaygroundWorld, playground_world
-
+from thymio_bt.backends.real.aseba import AsebaNode
+from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
+from thymio_bt.maze import Maze
+from thymio_bt.robot.interface import Pose, RobotLost
+from thymio_bt.robot.model import RobotModel, robot_model
+from thymio_bt.robot.placement import ContactTracker, placement_problem
+from thymio_bt.robot.profile import is_profile_path
 
 #: the Playground's Thymio covers this fraction of what its motor units say (Enki's 16.6 cm/s at 500):
 #: against its ground truth, 2.9 s straight read 0.983, 2.1 s turning 0.985, thymio-bt calibrate 0.986
@@ -42,12 +41,21 @@ SETTLE = 0.2
 class PlaygroundRobot(ThymioRobot):
     """A :class:`ThymioRobot` whose world is a Playground it started (and stops on :meth:`close`)."""
 
-    def __init__(self, node: AsebaNode, config: RealConfig, playground: Playground, enki: EnkiRobot,
-                 world: PlaygroundWorld, maze: Maze, model: RobotModel, latency: float = 0.2) -> None:
+    def __init__(
+        self,
+        node: AsebaNode,
+        config: RealConfig,
+        playground: Playground,
+        enki: EnkiRobot,
+        world: PlaygroundWorld,
+        maze: Maze,
+        model: RobotModel,
+        latency: float = 0.2,
+    ) -> None:
         self.playground, self.enki, self.world, self.maze, self.model = playground, enki, world, maze, model
         self._contacts = ContactTracker(maze, model)
         self.latency = latency
-        super().__init__(node, config, say=lambda text: None)    # deleting needs nobody: the robot is parked
+        super().__init__(node, config, say=lambda text: None)  # deleting needs nobody: the robot is parked
 
     def true_pose(self) -> Pose | None:
         """The pose the simulation has (None once the Playground is gone)."""
@@ -66,17 +74,18 @@ class PlaygroundRobot(ThymioRobot):
 
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
         return super().spawn_problem(name, pose) or (
-            placement_problem(self.maze, self.model, pose) if self.maze.walls or self.maze.obstacles else None)
+            placement_problem(self.maze, self.model, pose) if self.maze.walls or self.maze.obstacles else None
+        )
 
     def advance(self, duration: float) -> None:
         super().advance(duration)
-        self._contacts.update(self, self._truth())    # RobotLost when the Playground is gone: the run ends there
+        self._contacts.update(self, self._truth())  # RobotLost when the Playground is gone: the run ends there
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
         self.node.set_motors(0, 0)
         x, y, yaw = self.model.axle_of(pose)
         self.enki.place(*self.world.to_enki(x, y), yaw)
-        self._sleep(SETTLE)         # the robot's readings are from before the teleport until then
+        self._sleep(SETTLE)  # the robot's readings are from before the teleport until then
         self._place(pose)
         return None
 
@@ -109,6 +118,10 @@ def create_playground(mission: Any, seed: int, options: Any) -> PlaygroundRobot:
     scale = options.speed_scale
     if scale is None:
         scale = 1.0 if is_profile_path(mission.robot) else SPEED_SCALE
-    config = RealConfig(metres_per_unit=model.metres_per_unit * scale, max_units=model.max_units,
-                        wheel_separation=model.wheel_separation, table=model.calibration)
+    config = RealConfig(
+        metres_per_unit=model.metres_per_unit * scale,
+        max_units=model.max_units,
+        wheel_separation=model.wheel_separation,
+        table=model.calibration,
+    )
     return PlaygroundRobot(node, config, playground, enki, world, mission.maze, model, options.latency)

@@ -27,8 +27,11 @@ def _jeepney() -> Any:
         import jeepney
         import jeepney.io.blocking
     except ImportError:
-        raise UserError(Problem("the 'playground' backend needs jeepney, which is not installed",
-                                hint="pip install 'thymio-bt[aseba]'")) from None
+        raise UserError(
+            Problem(
+                "the 'playground' backend needs jeepney, which is not installed", hint="pip install 'thymio-bt[aseba]'"
+            )
+        ) from None
     return jeepney
 
 
@@ -38,26 +41,35 @@ class EnkiRobot:
     def __init__(self, connection: Any, path: str) -> None:
         jeepney = _jeepney()
         self.connection = connection
-        self.properties = jeepney.Properties(jeepney.DBusAddress(path, bus_name=SERVICE,
-                                                                 interface="ch.epfl.mobots.EnkiPhysicalObject"))
+        self.properties = jeepney.Properties(
+            jeepney.DBusAddress(path, bus_name=SERVICE, interface="ch.epfl.mobots.EnkiPhysicalObject")
+        )
 
     @classmethod
-    def find(cls, bus: str, timeout: float = 5.0) -> "EnkiRobot":
+    def find(cls, bus: str, timeout: float = 5.0) -> EnkiRobot:
         """The first Thymio of the Playground on ``bus`` (waiting for the Playground to register)."""
         jeepney = _jeepney()
         connection = jeepney.io.blocking.open_dbus_connection(bus=bus)
         world = jeepney.DBusAddress("/world", bus_name=SERVICE, interface="ch.epfl.mobots.EnkiWorld")
         deadline = time.monotonic() + timeout
         while True:
-            reply = connection.send_and_get_reply(jeepney.new_method_call(world, "PhysicalObjectsByType", "s", ("Thymio2",)))
+            reply = connection.send_and_get_reply(
+                jeepney.new_method_call(world, "PhysicalObjectsByType", "s", ("Thymio2",))
+            )
             if reply.header.message_type == jeepney.MessageType.method_return and reply.body[0]:
                 break
             if time.monotonic() > deadline:
                 connection.close()
-                raise UserError(Problem(f"the Aseba Playground's D-Bus interface did not appear within {timeout:g} s",
-                                        hint="is it the Playground of the aseba package (1.6.99 or later)?"))
-            time.sleep(0.05)     # realtime: waiting for a program to register
-        reply = connection.send_and_get_reply(jeepney.new_method_call(world, "PhysicalObject", "s", (reply.body[0][0],)))
+                raise UserError(
+                    Problem(
+                        f"the Aseba Playground's D-Bus interface did not appear within {timeout:g} s",
+                        hint="is it the Playground of the aseba package (1.6.99 or later)?",
+                    )
+                )
+            time.sleep(0.05)  # realtime: waiting for a program to register
+        reply = connection.send_and_get_reply(
+            jeepney.new_method_call(world, "PhysicalObject", "s", (reply.body[0][0],))
+        )
         return cls(connection, reply.body[0])
 
     def _call(self, message: Any) -> Any:
@@ -68,7 +80,9 @@ class EnkiRobot:
         except (OSError, TimeoutError) as exc:
             raise RobotLost(f"the Aseba Playground's D-Bus interface failed: {exc}") from None
         if reply.header.message_type != jeepney.MessageType.method_return:
-            raise RobotLost(f"the Aseba Playground's D-Bus interface answered: {reply.body[0] if reply.body else 'an error'}")
+            raise RobotLost(
+                f"the Aseba Playground's D-Bus interface answered: {reply.body[0] if reply.body else 'an error'}"
+            )
         return reply.body
 
     def _get(self, name: str) -> float:

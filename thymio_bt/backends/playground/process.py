@@ -55,12 +55,13 @@ class Playground:
         self.folder, self.processes, self.bus, self.port = folder, processes, bus, port
 
     @classmethod
-    def start(cls, world_text: str, port: int, timeout: float = 10.0) -> "Playground":
+    def start(cls, world_text: str, port: int, timeout: float = 10.0) -> Playground:
         """Write the world, start a session bus and the Playground on it; wait for the robot's port."""
         for program in (PLAYGROUND, DBUS):
             if shutil.which(program) is None:
-                raise UserError(Problem(f"the 'playground' backend needs {program}, which is not installed",
-                                        hint=_INSTALL_HINT))
+                raise UserError(
+                    Problem(f"the 'playground' backend needs {program}, which is not installed", hint=_INSTALL_HINT)
+                )
         folder = Path(tempfile.mkdtemp(prefix="thymio-bt-playground-"))
         (folder / "home").mkdir()
         (folder / "run").mkdir(mode=0o700)
@@ -71,13 +72,32 @@ class Playground:
         processes: list[subprocess.Popen[bytes]] = []
         playground = cls(folder, processes, bus, port)
         try:
-            processes.append(subprocess.Popen([DBUS, "--session", "--nofork", f"--address={bus}"],
-                                              stdout=log, stderr=subprocess.STDOUT, start_new_session=True))
+            processes.append(
+                subprocess.Popen(
+                    [DBUS, "--session", "--nofork", f"--address={bus}"],
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    start_new_session=True,
+                )
+            )
             playground._wait(lambda: (folder / "bus").exists(), timeout, "its D-Bus session bus")
-            env = {**os.environ, "HOME": str(folder / "home"), "XDG_RUNTIME_DIR": str(folder / "run"),
-                   "QT_QPA_PLATFORM": "offscreen", "DBUS_SESSION_BUS_ADDRESS": bus}
-            processes.append(subprocess.Popen([PLAYGROUND, str(world)], cwd=folder, env=env, stdout=log,
-                                              stderr=subprocess.STDOUT, start_new_session=True))
+            env = {
+                **os.environ,
+                "HOME": str(folder / "home"),
+                "XDG_RUNTIME_DIR": str(folder / "run"),
+                "QT_QPA_PLATFORM": "offscreen",
+                "DBUS_SESSION_BUS_ADDRESS": bus,
+            }
+            processes.append(
+                subprocess.Popen(
+                    [PLAYGROUND, str(world)],
+                    cwd=folder,
+                    env=env,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                    start_new_session=True,
+                )
+            )
             playground._wait(lambda: listening(port), timeout, f"the robot's port {port}")
         except BaseException:
             playground.stop()
@@ -86,15 +106,24 @@ class Playground:
 
     def _wait(self, ready: object, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout
-        while not ready():                                                 # type: ignore[operator]
+        while not ready():  # type: ignore[operator]
             for process in self.processes:
                 if process.poll() is not None:
-                    raise UserError(Problem(f"the Aseba Playground stopped while starting (exit {process.returncode}); "
-                                            f"its output: {self.folder / 'playground.log'}", hint=_INSTALL_HINT))
+                    raise UserError(
+                        Problem(
+                            f"the Aseba Playground stopped while starting (exit {process.returncode}); "
+                            f"its output: {self.folder / 'playground.log'}",
+                            hint=_INSTALL_HINT,
+                        )
+                    )
             if time.monotonic() > deadline:
-                raise UserError(Problem(f"the Aseba Playground did not open {what} within {timeout:g} s",
-                                        hint=f"its output: {self.folder / 'playground.log'}"))
-            time.sleep(0.02)      # realtime: starting a program, not a simulation step
+                raise UserError(
+                    Problem(
+                        f"the Aseba Playground did not open {what} within {timeout:g} s",
+                        hint=f"its output: {self.folder / 'playground.log'}",
+                    )
+                )
+            time.sleep(0.02)  # realtime: starting a program, not a simulation step
 
     def stop(self) -> None:
         """Stop every process it started (by PID, the Playground first) and remove its folder."""
@@ -109,7 +138,7 @@ class Playground:
         self.processes.clear()
         shutil.rmtree(self.folder, ignore_errors=True)
 
-    def __enter__(self) -> "Playground":
+    def __enter__(self) -> Playground:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -32,8 +32,8 @@ class PlaygroundWorld:
     """A world file's text and how maze coordinates map to the Playground's."""
 
     text: str
-    offset: tuple[float, float]       # maze (x, y) + offset = Playground position, in m
-    parking: tuple[float, float]      # where a deleted robot waits, maze coordinates
+    offset: tuple[float, float]  # maze (x, y) + offset = Playground position, in m
+    parking: tuple[float, float]  # where a deleted robot waits, maze coordinates
 
     def to_enki(self, x: float, y: float) -> tuple[float, float]:
         return 100.0 * (x + self.offset[0]), 100.0 * (y + self.offset[1])
@@ -63,21 +63,31 @@ def playground_world(maze: Maze, axle: Pose, port: int, name: str = "thymio") ->
     offset = (MARGIN - xmin, MARGIN - ymin)
     width, height = xmax - xmin + 2 * MARGIN + BAY, ymax - ymin + 2 * MARGIN
     world = PlaygroundWorld("", offset, (xmax + MARGIN + BAY / 2, (ymin + ymax) / 2))
-    lines = ['<!DOCTYPE aseba-playground>', '<aseba-playground>',
-             '  <color name="wall" r="0.8" g="0.8" b="0.8"/>',
-             f'  <world w="{100 * width:.4f}" h="{100 * height:.4f}" color="wall"/>']
+    lines = [
+        "<!DOCTYPE aseba-playground>",
+        "<aseba-playground>",
+        '  <color name="wall" r="0.8" g="0.8" b="0.8"/>',
+        f'  <world w="{100 * width:.4f}" h="{100 * height:.4f}" color="wall"/>',
+    ]
     for i, shape in enumerate((*maze.walls, *maze.obstacles)):
         corners = shape.corners()
         xs, ys = [x for x, _ in corners], [y for _, y in corners]
         if not _axis_aligned(corners):
-            raise UserError(Problem(f"the maze's shape {i + 1} is not parallel to an axis",
-                                    hint="Aseba Playground 1.6.99 walls have no angle: turn the maze's walls "
-                                         "parallel to x and y"))
+            raise UserError(
+                Problem(
+                    f"the maze's shape {i + 1} is not parallel to an axis",
+                    hint="Aseba Playground 1.6.99 walls have no angle: turn the maze's walls parallel to x and y",
+                )
+            )
         cx, cy = world.to_enki((min(xs) + max(xs)) / 2, (min(ys) + max(ys)) / 2)
-        lines.append(f'  <wall x="{cx:.4f}" y="{cy:.4f}" l1="{100 * (max(xs) - min(xs)):.4f}" '
-                     f'l2="{100 * (max(ys) - min(ys)):.4f}" h="{100 * WALL_HEIGHT:.1f}" color="wall"/>')
+        lines.append(
+            f'  <wall x="{cx:.4f}" y="{cy:.4f}" l1="{100 * (max(xs) - min(xs)):.4f}" '
+            f'l2="{100 * (max(ys) - min(ys)):.4f}" h="{100 * WALL_HEIGHT:.1f}" color="wall"/>'
+        )
     rx, ry = world.to_enki(axle.x, axle.y)
-    lines.append(f'  <robot type="thymio2" name={quoteattr(name)} x="{rx:.4f}" y="{ry:.4f}" '
-                 f'angle="{axle.yaw:.6f}" port="{port}" nodeId="1"/>')
-    lines.append('</aseba-playground>')
+    lines.append(
+        f'  <robot type="thymio2" name={quoteattr(name)} x="{rx:.4f}" y="{ry:.4f}" '
+        f'angle="{axle.yaw:.6f}" port="{port}" nodeId="1"/>'
+    )
+    lines.append("</aseba-playground>")
     return PlaygroundWorld("\n".join(lines) + "\n", offset, world.parking)

@@ -4,6 +4,14 @@ tdmclient is imported only when :meth:`TdmNode.connect` (or :meth:`ThymioRobot.c
 this package imports without the optional extra.
 """
 
-from thymio_bt.backends.real.thymio import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
+from thymio_bt.backends.real.thymio import (
+    PLAYGROUND,
+    PROX_INDEX,
+    Node,
+    RealConfig,
+    TdmNode,
+    ThymioRobot,
+    import_tdmclient,
+)
 
 __all__ = ["PLAYGROUND", "PROX_INDEX", "Node", "RealConfig", "TdmNode", "ThymioRobot", "import_tdmclient"]

@@ -33,9 +33,9 @@ import threading
 import time
 from typing import Any
 
+from thymio_bt.backends.real.thymio import PROX_VARIABLE, SPEED_VARIABLES, TARGET_VARIABLES, Node
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.interface import RobotLost
-from thymio_bt.backends.real.thymio import PROX_VARIABLE, SPEED_VARIABLES, TARGET_VARIABLES, Node
 
 #: A robot silent for this long (s) is lost; thymiodirect alone would wait 3 s and then say nothing.
 LOST_AFTER = 0.8
@@ -59,21 +59,21 @@ class _SocketIO(io.RawIOBase):
         self.failed: BaseException | None = None
         sock.settimeout(0.2)
 
-    def read(self, n: int = -1) -> bytes:                  # type: ignore[override]
+    def read(self, n: int = -1) -> bytes:  # type: ignore[override]
         if self.failed is None:
             try:
                 data = self.sock.recv(n)
                 if data:
                     return data
                 self.failed = ConnectionError("the peer closed the connection")
-            except socket.timeout:
+            except TimeoutError:
                 return b""
             except OSError as exc:
                 self.failed = exc
-        time.sleep(0.05)          # realtime: a dead link (thymiodirect's reader would spin), not a sim step
+        time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
         return b""
 
-    def write(self, data: Any) -> int:                     # type: ignore[override]
+    def write(self, data: Any) -> int:  # type: ignore[override]
         if self.failed is None:
             try:
                 self.sock.sendall(data)
@@ -98,10 +98,16 @@ def _open_stream(device: str, timeout: float) -> Any:
         try:
             sock = socket.create_connection((host or "127.0.0.1", int(port)), timeout=timeout)
         except ValueError:
-            raise UserError(Problem(f"bad device '{device}'", hint="write tcp:HOST:PORT, e.g. tcp:127.0.0.1:33333")) from None
+            raise UserError(
+                Problem(f"bad device '{device}'", hint="write tcp:HOST:PORT, e.g. tcp:127.0.0.1:33333")
+            ) from None
         except OSError as exc:
-            raise UserError(Problem(f"cannot reach a Thymio at {device}: {exc.strerror or exc}",
-                                    hint="start the Aseba Playground or the robot's TCP bridge, or check the port")) from None
+            raise UserError(
+                Problem(
+                    f"cannot reach a Thymio at {device}: {exc.strerror or exc}",
+                    hint="start the Aseba Playground or the robot's TCP bridge, or check the port",
+                )
+            ) from None
         return _SocketIO(sock)
     import serial
 
@@ -109,30 +115,39 @@ def _open_stream(device: str, timeout: float) -> Any:
     try:
         return serial.Serial(port, timeout=0.2)
     except (OSError, serial.SerialException) as exc:
-        raise UserError(Problem(f"cannot open the serial port {port}: {exc}",
-                                hint="plug the Thymio in (its USB cable or dongle); on Linux, join the dialout group")) from None
+        raise UserError(
+            Problem(
+                f"cannot open the serial port {port}: {exc}",
+                hint="plug the Thymio in (its USB cable or dongle); on Linux, join the dialout group",
+            )
+        ) from None
 
 
 def _only_serial_port(Connection: Any) -> str:
     ports = Connection.serial_ports()
     if len(ports) != 1:
         found = ", ".join(ports) if ports else "none"
-        raise UserError(Problem(f"found {len(ports)} serial ports that may be a Thymio ({found})",
-                                hint="name one: --backend-opt device=/dev/ttyACM0 (or device=tcp:HOST:PORT)"))
+        raise UserError(
+            Problem(
+                f"found {len(ports)} serial ports that may be a Thymio ({found})",
+                hint="name one: --backend-opt device=/dev/ttyACM0 (or device=tcp:HOST:PORT)",
+            )
+        )
     return str(ports[0])
 
 
 class AsebaNode(Node):
     """One Thymio on an Aseba connection (see the module docstring)."""
 
-    def __init__(self, connection: Any, node_id: int, loop: asyncio.AbstractEventLoop, device: str,
-                 thread: threading.Thread) -> None:
+    def __init__(
+        self, connection: Any, node_id: int, loop: asyncio.AbstractEventLoop, device: str, thread: threading.Thread
+    ) -> None:
         self.connection, self.node_id, self.loop, self.device = connection, node_id, loop, device
         self.thread = thread
         self._closed = False
         self._lock = threading.Lock()
-        self._travel = (0.0, 0.0)                  # units x s, since connecting
-        self._last: tuple[float, int, int] | None = None    # the last speeds received, and when
+        self._travel = (0.0, 0.0)  # units x s, since connecting
+        self._last: tuple[float, int, int] | None = None  # the last speeds received, and when
         connection.on_variables_received = self._received
 
     async def _received(self, node_id: int) -> None:
@@ -148,12 +163,14 @@ class AsebaNode(Node):
             if self._last is not None:
                 then, last_left, last_right = self._last
                 dt = now - then
-                self._travel = (self._travel[0] + (left + last_left) / 2.0 * dt,
-                                self._travel[1] + (right + last_right) / 2.0 * dt)
+                self._travel = (
+                    self._travel[0] + (left + last_left) / 2.0 * dt,
+                    self._travel[1] + (right + last_right) / 2.0 * dt,
+                )
             self._last = (now, left, right)
 
     @classmethod
-    def connect(cls, device: str = "", timeout: float = 5.0) -> "AsebaNode":
+    def connect(cls, device: str = "", timeout: float = 5.0) -> AsebaNode:
         """Open ``device``, wait (at most ``timeout`` s) for a Thymio to describe itself, and keep its
         proximity and wheel speed variables refreshed. Raises :class:`UserError` with a hint."""
         stream = _open_stream(device, timeout)
@@ -161,7 +178,7 @@ class AsebaNode(Node):
         made: dict[str, Any] = {}
         ready = threading.Event()
 
-        def serve() -> None:            # a daemon thread: its children (thymiodirect's reader) are daemons too
+        def serve() -> None:  # a daemon thread: its children (thymiodirect's reader) are daemons too
             loop = asyncio.new_event_loop()
             asyncio.set_event_loop(loop)
             connection = Connection(stream, refreshing_rate=REFRESH, discover_rate=DISCOVER, loop=loop)
@@ -176,18 +193,22 @@ class AsebaNode(Node):
         connection = made.get("connection")
         deadline = time.monotonic() + timeout
         while connection is not None and not connection.remote_node_set and time.monotonic() < deadline:
-            time.sleep(0.02)    # realtime: connecting, waiting for the robot's description
+            time.sleep(0.02)  # realtime: connecting, waiting for the robot's description
         if connection is None or not connection.remote_node_set:
             if connection is not None:
                 connection.shutdown()
             stream.close()
-            raise UserError(Problem(f"no Thymio answered on {device or 'the serial port'} within {timeout:g} s",
-                                    hint="switch the robot on; a simulated one needs the Playground running"))
+            raise UserError(
+                Problem(
+                    f"no Thymio answered on {device or 'the serial port'} within {timeout:g} s",
+                    hint="switch the robot on; a simulated one needs the Playground running",
+                )
+            )
         node_id = next(iter(connection.remote_node_set))
         node = cls(connection, node_id, made["loop"], device, thread)
         deadline = time.monotonic() + timeout
         while not node._has_variables() and time.monotonic() < deadline:
-            time.sleep(0.02)    # realtime: waiting for its first variables
+            time.sleep(0.02)  # realtime: waiting for its first variables
         node.set_motors(0, 0)
         return node
 
@@ -213,7 +234,7 @@ class AsebaNode(Node):
             for name, value in zip(TARGET_VARIABLES, (left, right)):
                 self.connection.set_var(self.node_id, name, int(value) & 0xFFFF)
         except (OSError, KeyError):
-            pass                    # the link is gone: the next read says so (RobotLost)
+            pass  # the link is gone: the next read says so (RobotLost)
 
     def read_prox(self) -> list[int]:
         return [signed(v) for v in self._remote().get_var_array(PROX_VARIABLE)]
@@ -224,7 +245,7 @@ class AsebaNode(Node):
         return left, right
 
     def read_wheel_travel(self) -> tuple[float, float]:
-        self._remote()                              # RobotLost when it has gone silent
+        self._remote()  # RobotLost when it has gone silent
         with self._lock:
             return self._travel
 
@@ -235,12 +256,12 @@ class AsebaNode(Node):
         self.set_motors(0, 0)
         self._closed = True
         connection = self.connection
-        connection.shutdown()                      # its loops end within a read timeout or a refresh
+        connection.shutdown()  # its loops end within a read timeout or a refresh
         connection.input_thread.join(1.0)
         if self.loop.is_running():
             self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(1.0)
-        if not self.loop.is_running():             # end its pending handlers (else: "Task was destroyed")
+        if not self.loop.is_running():  # end its pending handlers (else: "Task was destroyed")
             pending = asyncio.all_tasks(self.loop)
             for task in pending:
                 task.cancel()
@@ -252,12 +273,16 @@ class AsebaNode(Node):
 
 def create_aseba(mission: Any, seed: int, options: Any) -> Any:
     """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model."""
-    from thymio_bt.robot.model import robot_model
     from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
+    from thymio_bt.robot.model import robot_model
 
     model = robot_model(mission.robot)
-    config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
-                        wheel_separation=model.wheel_separation, table=model.calibration)
+    config = RealConfig(
+        metres_per_unit=model.metres_per_unit,
+        max_units=model.max_units,
+        wheel_separation=model.wheel_separation,
+        table=model.calibration,
+    )
     robot = ThymioRobot(AsebaNode.connect(options.device, options.timeout), config=config)
     robot.latency = options.latency
     return robot

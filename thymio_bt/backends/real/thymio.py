@@ -35,12 +35,13 @@ from __future__ import annotations
 import math
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any, Callable
+from typing import Any
 
-from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.errors import Problem, UserError, optional_module
+from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
 from thymio_bt.robot.model import COURSE, integrate_arc
 
@@ -128,8 +129,14 @@ class TdmNode(Node):
         self.node = node
 
     @classmethod
-    def connect(cls, tdm_addr: str | None = None, tdm_port: int | None = None, password: str | None = None,
-                robot_name: str | None = None, timeout: float = 10.0) -> "TdmNode":
+    def connect(
+        cls,
+        tdm_addr: str | None = None,
+        tdm_port: int | None = None,
+        password: str | None = None,
+        robot_name: str | None = None,
+        timeout: float = 10.0,
+    ) -> TdmNode:
         """Connect to the TDM (local by default), lock the first robot (or ``robot_name``) and wait
         for the variables. Raises :class:`UserError` with a hint when any of it is impossible."""
         tdmclient = import_tdmclient()
@@ -137,21 +144,33 @@ class TdmNode(Node):
             client = tdmclient.ClientAsync(tdm_addr=tdm_addr, tdm_port=tdm_port, password=password)
         except OSError as exc:
             where = f"{tdm_addr or '127.0.0.1'}:{tdm_port or 8596}"
-            raise UserError(Problem(f"cannot reach the Thymio Device Manager at {where}: {exc}",
-                                    hint="start Thymio Suite (it runs the device manager), or pass its address")) from None
+            raise UserError(
+                Problem(
+                    f"cannot reach the Thymio Device Manager at {where}: {exc}",
+                    hint="start Thymio Suite (it runs the device manager), or pass its address",
+                )
+            ) from None
         found = tdmclient.aw(client.wait_for_node(timeout=timeout, node_name=robot_name))
         if found is None:
             client.disconnect()
             which = f"named '{robot_name}' " if robot_name else ""
-            raise UserError(Problem(f"no Thymio {which}appeared within {timeout:g} s",
-                                    hint="switch the robot on and plug it (or its dongle) in, or start a "
-                                         "simulated robot from Thymio Suite's Playground"))
+            raise UserError(
+                Problem(
+                    f"no Thymio {which}appeared within {timeout:g} s",
+                    hint="switch the robot on and plug it (or its dongle) in, or start a "
+                    "simulated robot from Thymio Suite's Playground",
+                )
+            )
         try:
             node = tdmclient.aw(client.lock(node_name=robot_name))
         except tdmclient.NodeLockError as exc:
             client.disconnect()
-            raise UserError(Problem(f"cannot take control of the robot: {exc}",
-                                    hint="close the other program using it (a Thymio Suite editor?)")) from None
+            raise UserError(
+                Problem(
+                    f"cannot take control of the robot: {exc}",
+                    hint="close the other program using it (a Thymio Suite editor?)",
+                )
+            ) from None
         tdmclient.aw(node.wait_for_variables({PROX_VARIABLE, *SPEED_VARIABLES, *TARGET_VARIABLES}))
         return cls(client, node)
 
@@ -184,39 +203,53 @@ class ThymioRobot(Backend):
     present at that pose; without it, the robot is absent until a spawn request is served.
     """
 
-    def __init__(self, node: Node, config: RealConfig | None = None, spawn: Pose | None = None,
-                 robot_name: str = ROBOT_ENTITY, clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], None] = time.sleep, ask: Callable[[str], str] = input,
-                 say: Callable[[str], None] = print) -> None:
+    def __init__(
+        self,
+        node: Node,
+        config: RealConfig | None = None,
+        spawn: Pose | None = None,
+        robot_name: str = ROBOT_ENTITY,
+        clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], None] = time.sleep,
+        ask: Callable[[str], str] = input,
+        say: Callable[[str], None] = print,
+    ) -> None:
         super().__init__()
         self.node = node
         self.config = config or RealConfig()
         self.robot_name = robot_name
         self._clock, self._sleep, self._ask, self._say = clock, sleep, ask, say
         self._start = clock()
-        self._paused = 0.0                      # seconds spent waiting for the operator
-        self._deadline = 0.0                    # backend time the current tick ends at
+        self._paused = 0.0  # seconds spent waiting for the operator
+        self._deadline = 0.0  # backend time the current tick ends at
         self._present = False
         self._closed = False
         self._cmd = Twist()
         self._raw: dict[str, int] | None = None
         self._scan: dict[str, float] | None = None
-        self._wheels = (0.0, 0.0)               # latest measured wheel speeds, m/s
-        self._travel: tuple[float, float] | None = None   # the node's wheel travel at the last reading
-        self._read_at = 0.0                     # backend time of that measurement
-        self._axle = (0.0, 0.0, 0.0)            # odometry of the axle centre: x, y, yaw
+        self._wheels = (0.0, 0.0)  # latest measured wheel speeds, m/s
+        self._travel: tuple[float, float] | None = None  # the node's wheel travel at the last reading
+        self._read_at = 0.0  # backend time of that measurement
+        self._axle = (0.0, 0.0, 0.0)  # odometry of the axle centre: x, y, yaw
         # no bumper: collisions stay empty (COLLISION never fires); no ground truth: min_clearance stays inf
         node.set_motors(0, 0)
         if spawn is not None:
             self._place(spawn)
 
     @classmethod
-    def connect(cls, tdm_addr: str | None = None, tdm_port: int | None = None, password: str | None = None,
-                node_name: str | None = None, timeout: float = 10.0, **kwargs: Any) -> "ThymioRobot":
+    def connect(
+        cls,
+        tdm_addr: str | None = None,
+        tdm_port: int | None = None,
+        password: str | None = None,
+        node_name: str | None = None,
+        timeout: float = 10.0,
+        **kwargs: Any,
+    ) -> ThymioRobot:
         """A backend over the first robot the local (or given) Thymio Device Manager knows."""
         return cls(TdmNode.connect(tdm_addr, tdm_port, password, node_name, timeout), **kwargs)
 
-    def __enter__(self) -> "ThymioRobot":
+    def __enter__(self) -> ThymioRobot:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -312,7 +345,7 @@ class ThymioRobot(Backend):
         previous = self._wheels
         now = self._read_wheels()
         travel = self.node.read_wheel_travel()
-        if travel is not None and self._travel is not None:    # the node's own, finer integral
+        if travel is not None and self._travel is not None:  # the node's own, finer integral
             metres = self.config.metres_per_unit
             self._integrate((travel[0] - self._travel[0]) * metres, (travel[1] - self._travel[1]) * metres, 1.0)
         else:
@@ -365,9 +398,11 @@ class ThymioRobot(Backend):
 
     def _operator_places(self, pose: Pose) -> str | None:
         """Ask the operator to put the robot at ``pose``; the clock is paused while they do."""
-        prompt = (f"[thymio-bt] place the Thymio with base_link (2.4 cm ahead of the wheel axle) at "
-                  f"x={pose.x:.3f} m, y={pose.y:.3f} m, facing {math.degrees(pose.yaw):.0f} deg, "
-                  f"then press Enter (or type 'q' to refuse): ")
+        prompt = (
+            f"[thymio-bt] place the Thymio with base_link (2.4 cm ahead of the wheel axle) at "
+            f"x={pose.x:.3f} m, y={pose.y:.3f} m, facing {math.degrees(pose.yaw):.0f} deg, "
+            f"then press Enter (or type 'q' to refuse): "
+        )
         asked = self._clock()
         try:
             answer = self._ask(prompt)
@@ -387,6 +422,10 @@ def create_tdm(mission: Any, seed: int, options: Any) -> ThymioRobot:
     from thymio_bt.robot.model import robot_model
 
     model = robot_model(mission.robot)
-    config = RealConfig(metres_per_unit=model.metres_per_unit, max_units=model.max_units,
-                        wheel_separation=model.wheel_separation, table=model.calibration)
+    config = RealConfig(
+        metres_per_unit=model.metres_per_unit,
+        max_units=model.max_units,
+        wheel_separation=model.wheel_separation,
+        table=model.calibration,
+    )
     return ThymioRobot.connect(options.host, options.port, options.password, config=config)

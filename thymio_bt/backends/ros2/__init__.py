@@ -13,8 +13,10 @@ from types import ModuleType
 
 from thymio_bt.errors import optional_module
 
-INSTALL_HINT = ("source your ROS 2 install (Humble or later), or make an environment with "
-                "'scripts/ros2-env.sh DIR' and run DIR/bin/thymio-bt")
+INSTALL_HINT = (
+    "source your ROS 2 install (Humble or later), or make an environment with "
+    "'scripts/ros2-env.sh DIR' and run DIR/bin/thymio-bt"
+)
 
 
 def import_rclpy() -> ModuleType:

@@ -25,15 +25,16 @@ from __future__ import annotations
 import math
 import threading
 import time
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
-from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import ROBOT_ENTITY, Pose
-from thymio_bt.robot.model import RobotModel
-from thymio_bt.backends.sim.world import SimConfig, Simulation
 from thymio_bt.backends.ros2 import import_rclpy
 from thymio_bt.backends.ros2.messages import quaternion_of, stamp_parts, yaw_of
 from thymio_bt.backends.ros2.topics import COURSE_TOPICS, PREFIXES, TopicMap
+from thymio_bt.backends.sim.world import SimConfig, Simulation
+from thymio_bt.maze import Maze
+from thymio_bt.robot.interface import ROBOT_ENTITY, Pose
+from thymio_bt.robot.model import RobotModel
 
 #: what the course's diff-drive plugin reports as its covariances (x, y, yaw)
 ODOM_COVARIANCE = (0.00001, 0.00001, 0.001)
@@ -44,19 +45,30 @@ SENSOR_Z = 0.035
 
 def robot_urdf(model: RobotModel) -> str:
     """A URDF naming the course robot's frames (what /robot_description carries), from the model."""
-    links = ["base_footprint", "base_link", "left_wheel_link", "right_wheel_link",
-             *(f"{prefix}_link" for prefix in PREFIXES.values())]
-    joints = ['<joint name="base_joint" type="fixed"><parent link="base_footprint"/><child link="base_link"/>'
-              '<origin xyz="0 0 0"/></joint>']
+    links = [
+        "base_footprint",
+        "base_link",
+        "left_wheel_link",
+        "right_wheel_link",
+        *(f"{prefix}_link" for prefix in PREFIXES.values()),
+    ]
+    joints = [
+        '<joint name="base_joint" type="fixed"><parent link="base_footprint"/><child link="base_link"/>'
+        '<origin xyz="0 0 0"/></joint>'
+    ]
     for side, sign in (("left", 1), ("right", -1)):
-        joints.append(f'<joint name="{side}_wheel_joint" type="continuous"><parent link="base_link"/>'
-                      f'<child link="{side}_wheel_link"/><axis xyz="0 1 0"/><origin xyz="{model.axle_x} '
-                      f'{sign * model.wheel_separation / 2} {model.wheel_radius}"/></joint>')
+        joints.append(
+            f'<joint name="{side}_wheel_joint" type="continuous"><parent link="base_link"/>'
+            f'<child link="{side}_wheel_link"/><axis xyz="0 1 0"/><origin xyz="{model.axle_x} '
+            f'{sign * model.wheel_separation / 2} {model.wheel_radius}"/></joint>'
+        )
     for sensor in model.sensors:
         prefix = PREFIXES[sensor.name]
-        joints.append(f'<joint name="{prefix}_joint" type="fixed"><parent link="base_link"/>'
-                      f'<child link="{prefix}_link"/><origin xyz="{sensor.x} {sensor.y} {SENSOR_Z}" '
-                      f'rpy="0 0 {sensor.yaw}"/></joint>')
+        joints.append(
+            f'<joint name="{prefix}_joint" type="fixed"><parent link="base_link"/>'
+            f'<child link="{prefix}_link"/><origin xyz="{sensor.x} {sensor.y} {SENSOR_Z}" '
+            f'rpy="0 0 {sensor.yaw}"/></joint>'
+        )
     body = "".join(f'<link name="{name}"/>' for name in links) + "".join(joints)
     return f'<?xml version="1.0"?><robot name="thymio">{body}</robot>'
 
@@ -64,8 +76,15 @@ def robot_urdf(model: RobotModel) -> str:
 class GazeboStandIn:
     """A :class:`Simulation` behind the course's Gazebo topics and services (module docstring)."""
 
-    def __init__(self, maze: Maze, start: Pose | None, model: RobotModel, speedup: float = 1.0,
-                 physics_hz: float = 100.0, topics: TopicMap = COURSE_TOPICS) -> None:
+    def __init__(
+        self,
+        maze: Maze,
+        start: Pose | None,
+        model: RobotModel,
+        speedup: float = 1.0,
+        physics_hz: float = 100.0,
+        topics: TopicMap = COURSE_TOPICS,
+    ) -> None:
         rclpy = import_rclpy()
         from gazebo_msgs.srv import DeleteEntity, SpawnEntity
         from geometry_msgs.msg import Twist
@@ -93,8 +112,10 @@ class GazeboStandIn:
         self._clock_pub = node.create_publisher(Clock, topics.clock, 10)
         self._odom_pub = node.create_publisher(Odometry, topics.odom, 10)
         self._tf_pub = node.create_publisher(TFMessage, "/tf", 10)
-        self._scan_pubs = {name: node.create_publisher(LaserScan, topic, 10)    # reliable, as Gazebo's
-                           for name, topic in topics.sensors.items()}
+        self._scan_pubs = {
+            name: node.create_publisher(LaserScan, topic, 10)  # reliable, as Gazebo's
+            for name, topic in topics.sensors.items()
+        }
         node.create_publisher(TFMessage, "/tf_static", latched).publish(TFMessage(transforms=self._static_tf()))
         node.create_publisher(String, topics.robot_description, latched).publish(String(data=robot_urdf(model)))
         node.create_subscription(Twist, topics.cmd_vel, self._on_cmd_vel, 1)
@@ -108,7 +129,7 @@ class GazeboStandIn:
     def _spin(self) -> None:
         try:
             self._executor.spin()
-        except Exception:          # shut down under it: the stand-in is closing
+        except Exception:  # shut down under it: the stand-in is closing
             pass
 
     # ------------------------------------------------------------ requests (executor thread)
@@ -137,8 +158,16 @@ class GazeboStandIn:
         return self._entity_request(lambda: self.sim.request_delete(request.name), response)
 
     # ------------------------------------------------------------ publishing
-    def _transform(self, stamp: Any, parent: str, child: str, x: float, y: float, z: float,
-                   quaternion: tuple[float, float, float, float]) -> Any:
+    def _transform(
+        self,
+        stamp: Any,
+        parent: str,
+        child: str,
+        x: float,
+        y: float,
+        z: float,
+        quaternion: tuple[float, float, float, float],
+    ) -> Any:
         from geometry_msgs.msg import TransformStamped
 
         tf = TransformStamped()
@@ -154,8 +183,17 @@ class GazeboStandIn:
         zero = Time()
         tfs = [self._transform(zero, "base_footprint", "base_link", 0.0, 0.0, 0.0, quaternion_of(0.0))]
         for sensor in self.model.sensors:
-            tfs.append(self._transform(zero, "base_link", f"{PREFIXES[sensor.name]}_link", sensor.x, sensor.y,
-                                       SENSOR_Z, quaternion_of(sensor.yaw)))
+            tfs.append(
+                self._transform(
+                    zero,
+                    "base_link",
+                    f"{PREFIXES[sensor.name]}_link",
+                    sensor.x,
+                    sensor.y,
+                    SENSOR_Z,
+                    quaternion_of(sensor.yaw),
+                )
+            )
         return tfs
 
     def _publish(self, steps: int) -> None:
@@ -190,9 +228,17 @@ class GazeboStandIn:
             wheel = velocity.linear - sign * velocity.angular * self.model.wheel_separation / 2
             self._wheel_angles[i] += wheel / self.model.wheel_radius * period
             half = self._wheel_angles[i] / 2
-            tfs.append(self._transform(stamp, "base_link", f"{side}_wheel_link", self.model.axle_x,
-                                       sign * self.model.wheel_separation / 2, self.model.wheel_radius,
-                                       (0.0, math.sin(half), 0.0, math.cos(half))))
+            tfs.append(
+                self._transform(
+                    stamp,
+                    "base_link",
+                    f"{side}_wheel_link",
+                    self.model.axle_x,
+                    sign * self.model.wheel_separation / 2,
+                    self.model.wheel_radius,
+                    (0.0, math.sin(half), 0.0, math.cos(half)),
+                )
+            )
         self._tf_pub.publish(self._msgs["TFMessage"](transforms=tfs))
 
     def _scan(self, stamp: Any, name: str, value: float) -> Any:

@@ -40,15 +40,18 @@ class TopicMap(BaseModel):
     odom_rate: float = Field(50.0, gt=0, le=1000, description="how often odom is published (Hz)")
     clock: str = Field("/clock", description="rosgraph_msgs/Clock; simulated time when someone publishes it")
     sensor_type: Literal["LaserScan", "Range"] = Field(
-        "LaserScan", description="the proximity messages: single-ray LaserScan (Gazebo) or Range (drivers)")
+        "LaserScan", description="the proximity messages: single-ray LaserScan (Gazebo) or Range (drivers)"
+    )
     sensor_rate: float = Field(10.0, gt=0, le=1000, description="how often each proximity sensor publishes (Hz)")
     sensors: dict[str, str] = Field(
         default_factory=lambda: {name: f"/thymio_{prefix}_sensor" for name, prefix in PREFIXES.items()},
-        description="topic of each proximity sensor, by thymio-bt's sensor name")
+        description="topic of each proximity sensor, by thymio-bt's sensor name",
+    )
     spawn: str = Field("/spawn_entity", description="gazebo_msgs/srv/SpawnEntity service, or empty")
     delete: str = Field("/delete_entity", description="gazebo_msgs/srv/DeleteEntity service, or empty")
-    robot_description: str = Field("/robot_description",
-                                   description="std_msgs/String with the robot's URDF, sent when spawning")
+    robot_description: str = Field(
+        "/robot_description", description="std_msgs/String with the robot's URDF, sent when spawning"
+    )
 
     @field_validator("sensors")
     @classmethod
@@ -69,8 +72,15 @@ def load_topics(path: str | Path) -> TopicMap:
 
     data = load_yaml(path, "include")
     if not isinstance(data, dict):
-        raise UserError(Problem("a topic map is a mapping of names, e.g. 'odom: /odom'", str(path), 1, 1,
-                                hint="keys: " + ", ".join(TopicMap.model_fields)))
+        raise UserError(
+            Problem(
+                "a topic map is a mapping of names, e.g. 'odom: /odom'",
+                str(path),
+                1,
+                1,
+                hint="keys: " + ", ".join(TopicMap.model_fields),
+            )
+        )
     try:
         return TopicMap.model_validate(dict(data))
     except ValidationError as exc:
@@ -79,10 +89,14 @@ def load_topics(path: str | Path) -> TopicMap:
             key = str(error["loc"][0]) if error["loc"] else ""
             line, col = data.marks.get(key, (1, 1)) if isinstance(data, MarkedDict) else (1, 1)
             if error["type"] == "extra_forbidden":
-                problems.append(Problem(f"unknown key '{key}'", str(path), line, col,
-                                        hint=did_you_mean(key, TopicMap.model_fields)))
+                problems.append(
+                    Problem(f"unknown key '{key}'", str(path), line, col, hint=did_you_mean(key, TopicMap.model_fields))
+                )
             else:
                 field = TopicMap.model_fields.get(key)
-                problems.append(Problem(f"'{key}': {error['msg']}", str(path), line, col,
-                                        hint=field.description or "" if field else ""))
+                problems.append(
+                    Problem(
+                        f"'{key}': {error['msg']}", str(path), line, col, hint=field.description or "" if field else ""
+                    )
+                )
         raise UserError(problems) from None

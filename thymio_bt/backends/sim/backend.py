@@ -4,16 +4,23 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from thymio_bt.robot.model import robot_model
 from thymio_bt.backends.sim.world import SimConfig, Simulation
+from thymio_bt.robot.model import robot_model
 
 if TYPE_CHECKING:
     from thymio_bt.backends import SimOptions
     from thymio_bt.mission import Mission
 
 
-def create(mission: "Mission", seed: int, options: "SimOptions") -> Simulation:
+def create(mission: Mission, seed: int, options: SimOptions) -> Simulation:
     """The simulation of ``mission``'s maze with its robot model, noise and sensor model."""
-    return Simulation(mission.maze, config=SimConfig(
-        physics_hz=options.physics_hz, noise=mission.noise, seed=seed, sensor_model=mission.sensor_model,
-        robot=robot_model(mission.robot)))
+    return Simulation(
+        mission.maze,
+        config=SimConfig(
+            physics_hz=options.physics_hz,
+            noise=mission.noise,
+            seed=seed,
+            sensor_model=mission.sensor_model,
+            robot=robot_model(mission.robot),
+        ),
+    )

@@ -23,16 +23,16 @@ Example::
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Sequence
 
 import pymunk
 
-from thymio_bt.maze import Wall
-from thymio_bt.robot.model import RobotModel
 from thymio_bt.backends.sim.fastpath import NearShapes, PointDistance
 from thymio_bt.backends.sim.walls import Box, wall_grid
+from thymio_bt.maze import Wall
+from thymio_bt.robot.model import RobotModel
 
 #: The hull's extent tables are made in 1 degree steps.
 EXTENT_STEP = math.radians(1.0)
@@ -75,35 +75,49 @@ def hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> HullTab
     reach = max(math.hypot(x, y) for x, y in from_axle)
     extent = tuple(
         max(x * math.cos(i * EXTENT_STEP) + y * math.sin(i * EXTENT_STEP) for x, y in from_axle)
-        + reach * EXTENT_STEP / 2 for i in range(EXTENT_STEPS))
+        + reach * EXTENT_STEP / 2
+        for i in range(EXTENT_STEPS)
+    )
     support = tuple(
         tuple(from_axle[(k + j) % len(from_axle)] for j in (-1, 0, 1))
-        for k in (max(range(len(from_axle)),
-                      key=lambda v, i=i: from_axle[v][0] * math.cos(i * EXTENT_STEP)
-                      + from_axle[v][1] * math.sin(i * EXTENT_STEP)) for i in range(EXTENT_STEPS)))
+        for k in (
+            max(
+                range(len(from_axle)),
+                key=lambda v, i=i: (
+                    from_axle[v][0] * math.cos(i * EXTENT_STEP) + from_axle[v][1] * math.sin(i * EXTENT_STEP)
+                ),
+            )
+            for i in range(EXTENT_STEPS)
+        )
+    )
     return HullTables(reach, extent, support)
 
 
 class ClearanceTracker:
     """Measures one robot model's hull against the walls of one space (see the module's steps)."""
 
-    def __init__(self, model: RobotModel,
-                 walls: Sequence[tuple[pymunk.Shape, Wall | None, tuple[tuple[float, float], ...], Box]],
-                 bounds: Box) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        walls: Sequence[tuple[pymunk.Shape, Wall | None, tuple[tuple[float, float], ...], Box]],
+        bounds: Box,
+    ) -> None:
         """``walls``: each static shape with its maze wall (None for an obstacle polygon), its
         corners and its bounding box."""
         self.hull, self.axle_x = model.hull, model.axle_x
         self.tables = hull_tables(model.hull, model.axle_x)
         self.walls: tuple[TrackedWall, ...] = tuple(
-            (shape, None if wall is None else wall_frame(wall), corners) for shape, wall, corners, _ in walls)
+            (shape, None if wall is None else wall_frame(wall), corners) for shape, wall, corners, _ in walls
+        )
         self.grid = wall_grid(tuple(box for *_, box in walls), GRID_CELL, self.tables.reach + GRID_RECORD)
         xmin, ymin, xmax, ymax = bounds
         #: no gap inside the maze exceeds it: the record before the first measurement
         self.farthest = math.hypot(xmax - xmin, ymax - ymin)
         self._distance = PointDistance()
 
-    def below(self, record: float, near: NearShapes, robot: pymunk.Shape,
-              bx: float, by: float, cos: float, sin: float) -> float:
+    def below(
+        self, record: float, near: NearShapes, robot: pymunk.Shape, bx: float, by: float, cos: float, sin: float
+    ) -> float:
         """The exact gap between the hull (its body at (bx, by), heading of this cosine and sine) and
         the nearest wall when that is below ``record``; otherwise something not below it."""
         if self.farthest < record:
@@ -112,18 +126,18 @@ class ClearanceTracker:
         # 1e5 times Chipmunk's rounding at these sizes (1e-17 m) and a millionth of the report's
         # (1 µm): a robot cruising beside a wall at exactly its record gap (a corridor's side wall),
         # or a hair above it, would otherwise take the exact path at every refresh
-        if record <= RESOLUTION or not near.within(record - RESOLUTION):   # (a touch is the last record)
+        if record <= RESOLUTION or not near.within(record - RESOLUTION):  # (a touch is the last record)
             return record
         tables = self.tables
         ax, ay = bx + self.axle_x * cos, by + self.axle_x * sin
         best = math.inf
-        candidates: list[tuple[float, TrackedWall]] = []    # (a lower bound of its gap, wall)
+        candidates: list[tuple[float, TrackedWall]] = []  # (a lower bound of its gap, wall)
         radius, extents, supports, atan2 = tables.reach + record, tables.extent, tables.support, math.atan2
         walls, distance = self.walls, self._distance
         for index in self.grid.near(ax, ay, radius):
             wall = walls[index]
             frame = wall[1]
-            if frame is None:                      # an obstacle polygon: Chipmunk's distance, then exact
+            if frame is None:  # an obstacle polygon: Chipmunk's distance, then exact
                 d = distance(wall[0], (ax, ay))[0]
                 if d - tables.reach < record - 1e-6:
                     candidates.append((d - tables.reach, wall))
@@ -131,17 +145,17 @@ class ClearanceTracker:
             cx, cy, ux, uy, hl, ht = frame
             dx, dy = ax - cx, ay - cy
             along, across = dx * ux + dy * uy, dy * ux - dx * uy
-            out_along = (along if along >= 0.0 else -along) - hl           # beyond an end (> 0)
-            out_across = (across if across >= 0.0 else -across) - ht       # beyond a long face (> 0)
+            out_along = (along if along >= 0.0 else -along) - hl  # beyond an end (> 0)
+            out_across = (across if across >= 0.0 else -across) - ht  # beyond a long face (> 0)
             if out_along >= radius or out_across >= radius:
-                continue                           # the box is farther than the hull reaches
+                continue  # the box is farther than the hull reaches
             if out_across > 0.0 and out_along < 0.0:
                 # beside a long face, which is out_across away: towards it (the body frame's lx, ly)
                 wx, wy = (uy, -ux) if across > 0.0 else (-uy, ux)
                 lx, ly = wx * cos + wy * sin, wy * cos - wx * sin
                 step = round(atan2(ly, lx) / EXTENT_STEP) % EXTENT_STEPS
                 extent = -math.inf
-                for sx, sy in supports[step]:                                # the first farthest along it
+                for sx, sy in supports[step]:  # the first farthest along it
                     toward = sx * lx + sy * ly
                     if toward > extent:
                         extent, vx, vy = toward, sx, sy
@@ -152,35 +166,37 @@ class ClearanceTracker:
                         best = out_across - extent
                     continue
                 bound = out_across - extents[step]
-            elif out_along > 0.0 or out_across > 0.0:        # nearest the box's end or a corner
+            elif out_along > 0.0 or out_across > 0.0:  # nearest the box's end or a corner
                 qx = out_along if out_along > 0.0 else 0.0
                 qy = out_across if out_across > 0.0 else 0.0
                 d = math.hypot(qx, qy)
                 # the direction from the axle to the box's nearest point, in the body frame
                 nx = -(ux * (qx if along >= 0.0 else -qx) - uy * (qy if across >= 0.0 else -qy)) / d
                 ny = -(uy * (qx if along >= 0.0 else -qx) + ux * (qy if across >= 0.0 else -qy)) / d
-                bound = d - extents[round(atan2(nx * -sin + ny * cos, nx * cos + ny * sin) / EXTENT_STEP)
-                                    % EXTENT_STEPS]
+                bound = (
+                    d - extents[round(atan2(nx * -sin + ny * cos, nx * cos + ny * sin) / EXTENT_STEP) % EXTENT_STEPS]
+                )
             else:
-                bound = -math.inf                  # the axle inside the box
+                bound = -math.inf  # the axle inside the box
             if bound < record - 1e-6:
                 candidates.append((bound, wall))
-        exact = [wall for bound, wall in candidates if bound < best]     # others cannot beat the faces
+        exact = [wall for bound, wall in candidates if bound < best]  # others cannot beat the faces
         if exact:
             gap = self.exact(exact, robot, bx, by, cos, sin)
             if gap < best:
                 best = gap
         return best
 
-    def exact(self, walls: list[TrackedWall], robot: pymunk.Shape, bx: float, by: float,
-               cos: float, sin: float) -> float:
+    def exact(
+        self, walls: list[TrackedWall], robot: pymunk.Shape, bx: float, by: float, cos: float, sin: float
+    ) -> float:
         """The exact distance between the hull and the nearest of ``walls`` (convex polygons): hull
         vertices to each wall, then the wall corners that could be nearer than that to the hull."""
         ax, ay = bx + self.axle_x * cos, by + self.axle_x * sin
         gap = math.inf
         distance = self._distance
         for shape, frame, _ in walls:
-            if frame is None:                  # a polygon obstacle: ask Chipmunk
+            if frame is None:  # a polygon obstacle: ask Chipmunk
                 for x, y in self.hull:
                     d = distance(shape, (bx + x * cos - y * sin, by + x * sin + y * cos))[0]
                     if d < gap:
@@ -197,17 +213,17 @@ class ClearanceTracker:
                 # abs() without a builtin call: the sign of a zero is lost in subtracting hl, ht > 0
                 ex = (along if along >= 0.0 else -along) - hl
                 ey = (across if across >= 0.0 else -across) - ht
-                if ex >= gap or ey >= gap:     # the distance is at least max(ex, ey): not nearer
+                if ex >= gap or ey >= gap:  # the distance is at least max(ex, ey): not nearer
                     continue
                 if ex > 0.0 or ey > 0.0:
                     d = math.hypot(ex if ex > 0.0 else 0.0, ey if ey > 0.0 else 0.0)
-                else:                          # inside the box: the (negative) depth
+                else:  # inside the box: the (negative) depth
                     d = ex if ex > ey else ey
                 if d < gap:
                     gap = d
         reach = self.tables.reach
         for shape, _, corners in walls:
             for cx, cy in corners:
-                if math.hypot(cx - ax, cy - ay) - reach < gap:    # could this corner be nearer?
+                if math.hypot(cx - ax, cy - ay) - reach < gap:  # could this corner be nearer?
                     gap = min(gap, distance(robot, (cx, cy))[0])
         return gap

@@ -39,7 +39,7 @@ class ConeResponse:
         """One ray's contribution for a hit at ``distance`` metres (None: no hit)."""
         if distance is None:
             return 0.0
-        x = distance * 100.0                    # Enki works in cm
+        x = distance * 100.0  # Enki works in cm
         if x < self.x0:
             return self.m
         if x > self.range * 100.0:

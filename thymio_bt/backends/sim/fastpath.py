@@ -32,8 +32,9 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Callable, Sequence
 from functools import lru_cache, partial
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import pymunk
 from pymunk._chipmunk import ffi, lib
@@ -57,8 +58,8 @@ def _reader(m: memoryview) -> Callable[[], tuple[float, float, float]]:
     angle = _ANGLE
 
     def read() -> tuple[float, float, float]:
-        return (m[tx] or (m[a] * 0.0 + m[c] * 0.0) + m[tx],
-                m[ty] or (m[b] * 0.0 + m[d] * 0.0) + m[ty], m[angle])
+        return (m[tx] or (m[a] * 0.0 + m[c] * 0.0) + m[tx], m[ty] or (m[b] * 0.0 + m[d] * 0.0) + m[ty], m[angle])
+
     return read
 
 
@@ -80,13 +81,15 @@ def _layout_known() -> bool:
 
     def agrees() -> bool:
         p, r, v = lib.cpBodyGetPosition(h), lib.cpBodyGetRotation(h), lib.cpBodyGetVelocity(h)
-        return _same((*read(), m[_VELOCITY], m[_VELOCITY + 1], m[_SPIN], m[_TRANSFORM], m[_TRANSFORM + 1]),
-                     (p.x, p.y, lib.cpBodyGetAngle(h), v.x, v.y, lib.cpBodyGetAngularVelocity(h), r.x, r.y))
+        return _same(
+            (*read(), m[_VELOCITY], m[_VELOCITY + 1], m[_SPIN], m[_TRANSFORM], m[_TRANSFORM + 1]),
+            (p.x, p.y, lib.cpBodyGetAngle(h), v.x, v.y, lib.cpBodyGetAngularVelocity(h), r.x, r.y),
+        )
 
     if not agrees():
         return False
-    m[_VELOCITY], m[_VELOCITY + 1], m[_SPIN] = -4.5, 5.5, -6.5        # written here, read by Chipmunk
-    for a, c in ((0.5, -0.5), (-0.5, -0.5)):        # a zero translation: the sign comes from the sum
+    m[_VELOCITY], m[_VELOCITY + 1], m[_SPIN] = -4.5, 5.5, -6.5  # written here, read by Chipmunk
+    for a, c in ((0.5, -0.5), (-0.5, -0.5)):  # a zero translation: the sign comes from the sum
         m[_TRANSFORM], m[_TRANSFORM + 1], m[_TRANSFORM + 2], m[_TRANSFORM + 3] = a, a, c, c
         m[_TRANSFORM + 4], m[_TRANSFORM + 5] = -0.0, -0.0
         if not agrees():
@@ -113,6 +116,7 @@ def body_reader(body: pymunk.Body) -> Callable[[], tuple[float, float, float]]:
     def read_by_calls() -> tuple[float, float, float]:
         p = get_position(handle)
         return p.x, p.y, get_angle(handle)
+
     return read_by_calls
 
 
@@ -128,6 +132,7 @@ def control_aimer(body: pymunk.Body, control: pymunk.Body) -> Callable[[float], 
         def aim(v: float) -> None:
             angle = m[heading]
             c[vx], c[vy] = v * cos(angle), v * sin(angle)
+
         return aim
     handle, target = body._body, control._body
     get_angle, set_velocity = lib.cpBodyGetAngle, lib.cpBodySetVelocity
@@ -135,6 +140,7 @@ def control_aimer(body: pymunk.Body, control: pymunk.Body) -> Callable[[float], 
     def aim_by_calls(v: float) -> None:
         angle = get_angle(handle)
         set_velocity(target, (v * cos(angle), v * sin(angle)))
+
     return aim_by_calls
 
 
@@ -152,10 +158,10 @@ def body_driver(body: pymunk.Body, control: pymunk.Body) -> Callable[[float, flo
             c[vx], c[vy], c[spin] = v * cos(angle), v * sin(angle), w
             if seed:
                 m[vx], m[vy], m[spin] = v * m[rx], v * m[ry], w
+
         return drive
     aim, turn, handle = control_aimer(body, control), spinner(control), body._body
-    get_rotation, set_velocity, set_angular = lib.cpBodyGetRotation, lib.cpBodySetVelocity, \
-        lib.cpBodySetAngularVelocity
+    get_rotation, set_velocity, set_angular = lib.cpBodyGetRotation, lib.cpBodySetVelocity, lib.cpBodySetAngularVelocity
 
     def drive_by_calls(v: float, w: float, seed: bool) -> None:
         aim(v)
@@ -164,6 +170,7 @@ def body_driver(body: pymunk.Body, control: pymunk.Body) -> Callable[[float, flo
             rot = get_rotation(handle)
             set_velocity(handle, (v * rot.x, v * rot.y))
             set_angular(handle, w)
+
     return drive_by_calls
 
 
@@ -175,6 +182,7 @@ def spinner(body: pymunk.Body) -> Callable[[float], None]:
 
         def spin(w: float) -> None:
             m[index] = w
+
         return spin
     return partial(lib.cpBodySetAngularVelocity, body._body)
 
@@ -210,7 +218,7 @@ class _SegmentQuery:
         self._alpha = ffi.offsetof("cpSegmentQueryInfo", "alpha") // 8
         self._ends = ffi.new("cpVect[2]")
         self._start, self._end = self._ends[0], self._ends[1]
-        self._points = memoryview(ffi.buffer(self._ends)).cast("d")     # x0, y0, x1, y1
+        self._points = memoryview(ffi.buffer(self._ends)).cast("d")  # x0, y0, x1, y1
 
 
 def _c_filter(shape_filter: pymunk.ShapeFilter) -> tuple[Any, Any]:
@@ -229,13 +237,26 @@ class RayCaster(_SegmentQuery):
         super().__init__(space)
         self._filters: dict[pymunk.ShapeFilter, tuple[Any, Any]] = {}
 
-    def fan(self, rays: Sequence[tuple[float, float, float, float]], x: float, y: float, cos: float, sin: float,
-            shape_filter: pymunk.ShapeFilter) -> list[float | None]:
+    def fan(
+        self,
+        rays: Sequence[tuple[float, float, float, float]],
+        x: float,
+        y: float,
+        cos: float,
+        sin: float,
+        shape_filter: pymunk.ShapeFilter,
+    ) -> list[float | None]:
         """For each ray ``(sx, sy, ex, ey)`` (start and end in a body frame, the body at ``(x, y)`` with
         a heading of this cosine and sine): where along it (0..1) it first touches a shape the filter
         admits, or None."""
-        query, space, info, start, end, points = self._query, self._space, self._info, self._start, self._end, \
-            self._points
+        query, space, info, start, end, points = (
+            self._query,
+            self._space,
+            self._info,
+            self._start,
+            self._end,
+            self._points,
+        )
         flt = self._filters.get(shape_filter)
         if flt is None:
             flt = self._filters[shape_filter] = _c_filter(shape_filter)
@@ -243,8 +264,14 @@ class RayCaster(_SegmentQuery):
         alphas: list[float | None] = []
         hit = alphas.append
         for sx, sy, ex, ey in rays:
-            write(points, 0, x + sx * cos - sy * sin, y + sx * sin + sy * cos,
-                  x + ex * cos - ey * sin, y + ex * sin + ey * cos)
+            write(
+                points,
+                0,
+                x + sx * cos - sy * sin,
+                y + sx * sin + sy * cos,
+                x + ex * cos - ey * sin,
+                y + ex * sin + ey * cos,
+            )
             query(space, start, end, 0.0, flt, info)
             alpha = result[alpha_at]
             hit(alpha if alpha < 1.0 else None)
@@ -259,8 +286,14 @@ class RayReader(_SegmentQuery):
 
     __slots__ = ("_filter", "_floor", "_owner", "_reach", "names", "rays")
 
-    def __init__(self, space: pymunk.Space, rays: dict[str, tuple[float, float, float, float]], reach: float,
-                 floor: float, shape_filter: pymunk.ShapeFilter) -> None:
+    def __init__(
+        self,
+        space: pymunk.Space,
+        rays: dict[str, tuple[float, float, float, float]],
+        reach: float,
+        floor: float,
+        shape_filter: pymunk.ShapeFilter,
+    ) -> None:
         super().__init__(space)
         self.rays = rays
         #: the rays' names, in their order
@@ -272,8 +305,14 @@ class RayReader(_SegmentQuery):
         """Ray ``name``'s reading, the body at ``(x, y)`` with a heading of this cosine and sine
         (KeyError for a name it does not have)."""
         sx, sy, ex, ey = self.rays[name]
-        _write_segment(self._points, 0, x + sx * cos - sy * sin, y + sx * sin + sy * cos,
-                       x + ex * cos - ey * sin, y + ex * sin + ey * cos)
+        _write_segment(
+            self._points,
+            0,
+            x + sx * cos - sy * sin,
+            y + sx * sin + sy * cos,
+            x + ex * cos - ey * sin,
+            y + ex * sin + ey * cos,
+        )
         self._query(self._space, self._start, self._end, 0.0, self._filter, self._info)
         alpha = self._result[self._alpha]
         if alpha < 1.0:
@@ -309,8 +348,13 @@ class NearShapes:
 
     __slots__ = ("_probe", "_query", "radius")
 
-    def __init__(self, space: pymunk.Space, body: pymunk.Body, hull: Sequence[tuple[float, float]],
-                 shape_filter: pymunk.ShapeFilter) -> None:
+    def __init__(
+        self,
+        space: pymunk.Space,
+        body: pymunk.Body,
+        hull: Sequence[tuple[float, float]],
+        shape_filter: pymunk.ShapeFilter,
+    ) -> None:
         self._probe = pymunk.Poly(body, list(hull))
         self._probe.filter = shape_filter
         self._query = partial(lib.cpSpaceShapeQuery, space._space, self._probe._shape, ffi.NULL, ffi.NULL)

@@ -16,9 +16,23 @@ class NoiseConfig(BaseModel):
     """Noise switches: all zero means the ideal, noise-free Gazebo robot."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
-    range_sd: float = Field(0.0, ge=0, le=0.05, allow_inf_nan=False, description="Gaussian sd added to each finite proximity range, m")
-    wheel: float = Field(0.0, ge=0, le=0.5, allow_inf_nan=False, description="uniform ± fraction on each wheel's speed, resampled every tick (Enki uses 0.027)")
-    odometry: float = Field(0.0, ge=0, le=0.5, allow_inf_nan=False, description="uniform ± fraction of wheel-encoder error; > 0 makes odometry drift instead of reporting the true pose")
+    range_sd: float = Field(
+        0.0, ge=0, le=0.05, allow_inf_nan=False, description="Gaussian sd added to each finite proximity range, m"
+    )
+    wheel: float = Field(
+        0.0,
+        ge=0,
+        le=0.5,
+        allow_inf_nan=False,
+        description="uniform ± fraction on each wheel's speed, resampled every tick (Enki uses 0.027)",
+    )
+    odometry: float = Field(
+        0.0,
+        ge=0,
+        le=0.5,
+        allow_inf_nan=False,
+        description="uniform ± fraction of wheel-encoder error; > 0 makes odometry drift instead of reporting the true pose",
+    )
 
     @property
     def enabled(self) -> bool:
@@ -36,7 +50,7 @@ class NoiseSource:
         self.config = config
         self._rng = random.Random(seed)
         self._gauss = self._rng.gauss
-        self._range_sd = config.range_sd          # read per ray: kept out of the model
+        self._range_sd = config.range_sd  # read per ray: kept out of the model
 
     def wheel_factors(self) -> tuple[float, float]:
         a = self.config.wheel

@@ -31,10 +31,10 @@ class _Readings(dict):  # type: ignore[type-arg]
     """The readings of one refresh, each cast on its first read (only ever seen through a proxy)."""
 
     __slots__ = ("_at", "_complete", "_names", "_read")
-    _at: tuple[float, float, float, float]          # the refresh's body pose: x, y, cos and sin of the heading
+    _at: tuple[float, float, float, float]  # the refresh's body pose: x, y, cos and sin of the heading
     _read: Callable[[str, float, float, float, float], float]
     _names: tuple[str, ...]
-    _complete: bool                                 # every sensor cast, in the sensors' order
+    _complete: bool  # every sensor cast, in the sensors' order
 
     def __missing__(self, name: str) -> float:
         x, y, cos, sin = self._at
@@ -65,15 +65,16 @@ class _Readings(dict):  # type: ignore[type-arg]
 
 def _after_all(method: Callable[..., Any]) -> Callable[..., Any]:
     """dict's ``method``, applied once every sensor is cast."""
+
     def completed(self: _Readings, *args: Any) -> Any:
         return method(self._all(), *args)
+
     completed.__name__ = completed.__qualname__ = method.__name__
     completed.__doc__ = method.__doc__
     return completed
 
 
-for _method in ("keys", "values", "items", "copy", "__eq__", "__ne__", "__repr__", "__reversed__", "__or__",
-                "__ror__"):
+for _method in ("keys", "values", "items", "copy", "__eq__", "__ne__", "__repr__", "__reversed__", "__or__", "__ror__"):
     setattr(_Readings, _method, _after_all(getattr(dict, _method)))
 
 

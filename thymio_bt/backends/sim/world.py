@@ -27,16 +27,25 @@ from typing import Literal
 
 import pymunk
 
-from thymio_bt.robot.calibration import RawProximityModel, raw_scan_to_metres
-from thymio_bt.maze import Maze
-from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
-from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose
-from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
 from thymio_bt.backends.sim.clearance import ClearanceTracker
 from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
-from thymio_bt.backends.sim.fastpath import NearShapes, RayCaster, RayReader, body_driver, body_reader, control_aimer, spinner, stepper
+from thymio_bt.backends.sim.fastpath import (
+    NearShapes,
+    RayCaster,
+    RayReader,
+    body_driver,
+    body_reader,
+    control_aimer,
+    spinner,
+    stepper,
+)
 from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
+from thymio_bt.maze import Maze
+from thymio_bt.robot.calibration import RawProximityModel, raw_scan_to_metres
+from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose
+from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
+from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2
@@ -50,7 +59,7 @@ def _pose_of(x: float, y: float, angle: float) -> Pose:
 
 
 def _raw_model(seed: int) -> RawProximityModel:
-    import numpy as np                 # only raw mode needs it: keeps ~50 ms off every start-up
+    import numpy as np  # only raw mode needs it: keeps ~50 ms off every start-up
 
     return RawProximityModel(np.random.default_rng((seed, 1)))
 
@@ -65,18 +74,21 @@ class _ConeSensors:
         reach = self.response.range
         self.names = [s.name for s in model.sensors]
         #: each sensor's three rays in turn, (start, end) in the body frame
-        self.rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
-                     for s in model.sensors for a in (APERTURE, 0.0, -APERTURE)]
+        self.rays = [
+            (s.x, s.y, s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
+            for s in model.sensors
+            for a in (APERTURE, 0.0, -APERTURE)
+        ]
         self.rng = np.random.default_rng((seed, 2))
 
-    def measure(self, rays: RayCaster, entity: "_Body", bx: float, by: float, cos: float, sin: float) -> dict[str, int]:
+    def measure(self, rays: RayCaster, entity: _Body, bx: float, by: float, cos: float, sin: float) -> dict[str, int]:
         """The readings of ``entity`` at (bx, by), heading with this cosine and sine."""
         alphas = rays.fan(self.rays, bx, by, cos, sin, entity.filter)
         reach, response = self.response.range, self.response
         draws = self.rng.standard_normal(len(self.names))
         readings = {}
         for i, (name, z) in enumerate(zip(self.names, draws)):
-            hits = [None if alpha is None else alpha * reach for alpha in alphas[3 * i:3 * i + 3]]
+            hits = [None if alpha is None else alpha * reach for alpha in alphas[3 * i : 3 * i + 3]]
             readings[name] = response.reading(response.value(*hits), float(z))
         return readings
 
@@ -105,25 +117,25 @@ class _Body:
         self.body = pymunk.Body(model.mass, pymunk.moment_for_poly(model.mass, model.hull))
         self.body.center_of_gravity = (model.axle_x, 0.0)
         self.shape = pymunk.Poly(self.body, model.hull)
-        self.shape.friction = 0.1          # the skid's mu in the URDF
+        self.shape.friction = 0.1  # the skid's mu in the URDF
         self.shape.collision_type = _ROBOT_TYPE
-        self.filter = pymunk.ShapeFilter(group=group)     # rays and queries skip the robot's own shape
+        self.filter = pymunk.ShapeFilter(group=group)  # rays and queries skip the robot's own shape
         self.shape.filter = pymunk.ShapeFilter(group=group, categories=_ROBOTS)
         self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
         pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (model.axle_x, 0.0))
-        pivot.max_bias = 0.0               # a pure velocity constraint: drift is not corrected
-        pivot.max_force = 10.0             # traction: walls win against the wheels
+        pivot.max_bias = 0.0  # a pure velocity constraint: drift is not corrected
+        pivot.max_force = 10.0  # traction: walls win against the wheels
         gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
         gear.max_bias = 0.0
         gear.max_force = 0.1
         self.joints = (pivot, gear)
-        self.near = NearShapes(space, self.body, model.hull, self.filter)   # for the clearance tracker
+        self.near = NearShapes(space, self.body, model.hull, self.filter)  # for the clearance tracker
         self.body.angle = pose.yaw
         self.body.position = (pose.x, pose.y)
         self.control.position = self.body.local_to_world((model.axle_x, 0.0))
         self.control.angle = pose.yaw
         space.add(self.body, self.shape, self.control, *self.joints)
-        self.read = body_reader(self.body)      # (x, y, angle), the hot path's way to read the body
+        self.read = body_reader(self.body)  # (x, y, angle), the hot path's way to read the body
         self.aim = control_aimer(self.body, self.control)
         self.spin = spinner(self.control)
         self.drive = body_driver(self.body, self.control)
@@ -138,22 +150,24 @@ class _Body:
 class Simulation(Backend):
     """A 2D simulation of one Thymio in a maze; advance it with :meth:`advance`."""
 
-    def __init__(self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None,
-                 robot_name: str = ROBOT_ENTITY) -> None:
+    def __init__(
+        self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None, robot_name: str = ROBOT_ENTITY
+    ) -> None:
         self.maze = maze
         super().__init__()
         self.config = config or SimConfig()
         self.model = self.config.robot
-        self._max_wheel = self.model.max_wheel_speed if self.config.max_wheel_speed is None \
-            else self.config.max_wheel_speed
+        self._max_wheel = (
+            self.model.max_wheel_speed if self.config.max_wheel_speed is None else self.config.max_wheel_speed
+        )
         self.robot_name = robot_name
         self.space = pymunk.Space()
         self.space.collision_slop = 0.0002
         self.space.iterations = 10
-        self._shapes = MazeShapes.of(maze)       # walls, then obstacles: polygons and boxes
+        self._shapes = MazeShapes.of(maze)  # walls, then obstacles: polygons and boxes
         tracked = []
         walled = len(maze.walls)
-        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):    # obstacles first
+        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):  # obstacles first
             corners = self._shapes.polygons[index]
             shape = pymunk.Poly(self.space.static_body, corners)
             shape.collision_type = _WALL_TYPE
@@ -168,9 +182,9 @@ class Simulation(Backend):
         self._ray = RayCaster(self.space)
         self._steps = 0
         self._noise = NoiseSource(self.config.noise, self.config.seed)
-        self._drifts = bool(self.config.noise.odometry)      # odometry drifts from the true pose
+        self._drifts = bool(self.config.noise.odometry)  # odometry drifts from the true pose
         if not self._drifts:
-            self.pose = self.true_pose         # the same answer, a call less (asked several times a tick)
+            self.pose = self.true_pose  # the same answer, a call less (asked several times a tick)
         self._noisy_wheels = bool(self.config.noise.wheel)
         #: range noise on the metres (raw readings get the raw model's noise instead)
         self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
@@ -179,7 +193,7 @@ class Simulation(Backend):
         self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
-        self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)   # (step, entity, its pose)
+        self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)  # (step, entity, its pose)
         #: the held command (linear, angular) as floats; command() makes it a Twist when asked
         self._cmd = (0.0, 0.0)
         #: the last drive() arguments and their floats: a behaviour cruising passes the same float
@@ -189,24 +203,26 @@ class Simulation(Backend):
         self._wheels_of: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
         #: the last command whose wheel speeds were worked out (limited), and those speeds
         self._wheels_of_command: tuple[tuple[float, float] | None, tuple[float, float]] = (None, (0.0, 0.0))
-        self._velocity = (0.0, 0.0)            # the body velocity (v, w) of the command, noise included
+        self._velocity = (0.0, 0.0)  # the body velocity (v, w) of the command, noise included
         self._delay_steps = round(self.model.command_delay * self.config.physics_hz)
         self._pending = False
         self._scan: Scan | None = None
         #: the last refresh's body pose (x, y, cos, sin) while _scan is None: proximity() reads from there
         self._sensed: tuple[float, float, float, float] | None = None
-        self._odo = (0.0, 0.0, 0.0)            # dead-reckoned axle x, y and yaw (drift model only)
-        self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)   # (_odo, its pose)
+        self._odo = (0.0, 0.0, 0.0)  # dead-reckoned axle x, y and yaw (drift model only)
+        self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)  # (_odo, its pose)
         self._contacts = 0
         self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
         reach = self._range_max = self.model.range_max
         self._range_min = self.model.range_min
         self._ray_names = [s.name for s in self.model.sensors]
-        self._rays = [(s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw))
-                      for s in self.model.sensors]
+        self._rays = [
+            (s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw)) for s in self.model.sensors
+        ]
         #: noise-free metres, cast when read (walls only: see _refresh_sensors)
-        self._reader = RayReader(self.space, dict(zip(self._ray_names, self._rays)), reach, self._range_min,
-                                 pymunk.ShapeFilter(mask=_WALLS))
+        self._reader = RayReader(
+            self.space, dict(zip(self._ray_names, self._rays)), reach, self._range_min, pymunk.ShapeFilter(mask=_WALLS)
+        )
         self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
         self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
         if spawn is not None:
@@ -225,7 +241,7 @@ class Simulation(Backend):
             self._drive_args = (linear, angular, cmd)
         self._cmd = cmd
         if self._delay_steps:
-            self._pending = True           # applied a few physics steps into the next advance (Enki: one)
+            self._pending = True  # applied a few physics steps into the next advance (Enki: one)
         else:
             self._apply_command()
 
@@ -236,7 +252,7 @@ class Simulation(Backend):
         if self.robot_name not in self._entities:
             return None
         scan, sensed = self._scan, self._sensed
-        if scan is None and sensed is not None:        # the last refresh's, each ray cast when read
+        if scan is None and sensed is not None:  # the last refresh's, each ray cast when read
             scan = self._scan = lazy_scan(self._reader, sensed)
         return scan
 
@@ -296,14 +312,14 @@ class Simulation(Backend):
         if self._pending:
             self._pending = False
             delay = min(self._delay_steps, steps)
-            self._run_steps(entity, delay)          # the old command still drives (the robot's command delay)
+            self._run_steps(entity, delay)  # the old command still drives (the robot's command delay)
             self._apply_command()
             steps -= delay
         self._run_steps(entity, steps)
         if self._requests:
             self.serve_requests()
 
-    def _run_steps(self, entity: "_Body | None", steps: int) -> None:
+    def _run_steps(self, entity: _Body | None, steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
         (step, space), dt = self._step, self._dt
         if entity is None:
@@ -318,12 +334,12 @@ class Simulation(Backend):
         every, done, aim = self._sensor_every, self._steps + steps, entity.aim
         while self._steps < done:
             first = self._steps
-            refresh = first + every - first % every            # the step count of the next sensor refresh
+            refresh = first + every - first % every  # the step count of the next sensor refresh
             last = refresh if refresh < done else done
             # during a step, _steps counts the steps before it (a collision's time)
             for self._steps in range(first, last):
                 if turning or self._contacts:
-                    aim(v)             # keep the control body's velocity along the heading as it changes
+                    aim(v)  # keep the control body's velocity along the heading as it changes
                     if self._contacts:
                         entity.spin(w)
                 step(space, dt)
@@ -337,12 +353,12 @@ class Simulation(Backend):
         last, wheels = self._wheels_of_command
         linear, angular = cmd
         fresh = last is not cmd and (last is None or linear != last[0] or angular != last[1])
-        if fresh:                  # the limited wheel speeds are a function of the command: once per command
+        if fresh:  # the limited wheel speeds are a function of the command: once per command
             wheels = model.limited_wheel_speeds(linear, angular, self._max_wheel)
             self._wheels_of_command = (cmd, wheels)
         if fresh or self._noisy_wheels:
             left, right = wheels
-            if self._noisy_wheels:              # noisy wheels err anew with every command sent
+            if self._noisy_wheels:  # noisy wheels err anew with every command sent
                 fl, fr = self._noise.wheel_factors()
                 left, right = left * fl, right * fr
             self._velocity = model.body_velocity(left, right)
@@ -360,7 +376,7 @@ class Simulation(Backend):
         believes it moves, as a real Thymio does. The arc is integrated exactly for the held command.
         """
         applied, wheels = self._wheels_of
-        if applied is not self._applied:             # the applied command's wheel speeds, once per command
+        if applied is not self._applied:  # the applied command's wheel speeds, once per command
             wheels = self.model.wheel_speeds(*self._applied)
             self._wheels_of = (self._applied, wheels)
         left, right = wheels
@@ -395,7 +411,7 @@ class Simulation(Backend):
             # ray is cast when first read (behaviours read few; a quarter of refreshes are not read),
             # seeing walls only, so a robot spawned before the read stays unseen as it should
             self._scan, self._sensed = None, (bx, by, cos, sin)
-        else:                      # noise (random streams in a fixed order) or other robots: now
+        else:  # noise (random streams in a fixed order) or other robots: now
             self._scan = MappingProxyType(self._cast(entity, bx, by, cos, sin))
         self._update_clearance(entity, bx, by, cos, sin)
 
@@ -410,7 +426,7 @@ class Simulation(Backend):
                 scan[name] = inf
                 continue
             value = alpha * hi
-            if value < lo:                 # max(value, lo) without a builtin call: 7 a tick
+            if value < lo:  # max(value, lo) without a builtin call: 7 a tick
                 value = lo
             scan[name] = noise.range(value, lo, hi) if noisy else value
         if raw is not None:
