@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from thymio_bt.backends.sim.noise import REALISTIC
+from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.behaviours.cellmap import CellMap, GridFrame, centre_cells
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse, to_text

@@ -16,7 +16,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from thymio_bt.backends.sim.noise import NoiseConfig
+from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.units import Quantity, check_kind
 from thymio_bt.inputs.validation import problems_from, validate

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from thymio_bt.backends.sim.noise import NoiseConfig
+from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from thymio_bt.backends.sim.noise import NoiseConfig
+from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.mission.registry import Registry, default_registry

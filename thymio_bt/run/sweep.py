@@ -25,7 +25,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any, Protocol
 
-from thymio_bt.backends.sim.noise import REALISTIC
+from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.interrupts import Interrupts
 
 

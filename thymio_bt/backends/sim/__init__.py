@@ -7,7 +7,7 @@ noise settings (behaviours, the mission loader) do not load the physics engine.
 
 from typing import Any
 
-from thymio_bt.backends.sim.noise import REALISTIC, NoiseConfig
+from thymio_bt.robot.noise import REALISTIC, NoiseConfig
 
 __all__ = ["Collision", "NoiseConfig", "REALISTIC", "SimConfig", "Simulation"]
 

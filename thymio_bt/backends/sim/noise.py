@@ -1,7 +1,7 @@
-"""Opt-in noise models, all seeded so that the same seed gives the same run bit for bit.
+"""The simulator's noise draws, all seeded so that the same seed gives the same run bit for bit.
 
-Defaults are off (the course's Gazebo model is noise-free). :data:`REALISTIC` holds the values a
-sweep switches on: plausible for a real Thymio II (../shared/research/sim_anchors.md).
+The settings (:class:`NoiseConfig`, :data:`REALISTIC`) live in :mod:`thymio_bt.robot.noise`;
+they are importable from here too.
 """
 
 from __future__ import annotations
@@ -9,38 +9,9 @@ from __future__ import annotations
 import math
 import random
 
-from pydantic import BaseModel, ConfigDict, Field
+from thymio_bt.robot.noise import REALISTIC, NoiseConfig
 
-
-class NoiseConfig(BaseModel):
-    """Noise switches: all zero means the ideal, noise-free Gazebo robot."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-    range_sd: float = Field(
-        0.0, ge=0, le=0.05, allow_inf_nan=False, description="Gaussian sd added to each finite proximity range, m"
-    )
-    wheel: float = Field(
-        0.0,
-        ge=0,
-        le=0.5,
-        allow_inf_nan=False,
-        description="uniform ± fraction on each wheel's speed, resampled every tick (Enki uses 0.027)",
-    )
-    odometry: float = Field(
-        0.0,
-        ge=0,
-        le=0.5,
-        allow_inf_nan=False,
-        description="uniform ± fraction of wheel-encoder error; > 0 makes odometry drift instead of reporting the true pose",
-    )
-
-    @property
-    def enabled(self) -> bool:
-        return bool(self.range_sd or self.wheel or self.odometry)
-
-
-#: What ``thymio-bt sweep`` switches on: Enki's ±2.7 % wheel noise, 1 mm range noise, 1 % encoder error.
-REALISTIC = NoiseConfig(range_sd=0.001, wheel=0.027, odometry=0.01)
+__all__ = ["REALISTIC", "NoiseConfig", "NoiseSource"]
 
 
 class NoiseSource:
