@@ -43,7 +43,7 @@ from thymio_bt.robot.model import COURSE  # noqa: E402
 MAZE = ROOT / "mazes" / "two_parts_maze.yaml"
 TICK = 0.1  # 10 Hz commands
 TARGET_RTF = 2000.0
-IDEAL_RTF = 2900.0  # ../shared/research/perf_baseline.md, "physics + scans + trivial controller"
+IDEAL_RTF = 2900.0  # docs/sources.md, "Performance baseline": physics + scans + trivial controller
 PENETRATION_LIMIT = 0.005  # half a wall's thickness: deeper means the hull is past the centre line
 
 

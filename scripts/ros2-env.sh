@@ -7,7 +7,7 @@
 #
 # No `source setup.bash` is needed: the wheels re-execute the interpreter once with their library
 # path. A second call on a ready DIR only refreshes the editable install (a few seconds).
-# Facts and traps: ../shared/research/ros2_from_pip.md. Needs python3 >= 3.10, cmake, g++, ninja.
+# Facts and traps: docs/sources.md, "ROS 2 from pip". Needs python3 >= 3.10, cmake, g++, ninja.
 set -euo pipefail
 
 DIR=${1:?usage: scripts/ros2-env.sh DIR}
