@@ -37,11 +37,14 @@ def test_commands_that_run_nothing_load_no_physics_engine(args, tmp_path):
         "import sys\nfrom thymio_bt.cli import main\n"
         f"sys.argv = ['thymio-bt', *{args!r}]\n"
         "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
-        "print('pymunk' in sys.modules, file=sys.stderr)"
+        "print('pymunk' in sys.modules, file=sys.stderr)\n"
+        "print(sorted(m for m in sys.modules if m.startswith('thymio_bt.backends.')), file=sys.stderr)"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert done.stderr.strip().splitlines()[-1] == "False", args
+    engine, backends = done.stderr.strip().splitlines()[-2:]
+    assert engine == "False", args
+    assert backends == "[]", f"{args}: loads backend modules {backends}"
 
 
 def _import_graph():
@@ -97,3 +100,21 @@ def test_only_the_simulator_imports_pymunk():
     _, graph = _import_graph()
     users = sorted(m for m, deps in graph.items() if any(d == "pymunk" or d.startswith("pymunk.") for d in deps))
     assert users and all(m.startswith("thymio_bt.backends.sim.") for m in users), users
+
+
+def test_no_module_is_over_500_lines():
+    from pathlib import Path
+
+    long = {str(p): n for p in Path("thymio_bt").rglob("*.py") if (n := len(p.read_text().splitlines())) > 500}
+    assert not long, long
+
+
+def test_the_architecture_page_names_every_package_and_root_module():
+    """docs/architecture.md is drawn from the code: every package and root module has its row."""
+    from pathlib import Path
+
+    page = Path("docs/architecture.md").read_text()
+    rooms = [p.name + "/" for p in Path("thymio_bt").iterdir() if (p / "__init__.py").exists() and p.name != "data"]
+    rooms += [p.name for p in Path("thymio_bt").glob("*.py")]
+    missing = [room for room in sorted(rooms) if f"`{room}`" not in page]
+    assert not missing, f"docs/architecture.md does not describe {missing}"
