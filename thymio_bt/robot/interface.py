@@ -5,11 +5,18 @@ pymunk simulation (:mod:`thymio_bt.backends.sim`) or, later, a real Thymio. Unit
 radians; the pose is the course's ``base_link`` in the world frame (0.0243 m ahead of the wheel
 axle the robot turns about).
 
+A behaviour drives and senses through the :class:`Robot` it is given (``robot.drive(0.1, 0.0)``
+holds a command like cmd_vel; ``robot.proximity()["front_center"]`` is a range in metres, inf when
+nothing is in range); poses and angles are plain values:
+
 Example::
 
-    robot.drive(0.1, 0.0)          # held until changed, like cmd_vel
-    scan = robot.proximity()       # {"front_center": 0.05, ...}, inf when nothing in range
-    pose = robot.pose()            # Pose(x, y, yaw), or None while the robot does not exist
+    >>> Pose(0.0, 0.0, 0.0).distance_to(Pose(0.3, 0.4, 0.0))
+    0.5
+    >>> round(wrap_angle(3 * math.pi / 2), 6)  # a three-quarter turn left is a quarter turn right
+    -1.570796
+    >>> Backend.latency, Backend.model.name  # what a backend that says nothing of itself is
+    (0.0, 'course')
 """
 
 from __future__ import annotations
@@ -19,6 +26,10 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from thymio_bt.robot.model import RobotModel
 
 #: The 7 proximity sensors, front (left to right) then rear, as in the course URDF.
 SENSOR_NAMES: tuple[str, ...] = (
@@ -53,16 +64,20 @@ class Pose:
     yaw: float
 
     def as_dict(self) -> dict[str, float]:
+        """The pose as ``{"x", "y", "yaw"}``, as events and reports write it."""
         return {"x": self.x, "y": self.y, "yaw": self.yaw}
 
     def as_tuple(self) -> tuple[float, float, float]:
+        """The pose as ``(x, y, yaw)``, for unpacking."""
         return (self.x, self.y, self.yaw)
 
     def distance_to(self, other: Pose) -> float:
+        """The straight-line distance in metres between the two positions (headings aside)."""
         return math.hypot(other.x - self.x, other.y - self.y)
 
 
-_set_x, _set_y, _set_yaw = Pose.x.__set__, Pose.y.__set__, Pose.yaw.__set__  # type: ignore[attr-defined]
+# the slots' member descriptors (``vars`` reaches them without reading them as fields)
+_set_x, _set_y, _set_yaw = (vars(Pose)[name].__set__ for name in ("x", "y", "yaw"))
 
 
 def new_pose(x: float, y: float, yaw: float) -> Pose:
@@ -98,8 +113,31 @@ read-only (the simulation's is: it casts each ray when first read); ``dict(scan)
 or change."""
 
 
+class _CourseModel:
+    """The default of :attr:`Robot.model`: the course's robot, looked up when first read (the
+    model module imports this one, so it cannot be imported here at load time). A backend that
+    knows its robot sets ``self.model``, which hides this default on the instance."""
+
+    _model: RobotModel | None = None
+
+    def __get__(self, robot: object, owner: type | None = None) -> RobotModel:
+        if _CourseModel._model is None:
+            from thymio_bt.robot.model import COURSE
+
+            _CourseModel._model = COURSE
+        return _CourseModel._model
+
+
 class Robot(ABC):
     """A differential-drive robot with 7 proximity sensors and odometry."""
+
+    #: what the robot is (sensor poses, geometry, speed limits): behaviours that depend on where its
+    #: sensors look read it here; a backend that does not set it drives the course's robot
+    model = _CourseModel()
+    #: seconds from the world a reading shows to the moment a command sent now takes effect
+    #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
+    #: 0 for the simulation, whose behaviours see the world of this tick.
+    latency: float = 0.0
 
     @abstractmethod
     def drive(self, linear: float, angular: float) -> None:
@@ -131,6 +169,8 @@ class Robot(ABC):
 
 
 class RequestState(Enum):
+    """Where an entity :class:`Request` stands: waiting, or done one way or the other."""
+
     PENDING = "pending"
     SUCCEEDED = "succeeded"
     FAILED = "failed"
@@ -148,6 +188,7 @@ class Request:
 
     @property
     def done(self) -> bool:
+        """Whether the request is served (SUCCEEDED or FAILED)."""
         return self.state is not RequestState.PENDING
 
 
@@ -181,10 +222,6 @@ class Backend(Robot, Entities):
     collisions: list[Collision]
     #: the smallest hull-to-wall gap so far in metres (inf when unknown)
     min_clearance: float = math.inf
-    #: seconds from the world a reading shows to the moment a command sent now takes effect
-    #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
-    #: 0 for the simulation, whose behaviours see the world of this tick.
-    latency: float = 0.0
     #: entity requests not yet served; :meth:`serve_requests` serves them
     _requests: list[Request]
 
@@ -194,11 +231,13 @@ class Backend(Robot, Entities):
         self.min_clearance = math.inf
 
     def request_delete(self, name: str) -> Request:
+        """Queue a delete request; :meth:`serve_requests` serves it (through :meth:`_remove`)."""
         request = Request("delete", name)
         self._requests.append(request)
         return request
 
     def request_spawn(self, name: str, pose: Pose) -> Request:
+        """Queue a spawn request; :meth:`serve_requests` checks and serves it (:meth:`_place_entity`)."""
         request = Request("spawn", name, pose)
         self._requests.append(request)
         return request
