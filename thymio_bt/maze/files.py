@@ -31,11 +31,13 @@ def load_maze(path: str | Path) -> Maze:
         return read_micromouse(path)
     data = load_yaml(path, "maze")
     if not isinstance(data, MarkedDict):
+        line, col = getattr(data, "mark", (1, 1))
         raise UserError(
             Problem(
                 "a maze file must be a mapping with 'walls:' (or 'grid:')",
                 str(path),
-                *getattr(data, "mark", (1, 1)),
+                line,
+                col,
                 hint="see mazes/two_parts_maze.yaml (walls) or mazes/arena.yaml (grid)",
             )
         )

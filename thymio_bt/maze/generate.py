@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 import random
+from collections.abc import Set as AbstractSet
 from typing import TYPE_CHECKING
 
 from thymio_bt.maze.model import Maze, Spawn, Wall
@@ -32,7 +33,7 @@ def _walls_from_open(
     cell: float,
     thickness: float,
     inside: set[Cell] | None = None,
-    gaps: set[frozenset[Cell]] = frozenset(),
+    gaps: AbstractSet[frozenset[Cell]] = frozenset(),
 ) -> list[Wall]:
     """A wall on every cell edge that is not a passage (only edges touching ``inside`` cells)."""
     inside = inside if inside is not None else {(c, r) for c in range(cols) for r in range(rows)}

@@ -189,7 +189,12 @@ class Maze(BaseModel):
     goal: list[Area] = Field(default_factory=list)
 
     def in_goal(self, x: float, y: float) -> bool:
+        """Whether (x, y) lies in one of the goal areas (never, for a maze without a goal)."""
         return any(area.contains(x, y) for area in self.goal)
+
+    def shapes(self) -> tuple[Wall | Obstacle, ...]:
+        """The walls, then the obstacles: every solid shape, each with its ``corners()``."""
+        return (*self.walls, *self.obstacles)
 
     def bounds(self) -> tuple[float, float, float, float]:
         """(xmin, ymin, xmax, ymax) of all walls and obstacles; an empty maze has all zero."""

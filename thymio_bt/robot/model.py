@@ -24,12 +24,25 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import Literal, TypeGuard
 
 from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 
+#: how a robot's own readings are made (:attr:`RobotModel.sensor_model`)
 SensorModelName = Literal["rays", "raw", "cone"]
+#: how the simulator makes a run's readings (a mission's ``sensor_model``): ``metres`` is ``rays``
+SimSensorModel = Literal["metres", "raw", "cone"]
+SIM_SENSOR_MODELS: tuple[SimSensorModel, ...] = ("metres", "raw", "cone")
+
+
+def is_sim_sensor_model(name: str) -> TypeGuard[SimSensorModel]:
+    """Whether ``name`` is one of :data:`SIM_SENSOR_MODELS`.
+
+    >>> is_sim_sensor_model("cone"), is_sim_sensor_model("rays")
+    (True, False)
+    """
+    return name in SIM_SENSOR_MODELS
 
 
 @dataclass(frozen=True, slots=True)

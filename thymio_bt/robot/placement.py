@@ -115,7 +115,7 @@ def convex_gap(a: Polygon, b: Polygon) -> float:
 def clearance(maze: Maze, model: RobotModel, pose: Pose) -> float:
     """The smallest gap between the robot's hull at ``pose`` and the maze's walls and obstacles."""
     hull = model.hull_at(pose)
-    return min((convex_gap(hull, shape.corners()) for shape in (*maze.walls, *maze.obstacles)), default=math.inf)
+    return min((convex_gap(hull, shape.corners()) for shape in maze.shapes()), default=math.inf)
 
 
 def placement_problem(maze: Maze | MazeShapes, model: RobotModel, pose: Pose) -> str | None:

@@ -69,7 +69,7 @@ def playground_world(maze: Maze, axle: Pose, port: int, name: str = "thymio") ->
         '  <color name="wall" r="0.8" g="0.8" b="0.8"/>',
         f'  <world w="{100 * width:.4f}" h="{100 * height:.4f}" color="wall"/>',
     ]
-    for i, shape in enumerate((*maze.walls, *maze.obstacles)):
+    for i, shape in enumerate(maze.shapes()):
         corners = shape.corners()
         xs, ys = [x for x, _ in corners], [y for _, y in corners]
         if not _axis_aligned(corners):

@@ -59,7 +59,7 @@ class _SocketIO(io.RawIOBase):
         self.failed: BaseException | None = None
         sock.settimeout(0.2)
 
-    def read(self, n: int = -1) -> bytes:  # type: ignore[override]
+    def read(self, n: int = -1) -> bytes:
         if self.failed is None:
             try:
                 data = self.sock.recv(n)
@@ -73,7 +73,7 @@ class _SocketIO(io.RawIOBase):
         time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
         return b""
 
-    def write(self, data: Any) -> int:  # type: ignore[override]
+    def write(self, data: Any) -> int:
         if self.failed is None:
             try:
                 self.sock.sendall(data)

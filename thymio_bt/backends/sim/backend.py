@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from thymio_bt.backends.sim.world import SimConfig, Simulation
-from thymio_bt.robot.model import robot_model
+from thymio_bt.robot.model import is_sim_sensor_model, robot_model
 
 if TYPE_CHECKING:
     from thymio_bt.backends import SimOptions
@@ -14,6 +14,8 @@ if TYPE_CHECKING:
 
 def create(mission: Mission, seed: int, options: SimOptions) -> Simulation:
     """The simulation of ``mission``'s maze with its robot model, noise and sensor model."""
+    if not is_sim_sensor_model(mission.sensor_model):  # a checked mission's never is
+        raise ValueError(f"no sensor model named {mission.sensor_model!r}")
     return Simulation(
         mission.maze,
         config=SimConfig(

@@ -69,8 +69,24 @@ class HullTables:
     support: tuple[tuple[tuple[float, float], ...], ...]
 
 
+def _farthest_vertex(polygon: tuple[tuple[float, float], ...], step: int) -> int:
+    """The index of ``polygon``'s first vertex farthest along the direction ``step`` (in
+    :data:`EXTENT_STEP` units)."""
+    cos, sin = math.cos(step * EXTENT_STEP), math.sin(step * EXTENT_STEP)
+    along = [x * cos + y * sin for x, y in polygon]
+    return along.index(max(along))
+
+
 @lru_cache(maxsize=8)
 def hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> HullTables:
+    """The :class:`HullTables` of a hull (base_link corners) about its axle at ``axle_x``: computed
+    once per robot model.
+
+    >>> from thymio_bt.robot.model import COURSE
+    >>> tables = hull_tables(COURSE.hull, COURSE.axle_x)
+    >>> round(tables.reach, 4), len(tables.extent), len(tables.support[0])
+    (0.08, 360, 3)
+    """
     from_axle = tuple((x - axle_x, y) for x, y in hull)
     reach = max(math.hypot(x, y) for x, y in from_axle)
     extent = tuple(
@@ -80,15 +96,7 @@ def hull_tables(hull: tuple[tuple[float, float], ...], axle_x: float) -> HullTab
     )
     support = tuple(
         tuple(from_axle[(k + j) % len(from_axle)] for j in (-1, 0, 1))
-        for k in (
-            max(
-                range(len(from_axle)),
-                key=lambda v, i=i: (
-                    from_axle[v][0] * math.cos(i * EXTENT_STEP) + from_axle[v][1] * math.sin(i * EXTENT_STEP)
-                ),
-            )
-            for i in range(EXTENT_STEPS)
-        )
+        for k in (_farthest_vertex(from_axle, i) for i in range(EXTENT_STEPS))
     )
     return HullTables(reach, extent, support)
 

@@ -46,11 +46,12 @@ _VELOCITY, _ANGLE, _SPIN, _TRANSFORM = 10, 14, 15, 17
 _DOUBLES = _TRANSFORM + 6
 
 
-def _view(body: pymunk.Body) -> memoryview:
+def _view(body: pymunk.Body) -> memoryview[float]:
+    """``body``'s cpBody state as doubles (see :data:`_VELOCITY`)."""
     return memoryview(ffi.buffer(body._body, 8 * _DOUBLES)).cast("d")
 
 
-def _reader(m: memoryview) -> Callable[[], tuple[float, float, float]]:
+def _reader(m: memoryview[float]) -> Callable[[], tuple[float, float, float]]:
     """(x, y, angle) from a body's memory ``m``: the position as ``cpBodyGetPosition`` computes it,
     the transform applied to the origin (``a * 0 + c * 0 + tx``), which is the translation itself
     unless that is a zero, whose sign the sum decides."""
@@ -97,7 +98,7 @@ def _layout_known() -> bool:
     return True
 
 
-def _memory(body: pymunk.Body) -> memoryview | None:
+def _memory(body: pymunk.Body) -> memoryview[float] | None:
     """``body``'s cpBody as doubles when its layout is the known one, else None. Reading or writing
     one costs a third of a C call; writing a velocity this way skips only Chipmunk's waking of a
     sleeping body, and the simulation never lets bodies sleep."""

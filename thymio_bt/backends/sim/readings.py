@@ -27,7 +27,7 @@ from typing import Any
 from thymio_bt.backends.sim.fastpath import RayReader
 
 
-class _Readings(dict):  # type: ignore[type-arg]
+class _Readings(dict[str, float]):
     """The readings of one refresh, each cast on its first read (only ever seen through a proxy)."""
 
     __slots__ = ("_at", "_complete", "_names", "_read")

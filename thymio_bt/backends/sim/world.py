@@ -23,7 +23,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Literal
 
 import pymunk
 
@@ -44,7 +43,7 @@ from thymio_bt.backends.sim.readings import lazy_scan
 from thymio_bt.maze import Maze
 from thymio_bt.robot.calibration import RawProximityModel, raw_scan_to_metres
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose
-from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
+from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
 from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
 
 _ROBOT_TYPE = 1
@@ -107,7 +106,7 @@ class SimConfig:
     #: "metres": the course's ideal rays; "raw": what a real Thymio reports (noisy integer readings
     #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does;
     #: "cone": Enki's three-ray cones (:mod:`thymio_bt.backends.sim.cone`), read through the robot's calibration
-    sensor_model: Literal["metres", "raw", "cone"] = "metres"
+    sensor_model: SimSensorModel = "metres"
 
 
 class _Body:
@@ -184,7 +183,9 @@ class Simulation(Backend):
         self._noise = NoiseSource(self.config.noise, self.config.seed)
         self._drifts = bool(self.config.noise.odometry)  # odometry drifts from the true pose
         if not self._drifts:
-            self.pose = self.true_pose  # the same answer, a call less (asked several times a tick)
+            # the same answer, a call less (asked several times a tick): an instance attribute
+            # shadowing the method, which mypy cannot express
+            self.pose = self.true_pose  # type: ignore[method-assign]
         self._noisy_wheels = bool(self.config.noise.wheel)
         #: range noise on the metres (raw readings get the raw model's noise instead)
         self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
@@ -462,7 +463,12 @@ class Simulation(Backend):
         self._contacts += 1
         if self._contacts == 1:
             points = arbiter.contact_point_set.points
-            x, y = points[0].point_a if points else arbiter.shapes[0].body.position
+            if points:
+                x, y = points[0].point_a
+            else:
+                body = arbiter.shapes[0].body
+                assert body is not None  # a shape in the space has a body
+                x, y = body.position
             self.collisions.append(Collision(self.time(), x, y))
 
     def _on_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: object) -> None:
