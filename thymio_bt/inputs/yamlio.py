@@ -39,6 +39,8 @@ class MarkedDict(dict):
     """A dict that knows the (line, column) of its own start and of each of its keys."""
 
     mark: Mark = (0, 0)
+    #: the BT.CPP ``<SubTree ID=...>`` a node read from XML stands for (the XML reader sets it), else None
+    subtree_use: str | None = None
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)

@@ -1,0 +1,338 @@
+"""A node's parameters, read by their declared types: the part of the planning pass
+(:mod:`thymio_bt.mission.planner`) that turns ``{distance: 5cm, speed: $cruise}`` into the node's
+pydantic parameter model.
+
+Each value is read by its field's type (:mod:`thymio_bt.inputs.fields`): numbers through the unit
+parser in the field's unit, tuples and lists element by element, a spawn name for a pose;
+``$name`` takes a parameter of the mission or subtree, ``bb:key`` reads the blackboard when the
+behaviour starts. Every problem is reported at its place, and all of a node's problems at once.
+
+Example::
+
+    >>> reference_name("$cruise"), reference_name("cruise"), reference_name("$2fast")
+    ('cruise', None, None)
+    >>> parse_value_kind("10cm/s"), parse_value_kind("fast")
+    ('speed', None)
+"""
+
+from __future__ import annotations
+
+import math
+import types
+import typing
+from dataclasses import dataclass, field
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+from pydantic.fields import FieldInfo
+from pydantic_core import ErrorDetails
+
+from thymio_bt.errors import did_you_mean
+from thymio_bt.inputs.fields import SpawnName, Unit, field_metadata, metadata, unit_of
+from thymio_bt.inputs.units import Quantity, UnitError, parse_value
+from thymio_bt.inputs.yamlio import MarkedDict
+from thymio_bt.maze import Maze
+from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
+
+#: what :meth:`ParameterReader.convert` returns for a value it reported a problem about
+_INVALID = object()
+
+
+def reference_name(raw: Any) -> str | None:
+    """The parameter a ``$name`` value refers to (``"$cruise"`` -> ``cruise``), None for any other value."""
+    if isinstance(raw, str) and raw.startswith("$") and raw[1:].isidentifier():
+        return raw[1:]
+    return None
+
+
+@dataclass
+class _Reading:
+    """One node's parameters being read: where they are written, and what was read so far."""
+
+    kind: str
+    model: type[BaseModel]
+    body: MarkedDict
+    where: Where
+    path: str
+    values: dict[str, Any] = field(default_factory=dict)
+    #: parameter -> blackboard key, for the ``bb:`` values
+    refs: dict[str, str] = field(default_factory=dict)
+    #: a misspelt key was reported: the field it meant is 'missing' too, say it once
+    unknown: bool = False
+
+    @property
+    def file(self) -> str:
+        """The file the node is written in."""
+        return self.where[0]
+
+    @property
+    def fields(self) -> dict[str, FieldInfo]:
+        """The parameter model's fields."""
+        return self.model.model_fields
+
+
+class ParameterReader(Checker):
+    """Reads nodes' parameters into their models; the planning pass's :class:`Checker` for values."""
+
+    #: the mission's maze, for spawn names written where a pose goes (None: names are not checked)
+    maze: Maze | None = None
+
+    def _params(
+        self,
+        kind: str,
+        model: type[BaseModel],
+        body: MarkedDict,
+        keys: list[Any],
+        where: Where,
+        path: str,
+        scope: Scope,
+        allow_refs: bool,
+        missing_hint: str = "",
+    ) -> tuple[BaseModel | None, dict[str, str]]:
+        """A node's parameter model from ``keys`` of ``body`` (units, $parameters, bb: references when
+        ``allow_refs``), with every problem reported at its place; (None, refs) when there is one."""
+        reading = _Reading(kind, model, body, where, path)
+        before = len(self.problems)
+        for key in keys:
+            self._read_key(reading, key, scope, allow_refs)
+        params = self._validated(reading, keys, missing_hint)
+        if params is None or len(self.problems) > before:
+            return None, reading.refs
+        return params, reading.refs
+
+    def _read_key(self, reading: _Reading, key: Any, scope: Scope, allow_refs: bool) -> None:
+        """One parameter of the node, into ``reading``: its value, its blackboard key, or a problem."""
+        raw = reading.body[key]
+        vwhere = self.where_value(reading.body, key, reading.file)
+        if key not in reading.fields:
+            if reading.model.model_config.get("extra") == "allow":
+                reading.values[key] = raw  # a stand-in for a plugin that was not imported: unchecked
+                return
+            self.problem(
+                f"{reading.kind} has no parameter '{key}'",
+                self.where_key(reading.body, key, reading.file),
+                f"{reading.path}.{key}",
+                did_you_mean(str(key), reading.fields),
+            )
+            reading.unknown = True
+            return
+        if allow_refs:
+            name = reference_name(raw)
+            looked = scope.get(name) if name is not None and name in scope.names() else None
+            if isinstance(looked, str) and looked.startswith("bb:"):
+                raw = looked  # a parameter that names a blackboard key
+            if isinstance(raw, str) and raw.startswith("bb:"):
+                self._blackboard_ref(reading, key, raw, vwhere)
+                return
+        value = self.field_value(reading.fields[key], raw, scope, vwhere, f"{reading.path}.{key}")
+        if value is not _INVALID:
+            reading.values[key] = value
+
+    def _blackboard_ref(self, reading: _Reading, key: Any, raw: str, where: Where) -> None:
+        """``key: bb:name``: the value is read from the blackboard when the behaviour starts."""
+        reading.refs[key] = raw[3:].strip()
+        if not reading.refs[key]:
+            self.problem(
+                "bb: needs a blackboard key",
+                where,
+                f"{reading.path}.{key}",
+                "e.g. bb:turn_angle (the key ChooseTurn writes)",
+            )
+
+    def _validated(self, reading: _Reading, keys: list[Any], missing_hint: str) -> BaseModel | None:
+        """The model of the values read, or None when pydantic finds a problem not reported yet (it is
+        reported now). A field left for the blackboard, or already reported, is not 'missing' again."""
+        failed = {key for key in keys if key not in reading.values and key not in reading.refs}
+        try:
+            return reading.model.model_validate(reading.values)
+        except ValidationError as exc:
+            # the other values are still checked, so that every problem of the node is reported at once
+            errors = [
+                e
+                for e in exc.errors(include_url=False)
+                if not (
+                    e["type"] == "missing"
+                    and e["loc"]
+                    and (e["loc"][0] in reading.refs or e["loc"][0] in failed or reading.unknown)
+                )
+            ]
+            for err in errors:
+                self._validation_problem(reading, err, missing_hint)
+            if errors:
+                return None
+            return reading.model.model_construct(**{**{k: None for k in reading.refs}, **reading.values})
+
+    def _validation_problem(self, reading: _Reading, err: ErrorDetails, missing_hint: str) -> None:
+        """One pydantic error of a node's parameters, as a problem at the value's place."""
+        key = err["loc"][0] if err["loc"] else None
+        body = reading.body
+        where = self.where_value(body, key, reading.file) if key in body else reading.where
+        field_info = reading.fields.get(key) if isinstance(key, str) else None
+        message = err["msg"].removeprefix("Value error, ")
+        hint = _error_hint(err, field_info, body.get(key))
+        if err["type"] == "missing":
+            message = f"{reading.kind} needs '{key}'"
+            hint = missing_hint or (field_info.description if field_info else "") or ""
+        self.problem(message, where, f"{reading.path}.{key}" if key else reading.path, hint)
+
+    def argument(self, raw: Any, scope: Scope, where: Where, path: str, kind: str | None) -> Any:
+        """A subtree argument: a quantity when it is numeric (in the caller's scope), else as written."""
+        name = reference_name(raw)
+        if name is not None:
+            try:
+                return scope.get(name)
+            except KeyError:
+                self.problem(f"unknown parameter '{raw}'", where, path, _parameter_hint(name, scope))
+                return None
+        if (
+            isinstance(raw, (int, float))
+            and not isinstance(raw, bool)
+            or (isinstance(raw, str) and not raw.startswith("bb:") and _looks_numeric(raw))
+        ):
+            value = self.quantity(raw, scope, where, path, kind)
+            return None if value is None else Quantity(value, kind or parse_value_kind(raw))
+        return raw
+
+    def field_value(self, field: Any, raw: Any, scope: Scope, where: Where, path: str) -> Any:
+        """Convert one YAML value for a parameter field: $references, then by the field's type."""
+        annotation = field.annotation
+        name = reference_name(raw)
+        if name is not None and not _is_number(annotation):
+            try:
+                value = scope.get(name)
+            except KeyError:
+                self.problem(f"unknown parameter '{raw}'", where, path, _parameter_hint(name, scope))
+                return _INVALID
+            if isinstance(value, Quantity):
+                return value.value
+            if not isinstance(value, (str, list)):
+                return value
+            raw = value  # a text or list parameter (e.g. a spawn name): convert it like a literal
+        return self.convert(annotation, field_metadata(field), raw, scope, where, path)
+
+    def convert(self, annotation: Any, extra: list[Any], raw: Any, scope: Scope, where: Where, path: str) -> Any:
+        """A YAML value as the type ``annotation`` wants it: numbers through the unit parser (in the
+        type's unit), tuples and lists element by element, spawn names for pose types; anything else
+        as written, for pydantic to check. The types (thymio_bt.inputs.fields) say everything: a new
+        parameter shape built from them needs no change here."""
+        meta = metadata(annotation, extra)
+        base = _strip_optional(annotation)
+        base = typing.get_args(base)[0] if typing.get_origin(base) is typing.Annotated else base
+        if raw is None:
+            return raw  # an optional value left empty: pydantic says whether that is allowed
+        if base in (float, int):
+            unit = next((m for m in meta if isinstance(m, Unit)), None)
+            value = self.quantity(raw, scope, where, path, unit.kind if unit else None)
+            return _INVALID if value is None else value
+        origin, args = typing.get_origin(base), typing.get_args(base)
+        if origin is tuple:
+            return self._convert_tuple(args, meta, raw, scope, where, path)
+        if origin is list and isinstance(raw, list) and args:
+            out = [
+                self.convert(args[0], [], item, scope, self.where_item(raw, i, where), f"{path}[{i}]")
+                for i, item in enumerate(raw)
+            ]
+            return _INVALID if any(v is _INVALID for v in out) else out
+        return raw
+
+    def _convert_tuple(
+        self, args: tuple[Any, ...], meta: list[Any], raw: Any, scope: Scope, where: Where, path: str
+    ) -> Any:
+        """A tuple type's value: a spawn name for a pose, else ``[a, b]`` or ``"a, b"`` item by item."""
+        if isinstance(raw, str) and "," not in raw and any(isinstance(m, SpawnName) for m in meta):
+            if self.maze is None:
+                return raw
+            pose = self.pose(raw, where, path, scope, self.maze)
+            return _INVALID if pose is None else (pose.x, pose.y, pose.yaw)
+        if isinstance(raw, str):
+            raw = raw.split(",")
+        if isinstance(raw, list) and (len(args) == len(raw) or (len(args) == 2 and args[1] is Ellipsis)):
+            kinds = [args[0]] * len(raw) if args[1:] == (Ellipsis,) else list(args)
+            out = [self.convert(kind, [], item, scope, where, path) for kind, item in zip(kinds, raw, strict=True)]
+            return _INVALID if any(v is _INVALID for v in out) else tuple(out)
+        return raw
+
+
+def _strip_optional(annotation: Any) -> Any:
+    """``X`` for ``X | None``; any other type as it is."""
+    args = [a for a in typing.get_args(annotation) if a is not type(None)]
+    if typing.get_origin(annotation) in (typing.Union, types.UnionType) and len(args) == 1:
+        return args[0]
+    return annotation
+
+
+def _is_number(annotation: Any) -> bool:
+    """Whether a field holds a plain number (a ``$name`` there is an expression for the unit parser)."""
+    return _strip_optional(annotation) in (float, int)
+
+
+def _looks_numeric(text: str) -> bool:
+    """Whether ``text`` parses as a number (with units, ``$names`` standing for 1)."""
+    try:
+        parse_value(text, lambda name: Quantity(1.0))
+        return True
+    except UnitError:
+        return False
+
+
+def parse_value_kind(text: str | int | float) -> str | None:
+    """The kind of unit a value is written in (``length`` for ``5cm``), None without one or when it
+    does not parse; ``$names`` count as plain numbers."""
+    try:
+        return parse_value(text, lambda name: Quantity(1.0)).kind
+    except UnitError:
+        return None
+
+
+def _error_hint(err: ErrorDetails, field_info: FieldInfo | None, raw: Any) -> str:
+    """The hint for a pydantic error of a parameter written ``raw``: the validator's own, how to write
+    a boolean, or the field's range (with the unit a bare number out of range probably meant)."""
+    hint = str((err.get("ctx") or {}).get("hint", ""))
+    if hint:
+        return hint
+    if err["type"] in ("bool_parsing", "bool_type"):
+        return "write true or false"
+    if field_info is None:
+        return hint
+    hint = _range_hint(field_info)
+    guess = _unit_guess(field_info, raw)
+    if guess:
+        return f"did you mean {guess}? a bare number is in {unit_of(field_info)}; {hint}"
+    return hint
+
+
+#: for a bare number out of range, the units a user may have meant, and their factor to the field's unit
+_MEANT = {
+    "rad": (("deg", math.pi / 180),),
+    "m": (("cm", 0.01), ("mm", 0.001)),
+    "m/s": (("cm/s", 0.01),),
+    "rad/s": (("deg/s", math.pi / 180),),
+}
+
+
+def _unit_guess(field: Any, raw: Any) -> str | None:
+    """``90deg`` for ``angle: 90``: the bare number with the first unit that brings it into range."""
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
+        return None
+    checks = [
+        (getattr(meta, attr), test)
+        for meta in field.metadata
+        for attr, test in (("ge", float.__ge__), ("gt", float.__gt__), ("le", float.__le__), ("lt", float.__lt__))
+        if isinstance(getattr(meta, attr, None), (int, float))
+    ]
+    for unit, factor in _MEANT.get(unit_of(field), ()):
+        if all(test(float(raw) * factor, float(bound)) for bound, test in checks):
+            return f"{raw:g}{unit}"
+    return None
+
+
+def _range_hint(field: Any) -> str:
+    """'allowed: > 0 and <= 2 m', or the field's description when it has no bounds."""
+    bounds = []
+    for meta in field.metadata:
+        for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
+            value = getattr(meta, attr, None)
+            if value is not None:
+                bounds.append(f"{sym} {value:g}" if isinstance(value, (int, float)) else f"{sym} {value}")
+    unit = unit_of(field)
+    return f"allowed: {' and '.join(bounds)}{(' ' + unit) if unit else ''}" if bounds else (field.description or "")
