@@ -3,13 +3,23 @@ written (file:line:col from the YAML marks), and how a number with a unit or a p
 
 The loader reports every problem of a mission at once, so a pass never stops at the first: it
 records a :class:`Problem` and goes on (see :mod:`thymio_bt.mission.loader`).
+
+Example::
+
+    >>> checker = Checker([])
+    >>> checker.quantity("$side * 2", Scope({"side": Quantity(0.25, "length")}), ("m.yaml", 3, 9), "d", "length")
+    0.5
+    >>> checker.quantity("5cm", Scope({}), ("m.yaml", 4, 9), "angle", "angle") is None
+    True
+    >>> print(checker.problems[0])
+    m.yaml:4:9: expected an angle (in rad), got a length [at angle] (hint: write an angle: 90deg, pi/2 or 1.57 rad)
 """
 
 from __future__ import annotations
 
 import math
 import typing
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from typing import Any
 
 from thymio_bt.errors import Problem, did_you_mean, type_name
@@ -29,6 +39,7 @@ class Scope:
         self.parent = parent
 
     def get(self, name: str) -> Any:
+        """The value of parameter ``name``, the innermost scope's first; ``KeyError`` when none has it."""
         if name in self.values:
             return self.values[name]
         if self.parent is not None:
@@ -36,6 +47,7 @@ class Scope:
         raise KeyError(name)
 
     def names(self) -> set[str]:
+        """Every parameter name visible here (for 'did you mean' hints)."""
         return set(self.values) | (self.parent.names() if self.parent else set())
 
 
@@ -46,16 +58,24 @@ class Checker:
         self.problems = problems
 
     def problem(self, message: str, where: Where, path: str = "", hint: str = "") -> None:
+        """Record a problem at ``where`` (file, line, column), with the node path and a hint."""
         self.problems.append(Problem(message, where[0], where[1], where[2], path, hint))
+
+    def adopt(self, problems: Iterable[Problem], where: Where, path: str) -> None:
+        """Take the problems another loader found (a maze, an include, a robot profile): one that has
+        no line of its own (a missing or unreadable file) is put where the file was named."""
+        self.problems.extend(p if p.line else Problem(p.message, *where, path, p.hint) for p in problems)
 
     @staticmethod
     def where_key(data: Any, key: Any, file: str) -> Where:
+        """The place of ``key`` in the mapping ``data`` (the mapping's own when it has no marks)."""
         if isinstance(data, MarkedDict) and key in data.marks:
             return (file, *data.marks[key])
         return (file, *getattr(data, "mark", (0, 0)))
 
     @staticmethod
     def where_value(data: Any, key: Any, file: str) -> Where:
+        """The place of the value of ``data[key]`` (a mapping's key or a list's index), else ``data``'s own."""
         if isinstance(data, MarkedDict) and key in data.value_marks:
             return (file, *data.value_marks[key])
         if isinstance(data, MarkedList) and isinstance(key, int) and key < len(data.marks):
@@ -70,6 +90,7 @@ class Checker:
         return where
 
     def check_keys(self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str, what: str) -> None:
+        """A problem for each key of ``data`` not in ``allowed`` (``what``: 'the mission', 'a subtree'...)."""
         allowed = list(allowed)
         for key in data:
             if key not in allowed:
@@ -168,7 +189,7 @@ class Checker:
             return None
         parts = [
             self.quantity(v, scope, self.where_item(raw, i, where), path, kind)
-            for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle")))
+            for i, (v, kind) in enumerate(zip(raw, ("length", "length", "angle"), strict=True))
         ]
         if any(p is None for p in parts):
             return None
