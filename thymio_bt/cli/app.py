@@ -1,0 +1,159 @@
+"""The ``thymio-bt`` command group and what its commands share: the error exit, option types and parsers.
+
+The commands themselves live in the modules of :mod:`thymio_bt.cli` named for what they do; importing
+:mod:`thymio_bt.cli` registers them all on :func:`main`. Heavy imports stay inside the commands.
+
+Example::
+
+    >>> parse_pairs(("device=/dev/ttyACM0", " port = 33333 "), "--backend-opt", "device=/dev/ttyACM0")
+    {'device': '/dev/ttyACM0', 'port': '33333'}
+    >>> POSITIVE.convert("0.5", None, None)
+    0.5
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, NoReturn, TypeVar
+
+import click
+
+from thymio_bt.errors import UserError
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def fail(exc: UserError) -> NoReturn:
+    """Print each problem of ``exc`` as one ``error:`` line on stderr and exit 2 (a user error)."""
+    for problem in exc.problems:
+        click.echo(f"error: {problem}", err=True)
+    if len(exc.problems) > 1:
+        click.echo(f"{len(exc.problems)} problems", err=True)
+    sys.exit(2)
+
+
+class _Positive(click.ParamType):
+    """A finite number > 0 (click's FloatRange lets NaN through: every comparison with it is false)."""
+
+    name = "number"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> float:
+        """``value`` as a float, or click's usage error (exit 2) when it is not a finite number > 0."""
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            self.fail(f"{value!r} is not a number", param, ctx)
+        if not (math.isfinite(number) and 0 < number <= 1e9):
+            self.fail(f"{value} must be a finite number > 0", param, ctx)
+        return number
+
+
+#: the option type of speed-ups, factors and sizes: a finite number > 0
+POSITIVE = _Positive()
+
+
+def parse_overrides(values: tuple[str, ...]) -> dict[str, str]:
+    """The ``--set NAME=VALUE`` options as a dict of mission overrides.
+
+    >>> parse_overrides(("cruise=0.15", "noise.wheel=0.03"))
+    {'cruise': '0.15', 'noise.wheel': '0.03'}
+    >>> parse_overrides(("cruise",))
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: --set expects NAME=VALUE, got 'cruise' (hint: --set cruise=0.15)
+    """
+    return parse_pairs(values, "--set", "cruise=0.15")
+
+
+def parse_pairs(values: tuple[str, ...], option: str, example: str) -> dict[str, str]:
+    """``NAME=VALUE`` arguments of a repeatable option, as a dict (``example`` goes in the hint)."""
+    out = {}
+    for item in values:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise UserError(f"{option} expects NAME=VALUE, got '{item}' (hint: {option} {example})")
+        out[name.strip()] = value.strip()
+    return out
+
+
+def json_text(data: Any) -> str:
+    """``data`` as the JSON the commands write: indented, strict (no NaN), with a final newline.
+
+    >>> print(json_text({"status": "SUCCESS", "ticks": 3}), end="")
+    {
+     "status": "SUCCESS",
+     "ticks": 3
+    }
+    """
+    return json.dumps(data, indent=1, allow_nan=False) + "\n"
+
+
+def path_option(*names: str, help: str, default: Any = None, **settings: Any) -> Callable[[F], F]:
+    """An option that takes a file path (a :class:`~pathlib.Path`); ``settings`` go to :func:`click.option`."""
+    return click.option(*names, type=click.Path(path_type=Path), default=default, help=help, **settings)
+
+
+def mission_options(set_help: str, start_help: str) -> Callable[[F], F]:
+    """The options that change the mission run (``--set``, ``--maze``, ``--start``), in that order."""
+    options = (
+        click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help=set_help),
+        path_option("--maze", help="Run in another maze file."),
+        click.option("--start", default=None, metavar="X,Y,YAW", help=start_help),
+    )
+
+    def apply(command: F) -> F:
+        for option in reversed(options):
+            command = option(command)
+        return command
+
+    return apply
+
+
+def viewer_options(command: F) -> F:
+    """The options of commands that show a run: ``--view`` and ``--speedup``, in that order."""
+    command = click.option(
+        "--speedup",
+        type=POSITIVE,
+        default=None,
+        help="Speed-up of --view (default 1: real time) and --gif (default 4).",
+    )(command)
+    return click.option(
+        "--view", is_flag=True, help="Watch the run in a window (pygame): SPACE pause, N step, +/- speed, Q quit."
+    )(command)
+
+
+class _Commands(click.Group):
+    """The command group; a Ctrl-C outside a run's own handling (or a second one) exits 130, quietly."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        """Run the command; a KeyboardInterrupt prints ``interrupted`` and exits 130."""
+        try:
+            return super().invoke(ctx)
+        except KeyboardInterrupt:
+            click.echo("\ninterrupted", err=True)
+            sys.exit(130)
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(package_name="thymio-bt")
+@click.option(
+    "--color",
+    "--colour",
+    "color",
+    type=click.Choice(["auto", "always", "never"]),
+    default="auto",
+    show_default=True,
+    help="Colour in the output; auto: on a terminal, unless NO_COLOR is set.",
+)
+@click.pass_context
+def main(ctx: click.Context, color: str) -> None:
+    """YAML behaviour-tree missions for a simulated Thymio II (no ROS, no Gazebo)."""
+    if color == "always":
+        ctx.color = True
+    elif color == "never" or os.environ.get("NO_COLOR"):  # https://no-color.org: any non-empty value
+        ctx.color = False

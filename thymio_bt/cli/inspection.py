@@ -1,0 +1,246 @@
+"""The commands that look at missions and the installation without running anything.
+
+``validate`` checks mission and maze files, ``tree`` prints or draws a mission's tree (or writes it as
+BehaviorTree.CPP XML), ``behaviours`` documents the nodes, ``backends`` lists the backends and robot
+models, ``schema`` prints the JSON Schema of mission files. None of them loads the physics engine.
+
+Example::
+
+    >>> from click.testing import CliRunner
+    >>> from thymio_bt.cli import main
+    >>> from thymio_bt.maze import resolve_maze
+    >>> print(CliRunner().invoke(main, ["validate", str(resolve_maze("two_parts_maze"))]).output, end="")
+    ok: .../two_parts_maze.yaml (maze: 21 walls, 0 obstacles, spawns part1, part2, bonus)
+    >>> result = CliRunner().invoke(main, ["tree", "maze_part1_2"])
+    >>> result.exit_code, result.output.splitlines()[:2]
+    (0, ['{-} course', '    --> part 1'])
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from thymio_bt.cli.app import fail, main, parse_overrides, path_option
+from thymio_bt.errors import UserError
+from thymio_bt.outputs import STDOUT, Output
+
+if TYPE_CHECKING:
+    from thymio_bt.errors import Problem
+    from thymio_bt.maze import Maze
+    from thymio_bt.mission import Registry
+
+
+@main.command()
+@click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check missions with these overrides.")
+@click.option(
+    "--plugins",
+    is_flag=True,
+    help="Import the missions' plugins to check their nodes' parameters too (runs their code).",
+)
+def validate(files: tuple[Path, ...], sets: tuple[str, ...], plugins: bool) -> None:
+    """Check mission FILES (and the mazes they name) or maze files without running anything
+    (not even the missions' plugins, unless --plugins)."""
+    bad = 0
+    for path in files:
+        try:
+            click.echo(f"ok: {path} ({_check_file(path, parse_overrides(sets), plugins)})")
+        except UserError as exc:
+            bad += 1
+            for problem in exc.problems:
+                click.echo(f"error: {problem}", err=True)
+    sys.exit(2 if bad else 0)
+
+
+def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) -> str:
+    """Validate one mission or maze file (a maze has ``walls:`` or ``grid:`` and no ``tree:``); what it holds."""
+    from thymio_bt.inputs.yamlio import load_yaml
+
+    micromouse = path.suffix.lower() == ".txt"  # a micromouse contest maze
+    data = None if path.suffix.lower() == ".xml" or micromouse else load_yaml(path)  # .xml: a BT.CPP mission
+    if micromouse or isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
+        return _check_maze(path, data)
+    return _check_mission(path, overrides, plugins)
+
+
+def _check_maze(path: Path, data: Any) -> str:
+    """Validate the maze file ``path`` (``data``: its YAML, ``None`` for a micromouse maze), spawns included."""
+    from thymio_bt.maze import load_maze
+
+    maze = load_maze(path)
+    spawns = data.get("spawns") if isinstance(data, dict) and "grid" not in data else None
+    problems = _spawn_problems(path, maze, getattr(spawns, "marks", {}))
+    if problems:
+        raise UserError(problems)
+    goal = f", goal {len(maze.goal)} cell{'s' * (len(maze.goal) != 1)}" if maze.goal else ""
+    return (
+        f"maze: {len(maze.walls)} walls, {len(maze.obstacles)} obstacles, "
+        f"spawns {', '.join(maze.spawns) or 'none'}{goal}"
+    )
+
+
+def _spawn_problems(path: Path, maze: Maze, marks: dict[str, tuple[int, int]]) -> list[Problem]:
+    """The spawns of ``maze`` where the course's robot cannot stand; ``marks``: where each is in the file."""
+    from thymio_bt.errors import Problem
+    from thymio_bt.robot.model import COURSE
+    from thymio_bt.robot.placement import placement_problem
+
+    problems = []
+    for name, spawn in maze.spawns.items():
+        if why := placement_problem(maze, COURSE, spawn.pose()):
+            line, column = marks.get(name, (0, 0))
+            problems.append(
+                Problem(
+                    f"spawn '{name}' is impossible: {why}",
+                    str(path),
+                    line,
+                    column,
+                    f"spawns.{name}",
+                    "move it into a free cell, away from the walls",
+                )
+            )
+    return problems
+
+
+def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
+    """Validate the mission file ``path``; its node count and maze, and the plugin nodes left unchecked."""
+    from thymio_bt.mission import load_mission
+
+    spec = load_mission(path, overrides, run_plugins=plugins)  # checks the start pose against the maze too
+    nodes = sum(1 for _ in spec.tree.walk())
+    unchecked = sum(
+        1 for n in spec.tree.walk() if n.behaviour and getattr(spec.registry[n.behaviour], "unrun_plugin", False)
+    )
+    note = f"; {unchecked} plugin node{'s' * (unchecked != 1)} not checked: --plugins imports them" if unchecked else ""
+    return f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}{note}"
+
+
+@main.command()
+@click.argument("mission", type=click.Path(path_type=Path))
+@click.option("--dot", "fmt", flag_value="dot", help="Write a Graphviz .dot file.")
+@click.option("--svg", "fmt", flag_value="svg", help="Write an SVG (needs Graphviz's dot program).")
+@click.option("--png", "fmt", flag_value="png", help="Write a PNG (needs Graphviz's dot program).")
+@path_option(
+    "--output",
+    "-o",
+    help="File to write (- = standard output); its suffix picks the format when no flag does. "
+    "Default with a format flag: MISSION's name with that suffix, in the current folder.",
+)
+@path_option(
+    "--btcpp",
+    metavar="OUT.xml",
+    help="Write the tree as BehaviorTree.CPP v4 XML (Groot2 opens it) instead of a drawing.",
+)
+@click.option("--plugins", is_flag=True, help="Import the mission's plugins (runs their code; default: read only).")
+def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None, plugins: bool) -> None:
+    """Print the tree of MISSION; write it as .dot/.svg/.png or BT.CPP XML when asked."""
+    try:
+        if btcpp is not None:
+            _write_btcpp(mission, btcpp, plugins)
+        else:
+            _draw_tree(mission, fmt, output, plugins)
+    except UserError as exc:
+        fail(exc)
+
+
+def _write_btcpp(mission: Path, btcpp: Path, plugins: bool) -> None:
+    """``tree --btcpp``: the mission's tree as BehaviorTree.CPP v4 XML."""
+    from thymio_bt.mission import load_mission
+    from thymio_bt.mission.btcpp import mission_xml
+
+    out = Output(btcpp, "--btcpp")
+    out.write_text(mission_xml(load_mission(mission, run_plugins=plugins), btcpp))
+    if not out.is_stdout:
+        click.echo(f"wrote {out}", err=True)
+
+
+def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: bool) -> None:
+    """``tree``: print the tree and, with a format (a flag, or ``output``'s suffix), write it as .dot/.svg/.png."""
+    from thymio_bt.viz.terminal import export_tree, tree_text
+
+    if fmt is None and output is not None:
+        fmt = output.suffix.lower().lstrip(".")
+        if fmt not in ("dot", "svg", "png"):
+            raise UserError(
+                f"--output {output}: cannot tell the format from '{output.suffix or 'no extension'}' "
+                f"(hint: end the name with .dot, .svg or .png, or add --dot/--svg/--png)"
+            )
+    if fmt is None:
+        click.echo(tree_text(mission, plugins))
+        return
+    out = Output(output if output is not None else Path(mission.stem).with_suffix(f".{fmt}"), "--output")
+    if not out.is_stdout:
+        click.echo(tree_text(mission, plugins))
+    export_tree(mission, out, fmt, plugins)
+    if not out.is_stdout:
+        click.echo(f"wrote {out}", err=True)
+
+
+def _registry(mission: Path | None) -> Registry:
+    """The node registry: the installed nodes, plus the ``plugins:`` of ``mission`` when one is given
+    (their code runs: that is what naming the mission asks for)."""
+    from thymio_bt.mission import default_registry, load_mission
+
+    return default_registry() if mission is None else load_mission(mission).registry
+
+
+@main.command()
+@click.argument("name", required=False)
+@path_option("--mission", help="Include the behaviours of this mission's plugins (runs their code).")
+def behaviours(name: str | None, mission: Path | None) -> None:
+    """List the behaviours, or document one (its parameters, units, defaults, ranges)."""
+    from thymio_bt.mission.node_docs import behaviour_help, behaviour_list
+
+    try:
+        registry = _registry(mission)
+    except UserError as exc:
+        fail(exc)
+    if name is None:
+        click.echo(behaviour_list(registry))
+        return
+    if name not in registry:
+        from thymio_bt.errors import did_you_mean
+
+        fail(UserError(f"no behaviour named '{name}' (hint: {did_you_mean(name, registry)})"))
+    click.echo(behaviour_help(registry[name]))
+
+
+@main.command("backends")
+def backends_command() -> None:
+    """List the backends (--backend NAME, with their --backend-opt settings) and robot models (--robot NAME)."""
+    from thymio_bt.backends import backend_kinds
+    from thymio_bt.robot.model import ROBOTS
+
+    try:
+        kinds = backend_kinds()
+    except UserError as exc:
+        fail(exc)
+    click.echo("backends (--backend NAME --backend-opt KEY=VALUE):")
+    for kind in kinds.values():
+        click.echo(f"  {kind.name:10} {kind.summary}")
+        for key, field in kind.options.model_fields.items():
+            default = "" if field.default is None else f" [default {field.default}]"
+            click.echo(f"  {'':10}   {key}: {field.description}{default}")
+    click.echo("robot models (--robot NAME):")
+    for model in ROBOTS.values():
+        click.echo(f"  {model.name:10} {model.description}")
+    click.echo(f"  {'FILE.yaml':10} a profile measured on your robot by 'thymio-bt calibrate'")
+
+
+@main.command()
+@path_option("--output", "-o", default=STDOUT, show_default=True, help="File to write (- = standard output).")
+@path_option("--mission", help="Include the behaviours of this mission's plugins (runs their code).")
+def schema(output: Path, mission: Path | None) -> None:
+    """Print the JSON Schema of mission files (for editors with yaml-language-server)."""
+    from thymio_bt.mission.schema import mission_schema
+
+    try:
+        out = Output(output, "--output")
+        out.write_text(json.dumps(mission_schema(_registry(mission)), indent=1) + "\n")
+    except UserError as exc:
+        fail(exc)

@@ -1,0 +1,119 @@
+"""``thymio-bt replay`` and ``thymio-bt export``: what a run log gives without running the mission again.
+
+``replay`` redraws a run (summary line, pictures, a window) from its ``--log`` file; ``export``
+converts a log into another format (rosbag2 ``.mcap``, a Groot2 ``.btlog``, ...).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, cast
+
+import click
+
+from thymio_bt.cli.app import fail, main, path_option, viewer_options
+from thymio_bt.cli.pictures import Pictures
+from thymio_bt.errors import UserError
+from thymio_bt.outputs import STDOUT, check_writable
+
+if TYPE_CHECKING:
+    from thymio_bt.logs.recording import Recording
+    from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+
+
+@main.command()
+@click.argument("log", type=click.Path(path_type=Path))
+@path_option("--plot", help="Draw the path in the maze (PNG).")
+@path_option("--plot-signals", help="Draw the signals (PNG).")
+@path_option("--gif", help="Animate the run.")
+@viewer_options
+@click.option("--partial", is_flag=True, help="Replay a damaged log up to its first damaged line.")
+def replay(
+    log: Path,
+    plot: Path | None,
+    plot_signals: Path | None,
+    gif: Path | None,
+    view: bool,
+    speedup: float | None,
+    partial: bool,
+) -> None:
+    """Redraw a run from its --log FILE.jsonl without re-running it."""
+    from thymio_bt.logs import read_log
+
+    pictures = Pictures(plot, plot_signals, gif)
+    try:
+        pictures.check()
+        recording = read_log(log, partial)
+        damage_note(log, recording)
+        end = recording.end
+        click.echo(
+            f"{recording.mission}: {end.get('status')} after {end.get('sim_time', 0):.1f} s simulated, "
+            f"{len(recording.samples)} ticks; final pose {end.get('final_pose')}"
+        )
+        if not (pictures.wanted or view):
+            click.echo(
+                "nothing to draw (hint: --view, --plot FILE.png, --plot-signals FILE.png or --gif FILE.gif)", err=True
+            )
+        pictures.draw(recording, 4.0 if speedup is None else speedup, quiet=False)
+        if view:
+            from thymio_bt.viz.window import replay as replay_in_window
+
+            replay_in_window(recording, 1.0 if speedup is None else speedup)
+    except UserError as exc:
+        fail(exc)
+
+
+@main.command()
+@click.argument("log", type=click.Path(path_type=Path))
+@path_option(
+    "--output",
+    "-o",
+    help="The log to write; its suffix picks the format (.jsonl, .mcap, .btlog, or a folder: rosbag2).",
+)
+@path_option("--btlog", metavar="OUT.btlog", help="Write a Groot2 log (BT.CPP's FileLogger2 file).")
+@click.option("--partial", is_flag=True, help="Export a damaged log up to its first damaged line.")
+def export(log: Path, output: Path | None, btlog: Path | None, partial: bool) -> None:
+    """Convert the run log LOG into another format (e.g. a JSON-lines log into a rosbag2 .mcap)."""
+    try:
+        from thymio_bt.logs import read_log
+
+        targets = [p for p in (output, btlog) if p is not None]
+        for target, option in ((output, "--output"), (btlog, "--btlog")):
+            if target is not None and str(target) != STDOUT:
+                check_writable(target, option)
+        if not targets:
+            raise UserError("nothing to write (hint: -o run.mcap, or --btlog run.btlog)")
+        recording = read_log(log, partial)
+        damage_note(log, recording)
+        if not recording.header.get("tree"):
+            raise UserError(
+                f"{log} was written before logs carried their tree (hint: run the mission again "
+                f"with --log to export it)"
+            )
+        for target in targets:
+            _write_log(recording, target)
+            click.echo(f"wrote {target}", err=True)
+    except UserError as exc:
+        fail(exc)
+
+
+def _write_log(recording: Recording, target: Path) -> None:
+    """Write ``recording`` to ``target`` in the format its suffix names (the file is closed however it ends)."""
+    from thymio_bt.logs import open_writer
+
+    writer = open_writer(target)
+    try:
+        # the records as read_log parsed them: the log formats' shapes, which a Recording keeps as plain dicts
+        writer.header(cast("LogHeader", recording.header))
+        for sample in recording.samples:
+            writer.tick(cast("TickRecord", sample))
+        writer.end(cast("LogEnd", {**recording.end, "events": recording.events}))
+    finally:
+        writer.close()
+
+
+def damage_note(log: Path, recording: Recording) -> None:
+    """Say where a ``--partial`` read of ``log`` stopped (nothing when the log was whole)."""
+    line = recording.header.get("damaged_at")
+    if line:
+        click.echo(f"{log}:{line}: damaged line; kept the {len(recording.samples)} ticks before it", err=True)

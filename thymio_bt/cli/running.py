@@ -1,0 +1,307 @@
+"""``thymio-bt run``: one run of a mission, in named steps.
+
+The steps: check the outputs before anything runs (report, log, pictures), load the mission, connect
+the backend (:func:`backend_for`) and prepare the run, attach the hooks that watch it tick by tick
+(progress line, recorder, live tree, window, Groot2 server), run it, then write the report and the
+pictures and print the summary. Exit codes: 0 SUCCESS, 1 any other end, 2 a user error, and the
+signal's code (130 for Ctrl-C) when interrupted.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, NoReturn
+
+import click
+
+from thymio_bt.cli.app import (
+    POSITIVE,
+    fail,
+    json_text,
+    main,
+    mission_options,
+    parse_overrides,
+    parse_pairs,
+    path_option,
+    viewer_options,
+)
+from thymio_bt.cli.pictures import Pictures
+from thymio_bt.errors import UserError
+from thymio_bt.outputs import STDOUT, Output, check_writable
+from thymio_bt.run.interrupts import Interrupts
+
+if TYPE_CHECKING:
+    from thymio_bt.logs.recording import Recorder
+    from thymio_bt.mission import Mission
+    from thymio_bt.robot.interface import Backend
+    from thymio_bt.run.runner import Run, RunResult
+    from thymio_bt.viz.groot2 import Groot2Server
+    from thymio_bt.viz.window import LiveView
+
+
+@main.command()
+@click.argument("mission", type=click.Path(path_type=Path))
+@click.option(
+    "--seed",
+    type=click.IntRange(0, 2**63 - 1),
+    default=None,
+    help="Random seed (noise models), >= 0; default: the mission's.",
+)
+@mission_options(
+    set_help="Override a mission parameter, e.g. --set cruise=0.15 or --set noise.wheel=0.03.",
+    start_help="Override the start pose, e.g. 0.5,0.3,pi/2.",
+)
+@path_option("--report", help="Write the run report (JSON).")
+@click.option("--quiet", "-q", is_flag=True, help="Print nothing; use the exit code.")
+@click.option(
+    "--realtime",
+    type=POSITIVE,
+    default=None,
+    metavar="FACTOR",
+    help="Pace the run against the wall clock (1 = real time).",
+)
+@path_option("--plot", help="Draw the path in the maze (PNG).")
+@path_option("--plot-signals", help="Draw pose, speeds and proximity over time (PNG).")
+@path_option("--gif", help="Animate the run (.gif, or .mp4 with ffmpeg).")
+@viewer_options
+@path_option("--log", "log", help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
+@click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
+@click.option(
+    "--backend",
+    "backend",
+    default=None,
+    metavar="NAME",
+    help="Where the mission runs: sim (default: the pymunk simulation) or another backend "
+    "(see 'thymio-bt backends'); default: the mission's backend: block, else sim.",
+)
+@click.option(
+    "--backend-opt",
+    "backend_opts",
+    multiple=True,
+    metavar="KEY=VALUE",
+    help="A setting of the backend, e.g. --backend-opt device=/dev/ttyACM0 (repeatable).",
+)
+@click.option(
+    "--robot",
+    default=None,
+    metavar="NAME",
+    help="The robot model: course (default), enki or real (see 'thymio-bt backends').",
+)
+@click.option(
+    "--groot2",
+    type=click.IntRange(1, 65534),
+    is_flag=False,
+    flag_value=1667,
+    default=None,
+    metavar="[PORT]",
+    help="Serve the live tree to Groot2 on 127.0.0.1:PORT and PORT+1 "
+    "(default 1667; use with --realtime; needs thymio-bt[groot2]).",
+)
+def run(
+    mission: Path,
+    seed: int | None,
+    sets: tuple[str, ...],
+    maze: Path | None,
+    start: str | None,
+    report: Path | None,
+    quiet: bool,
+    realtime: float | None,
+    plot: Path | None,
+    plot_signals: Path | None,
+    gif: Path | None,
+    view: bool,
+    speedup: float | None,
+    log: Path | None,
+    live_tree: bool,
+    backend: str | None,
+    backend_opts: tuple[str, ...],
+    robot: str | None,
+    groot2: int | None,
+) -> None:
+    """Run MISSION (a YAML file) and print a summary."""
+    pictures = Pictures(plot, plot_signals, gif)
+    try:
+        from thymio_bt.mission import load_mission
+
+        overrides = parse_overrides(sets)
+        if robot is not None:
+            overrides["robot"] = robot
+        report_out = Output(report, "--report") if report is not None else None
+        pictures.check()
+        if log is not None and str(log) != STDOUT:
+            check_writable(log, "--log")
+        spec = load_mission(mission, overrides, maze=maze, start=start)
+        runner = _prepare(spec, seed, backend, backend_opts)
+        hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
+        hooks.attach(
+            runner,
+            recorder=pictures.wanted or log is not None,
+            log=log,
+            keep=pictures.wanted,
+            live_tree=live_tree,
+            view=(1.0 if speedup is None else speedup) if view else None,
+            groot2=groot2,
+        )
+        result, interrupts = hooks.watch(runner, realtime)
+        if report_out is not None:
+            report_out.write_text(json_text(result.report()))
+        if hooks.recorder is not None:
+            pictures.draw(hooks.recorder.finish(result), 4.0 if speedup is None else speedup, quiet)
+    except UserError as exc:
+        fail(exc)
+    _conclude(runner, result, interrupts, hooks.window, quiet, err=STDOUT in (str(report), str(log)))
+
+
+def backend_for(spec: Mission, seed: int | None, name: str | None, opts: tuple[str, ...]) -> Backend:
+    """The backend the run asked for (``--backend`` over the mission's), connected and ready.
+
+    ``opts`` are the ``--backend-opt KEY=VALUE`` options; they add to the mission's ``backend:``
+    options when ``name`` is the mission's backend, and replace them otherwise.
+    """
+    from thymio_bt.backends import backend_kind
+
+    options = dict(spec.backend_options) if name is None or name == spec.backend else {}
+    options.update(parse_pairs(opts, "--backend-opt", "device=/dev/ttyACM0"))
+    kind = backend_kind(name or spec.backend)
+    return kind.create(spec, spec.seed if seed is None else seed, options)
+
+
+def _prepare(spec: Mission, seed: int | None, backend: str | None, backend_opts: tuple[str, ...]) -> Run:
+    """The run of ``spec`` on its backend; the backend is released if the run cannot be prepared."""
+    from thymio_bt.run.runner import Run
+
+    device = backend_for(spec, seed, backend, backend_opts)
+    try:
+        return Run(spec, seed, backend=device)
+    except BaseException:
+        device.close()  # the run never started: release the robot now
+        raise
+
+
+@dataclass
+class _Hooks:
+    """What watches a run tick by tick, called in this order: the progress line, then each of
+    ``extra`` (the recorder, the live tree, the window, the Groot2 server, as asked)."""
+
+    progress: _Progress
+    extra: list[Callable[[Run], None]] = field(default_factory=list)
+    recorder: Recorder | None = None
+    window: LiveView | None = None
+    monitor: Groot2Server | None = None
+
+    def __call__(self, run: Run) -> None:
+        """One tick of ``run``: every hook sees it."""
+        self.progress(run)
+        for hook in self.extra:
+            hook(run)
+
+    def attach(
+        self,
+        runner: Run,
+        recorder: bool,
+        log: Path | None,
+        keep: bool,
+        live_tree: bool,
+        view: float | None,
+        groot2: int | None,
+    ) -> None:
+        """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``),
+        the ``live_tree``, a window at speed-up ``view`` and a Groot2 server on port ``groot2``."""
+        if recorder:
+            from thymio_bt.logs.recording import Recorder
+
+            self.recorder = Recorder(log_path=log, keep=keep)
+            self.extra.append(self.recorder)
+        if live_tree:
+            from thymio_bt.viz.terminal import LiveTree
+
+            self.extra.append(LiveTree())
+        if view is not None:
+            from thymio_bt.viz.window import live_hook
+
+            self.window = live_hook(runner, view)
+            self.extra.append(self.window)
+        if groot2 is not None:
+            from thymio_bt.viz.groot2 import Groot2Server
+
+            self.monitor = Groot2Server(groot2)
+            self.extra.append(self.monitor)
+
+    def watch(self, runner: Run, realtime: float | None) -> tuple[RunResult, Interrupts]:
+        """Run ``runner`` under these hooks (Ctrl-C and SIGTERM end it cleanly); close the Groot2 server."""
+        try:
+            with Interrupts() as interrupts:
+                result = runner.run(on_tick=self, realtime=realtime, interrupts=interrupts)
+        finally:
+            if self.monitor is not None:
+                self.monitor.close()
+        self.progress.done()
+        return result, interrupts
+
+
+def _conclude(
+    runner: Run, result: RunResult, interrupts: Interrupts, window: LiveView | None, quiet: bool, err: bool
+) -> NoReturn:
+    """Print the summary (on stderr when ``err``: stdout carries the report or log), show the window's
+    last frame, and exit with the run's code."""
+    if not quiet:
+        _summary(result, err=err)
+        if result.status != "SUCCESS":
+            from thymio_bt.viz.terminal import failing_tree
+
+            click.echo(failing_tree(runner), err=True)
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
+    if window is not None:
+        window.finish(result)  # with a display: stays open on the last frame until closed
+    sys.exit(0 if result.status == "SUCCESS" else 1)
+
+
+class _Progress:
+    """A one-line progress indicator on stderr for runs that take more than a second."""
+
+    def __init__(self, limit: float, enabled: bool) -> None:
+        self.limit, self.enabled = limit, enabled
+        self.start = time.perf_counter()
+        self.shown = False
+
+    def __call__(self, run: Any) -> None:
+        """Every 20 ticks after the first second: the simulated time so far, over the line before."""
+        if self.enabled and run.ticks % 20 == 0 and time.perf_counter() - self.start > 1.0:
+            t = run.backend.time()
+            click.echo(f"\r  simulated {t:7.1f} s of at most {self.limit:g} s", err=True, nl=False)
+            self.shown = True
+
+    def done(self) -> None:
+        """Blank the line, if anything was shown."""
+        if self.shown:
+            click.echo("\r" + " " * 60 + "\r", err=True, nl=False)
+
+
+def _summary(result: RunResult, err: bool = False) -> None:
+    """The run's status, times, final pose and clearance; where and why it failed, on stderr."""
+    echo = partial(click.echo, err=err)
+    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow", "INTERRUPTED": "yellow"}[result.status]
+    rtf = result.real_time_factor
+    echo(
+        f"{result.mission}: "
+        + click.style(result.status, fg=colour, bold=True)
+        + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
+        f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)"
+    )
+    pose = result.final_pose
+    if pose:
+        echo(f"  final pose: x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg")
+    else:
+        echo("  final pose: no robot")
+    clearance = f"{result.min_clearance:.4f} m" if result.min_clearance is not None else "n/a"
+    echo(f"  collisions: {result.collisions}   min clearance: {clearance}")
+    if result.status != "SUCCESS":
+        echo(f"  failed at: {result.failed_path}", err=True)
+        echo(f"  reason: [{result.code}] {result.reason}", err=True)

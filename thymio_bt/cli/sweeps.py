@@ -1,0 +1,224 @@
+"""``thymio-bt sweep``: a mission run many times with the noise models on, and its statistics.
+
+With ``--matrix`` one sweep per combination of settings (robot models, parameters), then one table.
+The runs go to a process pool on this machine, or to a Dask cluster with ``--dask``.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import click
+
+from thymio_bt.cli.app import fail, json_text, main, mission_options, parse_overrides, path_option
+from thymio_bt.errors import UserError
+from thymio_bt.outputs import Output
+from thymio_bt.run.interrupts import Interrupts
+
+if TYPE_CHECKING:
+    from thymio_bt.run.matrix import Cell
+
+
+@main.command()
+@click.argument("mission", type=click.Path(path_type=Path))
+@click.option("--runs", type=click.IntRange(1, 1_000_000), default=100, show_default=True, help="Number of runs.")
+@click.option(
+    "--seed-start", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True, help="Seed of the first run."
+)
+@path_option("--out", help="Write the sweep JSON here.")
+@mission_options(
+    set_help="Override a parameter or a noise model (e.g. --set noise.wheel=0.05).",
+    start_help="Override the start pose.",
+)
+@click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
+@click.option(
+    "--dask",
+    "dask",
+    default=None,
+    metavar="ADDRESS",
+    help="Run on a Dask cluster, e.g. tcp://127.0.0.1:8786 (needs thymio-bt[dask]).",
+)
+@click.option(
+    "--matrix",
+    "matrix",
+    multiple=True,
+    metavar="NAME=V1,V2,...",
+    help="Sweep every combination of these settings, e.g. --matrix robot=course,enki,real.",
+)
+def sweep(
+    mission: Path,
+    runs: int,
+    seed_start: int,
+    out: Path | None,
+    sets: tuple[str, ...],
+    maze: Path | None,
+    start: str | None,
+    workers: int | None,
+    dask: str | None,
+    matrix: tuple[str, ...],
+) -> None:
+    """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
+    from thymio_bt.run.sweep import LocalPool
+    from thymio_bt.run.sweep import sweep as run_sweep
+
+    try:
+        sweep_out = Output(out, "--out") if out is not None else None
+        executor = _dask(dask) if dask else None
+        if matrix:
+            _matrix(mission, runs, seed_start, sweep_out, sets, maze, start, executor, workers, matrix)
+            return
+        with Interrupts() as interrupts:
+            with click.progressbar(
+                length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr, show_pos=True
+            ) as bar:
+                result = run_sweep(
+                    mission,
+                    runs,
+                    seed_start,
+                    parse_overrides(sets),
+                    str(maze) if maze else None,
+                    start,
+                    executor=executor or LocalPool(workers, interrupts),
+                    progress=lambda _: bar.update(1),
+                    interrupts=interrupts,
+                )
+            click.echo("", err=True)  # the bar leaves its line open
+        data = result.to_json()
+        if sweep_out is not None:
+            sweep_out.write_text(json_text(data))
+    except UserError as exc:
+        fail(exc)
+    _sweep_table(data, err=sweep_out is not None and sweep_out.is_stdout)
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
+    if data["interrupted"]:
+        sys.exit(1)  # a worker died: the sweep did not complete
+
+
+def _matrix(
+    mission: Path,
+    runs: int,
+    seed_start: int,
+    out: Output | None,
+    sets: tuple[str, ...],
+    maze: Path | None,
+    start: str | None,
+    executor: Any,
+    workers: int | None,
+    specs: tuple[str, ...],
+) -> None:
+    """sweep --matrix: one sweep per combination of settings, then one table."""
+    from thymio_bt.run.matrix import parse_axes, run_matrix
+    from thymio_bt.run.sweep import LocalPool
+
+    axes = parse_axes(specs)
+    count = math.prod(len(v) for v in axes.values())
+    with Interrupts() as interrupts:
+        with click.progressbar(
+            length=runs * count, label=f"{mission.name}: {count} cells x {runs} runs", file=sys.stderr, show_pos=True
+        ) as bar:
+            cells = run_matrix(
+                mission,
+                runs,
+                axes,
+                seed_start,
+                parse_overrides(sets),
+                str(maze) if maze else None,
+                start,
+                executor=executor or LocalPool(workers, interrupts),
+                progress=lambda _: bar.update(1),
+                interrupts=interrupts,
+            )
+        click.echo("", err=True)
+    rows = [cell.row() for cell in cells]
+    if out is not None:
+        out.write_text(
+            json_text(
+                {
+                    "mission": cells[0].result.mission,
+                    "runs": runs,
+                    "seed_start": seed_start,
+                    "axes": axes,
+                    "reference_final_pose": cells[0].reference,
+                    "cells": rows,
+                }
+            )
+        )
+    _matrix_table(cells, rows, list(axes), runs, err=out is not None and out.is_stdout)
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
+
+
+def _matrix_table(cells: list[Cell], rows: list[dict[str, Any]], names: list[str], runs: int, err: bool) -> None:
+    """One line per cell of a matrix (its settings, success rate, collisions, final errors, failures)."""
+    echo = partial(click.echo, err=err)
+    echo(
+        f"{cells[0].result.mission}: {runs} noisy runs per cell; final error = distance from the final pose "
+        f"of the noise-free run on the course's robot"
+    )
+    echo(
+        "  "
+        + "".join(f"{n:>14}" for n in names)
+        + f"{'success':>10}{'collided':>10}{'median err':>12}{'max err':>10}  failures"
+    )
+    for row in rows:
+        median, worst = row["final_error_median"], row["final_error_max"]
+        echo(
+            "  "
+            + "".join(f"{row['settings'][n]:>14}" for n in names)
+            + f"{100 * row['success_rate']:>9.1f}%{row['runs_with_collision']:>10}"
+            + (f"{1000 * median:>10.1f}mm" if median is not None else f"{'-':>12}")
+            + (f"{1000 * worst:>8.1f}mm" if worst is not None else f"{'-':>10}")
+            + "  "
+            + ", ".join(f"{code} {n}" for code, n in row["failures"].items())
+        )
+
+
+def _dask(address: str) -> Any:
+    """A sweep executor on the Dask cluster at ``address``."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise UserError("--dask needs Dask (hint: pip install 'thymio-bt[dask]')") from None
+    from thymio_bt.run.distributed import DaskExecutor
+
+    try:
+        return DaskExecutor(Client(address, timeout=5))
+    except (OSError, TimeoutError) as exc:
+        raise UserError(
+            f"--dask {address}: cannot reach the scheduler ({exc}) "
+            f"(hint: start one with: dask scheduler; dask worker ADDRESS)"
+        ) from None
+
+
+def _sweep_table(data: dict[str, Any], err: bool = False) -> None:
+    """The statistics of a sweep's JSON ``data``: success rate, times, errors, failures with how to reproduce them."""
+    echo = partial(click.echo, err=err)
+    if stopped := data["interrupted"]:
+        why = f"interrupted by {stopped}" if stopped.startswith("SIG") else stopped
+        echo(
+            f"{data['mission']}: {why} after {data['runs']} of {data['runs_requested']} runs; those are reported",
+            err=True,
+        )
+    last_seed = data["seed_start"] + data["runs_requested"] - 1
+    echo(
+        f"{data['mission']}: {data['successes']}/{data['runs']} succeeded "
+        f"({100 * data['success_rate']:.1f} %), seeds {data['seed_start']}..{last_seed}, "
+        f"noise {', '.join(f'{k}={v:g}' for k, v in data['noise'].items())}"
+    )
+    echo(f"  {data['wall_time']:.2f} s wall, {data['aggregate_real_time_factor'] or 0:,.0f}x real time in aggregate")
+    rows = [("mission time [s]", data["sim_time"], 1.0), ("first stop error [mm]", data["first_stop_error"], 1000.0)]
+    echo(f"  {'':22} {'min':>8} {'p5':>8} {'median':>8} {'p95':>8} {'max':>8}")
+    for label, dist, scale in rows:
+        if dist:
+            echo(f"  {label:22} " + " ".join(f"{dist[k] * scale:8.2f}" for k in ("min", "p5", "median", "p95", "max")))
+    for code, count in data["failures"].items():
+        echo(f"  failures {code}: {count}")
+    for r in data["results"]:
+        if r["status"] != "SUCCESS":
+            echo(f"  seed {r['seed']}: {r['status']} [{r['code']}] {r['failed_path']}: {r['reason']}")
+            echo(f"    reproduce: {r['reproduce']}")
