@@ -83,16 +83,22 @@ class BackendKind:
 
 
 class SimOptions(BackendOptions):
+    """The ``sim`` backend's settings: the physics sub-step rate."""
+
     physics_hz: float = Field(100.0, ge=50.0, le=2000.0, description="physics sub-steps per simulated second")
 
 
 class TdmOptions(BackendOptions):
+    """The ``tdm`` backend's settings: where the Thymio Device Manager is."""
+
     host: str | None = Field(None, description="Thymio Device Manager host (default: found on this machine)")
     port: int | None = Field(None, ge=1, le=65535, description="Thymio Device Manager TCP port")
     password: str | None = Field(None, description="Thymio Device Manager password, if it has one")
 
 
 class AsebaOptions(BackendOptions):
+    """The ``aseba`` backend's settings: the device, how long to wait, and the robot's latency."""
+
     device: str = Field(
         "", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for the only Thymio plugged in"
     )
@@ -108,6 +114,8 @@ class AsebaOptions(BackendOptions):
 
 
 class PlaygroundOptions(BackendOptions):
+    """The ``playground`` backend's settings: start-up wait, latency and the speed calibration."""
+
     timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
     latency: float = Field(
         0.2,
@@ -128,6 +136,8 @@ class PlaygroundOptions(BackendOptions):
 
 
 class Ros2Options(BackendOptions):
+    """The ``ros2`` backend's settings: the topic map, the clock, the latency and the robot's URDF."""
+
     topics: str = Field("", description="a YAML topic map (default: the course's Gazebo topics and services)")
     timeout: float = Field(
         5.0,

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import random
 from collections.abc import Set as AbstractSet
+from itertools import pairwise
 from typing import TYPE_CHECKING
 
 from thymio_bt.maze.model import Maze, Spawn, Wall
@@ -124,7 +125,7 @@ def random_path(length: int, seed: int, cols: int = 8, rows: int = 8) -> list[Ce
 
 def path_maze(path: list[Cell], cell: float = 0.2, thickness: float = 0.01) -> Maze:
     """A corridor along ``path`` (closed at both ends); spawn ``start`` in the first cell facing the second."""
-    passages = {frozenset({a, b}) for a, b in zip(path, path[1:])}
+    passages = {frozenset({a, b}) for a, b in pairwise(path)}
     cols = max(c for c, _ in path) + 1
     rows = max(r for _, r in path) + 1
     walls = _walls_from_open(cols, rows, passages, cell, thickness, inside=set(path))
@@ -136,7 +137,7 @@ def path_maze(path: list[Cell], cell: float = 0.2, thickness: float = 0.01) -> M
 def turns_along(path: list[Cell]) -> str:
     """The turns (L/R) a robot driving along ``path`` makes, e.g. 'RRL'."""
     out = []
-    for a, b, c in zip(path, path[1:], path[2:]):
+    for a, b, c in zip(path, path[1:], path[2:], strict=False):  # each cell with the next two
         d1 = (b[0] - a[0], b[1] - a[1])
         d2 = (c[0] - b[0], c[1] - b[1])
         cross = d1[0] * d2[1] - d1[1] * d2[0]

@@ -18,6 +18,7 @@ Example::
 from __future__ import annotations
 
 import math
+from itertools import pairwise
 from pathlib import Path
 from typing import Annotated
 
@@ -68,7 +69,7 @@ def maze_from_grid(
                 hint="draw cells between '+' corners, e.g. '+--+--+'",
             )
         )
-    widths = {b - a for a, b in zip(corner_cols, corner_cols[1:])}
+    widths = {b - a for a, b in pairwise(corner_cols)}
     if len(widths) != 1:
         raise UserError(
             Problem(

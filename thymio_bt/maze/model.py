@@ -75,6 +75,7 @@ class Wall(BaseModel):
 
     @property
     def length(self) -> float:
+        """The segment's length from ``from`` to ``to`` (the box is a thickness longer)."""
         return math.dist(self.start, self.end)
 
     def corners(self) -> list[tuple[float, float]]:
@@ -133,6 +134,7 @@ class Obstacle(BaseModel):
         return self
 
     def corners(self) -> list[tuple[float, float]]:
+        """The 4 corners of the box, or the polygon's points, counter-clockwise or as written."""
         if self.polygon is not None:
             return [tuple(p) for p in self.polygon]  # type: ignore[misc]
         assert self.center is not None and self.size is not None
@@ -160,6 +162,7 @@ class Spawn(BaseModel):
         return value
 
     def pose(self) -> Pose:
+        """The spawn as a :class:`~thymio_bt.robot.interface.Pose`."""
         return Pose(self.x, self.y, self.yaw)
 
 
@@ -171,6 +174,7 @@ class Area(BaseModel):
     end: Point = Field(alias="to", description="the opposite corner [x, y]")
 
     def contains(self, x: float, y: float) -> bool:
+        """Whether (x, y) lies in the rectangle, edges included."""
         (x0, y0), (x1, y1) = self.start, self.end
         return min(x0, x1) <= x <= max(x0, x1) and min(y0, y1) <= y <= max(y0, y1)
 

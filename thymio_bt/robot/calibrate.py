@@ -27,9 +27,10 @@ import math
 import statistics
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from itertools import pairwise
 
 from thymio_bt.maze import Maze
+from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.robot.interface import Backend, Pose
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import ray_distance
@@ -71,6 +72,7 @@ class Calibration:
     rows: list[tuple[float, float]] = field(default_factory=list)  # the table
 
     def profile(self, name: str) -> Profile:
+        """The profile file's content, named ``name``, with the scales against the base model for the record."""
         return Profile(
             base=self.base.name,
             name=name,
@@ -101,9 +103,8 @@ class Calibration:
             lines.append(f"  {cm:2d} cm: {measured:6.0f} / {expected:6.0f} {off}")
         return lines
 
-    def table(self) -> Any:
-        from thymio_bt.robot.calibration import CalibrationTable
-
+    def table(self) -> CalibrationTable:
+        """The measured rows as a calibration table."""
         return CalibrationTable(tuple(d for d, _ in self.rows), tuple(r for _, r in self.rows), source="calibrate")
 
 
@@ -190,7 +191,7 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     run_for(2.0, -0.05, 0.0)
     spin_wheel = SPIN_UNITS * model.metres_per_unit
     track = run_for(3.0, 0.0, 2 * spin_wheel / model.wheel_separation)[5:]
-    turned = sum(math.remainder(b.yaw - a.yaw, math.tau) for (_, a), (_, b) in zip(track, track[1:]))
+    turned = sum(math.remainder(b.yaw - a.yaw, math.tau) for (_, a), (_, b) in pairwise(track))
     rate = turned / (track[-1][0] - track[0][0])
     wheel_separation = 2 * SPIN_UNITS * metres_per_unit / rate
     result = Calibration(model, metres_per_unit, wheel_separation, samples)

@@ -53,6 +53,7 @@ import math
 from bisect import bisect_right
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from itertools import pairwise
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # numpy is only needed by whoever makes the generator
@@ -74,7 +75,7 @@ class CalibrationTable:
         d, r = self.distances, self.readings
         if len(d) != len(r) or len(d) < 2:
             raise ValueError("a calibration table needs at least two (distance, reading) rows")
-        if any(b <= a for a, b in zip(d, d[1:])) or any(b >= a for a, b in zip(r, r[1:])):
+        if any(b <= a for a, b in pairwise(d)) or any(b >= a for a, b in pairwise(r)):
             raise ValueError("distances must increase and readings decrease strictly")
         if r[-1] != 0 or d[0] < 0:
             raise ValueError("the last reading must be 0 (nothing seen) and distances non-negative")
@@ -92,6 +93,7 @@ class CalibrationTable:
 
     @property
     def max_reading(self) -> float:
+        """The saturated reading, at :attr:`min_distance` and closer."""
         return self.readings[0]
 
     def to_raw(self, distance: float) -> float:
@@ -229,7 +231,7 @@ class RawProximityModel:
         draws = self.rng.standard_normal(len(scan))
         return {
             name: self._reading(self.table.to_raw(distance), float(z))
-            for (name, distance), z in zip(scan.items(), draws)
+            for (name, distance), z in zip(scan.items(), draws, strict=True)
         }
 
     def through_raw(self, scan: Mapping[str, float]) -> dict[str, float]:

@@ -79,7 +79,7 @@ def _wall_shapes(geometry: bytes) -> MazeShapes:
 
 
 def _axes(polygon: Polygon) -> Iterable[tuple[float, float]]:
-    for (x0, y0), (x1, y1) in zip(polygon, [*polygon[1:], polygon[0]]):
+    for (x0, y0), (x1, y1) in zip(polygon, [*polygon[1:], polygon[0]], strict=True):
         yield y0 - y1, x1 - x0  # the edge's normal (not normalised: only signs matter)
 
 
@@ -108,7 +108,7 @@ def convex_gap(a: Polygon, b: Polygon) -> float:
         _point_segment(px, py, p, q)
         for one, other in ((a, b), (b, a))
         for px, py in one
-        for p, q in zip(other, [*other[1:], other[0]])
+        for p, q in zip(other, [*other[1:], other[0]], strict=True)
     )
 
 
@@ -132,7 +132,7 @@ def placement_problem(maze: Maze | MazeShapes, model: RobotModel, pose: Pose) ->
                 f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])"
             )
     hx0, hy0, hx1, hy1 = _box(hull)
-    for polygon, (x0, y0, x1, y1) in zip(shapes.polygons, shapes.boxes):
+    for polygon, (x0, y0, x1, y1) in zip(shapes.polygons, shapes.boxes, strict=True):
         if x0 - hx1 > _APART or hx0 - x1 > _APART or y0 - hy1 > _APART or hy0 - y1 > _APART:
             continue
         if convex_overlap(hull, polygon):
@@ -145,7 +145,7 @@ def ray_distance(maze: Maze | MazeShapes, ox: float, oy: float, yaw: float) -> f
     shapes = maze if isinstance(maze, MazeShapes) else MazeShapes.of(maze)
     c, s = math.cos(yaw), math.sin(yaw)
     best = math.inf
-    for corners, (bx0, by0, bx1, by1) in zip(shapes.polygons, shapes.boxes):
+    for corners, (bx0, by0, bx1, by1) in zip(shapes.polygons, shapes.boxes, strict=True):
         # a box wholly behind the start along x or along y (by more than any rounding) is never hit
         if (
             (c >= 0.0 and bx1 < ox - _APART)
@@ -154,7 +154,7 @@ def ray_distance(maze: Maze | MazeShapes, ox: float, oy: float, yaw: float) -> f
             or (s <= 0.0 and by0 > oy + _APART)
         ):
             continue
-        for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]]):
+        for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]], strict=True):
             hit = _ray_segment(ox, oy, c, s, x0, y0, x1, y1)
             if hit is not None and hit < best:
                 best = hit
@@ -190,6 +190,7 @@ class ContactTracker:
         self.touching = False
 
     def update(self, backend: Backend, pose: Pose | None) -> None:
+        """Take ``pose`` (None: nothing known) into ``backend.min_clearance`` and ``backend.collisions``."""
         if pose is None or not (self.maze.walls or self.maze.obstacles):
             return
         gap = clearance(self.maze, self.model, pose)

@@ -34,6 +34,8 @@ PROFILE_SUFFIXES = (".yaml", ".yml")
 
 
 class TableRows(BaseModel):
+    """A profile's calibration table: distances and readings, row by row."""
+
     model_config = ConfigDict(extra="forbid")
 
     distances: list[float] = Field(description="metres, increasing")
@@ -56,6 +58,7 @@ class Profile(BaseModel):
 
 
 def is_profile_path(name: str) -> bool:
+    """Whether ``name`` is a profile file (``.yaml``, ``.yml``) rather than a built-in model's name."""
     return name.lower().endswith(PROFILE_SUFFIXES)
 
 

@@ -73,11 +73,13 @@ class PlaygroundRobot(ThymioRobot):
         return Pose(base.x, base.y, math.atan2(math.sin(angle), math.cos(angle)))
 
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why the robot cannot stand at ``pose``: a real robot's reasons, then the maze's geometry."""
         return super().spawn_problem(name, pose) or (
             placement_problem(self.maze, self.model, pose) if self.maze.walls or self.maze.obstacles else None
         )
 
     def advance(self, duration: float) -> None:
+        """A real robot's tick, then the clearance and contacts of the Playground's true pose."""
         super().advance(duration)
         self._contacts.update(self, self._truth())  # RobotLost when the Playground is gone: the run ends there
 
@@ -96,6 +98,7 @@ class PlaygroundRobot(ThymioRobot):
         return problem
 
     def close(self) -> None:
+        """Stop the robot, then the D-Bus connection and the Playground with its bus."""
         try:
             super().close()
         finally:

@@ -98,4 +98,5 @@ class EnkiRobot:
             self._call(self.properties.set(name, "d", float(value)))
 
     def close(self) -> None:
+        """Close the D-Bus connection."""
         self.connection.close()

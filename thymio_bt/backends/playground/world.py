@@ -36,9 +36,11 @@ class PlaygroundWorld:
     parking: tuple[float, float]  # where a deleted robot waits, maze coordinates
 
     def to_enki(self, x: float, y: float) -> tuple[float, float]:
+        """The Playground's position (cm) of the maze point (x, y) (m)."""
         return 100.0 * (x + self.offset[0]), 100.0 * (y + self.offset[1])
 
     def from_enki(self, x_cm: float, y_cm: float) -> tuple[float, float]:
+        """The maze point (m) of the Playground's position (x, y) in cm."""
         return x_cm / 100.0 - self.offset[0], y_cm / 100.0 - self.offset[1]
 
 
@@ -47,7 +49,7 @@ AXIS_TOLERANCE = 1e-3
 
 
 def _axis_aligned(corners: list[tuple[float, float]]) -> bool:
-    for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]]):
+    for (x0, y0), (x1, y1) in zip(corners, [*corners[1:], corners[0]], strict=True):
         angle = math.atan2(y1 - y0, x1 - x0) % (math.pi / 2)
         if min(angle, math.pi / 2 - angle) > AXIS_TOLERANCE:
             return False

@@ -228,23 +228,27 @@ class AsebaNode(Node):
         return remote
 
     def set_motors(self, left: int, right: int) -> None:
+        """Send the motor targets without waiting; a broken link is said by the next read."""
         if self._closed:
             return
         try:
-            for name, value in zip(TARGET_VARIABLES, (left, right)):
+            for name, value in zip(TARGET_VARIABLES, (left, right), strict=True):
                 self.connection.set_var(self.node_id, name, int(value) & 0xFFFF)
         except (OSError, KeyError):
             pass  # the link is gone: the next read says so (RobotLost)
 
     def read_prox(self) -> list[int]:
+        """The latest ``prox.horizontal`` the robot sent, signed."""
         return [signed(v) for v in self._remote().get_var_array(PROX_VARIABLE)]
 
     def read_wheel_speeds(self) -> tuple[int, int]:
+        """The latest measured wheel speeds the robot sent, signed (units)."""
         remote = self._remote()
         left, right = (signed(remote.get_var(name)) for name in SPEED_VARIABLES)
         return left, right
 
     def read_wheel_travel(self) -> tuple[float, float]:
+        """Each wheel's travel since connecting (units x s), integrated as every refresh arrived."""
         self._remote()  # RobotLost when it has gone silent
         with self._lock:
             return self._travel

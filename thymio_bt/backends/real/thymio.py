@@ -77,6 +77,7 @@ class RealConfig:
 
     @property
     def max_wheel_speed(self) -> float:
+        """The wheel-speed limit in m/s (``max_units`` motor units)."""
         return self.max_units * self.metres_per_unit
 
 
@@ -106,7 +107,7 @@ class Node(ABC):
         backend then integrates those at its ticks)."""
         return None
 
-    def close(self) -> None:
+    def close(self) -> None:  # noqa: B027 (an optional hook: a node that holds nothing has nothing to do)
         """Release the robot (the default node holds nothing)."""
 
 
@@ -175,16 +176,19 @@ class TdmNode(Node):
         return cls(client, node)
 
     def set_motors(self, left: int, right: int) -> None:
+        """Write both motor targets to the node's cache and send them."""
         self.node[TARGET_VARIABLES[0]] = int(left)
         self.node[TARGET_VARIABLES[1]] = int(right)
         self.node.flush()
 
     def read_prox(self) -> list[int]:
+        """The TDM's latest ``prox.horizontal`` (its waiting messages processed first)."""
         self.client.process_waiting_messages()
         values = self.node[PROX_VARIABLE]
         return [int(values[i]) for i in range(len(SENSOR_NAMES))]
 
     def read_wheel_speeds(self) -> tuple[int, int]:
+        """The TDM's latest measured wheel speeds (its waiting messages processed first)."""
         self.client.process_waiting_messages()
         return int(self.node[SPEED_VARIABLES[0]]), int(self.node[SPEED_VARIABLES[1]])
 
@@ -265,6 +269,7 @@ class ThymioRobot(Backend):
 
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
+        """Hold the body velocity: the motor targets are sent now (nothing while the robot is absent)."""
         if not self._present:
             return
         self._cmd = Twist(float(linear), float(angular))
@@ -283,9 +288,11 @@ class ThymioRobot(Backend):
         return units(left), units(right)
 
     def exists(self) -> bool:
+        """Whether the robot is present (placed and not deleted)."""
         return self._present
 
     def proximity(self) -> Scan | None:
+        """The last tick's readings in metres, through the calibration table; None while absent."""
         return self._scan if self._present else None
 
     def proximity_raw(self) -> dict[str, int] | None:
@@ -293,6 +300,7 @@ class ThymioRobot(Backend):
         return self._raw if self._present else None
 
     def pose(self) -> Pose | None:
+        """Odometry's base_link pose (it drifts: there is no ground truth); None while absent."""
         if not self._present:
             return None
         base = COURSE.base_of(*self._axle)
@@ -303,15 +311,18 @@ class ThymioRobot(Backend):
         return self.pose()
 
     def velocity(self) -> Twist:
+        """The measured wheel speeds as a body velocity (zero while absent)."""
         if not self._present:
             return Twist()
         left, right = self._wheels
         return Twist((left + right) / 2.0, (right - left) / self.config.wheel_separation)
 
     def command(self) -> Twist:
+        """The held command."""
         return self._cmd
 
     def time(self) -> float:
+        """Wall-clock seconds since the backend started, less the time spent waiting for the operator."""
         return self._clock() - self._start - self._paused
 
     # -------------------------------------------------------------- Entities

@@ -23,6 +23,7 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import threading
@@ -129,10 +130,8 @@ class Ros2Robot(Backend):
 
     # ------------------------------------------------------------ callbacks (executor thread)
     def _spin(self) -> None:
-        try:
+        with contextlib.suppress(Exception):  # the context was shut down under it: the backend is closing
             self._executor.spin()
-        except Exception:  # the context was shut down under it: the backend is closing
-            pass
 
     def _on_clock(self, msg: Any) -> None:
         with self._cond:
@@ -219,6 +218,7 @@ class Ros2Robot(Backend):
         return int((time.monotonic() - self._wall_start) * 1e9)
 
     def time(self) -> float:
+        """Seconds since the run started, on /clock (simulated time) or the wall clock."""
         return (self._now_ns() - self._start_ns) / 1e9
 
     def _wait_for(self, ready: Callable[[], bool], seconds: float, lost: str) -> None:
@@ -233,6 +233,7 @@ class Ros2Robot(Backend):
 
     # ------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
+        """Hold the command and publish it now (again at every tick); nothing while the robot is absent."""
         if not self._present:
             return
         self._cmd = Twist(float(linear), float(angular))
@@ -244,14 +245,17 @@ class Ros2Robot(Backend):
         self._cmd_pub.publish(msg)
 
     def exists(self) -> bool:
+        """Whether the robot is in the world (adopted or spawned, and not deleted)."""
         return self._present
 
     def proximity(self) -> Scan | None:
+        """The latest reading of each sensor topic (inf for one not heard yet); None while absent."""
         if not self._present:
             return None
         return {name: self._ranges[name][1] if name in self._ranges else math.inf for name in SENSOR_NAMES}
 
     def pose(self) -> Pose | None:
+        """The latest /odom pose; None while absent or before the first message."""
         odom = self._odom
         if not self._present or odom is None:
             return None
@@ -262,10 +266,12 @@ class Ros2Robot(Backend):
         return self.pose()
 
     def velocity(self) -> Twist:
+        """The latest /odom twist (zero while absent)."""
         odom = self._odom
         return Twist(odom[4], odom[5]) if self._present and odom is not None else Twist()
 
     def command(self) -> Twist:
+        """The held command."""
         return self._cmd
 
     # ------------------------------------------------------------ stepping
@@ -344,6 +350,7 @@ class Ros2Robot(Backend):
 
     # ------------------------------------------------------------ entities
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
+        """Why the robot cannot be spawned at ``pose``: one robot, once, at finite numbers, clear of walls."""
         if name != self.robot_name:
             return f"this backend drives one robot, '{self.robot_name}', not '{name}'"
         if self._present:
@@ -436,13 +443,16 @@ class Ros2Robot(Backend):
             self._present = True  # the robot already stands there: adopt it
             request.state = RequestState.SUCCEEDED
             return
-        if seen is not None:  # elsewhere: take it away first, as the course does
-            if (
+        if (
+            seen is not None  # elsewhere: take it away first, as the course does
+            and (
                 yield from self._call(
                     self._delete_client, self.topics.delete, DeleteEntity.Request(name=request.entity), request
                 )
-            ) is None:
-                return
+            )
+            is None
+        ):
+            return
         message = SpawnEntity.Request(name=request.entity, xml=self._xml or "", reference_frame="world")
         pose = message.initial_pose
         pose.position.x, pose.position.y = request.pose.x, request.pose.y

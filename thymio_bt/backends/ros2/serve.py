@@ -22,6 +22,7 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
 import time
@@ -127,10 +128,8 @@ class GazeboStandIn:
         self._spinner.start()
 
     def _spin(self) -> None:
-        try:
+        with contextlib.suppress(Exception):  # shut down under it: the stand-in is closing
             self._executor.spin()
-        except Exception:  # shut down under it: the stand-in is closing
-            pass
 
     # ------------------------------------------------------------ requests (executor thread)
     def _on_cmd_vel(self, msg: Any) -> None:
@@ -270,6 +269,7 @@ class GazeboStandIn:
                 on_second(sim_time, sim_time / max(time.monotonic() - wall_start, 1e-9))
 
     def close(self) -> None:
+        """Stop spinning, leave ROS and end the spinner thread."""
         self._executor.shutdown(timeout_sec=1.0)
         self._node.destroy_node()
         self._context.try_shutdown()

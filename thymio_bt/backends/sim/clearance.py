@@ -230,7 +230,7 @@ class ClearanceTracker:
                 if d < gap:
                     gap = d
         reach = self.tables.reach
-        for shape, _, corners in walls:
+        for _, _, corners in walls:
             for cx, cy in corners:
                 if math.hypot(cx - ax, cy - ay) - reach < gap:  # could this corner be nearer?
                     gap = min(gap, distance(robot, (cx, cy))[0])

@@ -66,7 +66,7 @@ def _reader(m: memoryview[float]) -> Callable[[], tuple[float, float, float]]:
 
 def _same(xs: Sequence[float], ys: Sequence[float]) -> bool:
     """Equal, signed zeros included."""
-    return all(x == y and math.copysign(1.0, x) == math.copysign(1.0, y) for x, y in zip(xs, ys))
+    return all(x == y and math.copysign(1.0, x) == math.copysign(1.0, y) for x, y in zip(xs, ys, strict=True))
 
 
 @lru_cache(maxsize=1)

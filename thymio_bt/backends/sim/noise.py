@@ -24,16 +24,20 @@ class NoiseSource:
         self._range_sd = config.range_sd  # read per ray: kept out of the model
 
     def wheel_factors(self) -> tuple[float, float]:
+        """Each wheel's speed factor for a new command: 1 ± ``wheel`` (uniform), or exactly 1 when off."""
         a = self.config.wheel
         if not a:
             return 1.0, 1.0
         return 1.0 + self._rng.uniform(-a, a), 1.0 + self._rng.uniform(-a, a)
 
     def encoder_factors(self) -> tuple[float, float]:
+        """Each wheel encoder's factor for one dead-reckoning step: 1 ± ``odometry`` (uniform)."""
         a = self.config.odometry
         return 1.0 + self._rng.uniform(-a, a), 1.0 + self._rng.uniform(-a, a)
 
     def range(self, value: float, lo: float, hi: float) -> float:
+        """A range reading with Gaussian noise (sd ``range_sd``): inf stays inf, above ``hi`` reads inf, below
+        ``lo`` reads ``lo``."""
         sd = self._range_sd
         if not sd or math.isinf(value):
             return value

@@ -46,7 +46,7 @@ class _Readings(dict[str, float]):
         if not self._complete:
             values = [self[name] for name in self._names]
             dict.clear(self)
-            dict.update(self, zip(self._names, values))
+            dict.update(self, zip(self._names, values, strict=True))
             self._complete = True
         return self
 

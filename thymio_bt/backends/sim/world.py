@@ -86,7 +86,7 @@ class _ConeSensors:
         reach, response = self.response.range, self.response
         draws = self.rng.standard_normal(len(self.names))
         readings = {}
-        for i, (name, z) in enumerate(zip(self.names, draws)):
+        for i, (name, z) in enumerate(zip(self.names, draws, strict=True)):
             hits = [None if alpha is None else alpha * reach for alpha in alphas[3 * i : 3 * i + 3]]
             readings[name] = response.reading(response.value(*hits), float(z))
         return readings
@@ -222,7 +222,11 @@ class Simulation(Backend):
         ]
         #: noise-free metres, cast when read (walls only: see _refresh_sensors)
         self._reader = RayReader(
-            self.space, dict(zip(self._ray_names, self._rays)), reach, self._range_min, pymunk.ShapeFilter(mask=_WALLS)
+            self.space,
+            dict(zip(self._ray_names, self._rays, strict=True)),
+            reach,
+            self._range_min,
+            pymunk.ShapeFilter(mask=_WALLS),
         )
         self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
         self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
@@ -234,6 +238,7 @@ class Simulation(Backend):
 
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
+        """Hold (linear, angular); applied at once, or a few physics steps later with a command delay."""
         if self.robot_name not in self._entities:
             return
         last_linear, last_angular, cmd = self._drive_args
@@ -247,9 +252,11 @@ class Simulation(Backend):
             self._apply_command()
 
     def exists(self) -> bool:
+        """Whether the robot entity exists (it does not between a delete and a spawn)."""
         return self.robot_name in self._entities
 
     def proximity(self) -> Scan | None:
+        """The last sensor refresh's readings (each ray cast when first read when noise-free); None while absent."""
         if self.robot_name not in self._entities:
             return None
         scan, sensed = self._scan, self._sensed
@@ -262,6 +269,7 @@ class Simulation(Backend):
         return self._raw if self.exists() else None
 
     def pose(self) -> Pose | None:
+        """Odometry's pose: the true pose, or the dead-reckoned one when odometry noise is on."""
         if self._drifts:
             return self._odometry_pose() if self.robot_name in self._entities else None
         return self.true_pose()
@@ -279,6 +287,7 @@ class Simulation(Backend):
         return pose
 
     def velocity(self) -> Twist:
+        """The body's velocity along its heading and its turn rate (zero while absent)."""
         entity = self._entities.get(self.robot_name)
         if entity is None:
             return Twist()
@@ -286,9 +295,11 @@ class Simulation(Backend):
         return Twist(body.velocity.dot(body.rotation_vector), body.angular_velocity)
 
     def command(self) -> Twist:
+        """The held command as a Twist."""
         return Twist(*self._cmd)
 
     def time(self) -> float:
+        """Simulated seconds: physics steps times the step length."""
         return self._steps * self._dt
 
     # -------------------------------------------------------------- Entities
@@ -422,7 +433,7 @@ class Simulation(Backend):
         noise, raw, noisy = self._noise, self._raw_model, self._range_noise
         lo, hi, inf = self._range_min, self._range_max, math.inf
         scan: dict[str, float] = {}
-        for name, alpha in zip(self._ray_names, alphas):
+        for name, alpha in zip(self._ray_names, alphas, strict=True):
             if alpha is None:
                 scan[name] = inf
                 continue
