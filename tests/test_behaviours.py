@@ -6,9 +6,9 @@ import pytest
 
 from thymio_bt.maze.generate import perfect_maze
 from thymio_bt.robot.model import COURSE
+from thymio_bt.testing import run_tree, world
 
 AXLE_X = COURSE.axle_x
-from thymio_bt.testing import run_tree, world
 
 MIRRORED_L = """
 +--+--+--+
@@ -306,3 +306,91 @@ def test_a_late_robot_makes_move_until_wall_and_turn_angle_lead_by_its_latency(t
     turn = late_run(tmp_path, 0.1, {"TurnAngle": {"angle": "90deg"}}, "arena")
     turned = ends(turn, "TurnAngle")[-1]["angle"]
     assert turn.status == "SUCCESS" and math.pi / 2 - 0.05 < turned < math.pi / 2 - 0.0005
+
+
+#: parameters that make each built-in behaviour do something small in the arena (start: base_link
+#: at (0.7, 0.7) facing +x, a 6 x 6 open floor of 0.2 m cells); each ends with SUCCESS by itself
+#: except SpawnEntity (the robot's name is taken), DeleteEntity once the robot is gone, and
+#: ChooseTurn (no wall ahead comes into range: it runs out of time)
+GRID = {"cell": 0.2, "wall": 0.01}
+RESTART_PARAMS = {
+    "MoveUntilWall": {"distance": "5cm"},
+    "MoveDistance": {"distance": "2cm"},
+    "TurnAngle": {"angle": "20deg"},
+    "Stop": {},
+    "Wait": {"seconds": 0.2},
+    "DeleteEntity": {},
+    "SpawnEntity": {"pose": [0.3, 0.3, 0]},
+    "ChooseTurn": {"timeout": 1},
+    "WallAhead": {},
+    "SideOpen": {"side": "left"},
+    "IsDeadEnd": {},
+    "WallFollow": {"side": "left", "until": "goal", "goal": [0.9, 0.7]},
+    "GoToPose": {"goal": [0.9, 0.8]},
+    "FollowWaypoints": {"waypoints": [[0.9, 0.7], [0.9, 0.9]]},
+    "WaypointsDone": {},
+    "ObstacleAhead": {},
+    "TurnUntilClear": {},
+    "TurnBack": {},
+    "SetBlackboard": {"key": "k", "value": 1},
+    "MapWalls": GRID,
+    "PlanMove": {**GRID, "target": "centre"},
+    "MoveCells": {**GRID, "distance": -0.2},  # backwards: three cells ahead is the wall
+    "WallMapped": GRID,
+    "AtTarget": {**GRID, "target": "centre"},
+}
+#: the behaviours still running 0.2 s after they start with the parameters above
+STILL_RUNNING = {
+    "ChooseTurn",
+    "FollowWaypoints",
+    "GoToPose",
+    "MoveCells",
+    "MoveDistance",
+    "MoveUntilWall",
+    "TurnAngle",
+    "WallFollow",
+}
+
+
+def test_every_builtin_behaviour_has_restart_parameters():
+    from thymio_bt.behaviours import BUILTIN
+
+    assert sorted(RESTART_PARAMS) == sorted(cls.yaml_name for cls in BUILTIN)
+
+
+def restart_tree(name, loop, ending):
+    """``name`` three times in a row: ``repeat`` over ``force_success`` (every ending counts as a
+    success) or ``retry`` over ``force_failure``; the behaviour ends by itself (``finished``), runs
+    out of its own 0.3 s (``timed out``, FAILURE) or is halted by a 0.2 s ``timeout`` (``halted``)."""
+    params = dict(RESTART_PARAMS[name])
+    node = {name: params}
+    if ending == "timed out":
+        params["timeout"] = 0.3
+    elif ending == "halted":
+        node = {"timeout": {"seconds": 0.2, "do": {name: {**params, "timeout": 5}}}}
+    force = "force_success" if loop == "repeat" else "force_failure"
+    return {loop: {"times": 3, "do": {force: node}}}
+
+
+@pytest.mark.parametrize("ending", ["finished", "timed out", "halted"])
+@pytest.mark.parametrize("loop", ["repeat", "retry"])
+@pytest.mark.parametrize("name", sorted(RESTART_PARAMS))
+def test_every_builtin_behaviour_restarts_after_success_failure_and_halt(name, loop, ending):
+    """A behaviour is started again by ``repeat`` after it succeeded and by ``retry`` after it failed,
+    and by either after a ``timeout`` halted it: its ``start`` hook must set it up afresh each time
+    (WallFollow once overwrote its ``start`` hook with a tuple, and its second start raised TypeError)."""
+    result = run_tree(restart_tree(name, loop, ending), world("arena"), start=[0.7, 0.7, 0], seconds=20)
+    codes = [e.get("code") for e in result.events if e["kind"] == "behaviour_end"]
+    assert "EXCEPTION" not in codes and result.code != "EXCEPTION", result.reason
+    assert result.status == ("SUCCESS" if loop == "repeat" else "FAILURE"), result.reason
+    ticks = [stats["ticks"] for path, stats in result.node_stats.items() if path.endswith(f"/{name}")]
+    assert ticks and ticks[0] >= 3  # started three times, ticked at least once each
+    endings = [e["status"] for e in ends(result, name)]
+    if not endings:
+        return  # a condition (or SetBlackboard): no events, it answers at once
+    if ending == "finished" and name not in ("ChooseTurn", "SpawnEntity", "DeleteEntity"):
+        assert endings == ["SUCCESS"] * 3
+    elif ending != "finished" and name in STILL_RUNNING:
+        assert endings == ["FAILURE" if ending == "timed out" else "INVALID"] * 3
+    else:
+        assert len(endings) == 3
