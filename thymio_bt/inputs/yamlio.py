@@ -7,8 +7,16 @@ duplicate keys, and limits aliases so that "billion laughs" files cannot blow up
 
 Example::
 
-    data = load_yaml(path)
-    line, col = data.marks["tree"]
+    >>> from thymio_bt.data import MISSIONS
+    >>> data = load_yaml(MISSIONS / "maze_part1_2.yaml")
+    >>> data["start"], data.marks["start"], data.value_marks["start"]     # start: part1, on line 11
+    ('part1', (11, 1), (11, 8))
+    >>> data["tree"]["sequence"]["children"].marks[:2]                   # where the first two items are
+    [(32, 9), (33, 9)]
+    >>> loads_yaml("{a: 1, a: 2}", "m.yaml")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: m.yaml:1:8: duplicate key 'a' (hint: 'a' is already given at line 1; ...)
 """
 
 from __future__ import annotations
@@ -78,7 +86,8 @@ class _Loader(yaml.SafeLoader):
             Problem(message, self.filename, event.start_mark.line + 1, event.start_mark.column + 1, hint=hint)
         )
 
-    def compose_node(self, parent: Node | None, index: Any) -> Node:  # type: ignore[override]
+    def compose_node(self, parent: Node | None, index: Any) -> Node | None:
+        """Compose one node, counting aliases and refusing an alias of an open anchor or a too deep nesting."""
         event = self.peek_event()
         if isinstance(event, yaml.AliasEvent):
             self.alias_count += 1
@@ -122,7 +131,8 @@ class _Loader(yaml.SafeLoader):
         """Dates and times stay text: missions have no use for them, and bad dates must not crash."""
         return str(self.construct_scalar(node))
 
-    def construct_mapping(self, node: MappingNode, deep: bool = False) -> MarkedDict:  # type: ignore[override]
+    def construct_mapping(self, node: MappingNode, deep: bool = False) -> MarkedDict:
+        """A mapping as a :class:`MarkedDict`; a duplicate or unhashable key is a problem at its place."""
         own = sum(1 for key_node, _ in node.value if key_node.tag != _STANDARD_TAG + "merge")
         self.flatten_mapping(node)  # merged pairs ('<<: *base') first, then the mapping's own
         merged = len(node.value) - own
@@ -154,13 +164,15 @@ class _Loader(yaml.SafeLoader):
             result.value_marks[key] = _mark(value_node)
         return result
 
-    def construct_sequence(self, node: SequenceNode, deep: bool = False) -> MarkedList:  # type: ignore[override]
+    def construct_sequence(self, node: SequenceNode, deep: bool = False) -> MarkedList:
+        """A sequence as a :class:`MarkedList`."""
         result = MarkedList(self.construct_object(child, deep=True) for child in node.value)
         result.mark = _mark(node)
         result.marks = [_mark(child) for child in node.value]
         return result
 
     def construct_undefined(self, node: Node) -> Any:
+        """A tag that is not a standard one: refused (no Python objects, no custom types)."""
         raise UserError(
             Problem(
                 f"the tag {_tag_name(node.tag)} is not allowed",

@@ -10,7 +10,19 @@ can show and edit the tree. Nodes carry BT.CPP's pre-order ``_uid`` (1 = the roo
 
 Example::
 
-    xml = tree_xml(tree_nodes(root), registry, ports={3: {"distance": "0.05"}})
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> mission = load_mission("maze_bonus")
+    >>> nodes, params, subtrees = mission_nodes(mission)
+    >>> subtrees                                  # the tree is one use of the subtree to_dead_end
+    {1: 'to_dead_end'}
+    >>> node_id(nodes[0], children=2), node_id(nodes[1], children=2), params[4]["distance"]
+    ('RepeatUntil', 'SequenceWithMemory', 0.05)
+    >>> xml = tree_xml(nodes, mission.registry, params, subtrees=subtrees)
+    >>> for line in xml.splitlines()[1:4]:
+    ...     print(line)
+      <BehaviorTree ID="MainTree">
+        <SubTree ID="to_dead_end" name="bonus maze" _uid="1" />
+      </BehaviorTree>
 """
 
 from __future__ import annotations
@@ -26,6 +38,8 @@ from thymio_bt.behaviours import ControlNode
 from thymio_bt.behaviours.base import ConditionBehaviour
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
+from thymio_bt.mission.plan import Mission, NodePlan
+from thymio_bt.mission.registry import Registry
 
 #: thymio-bt kind -> BT.CPP built-in of the same semantics
 BUILTIN = {
@@ -91,6 +105,7 @@ def _port_value(value: Any) -> str:
 
 
 def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, str]:
+    """A node's parameters as the ports of its BT.CPP element (a built-in's under BT.CPP's names)."""
     kind = node["kind"]
     if ident == "RepeatUntil":
         return {}  # the loop ends by its condition, not a count
@@ -105,7 +120,7 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, s
 
 def tree_xml(
     nodes: list[TreeNode],
-    registry: Any,
+    registry: Registry,
     params: Mapping[int, Mapping[str, Any]] | None = None,
     tree_id: str = "MainTree",
     settings: Mapping[str, str] | None = None,
@@ -141,7 +156,7 @@ def tree_xml(
     for ident, kind in sorted(used.items()):
         if ident in BUILTIN.values():
             continue
-        cls = registry[kind] if kind in registry else None
+        cls = registry.get(kind)
         tag = _category(cls, ident)
         entry = ET.SubElement(model, tag, ID=ident)
         if cls is not None:
@@ -149,7 +164,7 @@ def tree_xml(
                 unit = unit_of(field)
                 text = (field.description or "") + (f" [{unit}]" if unit else "")
                 default = {} if field.is_required() else {"default": _port_value(field.default)}
-                port = ET.SubElement(entry, "input_port", name=name, **default)
+                port = ET.SubElement(entry, "input_port", {"name": name, **default})
                 port.text = text
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
@@ -169,6 +184,7 @@ def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[i
 
 
 def _category(cls: Any, ident: str) -> str:
+    """The ``<TreeNodesModel>`` element of a node class: Control, Decorator, Condition or Action."""
     if ident == "RepeatUntil" or (
         isinstance(cls, type) and issubclass(cls, ControlNode) and cls.category == "composite"
     ):
@@ -180,7 +196,7 @@ def _category(cls: Any, ident: str) -> str:
     return "Action"
 
 
-def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
+def mission_settings(mission: Mission, folder: Path) -> dict[str, str]:
     """A mission's settings as ``<ThymioMission>`` attributes (the maze's path relative to ``folder``)."""
     pose = mission.start
     settings = {
@@ -202,7 +218,7 @@ def mission_settings(mission: Any, folder: Path) -> dict[str, str]:
     return settings
 
 
-def mission_xml(mission: Any, output: Path | None = None) -> str:
+def mission_xml(mission: Mission, output: Path | None = None) -> str:
     """The BT.CPP XML of a loaded mission: its tree as planned, parameters as ports (in SI units),
     each subtree instance as its own ``<BehaviorTree>`` used by a ``<SubTree>`` node, its settings
     in a ``<ThymioMission>`` element (BT.CPP ignores it) so that the file runs as the mission did
@@ -212,7 +228,7 @@ def mission_xml(mission: Any, output: Path | None = None) -> str:
     return tree_xml(nodes, mission.registry, params, settings=mission_settings(mission, folder), subtrees=subtrees)
 
 
-def mission_nodes(mission: Any) -> tuple[list[TreeNode], dict[int, dict[str, Any]], dict[int, str]]:
+def mission_nodes(mission: Mission) -> tuple[list[TreeNode], dict[int, dict[str, Any]], dict[int, str]]:
     """A mission's planned tree in pre-order (uids from 1, as the built py_trees tree walks), each
     node's parameters, and the BehaviorTree ID of each subtree instance's root (``NAME``, then
     ``NAME_2``... when a subtree is used several times)."""
@@ -221,7 +237,7 @@ def mission_nodes(mission: Any) -> tuple[list[TreeNode], dict[int, dict[str, Any
     subtrees: dict[int, str] = {}
     uses: dict[str, int] = {}
 
-    def visit(plan: Any, parent: int | None, prefix: str) -> None:
+    def visit(plan: NodePlan, parent: int | None, prefix: str) -> None:
         uid = len(nodes) + 1
         path = f"{prefix}/{plan.name}" if prefix else plan.name
         nodes.append(TreeNode(uid=uid, path=path, name=plan.name, kind=plan.behaviour or plan.kind, parent=parent))

@@ -44,10 +44,13 @@ def build_tree(
         if fnmatchcase(path, pattern):
             return ScriptedStub(plan.name, script, ctx)
     children = [build_tree(child, ctx, registry, substitutions, path) for child in plan.children]
-    cls = registry[plan.behaviour if plan.kind == "behaviour" else plan.kind]
+    kind = plan.behaviour if plan.kind == "behaviour" else plan.kind
+    assert kind is not None  # the planner names every behaviour node's behaviour
+    cls = registry[kind]
     if issubclass(cls, ControlNode):
         node = cls.build(plan.name, plan.params, children, ctx)
-        node.yaml_name = cls.yaml_name  # what logs and exports call it
+        # a tag on py_trees' node, which does not declare it: what logs and exports call the node
+        node.yaml_name = cls.yaml_name  # type: ignore[attr-defined]
         return node
     assert plan.params is not None
     return cls(plan.name, plan.params, ctx, blackboard_refs=plan.blackboard_refs)

@@ -8,9 +8,11 @@ relative to the mission).
 
 Example::
 
-    registry = default_registry()
-    cls = registry["MoveUntilWall"]
-    cls.Params.model_fields["distance"].default   # 0.05
+    >>> registry = default_registry()
+    >>> registry["MoveUntilWall"].Params.model_fields["distance"].default
+    0.05
+    >>> registry["sequence"].category, "NoSuchNode" in registry
+    ('composite', False)
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import inspect
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 from thymio_bt.behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
@@ -62,6 +65,7 @@ class Registry:
         self._classes[name] = cls
 
     def copy(self) -> Registry:
+        """A registry of the same nodes, to which a mission's plugins can be added."""
         other = Registry()
         other._classes = dict(self._classes)
         other.plugin_files = list(self.plugin_files)
@@ -70,6 +74,10 @@ class Registry:
     def __getitem__(self, name: str) -> Node:
         return self._classes[name]
 
+    def get(self, name: str) -> Node | None:
+        """The node class called ``name``, None when there is none."""
+        return self._classes.get(name)
+
     def __contains__(self, name: object) -> bool:
         return name in self._classes
 
@@ -77,6 +85,7 @@ class Registry:
         return iter(self._classes)
 
     def items(self) -> Iterator[tuple[str, Node]]:
+        """(YAML name, node class) of every node, in the order they were registered."""
         return iter(self._classes.items())
 
     def behaviours(self) -> Iterator[tuple[str, type[RobotBehaviour]]]:
@@ -90,103 +99,57 @@ class Registry:
     def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int], run: bool = True) -> None:
         """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours; with
         ``run=False``, register stand-ins for them without running any of the plugin's code."""
-        file, line, col = where
-        target, _, attr = ref.partition(":")
         if not run:
             self._declare_plugin(ref, base_dir, where)
             return
+        module = self._import_plugin(ref, base_dir, where)
+        for cls in _plugin_classes(module, ref, where):
+            try:
+                self.register(cls)
+            except (TypeError, ValueError) as exc:
+                raise UserError(Problem(f"plugin '{ref}': {exc}", *where)) from None
+
+    def _import_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> ModuleType:
+        """The module of plugin ``ref``, imported; its own import error is a :class:`UserError`."""
+        target = ref.partition(":")[0]
         try:
             if target.endswith(".py"):
-                path = (base_dir / target).resolve()
-                if not path.is_file():
-                    raise UserError(
-                        Problem(
-                            f"plugin file not found: {target}",
-                            file,
-                            line,
-                            col,
-                            hint="plugin paths are relative to the mission file",
-                        )
-                    )
-                self.plugin_files.append(path)
-                name = f"thymio_bt_plugin_{abs(hash(str(path)))}"
-                module = sys.modules.get(name)
-                if module is None:
-                    spec = importlib.util.spec_from_file_location(name, path)
-                    assert spec and spec.loader
-                    module = importlib.util.module_from_spec(spec)
-                    sys.modules[name] = module
-                    spec.loader.exec_module(module)
-            else:
-                module = importlib.import_module(target)
+                return _import_file(self._plugin_file(target, base_dir, where))
+            return importlib.import_module(target)
         except UserError:
             raise
         except Exception as exc:  # the plugin's own import error: report it, do not crash
             raise UserError(
                 Problem(
                     f"cannot import plugin '{ref}': {type(exc).__name__}: {exc}",
-                    file,
-                    line,
-                    col,
+                    *where,
                     hint="check the module name, or give a .py path relative to the mission",
                 )
             ) from None
-        if attr:
-            cls = getattr(module, attr, None)
-            if cls is None:
-                raise UserError(Problem(f"plugin '{target}' has no attribute '{attr}'", file, line, col))
-            candidates = [cls]
-        else:
-            candidates = [
-                c
-                for _, c in inspect.getmembers(module, inspect.isclass)
-                if is_node(c) and c.__module__ == module.__name__
-            ]
-            if not candidates:
-                raise UserError(
-                    Problem(f"plugin '{ref}' defines no RobotBehaviour or ControlNode subclass", file, line, col)
+
+    def _plugin_file(self, target: str, base_dir: Path, where: tuple[str, int, int]) -> Path:
+        """The ``.py`` plugin file ``target`` (relative to ``base_dir``), recorded among the plugin files."""
+        path = (base_dir / target).resolve()
+        if not path.is_file():
+            raise UserError(
+                Problem(
+                    f"plugin file not found: {target}",
+                    *where,
+                    hint="plugin paths are relative to the mission file",
                 )
-        for cls in candidates:
-            try:
-                self.register(cls)
-            except (TypeError, ValueError) as exc:
-                raise UserError(Problem(f"plugin '{ref}': {exc}", file, line, col)) from None
+            )
+        self.plugin_files.append(path)
+        return path
 
     def _declare_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
         """Stand-ins for the nodes of plugin ``ref``, found by reading its source, not running it."""
         from thymio_bt.mission.unrun_plugins import plugin_node_names, stand_in
 
-        file, line, col = where
         target, _, attr = ref.partition(":")
         if attr:
             names = [attr]
         else:
-            if target.endswith(".py"):
-                path: Path | None = (base_dir / target).resolve()
-                if not path.is_file():
-                    raise UserError(
-                        Problem(
-                            f"plugin file not found: {target}",
-                            file,
-                            line,
-                            col,
-                            hint="plugin paths are relative to the mission file",
-                        )
-                    )
-                self.plugin_files.append(path)
-            else:
-                spec = importlib.util.find_spec(target) if "." not in target else None
-                path = Path(spec.origin) if spec and spec.origin and spec.origin.endswith(".py") else None
-                if path is None:
-                    raise UserError(
-                        Problem(
-                            f"cannot find plugin '{ref}' without importing it",
-                            file,
-                            line,
-                            col,
-                            hint="name its class (module:Class), or check with --plugins",
-                        )
-                    )
+            path = self._plugin_file(target, base_dir, where) if target.endswith(".py") else _source(ref, where)
             try:
                 names = plugin_node_names(path)
             except SyntaxError as exc:
@@ -196,6 +159,50 @@ class Registry:
         for name in names:
             if name not in self._classes:
                 self._classes[name] = stand_in(name)
+
+
+def _import_file(path: Path) -> ModuleType:
+    """The module of a ``.py`` plugin file, run once per process (a name of its own in ``sys.modules``)."""
+    name = f"thymio_bt_plugin_{abs(hash(str(path)))}"
+    module = sys.modules.get(name)
+    if module is None:
+        spec = importlib.util.spec_from_file_location(name, path)
+        assert spec and spec.loader
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return module
+
+
+def _source(ref: str, where: tuple[str, int, int]) -> Path:
+    """The ``.py`` file of the plugin module ``ref``, found without importing it (a top-level module only)."""
+    target = ref.partition(":")[0]
+    spec = importlib.util.find_spec(target) if "." not in target else None
+    if spec and spec.origin and spec.origin.endswith(".py"):
+        return Path(spec.origin)
+    raise UserError(
+        Problem(
+            f"cannot find plugin '{ref}' without importing it",
+            *where,
+            hint="name its class (module:Class), or check with --plugins",
+        )
+    )
+
+
+def _plugin_classes(module: ModuleType, ref: str, where: tuple[str, int, int]) -> list[Any]:
+    """The node classes plugin ``ref`` names: its ``Class``, or every node class its module defines."""
+    target, _, attr = ref.partition(":")
+    if attr:
+        cls = getattr(module, attr, None)
+        if cls is None:
+            raise UserError(Problem(f"plugin '{target}' has no attribute '{attr}'", *where))
+        return [cls]
+    candidates = [
+        c for _, c in inspect.getmembers(module, inspect.isclass) if is_node(c) and c.__module__ == module.__name__
+    ]
+    if not candidates:
+        raise UserError(Problem(f"plugin '{ref}' defines no RobotBehaviour or ControlNode subclass", *where))
+    return candidates
 
 
 def _entry_point_classes() -> list[Any]:

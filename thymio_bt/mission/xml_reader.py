@@ -10,7 +10,17 @@ expat, with no DTD: entities are refused, so nothing is expanded or fetched.
 
 Example::
 
-    data = read_xml_mission(Path("bonus.xml"))     # a MarkedDict like load_yaml's
+    >>> import tempfile
+    >>> from thymio_bt.mission.btcpp import mission_xml
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     xml = Path(folder) / "bonus.xml"
+    ...     _ = xml.write_text(mission_xml(load_mission("maze_bonus"), xml))
+    ...     data = read_xml_mission(xml)                # a MarkedDict, as load_yaml reads a mission
+    >>> data["start"], data["tree"].subtree_use, data.marks["tree"]
+    ('1.3, 0.1, 3.141592653589793', 'to_dead_end', (3, 3))
+    >>> sorted(data["tree"]["repeat"])                  # <RepeatUntil> is a repeat with until:
+    ['do', 'name', 'until']
 """
 
 from __future__ import annotations
@@ -160,39 +170,46 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
         return _subtree(element, file, trees, stack)
     attrs = {k: v for k, v in element.attrs.items() if not k.startswith("_")}
     children = [_node(child, file, trees, stack) for child in element.children]
-    kind = _FROM_BUILTIN.get(
-        ident, ident[len("Thymio") :] if ident.startswith("Thymio") and ident[len("Thymio") :] in RESERVED else ident
-    )
-    body: dict[str, Any] = {}
-    if "name" in attrs:
-        body["name"] = attrs.pop("name")
     if ident == "RepeatUntil":
         kind = "repeat"
+    else:
+        unprefixed = ident[len("Thymio") :]
+        kind = _FROM_BUILTIN.get(ident, unprefixed if ident.startswith("Thymio") and unprefixed in RESERVED else ident)
+    body: dict[str, Any] = {"name": attrs.pop("name")} if "name" in attrs else {}
+    body.update(_body(ident, kind, attrs, children, element, file))
+    return _marked({kind: _marked(body, element)}, element)
+
+
+def _body(
+    ident: str, kind: str, attrs: dict[str, str], children: list[MarkedDict], element: _Element, file: str
+) -> dict[str, Any]:
+    """A node's body but its name, from its ports (``attrs``) and its child nodes: a composite's
+    ``children``, a decorator's ``do`` (and ``condition``, ``until``), a behaviour's parameters."""
+    if ident == "RepeatUntil":
         if len(children) != 2:
             raise UserError(
                 Problem(
                     "RepeatUntil takes two children: the body, then the condition", file, element.line, element.column
                 )
             )
-        body.update(do=children[0], until=children[1])
-    elif kind == "parallel":
-        body["policy"] = "success_on_one" if attrs.pop("success_count", "-1").strip() == "1" else "success_on_all"
+        return {"do": children[0], "until": children[1]}
+    if kind == "parallel":
+        policy = "success_on_one" if attrs.pop("success_count", "-1").strip() == "1" else "success_on_all"
         attrs.pop("failure_count", None)
-        body.update({k: _value(v) for k, v in attrs.items()}, children=_list(children, element))
-    elif kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
-        body.update({k: _value(v) for k, v in attrs.items()}, children=_list(children, element))
-    elif children:  # a decorator
-        renamed = {"num_cycles": "times", "num_attempts": "times"}
-        body.update({renamed.get(k, k): _value(v) for k, v in attrs.items()})
-        if body.get("times") == -1:
-            body["times"] = "forever"
-        extra = {"guard": "condition"}.get(kind)
-        body["do"] = children[0]
-        if extra and len(children) > 1:
-            body[extra] = children[1]
-    else:  # a behaviour or condition
-        body.update({k: _value(v) for k, v in attrs.items()})
-    return _marked({kind: _marked(body, element)}, element)
+        return {"policy": policy, **{k: _value(v) for k, v in attrs.items()}, "children": _list(children, element)}
+    if kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
+        return {**{k: _value(v) for k, v in attrs.items()}, "children": _list(children, element)}
+    if not children:  # a behaviour or condition
+        return {k: _value(v) for k, v in attrs.items()}
+    renamed = {"num_cycles": "times", "num_attempts": "times"}  # a decorator
+    body = {renamed.get(k, k): _value(v) for k, v in attrs.items()}
+    if body.get("times") == -1:
+        body["times"] = "forever"
+    extra = {"guard": "condition"}.get(kind)
+    body["do"] = children[0]
+    if extra and len(children) > 1:
+        body[extra] = children[1]
+    return body
 
 
 def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tuple[str, ...]) -> MarkedDict:
@@ -262,6 +279,19 @@ def read_xml_mission(path: Path) -> MarkedDict:
             )
         )
     trees = [e for e in root.children if e.tag == "BehaviorTree"]
+    tree = _main_tree(root, trees, file)
+    settings, element = _settings(root, file)
+    if "noise" in settings:
+        settings["noise"] = _marked(settings["noise"], element or tree)
+    by_id = {t.attrs.get("ID", ""): t for t in trees}
+    node = _node(tree.children[0], file, by_id, (tree.attrs.get("ID", ""),))
+    data = _marked({**settings, "tree": node}, element or tree)
+    data.marks["tree"] = data.value_marks["tree"] = (tree.line, tree.column)
+    return data
+
+
+def _main_tree(root: _Element, trees: list[_Element], file: str) -> _Element:
+    """The ``<BehaviorTree>`` that is the mission: the one ``main_tree_to_execute`` names, or the only one."""
     main = root.attrs.get("main_tree_to_execute")
     chosen = [t for t in trees if t.attrs.get("ID") == main] if main else trees
     if len(chosen) != 1:
@@ -277,8 +307,14 @@ def read_xml_mission(path: Path) -> MarkedDict:
     tree = chosen[0]
     if len(tree.children) != 1:
         raise UserError(Problem("a <BehaviorTree> holds exactly one root node", file, tree.line, tree.column))
+    return tree
+
+
+def _settings(root: _Element, file: str) -> tuple[dict[str, Any], _Element | None]:
+    """The mission's settings from its ``<ThymioMission>`` attributes (``noise.X`` gathered into
+    ``noise``), and the last such element (None without one): where the settings are written."""
     settings: dict[str, Any] = {}
-    element = tree
+    element = None
     for mission in (e for e in root.children if e.tag == MISSION_TAG):
         element = mission
         for key, text in mission.attrs.items():
@@ -296,14 +332,9 @@ def read_xml_mission(path: Path) -> MarkedDict:
                             mission.column,
                             hint=f'write {key} as a JSON object, e.g. {key}=\'{{"name": "sim"}}\'',
                         )
-                    )
+                    ) from None
             elif key in ("name", "description", "maze", "start", "sensor_model", "robot"):
                 settings[key] = text
             else:
                 settings[key] = _value(text)
-    if "noise" in settings:
-        settings["noise"] = _marked(settings["noise"], element)
-    by_id = {t.attrs.get("ID", ""): t for t in trees}
-    data = _marked({**settings, "tree": _node(tree.children[0], file, by_id, (tree.attrs.get("ID", ""),))}, element)
-    data.marks["tree"] = data.value_marks["tree"] = (tree.line, tree.column)
-    return data
+    return settings, element
