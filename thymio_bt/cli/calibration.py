@@ -2,6 +2,16 @@
 
 The measurement runs in a corridor maze written to a temporary folder with a one-node mission, on
 the backend asked for; :mod:`thymio_bt.robot.calibrate` does the measuring.
+
+Example::
+
+    >>> from click.testing import CliRunner
+    >>> from thymio_bt.cli import main
+    >>> result = CliRunner().invoke(main, ["calibrate", "-o", "my_thymio.txt"])
+    >>> result.exit_code
+    2
+    >>> print(result.output, end="")
+    error: --output my_thymio.txt: a profile is a .yaml file (hint: -o my_thymio.yaml)
 """
 
 from __future__ import annotations

@@ -2,6 +2,16 @@
 
 ``replay`` redraws a run (summary line, pictures, a window) from its ``--log`` file; ``export``
 converts a log into another format (rosbag2 ``.mcap``, a Groot2 ``.btlog``, ...).
+
+Example::
+
+    >>> from click.testing import CliRunner
+    >>> from thymio_bt.cli import main
+    >>> result = CliRunner().invoke(main, ["export", "run.jsonl"])
+    >>> result.exit_code
+    2
+    >>> print(result.output, end="")
+    error: nothing to write (hint: -o run.mcap, or --btlog run.btlog)
 """
 
 from __future__ import annotations

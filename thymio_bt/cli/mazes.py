@@ -2,6 +2,15 @@
 
 ``import`` reads a Gazebo classic world of box walls or a micromouse contest maze (``.txt``) into a
 maze file; ``export --playground`` writes a maze as an Aseba Playground world with one Thymio.
+
+Example::
+
+    >>> from click.testing import CliRunner
+    >>> from thymio_bt.cli import main
+    >>> from thymio_bt.maze import resolve_maze
+    >>> result = CliRunner().invoke(main, ["maze", "export", str(resolve_maze("two_parts_maze")), "--playground"])
+    >>> result.exit_code, result.output.splitlines()[:2]
+    (0, ['<!DOCTYPE aseba-playground>', '<aseba-playground>'])
 """
 
 from __future__ import annotations

@@ -5,6 +5,18 @@ the backend (:func:`backend_for`) and prepare the run, attach the hooks that wat
 (progress line, recorder, live tree, window, Groot2 server), run it, then write the report and the
 pictures and print the summary. Exit codes: 0 SUCCESS, 1 any other end, 2 a user error, and the
 signal's code (130 for Ctrl-C) when interrupted.
+
+Example::
+
+    >>> from thymio_bt.mission import load_mission
+    >>> device = backend_for(load_mission("square"), seed=None, name=None, opts=())  # the mission's: sim
+    >>> type(device).__name__, device.time()
+    ('Simulation', 0.0)
+    >>> device.close()
+    >>> backend_for(load_mission("square"), seed=None, name="sim", opts=("device",))
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: --backend-opt expects NAME=VALUE, got 'device' (hint: --backend-opt device=/dev/ttyACM0)
 """
 
 from __future__ import annotations

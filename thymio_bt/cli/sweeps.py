@@ -2,15 +2,27 @@
 
 With ``--matrix`` one sweep per combination of settings (robot models, parameters), then one table.
 The runs go to a process pool on this machine, or to a Dask cluster with ``--dask``.
+
+Example::
+
+    >>> from click.testing import CliRunner
+    >>> from thymio_bt.cli import main
+    >>> result = CliRunner().invoke(main, ["sweep", "square", "--matrix", "robot"])
+    >>> result.exit_code
+    2
+    >>> print(result.output, end="")
+    error: --matrix expects NAME=VALUE,VALUE..., got 'robot' (hint: --matrix robot=course,enki,real)
 """
 
 from __future__ import annotations
 
 import math
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import click
 
@@ -21,6 +33,8 @@ from thymio_bt.run.interrupts import Interrupts
 
 if TYPE_CHECKING:
     from thymio_bt.run.matrix import Cell
+
+T = TypeVar("T")
 
 
 @main.command()
@@ -62,31 +76,19 @@ def sweep(
     matrix: tuple[str, ...],
 ) -> None:
     """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
-    from thymio_bt.run.sweep import LocalPool
     from thymio_bt.run.sweep import sweep as run_sweep
 
     try:
         sweep_out = Output(out, "--out") if out is not None else None
-        executor = _dask(dask) if dask else None
+        request = _Request(mission, runs, seed_start, sets, maze, start, _dask(dask) if dask else None, workers)
         if matrix:
-            _matrix(mission, runs, seed_start, sweep_out, sets, maze, start, executor, workers, matrix)
+            _matrix(request, sweep_out, matrix)
             return
-        with Interrupts() as interrupts:
-            with click.progressbar(
-                length=runs, label=f"{mission.name}: {runs} runs", file=sys.stderr, show_pos=True
-            ) as bar:
-                result = run_sweep(
-                    mission,
-                    runs,
-                    seed_start,
-                    parse_overrides(sets),
-                    str(maze) if maze else None,
-                    start,
-                    executor=executor or LocalPool(workers, interrupts),
-                    progress=lambda _: bar.update(1),
-                    interrupts=interrupts,
-                )
-            click.echo("", err=True)  # the bar leaves its line open
+        result, interrupts = request.execute(
+            runs,
+            f"{mission.name}: {runs} runs",
+            lambda overrides, **how: run_sweep(mission, runs, seed_start, overrides, request.maze_ref, start, **how),
+        )
         data = result.to_json()
         if sweep_out is not None:
             sweep_out.write_text(json_text(data))
@@ -99,41 +101,57 @@ def sweep(
         sys.exit(1)  # a worker died: the sweep did not complete
 
 
-def _matrix(
-    mission: Path,
-    runs: int,
-    seed_start: int,
-    out: Output | None,
-    sets: tuple[str, ...],
-    maze: Path | None,
-    start: str | None,
-    executor: Any,
-    workers: int | None,
-    specs: tuple[str, ...],
-) -> None:
+@dataclass(frozen=True)
+class _Request:
+    """What a sweep and each cell of a matrix share: the mission, how many runs from which seed, the
+    ``--set``/``--maze``/``--start`` options, and where the runs go (``executor``, else a local pool)."""
+
+    mission: Path
+    runs: int
+    seed_start: int
+    sets: tuple[str, ...]
+    maze: Path | None
+    start: str | None
+    executor: Any
+    workers: int | None
+
+    @property
+    def maze_ref(self) -> str | None:
+        """The ``--maze`` option as the sweep takes it."""
+        return str(self.maze) if self.maze else None
+
+    def execute(self, length: int, label: str, work: Callable[..., T]) -> tuple[T, Interrupts]:
+        """``work(overrides, executor=, progress=, interrupts=)`` under a progress bar of ``length`` runs;
+        Ctrl-C and SIGTERM stop it cleanly (the runs done are kept)."""
+        from thymio_bt.run.sweep import LocalPool
+
+        with Interrupts() as interrupts:
+            with click.progressbar(length=length, label=label, file=sys.stderr, show_pos=True) as bar:
+                overrides = parse_overrides(self.sets)  # a bad --set is reported under the bar's label
+                result = work(
+                    overrides,
+                    executor=self.executor or LocalPool(self.workers, interrupts),
+                    progress=lambda _: bar.update(1),
+                    interrupts=interrupts,
+                )
+            click.echo("", err=True)  # the bar leaves its line open
+        return result, interrupts
+
+
+def _matrix(request: _Request, out: Output | None, specs: tuple[str, ...]) -> None:
     """sweep --matrix: one sweep per combination of settings, then one table."""
     from thymio_bt.run.matrix import parse_axes, run_matrix
-    from thymio_bt.run.sweep import LocalPool
 
+    mission, runs, seed_start = request.mission, request.runs, request.seed_start
     axes = parse_axes(specs)
     count = math.prod(len(v) for v in axes.values())
-    with Interrupts() as interrupts:
-        with click.progressbar(
-            length=runs * count, label=f"{mission.name}: {count} cells x {runs} runs", file=sys.stderr, show_pos=True
-        ) as bar:
-            cells = run_matrix(
-                mission,
-                runs,
-                axes,
-                seed_start,
-                parse_overrides(sets),
-                str(maze) if maze else None,
-                start,
-                executor=executor or LocalPool(workers, interrupts),
-                progress=lambda _: bar.update(1),
-                interrupts=interrupts,
-            )
-        click.echo("", err=True)
+    cells, interrupts = request.execute(
+        runs * count,
+        f"{mission.name}: {count} cells x {runs} runs",
+        lambda overrides, **how: run_matrix(
+            mission, runs, axes, seed_start, overrides, request.maze_ref, request.start, **how
+        ),
+    )
     rows = [cell.row() for cell in cells]
     if out is not None:
         out.write_text(
