@@ -8,9 +8,16 @@ carries it. Composite shapes are built from them (``tuple[Length, Length]`` is a
 
 Example::
 
-    class MoveParams(BehaviourParams):
-        distance: Length = Field(0.1, gt=0, description="how far to drive")
-        goal: Pose2D = Field(description="[x, y, yaw] or a named spawn of the maze")
+    >>> from pydantic import BaseModel, Field
+    >>> class MoveParams(BaseModel):
+    ...     distance: Length = Field(0.1, gt=0, description="how far to drive")
+    ...     goal: Pose2D = Field(description="[x, y, yaw] or a named spawn of the maze")
+    >>> unit_of(MoveParams.model_fields["distance"]), unit_of(MoveParams.model_fields["goal"])
+    ('m', 'm, m, rad')
+    >>> MoveParams(goal="0.5, 0.3, pi/2").goal          # in Python too, a pose may be written as text
+    (0.5, 0.3, 1.5707963267948966)
+    >>> Unit("rad/s").kind, Unit("1/s").kind              # the unit parser's kind, if the unit has one
+    ('angular_speed', None)
 """
 
 from __future__ import annotations
@@ -40,6 +47,7 @@ class Unit:
         return _KIND.get(self.symbol)
 
     def __get_pydantic_json_schema__(self, core_schema: Any, handler: Any) -> dict[str, Any]:
+        """The number's JSON Schema, with its ``unit`` (editors show it; ``thymio-bt schema`` writes it)."""
         schema = handler(core_schema)
         schema["unit"] = self.symbol
         return schema

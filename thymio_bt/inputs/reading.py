@@ -6,7 +6,13 @@ the cap of its kind, which keeps memory and time bounded whatever is passed in.
 
 Example::
 
-    text = read_text("missions/square.yaml", "mission")     # str, or UserError naming the file
+    >>> from thymio_bt.data import MISSIONS
+    >>> read_text(MISSIONS / "square.yaml", "mission").splitlines()[0]
+    '# yaml-language-server: $schema=../schema/mission.schema.json'
+    >>> read_text("/dev/zero", "mission")                    # it would never end: refused unopened
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: /dev/zero: the mission /dev/zero is not a regular file ...
 """
 
 from __future__ import annotations
@@ -90,6 +96,7 @@ def read_text(path: str | Path, what: str) -> str:
 
 
 def _too_big(path: Path, what: str, limit: int) -> UserError:
+    """The error for a file of kind ``what`` past its cap of ``limit`` bytes."""
     cap = f"{limit // MB} MB" if limit >= MB else f"{limit // KB} kB"
     return UserError(
         Problem(

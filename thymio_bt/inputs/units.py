@@ -12,6 +12,15 @@ Example::
     (0.05, 'length')
     >>> round(parse_value("-45 deg").value, 4)
     -0.7854
+    >>> parse_pose("50cm, 30cm, 90deg")
+    (0.5, 0.3, 1.5707963267948966)
+    >>> try:
+    ...     parse_value("2cm*3cm")
+    ... except UnitError as exc:
+    ...     print(exc)
+    ...     print(exc.hint)
+    cannot multiply or divide two values with units in '2cm*3cm'
+    a unit binds to the number before it: write 2*$side - 10cm, not 2cm*3cm
 """
 
 from __future__ import annotations

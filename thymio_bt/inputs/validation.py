@@ -1,6 +1,18 @@
 """Turn pydantic validation errors into :class:`Problem` s that point at file:line:col.
 
 The data must come from :func:`thymio_bt.inputs.yamlio.load_yaml`, whose dicts and lists carry marks.
+
+Example::
+
+    >>> from thymio_bt.inputs.yamlio import loads_yaml
+    >>> from thymio_bt.robot.noise import NoiseConfig
+    >>> data = loads_yaml("noise: {wheel: 0.1, whel: 2}", "m.yaml")
+    >>> locate(data, ["noise", "wheel"]), key_mark(data, ["noise", "wheel"])     # (line, column)
+    ((1, 16), (1, 9))
+    >>> validate(NoiseConfig, data["noise"], "m.yaml", "noise.")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: m.yaml:1:21: unknown key 'whel' [at noise.whel] (hint: did you mean 'wheel'?)
 """
 
 from __future__ import annotations
@@ -53,6 +65,7 @@ def _field(model: type[BaseModel], name: str) -> FieldInfo | None:
 
 
 def _model_at(model: type[BaseModel], loc: Sequence[Any]) -> type[BaseModel] | None:
+    """The (nested) model that holds the value at ``loc``, for its field names and descriptions."""
     current: Any = model
     for step in loc:
         if isinstance(step, int) or current is None:

@@ -5,6 +5,12 @@ a composite or decorator kind builds its py_trees node around the built children
 ``substitutions`` replace nodes whose path (names from the root, joined by ``/``) matches a
 glob pattern by a scripted stub, so a mission can be tested with parts of it replaced (like
 BehaviorTree.CPP's substitution rules).
+
+Example::
+
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> list(node_paths(load_mission("maze_part1_2").tree))[:3]          # what substitutions match
+    ['course', 'course/part 1', 'course/DeleteEntity']
 """
 
 from __future__ import annotations

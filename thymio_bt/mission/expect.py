@@ -18,7 +18,19 @@ A run whose tree succeeds but whose expectations do not all hold ends FAILURE wi
 
 Example::
 
-    problems = check(mission.expect, result, mission.maze, model)    # [] when all hold
+    >>> from types import SimpleNamespace
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> from thymio_bt.robot.model import robot_model
+    >>> mission, model = load_mission("maze_part1_2"), robot_model("course")
+    >>> round(front_gap(mission.maze, model, mission.start), 4)        # at the start: 44 cm to the wall
+    0.4393
+    >>> run = SimpleNamespace(final_pose={"x": 0.3, "y": 0.5, "yaw": 0.0}, collisions=1, sim_time=42.0,
+    ...                       events=[], trajectory=[])                 # a RunResult's fields
+    >>> for failed in check(mission.expect, run, mission.maze, model):  # [] when all hold
+    ...     print(failed)
+    goal: ended 11.0 mm from (0.3, 0.489), more than 10 mm
+    no_collision: 1 collision
+    gaps: no node matching 'course/part 1' ended with a robot
 """
 
 from __future__ import annotations

@@ -13,8 +13,13 @@ with file:line:col, the node path and a hint.
 
 Example::
 
-    mission = load_mission("missions/maze_part1_2.yaml", overrides={"cruise": "0.15 m/s"})
-    mission.tree.kind          # 'sequence'
+    >>> mission = load_mission("maze_part1_2", overrides={"cruise": "0.15 m/s"})
+    >>> mission.tree.kind, mission.parameters["cruise"], mission.maze.name
+    ('sequence', 0.15, 'two_parts_maze')
+    >>> load_mission("maze_part1_2", overrides={"final_stop": "5 parsecs"})
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: ...maze_part1_2.yaml:32:65: parameter '$final_stop' is '5 parsecs', not a number ...
 """
 
 from __future__ import annotations

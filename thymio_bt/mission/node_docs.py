@@ -1,4 +1,13 @@
-"""Text documentation of every node, generated from the registry (for ``thymio-bt behaviours``)."""
+"""Text documentation of every node, generated from the registry (for ``thymio-bt behaviours``).
+
+Example::
+
+    >>> from thymio_bt.mission.registry import default_registry
+    >>> parameter_rows(default_registry()["Wait"])[1]
+    ('seconds', 'float', 's', 'required', '>= 0 <= 3600', 'how long to wait')
+    >>> print(behaviour_help(default_registry()["Wait"]).splitlines()[0])
+    Wait
+"""
 
 from __future__ import annotations
 
@@ -12,6 +21,7 @@ from thymio_bt.inputs.fields import unit_of
 
 
 def _type_name(annotation: Any) -> str:
+    """A parameter's type as the docs show it: ``float``, ``left | right``, ``[float, float]``..."""
     origin = typing.get_origin(annotation)
     args = typing.get_args(annotation)
     if origin is typing.Literal:
@@ -26,6 +36,7 @@ def _type_name(annotation: Any) -> str:
 
 
 def _range(field: Any) -> str:
+    """A field's bounds: ``> 0 <= 3600``."""
     parts = []
     for meta in field.metadata:
         for attr, sym in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
@@ -36,6 +47,7 @@ def _range(field: Any) -> str:
 
 
 def _default(field: Any) -> str:
+    """A field's default as the docs show it, or ``required``."""
     if field.is_required():
         return "required"
     value = field.default
@@ -62,6 +74,7 @@ def parameter_rows(cls: Any) -> list[tuple[str, str, str, str, str, str]]:
 
 
 def _summary(cls: Any) -> str:
+    """The first line of a node class's docstring."""
     return (inspect.getdoc(cls) or "").splitlines()[0] if cls.__doc__ else ""
 
 
@@ -99,10 +112,10 @@ def behaviour_help(cls: Any) -> str:
         lines += [
             "",
             "Parameters:",
-            "  " + "  ".join(h.ljust(w) for h, w in zip(header[:5], widths)) + "  " + header[5],
+            "  " + "  ".join(h.ljust(w) for h, w in zip(header[:5], widths, strict=True)) + "  " + header[5],
         ]
         for row in rows:
-            lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(row[:5], widths)) + "  " + row[5])
+            lines.append("  " + "  ".join(c.ljust(w) for c, w in zip(row[:5], widths, strict=True)) + "  " + row[5])
     if not issubclass(cls, ControlNode):
         lines += [
             "",

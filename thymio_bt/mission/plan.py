@@ -3,19 +3,27 @@
 Loading a mission produces a :class:`Mission` whose ``tree`` is a :class:`NodePlan`; only
 :func:`thymio_bt.mission.build.build_tree` turns it into py_trees behaviours bound to a robot.
 So validating a file never leaves state behind (py_trees' blackboard is global).
+
+Example::
+
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> mission = load_mission("square")
+    >>> mission.tree.kind, len(list(mission.tree.walk())), mission.start
+    ('repeat', 4, Pose(x=0.45, y=0.45, yaw=0.0))
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from pydantic import BaseModel
 
-from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.noise import NoiseConfig
 
 
 @dataclass
@@ -38,7 +46,8 @@ class NodePlan:
     #: the subtree (``subtrees:``) this node is the root of an instance of, or None
     subtree: str | None = None
 
-    def walk(self):
+    def walk(self) -> Iterator[NodePlan]:
+        """This node and every node below it, in pre-order (the order py_trees ticks them)."""
         yield self
         for child in self.children:
             yield from child.walk()

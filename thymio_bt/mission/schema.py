@@ -2,6 +2,15 @@
 
 Editors with yaml-language-server complete and check missions that start with
 ``# yaml-language-server: $schema=../schema/mission.schema.json``.
+
+Example::
+
+    >>> schema = mission_schema()
+    >>> schema["required"], schema["$defs"]["node"]["anyOf"][0]["type"]
+    (['maze', 'start', 'tree'], 'string')
+    >>> distance = behaviour_schema(default_registry()["MoveUntilWall"])["anyOf"][0]["properties"]["distance"]
+    >>> distance["description"], distance["anyOf"][1]           # 5cm or $stop: text is accepted too
+    ('stop when the sensor reads this [m]', {'type': 'string'})
 """
 
 from __future__ import annotations
@@ -9,11 +18,11 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.mission.registry import Registry, default_registry
 from thymio_bt.robot.model import ROBOTS
+from thymio_bt.robot.noise import NoiseConfig
 
 _VALUE = {
     "anyOf": [{"type": "number"}, {"type": "string"}],
@@ -57,10 +66,13 @@ def _parameters(model: Any, loosen: Any) -> tuple[dict[str, Any], list[str]]:
 
 
 def _summary(cls: Any) -> str:
+    """The first line of a node class's docstring."""
     return (cls.__doc__ or "").strip().splitlines()[0] if cls.__doc__ else ""
 
 
 def behaviour_schema(cls: Any) -> dict[str, Any]:
+    """A behaviour's body: its parameters (each also as text: units, $parameters, bb: keys); nothing
+    at all when none is required."""
     props, required = _parameters(cls.Params, _loosen)
     body: dict[str, Any] = {"type": "object", "properties": props, "additionalProperties": False}
     if required:
@@ -130,6 +142,7 @@ _EXPECT = {
 
 
 def mission_schema(registry: Registry | None = None) -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of a mission file, with every node of ``registry``."""
     registry = registry or default_registry()
     node_ref = {"$ref": "#/$defs/node"}
     node_props: dict[str, Any] = {

@@ -1,4 +1,4 @@
-"""Plugins named by a mission, known without running their code.
+r"""Plugins named by a mission, known without running their code.
 
 ``thymio-bt validate`` and ``tree`` read missions that may come from anyone; importing their
 ``plugins:`` would run that code. So those commands read a ``.py`` plugin with :mod:`ast` only: each
@@ -7,7 +7,14 @@ parameters are accepted unchecked (``--plugins`` asks for the real import, and t
 
 Example::
 
-    names = plugin_node_names(Path("examples/spin_until_clear.py"))    # ['SpinUntilClear']
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     plugin = Path(folder) / "spin.py"
+    ...     _ = plugin.write_text("import os; os.abort()\nclass Spin(RobotBehaviour):\n    yaml_name = 'SpinInPlace'")
+    ...     plugin_node_names(plugin)                          # read, never run: no abort
+    ['SpinInPlace']
+    >>> stand_in("SpinInPlace").Params(speed=3, side="left").model_extra   # any parameters, unchecked
+    {'speed': 3, 'side': 'left'}
 """
 
 from __future__ import annotations
@@ -61,10 +68,12 @@ def stand_in(name: str) -> type[RobotBehaviour]:
 
 
 def _base_name(base: ast.expr) -> str:
+    """The name a base class is written with: ``RobotBehaviour`` for ``bt.RobotBehaviour`` too."""
     return base.attr if isinstance(base, ast.Attribute) else base.id if isinstance(base, ast.Name) else ""
 
 
 def _yaml_name(cls: ast.ClassDef) -> str | None:
+    """The string a class body assigns to ``yaml_name``, if it does."""
     for stmt in cls.body:
         if (
             isinstance(stmt, ast.Assign)
