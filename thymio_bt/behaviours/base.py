@@ -7,12 +7,28 @@ when the behaviour ends or is interrupted, and the ``behaviour_start``/``behavio
 
 Example::
 
-    class Creep(RobotBehaviour):
-        yaml_name = "Creep"
-        Params = CreepParams
-        def step(self):
-            self.robot.drive(0.01, 0.0)
-            return Status.RUNNING
+    >>> class CreepParams(BehaviourParams):
+    ...     "Creep forward."
+    >>> class Creep(RobotBehaviour):
+    ...     "Creep forward until something ends it."
+    ...     yaml_name = "Creep"
+    ...     Params = CreepParams
+    ...     moves = True
+    ...     def step(self):
+    ...         self.robot.drive(0.01, 0.0)
+    ...         return Status.RUNNING
+    >>> from thymio_bt.backends.sim import Simulation
+    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.testing import world
+    >>> sim = Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0))
+    >>> ctx = Context(robot=sim, entities=sim)
+    >>> creep = Creep("creep", CreepParams(), ctx)
+    >>> tick(creep)
+    >>> creep.status, sim.command().linear, [e["kind"] for e in ctx.events]
+    (<Status.RUNNING: 'RUNNING'>, 0.01, ['behaviour_start'])
+    >>> creep.stop(Status.INVALID)  # halted by a parent: the robot stops, the end is logged
+    >>> sim.command().linear, ctx.events[-1]["status"]
+    (0.0, 'INVALID')
 """
 
 from __future__ import annotations
@@ -75,6 +91,7 @@ class EventLog(list):
     """The run's events, in time order: dicts with at least ``t`` and ``kind``."""
 
     def emit(self, t: float, kind: str, **fields: Any) -> None:
+        """Append an event of ``kind`` at time ``t`` (rounded to the microsecond) with ``fields``."""
         self.append({"t": round(t, 6), "kind": kind, **fields})
 
 
@@ -94,6 +111,7 @@ class Context:
     collision_count: Callable[[], int] = lambda: 0
 
     def now(self) -> float:
+        """The backend's clock (simulated seconds in a simulation)."""
         return self.robot.time()
 
 
@@ -144,6 +162,8 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
 
     #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
     created = 0
+    #: the feedback line, or a template and its arguments not formatted yet (see :meth:`say`)
+    _feedback: str | tuple[str, tuple[Any, ...]]
 
     def __init__(
         self, name: str, params: BaseModel, ctx: Context, blackboard_refs: dict[str, str] | None = None
@@ -159,7 +179,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         #: behaviour ends (a behaviour that updates them every tick saves rounding what nobody reads)
         self.extra: dict[str, Any] | Callable[[], dict[str, Any]] = {}
         self._refs = dict(blackboard_refs or {})
-        self._reader = None
+        self._reader: py_trees.blackboard.Client | None = None
         if self._refs:
             self._reader = self.attach_blackboard_client(name=f"{name}_reads")
             for key in self._refs.values():
@@ -211,14 +231,14 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     def feedback_message(self) -> str:
         """py_trees' one-line status of the node, formatted when read (see :meth:`say`)."""
         message = self._feedback
-        if message.__class__ is not str:
+        if isinstance(message, tuple):
             template, args = message
             message = self._feedback = template.format(*args)
         return message
 
     @feedback_message.setter
     def feedback_message(self, message: str) -> None:
-        self._feedback: str | tuple[str, tuple[Any, ...]] = message
+        self._feedback = message
 
     def say(self, template: str, *args: Any) -> None:
         """Set the feedback line to ``template.format(*args)``, formatted only if something reads it
@@ -227,11 +247,13 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
 
     @property
     def path(self) -> str:
+        """The node's path from the root (names joined by ``/``), found once the tree is built."""
         if self._path is None:
             self._path = node_path(self)
         return self._path
 
     def elapsed(self) -> float:
+        """Seconds of backend time since the behaviour started."""
         return self.ctx.now() - self._start_time
 
     def fail(self, code: FailureCode | str, reason: str) -> Status:
@@ -245,6 +267,8 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         return Status.FAILURE
 
     def initialise(self) -> None:
+        """py_trees' hook when the node starts: reset, resolve blackboard parameters, log the start,
+        then :meth:`start` (unless the robot is missing or a parameter could not be resolved)."""
         self.failure = None
         self.extra = {}
         self.feedback_message = ""
@@ -257,6 +281,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             self.start()
 
     def _resolve_refs(self) -> str | None:
+        """Validate the parameters again with the blackboard values they refer to; why not, or None."""
         if not self._refs:
             return None
         values = {}
@@ -272,6 +297,8 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         return None
 
     def update(self) -> Status:
+        """py_trees' hook each tick: the shared checks (parameters, robot, collisions), then
+        :meth:`step`, then the time limit."""
         if self._resolution_error is not None:
             return self.fail(FailureCode.INVALID_INPUT, self._resolution_error)
         if self.needs_robot and not self.robot.exists():
@@ -287,7 +314,19 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         """What running out of time means; subclasses may give a more precise code."""
         return self.fail(FailureCode.TIMEOUT, f"not done after {self.params.timeout:g} s")
 
+    def blackboard(
+        self, suffix: str, write: tuple[str, ...] = (), read: tuple[str, ...] = ()
+    ) -> py_trees.blackboard.Client:
+        """A blackboard client ``{name}_{suffix}`` with ``write`` then ``read`` keys registered."""
+        board = self.attach_blackboard_client(name=f"{self.name}_{suffix}")
+        for key in write:
+            board.register_key(key, access=Access.WRITE)
+        for key in read:
+            board.register_key(key, access=Access.READ)
+        return board
+
     def terminate(self, new_status: Status) -> None:
+        """py_trees' hook when the node ends or is halted: stop a moving robot, log the end."""
         if self.status != Status.RUNNING and new_status == Status.INVALID:
             return  # a parent resetting a behaviour that already ended (or never started)
         if self.moves and not getattr(self.params, "keep_moving", False) and self.robot.exists():

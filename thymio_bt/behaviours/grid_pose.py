@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar, Literal
 
-from py_trees.common import Access, Status
+from py_trees.common import Status
 from pydantic import BaseModel, Field
 
 from thymio_bt.behaviours.base import BehaviourParams, Context, FailureCode, RobotBehaviour, current_pose
@@ -72,10 +72,11 @@ class OnGrid(RobotBehaviour):
     # declared as the base's type: subclasses' parameters add required fields (MoveCells' distance)
     Params: ClassVar[type[BaseModel]] = MazeMapParams
 
-    def __init__(self, name: str, params: MazeMapParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_map")
-        self.board.register_key(params.key, access=Access.WRITE)
+    def __init__(
+        self, name: str, params: MazeMapParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("map", write=(params.key,))
         self.model: RobotModel = self.robot.model
         self.grid = self._grid()
         self._map: CellMap | None = None

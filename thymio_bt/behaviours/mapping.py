@@ -177,8 +177,10 @@ class PlanMove(OnGrid):
     yaml_name = "PlanMove"
     Params = PlanMoveParams
 
-    def __init__(self, name: str, params: PlanMoveParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)
+    def __init__(
+        self, name: str, params: PlanMoveParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
         for key in ("move_centre", "move_turn", "move_distance"):
             self.board.register_key(key, access=Access.WRITE)
 

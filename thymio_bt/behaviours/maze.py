@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from py_trees.common import Access, Status
+from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, RobotBehaviour
@@ -146,10 +146,11 @@ class IsDeadEnd(ConditionBehaviour):
     Params = IsDeadEndParams
     needs_robot = False
 
-    def __init__(self, name: str, params: IsDeadEndParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_decision")
-        self.board.register_key(params.key, access=Access.READ)
+    def __init__(
+        self, name: str, params: IsDeadEndParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("decision", read=(params.key,))
 
     def step(self) -> Status:
         """Read the decision (FAILURE while there is none)."""
@@ -190,11 +191,11 @@ class ChooseTurn(RobotBehaviour):
     Params = ChooseTurnParams
     fails_on_collision = False
 
-    def __init__(self, name: str, params: ChooseTurnParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_decision")
-        self.board.register_key(params.key, access=Access.WRITE)
-        self.board.register_key(f"{params.key}_angle", access=Access.WRITE)
+    def __init__(
+        self, name: str, params: ChooseTurnParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("decision", write=(params.key, f"{params.key}_angle"))
 
     def step(self) -> Status:
         """Wait for the wall ahead, then decide from the outer rays and write the decision."""

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from py_trees.common import Access, Status
+from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import (
@@ -27,7 +27,7 @@ from thymio_bt.behaviours.base import (
 from thymio_bt.behaviours.motion import approach_speed
 from thymio_bt.behaviours.pid import PID
 from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, Point, Speed
-from thymio_bt.robot.interface import Pose, wrap_angle
+from thymio_bt.robot.interface import Pose, Scan, wrap_angle
 
 FRONT = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")
 #: The report's simulation thresholds for the 5 front sensors (Table 2), metres.
@@ -122,9 +122,11 @@ class GoToPose(RobotBehaviour):
     moves = True
 
     def start(self) -> None:
+        """A fresh controller (its PIDs start from zero)."""
         self.nav = _Navigator(self.params)
 
     def step(self) -> Status:
+        """One control step towards the goal: SUCCESS there, FAILURE (NO_PROGRESS) when stalled."""
         command = self.nav.command(current_pose(self.robot), self.params.goal, self.ctx.tick_period)
         if command is None:
             self.robot.drive(0.0, 0.0)
@@ -160,22 +162,25 @@ class FollowWaypoints(RobotBehaviour):
     Params = FollowWaypointsParams
     moves = True
 
-    def __init__(self, name: str, params: FollowWaypointsParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_progress")
-        self.board.register_key(params.key, access=Access.WRITE)
-        self.board.register_key(f"{params.key}_left", access=Access.WRITE)
+    def __init__(
+        self, name: str, params: FollowWaypointsParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("progress", write=(params.key, f"{params.key}_left"))
 
     def start(self) -> None:
+        """A fresh controller; resume at the waypoint the blackboard says is next."""
         self.nav = _Navigator(self.params)
         self.index = self.board.get(self.params.key) if self.board.exists(self.params.key) else 0
         self._publish()
 
     def _publish(self) -> None:
+        """Write the progress (next index, how many left) on the blackboard."""
         self.board.set(self.params.key, self.index)
         self.board.set(f"{self.params.key}_left", len(self.params.waypoints) - self.index)
 
     def step(self) -> Status:
+        """Drive towards the next waypoint, moving on (and logging it) as each is reached."""
         waypoints = self.params.waypoints
         while self.index < len(waypoints):
             pose = current_pose(self.robot)
@@ -220,12 +225,14 @@ class WaypointsDone(ConditionBehaviour):
     Params = WaypointsDoneParams
     needs_robot = False
 
-    def __init__(self, name: str, params: WaypointsDoneParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_progress")
-        self.board.register_key(f"{params.key}_left", access=Access.READ)
+    def __init__(
+        self, name: str, params: WaypointsDoneParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("progress", read=(f"{params.key}_left",))
 
     def step(self) -> Status:
+        """Whether the blackboard says no waypoint is left."""
         key = f"{self.params.key}_left"
         left = self.board.get(key) if self.board.exists(key) else None
         self.feedback_message = "not started" if left is None else f"{left} left"
@@ -233,8 +240,9 @@ class WaypointsDone(ConditionBehaviour):
 
 
 # ------------------------------------------------------------ avoidance
-def _blocked(scan: dict[str, float], thresholds: Thresholds) -> bool:
-    return any(scan[name] < limit for name, limit in zip(FRONT, thresholds))
+def _blocked(scan: Scan, thresholds: Thresholds) -> bool:
+    """Whether a front sensor reads less than its threshold (one threshold per front sensor)."""
+    return any(scan[name] < limit for name, limit in zip(FRONT, thresholds, strict=True))
 
 
 class ObstacleAheadParams(BehaviourParams):
@@ -255,12 +263,15 @@ class ObstacleAhead(ConditionBehaviour):
     Params = ObstacleAheadParams
 
     def step(self) -> Status:
+        """Compare the front readings with the thresholds."""
         scan = self.robot.proximity()
         assert scan is not None
         return Status.SUCCESS if _blocked(scan, self.params.thresholds) else Status.FAILURE
 
 
 class _CounterParams(BehaviourParams):
+    """What the Pledge counter's turns share: the obstacle thresholds, the counter key, the rate."""
+
     thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right")
     counter: str = Field("avoid_turn", description="blackboard key of the angle turned since avoidance began")
     speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="turn rate")
@@ -271,17 +282,20 @@ class _CountingTurn(RobotBehaviour):
 
     moves = True
 
-    def __init__(self, name: str, params: _CounterParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_counter")
-        self.board.register_key(params.counter, access=Access.WRITE)
+    def __init__(
+        self, name: str, params: _CounterParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("counter", write=(params.counter,))
 
     def start(self) -> None:
+        """Count from the current heading; start the counter at zero if nothing wrote it yet."""
         self.last_yaw = current_pose(self.robot).yaw
         if not self.board.exists(self.params.counter):
             self.board.set(self.params.counter, 0.0)
 
     def count(self) -> float:
+        """Add the turn since the last call to the counter; the counter's new value (rad)."""
         yaw = current_pose(self.robot).yaw
         total = self.board.get(self.params.counter) + wrap_angle(yaw - self.last_yaw)
         self.last_yaw = yaw
@@ -315,10 +329,12 @@ class TurnUntilClear(_CountingTurn):
     Params = TurnUntilClearParams
 
     def start(self) -> None:
+        """Count from here; not clear yet."""
         super().start()
         self.clear_at: float | None = None
 
     def step(self) -> Status:
+        """Turn while blocked, then the margin more once clear."""
         counter = self.count()
         scan = self.robot.proximity()
         assert scan is not None
@@ -358,6 +374,7 @@ class TurnBack(_CountingTurn):
     Params = TurnBackParams
 
     def step(self) -> Status:
+        """Turn the counter back towards zero; FAILURE (BLOCKED) as soon as an obstacle is ahead."""
         counter = self.count()
         if abs(counter) <= self.params.tolerance:
             self.robot.drive(0.0, 0.0)
@@ -396,11 +413,13 @@ class SetBlackboard(RobotBehaviour):
     emits_events = False
     fails_on_collision = False
 
-    def __init__(self, name: str, params: SetBlackboardParams, ctx: Context, **kwargs: object) -> None:
-        super().__init__(name, params, ctx, **kwargs)  # type: ignore[arg-type]
-        self.board = self.attach_blackboard_client(name=f"{name}_writer")
-        self.board.register_key(params.key, access=Access.WRITE)
+    def __init__(
+        self, name: str, params: SetBlackboardParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        self.board = self.blackboard("writer", write=(params.key,))
 
     def step(self) -> Status:
+        """Write the value."""
         self.board.set(self.params.key, self.params.value)
         return Status.SUCCESS
