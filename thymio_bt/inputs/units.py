@@ -98,6 +98,7 @@ class Quantity:
 
 
 def _tokens(text: str) -> list[tuple[str, str]]:
+    """The tokens of ``text``: (group name, text) pairs; an unexpected character is a :class:`UnitError`."""
     pos, out = 0, []
     text = text.strip()
     while pos < len(text):
@@ -125,9 +126,11 @@ class _Parser:
         self.resolve = resolve
 
     def peek(self) -> tuple[str, str] | None:
+        """The next token, None at the end."""
         return self.toks[self.i] if self.i < len(self.toks) else None
 
     def take(self) -> tuple[str, str]:
+        """The next token, consumed; the end of the text is a :class:`UnitError`."""
         tok = self.peek()
         if tok is None:
             raise UnitError(f"'{self.text}' ends too early")
@@ -135,12 +138,14 @@ class _Parser:
         return tok
 
     def parse(self) -> Quantity:
+        """The whole text as one quantity (anything left over is an error)."""
         value, kind = self.expr()
         if self.peek() is not None:
             raise UnitError(f"unexpected '{self.peek()[1]}' in '{self.text}'")  # type: ignore[index]
         return Quantity(value, kind)
 
     def _combine(self, a: str | None, b: str | None, op: str) -> str | None:
+        """The kind of ``a op b``: adding needs the same kind (or none), multiplying at most one."""
         if a and b and (op in "*/" or a != b):
             what = "multiply or divide two values with units" if op in "*/" else f"add {_named(a)} and {_named(b)}"
             raise UnitError(
@@ -152,6 +157,7 @@ class _Parser:
         return a or b
 
     def expr(self) -> tuple[float, str | None]:
+        """expr := term (("+" | "-") term)*"""
         value, kind = self.term()
         while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":
             self.i += 1
@@ -161,6 +167,7 @@ class _Parser:
         return value, kind
 
     def term(self) -> tuple[float, str | None]:
+        """term := unary (("*" | "/") unary)*"""
         value, kind = self.unary()
         while (tok := self.peek()) and tok[0] == "op" and tok[1] in "*/":
             self.i += 1
@@ -175,6 +182,7 @@ class _Parser:
         return value, kind
 
     def unary(self) -> tuple[float, str | None]:
+        """unary := ("+" | "-")* atom unit?"""
         sign = 1.0
         while (tok := self.peek()) and tok[0] == "op" and tok[1] in "+-":  # a loop: '-----5' nests nothing
             self.i += 1
@@ -183,6 +191,7 @@ class _Parser:
         return sign * value, kind
 
     def unit(self, value: float, kind: str | None) -> tuple[float, str | None]:
+        """The unit after a value, if any, applied to it (a value already with a unit takes none)."""
         tok = self.peek()
         if not tok or tok[0] != "unit" or tok[1] == "pi":
             return value, kind
@@ -202,6 +211,7 @@ class _Parser:
         return value * factor, unit_kind
 
     def atom(self) -> tuple[float, str | None]:
+        """atom := number | "(" expr ")" | "pi" | $name"""
         kind, text = self.take()
         if kind == "num":
             return float(text), None

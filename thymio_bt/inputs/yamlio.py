@@ -67,6 +67,7 @@ class MarkedList(list):
 
 
 def _mark(node: Node) -> Mark:
+    """A node's (line, column), 1-based."""
     return node.start_mark.line + 1, node.start_mark.column + 1
 
 
@@ -81,6 +82,7 @@ class _Loader(yaml.SafeLoader):
         self._open_anchors: list[str] = []  # anchors of the nodes being composed, outermost first
 
     def _event_problem(self, message: str, hint: str) -> UserError:
+        """A :class:`UserError` at the place of the next event (the node being composed)."""
         event = self.peek_event()
         return UserError(
             Problem(message, self.filename, event.start_mark.line + 1, event.start_mark.column + 1, hint=hint)

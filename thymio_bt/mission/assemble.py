@@ -158,6 +158,7 @@ class Assembler(SettingsReader):
         )
 
     def _plugins(self, data: MarkedDict, path: Path) -> None:
+        """The ``plugins:`` of ``data`` (read from ``path``), loaded into the registry (or declared, unrun)."""
         file = str(path)
         plugins = data.get("plugins", [])
         if isinstance(plugins, str):
@@ -250,6 +251,7 @@ class Assembler(SettingsReader):
         self.included_parameters.append((included, str(shown)))
 
     def _parameters(self, data: MarkedDict, file: str) -> dict[str, Any]:
+        """The mission's parameters: the included files' first, then its own (a later one wins)."""
         params: dict[str, Any] = {}
         sources = [*self.included_parameters, (data, file)]
         for source, source_file in sources:
@@ -277,6 +279,7 @@ class Assembler(SettingsReader):
         return params
 
     def _subtrees(self, data: MarkedDict, file: str) -> None:
+        """The ``subtrees:`` of ``data``, checked and recorded (a name is defined once, in any file)."""
         raw = data.get("subtrees") or MarkedDict()
         if not isinstance(raw, dict):
             self.problem(
@@ -313,6 +316,7 @@ class Assembler(SettingsReader):
             self.subtrees[name] = Subtree(name, body, (file, *body.mark))
 
     def _maze(self, data: MarkedDict, path: Path, override: str | Path | None) -> tuple[Maze | None, Path | None]:
+        """The maze (``maze:`` or ``--maze``) and its file, or (None, None) and a problem."""
         file = str(path)
         if override is not None:
             ref, base, where = str(override), None, ("--maze", 0, 0)
@@ -337,6 +341,7 @@ class Assembler(SettingsReader):
             return None, None
 
     def _start(self, data: MarkedDict, file: str, maze: Maze | None, override: str | None, robot: str) -> Pose | None:
+        """The start pose (``start:`` or ``--start``): a spawn name or a pose, free of the walls."""
         if override is not None:
             where: Where = ("--start", 0, 0)
             raw: Any = override

@@ -214,6 +214,7 @@ MAX_YAW = 10 * math.tau
 
 
 def _parameter_hint(name: str, scope: Scope) -> str:
+    """The hint for an unknown ``$name``: the nearest name in scope, or how to declare one."""
     names = scope.names()
     if not names:
         return "no parameters are defined here: declare it under 'parameters:'"

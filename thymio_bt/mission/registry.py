@@ -206,6 +206,7 @@ def _plugin_classes(module: ModuleType, ref: str, where: tuple[str, int, int]) -
 
 
 def _entry_point_classes() -> list[Any]:
+    """The node classes installed packages declare in the entry-point group (a broken one is a warning)."""
     from importlib.metadata import entry_points
 
     classes = []

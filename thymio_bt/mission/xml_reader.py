@@ -58,6 +58,7 @@ class _Element:
 
 
 def _parse(path: Path) -> _Element:
+    """The element tree of the XML file, with places; no DTD, no entities, bounded depth."""
     file = str(path)
     data = read_bytes(path, "mission")
     parser = expat.ParserCreate()
@@ -149,6 +150,7 @@ def _value(text: str) -> Any:
 
 
 def _marked(mapping: dict[str, Any], element: _Element) -> MarkedDict:
+    """``mapping`` as a :class:`MarkedDict` whose keys and values all carry ``element``'s place."""
     out = MarkedDict(mapping)
     out.mark = (element.line, element.column)
     for key in mapping:
@@ -213,6 +215,7 @@ def _body(
 
 
 def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tuple[str, ...]) -> MarkedDict:
+    """A ``<SubTree ID=...>``: the root of that ``<BehaviorTree>``, marked as its use."""
     ident = element.attrs.get("ID", "")
     ports = sorted(k for k in element.attrs if k not in ("ID", "name") and not k.startswith("_"))
     if ports:
@@ -258,6 +261,7 @@ def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tu
 
 
 def _list(items: list[MarkedDict], element: _Element) -> MarkedList:
+    """``items`` as a :class:`MarkedList` at ``element``'s place."""
     out = MarkedList(items)
     out.mark = (element.line, element.column)
     out.marks = [item.mark for item in items]
