@@ -44,6 +44,7 @@ class Output:
 
     @property
     def is_stdout(self) -> bool:
+        """Whether the user named ``-``, standard output."""
         return str(self.path) == STDOUT
 
     def __str__(self) -> str:

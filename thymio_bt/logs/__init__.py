@@ -32,13 +32,17 @@ ENTRY_POINT_GROUP = "thymio_bt.log_formats"
 class LogWriter(Protocol):
     """Writes one run: the header first, a record per tick, the end; ``close`` however the run ends."""
 
-    def header(self, header: LogHeader) -> None: ...
+    def header(self, header: LogHeader) -> None:
+        """Write the log's header: the mission, its rates and the tree, before the first tick."""
 
-    def tick(self, record: TickRecord) -> None: ...
+    def tick(self, record: TickRecord) -> None:
+        """Write one tick's record."""
 
-    def end(self, end: LogEnd) -> None: ...
+    def end(self, end: LogEnd) -> None:
+        """Write how the run ended, with its events."""
 
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Close the file; what was written stays readable however the run ended."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +61,7 @@ class LogFormat:
     partial: bool = False
 
     def load(self, attr: str) -> Any:
+        """The object ``attr`` (``"module:name"``, :attr:`writer` or :attr:`reader`) names, imported now."""
         module, _, name = attr.partition(":")
         return getattr(import_module(module), name)
 

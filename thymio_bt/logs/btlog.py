@@ -36,6 +36,7 @@ class BtlogWriter:
         self._last: dict[str, str] = {}
 
     def header(self, header: LogHeader) -> None:
+        """Write the file's head: the magic, the protocol and the tree as BT.CPP XML (uids from the header)."""
         from thymio_bt.mission import default_registry
         from thymio_bt.mission.btcpp import tree_xml
 
@@ -47,6 +48,7 @@ class BtlogWriter:
         self._file.write(MAGIC + struct.pack("<Bi", PROTOCOL, len(xml)) + xml + struct.pack("<q", 0))
 
     def tick(self, record: TickRecord) -> None:
+        """Write a record for each node whose status changed since the last tick."""
         assert self._file is not None
         stamp = round(record["t"] * 1e6)
         records = []
@@ -60,6 +62,7 @@ class BtlogWriter:
         """Nothing to add: a Groot2 log holds status changes only."""
 
     def close(self) -> None:
+        """Close the file (idempotent)."""
         if self._file is not None:
             self._file.close()
             self._file = None

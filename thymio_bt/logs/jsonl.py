@@ -42,15 +42,19 @@ class JsonlWriter:
             self._file.write(json.dumps(obj, allow_nan=False, separators=(",", ":")) + "\n")
 
     def header(self, header: LogHeader) -> None:
+        """Write line 1, ``{"kind": "header", ...}``."""
         self._write({"kind": "header", **header})
 
     def tick(self, record: TickRecord) -> None:
+        """Write a ``{"kind": "tick", ...}`` line (flushed: the file is line-buffered)."""
         self._write({"kind": "tick", **record})
 
     def end(self, end: LogEnd) -> None:
+        """Write the last line, ``{"kind": "end", ...}``."""
         self._write({"kind": "end", **end})
 
     def close(self) -> None:
+        """Close the file (standard output is flushed, left open); idempotent."""
         if self._file is not None:
             if self._owned:
                 self._file.close()

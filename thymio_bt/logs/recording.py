@@ -44,6 +44,7 @@ class Recording:
 
     @property
     def final_pose(self) -> dict[str, float] | None:
+        """base_link's pose when the run ended (None: no robot then, or a log without an end)."""
         return self.end.get("final_pose")
 
 
@@ -82,6 +83,8 @@ class Recorder:
             self._writer.header(self._header)  # type: ignore[arg-type]
 
     def __call__(self, run: Any) -> None:
+        """Record the tick ``run`` just made (the first call writes the log's header); a log that cannot
+        be written any more ends the run with :class:`~thymio_bt.run.runner.StopRun`."""
         from thymio_bt.logs.records import STATUS_LETTER, jsonable, number
 
         if self._run is None:

@@ -30,6 +30,8 @@ class TreeNode(TypedDict):
 
 
 class LogHeader(TypedDict):
+    """A log's first record: what the run was (mission, rates, seed, start, the maze and the tree)."""
+
     version: int
     mission: str
     tick_hz: float
@@ -54,6 +56,8 @@ class TickRecord(TypedDict, total=False):
 
 
 class LogEnd(TypedDict, total=False):
+    """A log's last record: the run's outcome as its report gives it, and its events."""
+
     status: str
     reason: str | None
     code: str | None

@@ -29,7 +29,7 @@ from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 _INSTALL = "pip install 'thymio-bt[rosbag]'"
-#: sensor name -> the course's topic prefix (../shared/course/robot.md)
+#: sensor name -> the course's topic prefix (docs/sources.md, "Robot geometry and sensors")
 _PREFIX = {
     name: f"{name}_proximity"
     for name in (
@@ -112,9 +112,11 @@ class RosbagWriter:
         return self.types["std_msgs/msg/String"](data=json.dumps(data, separators=(",", ":")))
 
     def header(self, header: LogHeader) -> None:
+        """Write the log header, as JSON on ``/thymio_bt/header`` at t = 0."""
         self._write("/thymio_bt/header", 0.0, self._string(header))
 
     def tick(self, record: TickRecord) -> None:
+        """Write one tick's messages: clock, command, odometry and tf (with a robot), scans, tree status."""
         T, t = self.types, record["t"]
         v3, q = T["geometry_msgs/msg/Vector3"], T["geometry_msgs/msg/Quaternion"]
         self._write("/clock", t, T["rosgraph_msgs/msg/Clock"](clock=self._stamp(t)))
@@ -178,6 +180,7 @@ class RosbagWriter:
             )
 
     def end(self, end: LogEnd) -> None:
+        """Write the run's events, then its outcome, on ``/behavior_tree/events``."""
         for event in end.get("events", []):
             self._write("/behavior_tree/events", float(event.get("t", 0.0)), self._string(event))
         last = end.get("sim_time", 0.0)
@@ -188,6 +191,7 @@ class RosbagWriter:
         )
 
     def close(self) -> None:
+        """Finish the bag (a ``.mcap`` path: its one MCAP file moved there); idempotent."""
         if self.writer is None:
             return
         self.writer.close()
@@ -229,7 +233,8 @@ def read_rosbag(path: Path) -> Recording:
             [path], default_typestore=rosbags.typesys.get_typestore(rosbags.typesys.Stores.ROS2_HUMBLE)
         ) as reader:
             for connection, stamp, raw in reader.messages():
-                msg = reader.deserialize(raw, connection.msgtype)
+                # rosbags returns object: message classes are made at run time from the bag's typestore
+                msg: Any = reader.deserialize(raw, connection.msgtype)
                 sample = ticks.setdefault(stamp, {"t": round(stamp / 1e9, 6), "pose": None, "prox": {}})
                 topic = connection.topic
                 if topic == "/thymio_bt/header":

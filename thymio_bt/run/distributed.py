@@ -28,6 +28,7 @@ class DaskExecutor:
         self.client = client
 
     def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+        """``fn(job)`` of every job, computed on the cluster, in the order they finish."""
         from distributed import as_completed
 
         futures = self.client.map(fn, list(jobs), pure=False)

@@ -33,6 +33,7 @@ class Interrupts:
 
     @property
     def name(self) -> str:
+        """The signal's name (``"SIGINT"``, ``"SIGTERM"``), or "" before any."""
         return signal.Signals(self.signal).name if self.signal else ""
 
     @property

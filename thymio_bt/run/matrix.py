@@ -46,6 +46,7 @@ class Cell:
         ]
 
     def row(self) -> dict[str, Any]:
+        """The cell's line of the matrix table: success rate, collisions, distance from the reference end."""
         errors = sorted(self.errors())
         finite = [e for e in errors if math.isfinite(e)]
         return {
@@ -98,7 +99,7 @@ def run_matrix(
     cells = []
     names = list(axes)
     for values in itertools.product(*(axes[n] for n in names)):
-        settings = dict(zip(names, values))
+        settings = dict(zip(names, values, strict=True))  # one value per axis
         result = sweep(
             mission,
             runs,

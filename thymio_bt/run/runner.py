@@ -1,11 +1,21 @@
 """The tick loop: tick the tree at the mission's rate in simulated time, advance the backend between
 ticks, stop on SUCCESS, FAILURE or the time limit, and produce a :class:`RunResult`.
 
-Example::
+Example:
 
-    mission = load_mission("missions/maze_part1_2.yaml")
-    result = Run(mission).run()
-    result.status, round(result.sim_time, 1)        # ('SUCCESS', 61.3)
+>>> from thymio_bt.mission import load_mission
+>>> result = Run(load_mission("maze_part1_2")).run()
+>>> result.status, round(result.sim_time, 1), result.ticks
+('SUCCESS', 32.8, 329)
+>>> report = result.report()
+>>> report["status"], report["expectations"]
+('SUCCESS', {'met': True, 'failed': []})
+
+A run that the tree does not end is cut short, its running node named:
+
+>>> result = Run(load_mission("maze_part1_2", {"time_limit": "5"})).run()
+>>> result.status, result.code, result.reason, result.failed_path
+('TIMEOUT', 'TIMEOUT', 'time limit of 5 s reached', 'course/part 2/leg/approach/ChooseTurn')
 """
 
 from __future__ import annotations
@@ -14,16 +24,19 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import Enum
 from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
+from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
 from thymio_bt.behaviours.base import describe, node_path, snapshot
 from thymio_bt.behaviours.cellmap import CellMap
+from thymio_bt.behaviours.mapping import MazeMapParams
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.mission import Mission, build_tree
@@ -66,9 +79,11 @@ class RunResult:
 
     @property
     def real_time_factor(self) -> float:
+        """Simulated seconds per wall-clock second (inf for a run too quick to time)."""
         return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
 
     def report(self) -> dict[str, Any]:
+        """The run report as JSON data: a contract (key order included) that ``--report`` writes as it is."""
         expectations = (
             {}
             if self.expectations is None
@@ -97,6 +112,62 @@ class RunResult:
             **({"map": self.maze_map} if self.maze_map else {}),
             "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
         }
+
+
+class EndKind(Enum):
+    """What ended a run's tick loop (the report's status follows from it: :meth:`Run._end_of_run`)."""
+
+    #: the tree returned SUCCESS or FAILURE
+    FINISHED = "finished"
+    #: the mission's time limit came first
+    TIMEOUT = "timeout"
+    #: a signal (Ctrl-C, SIGTERM) noted in the run's :class:`~thymio_bt.run.interrupts.Interrupts`
+    INTERRUPTED = "interrupted"
+    #: a tick hook raised :class:`StopRun`
+    STOPPED = "stopped"
+    #: the robot could not start, was lost, or the backend raised
+    CRASHED = "crashed"
+
+    @property
+    def report_status(self) -> str:
+        """The report's status of a run cut short this way: a stopped or crashed run is a FAILURE.
+
+        >>> EndKind.TIMEOUT.report_status, EndKind.CRASHED.report_status
+        ('TIMEOUT', 'FAILURE')
+        """
+        return self.name if self in (EndKind.TIMEOUT, EndKind.INTERRUPTED) else "FAILURE"
+
+
+@dataclass(frozen=True)
+class Ending:
+    """How the tick loop ended: its kind, and for a run cut short the report's code (``TIMEOUT``,
+    ``ROBOT_LOST``...) and, where known then, the reason."""
+
+    kind: EndKind
+    code: str | None = None
+    reason: str | None = None
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The report's status, reason, code and failing node's path (all None but the status on SUCCESS)."""
+
+    status: str
+    reason: str | None = None
+    code: str | None = None
+    failed_path: str | None = None
+
+
+def learnt_map(root: Behaviour) -> CellMap | None:
+    """The maze map the tree's mapping behaviours keep on the blackboard, at the ``key`` of their
+    parameters (:class:`~thymio_bt.behaviours.mapping.MazeMapParams`); None when none made one."""
+    for node in root.iterate():
+        params = getattr(node, "params", None)
+        if isinstance(params, MazeMapParams) and Blackboard.exists(params.key):
+            found = Blackboard.get(params.key)
+            if isinstance(found, CellMap):
+                return found
+    return None
 
 
 TickHook = Callable[["Run"], None]
@@ -183,80 +254,135 @@ class Run:
             self.backend.close()
 
     def _run(self, on_tick: TickHook | None, realtime: float | None, interrupts: Interrupts) -> RunResult:
-        sim, root, stats = self.backend, self.root, self.stats
+        """The run's named steps: start, tick loop, end of run, result."""
+        wall_start = self._start()
+        ending = self._unstarted_ending() or self._tick_loop(on_tick, realtime, interrupts, wall_start)
+        verdict = self._end_of_run(ending, interrupts)
+        return self._result(verdict, time.perf_counter() - wall_start)
+
+    def _start(self) -> float:
+        """Record the start pose; the wall clock's time the run starts at."""
+        wall_start = time.perf_counter()
+        self._record()
+        return wall_start
+
+    def _unstarted_ending(self) -> Ending | None:
+        """The run's ending before its first tick when the robot could not be started, else None."""
+        if self.unstarted is None:
+            return None
+        code, reason = self.unstarted
+        return Ending(EndKind.CRASHED, code, reason)
+
+    def _tick_loop(
+        self, on_tick: TickHook | None, realtime: float | None, interrupts: Interrupts, wall_start: float
+    ) -> Ending:
+        """Tick the tree and advance the backend until something ends the run (the time limit at the latest)."""
         limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
         seen_collisions = 0
-        wall_start = time.perf_counter()
-        status = "TIMEOUT"
-        self._record()
-        if self.unstarted is not None:
-            status, (crash_code, crashed) = "CRASHED", self.unstarted
-            limit_ticks = 0
         while self.ticks < limit_ticks:
-            # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
-            # every tick for "full" visitors, which cost ~15 % of a run here and we have none
-            if stats is None:
-                tick(root)  # no visitor: the direct tick, without generators
-            else:
-                for node in root.tick():
-                    stats.run(node)
-            self.ticks += 1
-            if on_tick is not None:
-                try:
-                    on_tick(self)
-                except StopRun as stop:
-                    status, stopped = "STOPPED", str(stop) or "stopped by a tick hook"
-                    break
-            if root.status in (Status.SUCCESS, Status.FAILURE):
-                status = root.status.name
-                break
-            if interrupts.signal:
-                status = "INTERRUPTED"
-                break
-            try:
-                sim.advance(self.period)
-            except RobotLost as exc:  # a real robot gone silent: its own code
-                status, crashed, crash_code = "CRASHED", str(exc), "ROBOT_LOST"
-                break
-            except (Exception, SystemExit) as exc:  # a backend's bug (a plugin's, say): end the run, say why
-                status, crashed, crash_code = "CRASHED", f"the backend raised {describe(exc)}", "BACKEND_ERROR"
-                break
-            if len(sim.collisions) > seen_collisions:
-                for c in sim.collisions[seen_collisions:]:
-                    self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
-                seen_collisions = len(sim.collisions)
+            self._tick_tree()
+            ending = self._after_tick(on_tick, interrupts)
+            if ending is not None:
+                return ending
+            seen_collisions = self._emit_collisions(seen_collisions)
             self._record()
             if realtime:
-                lag = sim.time() / realtime - (time.perf_counter() - wall_start)
-                if lag > 0:
-                    time.sleep(lag)  # realtime: pacing asked for with --realtime
-        reason = code = failed_path = None
+                self._pace(realtime, wall_start)
+        return Ending(EndKind.TIMEOUT, "TIMEOUT")
+
+    def _tick_tree(self) -> None:
+        """One tick of the tree, through the node statistics' visitor when they are kept."""
+        # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
+        # every tick for "full" visitors, which cost ~15 % of a run here and we have none
+        if self.stats is None:
+            tick(self.root)  # no visitor: the direct tick, without generators
+        else:
+            for node in self.root.tick():
+                self.stats.run(node)
+        self.ticks += 1
+
+    def _after_tick(self, on_tick: TickHook | None, interrupts: Interrupts) -> Ending | None:
+        """What ends the run after a tick, in this order: the tick hook, the tree, a signal, the backend
+        failing to advance to the next tick; None when the run goes on (the backend has advanced)."""
+        if on_tick is not None:
+            try:
+                on_tick(self)
+            except StopRun as stop:
+                return Ending(EndKind.STOPPED, "STOPPED", str(stop) or "stopped by a tick hook")
+        if self.root.status in (Status.SUCCESS, Status.FAILURE):
+            return Ending(EndKind.FINISHED)
+        if interrupts.signal:
+            return Ending(EndKind.INTERRUPTED, "INTERRUPTED")
+        return self._advance()
+
+    def _advance(self) -> Ending | None:
+        """Advance the backend by one tick period; the run's ending if it cannot."""
+        try:
+            self.backend.advance(self.period)
+        except RobotLost as exc:  # a real robot gone silent: its own code
+            return Ending(EndKind.CRASHED, "ROBOT_LOST", str(exc))
+        except (Exception, SystemExit) as exc:  # a backend's bug (a plugin's, say): end the run, say why
+            return Ending(EndKind.CRASHED, "BACKEND_ERROR", f"the backend raised {describe(exc)}")
+        return None
+
+    def _emit_collisions(self, seen: int) -> int:
+        """A ``collision`` event for each collision the backend counted past the first ``seen``; how
+        many have had their event."""
+        collisions = self.backend.collisions
+        if len(collisions) <= seen:
+            return seen
+        for c in collisions[seen:]:
+            self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
+        return len(collisions)
+
+    def _pace(self, realtime: float, wall_start: float) -> None:
+        """Wait until the wall clock catches up with simulated time / ``realtime`` (``--realtime``)."""
+        lag = self.backend.time() / realtime - (time.perf_counter() - wall_start)
+        if lag > 0:
+            time.sleep(lag)
+
+    def _end_of_run(self, ending: Ending, interrupts: Interrupts) -> Verdict:
+        """The report's status, reason, code and failing node; a run cut short has its running
+        behaviours stopped (their events written, the robot stopped) once the final tree is drawn."""
         self._final_tree = None  # drawn when read (the terminal viewer does)
-        if status in ("TIMEOUT", "STOPPED", "INTERRUPTED", "CRASHED"):
-            self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
-            running = root.tip()
-            failed_path = node_path(running) if running is not None else None
-            if status == "TIMEOUT":
-                reason, code = f"time limit of {self.mission.time_limit:g} s reached", "TIMEOUT"
-            elif status == "INTERRUPTED":
-                reason, code = f"interrupted by {interrupts.name} at {sim.time():.1f} s", "INTERRUPTED"
-            elif status == "CRASHED":
-                reason, code, status = crashed, crash_code, "FAILURE"
-            else:
-                reason, code, status = stopped, "STOPPED", "FAILURE"
-            root.stop(Status.INVALID)  # ends the running behaviours: events, robot stopped
-        elif status == "FAILURE":
-            failed_path, code, reason = failing_branch(root)
-        wall = time.perf_counter() - wall_start
+        if ending.kind is EndKind.FINISHED:
+            if self.root.status is Status.FAILURE:
+                failed_path, code, reason = failing_branch(self.root)
+                return Verdict(Status.FAILURE.name, reason, code, failed_path)
+            return Verdict(self.root.status.name)
+        self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
+        running = self.root.tip()
+        verdict = Verdict(
+            ending.kind.report_status,
+            self._cut_short_reason(ending, interrupts),
+            ending.code,
+            node_path(running) if running is not None else None,
+        )
+        self.root.stop(Status.INVALID)  # ends the running behaviours: events, robot stopped
+        return verdict
+
+    def _cut_short_reason(self, ending: Ending, interrupts: Interrupts) -> str | None:
+        """Why a run that the tree did not end was cut short, in the report's words."""
+        if ending.kind is EndKind.TIMEOUT:
+            return f"time limit of {self.mission.time_limit:g} s reached"
+        if ending.kind is EndKind.INTERRUPTED:
+            return f"interrupted by {interrupts.name} at {self.backend.time():.1f} s"
+        return ending.reason
+
+    def _result(self, verdict: Verdict, wall: float) -> RunResult:
+        """The run's result: the verdict, the robot's final state, events, phases, the learnt map,
+        whether it reached the maze's goal and whether the mission's ``expect:`` held."""
+        sim = self.backend
         final = snapshot(sim)
         true_pose = sim.true_pose()
+        learnt = learnt_map(self.root)
         result = RunResult(
             mission=self.mission.name,
             maze=self.mission.maze.name,
-            status=status,
-            reason=reason,
-            code=code,
-            failed_path=failed_path,
+            status=verdict.status,
+            reason=verdict.reason,
+            code=verdict.code,
+            failed_path=verdict.failed_path,
             sim_time=sim.time(),
             ticks=self.ticks,
             wall_time=wall,
@@ -269,9 +395,7 @@ class Run:
             trajectory=self.trajectory,
             node_stats=self.stats.table if self.stats else None,
             phases=phases(self.mission.tree, self.events),
-            maze_map=next(
-                (v.summary() for v in py_trees.blackboard.Blackboard.storage.values() if isinstance(v, CellMap)), None
-            ),
+            maze_map=None if learnt is None else learnt.summary(),
         )
         if self.mission.maze.goal:
             reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
@@ -315,6 +439,7 @@ class NodeStats(py_trees.visitors.VisitorBase):
         self.table: dict[str, dict[str, float]] = {}
 
     def run(self, behaviour: Behaviour) -> None:
+        """Count one tick of ``behaviour`` (py_trees calls a visitor with each node its tick passed)."""
         row = self.table.setdefault(
             node_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0}
         )

@@ -23,10 +23,13 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.interrupts import Interrupts
+
+if TYPE_CHECKING:
+    from thymio_bt.mission import Mission
 
 
 @dataclass(frozen=True)
@@ -43,7 +46,8 @@ class Job:
     key: str = ""
 
 
-_CACHE: dict[tuple[Any, ...], Any] = {}
+#: a worker's missions, by :attr:`Job.key` (or, for a job made without one, by what it names)
+_CACHE: dict[str | tuple[Any, ...], Mission] = {}
 
 
 def content_key(sources: Iterable[Path], *settings: Any) -> str:
@@ -60,7 +64,7 @@ def run_job(job: Job) -> dict[str, Any]:
     from thymio_bt.mission import load_mission
     from thymio_bt.run.runner import Run
 
-    key = job.key or (job.mission, job.overrides, job.maze, job.start)
+    key: str | tuple[Any, ...] = job.key or (job.mission, job.overrides, job.maze, job.start)
     mission = _CACHE.get(key)
     if mission is None:
         mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
@@ -104,7 +108,9 @@ def run_job(job: Job) -> dict[str, Any]:
 class Executor(Protocol):
     """What a sweep needs from a pool: results of ``fn`` over ``jobs``, in any order."""
 
-    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]: ...
+    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+        """``fn(job)`` of every job, in any order."""
+        ...
 
 
 class LocalPool:
@@ -119,6 +125,8 @@ class LocalPool:
         self.interrupts = interrupts or Interrupts()
 
     def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+        """``fn(job)`` of every job, computed by the workers in small chunks, in the order they finish;
+        a worker that dies raises :class:`WorkerDied`."""
         jobs = list(jobs)
         if self.workers == 1:
             for job in jobs:
@@ -195,9 +203,12 @@ class SweepResult:
 
     @property
     def success_rate(self) -> float:
+        """The share of the completed runs that succeeded (0.0 when none completed)."""
         return self.successes / self.runs if self.runs else 0.0
 
     def distribution(self, key: str) -> dict[str, float] | None:
+        """min, 5th percentile, median, 95th percentile, max and mean of the results' ``key``; None
+        when no result has one."""
         values = sorted(r[key] for r in self.results if r.get(key) is not None)
         if not values:
             return None
@@ -212,6 +223,7 @@ class SweepResult:
         }
 
     def to_json(self) -> dict[str, Any]:
+        """The sweep JSON that ``sweep --out`` writes (a contract, as the run report)."""
         sim_total = sum(r["sim_time"] for r in self.results)
         return {
             "mission": self.mission,

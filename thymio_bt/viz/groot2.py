@@ -3,10 +3,11 @@
 ``thymio-bt run MISSION --realtime 1 --groot2 [PORT]`` serves, on 127.0.0.1 only, a REP socket on
 PORT (default 1667, as BT.CPP) and a PUB socket on PORT+1. Every request's first frame is 6 bytes
 (u8 protocol 2, u8 type, u32 id); every reply's first frame echoes them and adds the tree's 16-byte
-id. Served: ``T`` the tree as ``thymio-bt tree --btcpp`` writes it (ports, ``_uid``s, TreeNodesModel), ``S`` the status of
-every node (u16 uid, u8 status; a node reset to IDLE reads 10 + the status it had), ``B`` the
-blackboard as msgpack (``{"MainTree": {key: value}}``; every blackboard when no name is asked), ``D`` the hooks (none), and ``A``/``X``
-(remove or disable hooks: nothing to do). Breakpoints and recording answer ``error``, as a
+id. Served: ``T`` the tree as ``thymio-bt tree --btcpp`` writes it (ports, ``_uid``s,
+TreeNodesModel), ``S`` the status of every node (u16 uid, u8 status; a node reset to IDLE reads
+10 + the status it had), ``B`` the blackboard as msgpack (``{"MainTree": {key: value}}``; every
+blackboard when no name is asked), ``D`` the hooks (none), and ``A``/``X`` (remove or disable
+hooks: nothing to do). Breakpoints and recording answer ``error``, as a
 publisher without them does. Needs ``thymio-bt[groot2]`` (pyzmq, msgpack).
 
 Example::
@@ -70,6 +71,8 @@ class Groot2Server:
         self.thread = threading.Thread(target=self._serve, name="groot2", daemon=True)
 
     def __call__(self, run: Any) -> None:
+        """Take the tree's statuses and the blackboard after a tick (the first call maps the tree's
+        nodes to their BT.CPP uids and starts serving)."""
         if not self.uids:
             from thymio_bt.logs.records import walk
             from thymio_bt.mission.btcpp import mission_nodes, mission_xml, xml_uids
@@ -77,8 +80,9 @@ class Groot2Server:
             self.xml = mission_xml(run.mission)  # as `tree --btcpp` writes it: ports and settings
             nodes, _, subtrees = mission_nodes(run.mission)
             uids, wrappers = xml_uids(nodes, subtrees)
-            # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's status
-            for plan_node, node in zip(nodes, walk(run.root)):
+            # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's status.
+            # strict=False: a display hook must not end the run if a tree were built otherwise than planned
+            for plan_node, node in zip(nodes, walk(run.root), strict=False):
                 if plan_node["uid"] in wrappers:
                     self.uids.append((wrappers[plan_node["uid"]], node))
                 self.uids.append((uids[plan_node["uid"]], node))

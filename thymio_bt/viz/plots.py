@@ -338,7 +338,8 @@ def animate(recording: Recording, path: str | Path, speedup: float = 4.0, fps: i
             xs.append(pose["x"])
             ys.append(pose["y"])
             trail.set_data(xs, ys)
-            for ray, (start, end, hit) in zip(rays, _rays(pose, sample["prox"] or {})):
+            # a line per sensor: as many as rays
+            for ray, (start, end, hit) in zip(rays, _rays(pose, sample["prox"] or {}), strict=True):
                 ray.set_data([start[0], end[0]], [start[1], end[1]])
                 ray.set_color("tab:red" if hit else "0.7")
         label.set_text(f"t = {sample['t']:.1f} s   {', '.join(sample.get('running', []))}")

@@ -27,6 +27,7 @@ class LiveTree:
         self.clear = self.stream.isatty() if hasattr(self.stream, "isatty") else False
 
     def __call__(self, run: Any) -> None:
+        """Print the tree if any node's status changed with this tick."""
         state = tuple((n.id, n.status) for n in run.root.iterate())
         if state == self.last:
             return
@@ -53,6 +54,7 @@ def _build(mission_path: Path, run_plugins: bool = False) -> Any:
 
 
 def tree_text(mission_path: Path, run_plugins: bool = False) -> str:
+    """The mission's tree as py_trees draws it in a terminal (``thymio-bt tree``)."""
     return py_trees.display.unicode_tree(_build(mission_path, run_plugins))
 
 

@@ -29,8 +29,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import py_trees
-
 from thymio_bt.behaviours.base import node_path
 from thymio_bt.behaviours.cellmap import CellMap
 from thymio_bt.errors import UserError
@@ -38,7 +36,7 @@ from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import number
 from thymio_bt.maze import Maze
 from thymio_bt.robot.model import COURSE
-from thymio_bt.run.runner import Run, RunResult, StopRun
+from thymio_bt.run.runner import Run, RunResult, StopRun, learnt_map
 from thymio_bt.viz.plots import _outline, _rays
 
 #: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
@@ -83,7 +81,7 @@ class Frame:
     prox: dict[str, float | None]
     node: str = ""
     #: the mapping behaviours' map (:class:`~thymio_bt.behaviours.cellmap.CellMap`), if the run has one
-    cells: Any = None
+    cells: CellMap | None = None
 
 
 def _pygame() -> Any:
@@ -232,7 +230,7 @@ class Viewer:
         self.frames += 1
         self._last_draw = time.perf_counter()
 
-    def _draw_cell_map(self, cells: Any) -> None:
+    def _draw_cell_map(self, cells: CellMap) -> None:
         """What the map knows so far: a dot in each visited cell, the walls found drawn over the maze's."""
         c, (ox, oy) = cells.cell, cells.origin
         for i, j in cells.visited:
@@ -371,16 +369,15 @@ class LiveView:
         self.viewer = Viewer(
             run.mission.maze, speedup, title=f"thymio-bt: {run.mission.name}", include=[(start.x, start.y)], **options
         )
-        self.cells: Any = None
+        self.cells: CellMap | None = None
 
     def __call__(self, run: Run) -> None:
+        """Show the simulation as this tick left it (paced; keys handled); :class:`ViewerClosed` ends the run."""
         sim = run.backend
         pose = sim.true_pose()
         scan = sim.proximity() or {}
         if self.cells is None:  # a mapping mission's map, once one of its behaviours made it
-            self.cells = next(
-                (v for v in py_trees.blackboard.Blackboard.storage.values() if isinstance(v, CellMap)), None
-            )
+            self.cells = learnt_map(run.root)
         self.viewer.show(
             Frame(
                 sim.time(),

@@ -1,0 +1,87 @@
+"""Old module names (before the 0.2 layout) still import: the new module itself, with a warning.
+
+Each test forgets the old names first (``monkeypatch`` puts ``sys.modules`` back afterwards), so the
+finder of :mod:`thymio_bt._moved` answers whatever other tests imported before.
+"""
+
+from __future__ import annotations
+
+import importlib
+import subprocess
+import sys
+import warnings
+
+import pytest
+
+from thymio_bt._moved import MOVED, new_name
+
+
+def _forget_old_names(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Remove every old name (and its submodules) from ``sys.modules``, for this test only."""
+    for name in list(sys.modules):
+        if new_name(name) is not None:
+            monkeypatch.delitem(sys.modules, name)
+
+
+@pytest.mark.parametrize("old, new", sorted(MOVED.items()))
+def test_an_old_name_imports_the_new_module_with_a_warning(old: str, new: str, monkeypatch: pytest.MonkeyPatch):
+    target = importlib.import_module(new)
+    _forget_old_names(monkeypatch)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        module = importlib.import_module(old)
+    assert module is target
+    assert sys.modules[old] is target
+    assert module.__name__ == new and module.__spec__ is not None and module.__spec__.name == new
+    deprecations = [w for w in caught if issubclass(w.category, DeprecationWarning)]
+    assert [str(w.message) for w in deprecations] == [f"{old} moved to {new}: import it from there"]
+
+
+def test_a_class_from_an_old_name_is_the_same_class(monkeypatch: pytest.MonkeyPatch):
+    from thymio_bt.run.runner import Run
+
+    _forget_old_names(monkeypatch)
+    with pytest.warns(DeprecationWarning, match="thymio_bt.runner moved to thymio_bt.run.runner"):
+        from thymio_bt.runner import Run as OldRun  # type: ignore[import-not-found]
+    assert OldRun is Run
+
+
+def test_a_submodule_of_a_moved_package_is_the_new_one_not_a_second_copy(monkeypatch: pytest.MonkeyPatch):
+    world = importlib.import_module("thymio_bt.backends.sim.world")
+    world.__dict__["_loaded_once"] = True  # a second execution of the file would not have it
+    _forget_old_names(monkeypatch)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        old = importlib.import_module("thymio_bt.sim.world")
+    assert [str(w.message) for w in caught] == [  # the package, then its submodule
+        "thymio_bt.sim moved to thymio_bt.backends.sim: import it from there",
+        "thymio_bt.sim.world moved to thymio_bt.backends.sim.world: import it from there",
+    ]
+    assert old is world and old.__dict__.get("_loaded_once") is True
+    assert sys.modules["thymio_bt.sim"] is sys.modules["thymio_bt.backends.sim"]
+    copies = [m for m in list(sys.modules.values()) if getattr(m, "__file__", None) == world.__file__]
+    assert set(map(id, copies)) == {id(world)}
+
+
+def test_in_a_fresh_process_the_old_submodule_loads_its_file_once():
+    """Nothing imported before: the old package's import warns first, and the file is one module."""
+    code = (
+        "import sys, warnings\n"
+        "warnings.simplefilter('error', DeprecationWarning)\n"
+        "try:\n    import thymio_bt.sim.world\nexcept DeprecationWarning as w:\n    print(w)\n"
+        "warnings.simplefilter('ignore', DeprecationWarning)\n"
+        "import thymio_bt.sim.world as old, thymio_bt.backends.sim.world as new\n"
+        "files = [n for n, m in sys.modules.items() if getattr(m, '__file__', None) == new.__file__]\n"
+        "print(old is new, sorted(files))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.splitlines()
+    assert out[0] == "thymio_bt.sim moved to thymio_bt.backends.sim: import it from there"
+    assert out[-1] == "True ['thymio_bt.backends.sim.world', 'thymio_bt.sim.world']"
+
+
+def test_names_that_did_not_move_are_left_to_the_other_finders():
+    assert new_name("thymio_bt.mission") is None
+    assert new_name("thymio_bt") is None
+    assert new_name("json") is None
+    assert new_name("thymio_bt.simulation") is None  # a prefix of a moved name is not the name
+    assert new_name("thymio_bt.sim.world.inner") == "thymio_bt.backends.sim.world.inner"
