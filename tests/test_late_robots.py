@@ -21,6 +21,7 @@ class ScriptedRobot:
     """A robot driving along +x at its last command, whose front-centre sensor reads a script."""
 
     latency = 0.0
+    model = COURSE  # a Robot's model: behaviours read its sensor poses and axle there
 
     def __init__(self, readings):
         self.readings, self.i, self.x, self.v = list(readings), 0, 0.1, 0.0
@@ -120,6 +121,7 @@ class DriftingCorridor:
     parallel to it; it reads the walls from its true pose."""
 
     latency = 0.0
+    model = COURSE
 
     def __init__(self, bias):
         self.bias, self.x, self.y, self.yaw, self.v, self.w, self.t = bias, 0.1, 0.0, -bias, 0.0, 0.0, 0.0
