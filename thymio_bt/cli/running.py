@@ -25,7 +25,6 @@ import math
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -196,16 +195,16 @@ def _prepare(spec: Mission, seed: int | None, backend: str | None, backend_opts:
         raise
 
 
-@dataclass
 class _Hooks:
     """What watches a run tick by tick, called in this order: the progress line, then each of
     ``extra`` (the recorder, the live tree, the window, the Groot2 server, as asked)."""
 
-    progress: _Progress
-    extra: list[Callable[[Run], None]] = field(default_factory=list)
-    recorder: Recorder | None = None
-    window: LiveView | None = None
-    monitor: Groot2Server | None = None
+    def __init__(self, progress: _Progress) -> None:
+        self.progress = progress
+        self.extra: list[Callable[[Run], None]] = []
+        self.recorder: Recorder | None = None
+        self.window: LiveView | None = None
+        self.monitor: Groot2Server | None = None
 
     def __call__(self, run: Run) -> None:
         """One tick of ``run``: every hook sees it."""

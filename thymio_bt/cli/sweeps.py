@@ -19,10 +19,9 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
 
 import click
 
@@ -101,8 +100,7 @@ def sweep(
         sys.exit(1)  # a worker died: the sweep did not complete
 
 
-@dataclass(frozen=True)
-class _Request:
+class _Request(NamedTuple):
     """What a sweep and each cell of a matrix share: the mission, how many runs from which seed, the
     ``--set``/``--maze``/``--start`` options, and where the runs go (``executor``, else a local pool)."""
 
