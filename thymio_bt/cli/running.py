@@ -143,10 +143,7 @@ def run(
         overrides = parse_overrides(sets)
         if robot is not None:
             overrides["robot"] = robot
-        report_out = Output(report, "--report") if report is not None else None
-        pictures.check()
-        if log is not None and str(log) != STDOUT:
-            check_writable(log, "--log")
+        report_out = _check_outputs(report, pictures, log)
         spec = load_mission(mission, overrides, maze=maze, start=start)
         runner = _prepare(spec, seed, backend, backend_opts)
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
@@ -167,6 +164,15 @@ def run(
     except UserError as exc:
         fail(exc)
     _conclude(runner, result, interrupts, hooks.window, quiet, err=STDOUT in (str(report), str(log)))
+
+
+def _check_outputs(report: Path | None, pictures: Pictures, log: Path | None) -> Output | None:
+    """Refuse, before anything runs, a report, picture or log that cannot be written; the report's output."""
+    report_out = Output(report, "--report") if report is not None else None
+    pictures.check()
+    if log is not None and str(log) != STDOUT:
+        check_writable(log, "--log")
+    return report_out
 
 
 def backend_for(spec: Mission, seed: int | None, name: str | None, opts: tuple[str, ...]) -> Backend:
