@@ -11,10 +11,13 @@ square ahead (the heading from two sensors' hits, the distance along it from the
 
 Example::
 
-    cells = CellMap(16, 16)
-    cells.mark((0, 0), "E", True)
-    distance = cells.distances({(7, 7), (8, 7), (7, 8), (8, 8)})
-    distance[(0, 0)]          # steps to the centre, walls not yet seen assumed open
+    >>> cells = CellMap(16, 16)
+    >>> cells.mark((0, 0), "E", True)
+    >>> distance = cells.distances(centre_cells(16, 16))
+    >>> distance[(0, 0)]  # steps to the centre, walls not yet seen assumed open
+    14
+    >>> cells.next_side((0, 0), "E", distance)  # the wall east: north, as short
+    'N'
 """
 
 from __future__ import annotations
@@ -62,6 +65,7 @@ class RunningMedian:
     count: int = 0
 
     def add(self, value: float) -> None:
+        """Take in ``value`` (the oldest goes once the window is full)."""
         self.count += 1
         self.values.append(value)
         if len(self.values) > self.window:
@@ -69,6 +73,7 @@ class RunningMedian:
 
     @property
     def median(self) -> float:
+        """The median of the window (0 before any value)."""
         return statistics.median(self.values) if self.values else 0.0
 
 
@@ -94,6 +99,7 @@ class CellMap:
     origin: tuple[float, float] = (0.0, 0.0)
 
     def inside(self, cell: Cell) -> bool:
+        """Whether ``cell`` is in the maze."""
         return 0 <= cell[0] < self.cols and 0 <= cell[1] < self.rows
 
     def mark(self, cell: Cell, side: str, wall: bool) -> None:
@@ -110,6 +116,8 @@ class CellMap:
         return self.sides.get((cell[0], cell[1], side))
 
     def passable(self, cell: Cell, side: str, known_only: bool = False) -> bool:
+        """Whether the way out of ``cell`` through ``side`` may be taken: not a known wall, or (with
+        ``known_only``) a known opening."""
         known = self.wall(cell, side)
         return known is False if known_only else known is not True
 
@@ -207,6 +215,7 @@ def _edge(i: int, j: int, side: str) -> tuple[int, int, str]:
 
 
 def _next(cell: Cell, side: str) -> Cell:
+    """The neighbour of ``cell`` through ``side``."""
     di, dj = STEPS[side]
     return cell[0] + di, cell[1] + dj
 

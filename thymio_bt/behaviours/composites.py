@@ -32,6 +32,7 @@ class Sequence(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
+        """A py_trees ``Sequence`` with memory."""
         return py_trees.composites.Sequence(name, memory=True, children=children)
 
 
@@ -44,6 +45,7 @@ class ReactiveSequence(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
+        """A py_trees ``Sequence`` without memory."""
         return py_trees.composites.Sequence(name, memory=False, children=children)
 
 
@@ -56,6 +58,7 @@ class Selector(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
+        """A py_trees ``Selector`` with memory."""
         return py_trees.composites.Selector(name, memory=True, children=children)
 
 
@@ -68,10 +71,13 @@ class ReactiveSelector(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
+        """A py_trees ``Selector`` without memory."""
         return py_trees.composites.Selector(name, memory=False, children=children)
 
 
 class ParallelParams(ControlParams):
+    """When a parallel succeeds, and whether children that succeeded are ticked again."""
+
     policy: Literal["success_on_all", "success_on_one"] = Field(
         "success_on_all", description="success_on_all (every child must succeed) or success_on_one"
     )
@@ -102,6 +108,7 @@ class Parallel(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
+        """A py_trees ``Parallel`` with the policy (synchronised, for success on all, by default)."""
         policy = (
             ParallelPolicy.SuccessOnAll(synchronise=params.synchronise)
             if params.policy == "success_on_all"

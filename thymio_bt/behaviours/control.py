@@ -22,7 +22,14 @@ class SimTimeout(py_trees.decorators.Decorator):
 
     Example::
 
-        SimTimeout("limit", child, duration=30.0, clock=ctx.now)
+        >>> from py_trees.behaviours import Running
+        >>> clock = [0.0]
+        >>> limit = SimTimeout("limit", Running("forever"), duration=30.0, clock=lambda: clock[0])
+        >>> tick(limit); limit.status
+        <Status.RUNNING: 'RUNNING'>
+        >>> clock[0] = 30.0
+        >>> tick(limit); limit.status, limit.decorated.status, limit.failure[0]
+        (<Status.FAILURE: 'FAILURE'>, <Status.INVALID: 'INVALID'>, 'TIMEOUT')
     """
 
     def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
@@ -33,11 +40,13 @@ class SimTimeout(py_trees.decorators.Decorator):
         self.failure: tuple[str, str] | None = None
 
     def initialise(self) -> None:
+        """py_trees' start hook: the time limit runs from now."""
         self.finish_time = self.clock() + self.duration
         self.feedback_message = ""
         self.failure = None
 
     def update(self) -> Status:
+        """The child's status, or FAILURE (and the child halted) once the time is up."""
         now = self.clock()
         if self.decorated.status == Status.RUNNING and now >= self.finish_time - 1e-9:
             self.decorated.stop(Status.INVALID)
@@ -56,7 +65,12 @@ class RepeatUntil(py_trees.composites.Composite):
 
     Example::
 
-        RepeatUntil("to the dead end", body=leg, condition=is_dead_end)
+        >>> from py_trees.behaviours import Success, SuccessEveryN
+        >>> loop = RepeatUntil("until the third", body=Success("leg"), condition=SuccessEveryN("third", 3))
+        >>> for _ in range(3):
+        ...     tick(loop)
+        >>> loop.status, loop.iterations
+        (<Status.SUCCESS: 'SUCCESS'>, 3)
     """
 
     def __init__(self, name: str, body: Behaviour, condition: Behaviour) -> None:
@@ -64,7 +78,8 @@ class RepeatUntil(py_trees.composites.Composite):
         self.iterations = 0
 
     def tick(self) -> Iterator[Behaviour]:
-        child = self._begin()
+        """py_trees' generator tick: the body, and the condition after each success of the body."""
+        child: Behaviour | None = self._begin()
         while child is not None:
             yield from child.tick()
             child = self._after(child)
@@ -72,12 +87,12 @@ class RepeatUntil(py_trees.composites.Composite):
 
     def tick_direct(self) -> None:
         """The same tick without generators (:mod:`.ticking`)."""
-        child = self._begin()
+        child: Behaviour | None = self._begin()
         while child is not None:
             tick(child)
             child = self._after(child)
 
-    def _begin(self) -> Behaviour:
+    def _begin(self) -> Behaviour | None:
         """Start the loop if it is not running; the child to tick first."""
         if self.status is not Status.RUNNING:
             for child in self.children:
@@ -119,7 +134,14 @@ class ScriptedStub(Behaviour):
 
     Example::
 
-        ScriptedStub("fake delete", ["running", "running", "success"], ctx)
+        >>> from types import SimpleNamespace
+        >>> stub = ScriptedStub("fake delete", ["running", "success"], SimpleNamespace(now=lambda: 0.0))
+        >>> for _ in range(3):
+        ...     tick(stub)
+        ...     print(stub.status.name, stub.feedback_message)
+        RUNNING scripted: running
+        SUCCESS scripted: success
+        RUNNING scripted: running
     """
 
     def __init__(self, name: str, script: Any, ctx: Any) -> None:
@@ -138,10 +160,12 @@ class ScriptedStub(Behaviour):
         self.started = 0.0
 
     def initialise(self) -> None:
+        """py_trees' start hook: the script starts over."""
         self.index = 0
         self.started = self.ctx.now()
 
     def update(self) -> Status:
+        """The script's next status (RUNNING while its ``seconds`` last)."""
         if self.ctx.now() - self.started < self.seconds - 1e-9:
             self.feedback_message = "scripted: running"
             return Status.RUNNING

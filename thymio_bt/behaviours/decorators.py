@@ -17,6 +17,7 @@ Written ``repeat: {times: 4, do: CHILD}``; those without parameters also as ``in
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Annotated, Any, Literal
 
 import py_trees
@@ -33,6 +34,8 @@ _RETRY_EXAMPLE = "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'"
 
 
 class RepeatParams(ControlParams):
+    """How many times ``repeat`` runs its child."""
+
     times: Annotated[int, Field(ge=1)] | Literal["forever"] = Field(
         "forever", description="how many successes of the child end the loop, or forever"
     )
@@ -59,6 +62,7 @@ class Repeat(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``Repeat`` of the child, or a :class:`RepeatUntil` with the ``until`` condition."""
         if len(children) == 2:
             return RepeatUntil(name, body=children[0], condition=children[1])
         times = -1 if params.times == "forever" else params.times
@@ -66,6 +70,8 @@ class Repeat(ControlNode):
 
 
 class RetryParams(ControlParams):
+    """How many failures ``retry`` takes."""
+
     times: Annotated[int, Field(ge=1)] = Field(description="how many failures of the child end it with FAILURE")
 
     @field_validator("times", mode="before")
@@ -86,10 +92,13 @@ class Retry(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``Retry`` of the child."""
         return py_trees.decorators.Retry(name=name, child=children[0], num_failures=params.times)
 
 
 class SecondsParams(ControlParams):
+    """A time in simulated seconds (``timeout``, ``delay``)."""
+
     seconds: Duration = Field(gt=0, le=36000, description="simulated seconds")
 
 
@@ -102,6 +111,7 @@ class Timeout(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A :class:`SimTimeout` of the child on the run's clock."""
         return SimTimeout(name, children[0], duration=params.seconds, clock=ctx.now)
 
 
@@ -119,12 +129,14 @@ class Delay(py_trees.decorators.Decorator, ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A :class:`Delay` of the child on the run's clock."""
         return cls(name, children[0], params.seconds, ctx.now)
 
     def initialise(self) -> None:
+        """py_trees' start hook: the wait starts now."""
         self.start = self.clock()
 
-    def tick(self):  # type: ignore[override]
+    def tick(self) -> Iterator[Behaviour]:
         """Tick the child only once the delay is over (a Decorator ticks its child first otherwise)."""
         if self.status != Status.RUNNING:
             self.initialise()
@@ -136,6 +148,7 @@ class Delay(py_trees.decorators.Decorator, ControlNode):
         yield from super().tick()
 
     def update(self) -> Status:
+        """The child's status, once it runs."""
         self.feedback_message = self.decorated.feedback_message
         return self.decorated.status
 
@@ -149,6 +162,7 @@ class Invert(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``Inverter`` of the child."""
         return py_trees.decorators.Inverter(name=name, child=children[0])
 
 
@@ -161,6 +175,7 @@ class ForceSuccess(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``FailureIsSuccess`` of the child."""
         return py_trees.decorators.FailureIsSuccess(name=name, child=children[0])
 
 
@@ -173,10 +188,13 @@ class ForceFailure(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``SuccessIsFailure`` of the child."""
         return py_trees.decorators.SuccessIsFailure(name=name, child=children[0])
 
 
 class UntilParams(ControlParams):
+    """The child's result ``until`` waits for."""
+
     status: Literal["success", "failure"] = Field(
         description="the child's result that ends the wait: success or failure"
     )
@@ -198,6 +216,7 @@ class Until(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``Condition`` on the child's ``status``."""
         status = Status.SUCCESS if params.status == "success" else Status.FAILURE
         return py_trees.decorators.Condition(name=name, child=children[0], status=status)
 
@@ -212,6 +231,7 @@ class Guard(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``EternalGuard`` of the child, ``condition`` ticked as its check."""
         child, condition = children
 
         def check() -> bool:
@@ -223,6 +243,8 @@ class Guard(ControlNode):
 
 
 class OneShotParams(ControlParams):
+    """Which result of the child ``one_shot`` keeps."""
+
     on: Literal["success", "completion"] = Field(
         "success", description="success: only a success counts; completion: any result"
     )
@@ -245,6 +267,7 @@ class OneShot(ControlNode):
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """A py_trees ``OneShot`` of the child with the ``on`` policy."""
         policy = OneShotPolicy.ON_SUCCESSFUL_COMPLETION if params.on == "success" else OneShotPolicy.ON_COMPLETION
         return py_trees.decorators.OneShot(name=name, child=children[0], policy=policy)
 

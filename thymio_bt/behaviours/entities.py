@@ -33,10 +33,12 @@ class DeleteEntity(RobotBehaviour):
     fails_on_collision = False
 
     def start(self) -> None:
+        """Note the robot's pose and readings for the event, and send the request."""
         self.before = snapshot(self.robot)
         self.request: Request = self.ctx.entities.request_delete(self.params.entity)
 
     def step(self) -> Status:
+        """Wait for the request; log the deletion when it is served."""
         if self.request.state is RequestState.PENDING:
             self.feedback_message = f"deleting '{self.params.entity}'"
             return Status.RUNNING
@@ -72,10 +74,12 @@ class SpawnEntity(RobotBehaviour):
     fails_on_collision = False
 
     def start(self) -> None:
+        """Send the spawn request."""
         self.target = Pose(*self.params.pose)
         self.request: Request = self.ctx.entities.request_spawn(self.params.entity, self.target)
 
     def step(self) -> Status:
+        """Wait for the request; log the spawn when it is served."""
         if self.request.state is RequestState.PENDING:
             self.feedback_message = f"spawning '{self.params.entity}'"
             return Status.RUNNING

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Literal
+from typing import Literal, get_args
 
 from py_trees.common import Status
 from pydantic import Field
@@ -22,7 +22,7 @@ from thymio_bt.robot.model import COURSE
 SensorName = Literal[
     "front_left", "front_center_left", "front_center", "front_center_right", "front_right", "rear_left", "rear_right"
 ]
-assert set(SensorName.__args__) == set(SENSOR_NAMES)  # type: ignore[attr-defined]
+assert set(get_args(SensorName)) == set(SENSOR_NAMES)
 
 #: Readings of the ±38° rays closer than this count as centred (about 0.15 mm off the centre line),
 #: so a centred robot drives dead straight on its held heading instead of hunting around it.
@@ -48,7 +48,15 @@ def late_gain(gain: float, robot: object, period: float) -> float:
 
 
 def approach_speed(remaining: float, cruise: float, gain: float, minimum: float, period: float) -> float:
-    """Speed towards a goal ``remaining`` away: cruise, then proportional, never past it in one tick."""
+    """Speed towards a goal ``remaining`` away: cruise, then proportional, never past it in one tick.
+
+    >>> approach_speed(0.5, cruise=0.1, gain=5.0, minimum=0.005, period=0.1)  # far: cruise
+    0.1
+    >>> approach_speed(0.004, cruise=0.1, gain=5.0, minimum=0.005, period=0.1)  # near: gain x remaining
+    0.02
+    >>> round(approach_speed(0.0003, cruise=0.1, gain=5.0, minimum=0.005, period=0.1), 9)  # not past the goal
+    0.003
+    """
     if remaining <= 0.0:
         return 0.0
     # min(cruise, max(gain * remaining, minimum), remaining / period), without builtin calls (hot path)
@@ -95,8 +103,8 @@ class MoveUntilWall(RobotBehaviour):
 
     It holds its start heading by odometry; with ``centre`` it also steers towards the middle of
     a corridor while both side walls are in view and the front ray sees nothing (near a wall ahead
-    the angled rays may see it too), and holds the heading it has when that stops. Fails with NO_WALL when no wall comes into range within the
-    time limit.
+    the angled rays may see it too), and holds the heading it has when that stops. Fails with
+    NO_WALL when no wall comes into range within the time limit.
 
     Example (YAML)::
 
@@ -108,6 +116,7 @@ class MoveUntilWall(RobotBehaviour):
     moves = True
 
     def start(self) -> None:
+        """Hold the current heading; no wall seen yet."""
         pose = current_pose(self.robot)
         self.heading = pose.yaw
         self.wall_seen = False
@@ -116,13 +125,15 @@ class MoveUntilWall(RobotBehaviour):
         self.speed = 0.0  # the speed last commanded
         self.saw_nothing = False  # the last reading was out of range
         # a backend's latency and the approach gain it allows: fixed for the run
-        self.latency = getattr(self.robot, "latency", 0.0)
+        self.latency = self.robot.latency
         self.gain = late_gain(self.params.approach_gain, self.robot, self.ctx.tick_period)
 
     def _travelled(self, pose: Pose) -> float:
+        """How far ``pose`` is from the start along the held heading."""
         return (pose.x - self.origin[0]) * math.cos(self.heading) + (pose.y - self.origin[1]) * math.sin(self.heading)
 
     def step(self) -> Status:
+        """Approach the wall: cruise, slow down in range, stop at the distance (a glint holds it a tick)."""
         p = self.params
         pose = current_pose(self.robot)  # read once: nothing moves the robot within a tick
         scan = self.robot.proximity()
@@ -185,6 +196,7 @@ class MoveUntilWall(RobotBehaviour):
         return {"range": None if math.isinf(reading) else round(reading, 6), "distance": self.params.distance}
 
     def on_timeout(self) -> Status:
+        """NO_WALL when no wall came into range in the time limit, else TIMEOUT."""
         if not self.wall_seen:
             return self.fail(
                 FailureCode.NO_WALL,
@@ -234,6 +246,7 @@ class MoveDistance(RobotBehaviour):
     moves = True
 
     def start(self) -> None:
+        """Measure from here, along the current heading."""
         self.origin = current_pose(self.robot)
 
     def travelled(self, pose: Pose) -> float:
@@ -242,6 +255,7 @@ class MoveDistance(RobotBehaviour):
         return (pose.x - o.x) * math.cos(o.yaw) + (pose.y - o.y) * math.sin(o.yaw)
 
     def step(self) -> Status:
+        """Drive on towards the distance, slowing down near it."""
         p = self.params
         pose = current_pose(self.robot)  # read once: nothing moves the robot within a tick
         done = self.travelled(pose)
@@ -256,6 +270,7 @@ class MoveDistance(RobotBehaviour):
         return Status.RUNNING
 
     def _end_fields(self) -> dict[str, float]:
+        """The behaviour_end fields: the distance driven."""
         return {"distance": round(self.done, 6)}
 
 
@@ -318,6 +333,7 @@ class TurnAngle(RobotBehaviour):
     FINE_WINDOW = math.radians(10.0)
 
     def start(self) -> None:
+        """The angle to turn (to the snapped heading, if any), and the tolerance a late robot allows."""
         yaw = current_pose(self.robot).yaw
         target = yaw + self.params.angle
         if self.params.snap:
@@ -326,7 +342,7 @@ class TurnAngle(RobotBehaviour):
         self.last_yaw = yaw
         self.turned = 0.0
         self.rate = 0.0  # the turn rate last commanded
-        latency = self.latency = getattr(self.robot, "latency", 0.0)
+        latency = self.latency = self.robot.latency
         self.gain = late_gain(5.0, self.robot, self.ctx.tick_period)
         # a late robot cannot stop finer than its slowest turn covers in a tick and its latency
         self.tolerance = (
@@ -336,6 +352,7 @@ class TurnAngle(RobotBehaviour):
         )
 
     def step(self) -> Status:
+        """Turn on towards the angle (by odometry, or squared by the rear sensors near the end)."""
         yaw = current_pose(self.robot).yaw
         delta = wrap_angle(yaw - self.last_yaw)
         self.last_yaw = yaw
@@ -364,6 +381,7 @@ class TurnAngle(RobotBehaviour):
         return Status.RUNNING
 
     def _end_fields(self) -> dict[str, float]:
+        """The behaviour_end fields: the angle turned."""
         return {"angle": round(self.turned, 6)}
 
 
@@ -384,6 +402,7 @@ class Stop(RobotBehaviour):
     moves = True
 
     def step(self) -> Status:
+        """Stop the motors."""
         self.robot.drive(0.0, 0.0)
         return Status.SUCCESS
 
@@ -409,6 +428,7 @@ class Wait(RobotBehaviour):
     fails_on_collision = False
 
     def step(self) -> Status:
+        """SUCCESS once the time has passed."""
         if self.elapsed() >= self.params.seconds - 1e-9:
             return Status.SUCCESS
         self.say("{:.1f} s left", self.params.seconds - self.elapsed())

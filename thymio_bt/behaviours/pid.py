@@ -5,8 +5,11 @@ output saturates the integrator does not take the step that drove it there.
 
 Example::
 
-    heading = PID(kp=3.0, limit=math.pi)
-    omega = heading(error=0.4, dt=0.1)      # 1.2 rad/s
+    >>> heading = PID(kp=3.0, limit=math.pi)
+    >>> round(heading(error=0.4, dt=0.1), 6)  # rad/s
+    1.2
+    >>> heading(error=2.0, dt=0.1) == math.pi  # limited
+    True
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ class PID:
     previous: float | None = None
 
     def __call__(self, error: float, dt: float) -> float:
+        """The output for ``error`` after ``dt`` seconds (> 0) since the last call."""
         if dt <= 0:
             raise ValueError("dt must be positive")
         previous = error if self.previous is None else self.previous
@@ -42,5 +46,6 @@ class PID:
         return u
 
     def reset(self) -> None:
+        """Forget the integral and the last error (a new goal)."""
         self.integrator = 0.0
         self.previous = None

@@ -14,13 +14,17 @@ another policy or a decorator with its own tick) is ticked through its generator
 
 Example::
 
-    for _ in range(10):
-        tick(root)                    # like root.tick_once(), without the generators
+    >>> from py_trees.behaviours import Running, Success
+    >>> root = Sequence("legs", memory=True, children=[Success("first"), Running("second")])
+    >>> tick(root)  # like root.tick_once(), without the generators
+    >>> root.status, [child.status.name for child in root.children]
+    (<Status.RUNNING: 'RUNNING'>, ['SUCCESS', 'RUNNING'])
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from typing import cast
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import ParallelPolicy, Status
@@ -38,18 +42,21 @@ class _TickByClass(dict):
     """How each node class is ticked, found on first use: ``_TICK[node.__class__](node)`` is one
     dict lookup and no Python call (composites tick their children that way: a call less per child)."""
 
-    def __missing__(self, kind: type) -> _Tick:
+    def __missing__(self, kind: type[Behaviour]) -> _Tick:
+        # the table dispatches by class: each function below only ever gets nodes of its class,
+        # which the type of a table of callables cannot say (hence the casts)
         how: _Tick = _generator
-        if getattr(kind, "tick_direct", None) is not None:
-            how = kind.tick_direct
+        direct = getattr(kind, "tick_direct", None)
+        if direct is not None:
+            how = direct
         elif kind.tick is Sequence.tick:
-            how = _sequence
+            how = cast(_Tick, _sequence)
         elif kind.tick is Selector.tick:
-            how = _selector
+            how = cast(_Tick, _selector)
         elif kind.tick is Parallel.tick:
-            how = _parallel
+            how = cast(_Tick, _parallel)
         elif issubclass(kind, Decorator) and kind.tick is Decorator.tick:
-            how = _decorator
+            how = cast(_Tick, _decorator)
         self[kind] = how
         return how
 
@@ -64,8 +71,16 @@ def tick(node: Behaviour) -> None:
 
 
 def _generator(node: Behaviour) -> None:
+    """py_trees' own tick, through its generator (for the node kinds this module does not know)."""
     for _ in node.tick():
         pass
+
+
+def _invalidate(children: Iterable[Behaviour]) -> None:
+    """Stop (reset to INVALID) each of ``children`` that is not already, as py_trees' composites do."""
+    for child in children:
+        if child.status is not INVALID:
+            child.stop(INVALID)
 
 
 def _sequence(seq: Sequence) -> None:
@@ -74,9 +89,7 @@ def _sequence(seq: Sequence) -> None:
     index = 0
     if seq.status is not RUNNING:
         seq.current_child = children[0] if children else None
-        for child in children:
-            if child.status is not INVALID:
-                child.stop(INVALID)
+        _invalidate(children)
         seq.initialise()
     elif seq.memory and seq.current_child is not None:
         index = children.index(seq.current_child)
@@ -93,9 +106,7 @@ def _sequence(seq: Sequence) -> None:
         status = child.status
         if status is not SUCCESS:
             if not seq.memory:  # invalidate the rest: no dangling runners
-                for later in children[index + 1 :]:
-                    if later.status is not INVALID:
-                        later.stop(INVALID)
+                _invalidate(children[index + 1 :])
             if status is not RUNNING:
                 seq.stop(status)
             else:
@@ -119,10 +130,9 @@ def _selector(sel: Selector) -> None:
         sel.stop(FAILURE)
         return
     if sel.memory:
+        assert sel.current_child is not None  # set above when it started, kept while it runs
         index = children.index(sel.current_child)
-        for child in children[:index]:
-            if child.status is not INVALID:
-                child.stop(INVALID)
+        _invalidate(children[:index])
     else:
         index = 0
     previous = sel.current_child
@@ -155,9 +165,7 @@ def _parallel(par: Parallel) -> None:
         return
     children = par.children
     if par.status is not RUNNING:
-        for child in children:
-            if child.status is not INVALID:
-                child.stop(INVALID)
+        _invalidate(children)
         par.current_child = None
         par.initialise()
     if not children:
@@ -169,31 +177,35 @@ def _parallel(par: Parallel) -> None:
         if synchronise and child.status is SUCCESS:
             continue
         _TICK[child.__class__](child)
-    new_status = RUNNING
+    new_status = _parallel_status(par, policy.__class__ is _SUCCESS_ON_ALL)
+    if new_status is not RUNNING:
+        par.stop(new_status)
+    par.status = new_status
+
+
+def _parallel_status(par: Parallel, on_all: bool) -> Status:
+    """What the children's statuses make of the parallel (any failure fails it; success on all or
+    on one), setting ``current_child`` as py_trees does."""
+    children = par.children
     par.current_child = children[-1]
     succeeded = 0
     for child in children:
         status = child.status
         if status is FAILURE:
             par.current_child = child
-            new_status = FAILURE
-            break
+            return FAILURE
         if status is SUCCESS:
             succeeded += 1
-    if new_status is RUNNING:
-        if policy.__class__ is _SUCCESS_ON_ALL:
-            if succeeded == len(children):
-                new_status = SUCCESS
-                par.current_child = children[-1]
-        else:
-            for child in reversed(children):
-                if child.status is SUCCESS:
-                    new_status = SUCCESS
-                    par.current_child = child
-                    break
-    if new_status is not RUNNING:
-        par.stop(new_status)
-    par.status = new_status
+    if on_all:
+        if succeeded == len(children):
+            par.current_child = children[-1]
+            return SUCCESS
+        return RUNNING
+    for child in reversed(children):
+        if child.status is SUCCESS:
+            par.current_child = child
+            return SUCCESS
+    return RUNNING
 
 
 def _decorator(dec: Decorator) -> None:

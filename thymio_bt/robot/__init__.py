@@ -2,9 +2,14 @@
 (:mod:`.model`, :mod:`.profile`, :mod:`.calibration`), how a profile is measured (:mod:`.calibrate`),
 and where a robot may stand (:mod:`.placement`).
 
-The interface's names are importable from here, as they were when it was one module::
+The interface's names are importable from here, as they were when it was one module; a robot
+that does not say what it is, nor how late it is, is the course's robot, on time:
 
-    from thymio_bt.robot import Backend, Pose, Robot
+Example::
+
+    >>> from thymio_bt.robot import Backend, Pose, Robot
+    >>> Robot.model.name, Backend.latency
+    ('course', 0.0)
 """
 
 from thymio_bt.robot.interface import (
@@ -23,6 +28,10 @@ from thymio_bt.robot.interface import (
     new_pose,
     wrap_angle,
 )
+from thymio_bt.robot.model import COURSE
+
+#: a backend that does not say which robot it drives (sets no ``model``) drives the course's
+Robot.model = COURSE
 
 __all__ = [
     "ROBOT_ENTITY",

@@ -113,27 +113,13 @@ read-only (the simulation's is: it casts each ray when first read); ``dict(scan)
 or change."""
 
 
-class _CourseModel:
-    """The default of :attr:`Robot.model`: the course's robot, looked up when first read (the
-    model module imports this one, so it cannot be imported here at load time). A backend that
-    knows its robot sets ``self.model``, which hides this default on the instance."""
-
-    _model: RobotModel | None = None
-
-    def __get__(self, robot: object, owner: type | None = None) -> RobotModel:
-        if _CourseModel._model is None:
-            from thymio_bt.robot.model import COURSE
-
-            _CourseModel._model = COURSE
-        return _CourseModel._model
-
-
 class Robot(ABC):
     """A differential-drive robot with 7 proximity sensors and odometry."""
 
     #: what the robot is (sensor poses, geometry, speed limits): behaviours that depend on where its
-    #: sensors look read it here; a backend that does not set it drives the course's robot
-    model = _CourseModel()
+    #: sensors look read it here. A backend that does not set it drives the course's robot: that
+    #: default is set by :mod:`thymio_bt.robot` (the models import this module, not the reverse)
+    model: RobotModel
     #: seconds from the world a reading shows to the moment a command sent now takes effect
     #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
     #: 0 for the simulation, whose behaviours see the world of this tick.
