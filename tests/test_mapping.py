@@ -2,14 +2,15 @@
 moving on small contest-style worlds (18 cm cells, 12 mm walls)."""
 
 import math
+from itertools import pairwise
 
 import pytest
 
-from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.behaviours.cellmap import CellMap, GridFrame, centre_cells
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse, to_text
 from thymio_bt.mission import load_mission
+from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.runner import run_mission
 from thymio_bt.testing import run_tree
 
@@ -190,4 +191,4 @@ def test_the_report_map_has_the_distances_to_the_goal_and_the_shortest_known_pat
     assert path[0] == [0, 0] and path[-1] == [0, 3]
     steps = {(i, j): d for i, j, d in cells["distances"]}
     assert [steps[tuple(p)] for p in path] == list(range(len(path) - 1, -1, -1))
-    assert all(abs(a[0] - b[0]) + abs(a[1] - b[1]) == 1 for a, b in zip(path, path[1:]))
+    assert all(abs(a[0] - b[0]) + abs(a[1] - b[1]) == 1 for a, b in pairwise(path))

@@ -1,6 +1,7 @@
 """The report's navigation: GoToPose, FollowWaypoints, and the avoidance modes on their own."""
 
 import math
+from itertools import pairwise
 
 import pytest
 
@@ -27,7 +28,7 @@ def test_follow_waypoints_visits_every_waypoint_in_order():
     result = run_tree({"FollowWaypoints": {"waypoints": points}}, ARENA, seconds=120)
     reached = events(result, "waypoint_reached")
     assert result.status == "SUCCESS" and [e["index"] for e in reached] == [0, 1, 2]
-    for event, point in zip(reached, points):
+    for event, point in zip(reached, points, strict=True):
         assert math.dist((event["pose"]["x"], event["pose"]["y"]), point) <= 0.01
 
 
@@ -113,6 +114,6 @@ def test_corner_case_left_is_the_long_way_round(tmp_path):
     )
     result = Run(mission).run()
     assert result.status == "SUCCESS" and result.collisions == 0
-    path = sum(math.dist(a[1:3], b[1:3]) for a, b in zip(result.trajectory, result.trajectory[1:]))
+    path = sum(math.dist(a[1:3], b[1:3]) for a, b in pairwise(result.trajectory))
     assert path > 1.5  # the straight line is 1.0 m; round the short end ~1.2 m
     assert max(y for _, x, y, _ in result.trajectory) > 0.4  # went round the far (left) end
