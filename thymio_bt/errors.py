@@ -2,6 +2,19 @@
 
 Every loader collects :class:`Problem` s and raises one :class:`UserError` holding all of them, so
 a student sees every mistake of a file at once. The CLI prints them and exits with code 2.
+
+Example:
+
+>>> hint = did_you_mean("MoveUntillWall", ["MoveUntilWall", "Stop"])
+>>> error = UserError([
+...     Problem("unknown node 'MoveUntillWall'", "m.yaml", 12, 7, "tree", hint),
+...     Problem("time_limit must be > 0", "m.yaml", 4),
+... ])
+>>> print(error)
+m.yaml:12:7: unknown node 'MoveUntillWall' [at tree] (hint: did you mean 'MoveUntilWall'?)
+m.yaml:4:1: time_limit must be > 0
+>>> type_name([1]), type_name(None), type_name(True)
+('a list', 'nothing', 'true/false')
 """
 
 from __future__ import annotations
@@ -76,9 +89,15 @@ def optional_module(name: str, needed_by: str, hint: str) -> ModuleType:
     """``import name`` for what an optional extra brings: a :class:`UserError` saying who needs it and
     how to get it, instead of an ImportError, when it is not installed.
 
-    Example::
+    Example:
 
-        tdmclient = optional_module("tdmclient", "the 'tdm' backend", "pip install 'thymio-bt[thymio]'")
+    >>> optional_module("json", "the report", "it comes with Python").dumps([1])
+    '[1]'
+    >>> optional_module("no_such_module", "the 'tdm' backend", "pip install 'thymio-bt[thymio]'")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: the 'tdm' backend needs no_such_module, which is not installed \
+(No module named 'no_such_module') (hint: pip install 'thymio-bt[thymio]')
     """
     try:
         return importlib.import_module(name)

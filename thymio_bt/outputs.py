@@ -9,10 +9,23 @@ Every command that writes (``--report``, ``sweep --out``, ``schema -o``, ``maze 
   complete: a full disk or a crash never leaves half a report or a ``*.tmp`` behind;
 - the message says which path was actually written.
 
-Example::
+Example:
 
-    out = Output(Path("run.json"), "--report")   # raises UserError now if run.json cannot be written
-    out.write_text(json.dumps(report))           # atomically; "-" would print it instead
+>>> import tempfile
+>>> folder = Path(tempfile.mkdtemp())
+>>> out = Output(folder / "run.json", "--report")  # checked now, before the run
+>>> out.write_text('{"status": "SUCCESS"}')  # atomically; "-" would print it instead
+>>> sorted(p.name for p in folder.iterdir()), (folder / "run.json").read_text()
+(['run.json'], '{"status": "SUCCESS"}')
+>>> Output(folder, "--report")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+thymio_bt.errors.UserError: --report ...: is a folder (hint: give a file name, e.g. .../out.json)
+>>> Output(folder / "missing" / "run.json", "--report")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+thymio_bt.errors.UserError: --report .../run.json: the folder ... does not exist (hint: mkdir -p ...)
+>>> (folder / "run.json").unlink(); folder.rmdir()
 """
 
 from __future__ import annotations

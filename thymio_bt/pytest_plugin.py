@@ -6,11 +6,12 @@ into the next. It is loaded by every pytest run of every project in the environm
 nothing heavy until a test asks for thymio-bt (loading it costs about a millisecond), and it leaves
 alone the blackboard of tests that never made a thymio-bt behaviour.
 
-Example::
+Example (a test in a student's project; pytest passes it the fixture's value, as here):
 
-    def test_stop(thymio):
-        result = thymio.run_tree({"MoveUntilWall": {"distance": "5cm"}}, thymio.world("corridor"))
-        assert result.status == "SUCCESS"
+>>> def test_stop(thymio):
+...     result = thymio.run_tree({"MoveUntilWall": {"distance": "5cm"}}, thymio.world("corridor"))
+...     assert result.status == "SUCCESS"
+>>> test_stop(thymio.__wrapped__())
 """
 
 from __future__ import annotations

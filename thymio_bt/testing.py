@@ -1,13 +1,21 @@
 """Helpers to test behaviours and subtrees on small worlds (also a pytest plugin: see ``conftest``).
 
-Example::
+Example (a student's test: pytest runs it; here it is called):
 
-    from thymio_bt.testing import run_tree, world
+>>> from thymio_bt.testing import run_tree, world
+>>> def test_stops_five_cm_from_the_wall():
+...     result = run_tree({"MoveUntilWall": {"distance": "5cm"}}, world("corridor"), seconds=20)
+...     assert result.status == "SUCCESS"
+...     assert abs(result.final_proximity["front_center"] - 0.05) < 0.001
+>>> test_stops_five_cm_from_the_wall()
 
-    def test_stops_five_cm_from_the_wall():
-        result = run_tree({"MoveUntilWall": {"distance": "5cm"}}, world("corridor"), seconds=20)
-        assert result.status == "SUCCESS"
-        assert abs(result.final_proximity["front_center"] - 0.05) < 0.001
+A tree that fails says which node and why, and every node's statistics come with the result:
+
+>>> result = run_tree({"sequence": [{"MoveDistance": {"distance": "2m"}}, "Stop"]}, world("corridor"))
+>>> result.status, result.code, result.failed_path, result.reason
+('FAILURE', 'COLLISION', 'sequence/MoveDistance', 'the robot hit a wall')
+>>> result.node_stats["sequence/MoveDistance"]
+{'ticks': 65, 'successes': 0, 'failures': 1, 'running_time': 6.4}
 """
 
 from __future__ import annotations
@@ -140,9 +148,11 @@ def run_mission_file(
     (names from the root joined by ``/``, e.g. ``"course/part 2/*"`` or ``"*/DeleteEntity"``) to a
     status (``"success"``), a list of statuses one per tick, or ``{"status": ..., "seconds": ...}``.
 
-    Example::
+    Example (part 2 replaced by a stub that succeeds at once):
 
-        result = run_mission_file("missions/maze_part1_2.yaml", substitute={"course/part 2": "success"})
+    >>> result = run_mission_file("maze_part1_2", substitute={"course/part 2": "success"})
+    >>> result.status, result.ticks, result.node_stats["course/part 2"]
+    ('SUCCESS', 46, {'ticks': 1, 'successes': 1, 'failures': 0, 'running_time': 0.0})
     """
     from thymio_bt.mission import load_mission
 

@@ -6,10 +6,18 @@ folder: what Foxglove, PlotJuggler and ``ros2 bag`` open; needs ``thymio-bt[rosb
 BT.CPP's Groot2 log (``.btlog``, written only). Plugins add formats through the
 ``thymio_bt.log_formats`` entry-point group, whose entries point to a :class:`LogFormat`.
 
-Example::
+A :class:`LogWriter` gets ``header()``, then ``tick()`` per tick, ``end()`` and ``close()``;
+:func:`read_log` gives a :class:`~thymio_bt.logs.recording.Recording` back, for plots and replays
+(:mod:`thymio_bt.logs.recording` writes and reads one).
 
-    writer = open_writer("run.mcap")        # a LogWriter: header(), tick() per tick, end(), close()
-    recording = read_log("run.jsonl")       # a Recording, for plots and replays
+Example:
+
+>>> [format_for(name).name for name in ("run.jsonl", "run.mcap", "run_bag", "run.btlog")]
+['jsonl', 'rosbag2', 'rosbag2', 'btlog']
+>>> format_for("run.btlog", reading=True)
+Traceback (most recent call last):
+...
+thymio_bt.errors.UserError: run.btlog: no log format reads '.btlog' files (hint: use .jsonl, .mcap)
 """
 
 from __future__ import annotations

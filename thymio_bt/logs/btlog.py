@@ -5,6 +5,24 @@ the text, nodes with their ``_uid``), the start time (i64 µs), then one 9-byte 
 change: µs since the start (6 bytes), the node's uid (u16), its new status (u8: 0 IDLE, 1 RUNNING,
 2 SUCCESS, 3 FAILURE). Times are simulated, so the same run gives the same file; the start time is
 0 (1970 in Groot2's clock).
+
+Example:
+
+>>> import tempfile
+>>> from pathlib import Path
+>>> from thymio_bt.logs.recording import Recorder
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import Run
+>>> with tempfile.TemporaryDirectory() as folder:
+...     recorder = Recorder(log_path=f"{folder}/run.btlog")
+...     _ = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+...     data = Path(f"{folder}/run.btlog").read_bytes()
+>>> data[: len(MAGIC)], data[len(MAGIC)]
+(b'BTCPP4-FileLogger2', 1)
+>>> xml_length = struct.unpack_from("<i", data, len(MAGIC) + 1)[0]
+>>> records = data[len(MAGIC) + 5 + xml_length + 8 :]
+>>> len(records) % 9, struct.unpack_from("<HB", records, 6)  # first: MoveDistance (uid 3) RUNNING
+(0, (3, 1))
 """
 
 from __future__ import annotations

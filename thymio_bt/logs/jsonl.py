@@ -3,6 +3,30 @@
 Line 1 is the ``header`` (mission, maze, rates, the tree), then one ``tick`` per tick (time, pose,
 command, velocity, proximity, running nodes, the status of every node, blackboard values that
 changed), then an ``end`` with the outcome and the events.
+
+Example (a log damaged at line 101: an error naming the line, or the 99 ticks before it):
+
+>>> import tempfile
+>>> from thymio_bt.logs.recording import Recorder
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import Run
+>>> folder = tempfile.TemporaryDirectory()
+>>> path = Path(folder.name) / "run.jsonl"
+>>> recorder = Recorder(log_path=path)
+>>> _ = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+>>> lines = path.read_text().splitlines()
+>>> lines[0][:60]
+'{"kind":"header","version":2,"mission":"square","tick_hz":10'
+>>> lines[100] = '{"kind": "tick"}'  # no time, no pose...
+>>> _ = path.write_text("\\n".join(lines))
+>>> read_jsonl(path)  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+thymio_bt.errors.UserError: .../run.jsonl:101:1: damaged log line: tick line: t: Field required (hint: ...)
+>>> partial = read_jsonl(path, partial=True)
+>>> len(partial.samples), partial.header["damaged_at"], partial.end["status"]
+(99, 101, 'INCOMPLETE')
+>>> folder.cleanup()
 """
 
 from __future__ import annotations

@@ -6,11 +6,20 @@ nodes, the status of every node, blackboard values that changed), keeps it for p
 to the log writer that ``--log FILE``'s suffix picks (:mod:`thymio_bt.logs`). ``thymio-bt replay``
 redraws plots from a log without re-running.
 
-Example::
+Example (a log written, then read back as it was recorded):
 
-    recorder = Recorder(log_path="run.mcap")
-    result = run.run(on_tick=recorder)
-    recording = recorder.finish(result)
+>>> import tempfile
+>>> from thymio_bt.logs import read_log
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import Run
+>>> with tempfile.TemporaryDirectory() as folder:
+...     recorder = Recorder(log_path=f"{folder}/run.jsonl")
+...     recording = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+...     logged = read_log(f"{folder}/run.jsonl")
+>>> len(recording.samples), recording.end["status"], recording.final_pose
+(228, 'SUCCESS', {'x': 0.45, 'y': 0.45, 'yaw': 0.0})
+>>> logged.samples == recording.samples, logged.end == recording.end
+(True, True)
 """
 
 from __future__ import annotations

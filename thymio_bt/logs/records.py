@@ -3,6 +3,16 @@
 The header carries the mission, the maze and the tree itself (each node with a BT.CPP-style
 pre-order uid, 1 = the root), so a log is self-contained: a replay, a Groot2 log or a rosbag2
 export needs nothing else. Times are simulated seconds, poses base_link in the world frame.
+
+Example:
+
+>>> import py_trees
+>>> a, b = py_trees.behaviours.Success("a"), py_trees.behaviours.Failure("b")
+>>> root = py_trees.composites.Sequence("course", memory=True, children=[a, b])
+>>> [(n["uid"], n["path"], n["kind"], n["parent"]) for n in tree_nodes(root)]
+[(1, 'course', 'Sequence', None), (2, 'course/a', 'Success', 1), (3, 'course/b', 'Failure', 1)]
+>>> number(0.1234567), number(float("inf")), jsonable({"turn": ("left", 1.5707963), "at": object})
+(0.123457, None, {'turn': ['left', 1.570796], 'at': "<class 'object'>"})
 """
 
 from __future__ import annotations

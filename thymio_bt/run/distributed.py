@@ -6,11 +6,11 @@ needs this small adapter over ``Client.map`` (``pip install 'thymio-bt[dask]'``)
 mission once and keep it, keyed on the content of its files and settings, so a file edited between
 two sweeps is read again.
 
-Example::
+To use it (a cluster's scheduler is needed, so this is not run as a doctest: ``tests/test_distributed.py``
+runs a sweep on a local cluster)::
 
     from distributed import Client
-    result = sweep("missions/maze_bonus.yaml", runs=10_000,
-                   executor=DaskExecutor(Client("tcp://scheduler:8786")))
+    result = sweep("maze_bonus", runs=10_000, executor=DaskExecutor(Client("tcp://scheduler:8786")))
 """
 
 from __future__ import annotations

@@ -6,11 +6,18 @@ runner.Run` and :func:`~thymio_bt.run.sweep.sweep` look at it once per tick (or 
 robot, and end with status ``INTERRUPTED``, their report and log complete. A second signal while
 that happens raises :class:`KeyboardInterrupt` at once, for a loop stuck in a blocking call.
 
-Example::
+Example (a Ctrl-C before the first tick: the run ticks once, then ends):
 
-    with Interrupts() as interrupts:
-        result = Run(mission).run(interrupts=interrupts)
-    sys.exit(interrupts.exit_code if interrupts.signal else 0)
+>>> import os, signal
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import Run
+>>> with Interrupts() as interrupts:
+...     os.kill(os.getpid(), signal.SIGINT)  # noted by the handler, not raised
+...     result = Run(load_mission("maze_bonus")).run(interrupts=interrupts)
+>>> result.status, result.ticks, result.reason
+('INTERRUPTED', 1, 'interrupted by SIGINT at 0.0 s')
+>>> interrupts.name, interrupts.exit_code  # the CLI exits with that code
+('SIGINT', 130)
 """
 
 from __future__ import annotations

@@ -5,10 +5,14 @@ the sweep once per cell of the cartesian product and tabulates, per cell, the su
 the robot ended from where the mission ends on the course's ideal robot (its noise-free run: the
 "right pocket"), and how many runs touched a wall.
 
-Example::
+Example (one run per cell here; ``thymio-bt sweep`` runs them in parallel):
 
-    cells = run_matrix("missions/maze_bonus.yaml", 20, {"robot": ["course", "enki"]})
-    [c.row()["success_rate"] for c in cells]      # [1.0, 1.0]
+>>> from thymio_bt.run.sweep import LocalPool
+>>> cells = run_matrix("square", 1, {"robot": ["course", "enki"]}, executor=LocalPool(workers=1))
+>>> [(c.settings["robot"], c.row()["success_rate"], c.row()["final_error_median"]) for c in cells]  # error in m
+[('course', 1.0, 0.001238), ('enki', 1.0, 0.001593)]
+>>> parse_axes(["robot=course,enki", "sensor_model=rays"])
+{'robot': ['course', 'enki'], 'sensor_model': ['rays']}
 """
 
 from __future__ import annotations

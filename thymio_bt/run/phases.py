@@ -3,10 +3,13 @@
 A mission such as ``micromouse.yaml`` is written as phases (search, return, fast run); its report
 says how long each took, from the behaviours' events, so nobody has to read them to find out.
 
-Example::
+Example:
 
-    result = run_mission(load_mission("micromouse"))
-    [(p["name"], p["duration"]) for p in result.phases]   # [('search', 50.5), ('return', ...), ...]
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import run_mission
+>>> result = run_mission(load_mission("micromouse"))
+>>> [(p["name"], p["duration"], p["cells"]) for p in result.phases]
+[('search', 45.2, 11), ('return', 70.2, 14), ('fast run', 36.5, 9)]
 """
 
 from __future__ import annotations

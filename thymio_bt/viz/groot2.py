@@ -10,11 +10,27 @@ blackboard when no name is asked), ``D`` the hooks (none), and ``A``/``X`` (remo
 hooks: nothing to do). Breakpoints and recording answer ``error``, as a
 publisher without them does. Needs ``thymio-bt[groot2]`` (pyzmq, msgpack).
 
-Example::
+Example (a run served on a free port, then asked for its statuses as Groot2 asks):
 
-    server = Groot2Server(1667)
-    run.run(on_tick=server, realtime=1.0)
-    server.close()
+>>> import socket, zmq
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import Run
+>>> with socket.socket() as probe:
+...     _ = probe.bind(("127.0.0.1", 0))
+...     port = probe.getsockname()[1]
+>>> server = Groot2Server(port)
+>>> result = Run(load_mission("square")).run(on_tick=server)  # with --realtime 1 from the CLI
+>>> groot2 = server.context.socket(zmq.REQ)
+>>> groot2.setsockopt(zmq.RCVTIMEO, 2000)
+>>> _ = groot2.connect(f"tcp://127.0.0.1:{port}")
+>>> groot2.send(struct.pack("<BBI", PROTOCOL, ord("S"), 7))  # protocol, request type, request id
+>>> head, statuses = groot2.recv_multipart()
+>>> head[:6] == struct.pack("<BBI", 2, ord("S"), 7), len(head)  # echoed, then the tree's id
+(True, 22)
+>>> [struct.unpack_from("<HB", statuses, i) for i in range(0, len(statuses), 3)]  # (uid, 2 = SUCCESS)
+[(1, 2), (2, 2), (3, 2), (4, 2)]
+>>> groot2.close()
+>>> server.close()
 """
 
 from __future__ import annotations

@@ -3,11 +3,23 @@
 matplotlib is imported only here (it is the optional ``viz`` extra), with the Agg backend, so
 plots work headless and a run that asks for none pays nothing.
 
-Example::
+``plot_signals(recording, "signals.png")`` and ``animate(recording, "run.gif", speedup=4)`` take
+a recording as ``plot_run`` does.
 
-    plot_run(recording, "run.png")
-    plot_signals(recording, "signals.png")
-    animate(recording, "run.gif", speedup=4)
+Example:
+
+>>> import tempfile
+>>> from thymio_bt.logs.recording import Recorder
+>>> from thymio_bt.mission import load_mission
+>>> from thymio_bt.run.runner import Run
+>>> recorder = Recorder()
+>>> recording = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+>>> with tempfile.TemporaryDirectory() as folder:
+...     path = plot_run(recording, Path(folder) / "run.png")
+...     path.name, path.read_bytes()[:4]
+('run.png', b'\x89PNG')
+>>> [round(a, 2) for a in unwrapped([3.0, -3.0, math.nan, -3.0])]  # no jump at ±pi; a gap restarts
+[3.0, 3.28, nan, -3.0]
 """
 
 from __future__ import annotations

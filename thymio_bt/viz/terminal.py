@@ -1,5 +1,13 @@
 """The tree in the terminal: live statuses while a run goes, the failing branch after it,
 and exports to Graphviz (.dot always; .svg/.png when Graphviz's ``dot`` program is installed).
+
+Example:
+
+>>> print(tree_text(Path("square")).rstrip())  # the mission's repeat, a sequence and two leaves
+-^- four sides
+    {-} side
+        --> MoveDistance
+        --> TurnAngle
 """
 
 from __future__ import annotations

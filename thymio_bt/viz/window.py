@@ -11,12 +11,17 @@ Q or ESC close. Closing the window of a live run raises :class:`ViewerClosed`, a
 :class:`thymio_bt.run.runner.StopRun`: the run ends there as a FAILURE with code STOPPED, and its
 report, log and pictures are written as for any other ending.
 
-Example::
+Example (offscreen; ``replay(read_log("run.jsonl"), speedup=10)`` shows a log the same way):
 
-    view = live_hook(run, speedup=4)
-    result = run.run(on_tick=view)             # result.code == "STOPPED" if the window was closed
-    view.finish(result)
-    replay(read_log("run.jsonl"), speedup=10)
+>>> import os
+>>> from thymio_bt.mission import load_mission
+>>> _ = os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # no window opens
+>>> run = Run(load_mission("square"))
+>>> view = live_hook(run, speedup=1000, hold=False)
+>>> result = run.run(on_tick=view)  # result.code == "STOPPED" if the window was closed
+>>> view.finish(result)
+>>> result.status, view.viewer.shown, view.viewer.outcome
+('SUCCESS', 228, 'SUCCESS')
 """
 
 from __future__ import annotations
