@@ -1,4 +1,11 @@
-"""Mission YAML → validated plan → py_trees tree; and the behaviour registry."""
+"""Mission YAML → validated plan → py_trees tree; and the behaviour registry.
+
+Example::
+
+    >>> mission = load_mission("square")                    # a shipped mission, by name
+    >>> mission.tree.kind, mission.tree.options, [child.behaviour for child in mission.tree.children[0].children]
+    ('repeat', {'times': 4}, ['MoveDistance', 'TurnAngle'])
+"""
 
 from thymio_bt.mission.build import build_tree
 from thymio_bt.mission.loader import load_mission
