@@ -90,7 +90,7 @@ def test_a_ray_meets_the_nearest_face_of_every_wall_it_crosses(maze_file):
             every = [
                 _ray_segment(x, y, c, s, *a, *b)
                 for wall in maze.walls
-                for a, b in zip(wall.corners(), [*wall.corners()[1:], wall.corners()[0]])
+                for a, b in zip(wall.corners(), [*wall.corners()[1:], wall.corners()[0]], strict=True)
             ]
             assert ray_distance(maze, x, y, yaw) == min((d for d in every if d is not None), default=math.inf)
 

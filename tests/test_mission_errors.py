@@ -93,7 +93,7 @@ def check_case(path: Path) -> list[Problem]:
     problems = info.value.problems
     listing = "\n".join(str(p) for p in problems)
     assert len(problems) == len(expected), f"{path.name}: expected {len(expected)} problems, got:\n{listing}"
-    for problem, want in zip(problems, expected):
+    for problem, want in zip(problems, expected, strict=True):
         check_problem(problem, want, path.name)
     return problems
 
@@ -168,6 +168,47 @@ def test_overrides_are_checked_like_the_file() -> None:
     assert all(p.file == "--set" for p in problems.values())
 
 
+REFERENCES = """\
+maze: two_parts_maze
+start: part1
+parameters: {turn: bb:turn_angle, side: 20cm, where: part2}
+subtrees:
+  leg:
+    parameters: {length: 10cm}
+    tree: {MoveDistance: {distance: $length}}
+tree:
+  sequence:
+    - TurnAngle: {angle: $turn}
+    - leg: {length: $side}
+    - SpawnEntity: {pose: $where}
+    - leg: {length: $nope}
+    - MoveDistance: {distance: $nope}
+    - MoveDistance: {distance: $2cm}
+"""
+
+
+def test_a_parameter_reference_reads_the_same_in_every_place(tmp_path: Path) -> None:
+    """``$name`` in a behaviour's parameter, a subtree's argument or a pose: the parameter's value
+    (a bb: key stays a blackboard reference); an unknown name is the same problem everywhere, and
+    ``$2cm`` (not a name) is a value for the unit parser."""
+    mission = tmp_path / "refs.yaml"
+    mission.write_text(REFERENCES)
+    with pytest.raises(UserError) as info:
+        load_mission(mission)
+    in_tree = [(p.line, p.column, p.message, p.hint) for p in info.value.problems if p.line >= 13]
+    assert in_tree == [
+        (13, 21, "unknown parameter '$nope'", "expected one of: side, turn, where"),
+        (14, 32, "unknown parameter '$nope'", "expected one of: side, turn, where"),
+        (15, 32, "unexpected '$2cm' in '$2cm'", info.value.problems[-1].hint),
+    ]
+    assert info.value.problems[-1].hint.startswith("numbers may carry a unit")
+    mission.write_text("\n".join(REFERENCES.splitlines()[:-3]))
+    turn, leg, spawn = load_mission(mission).tree.children
+    assert turn.blackboard_refs == {"angle": "turn_angle"} and turn.params.angle is None
+    assert leg.subtree == "leg" and leg.params.distance == pytest.approx(0.2)
+    assert spawn.params.pose == pytest.approx((0.5, 0.3, 1.5707963))
+
+
 def test_an_impossible_start_override_is_reported_as_such() -> None:
     with pytest.raises(UserError) as info:
         load_mission(ROOT / "missions" / "maze_part1_2.yaml", start="0.3,0.2,0")
@@ -228,7 +269,7 @@ def _assert_cli_errors(stderr: str, path: Path) -> None:
     found = [m for m in map(_CLI_ERROR.match, stderr.splitlines()) if m]
     expected = expectations(path)
     assert len(found) == len(expected), stderr
-    for match, want in zip(found, expected):
+    for match, want in zip(found, expected, strict=True):
         got = Problem(match["message"], match["file"], int(match["line"]), int(match["col"]))
         assert Path(got.file).resolve() == want.file and (got.line, got.column) == (want.line, want.col), stderr
         assert want.message in got.message, stderr
