@@ -8,16 +8,22 @@ from the same place (BehaviorTree.CPP's factory works the same way). A composite
 
 Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for real ones)::
 
-    class Invert(ControlNode):
-        \"\"\"Swap SUCCESS and FAILURE of the child.\"\"\"
-
-        yaml_name = "invert"
-        category = "decorator"
-        short_form = True
-
-        @classmethod
-        def build(cls, name, params, children, ctx):
-            return py_trees.decorators.Inverter(name=name, child=children[0])
+    >>> import py_trees
+    >>> class Invert(ControlNode):
+    ...     "Swap SUCCESS and FAILURE of the child."
+    ...     yaml_name = "invert"
+    ...     category = "decorator"
+    ...     short_form = True
+    ...     @classmethod
+    ...     def build(cls, name, params, children, ctx):
+    ...         return py_trees.decorators.Inverter(name=name, child=children[0])
+    >>> Invert.keys()
+    ('do',)
+    >>> node = Invert.build("not", Invert.Params(), [py_trees.behaviours.Success("ok")], None)
+    >>> from thymio_bt.behaviours.ticking import tick
+    >>> tick(node)
+    >>> node.status
+    <Status.FAILURE: 'FAILURE'>
 """
 
 from __future__ import annotations
