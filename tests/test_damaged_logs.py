@@ -2,6 +2,8 @@
 one message naming the line, and `--partial` replays what is readable before the damage."""
 
 import json
+import subprocess
+import sys
 
 import pytest
 from click.testing import CliRunner
@@ -75,3 +77,12 @@ def test_a_log_cut_mid_line_reads_without_being_asked(good_log, tmp_path):
     path.write_text("\n".join(good_log[:10]) + "\n" + good_log[10][:20])
     result = CliRunner().invoke(main, ["replay", str(path)])
     assert result.exit_code == 0 and "INCOMPLETE" in result.output and "9 ticks" in result.output
+
+
+def test_importing_the_logs_package_stays_light():
+    """Every command that may write a log imports ``thymio_bt.logs``: a format's writer and reader, the
+    recorder and the libraries they need are imported only when a log of that format is used."""
+    heavy = ("py_trees", "pydantic", "pymunk", "numpy", "rosbags", "thymio_bt.logs.recording", "thymio_bt.logs.jsonl")
+    code = f"import sys, thymio_bt.logs; print(','.join(m for m in {heavy!r} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == ""

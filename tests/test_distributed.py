@@ -25,7 +25,9 @@ def test_a_dask_sweep_gives_the_local_pools_results(cluster):
     with distributed.Client(cluster) as client:
         on_dask = sweep("missions/maze_bonus.yaml", runs=6, executor=DaskExecutor(client))
     local = sweep("missions/maze_bonus.yaml", runs=6, executor=LocalPool(1))
-    assert on_dask.results == [{**r, "wall_time": d["wall_time"]} for r, d in zip(local.results, on_dask.results)]
+    assert on_dask.results == [
+        {**r, "wall_time": d["wall_time"]} for r, d in zip(local.results, on_dask.results, strict=True)
+    ]
     assert on_dask.success_rate == 1.0
 
 

@@ -176,7 +176,7 @@ def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message,
     path = tmp_path / "m.xml"
     path.write_text(broken)
     done = thymio_bt("run", path)
-    line = next(i for i, l in enumerate(broken.splitlines(), 1) if new and new.strip() in l) if new else None
+    line = next(i for i, text in enumerate(broken.splitlines(), 1) if new and new.strip() in text) if new else None
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert message in done.stderr and hint in done.stderr, done.stderr
     if line:

@@ -144,5 +144,5 @@ def test_the_signals_plot_unwraps_yaw():
     assert out[:4] == pytest.approx(
         [3.0, 3.1, 3.1 + (2 * 3.141592653589793 - 6.2), 3.0 + (2 * 3.141592653589793 - 6.0)]
     )
-    assert all(abs(b - a) < 0.5 for a, b in zip(out[:3], out[1:4]))
+    assert all(abs(b - a) < 0.5 for a, b in zip(out[:3], out[1:4], strict=True))
     assert out[5] == 3.1 and abs(out[6] - out[5]) < 0.5  # after a gap: restarts where it is

@@ -35,8 +35,11 @@ from thymio_bt.errors import UserError
 from thymio_bt.maze import Maze
 
 if TYPE_CHECKING:
+    from py_trees.behaviour import Behaviour
+
     from thymio_bt.logs import LogWriter
     from thymio_bt.logs.records import LogEnd, TickRecord
+    from thymio_bt.run.runner import Run, RunResult
 
 
 @dataclass
@@ -66,32 +69,31 @@ class Recorder:
         self._path = Path(log_path) if log_path else None
         self._writer: LogWriter | None = None
         self._blackboard: dict[str, Any] = {}
-        self._run: Any = None
+        self._run: Run | None = None
         self._header: dict[str, Any] = {}
 
-    def _open(self, run: Any) -> None:
+    def _open(self, run: Run) -> None:
         from thymio_bt.logs.records import LogHeader, tree_nodes
 
         self._run = run
         mission = run.mission
-        self._header = dict(
-            LogHeader(
-                version=2,
-                mission=mission.name,
-                tick_hz=mission.tick_hz,
-                seed=run.seed,
-                start=mission.start.as_dict(),
-                maze=mission.maze.to_yaml_dict(),
-                tree=tree_nodes(run.root),
-            )
+        header = LogHeader(
+            version=2,
+            mission=mission.name,
+            tick_hz=mission.tick_hz,
+            seed=run.seed,
+            start=mission.start.as_dict(),
+            maze=mission.maze.to_yaml_dict(),
+            tree=tree_nodes(run.root),
         )
+        self._header = dict(header)
         if self._path is not None:
             from thymio_bt.logs import open_writer
 
             self._writer = open_writer(self._path)
-            self._writer.header(self._header)  # type: ignore[arg-type]
+            self._writer.header(header)
 
-    def __call__(self, run: Any) -> None:
+    def __call__(self, run: Run) -> None:
         """Record the tick ``run`` just made (the first call writes the log's header); a log that cannot
         be written any more ends the run with :class:`~thymio_bt.run.runner.StopRun`."""
         from thymio_bt.logs.records import STATUS_LETTER, jsonable, number
@@ -128,7 +130,7 @@ class Recorder:
         if self.keep:
             self.samples.append(dict(record))
 
-    def finish(self, result: Any) -> Recording:
+    def finish(self, result: RunResult) -> Recording:
         """Write the log's end and close it; return the in-memory recording."""
         end: LogEnd = {
             "status": result.status,
@@ -167,5 +169,6 @@ class Recorder:
             pass
 
 
-def _running_leaves(root: Any) -> list[Any]:
+def _running_leaves(root: Behaviour) -> list[Behaviour]:
+    """The leaves RUNNING after the tick (a tree's running behaviours)."""
     return [n for n in root.iterate() if not getattr(n, "children", None) and n.status.name == "RUNNING"]

@@ -27,21 +27,11 @@ from typing import Any
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+from thymio_bt.robot.interface import SENSOR_NAMES
 
 _INSTALL = "pip install 'thymio-bt[rosbag]'"
 #: sensor name -> the course's topic prefix (docs/sources.md, "Robot geometry and sensors")
-_PREFIX = {
-    name: f"{name}_proximity"
-    for name in (
-        "front_left",
-        "front_center_left",
-        "front_center",
-        "front_center_right",
-        "front_right",
-        "rear_left",
-        "rear_right",
-    )
-}
+_PREFIX = {name: f"{name}_proximity" for name in SENSOR_NAMES}
 _TYPES = {
     "/clock": "rosgraph_msgs/msg/Clock",
     "/cmd_vel": "geometry_msgs/msg/Twist",

@@ -140,7 +140,8 @@ class LocalPool:
         size = max(1, min(4, len(jobs) // (self.workers * 8)))  # small: an interrupt loses little
         chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
         pool = multiprocessing.Pool(self.workers, initializer=_worker_signals)
-        workers = list(pool._pool)  # type: ignore[attr-defined]  # to notice one that dies
+        # the pool's processes, to notice one that dies: multiprocessing keeps them private, untyped
+        workers = list(pool._pool)  # type: ignore[attr-defined]
         try:
             # chunks by hand: with chunksize > 1, Pool.imap_unordered returns a generator that cannot wait
             # with a timeout, and the loop must look at the interrupts while it waits

@@ -39,10 +39,15 @@ import json
 import struct
 import threading
 import uuid
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import UserError
 from thymio_bt.logs.records import jsonable
+
+if TYPE_CHECKING:
+    from py_trees.behaviour import Behaviour
+
+    from thymio_bt.run.runner import Run
 
 PROTOCOL = 2
 DEFAULT_PORT = 1667
@@ -80,13 +85,13 @@ class Groot2Server:
         self.tree_id = uuid.uuid4().bytes
         self.lock = threading.Lock()
         self.xml = ""
-        self.uids: list[tuple[int, Any]] = []
+        self.uids: list[tuple[int, Behaviour]] = []
         self.status = b""
         self.blackboard: dict[str, Any] = {}
         self.running = True
         self.thread = threading.Thread(target=self._serve, name="groot2", daemon=True)
 
-    def __call__(self, run: Any) -> None:
+    def __call__(self, run: Run) -> None:
         """Take the tree's statuses and the blackboard after a tick (the first call maps the tree's
         nodes to their BT.CPP uids and starts serving)."""
         if not self.uids:

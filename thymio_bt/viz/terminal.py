@@ -23,7 +23,10 @@ import py_trees
 from thymio_bt.errors import UserError
 
 if TYPE_CHECKING:
+    from py_trees.behaviour import Behaviour
+
     from thymio_bt.outputs import Output
+    from thymio_bt.run.runner import Run
 
 
 class LiveTree:
@@ -34,7 +37,7 @@ class LiveTree:
         self.last: tuple[Any, ...] | None = None
         self.clear = self.stream.isatty() if hasattr(self.stream, "isatty") else False
 
-    def __call__(self, run: Any) -> None:
+    def __call__(self, run: Run) -> None:
         """Print the tree if any node's status changed with this tick."""
         state = tuple((n.id, n.status) for n in run.root.iterate())
         if state == self.last:
@@ -46,19 +49,20 @@ class LiveTree:
         self.stream.flush()
 
 
-def failing_tree(run: Any) -> str:
+def failing_tree(run: Run) -> str:
     """The tree with the statuses it had when the run ended, for the end of a failed run."""
     return "the tree when the run ended:\n" + run.final_tree
 
 
-def _build(mission_path: Path, run_plugins: bool = False) -> Any:
+def _build(mission_path: Path, run_plugins: bool = False) -> Behaviour:
     """The mission's py_trees tree, to draw: built with no robot (behaviours touch it only when ticked);
     its plugins are read, not imported, unless ``run_plugins``."""
     from thymio_bt.behaviours import Context
     from thymio_bt.mission import build_tree, load_mission
 
     mission = load_mission(mission_path, run_plugins=run_plugins)
-    return build_tree(mission.tree, Context(robot=None, entities=None), mission.registry)  # type: ignore[arg-type]
+    nobody = Context(robot=None, entities=None)  # type: ignore[arg-type]  # drawn, never ticked: no robot needed
+    return build_tree(mission.tree, nobody, mission.registry)
 
 
 def tree_text(mission_path: Path, run_plugins: bool = False) -> str:
