@@ -96,6 +96,13 @@ class TdmOptions(BackendOptions):
     password: str | None = Field(None, description="Thymio Device Manager password, if it has one")
 
 
+def _latency(default: float, more: str) -> Any:
+    """A ``latency`` option (s, 0 to 2), its description ending with ``more``."""
+    return Field(
+        default, ge=0, le=2, description="seconds from the world a reading shows to a new command acting" + more
+    )
+
+
 class AsebaOptions(BackendOptions):
     """The ``aseba`` backend's settings: the device, how long to wait, and the robot's latency."""
 
@@ -103,13 +110,8 @@ class AsebaOptions(BackendOptions):
         "", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for the only Thymio plugged in"
     )
     timeout: float = Field(5.0, gt=0, le=60, description="how long to wait for the robot to answer (s)")
-    latency: float = Field(
-        0.2,
-        ge=0,
-        le=2,
-        description="seconds from the world a reading shows to a new "
-        "command acting (behaviours stop early by it); 0.2 was measured on the Playground, "
-        "measure your robot's",
+    latency: float = _latency(
+        0.2, " (behaviours stop early by it); 0.2 was measured on the Playground, measure your robot's"
     )
 
 
@@ -117,13 +119,10 @@ class PlaygroundOptions(BackendOptions):
     """The ``playground`` backend's settings: start-up wait, latency and the speed calibration."""
 
     timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
-    latency: float = Field(
+    latency: float = _latency(
         0.2,
-        ge=0,
-        le=2,
-        description="seconds from the world a reading shows to a new "
-        "command acting, for the behaviours (measured: readings 40-120 ms behind the true "
-        "pose, a new motor target acting ~100 ms later)",
+        ", for the behaviours (measured: readings 40-120 ms behind the true pose, a new motor target acting "
+        "~100 ms later)",
     )
     speed_scale: float | None = Field(
         None,
@@ -151,13 +150,7 @@ class Ros2Options(BackendOptions):
         description="the run's time: the /clock of a simulator (sim), the wall clock (wall), or sim "
         "when someone publishes /clock (auto)",
     )
-    latency: float = Field(
-        0.0,
-        ge=0,
-        le=2,
-        description="seconds from the world a reading shows to a new command "
-        "acting (behaviours stop early by it); measure a real robot's",
-    )
+    latency: float = _latency(0.0, " (behaviours stop early by it); measure a real robot's")
     robot_xml: str = Field("", description="URDF/SDF file sent when spawning (default: /robot_description)")
 
 

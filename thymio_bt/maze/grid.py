@@ -41,108 +41,121 @@ def maze_from_grid(
     first_col: int = 1,
 ) -> Maze:
     """Build a :class:`Maze` from ASCII art; bad art is a :class:`UserError` pointing at the line and
-    column (``first_line``/``first_col``: where the art starts in its file)."""
+    column (``first_line``/``first_col``: where the art starts in its file).
+
+    >>> maze = maze_from_grid('''
+    ... +--+--+
+    ... |>    |
+    ... +--+--+
+    ... ''', cell=0.2)
+    >>> len(maze.walls), maze.spawns["start"].pose()
+    (4, Pose(x=0.1, y=0.1, yaw=0.0))
+    """
     lines = [ln.rstrip() for ln in text.splitlines()]
     while lines and not lines[0].strip():
         lines.pop(0)
         first_line += 1
     while lines and not lines[-1].strip():
         lines.pop()
-    if len(lines) < 3 or len(lines) % 2 == 0:
-        raise UserError(
-            Problem(
-                "a grid needs an odd number of lines (corner lines around cell lines)",
-                filename,
-                first_line,
-                first_col,
-                hint="start and end with a '+--+' line",
-            )
-        )
-    corner_cols = sorted({i for ln in lines[::2] for i, ch in enumerate(ln) if ch == "+"})
-    if len(corner_cols) < 2:
-        raise UserError(
-            Problem(
-                "no '+' corners found",
-                filename,
-                first_line,
-                first_col,
-                hint="draw cells between '+' corners, e.g. '+--+--+'",
-            )
-        )
-    widths = {b - a for a, b in pairwise(corner_cols)}
-    if len(widths) != 1:
-        raise UserError(
-            Problem(
-                "corners '+' must be evenly spaced",
-                filename,
-                first_line,
-                first_col,
-                hint="every cell must be drawn the same width, e.g. '+--+--+'",
-            )
-        )
-    width = widths.pop()
-    base = corner_cols[0]
-    n_rows = (len(lines) - 1) // 2
-
-    def at(line: str, col: int) -> str:
-        return line[col] if col < len(line) else " "
-
-    walls: list[Wall] = []
-    spawns: dict[str, Spawn] = {}
-    ox, oy = origin
+    art = _Art(lines, cell, origin, thickness, filename, first_line, first_col)
     for r, line in enumerate(lines):
-        y_corner = round(oy + (n_rows - r // 2) * cell, 9)
-        if r % 2 == 0:  # corner line: horizontal walls
-            for col in corner_cols[:-1]:
-                seg = line[col + 1 : col + width] if col + 1 < len(line) else ""
-                if seg.strip("-") == "" and seg.count("-") == width - 1:
-                    x0 = round(ox + (col - base) // width * cell, 9)
-                    walls.append(Wall(start=(x0, y_corner), end=(round(x0 + cell, 9), y_corner), thickness=thickness))
-                elif seg.strip():
-                    raise UserError(
-                        Problem(
-                            f"unexpected '{seg.strip()}' in a corner line",
-                            filename,
-                            first_line + r,
-                            first_col + col + 1,
-                            hint="use '-' for walls, spaces for gaps",
-                        )
-                    )
-        else:  # cell line: vertical walls and start arrows
-            y0 = round(oy + (n_rows - 1 - r // 2) * cell, 9)
-            for col in corner_cols:
-                ch = at(line, col)
-                if ch == "|":
-                    x = round(ox + (col - base) // width * cell, 9)
-                    walls.append(Wall(start=(x, y0), end=(x, round(y0 + cell, 9)), thickness=thickness))
-                elif ch not in " ":
-                    raise UserError(
-                        Problem(
-                            f"unexpected '{ch}' on a wall column",
-                            filename,
-                            first_line + r,
-                            first_col + col,
-                            hint="use '|' for a wall or a space",
-                        )
-                    )
-            for i, col in enumerate(corner_cols[:-1]):
-                inside = line[col + 1 : col + width]
-                stray = next((k for k, ch in enumerate(inside) if ch != " " and ch not in _HEADINGS), None)
-                if stray is not None:
-                    raise UserError(
-                        Problem(
-                            f"unexpected '{inside[stray]}' inside a cell",
-                            filename,
-                            first_line + r,
-                            first_col + col + 1 + stray,
-                            hint="a cell holds spaces, or one of > < ^ v for the start",
-                        )
-                    )
-                marks = [ch for ch in inside if ch in _HEADINGS]
-                if marks:
-                    cx, cy = round(ox + (i + 0.5) * cell, 9), round(y0 + cell / 2, 9)
-                    spawns["start"] = Spawn(x=cx, y=cy, yaw=_HEADINGS[marks[0]])
-    return Maze(name=name, walls=_merge(walls), spawns=spawns)
+        if r % 2 == 0:
+            art.corner_line(r, line)
+        else:
+            art.cell_line(r, line)
+    return Maze(name=name, walls=_merge(art.walls), spawns=art.spawns)
+
+
+class _Art:
+    """The walls and spawns of ASCII art, read line by line (see :func:`maze_from_grid`)."""
+
+    def __init__(
+        self,
+        lines: list[str],
+        cell: float,
+        origin: tuple[float, float],
+        thickness: float,
+        filename: str,
+        first_line: int,
+        first_col: int,
+    ) -> None:
+        self.cell, self.origin, self.thickness = cell, origin, thickness
+        self.filename, self.first_line, self.first_col = filename, first_line, first_col
+        self.corner_cols, self.width = self._corners(lines)
+        self.base = self.corner_cols[0]
+        self.n_rows = (len(lines) - 1) // 2
+        self.walls: list[Wall] = []
+        self.spawns: dict[str, Spawn] = {}
+
+    def _error(self, message: str, line: int, col: int, hint: str) -> UserError:
+        """A :class:`UserError` at ``line`` and ``col`` of the art (0-based), in its file."""
+        return UserError(Problem(message, self.filename, self.first_line + line, self.first_col + col, hint=hint))
+
+    def _corners(self, lines: list[str]) -> tuple[list[int], int]:
+        """The columns of the '+' corners and the cells' width, checked: an odd number of lines,
+        two corners or more, evenly spaced."""
+        if len(lines) < 3 or len(lines) % 2 == 0:
+            raise self._error(
+                "a grid needs an odd number of lines (corner lines around cell lines)",
+                0,
+                0,
+                "start and end with a '+--+' line",
+            )
+        corner_cols = sorted({i for ln in lines[::2] for i, ch in enumerate(ln) if ch == "+"})
+        if len(corner_cols) < 2:
+            raise self._error("no '+' corners found", 0, 0, "draw cells between '+' corners, e.g. '+--+--+'")
+        widths = {b - a for a, b in pairwise(corner_cols)}
+        if len(widths) != 1:
+            raise self._error(
+                "corners '+' must be evenly spaced", 0, 0, "every cell must be drawn the same width, e.g. '+--+--+'"
+            )
+        return corner_cols, widths.pop()
+
+    def _x(self, col: int) -> float:
+        """The x of the corner column ``col``."""
+        return round(self.origin[0] + (col - self.base) // self.width * self.cell, 9)
+
+    def corner_line(self, r: int, line: str) -> None:
+        """Line ``r``, of corners: its horizontal walls."""
+        cell, width = self.cell, self.width
+        y_corner = round(self.origin[1] + (self.n_rows - r // 2) * cell, 9)
+        for col in self.corner_cols[:-1]:
+            seg = line[col + 1 : col + width] if col + 1 < len(line) else ""
+            if seg.strip("-") == "" and seg.count("-") == width - 1:
+                x0 = self._x(col)
+                self.walls.append(
+                    Wall(start=(x0, y_corner), end=(round(x0 + cell, 9), y_corner), thickness=self.thickness)
+                )
+            elif seg.strip():
+                raise self._error(
+                    f"unexpected '{seg.strip()}' in a corner line", r, col + 1, "use '-' for walls, spaces for gaps"
+                )
+
+    def cell_line(self, r: int, line: str) -> None:
+        """Line ``r``, of cells: its vertical walls, and the start arrow of a cell that holds one."""
+        cell, width = self.cell, self.width
+        y0 = round(self.origin[1] + (self.n_rows - 1 - r // 2) * cell, 9)
+        for col in self.corner_cols:
+            ch = line[col] if col < len(line) else " "
+            if ch == "|":
+                x = self._x(col)
+                self.walls.append(Wall(start=(x, y0), end=(x, round(y0 + cell, 9)), thickness=self.thickness))
+            elif ch not in " ":
+                raise self._error(f"unexpected '{ch}' on a wall column", r, col, "use '|' for a wall or a space")
+        for i, col in enumerate(self.corner_cols[:-1]):
+            inside = line[col + 1 : col + width]
+            stray = next((k for k, ch in enumerate(inside) if ch != " " and ch not in _HEADINGS), None)
+            if stray is not None:
+                raise self._error(
+                    f"unexpected '{inside[stray]}' inside a cell",
+                    r,
+                    col + 1 + stray,
+                    "a cell holds spaces, or one of > < ^ v for the start",
+                )
+            marks = [ch for ch in inside if ch in _HEADINGS]
+            if marks:
+                cx, cy = round(self.origin[0] + (i + 0.5) * cell, 9), round(y0 + cell / 2, 9)
+                self.spawns["start"] = Spawn(x=cx, y=cy, yaw=_HEADINGS[marks[0]])
 
 
 def _merge(walls: list[Wall]) -> list[Wall]:

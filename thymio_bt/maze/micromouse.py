@@ -62,7 +62,12 @@ class CellWalls:
 
 
 def parse_micromouse(text: str, file: str = "") -> CellWalls:
-    """The cells and walls of a maze in the text format; every problem is located (file:line:col)."""
+    """The cells and walls of a maze in the text format; every problem is located (file:line:col).
+
+    >>> cells = parse_micromouse("o---o---o\\n| G     |\\no   o   o\\n| S |   |\\no---o---o\\n")
+    >>> cells.cols, cells.rows, cells.start, sorted(cells.goal), cells.open_sides(0, 0)
+    (2, 2, (0, 0), [(0, 1)], ['N'])
+    """
     lines = [line.rstrip() for line in text.splitlines()]
     while lines and not lines[-1].strip():
         lines.pop()
@@ -84,96 +89,111 @@ def parse_micromouse(text: str, file: str = "") -> CellWalls:
                 "and the last line is posts",
             )
         )
-    cols, rows = (width - 1) // 4, (len(lines) - 1) // 2
-    problems = []
-    horizontal, vertical, goal = set(), set(), set()
-    start = None
+    text_maze = _TextMaze(file, first, width, (width - 1) // 4, (len(lines) - 1) // 2)
     for n, line in enumerate(lines):
-        where = first + n + 1
-        if len(line) > width:
-            problems.append(
-                Problem(
-                    f"this line has {len(line)} characters, the first has {width}",
-                    file,
-                    where,
-                    width + 1,
-                    hint="every line of the maze is as long as the first",
-                )
+        text_maze.read_line(n, line)
+    return text_maze.cells()
+
+
+class _TextMaze:
+    """What the lines of a maze in the text format say, read one at a time, and their problems."""
+
+    def __init__(self, file: str, first: int, width: int, cols: int, rows: int) -> None:
+        #: the file, the index of its first line of the maze, and that line's width
+        self.file, self.first, self.width = file, first, width
+        self.cols, self.rows = cols, rows
+        self.problems: list[Problem] = []
+        self.horizontal: set[tuple[int, int]] = set()
+        self.vertical: set[tuple[int, int]] = set()
+        self.goal: set[tuple[int, int]] = set()
+        self.start: tuple[int, int] | None = None
+
+    def _problem(self, message: str, line: int, col: int, hint: str = "") -> None:
+        """Record a problem at ``line`` (1-based, in the file) and ``col`` (1-based)."""
+        self.problems.append(Problem(message, self.file, line, col, hint=hint))
+
+    def read_line(self, n: int, line: str) -> None:
+        """The maze's line ``n``: posts and horizontal walls (even lines), or cells and vertical walls."""
+        where = self.first + n + 1
+        if len(line) > self.width:
+            self._problem(
+                f"this line has {len(line)} characters, the first has {self.width}",
+                where,
+                self.width + 1,
+                "every line of the maze is as long as the first",
             )
-            continue
-        line = line.ljust(width)  # trailing blanks may have been trimmed
-        j = rows - 1 - n // 2  # the cell row below a post row, or this cell row
+            return
+        line = line.ljust(self.width)  # trailing blanks may have been trimmed
+        j = self.rows - 1 - n // 2  # the cell row below a post row, or this cell row
         for col, char in enumerate(line):
-            if n % 2 == 0:  # posts and horizontal walls
-                if col % 4 == 0:
-                    if char != "o":
-                        problems.append(Problem(f"a post 'o' is missing here, found {char!r}", file, where, col + 1))
-                elif col % 4 == 1:
-                    segment = line[col : col + 3]
-                    if segment == "---":
-                        horizontal.add((col // 4, j + 1))
-                    elif segment.strip():
-                        problems.append(
-                            Problem(f"a horizontal wall is '---' or blanks, found {segment!r}", file, where, col + 1)
-                        )
-            elif col % 4 == 0:  # vertical walls
-                if char == "|":
-                    vertical.add((col // 4, j))
-                elif char != " ":
-                    problems.append(Problem(f"a vertical wall is '|' or a blank, found {char!r}", file, where, col + 1))
-            elif col % 4 == 2 and char in "SGsg":
-                if char in "Ss":
-                    if start is not None:
-                        problems.append(Problem("a second start cell 'S'", file, where, col + 1))
-                    start = (col // 4, j)
-                else:
-                    goal.add((col // 4, j))
+            if n % 2 == 0:
+                self._post_row(line, where, j, col, char)
+            else:
+                self._cell_row(where, j, col, char)
+
+    def _post_row(self, line: str, where: int, j: int, col: int, char: str) -> None:
+        """One character of a row of posts and horizontal walls (the walls on the north of row ``j``)."""
+        if col % 4 == 0:
+            if char != "o":
+                self._problem(f"a post 'o' is missing here, found {char!r}", where, col + 1)
+        elif col % 4 == 1:
+            segment = line[col : col + 3]
+            if segment == "---":
+                self.horizontal.add((col // 4, j + 1))
+            elif segment.strip():
+                self._problem(f"a horizontal wall is '---' or blanks, found {segment!r}", where, col + 1)
+
+    def _cell_row(self, where: int, j: int, col: int, char: str) -> None:
+        """One character of a row of cells ``j``: a vertical wall, a cell's mark, or a blank."""
+        if col % 4 == 0:
+            if char == "|":
+                self.vertical.add((col // 4, j))
             elif char != " ":
-                problems.append(
-                    Problem(
-                        f"unexpected {char!r} in a cell",
-                        file,
-                        where,
-                        col + 1,
-                        hint="a cell holds S (start), G (goal) or nothing",
-                    )
-                )
-    last = first + len(lines)
-    for i in range(cols):
-        for j, line_no in ((0, last), (rows, first + 1)):
-            if (i, j) not in horizontal:
-                problems.append(
-                    Problem(
-                        "the outline is open: a wall is missing on the maze's border",
-                        file,
-                        line_no,
-                        4 * i + 2,
-                        hint="close the border with '---'",
-                    )
-                )
-    for j in range(rows):
-        for i, col in ((0, 1), (cols, 4 * cols + 1)):
-            if (i, j) not in vertical:
-                problems.append(
-                    Problem(
-                        "the outline is open: a wall is missing on the maze's border",
-                        file,
-                        first + 2 * (rows - 1 - j) + 2,
-                        col,
-                        hint="close the border with '|'",
-                    )
-                )
-    if start is None and not problems:
-        problems.append(
-            Problem("no start cell 'S'", file, first + 1, 1, hint="mark the start cell with S at its centre")
+                self._problem(f"a vertical wall is '|' or a blank, found {char!r}", where, col + 1)
+        elif col % 4 == 2 and char in "SGsg":
+            if char in "Ss":
+                if self.start is not None:
+                    self._problem("a second start cell 'S'", where, col + 1)
+                self.start = (col // 4, j)
+            else:
+                self.goal.add((col // 4, j))
+        elif char != " ":
+            self._problem(
+                f"unexpected {char!r} in a cell", where, col + 1, "a cell holds S (start), G (goal) or nothing"
+            )
+
+    def _check_outline(self) -> None:
+        """A problem for every missing wall on the maze's border."""
+        open_outline = "the outline is open: a wall is missing on the maze's border"
+        last, first = self.first + 2 * self.rows + 1, self.first
+        for i in range(self.cols):
+            for j, line_no in ((0, last), (self.rows, first + 1)):
+                if (i, j) not in self.horizontal:
+                    self._problem(open_outline, line_no, 4 * i + 2, "close the border with '---'")
+        for j in range(self.rows):
+            for i, col in ((0, 1), (self.cols, 4 * self.cols + 1)):
+                if (i, j) not in self.vertical:
+                    self._problem(open_outline, first + 2 * (self.rows - 1 - j) + 2, col, "close the border with '|'")
+
+    def cells(self) -> CellWalls:
+        """The maze read, once every line is: a :class:`UserError` with all its problems if it has any."""
+        self._check_outline()
+        if self.start is None and not self.problems:
+            self._problem("no start cell 'S'", self.first + 1, 1, "mark the start cell with S at its centre")
+        if self.problems:
+            raise UserError(self.problems)
+        assert self.start is not None
+        maze = CellWalls(
+            self.cols,
+            self.rows,
+            frozenset(self.horizontal),
+            frozenset(self.vertical),
+            self.start,
+            frozenset(self.goal),
         )
-    if problems:
-        raise UserError(problems)
-    assert start is not None
-    maze = CellWalls(cols, rows, frozenset(horizontal), frozenset(vertical), start, frozenset(goal))
-    if not maze.open_sides(*start):
-        raise UserError(Problem("the start cell is closed on all four sides", file, first + 1, 1))
-    return maze
+        if not maze.open_sides(*self.start):
+            raise UserError(Problem("the start cell is closed on all four sides", self.file, self.first + 1, 1))
+        return maze
 
 
 def maze_from_cells(

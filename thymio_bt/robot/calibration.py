@@ -7,8 +7,8 @@ mission written for the metric simulator runs unchanged against raw readings.
 
 The table
     Webots' Thymio II model, ``lookupTable`` of ``projects/robots/mobsya/thymio/protos/
-    Thymio2DistanceSensor.proto`` (cyberbotics/webots @ 08f0a117; summarised in
-    ../shared/research/sim_anchors.md, section 2.2). It has 29 rows at 1/3 cm steps; its 1 cm rows
+    Thymio2DistanceSensor.proto`` (cyberbotics/webots @ 08f0a117; summarised in docs/sources.md,
+    "Enki and the real robot"). It has 29 rows at 1/3 cm steps; its 1 cm rows
     (4279, 4139, 3515, 2965, 2570, 2248, 1941, 1597, 1195 at 1..9 cm) are the table usually quoted.
     The full table is used rather than those 9 rows because it is the source itself, and the
     3.3 mm rows bend the curve where it changes fastest (2-3 cm: 3857 at 2.5 cm against 3827 from the
@@ -24,11 +24,11 @@ Choices
       model an obstacle between 9.33 and 9.75 cm is not seen (reads 0, converts to inf). The table is
       not stretched to 0.0975 m, since that would change the calibration.
     - A real robot's first non-zero reading is already about 800-1200 (a firmware offset, see
-      sim_anchors 2.2), and its range depends on the surface: the table stands for a light wall.
+      docs/sources.md), and its range depends on the surface: the table stands for a light wall.
 
 Thymio Suite's simulator
     Its robots (Enki, in Aseba Playground) follow another curve, ``F(x) = m(c - x0²)/(x² - 2·x0·x + c)``
-    with m = 4505, x0 = 0.03 cm, c = 73 (``enki/robots/thymio2/Thymio2.cpp``, sim_anchors 1.2): 600-900
+    with m = 4505, x0 = 0.03 cm, c = 73 (``enki/robots/thymio2/Thymio2.cpp``, docs/sources.md): 600-900
     higher than Webots at 4-9 cm, and 1226 at 14 cm before dropping to 0. :data:`ENKI_THYMIO2` is that
     curve at 1 cm steps, for trying the real-robot backend on a simulated Thymio.
 
@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_right
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from itertools import pairwise
 from typing import TYPE_CHECKING
@@ -80,6 +80,15 @@ class CalibrationTable:
         if r[-1] != 0 or d[0] < 0:
             raise ValueError("the last reading must be 0 (nothing seen) and distances non-negative")
         object.__setattr__(self, "_ascending", r[::-1])
+
+    @classmethod
+    def of_rows(cls, rows: Sequence[tuple[float, float]], source: str = "", floor: float = 0.0) -> CalibrationTable:
+        """A table from (distance, reading) rows, nearest first.
+
+        >>> CalibrationTable.of_rows([(0.01, 4000), (0.05, 0)]).to_raw(0.02)
+        3000.0
+        """
+        return cls(tuple(d for d, _ in rows), tuple(float(r) for _, r in rows), source, floor)
 
     @property
     def min_distance(self) -> float:
@@ -151,9 +160,8 @@ _WEBOTS_ROWS = (
 )
 
 #: The default table: Webots' Thymio II proximity lookup table without its 0 m row (see above).
-WEBOTS_THYMIO2 = CalibrationTable(
-    distances=tuple(d for d, _ in _WEBOTS_ROWS),
-    readings=tuple(float(r) for _, r in _WEBOTS_ROWS),
+WEBOTS_THYMIO2 = CalibrationTable.of_rows(
+    _WEBOTS_ROWS,
     source="cyberbotics/webots projects/robots/mobsya/thymio/protos/Thymio2DistanceSensor.proto @ 08f0a117",
 )
 
@@ -178,9 +186,8 @@ _ENKI_ROWS = (
 )
 
 #: Enki's (Thymio Suite's simulator) response at 1 cm steps; the Playground reads 0 from 14 cm on.
-ENKI_THYMIO2 = CalibrationTable(
-    distances=tuple(d for d, _ in _ENKI_ROWS),
-    readings=tuple(float(r) for _, r in _ENKI_ROWS),
+ENKI_THYMIO2 = CalibrationTable.of_rows(
+    _ENKI_ROWS,
     source="enki-community/enki enki/robots/thymio2/Thymio2.cpp @ bb486bfb (IRSensor m=4505, x0=0.03, c=73)",
     floor=20.0,  # empty sensors read 0-8 (noise sd 2.87): 20 is 7 sd
 )

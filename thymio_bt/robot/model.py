@@ -163,7 +163,7 @@ def _course_hull() -> tuple[tuple[float, float], ...]:
     return ((rear, -side + chamfer), (rear + chamfer, -side), *arc, (rear + chamfer, side), (rear, side - chamfer))
 
 
-#: The course's Thymio, number for number (../shared/course/robot.md: the URDF, Gazebo plugins).
+#: The course's Thymio, number for number (the URDF, Gazebo plugins: docs/sources.md, "Robot geometry and sensors").
 COURSE = RobotModel(
     name="course",
     description="the course's URDF in Gazebo classic: one exact ray per sensor to 9.75 cm, 20 cm/s",

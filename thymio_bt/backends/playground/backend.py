@@ -121,10 +121,5 @@ def create_playground(mission: Any, seed: int, options: Any) -> PlaygroundRobot:
     scale = options.speed_scale
     if scale is None:
         scale = 1.0 if is_profile_path(mission.robot) else SPEED_SCALE
-    config = RealConfig(
-        metres_per_unit=model.metres_per_unit * scale,
-        max_units=model.max_units,
-        wheel_separation=model.wheel_separation,
-        table=model.calibration,
-    )
+    config = RealConfig.of_model(model, scale)
     return PlaygroundRobot(node, config, playground, enki, world, mission.maze, model, options.latency)

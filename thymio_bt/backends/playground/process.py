@@ -1,9 +1,9 @@
 """Start a headless Aseba Playground on a world, and stop everything it started.
 
-Traps measured in ``research/aseba_playground.md`` and avoided here: the Playground needs a
-writable ``HOME`` (it writes a simulated SD card) and, for its D-Bus interface, a session bus of its
-own; a TCP connect to probe its port can crash it, so readiness is read from ``/proc/net/tcp``
-(the port in LISTEN); it binds every interface, so the port is a free one.
+Traps measured on the Playground 1.6.99 and avoided here: the Playground needs a writable ``HOME``
+(it writes a simulated SD card) and, for its D-Bus interface, a session bus of its own; a TCP
+connect to probe its port can crash it, so readiness is read from ``/proc/net/tcp`` (the port in
+LISTEN); it binds every interface, so the port is a free one.
 
 Example::
 

@@ -2,7 +2,7 @@
 
 :class:`AsebaNode` implements the backend's :class:`~thymio_bt.backends.real.thymio.Node` with
 thymiodirect's :class:`Connection` (optional extra ``thymio-bt[aseba]``), avoiding the traps
-measured in ``research/aseba_playground.md``:
+measured with thymiodirect 0.1.2 on the Aseba Playground 1.6.99:
 
 - connecting has a deadline (thymiodirect's own ``Thymio.connect`` waits for ever on a closed port);
 - the connection's threads are daemons and are shut down on :meth:`AsebaNode.close` (thymiodirect's
@@ -280,13 +280,7 @@ def create_aseba(mission: Any, seed: int, options: Any) -> Any:
     from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
     from thymio_bt.robot.model import robot_model
 
-    model = robot_model(mission.robot)
-    config = RealConfig(
-        metres_per_unit=model.metres_per_unit,
-        max_units=model.max_units,
-        wheel_separation=model.wheel_separation,
-        table=model.calibration,
-    )
+    config = RealConfig.of_model(robot_model(mission.robot))
     robot = ThymioRobot(AsebaNode.connect(options.device, options.timeout), config=config)
     robot.latency = options.latency
     return robot

@@ -43,7 +43,7 @@ from typing import Any
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
-from thymio_bt.robot.model import COURSE, integrate_arc
+from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
 #: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.
@@ -75,6 +75,22 @@ class RealConfig:
     wheel_separation: float = COURSE.wheel_separation
     table: CalibrationTable = WEBOTS_THYMIO2
 
+    @classmethod
+    def of_model(cls, model: RobotModel, speed_scale: float = 1.0) -> RealConfig:
+        """The constants of a robot model; ``speed_scale``: the robot's speed per unit over the model's.
+
+        >>> from thymio_bt.robot.model import ENKI
+        >>> config = RealConfig.of_model(ENKI)
+        >>> config.max_wheel_speed, config.wheel_separation, config.table is ENKI_THYMIO2
+        (0.166, 0.094, True)
+        """
+        return cls(
+            metres_per_unit=model.metres_per_unit * speed_scale,
+            max_units=model.max_units,
+            wheel_separation=model.wheel_separation,
+            table=model.calibration,
+        )
+
     @property
     def max_wheel_speed(self) -> float:
         """The wheel-speed limit in m/s (``max_units`` motor units)."""
@@ -82,7 +98,8 @@ class RealConfig:
 
 
 #: A simulated Thymio in Thymio Suite's Playground (Enki): 500 units are 16.6 cm/s, the wheels 9.4 cm
-#: apart (``DifferentialWheeled(9.4, 16.6, ...)``), and Enki's sensor curve (sim_anchors 1.1-1.2).
+#: apart (``DifferentialWheeled(9.4, 16.6, ...)``), and Enki's sensor curve (docs/sources.md, "Enki and
+#: the real robot").
 PLAYGROUND = RealConfig(metres_per_unit=0.166 / 500, wheel_separation=0.094, table=ENKI_THYMIO2)
 
 
@@ -432,11 +449,5 @@ def create_tdm(mission: Any, seed: int, options: Any) -> ThymioRobot:
     """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's robot model."""
     from thymio_bt.robot.model import robot_model
 
-    model = robot_model(mission.robot)
-    config = RealConfig(
-        metres_per_unit=model.metres_per_unit,
-        max_units=model.max_units,
-        wheel_separation=model.wheel_separation,
-        table=model.calibration,
-    )
+    config = RealConfig.of_model(robot_model(mission.robot))
     return ThymioRobot.connect(options.host, options.port, options.password, config=config)

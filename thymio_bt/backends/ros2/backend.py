@@ -23,7 +23,6 @@ Example::
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
 import threading
@@ -32,7 +31,9 @@ from collections.abc import Callable, Generator
 from typing import Any
 
 from thymio_bt.backends.ros2 import import_rclpy
-from thymio_bt.backends.ros2.messages import proximity_range, quaternion_of, stamp_ns, yaw_of
+from thymio_bt.backends.ros2.messages import odometry_of, reading_of, set_pose, stamp_ns
+from thymio_bt.backends.ros2.node import SpunNode
+from thymio_bt.backends.ros2.services import call_service, fail
 from thymio_bt.backends.ros2.topics import TopicMap
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import (
@@ -72,21 +73,18 @@ class Ros2Robot(Backend):
         node_name: str = "thymio_bt",
     ) -> None:
         super().__init__()
-        rclpy = import_rclpy()
+        import_rclpy()  # first: without ROS, a UserError that says how to get it
         from geometry_msgs.msg import Twist as TwistMsg
         from nav_msgs.msg import Odometry
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile, qos_profile_sensor_data
-        from rclpy.signals import SignalHandlerOptions
         from rosgraph_msgs.msg import Clock
         from std_msgs.msg import String
 
         self.topics, self.maze, self.model = topics, maze, model
         self.timeout, self.latency, self.robot_name = timeout, latency, ROBOT_ENTITY
         self._TwistMsg = TwistMsg
-        self._context = rclpy.Context()
-        rclpy.init(args=[], context=self._context, signal_handler_options=SignalHandlerOptions.NO)
-        self._node = rclpy.create_node(node_name, context=self._context)
+        self._ros = SpunNode(node_name)
+        self._node = self._ros.node
         self._cond = threading.Condition()
         self._clock_ns: int | None = None  # latest /clock
         self._clock_wall = 0.0  # wall time it came
@@ -119,20 +117,13 @@ class Ros2Robot(Backend):
 
         self._spawn_client = node.create_client(SpawnEntity, topics.spawn) if topics.spawn else None
         self._delete_client = node.create_client(DeleteEntity, topics.delete) if topics.delete else None
-        self._executor = SingleThreadedExecutor(context=self._context)
-        self._executor.add_node(node)
-        self._spinner = threading.Thread(target=self._spin, name="thymio-bt-ros2", daemon=True)
-        self._spinner.start()
+        self._ros.start("thymio-bt-ros2")
         self._wall_start = time.monotonic()
         self._sim_time = self._detect_clock(clock)
         self._start_ns = self._deadline_ns = self._now_ns()
         self._started = False
 
     # ------------------------------------------------------------ callbacks (executor thread)
-    def _spin(self) -> None:
-        with contextlib.suppress(Exception):  # the context was shut down under it: the backend is closing
-            self._executor.spin()
-
     def _on_clock(self, msg: Any) -> None:
         with self._cond:
             self._clock_ns = stamp_ns(msg.clock.sec, msg.clock.nanosec)
@@ -140,16 +131,8 @@ class Ros2Robot(Backend):
             self._cond.notify_all()
 
     def _on_odom(self, msg: Any) -> None:
-        p, q, t = msg.pose.pose.position, msg.pose.pose.orientation, msg.twist.twist
         with self._cond:
-            self._odom = (
-                stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec),
-                p.x,
-                p.y,
-                yaw_of(q.x, q.y, q.z, q.w),
-                t.linear.x,
-                t.angular.z,
-            )
+            self._odom = odometry_of(msg)
             self._odom_wall = time.monotonic()
             self._odom_count += 1
             self._cond.notify_all()
@@ -158,16 +141,8 @@ class Ros2Robot(Backend):
         limit = self.model.range_max
 
         def store(msg: Any) -> None:
-            value = (
-                msg.ranges[0]
-                if self.topics.sensor_type == "LaserScan" and len(msg.ranges)
-                else getattr(msg, "range", math.inf)
-            )
             with self._cond:
-                self._ranges[name] = (
-                    stamp_ns(msg.header.stamp.sec, msg.header.stamp.nanosec),
-                    proximity_range(float(value), limit),
-                )
+                self._ranges[name] = reading_of(msg, self.topics.sensor_type, limit)
                 self._sensor_wall[name] = time.monotonic()
                 self._cond.notify_all()
 
@@ -384,53 +359,28 @@ class Ros2Robot(Backend):
                 self._cond.wait(POLL)
             self._pump()
 
-    def _fail(self, request: Request, reason: str) -> None:
-        request.state, request.reason = RequestState.FAILED, reason
-
-    def _call(self, client: Any, name: str, message: Any, request: Request) -> Generator[None, None, Any]:
-        """Call a service over later ticks; None (and the request FAILED) when it is not there."""
-        if client is None:
-            self._fail(request, f'this robot has no {request.kind} service (topic map: {request.kind}: "")')
-            return None
-        deadline = time.monotonic() + self.timeout
-        while not client.service_is_ready():
-            if time.monotonic() > deadline:
-                self._fail(request, f"service {name} is not available (waited {self.timeout:g} s)")
-                return None
-            yield
-        future = client.call_async(message)
-        while not future.done():
-            if time.monotonic() > deadline + self.timeout:
-                self._fail(request, f"service {name} did not answer within {self.timeout:g} s")
-                return None
-            yield
-        response = future.result()
-        if not response.success:
-            self._fail(request, f"{name} refused: {response.status_message or 'no reason given'}")
-            return None
-        return response
-
-    def _delete(self, request: Request) -> _Step:
+    def _call_delete(self, request: Request) -> Generator[None, None, Any]:
+        """Gazebo's DeleteEntity of ``request``'s entity, over later ticks (see :func:`call_service`)."""
         from gazebo_msgs.srv import DeleteEntity
 
+        message = DeleteEntity.Request(name=request.entity)
+        return (yield from call_service(self._delete_client, self.topics.delete, message, request, self.timeout))
+
+    def _delete(self, request: Request) -> _Step:
         if request.entity != self.robot_name or not self._present:
-            self._fail(
+            fail(
                 request,
                 f"no entity named '{request.entity}' (existing: {self.robot_name if self._present else 'none'})",
             )
             return
         self._stop_motors()
-        if (
-            yield from self._call(
-                self._delete_client, self.topics.delete, DeleteEntity.Request(name=request.entity), request
-            )
-        ) is None:
+        if (yield from self._call_delete(request)) is None:
             return
         self._present, self._cmd = False, Twist()
         request.state = RequestState.SUCCEEDED
 
     def _spawn(self, request: Request) -> _Step:
-        from gazebo_msgs.srv import DeleteEntity, SpawnEntity
+        from gazebo_msgs.srv import SpawnEntity
 
         assert request.pose is not None
         seen = (yield from self._robot_in_world()) if self._first_spawn else None
@@ -443,22 +393,13 @@ class Ros2Robot(Backend):
             self._present = True  # the robot already stands there: adopt it
             request.state = RequestState.SUCCEEDED
             return
-        if (
-            seen is not None  # elsewhere: take it away first, as the course does
-            and (
-                yield from self._call(
-                    self._delete_client, self.topics.delete, DeleteEntity.Request(name=request.entity), request
-                )
-            )
-            is None
-        ):
+        # elsewhere: take it away first, as the course does
+        if seen is not None and (yield from self._call_delete(request)) is None:
             return
         message = SpawnEntity.Request(name=request.entity, xml=self._xml or "", reference_frame="world")
-        pose = message.initial_pose
-        pose.position.x, pose.position.y = request.pose.x, request.pose.y
-        pose.orientation.x, pose.orientation.y, pose.orientation.z, pose.orientation.w = quaternion_of(request.pose.yaw)
+        set_pose(message.initial_pose, request.pose)
         count = self._odom_count
-        if (yield from self._call(self._spawn_client, self.topics.spawn, message, request)) is None:
+        if (yield from call_service(self._spawn_client, self.topics.spawn, message, request, self.timeout)) is None:
             return
         with self._cond:
             self._ranges.clear()  # readings from before: the new robot's come next
@@ -474,7 +415,7 @@ class Ros2Robot(Backend):
                     if self._odom_count == count
                     else [t for n, t in self.topics.sensors.items() if n not in self._ranges]
                 )
-                self._fail(request, f"spawned, but no message on {', '.join(silent)} within {self.timeout:g} s")
+                fail(request, f"spawned, but no message on {', '.join(silent)} within {self.timeout:g} s")
                 return
             yield
         self._present, self._cmd = True, Twist()
@@ -517,10 +458,7 @@ class Ros2Robot(Backend):
 
                 self._cmd_pub.wait_for_all_acked(Duration(seconds=1))
         finally:
-            self._executor.shutdown(timeout_sec=1.0)
-            self._node.destroy_node()
-            self._context.try_shutdown()
-            self._spinner.join(timeout=2.0)
+            self._ros.close()
 
 
 def create_ros2(mission: Any, seed: int, options: Any) -> Ros2Robot:

@@ -1,7 +1,7 @@
 """``thymio-bt serve ros2``: our simulation standing in for the course's Gazebo classic world.
 
-It offers what the course's launch file gives a student's node (``course/robot.md``), so a node
-written for the course runs against it unchanged:
+It offers what the course's launch file gives a student's node (docs/sources.md, "Robot geometry and
+sensors"), so a node written for the course runs against it unchanged:
 
 - ``/cmd_vel`` (geometry_msgs/Twist) in, held until the next one (no timeout);
 - ``/odom`` (nav_msgs/Odometry, frame ``odom`` -> ``base_footprint``, the true pose as Gazebo's
@@ -22,7 +22,6 @@ Example::
 
 from __future__ import annotations
 
-import contextlib
 import math
 import threading
 import time
@@ -31,6 +30,7 @@ from typing import Any
 
 from thymio_bt.backends.ros2 import import_rclpy
 from thymio_bt.backends.ros2.messages import quaternion_of, stamp_parts, yaw_of
+from thymio_bt.backends.ros2.node import SpunNode
 from thymio_bt.backends.ros2.topics import COURSE_TOPICS, PREFIXES, TopicMap
 from thymio_bt.backends.sim.world import SimConfig, Simulation
 from thymio_bt.maze import Maze
@@ -86,13 +86,11 @@ class GazeboStandIn:
         physics_hz: float = 100.0,
         topics: TopicMap = COURSE_TOPICS,
     ) -> None:
-        rclpy = import_rclpy()
+        import_rclpy()  # first: without ROS, a UserError that says how to get it
         from gazebo_msgs.srv import DeleteEntity, SpawnEntity
         from geometry_msgs.msg import Twist
         from nav_msgs.msg import Odometry
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile
-        from rclpy.signals import SignalHandlerOptions
         from rosgraph_msgs.msg import Clock
         from sensor_msgs.msg import LaserScan
         from std_msgs.msg import String
@@ -106,9 +104,8 @@ class GazeboStandIn:
         self._lock = threading.Lock()
         self._wheel_angles = [0.0, 0.0]
         self._msgs = {"Clock": Clock, "Odometry": Odometry, "LaserScan": LaserScan, "TFMessage": TFMessage}
-        self._context = rclpy.Context()
-        rclpy.init(args=[], context=self._context, signal_handler_options=SignalHandlerOptions.NO)
-        node = self._node = rclpy.create_node("gazebo", context=self._context)
+        self._ros = SpunNode("gazebo")
+        node = self._ros.node
         latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
         self._clock_pub = node.create_publisher(Clock, topics.clock, 10)
         self._odom_pub = node.create_publisher(Odometry, topics.odom, 10)
@@ -122,14 +119,7 @@ class GazeboStandIn:
         node.create_subscription(Twist, topics.cmd_vel, self._on_cmd_vel, 1)
         node.create_service(SpawnEntity, topics.spawn, self._on_spawn)
         node.create_service(DeleteEntity, topics.delete, self._on_delete)
-        self._executor = SingleThreadedExecutor(context=self._context)
-        self._executor.add_node(node)
-        self._spinner = threading.Thread(target=self._spin, name="thymio-bt-serve", daemon=True)
-        self._spinner.start()
-
-    def _spin(self) -> None:
-        with contextlib.suppress(Exception):  # shut down under it: the stand-in is closing
-            self._executor.spin()
+        self._ros.start("thymio-bt-serve")
 
     # ------------------------------------------------------------ requests (executor thread)
     def _on_cmd_vel(self, msg: Any) -> None:
@@ -270,7 +260,4 @@ class GazeboStandIn:
 
     def close(self) -> None:
         """Stop spinning, leave ROS and end the spinner thread."""
-        self._executor.shutdown(timeout_sec=1.0)
-        self._node.destroy_node()
-        self._context.try_shutdown()
-        self._spinner.join(timeout=2.0)
+        self._ros.close()

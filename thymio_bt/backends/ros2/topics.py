@@ -1,7 +1,7 @@
 """Where a ROS 2 Thymio's data is: topic and service names, message kinds and rates (a topic map).
 
-The default is the course's Gazebo classic layout (``course/robot.md``): ``/cmd_vel`` Twist in,
-``/odom`` Odometry at 50 Hz (world pose), one single-ray LaserScan per proximity sensor on
+The default is the course's Gazebo classic layout (docs/sources.md, "Robot geometry and sensors"):
+``/cmd_vel`` Twist in, ``/odom`` Odometry at 50 Hz (world pose), one single-ray LaserScan per proximity sensor on
 ``/thymio_<prefix>_sensor`` at 10 Hz, Gazebo's ``/spawn_entity`` and ``/delete_entity`` services and
 ``/clock``. Another layout is a YAML file of the keys to change, e.g. for a driver publishing Range::
 

@@ -128,8 +128,7 @@ class ClearanceTracker:
     ) -> float:
         """The exact gap between the hull (its body at (bx, by), heading of this cosine and sine) and
         the nearest wall when that is below ``record``; otherwise something not below it."""
-        if self.farthest < record:
-            record = self.farthest
+        record = self.farthest if self.farthest < record else record
         # nothing can beat the record: one C query. It asks for 1 pm less than the record, still
         # 1e5 times Chipmunk's rounding at these sizes (1e-17 m) and a millionth of the report's
         # (1 µm): a robot cruising beside a wall at exactly its record gap (a corridor's side wall),
@@ -191,8 +190,7 @@ class ClearanceTracker:
         exact = [wall for bound, wall in candidates if bound < best]  # others cannot beat the faces
         if exact:
             gap = self.exact(exact, robot, bx, by, cos, sin)
-            if gap < best:
-                best = gap
+            best = gap if gap < best else best
         return best
 
     def exact(
