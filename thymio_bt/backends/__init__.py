@@ -9,8 +9,13 @@ Plugins add kinds through the ``thymio_bt.backends`` entry-point group, whose en
 
 Example::
 
-    kind = backend_kind("sim")
-    backend = kind.create(mission, seed=0, options={"physics_hz": "200"})
+    >>> from thymio_bt.mission import load_mission
+    >>> kind = backend_kind("sim")
+    >>> kind.realtime, kind.parse_options({"physics_hz": "200"}).physics_hz
+    (False, 200.0)
+    >>> backend = kind.create(load_mission("maze_part1_2"), seed=0, options={"physics_hz": "200"})
+    >>> backend.model.name, backend.time()
+    ('course', 0.0)
 """
 
 from __future__ import annotations

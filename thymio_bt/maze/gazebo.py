@@ -11,9 +11,17 @@ sorted by name in natural order (Wall_2 before Wall_10).
 Spawns are not part of a world (the launch file places the robot): pass them as ``spawns=``
 (the CLI's ``maze import`` may add them later, as ``mazes/*.yaml`` do).
 
-Example::
+Example (a world of one 0.61 m box, as the course's walls are)::
 
-    maze = import_world("two_parts_maze.world", spawns={"part1": (0.1, 0.1, 0)})
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "box.world"
+    >>> box = "<collision name='c'><geometry><box><size>0.61 0.01 0.1</size></box></geometry></collision>"
+    >>> link = f"<link name='Wall_1'><pose>0.3 0 0 0 0 0</pose>{box}</link>"
+    >>> _ = path.write_text(f"<sdf version='1.6'><world name='w'><model name='walls'>{link}</model></world></sdf>")
+    >>> maze = import_world(path, spawns={"part1": (0.1, 0.1, 0)})
+    >>> wall = maze.walls[0]
+    >>> wall.name, wall.start, wall.end, wall.thickness, maze.spawn("part1")
+    ('Wall_1', (0.0, 0.0), (0.6, 0.0), 0.01, Pose(x=0.1, y=0.1, yaw=0.0))
 """
 
 from __future__ import annotations

@@ -7,7 +7,12 @@
 
 Example::
 
-    maze = perfect_maze(5, 4, seed=3)          # start spawn in the bottom-left cell
+    >>> maze = perfect_maze(5, 4, seed=3)          # start spawn in the bottom-left cell
+    >>> len(maze.walls), maze.spawn("start"), maze.description
+    (29, Pose(x=0.1, y=0.1, yaw=0.0), 'random perfect maze, exit above cell (0, 3)')
+    >>> path = [(0, 0), (1, 0), (1, 1), (2, 1)]
+    >>> turns_along(path), len(path_maze(path).walls)
+    ('LR', 10)
 """
 
 from __future__ import annotations

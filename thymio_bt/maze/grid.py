@@ -6,13 +6,15 @@ cell centre facing that way (the course's convention). The bottom-left corner is
 
 Example::
 
-    maze = maze_from_grid('''
-    +--+--+
-    |>    |
-    +--+  +
-       |  |
-       +--+
-    ''', cell=0.2)
+    >>> maze = maze_from_grid('''
+    ... +--+--+
+    ... |>    |
+    ... +--+  +
+    ...    |  |
+    ...    +--+
+    ... ''', cell=0.2)
+    >>> len(maze.walls), maze.spawn("start")         # collinear walls joined into one
+    (6, Pose(x=0.1, y=0.3, yaw=0.0))
 """
 
 from __future__ import annotations

@@ -18,8 +18,12 @@ The S cell becomes the spawn ``start`` facing its opening, the G cells the maze'
 
 Example::
 
-    maze = read_micromouse("mazes/micromouse_4x4.txt")        # classic sizes: 18 cm cells
-    maze.spawns["start"], maze.goal
+    >>> from thymio_bt.maze import resolve_maze
+    >>> maze = read_micromouse(resolve_maze("micromouse_4x4"))        # classic sizes: 18 cm cells
+    >>> maze.description, maze.spawn("start")
+    ('micromouse maze, 4 x 4 cells of 18 cm', Pose(x=0.09, y=0.09, yaw=1.5707963267948966))
+    >>> maze.goal
+    [Area(start=(0.0, 0.54), end=(0.18, 0.72))]
 """
 
 from __future__ import annotations

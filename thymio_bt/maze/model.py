@@ -3,14 +3,26 @@
 A wall is a box ``thickness`` wide that extends ``thickness/2`` past both ends, so the course's
 0.61 m Gazebo boxes are 0.6 m segments on a 0.2 m grid. Values accept units (``20cm``, ``pi/2``).
 
-Example (``mazes/corridor.yaml``)::
+A maze file (YAML)::
 
     name: corridor
     walls:
       - {from: [0, 0], to: [1, 0]}
-      - {from: [0, 0.2], to: [1, 0.2], thickness: 0.01}
+      - {from: [0, 20cm], to: [1, 0.2], thickness: 1cm}
     spawns:
-      start: {x: 0.1, y: 0.1, yaw: 0}
+      start: [0.1, 0.1, 90deg]
+
+Example (the same maze, as the file's mapping)::
+
+    >>> maze = Maze.model_validate({
+    ...     "name": "corridor",
+    ...     "walls": [{"from": [0, 0], "to": [1, 0]}, {"from": [0, "20cm"], "to": [1, 0.2], "thickness": "1cm"}],
+    ...     "spawns": {"start": [0.1, 0.1, "90deg"]},
+    ... })
+    >>> maze.walls[1].start, maze.walls[1].thickness, maze.spawn("start")
+    ((0.0, 0.2), 0.01, Pose(x=0.1, y=0.1, yaw=1.5707963267948966))
+    >>> maze.bounds()                  # the walls' boxes extend half their thickness
+    (-0.005, -0.005, 1.005, 0.20500000000000002)
 """
 
 from __future__ import annotations

@@ -15,10 +15,17 @@ Each measure skips its first half second (start-up, the robot's own delays). On 
 ground truth the pose is odometry, which counts wheel turns in the same units: the speed and wheel
 base then only check themselves, while the table is as good as the robot was placed.
 
-Example::
+From the shell::
 
     thymio-bt calibrate --backend playground --robot enki -o enki_measured.yaml
     thymio-bt run missions/maze_part1_2.yaml --backend playground --robot enki_measured.yaml
+
+Example (the corridor, and a table from approach samples: the nearest bin reading 0 ends it)::
+
+    >>> len(arena().walls), arena().spawn("start")
+    (4, Pose(x=0.15, y=0.1, yaw=0.0))
+    >>> table_rows([(0.010, 4200), (0.011, 4300), (0.020, 4100), (0.030, 3500), (0.030, 3600), (0.035, 0)])
+    [(0.01, 4250.0), (0.02, 4100.0), (0.03, 3550.0), (0.035, 0.0)]
 """
 
 from __future__ import annotations

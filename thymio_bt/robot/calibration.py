@@ -219,9 +219,13 @@ class RawProximityModel:
 
     Example::
 
-        model = RawProximityModel(np.random.default_rng(0))
-        raw = model.measure_scan({"front_center": 0.05, "rear_left": math.inf})   # {..: 2571, ..: 0}
-        scan = raw_scan_to_metres(raw)                                            # back in metres
+        >>> import numpy as np
+        >>> model = RawProximityModel(np.random.default_rng(0))
+        >>> raw = model.measure_scan({"front_center": 0.05, "rear_left": math.inf})
+        >>> raw                                  # 2570 at 5 cm, plus noise; nothing in range reads 0
+        {'front_center': 2573, 'rear_left': 0}
+        >>> raw_scan_to_metres(raw)              # back in metres
+        {'front_center': 0.049920476190476196, 'rear_left': inf}
     """
 
     rng: np.random.Generator

@@ -7,7 +7,15 @@ this directly, so checking a mission never loads pymunk.
 
 Example::
 
-    placement_problem(maze, COURSE, Pose(0.1, 0.1, 0.0))      # None: the robot fits there
+    >>> from thymio_bt.maze import load_maze, resolve_maze
+    >>> from thymio_bt.robot.model import COURSE
+    >>> maze = load_maze(resolve_maze("two_parts_maze"))
+    >>> placement_problem(maze, COURSE, Pose(0.1, 0.1, 0.0)) is None      # the robot fits there
+    True
+    >>> placement_problem(maze, COURSE, Pose(0.0, 0.1, 0.0))
+    'pose (0.000, 0.100) puts the robot outside the maze (x in [-0.005, 2.005], y in [-0.005, 0.805])'
+    >>> round(clearance(maze, COURSE, Pose(0.1, 0.1, 0.0)), 4), round(ray_distance(maze, 0.1, 0.1, 0.0), 4)
+    (0.0391, 0.495)
 """
 
 from __future__ import annotations
@@ -179,10 +187,19 @@ class ContactTracker:
     geometry: for backends without a physics engine of ours (the Playground's ground truth, a ROS 2
     robot's odometry). Call :meth:`update` after each tick's move.
 
-    Example::
+    Example (a stand-in for a backend: its clearance, contacts and clock)::
 
-        tracker = ContactTracker(maze, model)
-        tracker.update(backend, backend.true_pose())     # backend.min_clearance, .collisions kept up
+        >>> import types
+        >>> from thymio_bt.maze import load_maze, resolve_maze
+        >>> from thymio_bt.robot.model import COURSE
+        >>> backend = types.SimpleNamespace(min_clearance=math.inf, collisions=[], time=lambda: 1.5)
+        >>> tracker = ContactTracker(load_maze(resolve_maze("two_parts_maze")), COURSE)
+        >>> tracker.update(backend, Pose(0.1, 0.1, 0.0))
+        >>> round(backend.min_clearance, 4), backend.collisions
+        (0.0391, [])
+        >>> tracker.update(backend, Pose(0.1, 0.06, 0.0))             # into the wall below
+        >>> backend.min_clearance, backend.collisions
+        (0.0, [Collision(t=1.5, x=0.1, y=0.06)])
     """
 
     def __init__(self, maze: Maze, model: RobotModel) -> None:

@@ -14,7 +14,13 @@ else (geometry, sensor poses, the simulator's sensor model) comes from the base:
 
 Example::
 
-    model = robot_model("my_thymio.yaml")       # thymio_bt.robot.model: a RobotModel from this file
+    >>> import pathlib, tempfile
+    >>> from thymio_bt.robot.model import robot_model
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "my_thymio.yaml"
+    >>> _ = path.write_text("{base: real, name: my_thymio, metres_per_unit: 0.000391, wheel_separation: 0.0928}")
+    >>> model = robot_model(str(path))          # the real model with the measured numbers
+    >>> model.name, model.max_wheel_speed, model.wheel_separation, model.sensor_model
+    ('my_thymio', 0.1955, 0.0928, 'raw')
 """
 
 from __future__ import annotations

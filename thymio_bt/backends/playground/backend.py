@@ -6,7 +6,7 @@ readings); what only a simulator gives comes from the Playground's D-Bus interfa
 (the report's pose and trajectory, the clearance to the maze's walls and contact episodes, all from
 geometry), spawning (teleport) and deleting (parking the robot in a bay beside the maze).
 
-Example::
+From the shell (the Playground installed)::
 
     thymio-bt run missions/maze_part1_2.yaml --backend playground --robot enki
 """

@@ -4,7 +4,7 @@ The Playground registers ``ch.epfl.mobots.AsebaPlayground``; ``/world`` lists ph
 type, and each object has ``x``, ``y`` (cm) and ``angle`` (rad) properties, writable. Enki's
 position is the wheel axle.
 
-Example::
+With a Playground running (:mod:`.process` starts one)::
 
     robot = EnkiRobot.find(bus)          # the world's first Thymio
     robot.pose()                          # (x_cm, y_cm, angle)

@@ -5,10 +5,16 @@ Traps measured on the Playground 1.6.99 and avoided here: the Playground needs a
 connect to probe its port can crash it, so readiness is read from ``/proc/net/tcp`` (the port in
 LISTEN); it binds every interface, so the port is a free one.
 
-Example::
+With the Playground installed (``apt-get install aseba dbus``)::
 
     with Playground.start(world_text, port) as pg:      # a private bus, a temporary HOME
         pg.bus                                           # "unix:path=/tmp/.../bus"
+
+Example (the port it is given, and how its readiness is seen)::
+
+    >>> port = free_port()
+    >>> 1024 <= port < 65536, listening(port)
+    (True, False)
 """
 
 from __future__ import annotations

@@ -6,9 +6,13 @@ no angle, so every wall must be parallel to an axis.
 
 Example::
 
-    world = playground_world(read_maze("mazes/two_parts_maze.yaml"), start, port=33333)
-    Path("maze.playground").write_text(world.text)
-    world.to_enki(0.5, 0.3)          # the Playground's (x, y) in cm of a maze point
+    >>> from thymio_bt.maze import load_maze, resolve_maze
+    >>> world = playground_world(load_maze(resolve_maze("two_parts_maze")), Pose(0.1, 0.1, 0.0), port=33333)
+    >>> world.text.count("<wall"), world.text.count("<robot")      # written to a .playground file
+    (21, 1)
+    >>> x_cm, y_cm = world.to_enki(0.5, 0.3)          # the Playground's (x, y) in cm of a maze point
+    >>> round(x_cm, 2), round(y_cm, 2), world.from_enki(x_cm, y_cm)
+    (80.5, 60.5, (0.5, 0.3))
 """
 
 from __future__ import annotations

@@ -16,12 +16,17 @@ measured with thymiodirect 0.1.2 on the Aseba Playground 1.6.99:
 - a robot that sends nothing for :data:`LOST_AFTER` seconds, or a connection that fails, raises
   :class:`~thymio_bt.robot.interface.RobotLost` at the next read: the run ends as FAILURE ``ROBOT_LOST``.
 
-Example::
+With a robot (or the Playground) to talk to::
 
     node = AsebaNode.connect("tcp:127.0.0.1:33333")     # or "/dev/ttyACM0", or "" for the only one
     node.set_motors(100, 100)
     node.read_prox()                                      # [0, 0, 1203, 0, 0, 0, 0]
     node.close()
+
+Example (the words it receives)::
+
+    >>> signed(0xFFFF), signed(1203)          # a wheel turning back at 1 unit, a proximity reading
+    (-1, 1203)
 """
 
 from __future__ import annotations

@@ -20,14 +20,26 @@ What the backend does with them:
   absent, and spawn asks the operator to place it at the pose, then resets odometry to that pose;
 - no collision detection (``collisions`` stays empty) and no clearance (``min_clearance`` is inf).
 
-Example::
+With Thymio Suite running and a robot connected::
 
-    with ThymioRobot.connect() as robot:         # Thymio Suite running, a robot connected
+    with ThymioRobot.connect() as robot:
         robot.request_spawn("thymio", Pose(0.1, 0.1, 0.0))
         robot.advance(0.0)                       # prompts: place the robot, press Enter
         robot.drive(0.1, 0.0)
         for _ in range(10):
             robot.advance(0.1)                   # 1 s later: about 0.1 m further
+
+Example (a node that stands still, 5 cm from a wall, and a clock that never moves)::
+
+    >>> class Still(Node):
+    ...     def set_motors(self, left, right): self.sent = (left, right)
+    ...     def read_prox(self): return [0, 0, 2570, 0, 0, 0, 0]
+    ...     def read_wheel_speeds(self): return 0, 0
+    >>> node = Still()
+    >>> robot = ThymioRobot(node, spawn=Pose(0.1, 0.1, 0.0), clock=lambda: 0.0, sleep=lambda s: None)
+    >>> robot.drive(0.1, 0.0)
+    >>> node.sent, robot.proximity()["front_center"], robot.proximity()["front_left"]   # units; metres
+    ((250, 250), 0.05, inf)
 """
 
 from __future__ import annotations

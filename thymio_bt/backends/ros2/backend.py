@@ -15,7 +15,7 @@ The robot already in the world is adopted when it stands at the mission's start 
 the run as FAILURE ``ROBOT_LOST`` naming it; a service missing or refusing fails the behaviour that
 asked, with the service's reason. The motors are stopped however the run ends.
 
-Example::
+From the shell, with ROS 2 (``scripts/ros2-env.sh``)::
 
     thymio-bt serve ros2 &                                   # or the course's Gazebo launch
     thymio-bt run missions/maze_part1_2.yaml --backend ros2

@@ -5,7 +5,7 @@ Each gets its own ``rclpy.Context`` (so a backend and a stand-in can live in one
 closing one leaves the other alone) and no signal handlers (Ctrl-C stays the CLI's). rclpy is
 imported when a node is made, never when this module is.
 
-Example (with ROS 2)::
+With ROS 2::
 
     ros = SpunNode("thymio_bt")
     ros.node.create_subscription(...)          # subscriptions, publishers, services

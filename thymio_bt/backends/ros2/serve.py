@@ -15,7 +15,7 @@ sensors"), so a node written for the course runs against it unchanged:
 The world runs at real time x ``speedup`` of the wall clock (that is the point of a stand-in); its
 physics is the same deterministic simulation as ``thymio-bt run``.
 
-Example::
+From the shell, with ROS 2 (``scripts/ros2-env.sh``)::
 
     thymio-bt serve ros2 --maze two_parts_maze --start 0.1,0.1,0 --speedup 2
 """

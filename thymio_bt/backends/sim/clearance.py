@@ -14,10 +14,20 @@ the common case cheap:
 3. otherwise (wall ends, corners, obstacles) d - extent is a lower bound, and the polygon distance
    is computed only for walls whose bound could beat both the record and the gaps of step 2.
 
+The simulation keeps one tracker and asks ``tracker.below(record, near, hull_shape, bx, by, cos,
+sin)`` at every sensor refresh: a gap below ``record`` only when one beats it. Its record is the
+exact gap plain geometry gives (:func:`~thymio_bt.robot.placement.clearance`), to the last bits:
+
 Example::
 
-    tracker = ClearanceTracker(model, [(shape, wall, corners, box), ...], bounds)
-    gap = tracker.below(record, near, hull_shape, bx, by, cos, sin)   # < record only when beaten
+    >>> from thymio_bt.backends.sim.world import Simulation
+    >>> from thymio_bt.maze import load_maze, resolve_maze
+    >>> from thymio_bt.robot.interface import Pose
+    >>> from thymio_bt.robot.model import COURSE
+    >>> from thymio_bt.robot.placement import clearance
+    >>> maze, start = load_maze(resolve_maze("two_parts_maze")), Pose(0.1, 0.1, 0.0)
+    >>> Simulation(maze, spawn=start).min_clearance, clearance(maze, COURSE, start)
+    (0.0391, 0.039099999999999996)
 """
 
 from __future__ import annotations

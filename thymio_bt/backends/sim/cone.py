@@ -11,9 +11,12 @@ clipped to [0, m] and read as an integer, as ``prox.horizontal``.
 
 Example::
 
-    cone = ConeResponse()
-    side = 0.05 / math.cos(APERTURE)           # a wall square to the sensor, 5 cm away
-    cone.value(side, 0.05, side)               # 3366.03, f(0.05): the centre ray alone
+    >>> cone = ConeResponse()
+    >>> side = 0.05 / math.cos(APERTURE)           # a wall square to the sensor, 5 cm away
+    >>> round(cone.value(side, 0.05, side), 2)     # f(0.05): the centre ray alone
+    3366.03
+    >>> cone.reading(cone.value(side, 0.05, side), z=0.0), cone.reading(0.0, z=-1.0)   # clipped at 0
+    (3366, 0)
 """
 
 from __future__ import annotations

@@ -12,20 +12,27 @@ once a probe body has shown that the fields are where this module expects them. 
 module that touches pymunk's private handles; ``tests/test_sim.py`` checks that both paths give
 bit-identical runs.
 
-Example::
+Example (a wall 2 cm thick whose face is at x = 0.5)::
 
-    step, handle = stepper(space)
-    step(handle, 0.01)                         # same as space.step(0.01)
-    rays = RayCaster(space)
-    rays.fan([(0, 0, 1, 0)], 0, 0, 1, 0, shape_filter)   # [fraction along the segment of the first hit, or None]
-    reader = RayReader(space, {"ahead": (0, 0, 0.1, 0)}, 0.1, 0.0, shape_filter)
-    reader.read("ahead", 0, 0, 1, 0)           # metres to the first hit along it, or inf
-    near = NearShapes(space, body, hull, shape_filter)
-    near.within(0.02)                          # is any shape closer than 2 cm to the hull?
-    distance = PointDistance()
-    distance(wall, (0.1, 0.2))                 # (distance, nearest x, nearest y), as wall.point_query
-    read = body_reader(body)
-    read()                                     # (x, y, angle), as body.position and body.angle
+    >>> space, anything = pymunk.Space(), pymunk.ShapeFilter()
+    >>> wall = pymunk.Poly(space.static_body, [(0.5, -0.5), (0.52, -0.5), (0.52, 0.5), (0.5, 0.5)])
+    >>> space.add(wall)
+    >>> step, handle = stepper(space)
+    >>> step(handle, 0.01)                         # same as space.step(0.01)
+    >>> RayCaster(space).fan([(0, 0, 1, 0), (0, 0, -1, 0)], 0.0, 0.0, 1.0, 0.0, anything)   # where each ray hits
+    [0.5, None]
+    >>> reader = RayReader(space, {"ahead": (0.0, 0.0, 1.0, 0.0)}, 1.0, 0.0, anything)
+    >>> reader.read("ahead", 0.1, 0.0, 1.0, 0.0)     # metres to the first hit, the body at x = 0.1
+    0.4
+    >>> PointDistance()(wall, (0.0, 0.0))          # (distance, nearest x, nearest y), as wall.point_query
+    (0.5, 0.5, 0.0)
+    >>> body = pymunk.Body(1.0, 1.0)
+    >>> body.position, body.angle = (0.1, 0.2), 0.5
+    >>> body_reader(body)()                        # (x, y, angle), as body.position and body.angle
+    (0.1, 0.2, 0.5)
+    >>> near = NearShapes(space, body, [(-0.1, -0.1), (0.1, -0.1), (0.1, 0.1), (-0.1, 0.1)], anything)
+    >>> near.within(0.35), near.within(0.25)       # is any shape closer than that to the square?
+    (True, False)
 """
 
 from __future__ import annotations

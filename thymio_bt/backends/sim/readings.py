@@ -11,11 +11,17 @@ with a Python ``__getitem__`` cost more per read than the rays it saved). Everyt
 ``len``, ``in``, ``get``, ``keys``, ``values``, ``items``, ``==``, ``repr``, ``copy``, ``|``) sees all
 seven sensors in their order, casting the rest first.
 
-Example::
+Example (a wall whose face is 0.5 m ahead)::
 
-    scan = lazy_scan(reader, (x, y, cos, sin))
-    scan["front_center"]          # cast now
-    dict(scan)                    # the other six cast, in the sensors' order
+    >>> import pymunk
+    >>> space = pymunk.Space()
+    >>> space.add(pymunk.Poly(space.static_body, [(0.5, -0.5), (0.52, -0.5), (0.52, 0.5), (0.5, 0.5)]))
+    >>> rays = {"ahead": (0.0, 0.0, 1.0, 0.0), "behind": (0.0, 0.0, -1.0, 0.0)}
+    >>> scan = lazy_scan(RayReader(space, rays, 1.0, 0.0, pymunk.ShapeFilter()), (0.0, 0.0, 1.0, 0.0))
+    >>> scan["ahead"]             # cast now
+    0.5
+    >>> dict(scan)                # the other one cast, in the sensors' order
+    {'ahead': 0.5, 'behind': inf}
 """
 
 from __future__ import annotations

@@ -9,8 +9,9 @@ geometry: every run of a mission (a sweep's hundreds) shares its maze's grid.
 
 Example::
 
-    grid = wall_grid(((0.0, 0.0, 0.6, 0.01), ...), cell=0.05, margin=0.15)   # walls' bounding boxes
-    grid.near(0.3, 0.2, 0.1)          # the indices of every wall within 0.1 of (0.3, 0.2), perhaps more
+    >>> grid = wall_grid(((0.0, 0.0, 0.6, 0.01),), cell=0.05, margin=0.15)   # the walls' bounding boxes
+    >>> grid.near(0.3, 0.1, 0.1), grid.near(0.3, 0.5, 0.1)   # every wall within 0.1, perhaps more
+    ((0,), ())
 """
 
 from __future__ import annotations

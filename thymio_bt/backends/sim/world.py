@@ -12,10 +12,14 @@ Physics, in metres:
 
 Example::
 
-    sim = Simulation(load_maze("mazes/two_parts_maze.yaml"), spawn=Pose(0.1, 0.1, 0.0))
-    sim.drive(0.1, 0.0)
-    sim.advance(1.0)            # 1 s of simulated time in 100 Hz sub-steps
-    sim.pose()                  # Pose(x=0.2, y=0.1, yaw=0.0)
+    >>> from thymio_bt.maze import load_maze, resolve_maze
+    >>> sim = Simulation(load_maze(resolve_maze("two_parts_maze")), spawn=Pose(0.1, 0.1, 0.0))
+    >>> sim.drive(0.1, 0.0)
+    >>> sim.advance(1.0)            # 1 s of simulated time in 100 Hz sub-steps
+    >>> sim.pose()
+    Pose(x=0.20000000000000007, y=0.1, yaw=0.0)
+    >>> sim.proximity()["front_center"], sim.min_clearance       # nothing in range; the closest gap so far
+    (inf, 0.0391)
 """
 
 from __future__ import annotations
