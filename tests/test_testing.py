@@ -102,3 +102,21 @@ def test_a_misspelt_preset_world_suggests_the_nearest():
 
     with pytest.raises(UserError, match="no preset world named 'coridor' .*did you mean 'corridor'"):
         world("coridor")
+
+
+@pytest.mark.parametrize("key", ["maze_map", "my_map"])
+def test_the_report_holds_the_map_where_the_mapping_behaviours_keep_it(key):
+    """The run reads the map at the blackboard key its mapping behaviours were given."""
+    from thymio_bt.testing import run_tree
+
+    result = run_tree({"MapWalls": {"cell": 0.2, "key": key}}, world("corridor"), seconds=5)
+    assert result.status == "SUCCESS"
+    assert result.maze_map is not None and result.maze_map["visited"] == [[0, 0]] and result.maze_map["open_sides"] == 1
+    assert result.report()["map"] == result.maze_map
+
+
+def test_a_run_without_mapping_behaviours_reports_no_map():
+    from thymio_bt.testing import run_tree
+
+    result = run_tree({"SetBlackboard": {"key": "maze_map", "value": 3}}, world("corridor"), seconds=5)
+    assert result.status == "SUCCESS" and result.maze_map is None and "map" not in result.report()
