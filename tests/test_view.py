@@ -37,18 +37,24 @@ def _colours(pg, path):
     return {(int(c) >> 16, (int(c) >> 8) & 255, int(c) & 255) for c in packed}
 
 
-def test_a_live_view_draws_every_tick_and_leaves_the_run_unchanged(pg, tmp_path):
-    plain = Run(load_mission("missions/square.yaml")).run()
-    run = Run(load_mission("missions/square.yaml"))
+def _view_with_screenshot(run, tick, screenshot, stop=False):
+    """Run ``run`` in a live view, saving the window after ``tick`` (and ending the run there with ``stop``)."""
     view = live_hook(run, FAST, max_fps=None)
-    screenshot = tmp_path / "frame.png"
 
     def hook(r):
         view(r)
-        if r.ticks == 60:
+        if r.ticks == tick:
             view.viewer.save(screenshot)
+            if stop:
+                raise window.StopRun("enough")
 
-    result = run.run(on_tick=hook)
+    return view, run.run(on_tick=hook)
+
+
+def test_a_live_view_draws_every_tick_and_leaves_the_run_unchanged(pg, tmp_path):
+    plain = Run(load_mission("missions/square.yaml")).run()
+    screenshot = tmp_path / "frame.png"
+    view, result = _view_with_screenshot(Run(load_mission("missions/square.yaml")), 60, screenshot)
     view.finish(result)
     assert view.viewer.frames == result.ticks + 1  # every tick, and the outcome
     assert result.final_pose == plain.final_pose and result.trajectory == plain.trajectory
@@ -198,17 +204,8 @@ def test_view_without_pygame_is_a_user_error(monkeypatch):
 
 
 def test_a_mapping_mission_shows_its_map_live(pg, tmp_path):
-    run = Run(load_mission("missions/micromouse.yaml"))
-    view = live_hook(run, FAST, max_fps=None)
     screenshot = tmp_path / "map.png"
-
-    def hook(r):
-        view(r)
-        if r.ticks == 400:
-            view.viewer.save(screenshot)
-            raise window.StopRun("enough")
-
-    run.run(on_tick=hook)
+    view, _ = _view_with_screenshot(Run(load_mission("missions/micromouse.yaml")), 400, screenshot, stop=True)
     view.viewer.close()
     assert view.cells is not None and view.cells.wall_segments()
     assert {window.MAP_WALL, window.MAP_VISITED} <= _colours(pg, screenshot)
