@@ -23,20 +23,15 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from enum import Enum
 from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
-from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
 from thymio_bt.behaviours.base import describe, node_path, snapshot
-from thymio_bt.behaviours.cellmap import CellMap
-from thymio_bt.behaviours.mapping import MazeMapParams
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.mission import Mission, build_tree
@@ -44,131 +39,7 @@ from thymio_bt.robot.interface import Backend, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
 from thymio_bt.run.interrupts import Interrupts
 from thymio_bt.run.phases import phases
-
-
-@dataclass
-class RunResult:
-    """What a run produced; :meth:`report` gives the run report JSON of DESIGN.md."""
-
-    mission: str
-    maze: str
-    status: str
-    reason: str | None
-    code: str | None
-    failed_path: str | None
-    sim_time: float
-    ticks: int
-    wall_time: float
-    seed: int
-    final_pose: dict[str, float] | None
-    final_proximity: dict[str, float | None] | None
-    events: list[dict[str, Any]]
-    collisions: int
-    min_clearance: float | None
-    trajectory: list[tuple[float, float, float, float]] = field(default_factory=list)
-    #: per node path: ticks, successes, failures, running_time (only with ``node_stats=True``)
-    node_stats: dict[str, dict[str, float]] | None = None
-    #: the mission's ``expect:`` criteria that failed ([] all held); None when it declares none
-    expectations: list[str] | None = None
-    #: for a maze with a goal region: whether base_link entered it, and when (s); else None
-    goal: dict[str, Any] | None = None
-    #: each subtree use that ran: when, how long, cells seen (:mod:`thymio_bt.run.phases`)
-    phases: list[dict[str, Any]] = field(default_factory=list)
-    #: the maze map the mapping behaviours learnt (:meth:`CellMap.summary`), if a run made one
-    maze_map: dict[str, Any] | None = None
-
-    @property
-    def real_time_factor(self) -> float:
-        """Simulated seconds per wall-clock second (inf for a run too quick to time)."""
-        return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
-
-    def report(self) -> dict[str, Any]:
-        """The run report as JSON data: a contract (key order included) that ``--report`` writes as it is."""
-        expectations = (
-            {}
-            if self.expectations is None
-            else {"expectations": {"met": not self.expectations, "failed": self.expectations}}
-        )
-        return {
-            "mission": self.mission,
-            "maze": self.maze,
-            "status": self.status,
-            "reason": self.reason,
-            "code": self.code,
-            "failed_path": self.failed_path,
-            "sim_time": round(self.sim_time, 6),
-            "ticks": self.ticks,
-            "wall_time": round(self.wall_time, 6),
-            "real_time_factor": round(self.real_time_factor, 1) if math.isfinite(self.real_time_factor) else None,
-            "seed": self.seed,
-            "final_pose": self.final_pose,
-            "final_proximity": self.final_proximity,
-            "collisions": self.collisions,
-            "min_clearance": None if self.min_clearance is None else round(self.min_clearance, 6),
-            "events": self.events,
-            **expectations,
-            **({} if self.goal is None else {"goal": self.goal}),
-            **({"phases": self.phases} if self.phases else {}),
-            **({"map": self.maze_map} if self.maze_map else {}),
-            "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
-        }
-
-
-class EndKind(Enum):
-    """What ended a run's tick loop (the report's status follows from it: :meth:`Run._end_of_run`)."""
-
-    #: the tree returned SUCCESS or FAILURE
-    FINISHED = "finished"
-    #: the mission's time limit came first
-    TIMEOUT = "timeout"
-    #: a signal (Ctrl-C, SIGTERM) noted in the run's :class:`~thymio_bt.run.interrupts.Interrupts`
-    INTERRUPTED = "interrupted"
-    #: a tick hook raised :class:`StopRun`
-    STOPPED = "stopped"
-    #: the robot could not start, was lost, or the backend raised
-    CRASHED = "crashed"
-
-    @property
-    def report_status(self) -> str:
-        """The report's status of a run cut short this way: a stopped or crashed run is a FAILURE.
-
-        >>> EndKind.TIMEOUT.report_status, EndKind.CRASHED.report_status
-        ('TIMEOUT', 'FAILURE')
-        """
-        return self.name if self in (EndKind.TIMEOUT, EndKind.INTERRUPTED) else "FAILURE"
-
-
-@dataclass(frozen=True)
-class Ending:
-    """How the tick loop ended: its kind, and for a run cut short the report's code (``TIMEOUT``,
-    ``ROBOT_LOST``...) and, where known then, the reason."""
-
-    kind: EndKind
-    code: str | None = None
-    reason: str | None = None
-
-
-@dataclass(frozen=True)
-class Verdict:
-    """The report's status, reason, code and failing node's path (all None but the status on SUCCESS)."""
-
-    status: str
-    reason: str | None = None
-    code: str | None = None
-    failed_path: str | None = None
-
-
-def learnt_map(root: Behaviour) -> CellMap | None:
-    """The maze map the tree's mapping behaviours keep on the blackboard, at the ``key`` of their
-    parameters (:class:`~thymio_bt.behaviours.mapping.MazeMapParams`); None when none made one."""
-    for node in root.iterate():
-        params = getattr(node, "params", None)
-        if isinstance(params, MazeMapParams) and Blackboard.exists(params.key):
-            found = Blackboard.get(params.key)
-            if isinstance(found, CellMap):
-                return found
-    return None
-
+from thymio_bt.run.result import Ending, EndKind, RunResult, Verdict, failing_branch, learnt_map
 
 TickHook = Callable[["Run"], None]
 
@@ -452,25 +323,21 @@ class NodeStats(py_trees.visitors.VisitorBase):
             row["running_time"] = round(row["running_time"] + self.period, 9)
 
 
-def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
-    """Follow FAILURE down from the root to the node that caused it: (path, code, reason)."""
-    node = root
-    while True:
-        failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
-        if not failed or getattr(node, "failure", None):
-            break
-        # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)
-        explained = [
-            c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE for n in c.iterate())
-        ]
-        node = (explained or failed)[-1]
-    failure = getattr(node, "failure", None)
-    if failure:
-        code, reason = failure
-        return node_path(node), code, reason
-    return node_path(node), "FAILED", node.feedback_message or f"'{node.name}' returned FAILURE"
-
-
 def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> RunResult:
     """Build and run ``mission`` once."""
     return Run(mission, seed).run(**kwargs)
+
+
+__all__ = [
+    "EndKind",
+    "Ending",
+    "NodeStats",
+    "Run",
+    "RunResult",
+    "StopRun",
+    "TickHook",
+    "Verdict",
+    "failing_branch",
+    "learnt_map",
+    "run_mission",
+]

@@ -41,7 +41,8 @@ from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import number
 from thymio_bt.maze import Maze
 from thymio_bt.robot.model import COURSE
-from thymio_bt.run.runner import Run, RunResult, StopRun, learnt_map
+from thymio_bt.run.result import RunResult, learnt_map
+from thymio_bt.run.runner import Run, StopRun
 from thymio_bt.viz.plots import _outline, _rays
 
 #: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
