@@ -100,12 +100,14 @@ def save_results(section: str, data: dict[str, Any]) -> None:
 
 def table(rows: list[tuple[str, ...]], header: tuple[str, ...]) -> str:
     """A plain-text table with columns padded to width."""
-    cols = list(zip(header, *rows))
+    cols = list(zip(header, *rows, strict=True))
     widths = [max(len(str(c)) for c in col) for col in cols]
-    line = lambda r: "  ".join(
-        str(c).ljust(w) if i == 0 else str(c).rjust(w)  # noqa: E731
-        for i, (c, w) in enumerate(zip(r, widths))
-    )
+
+    def line(r: tuple[str, ...]) -> str:
+        return "  ".join(
+            str(c).ljust(w) if i == 0 else str(c).rjust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True))
+        )
+
     sep = "  ".join("-" * w for w in widths)
     return "\n".join([line(header), sep, *(line(r) for r in rows)])
 

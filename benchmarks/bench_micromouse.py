@@ -18,10 +18,10 @@ from typing import Any
 
 from _common import ROOT, machine, save_results, table
 
-from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import to_text
 from thymio_bt.mission import load_mission
+from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.runner import run_mission
 
 MISSION = ROOT / "missions" / "micromouse.yaml"

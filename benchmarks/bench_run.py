@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import itertools
 import math
 import os
 import re
@@ -74,9 +75,7 @@ def bench_in_process(repeats: int) -> dict:
             "collisions": result.collisions,
             "run_wall_time_reported": result.wall_time,
             "path_m": sum(
-                math.dist(p[1:3], q[1:3])
-                for p, q in zip(result.trajectory, result.trajectory[1:])
-                if q[0] - p[0] < 0.15
+                math.dist(p[1:3], q[1:3]) for p, q in itertools.pairwise(result.trajectory) if q[0] - p[0] < 0.15
             ),
         }  # a respawn shows as a jump of one tick
 

@@ -23,6 +23,7 @@ Usage (from the repo root): python benchmarks/bench_sim.py [--seconds 120] [--re
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import statistics
 import sys
@@ -145,10 +146,12 @@ def check_drive(spawn: str, seconds: float) -> dict:
 
     ticks = round(seconds / TICK)
     drive(sim, ticks, record)
-    crossings = sum(_segments_cross((p.x, p.y), (q.x, q.y), a, b) for p, q in zip(poses, poses[1:]) for a, b in walls)
+    crossings = sum(
+        _segments_cross((p.x, p.y), (q.x, q.y), a, b) for p, q in itertools.pairwise(poses) for a, b in walls
+    )
     outside = sum(not (box[0] < p.x < box[2] and box[1] < p.y < box[3]) for p in poses)
     deepest = max(_penetration(sim, p) for p in poses)
-    path = sum(math.dist((p.x, p.y), (q.x, q.y)) for p, q in zip(poses, poses[1:]))
+    path = sum(math.dist((p.x, p.y), (q.x, q.y)) for p, q in itertools.pairwise(poses))
     cells = {(int(p.x / 0.2), int(p.y / 0.2)) for p in poses}
     ok = crossings == 0 and outside == 0 and deepest <= PENETRATION_LIMIT
     return {

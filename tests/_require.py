@@ -25,9 +25,9 @@ def module(name: str) -> ModuleType:
     """Import ``name`` or skip/fail as :func:`missing` does."""
     try:
         return importlib.import_module(name)
-    except ImportError:
+    except ImportError as exc:
         missing(f"Python module {name}")
-        raise AssertionError("unreachable")
+        raise AssertionError("unreachable") from exc
 
 
 def program(name: str) -> str:

@@ -3,9 +3,9 @@ tests that made thymio-bt behaviours)."""
 
 import pytest
 
-pytest_plugins = ["pytester"]
-
 from thymio_bt.testing import clear_blackboard
+
+pytest_plugins = ["pytester"]
 
 
 @pytest.fixture(autouse=True)

@@ -63,7 +63,7 @@ def test_part2_ends_in_the_pocket_with_the_axle_centred_after_every_turn():
     turns = ends(result, "TurnAngle")
     assert turn_letters(result) == "LLLL"
     expected = [(0.5, 0.7), (0.1, 0.7), (0.1, 0.3), (0.3, 0.3)]  # mazes.md turn points
-    for event, point in zip(turns, expected):
+    for event, point in zip(turns, expected, strict=True):
         assert axle(event["pose"]) == pytest.approx(point, abs=0.005)
 
 

@@ -53,9 +53,9 @@ def main():
 
 
 if __name__ == "__main__":
+    import contextlib
+
     from rclpy.executors import ExternalShutdownException
 
-    try:
+    with contextlib.suppress(KeyboardInterrupt, ExternalShutdownException):  # stopped by the test: quietly
         main()
-    except (KeyboardInterrupt, ExternalShutdownException):  # stopped by the test: quietly
-        pass
