@@ -28,12 +28,15 @@ from __future__ import annotations
 from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.robot.calibration import CalibrationTable
+
+if TYPE_CHECKING:
+    from thymio_bt.robot.model import RobotModel  # which imports this module when a profile is named
 
 #: the suffixes that make a ``--robot`` value a profile file rather than a model's name
 PROFILE_SUFFIXES = (".yaml", ".yml")
@@ -69,7 +72,7 @@ def is_profile_path(name: str) -> bool:
 
 
 @lru_cache(maxsize=16)
-def read_profile(path: str, models: tuple[tuple[str, Any], ...]) -> Any:
+def read_profile(path: str, models: tuple[tuple[str, RobotModel], ...]) -> RobotModel:
     """The :class:`~thymio_bt.robot.model.RobotModel` a profile file describes, on the base it names
     among ``models`` ((name, model) pairs); a located :class:`UserError` when the file is missing or
     wrong. Use :func:`thymio_bt.robot.model.robot_model`, which passes the built-in models."""

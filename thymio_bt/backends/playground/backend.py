@@ -14,7 +14,7 @@ From the shell (the Playground installed)::
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING
 
 from thymio_bt.backends.playground.enki import EnkiRobot
 from thymio_bt.backends.playground.process import Playground, free_port
@@ -26,6 +26,10 @@ from thymio_bt.robot.interface import Pose, RobotLost
 from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import ContactTracker, placement_problem
 from thymio_bt.robot.profile import is_profile_path
+
+if TYPE_CHECKING:
+    from thymio_bt.backends import PlaygroundOptions
+    from thymio_bt.mission import Mission
 
 #: the Playground's Thymio covers this fraction of what its motor units say (Enki's 16.6 cm/s at 500):
 #: against its ground truth, 2.9 s straight read 0.983, 2.1 s turning 0.985, thymio-bt calibrate 0.986
@@ -106,7 +110,7 @@ class PlaygroundRobot(ThymioRobot):
             self.playground.stop()
 
 
-def create_playground(mission: Any, seed: int, options: Any) -> PlaygroundRobot:
+def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -> PlaygroundRobot:
     """The ``playground`` backend kind: start a Playground on the mission's maze, connect to its Thymio."""
     model = robot_model(mission.robot)
     port = free_port()

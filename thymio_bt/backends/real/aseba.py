@@ -36,11 +36,22 @@ import io
 import socket
 import threading
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from thymio_bt.backends.real.thymio import PROX_VARIABLE, SPEED_VARIABLES, TARGET_VARIABLES, Node
+from thymio_bt.backends.real.thymio import (
+    PROX_VARIABLE,
+    SPEED_VARIABLES,
+    TARGET_VARIABLES,
+    Node,
+    RealConfig,
+    ThymioRobot,
+)
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.interface import RobotLost
+
+if TYPE_CHECKING:
+    from thymio_bt.backends import AsebaOptions
+    from thymio_bt.mission import Mission
 
 #: A robot silent for this long (s) is lost; thymiodirect alone would wait 3 s and then say nothing.
 LOST_AFTER = 0.8
@@ -280,9 +291,8 @@ class AsebaNode(Node):
         connection.close()
 
 
-def create_aseba(mission: Any, seed: int, options: Any) -> Any:
+def create_aseba(mission: Mission, seed: int, options: AsebaOptions) -> ThymioRobot:
     """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model."""
-    from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
     from thymio_bt.robot.model import robot_model
 
     config = RealConfig.of_model(robot_model(mission.robot))

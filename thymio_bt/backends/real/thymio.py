@@ -50,12 +50,16 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
 from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
+
+if TYPE_CHECKING:
+    from thymio_bt.backends import TdmOptions
+    from thymio_bt.mission import Mission
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
 #: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.
@@ -457,7 +461,7 @@ class ThymioRobot(Backend):
         return None
 
 
-def create_tdm(mission: Any, seed: int, options: Any) -> ThymioRobot:
+def create_tdm(mission: Mission, seed: int, options: TdmOptions) -> ThymioRobot:
     """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's robot model."""
     from thymio_bt.robot.model import robot_model
 

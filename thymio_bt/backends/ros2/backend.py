@@ -28,7 +28,7 @@ import os
 import threading
 import time
 from collections.abc import Callable, Generator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from thymio_bt.backends.ros2 import import_rclpy
 from thymio_bt.backends.ros2.messages import odometry_of, reading_of, set_pose, stamp_ns
@@ -49,6 +49,10 @@ from thymio_bt.robot.interface import (
 )
 from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import ContactTracker, placement_problem
+
+if TYPE_CHECKING:
+    from thymio_bt.backends import Ros2Options
+    from thymio_bt.mission import Mission
 
 #: the robot in the world is the mission's start when it is this close (m, rad)
 ADOPT_DISTANCE, ADOPT_ANGLE = 0.02, math.radians(3.0)
@@ -461,7 +465,7 @@ class Ros2Robot(Backend):
             self._ros.close()
 
 
-def create_ros2(mission: Any, seed: int, options: Any) -> Ros2Robot:
+def create_ros2(mission: Mission, seed: int, options: Ros2Options) -> Ros2Robot:
     """The ``ros2`` backend kind: the mission's robot behind the topic map of ``options.topics``."""
     from thymio_bt.backends.ros2.topics import COURSE_TOPICS, load_topics
 

@@ -26,7 +26,7 @@ Example (a wall whose face is 0.5 m ahead)::
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from types import MappingProxyType
 from typing import Any
 
@@ -56,7 +56,7 @@ class _Readings(dict[str, float]):
             self._complete = True
         return self
 
-    def __iter__(self) -> Any:
+    def __iter__(self) -> Iterator[str]:
         return iter(self._names)
 
     def __len__(self) -> int:
