@@ -2,6 +2,17 @@
 
 This is the only place that knows the file forms: :mod:`.model` is the maze itself, :mod:`.grid`
 turns ASCII art into walls.
+
+Example::
+
+    >>> path = resolve_maze("two_parts_maze")          # ./mazes first, then the shipped ones
+    >>> maze = load_maze(path)
+    >>> path.name, len(maze.walls), sorted(maze.spawns)
+    ('two_parts_maze.yaml', 21, ['bonus', 'part1', 'part2'])
+    >>> resolve_maze("two_part_maze")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: maze not found: 'two_part_maze' (hint: ... did you mean 'two_parts_maze'?)
 """
 
 from __future__ import annotations

@@ -1,4 +1,13 @@
-"""The ``sim`` backend kind: a :class:`~thymio_bt.backends.sim.world.Simulation` of a mission's maze."""
+"""The ``sim`` backend kind: a :class:`~thymio_bt.backends.sim.world.Simulation` of a mission's maze.
+
+Example::
+
+    >>> from thymio_bt.backends import SimOptions
+    >>> from thymio_bt.mission import load_mission
+    >>> sim = create(load_mission("maze_part1_2"), seed=0, options=SimOptions())
+    >>> sim.model.name, sim.config.sensor_model, sim.config.physics_hz
+    ('course', 'metres', 100.0)
+"""
 
 from __future__ import annotations
 

@@ -2,6 +2,16 @@
 
 The settings (:class:`NoiseConfig`, :data:`REALISTIC`) live in :mod:`thymio_bt.robot.noise`;
 they are importable from here too.
+
+Example::
+
+    >>> NoiseSource(NoiseConfig(), seed=1).wheel_factors()        # noise off: exact
+    (1.0, 1.0)
+    >>> noisy = NoiseSource(REALISTIC, seed=1)
+    >>> noisy.wheel_factors() == NoiseSource(REALISTIC, seed=1).wheel_factors()   # a seed, a stream
+    True
+    >>> noisy.range(float("inf"), 0.0005, 0.0975)                 # nothing seen stays nothing seen
+    inf
 """
 
 from __future__ import annotations
