@@ -1,7 +1,9 @@
-"""The real-robot backend: a Thymio II through the Thymio Device Manager (``thymio-bt[thymio]``).
+"""The real-robot backends: a Thymio II behind :class:`ThymioRobot` (:mod:`.thymio`), reached through
+the Thymio Device Manager (:class:`TdmNode`, ``thymio-bt[thymio]``) or over its own Aseba protocol
+(:mod:`.aseba`, ``thymio-bt[aseba]``).
 
-tdmclient is imported only when :meth:`TdmNode.connect` (or :meth:`ThymioRobot.connect`) runs, so
-this package imports without the optional extra.
+tdmclient and thymiodirect are imported only when a node connects, so this package imports without
+the optional extras.
 """
 
 from thymio_bt.backends.real.thymio import (
