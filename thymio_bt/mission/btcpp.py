@@ -1,12 +1,15 @@
 """A mission tree as BehaviorTree.CPP v4 XML: what Groot2 opens, and what a Groot2 log embeds.
 
-Composites and decorators become BT.CPP's built-ins where the semantics are the same
-(``sequence`` is ``SequenceWithMemory``, ``selector`` is ``Fallback``, ``invert`` is ``Inverter``,
-...); the others keep thymio-bt's name (``timeout`` and ``delay`` count simulated seconds, not
-BT.CPP's wall clock; a ``repeat`` with ``until`` is the control node ``RepeatUntil``). Behaviours
-are Actions, conditions Conditions, with their parameters as ports; a ``<TreeNodesModel>`` declares
-every non-built-in node with its ports, units and descriptions from the node registry, so Groot2
-can show and edit the tree. Nodes carry BT.CPP's pre-order ``_uid`` (1 = the root).
+Composites and decorators become BT.CPP's built-ins (``sequence`` is ``Sequence``, ``selector`` is
+``Fallback``, ``invert`` is ``Inverter``, ...), each marked ``_thymio="KIND"`` (BT.CPP ignores
+attributes that start with ``_``) so that reading the file back gives thymio-bt's node, tick for tick;
+a ``repeat`` with ``until`` (a do-while loop, which BT.CPP has no node for) is written with BT.CPP's
+built-ins and two scripts (:func:`repeat_until_elements`). Nothing needs a custom control node: the
+file loads in BT.CPP 4 with only the leaves registered. Behaviours are Actions, conditions
+Conditions, with their parameters as ports; a ``<TreeNodesModel>`` declares every non-built-in node
+(plugins' too) with its ports, units and descriptions from the node registry, so Groot2 can show and
+edit the tree. Nodes carry BT.CPP's pre-order ``_uid`` (1 = the root; the scripts of a do-while
+loop have none: they are not nodes of the mission).
 
 Example::
 
@@ -16,7 +19,7 @@ Example::
     >>> subtrees                                  # the tree is one use of the subtree to_dead_end
     {1: 'to_dead_end'}
     >>> node_id(nodes[0], children=2), node_id(nodes[1], children=2), params[4]["distance"]
-    ('RepeatUntil', 'SequenceWithMemory', 0.05)
+    ('Sequence', 'Sequence', 0.05)
     >>> xml = tree_xml(nodes, mission.registry, params, subtrees=subtrees)
     >>> for line in xml.splitlines()[1:4]:
     ...     print(line)
@@ -39,11 +42,11 @@ from thymio_bt.behaviours.base import ConditionBehaviour
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
 from thymio_bt.mission.plan import Mission, NodePlan
-from thymio_bt.mission.registry import Registry
+from thymio_bt.mission.registry import Registry, default_registry
 
 #: thymio-bt kind -> BT.CPP built-in of the same semantics
 BUILTIN = {
-    "sequence": "SequenceWithMemory",
+    "sequence": "Sequence",
     "reactive_sequence": "ReactiveSequence",
     "selector": "Fallback",
     "reactive_selector": "ReactiveFallback",
@@ -54,6 +57,8 @@ BUILTIN = {
     "retry": "RetryUntilSuccessful",
     "repeat": "Repeat",
 }
+#: the attribute that marks an exported element as thymio-bt's node kind (BT.CPP skips ``_`` attributes)
+KIND_ATTR = "_thymio"
 #: the element that carries a mission's settings (maze, start, rates, noise); BT.CPP skips it
 MISSION_TAG = "ThymioMission"
 #: BT.CPP's own node IDs (besides BUILTIN's): a thymio-bt node of one of these names is exported as
@@ -87,7 +92,7 @@ def node_id(node: TreeNode, children: int) -> str:
     """The BT.CPP node ID of a logged node."""
     kind = node["kind"]
     if kind == "repeat" and children == 2:
-        return "RepeatUntil"
+        return "Sequence"  # the outer element of a do-while loop (repeat_until_elements)
     if kind in RESERVED:
         return "Thymio" + kind
     return BUILTIN.get(kind, kind)
@@ -104,11 +109,11 @@ def _port_value(value: Any) -> str:
     return str(value)
 
 
-def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, str]:
+def _ports(node: TreeNode, ident: str, params: Mapping[str, Any], children: int) -> dict[str, str]:
     """A node's parameters as the ports of its BT.CPP element (a built-in's under BT.CPP's names)."""
     kind = node["kind"]
-    if ident == "RepeatUntil":
-        return {}  # the loop ends by its condition, not a count
+    if kind == "repeat" and children == 2:
+        return {}  # a do-while loop: it ends by its condition, not a count
     if kind == "parallel":
         one = params.get("policy") == "success_on_one"
         ports = {"success_count": "1" if one else "-1", "failure_count": "1"}
@@ -116,6 +121,32 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any]) -> dict[str, s
     if kind == "repeat" and params.get("times") == "forever":
         return {"num_cycles": "-1"}
     return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items() if v is not None}
+
+
+def repeat_until_elements(parent: ET.Element, attrs: dict[str, str], uid: int) -> tuple[ET.Element, ET.Element]:
+    """``repeat: {until: COND, do: BODY}`` in BT.CPP's built-ins, under ``parent``; returns the
+    elements BODY and COND go into. The loop's flag is the blackboard entry ``__until_UID``::
+
+        <Sequence _thymio="repeat">                       the loop (name, _uid)
+          <Script code="__until_7 := false"/>
+          <Fallback>
+            <KeepRunningUntilFailure>                      RUNNING after each failed check: again next tick
+              <Sequence> BODY <Inverter _onFailure="__until_7 := true"> COND </Inverter> </Sequence>
+            </KeepRunningUntilFailure>
+            <ScriptCondition code="__until_7"/>           SUCCESS if COND ended it, FAILURE if BODY did
+          </Fallback>
+        </Sequence>
+
+    Tick for tick in BT.CPP as thymio-bt's loop: BODY, COND in the same tick after each success of
+    BODY, BODY again the next tick after a failed check, a BODY failure fails the loop."""
+    flag = f"__until_{uid}"
+    loop = ET.SubElement(parent, "Sequence", attrs)
+    ET.SubElement(loop, "Script", code=f"{flag} := false")
+    fallback = ET.SubElement(loop, "Fallback")
+    keep = ET.SubElement(fallback, "KeepRunningUntilFailure")
+    body = ET.SubElement(keep, "Sequence")
+    ET.SubElement(fallback, "ScriptCondition", code=flag)
+    return body, body
 
 
 def tree_xml(
@@ -141,33 +172,57 @@ def tree_xml(
             children[n["parent"]] += 1
     uids, wrappers = xml_uids(nodes, subtrees)
     elements: dict[int, ET.Element] = {}
-    used: dict[str, str] = {}
+    loops: dict[int, ET.Element] = {}  # a do-while loop's uid -> the element its body and condition go in
+    used: dict[str, tuple[str, set[str]]] = {}
     for n in nodes:
-        parent = tree if n["parent"] is None else elements[n["parent"]]
+        parent = tree if n["parent"] is None else loops.get(n["parent"], elements[n["parent"]])
+        if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
+            parent = ET.SubElement(parent, "Inverter", _onFailure=f"__until_{uids[n['parent']]} := true")
         if n["uid"] in subtrees:
             sid = subtrees[n["uid"]]
             ET.SubElement(parent, "SubTree", {"ID": sid, "name": n["name"], "_uid": str(wrappers[n["uid"]])})
             parent = ET.SubElement(root, "BehaviorTree", ID=sid)
         ident = node_id(n, children[n["uid"]])
-        used.setdefault(ident, n["kind"])
-        attrs = {"name": n["name"], **_ports(n, ident, params.get(n["uid"], {})), "_uid": str(uids[n["uid"]])}
-        elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
-    model = ET.SubElement(root, "TreeNodesModel")
-    for ident, kind in sorted(used.items()):
-        if ident in BUILTIN.values():
-            continue
-        cls = registry.get(kind)
-        tag = _category(cls, ident)
-        entry = ET.SubElement(model, tag, ID=ident)
-        if cls is not None:
-            for name, field in cls.Params.model_fields.items():
-                unit = unit_of(field)
-                text = (field.description or "") + (f" [{unit}]" if unit else "")
-                default = {} if field.is_required() else {"default": _port_value(field.default)}
-                port = ET.SubElement(entry, "input_port", {"name": name, **default})
-                port.text = text
+        ports = _ports(n, ident, params.get(n["uid"], {}), children[n["uid"]])
+        used.setdefault(ident, (n["kind"], set()))[1].update(ports)
+        marked = {KIND_ATTR: n["kind"]} if _is_control(registry, n["kind"]) else {}
+        attrs = {"name": n["name"], **ports, **marked, "_uid": str(uids[n["uid"]])}
+        if n["kind"] == "repeat" and children[n["uid"]] == 2:
+            elements[n["uid"]] = loops[n["uid"]] = repeat_until_elements(parent, attrs, uids[n["uid"]])[0]
+        else:
+            elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
+    _model(ET.SubElement(root, "TreeNodesModel"), used, registry)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _is_control(registry: Registry, kind: str) -> bool:
+    """Whether ``kind`` is a composite or decorator (its element is marked with :data:`KIND_ATTR`)."""
+    cls = registry.get(kind)
+    return isinstance(cls, type) and issubclass(cls, ControlNode)
+
+
+#: BT.CPP's built-in node IDs an export uses besides BUILTIN's (no TreeNodesModel entry)
+_EXPORT_BUILTINS = frozenset({"Sequence", "Script", "ScriptCondition", "KeepRunningUntilFailure", "Inverter"})
+
+
+def _model(model: ET.Element, used: Mapping[str, tuple[str, set[str]]], registry: Registry) -> None:
+    """The ``<TreeNodesModel>``: every node ID ``used`` that is not BT.CPP's, with its ports (a
+    plugin that was not imported declares the ports the tree gives it)."""
+    for ident, (kind, ports) in sorted(used.items()):
+        if ident in BUILTIN.values() or ident in _EXPORT_BUILTINS:
+            continue
+        cls = registry.get(kind)
+        entry = ET.SubElement(model, _category(cls), ID=ident)
+        fields = cls.Params.model_fields if cls is not None else {}
+        for name, field in fields.items():
+            unit = unit_of(field)
+            text = (field.description or "") + (f" [{unit}]" if unit else "")
+            default = {} if field.is_required() else {"default": _port_value(field.default)}
+            port = ET.SubElement(entry, "input_port", {"name": name, **default})
+            port.text = text
+        for name in sorted(ports - set(fields)):
+            ET.SubElement(entry, "input_port", {"name": name})
 
 
 def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[int, int], dict[int, int]]:
@@ -183,11 +238,9 @@ def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[i
     return uids, wrappers
 
 
-def _category(cls: Any, ident: str) -> str:
+def _category(cls: Any) -> str:
     """The ``<TreeNodesModel>`` element of a node class: Control, Decorator, Condition or Action."""
-    if ident == "RepeatUntil" or (
-        isinstance(cls, type) and issubclass(cls, ControlNode) and cls.category == "composite"
-    ):
+    if isinstance(cls, type) and issubclass(cls, ControlNode) and cls.category == "composite":
         return "Control"
     if isinstance(cls, type) and issubclass(cls, ControlNode):
         return "Decorator"
@@ -215,7 +268,29 @@ def mission_settings(mission: Mission, folder: Path) -> dict[str, str]:
         settings["backend"] = json.dumps({"name": mission.backend, **mission.backend_options})
     if mission.expect is not None:
         settings["expect"] = json.dumps(mission.expect.model_dump(mode="json"))
+    plugins = mission_plugins(mission, folder)
+    if plugins:
+        settings["plugins"] = json.dumps(plugins)
     return settings
+
+
+def mission_plugins(mission: Mission, folder: Path) -> list[str]:
+    """The plugins a mission loaded, as an export's ``plugins``: ``.py`` files relative to
+    ``folder``, then ``module:Class`` for each imported plugin node from an installed module that
+    is not an entry point's (those load by themselves)."""
+    registry = mission.registry
+    files = list(dict.fromkeys(getattr(registry, "plugin_files", [])))
+    refs = [os.path.relpath(path, folder) for path in files]
+    if registry is None:
+        return refs
+    defaults = set(default_registry())
+    for name, cls in registry.items():
+        module = cls.__module__
+        if name in defaults or module.startswith(("thymio_bt.", "thymio_bt_plugin_")) or module == "builtins":
+            continue
+        if not getattr(cls, "unrun_plugin", False):
+            refs.append(f"{module}:{cls.__name__}")
+    return refs
 
 
 def mission_xml(mission: Mission, output: Path | None = None) -> str:

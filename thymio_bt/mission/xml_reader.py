@@ -19,7 +19,7 @@ Example::
     ...     data = read_xml_mission(xml)                # a MarkedDict, as load_yaml reads a mission
     >>> data["start"], data["tree"].subtree_use, data.marks["tree"]
     ('1.3, 0.1, 3.141592653589793', 'to_dead_end', (3, 3))
-    >>> sorted(data["tree"]["repeat"])                  # <RepeatUntil> is a repeat with until:
+    >>> sorted(data["tree"]["repeat"])                  # the exported do-while loop is a repeat with until:
     ['do', 'name', 'until']
 """
 
@@ -34,7 +34,7 @@ from xml.parsers import expat
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
-from thymio_bt.mission.btcpp import BUILTIN, MISSION_TAG, RESERVED
+from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, MISSION_TAG, RESERVED
 
 _FROM_BUILTIN = {ident: kind for kind, ident in BUILTIN.items()}
 #: BT.CPP nodes that thymio-bt cannot run, with what to use instead
@@ -43,7 +43,7 @@ _UNSUPPORTED = {
     "Delay": "BT.CPP's Delay counts wall-clock milliseconds: use thymio-bt's delay (seconds: simulated)",
     "Sleep": "use Wait (seconds: simulated)",
     "Script": "scripts are not supported: use SetBlackboard",
-    "Sequence": "BT.CPP's Sequence differs from both thymio-bt sequences: use SequenceWithMemory or ReactiveSequence",
+    "SequenceWithMemory": "BT.CPP's SequenceWithMemory resumes at a failed child: use Sequence (which restarts)",
 }
 MAX_DEPTH = 200
 
@@ -162,7 +162,10 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
     """One element as a ``{Type: body}`` node of the YAML form; a ``<SubTree ID=...>`` is replaced by
     the root of that ``<BehaviorTree>`` (named as the SubTree, when it is)."""
     ident = element.tag
-    if ident in _UNSUPPORTED:
+    marked = element.attrs.get(KIND_ATTR, "")
+    if BUILTIN.get(marked) != ident and not (marked == "repeat" and ident == "Sequence"):
+        marked = ""  # the mark of thymio-bt's node applies to the element the export writes for it only
+    if ident in _UNSUPPORTED and not marked:
         raise UserError(
             Problem(
                 f"BT.CPP node <{ident}> is not supported", file, element.line, element.column, hint=_UNSUPPORTED[ident]
@@ -171,9 +174,14 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
     if ident == "SubTree":
         return _subtree(element, file, trees, stack)
     attrs = {k: v for k, v in element.attrs.items() if not k.startswith("_")}
+    if marked == "repeat" and ident == "Sequence":
+        element = _repeat_until(element, file)
+        ident = "RepeatUntil"
     children = [_node(child, file, trees, stack) for child in element.children]
     if ident == "RepeatUntil":
         kind = "repeat"
+    elif marked:
+        kind = marked
     else:
         unprefixed = ident[len("Thymio") :]
         kind = _FROM_BUILTIN.get(ident, unprefixed if ident.startswith("Thymio") and unprefixed in RESERVED else ident)
@@ -212,6 +220,31 @@ def _body(
     if extra and len(children) > 1:
         body[extra] = children[1]
     return body
+
+
+def _repeat_until(element: _Element, file: str) -> _Element:
+    """The do-while loop an export writes (:func:`~thymio_bt.mission.btcpp.repeat_until_elements`)
+    as one ``RepeatUntil`` element of two children: the body, then the condition."""
+    try:
+        script, fallback = element.children
+        keep, check = fallback.children
+        (sequence,) = keep.children
+        body, inverter = sequence.children
+        (condition,) = inverter.children
+        tags = [script.tag, fallback.tag, keep.tag, check.tag, sequence.tag, inverter.tag]
+        if tags != ["Script", "Fallback", "KeepRunningUntilFailure", "ScriptCondition", "Sequence", "Inverter"]:
+            raise ValueError(tags)
+    except ValueError:
+        raise UserError(
+            Problem(
+                f'<Sequence {KIND_ATTR}="repeat"> is not the do-while loop thymio-bt exports',
+                file,
+                element.line,
+                element.column,
+                hint=f"export the loop again (thymio-bt tree MISSION.yaml --btcpp OUT.xml), or remove {KIND_ATTR}",
+            )
+        ) from None
+    return _Element("RepeatUntil", element.attrs, element.line, element.column, [body, condition])
 
 
 def _subtree(element: _Element, file: str, trees: dict[str, _Element], stack: tuple[str, ...]) -> MarkedDict:
@@ -324,21 +357,27 @@ def _settings(root: _Element, file: str) -> tuple[dict[str, Any], _Element | Non
         for key, text in mission.attrs.items():
             if key.startswith("noise."):
                 settings.setdefault("noise", {})[key[len("noise.") :]] = _value(text)
-            elif key in ("backend", "expect") and text.strip().startswith("{"):
-                try:
-                    settings[key] = json.loads(text)
-                except json.JSONDecodeError as exc:
-                    raise UserError(
-                        Problem(
-                            f"{key}: invalid JSON: {exc.msg}",
-                            file,
-                            mission.line,
-                            mission.column,
-                            hint=f'write {key} as a JSON object, e.g. {key}=\'{{"name": "sim"}}\'',
-                        )
-                    ) from None
+            elif text.strip()[:1] == {"plugins": "[", "backend": "{", "expect": "{"}.get(key):
+                settings[key] = _json_setting(key, text, file, mission)
             elif key in ("name", "description", "maze", "start", "sensor_model", "robot"):
                 settings[key] = text
             else:
                 settings[key] = _value(text)
     return settings, element
+
+
+def _json_setting(key: str, text: str, file: str, mission: _Element) -> Any:
+    """A ``<ThymioMission>`` attribute written as JSON (``backend``, ``expect``, ``plugins``)."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        example = '["my_nodes.py"]' if key == "plugins" else '{"name": "sim"}'
+        raise UserError(
+            Problem(
+                f"{key}: invalid JSON: {exc.msg}",
+                file,
+                mission.line,
+                mission.column,
+                hint=f"write {key} as JSON, e.g. {key}='{example}'",
+            )
+        ) from None

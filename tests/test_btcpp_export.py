@@ -1,0 +1,90 @@
+"""`tree --btcpp` exports that BehaviorTree.CPP 4 itself (behaviortreepy) loads and runs with only
+stub leaves registered, and that run back here to the identical report (#33)."""
+
+import json
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from _require import module
+
+MISSIONS = sorted(Path("missions").glob("*.yaml"))
+PLUGIN_MISSION = Path("examples/spin_until_clear.yaml")
+
+
+def _export(mission: Path, out: Path) -> str:
+    from thymio_bt.mission.btcpp import mission_xml
+    from thymio_bt.mission.loader import load_mission
+
+    text = mission_xml(load_mission(mission, run_plugins=False), out)
+    out.write_text(text)
+    return text
+
+
+def _stub_tree(bt, xml: str):
+    """The export as a BT.CPP tree: every TreeNodesModel node registered as a stub (actions RUNNING
+    once then SUCCESS, conditions alternating), their ports dropped (stubs declare none)."""
+    root = ET.fromstring(xml)
+    model = root.find("TreeNodesModel")
+    assert model is not None
+    leaves = {entry.get("ID"): entry.tag for entry in model}
+    assert "Control" not in leaves.values(), "an export needs no custom control node"
+    factory = bt.BehaviorTreeFactory()
+    calls: dict[str, int] = {}
+
+    def condition(node):
+        calls[node.name()] = calls.get(node.name(), 0) + 1
+        return bt.NodeStatus.SUCCESS if calls[node.name()] % 3 == 0 else bt.NodeStatus.FAILURE
+
+    for ident, tag in leaves.items():
+        if tag == "Condition":
+            factory.register_simple_condition(ident, condition)
+        else:
+            factory.register_simple_stateful_action(
+                ident, lambda node: bt.NodeStatus.RUNNING, lambda node: bt.NodeStatus.SUCCESS
+            )
+    for element in root.iter():
+        if element.tag in leaves:
+            for key in [k for k in element.attrib if k not in ("name", "_uid")]:
+                del element.attrib[key]
+    root.remove(model)
+    return factory.create_tree_from_text(ET.tostring(root, encoding="unicode"))
+
+
+@pytest.mark.parametrize("mission", [*MISSIONS, PLUGIN_MISSION], ids=lambda m: m.stem)
+def test_every_export_loads_and_runs_in_behaviortree_cpp_with_stub_leaves(mission, tmp_path):
+    bt = module("behaviortreepy")
+    xml = _export(mission, tmp_path / "tree.xml")
+    assert "RepeatUntil" not in xml
+    tree = _stub_tree(bt, xml)
+    statuses = [tree.tick_once() for _ in range(60)]
+    assert set(statuses) <= {bt.NodeStatus.RUNNING, bt.NodeStatus.SUCCESS, bt.NodeStatus.FAILURE}
+
+
+def test_a_plugin_mission_exports_its_plugins_and_runs_back_to_the_identical_report(tmp_path):
+    from thymio_bt.mission.loader import load_mission
+    from thymio_bt.run.runner import Run
+
+    out = tmp_path / "deep" / "spin.xml"
+    out.parent.mkdir()
+    xml = _export(PLUGIN_MISSION, out)
+    settings = ET.fromstring(xml).find("ThymioMission")
+    assert settings is not None
+    plugins = json.loads(settings.get("plugins", "[]"))
+    assert len(plugins) == 1 and not Path(plugins[0]).is_absolute()  # relative to the output file
+    assert (out.parent / plugins[0]).resolve() == (PLUGIN_MISSION.parent / "spin_until_clear.py").resolve()
+    assert re.search(r'<Action ID="SpinUntilClear">\s*<input_port name="rate"', xml)
+    reports = [Run(load_mission(path), seed=3).run().report() for path in (PLUGIN_MISSION, out)]
+    for report in reports:
+        report.pop("wall_time"), report.pop("real_time_factor")
+    assert reports[0] == reports[1]
+
+
+def test_a_do_while_loop_is_written_with_built_ins_and_read_back_as_one_repeat(tmp_path):
+    from thymio_bt.mission.xml_reader import read_xml_mission
+
+    xml = _export(Path("missions/maze_bonus.yaml"), tmp_path / "bonus.xml")
+    assert '<Sequence name="bonus maze" _thymio="repeat"' in xml and "<KeepRunningUntilFailure>" in xml
+    body = read_xml_mission(tmp_path / "bonus.xml")["tree"]["repeat"]
+    assert sorted(body) == ["do", "name", "until"] and "IsDeadEnd" in body["until"]
