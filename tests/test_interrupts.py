@@ -147,3 +147,85 @@ def test_a_sweep_worker_that_dies_is_reported_not_a_traceback(tmp_path, body, me
     data = json.loads((tmp_path / "s.json").read_text())
     assert data["interrupted"].startswith("a worker process died") and data["runs"] < 40
     assert all(r["status"] == "SUCCESS" for r in data["results"])
+
+
+STUCK = """\
+from pathlib import Path
+from py_trees.common import Status
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
+class StuckParams(BehaviourParams):
+    \"\"\"No parameters.\"\"\"
+class Stuck(RobotBehaviour):
+    \"\"\"Drives for three ticks, then loops for ever inside its fourth (says so in 'stuck.txt').\"\"\"
+    yaml_name = "Stuck"
+    Params = StuckParams
+    moves = True
+    def start(self):
+        self.ticks = 0
+    def step(self):
+        self.robot.drive(0.1, 0.0)
+        self.ticks += 1
+        if self.ticks > 3:
+            Path("stuck.txt").write_text("stuck")
+            while True:
+                pass
+        return Status.RUNNING
+"""
+
+
+def _stuck_mission(folder: Path) -> Path:
+    (folder / "stuck.py").write_text(STUCK)
+    mission = folder / "stuck.yaml"
+    mission.write_text("name: stuck\nmaze: arena\nstart: centre\nplugins: [stuck.py]\ntree: {sequence: [Stuck]}\n")
+    return mission
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_second_signal_ends_a_run_stuck_inside_a_tick(tmp_path, sig, code):
+    _stuck_mission(tmp_path)
+    proc = start(["run", "stuck.yaml", "--report", "r.json", "--log", "r.jsonl"], tmp_path)
+    wait_for(tmp_path / "stuck.txt")
+    proc.send_signal(sig)  # noted for the next tick, which never comes
+    time.sleep(0.5)
+    assert proc.poll() is None  # still stuck: the first signal only asks
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == code, err
+    report = json.loads((tmp_path / "r.json").read_text())
+    assert report["status"] == report["code"] == "INTERRUPTED" and report["failed_path"] == "sequence/Stuck"
+    assert signal.Signals(sig).name in report["reason"] and "never ended its tick" in report["reason"]
+    assert report["ticks"] == 3 and report["sim_time"] == 0.3
+    ends = [e for e in report["events"] if e["kind"] == "behaviour_end"]
+    assert [e["name"] for e in ends] == ["Stuck"]  # halted like any running node: its motors stopped
+    lines = [json.loads(line) for line in (tmp_path / "r.jsonl").read_text().splitlines()]
+    assert lines[-1]["kind"] == "end" and lines[-1]["status"] == "INTERRUPTED"
+    assert [r["tick"] for r in lines if "tick" in r] == [1, 2, 3]
+    assert "Traceback" not in err and "INTERRUPTED" in out
+
+
+def test_a_second_signal_stops_the_motors_of_a_run_stuck_inside_a_tick(tmp_path, monkeypatch):
+    import threading
+
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.interrupts import Interrupts
+    from thymio_bt.run.runner import Run
+
+    run = Run(load_mission(_stuck_mission(tmp_path)))
+    run.backend.close = lambda: None  # keep the world to look at it after the run
+    monkeypatch.chdir(tmp_path)  # the plugin writes stuck.txt in the working folder
+
+    def press_ctrl_c_twice():
+        wait_for(tmp_path / "stuck.txt")
+        for _ in range(2):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.2)
+
+    threading.Thread(target=press_ctrl_c_twice, daemon=True).start()
+    try:
+        with Interrupts() as interrupts:
+            result = run.run(interrupts=interrupts)
+    except KeyboardInterrupt:
+        pytest.fail("the second Ctrl-C escaped the run: no result, the robot left driving")
+    assert (result.status, result.failed_path, interrupts.exit_code) == ("INTERRUPTED", "sequence/Stuck", 130)
+    command = run.backend.command()
+    assert (command.linear, command.angular) == (0.0, 0.0)

@@ -128,15 +128,17 @@ def viewer_options(command: F) -> F:
 
 
 class _Commands(click.Group):
-    """The command group; a Ctrl-C outside a run's own handling (or a second one) exits 130, quietly."""
+    """The command group; a Ctrl-C outside a run's own handling (or a second one) exits 130, quietly
+    (143 when a SIGTERM came first)."""
 
     def invoke(self, ctx: click.Context) -> Any:
-        """Run the command; a KeyboardInterrupt prints ``interrupted`` and exits 130."""
+        """Run the command; a KeyboardInterrupt prints ``interrupted`` and exits 130 (or the code of
+        the first signal of an :class:`~thymio_bt.run.interrupts.Interrupted`)."""
         try:
             return super().invoke(ctx)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as exc:
             click.echo("\ninterrupted", err=True)
-            sys.exit(130)
+            sys.exit(getattr(exc, "exit_code", 130))
 
 
 @click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})

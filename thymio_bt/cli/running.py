@@ -301,6 +301,18 @@ class _Progress:
             click.echo("\r" + " " * 60 + "\r", err=True, nl=False)
 
 
+def clearance_text(gap: float | None) -> str:
+    """The summary's min clearance: in metres to 0.1 mm, a gap under that (not contact) to 1 µm, so
+    that 0 means contact (a collision) and nothing else.
+
+    >>> clearance_text(0.01537), clearance_text(3e-05), clearance_text(0.0), clearance_text(None)
+    ('0.0154 m', '0.000030 m', '0.0000 m', 'n/a')
+    """
+    if gap is None:
+        return "n/a"
+    return f"{gap:.6f} m" if 0.0 < gap < 5e-5 else f"{gap:.4f} m"
+
+
 def _summary(result: RunResult, err: bool = False) -> None:
     """The run's status, times, final pose and clearance; where and why it failed, on stderr."""
     echo = partial(click.echo, err=err)
@@ -317,8 +329,7 @@ def _summary(result: RunResult, err: bool = False) -> None:
         echo(f"  final pose: x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg")
     else:
         echo("  final pose: no robot")
-    clearance = f"{result.min_clearance:.4f} m" if result.min_clearance is not None else "n/a"
-    echo(f"  collisions: {result.collisions}   min clearance: {clearance}")
+    echo(f"  collisions: {result.collisions}   min clearance: {clearance_text(result.min_clearance)}")
     if result.status != "SUCCESS":
         echo(f"  failed at: {result.failed_path}", err=True)
         echo(f"  reason: [{result.code}] {result.reason}", err=True)

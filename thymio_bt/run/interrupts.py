@@ -3,8 +3,13 @@
 A signal arriving in the middle of a physics step or of a write must not leave a half-updated world,
 a robot driving on, or a report unwritten. So the handler only notes the signal; :class:`~thymio_bt.
 runner.Run` and :func:`~thymio_bt.run.sweep.sweep` look at it once per tick (or per result), stop the
-robot, and end with status ``INTERRUPTED``, their report and log complete. A second signal while
-that happens raises :class:`KeyboardInterrupt` at once, for a loop stuck in a blocking call.
+robot, and end with status ``INTERRUPTED``, their report and log complete.
+
+A tick that never ends (a plugin's endless loop inside ``step()``, a blocking call) never reaches
+that check. So a second signal raises :class:`Interrupted` (a :class:`KeyboardInterrupt`) at once,
+out of whatever the main thread is running: the run loop catches it, stops the motors, and ends the
+run the same way (status ``INTERRUPTED``, the stuck node named, report and log complete); outside a
+run loop it ends the command with the first signal's exit code.
 
 Example (a Ctrl-C before the first tick: the run ticks once, then ends):
 
@@ -31,6 +36,29 @@ from typing import Any
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
+class Interrupted(KeyboardInterrupt):
+    """A second signal, raised from the handler into the code the main thread was running.
+
+    >>> exc = Interrupted(signal.SIGTERM)
+    >>> exc.name, exc.exit_code
+    ('SIGTERM', 143)
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def name(self) -> str:
+        """The name of the signal that ended the command first (``"SIGINT"``, ``"SIGTERM"``)."""
+        return signal.Signals(self.signum).name
+
+    @property
+    def exit_code(self) -> int:
+        """130 after SIGINT, 143 after SIGTERM."""
+        return 128 + self.signum
+
+
 class Interrupts:
     """While entered (in the main thread), notes SIGINT/SIGTERM in :attr:`signal` instead of dying."""
 
@@ -49,8 +77,8 @@ class Interrupts:
         return 128 + (self.signal or 0)
 
     def _handle(self, signum: int, frame: FrameType | None) -> None:
-        if self.signal is not None:  # asked twice: stop now, whatever is running
-            raise KeyboardInterrupt
+        if self.signal is not None:  # asked twice: stop now, whatever is running (a stuck tick)
+            raise Interrupted(self.signal)  # the first signal's: it decides the exit code
         self.signal = signum
 
     def __enter__(self) -> Interrupts:

@@ -126,11 +126,14 @@ class EndKind(Enum):
 @dataclass(frozen=True)
 class Ending:
     """How the tick loop ended: its kind, and for a run cut short the report's code (``TIMEOUT``,
-    ``ROBOT_LOST``...) and, where known then, the reason."""
+    ``ROBOT_LOST``...) and, where known then, the reason and the node it ended in; ``forced`` when
+    a second signal broke into a tick (the robot is then stopped whatever the tree did)."""
 
     kind: EndKind
     code: str | None = None
     reason: str | None = None
+    failed_path: str | None = None
+    forced: bool = False
 
 
 @dataclass(frozen=True)

@@ -35,13 +35,17 @@ from thymio_bt.behaviours.base import describe, node_path, snapshot
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.mission import Mission, build_tree
-from thymio_bt.robot.interface import Backend, RequestState, RobotLost
+from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
-from thymio_bt.run.interrupts import Interrupts
+from thymio_bt.run.interrupts import Interrupted, Interrupts
 from thymio_bt.run.phases import phases
 from thymio_bt.run.result import Ending, EndKind, RunResult, Verdict, failing_branch, learnt_map
 
 TickHook = Callable[["Run"], None]
+
+#: a hull-to-wall gap at or below this (m) is contact, a collision: the report's ``min_clearance``
+#: is rounded to 1 µm, so a report never says 0 clearance with 0 collisions (:meth:`Run._contact`)
+CONTACT = 1e-6
 
 
 class StopRun(Exception):
@@ -150,16 +154,33 @@ class Run:
         """Tick the tree and advance the backend until something ends the run (the time limit at the latest)."""
         limit_ticks = math.ceil(self.mission.time_limit * self.mission.tick_hz - 1e-9)
         seen_collisions = 0
-        while self.ticks < limit_ticks:
-            self._tick_tree()
-            ending = self._after_tick(on_tick, interrupts)
-            if ending is not None:
-                return ending
-            seen_collisions = self._emit_collisions(seen_collisions)
-            self._record()
-            if realtime:
-                self._pace(realtime, wall_start)
+        try:
+            while self.ticks < limit_ticks:
+                self._tick_tree()
+                ending = self._after_tick(on_tick, interrupts)
+                if ending is not None:
+                    return ending
+                seen_collisions = self._emit_collisions(seen_collisions)
+                self._record()
+                if realtime:
+                    self._pace(realtime, wall_start)
+        except Interrupted as exc:  # a second signal: the tick (a plugin's endless loop) never ended
+            return self._forced_ending(exc)
         return Ending(EndKind.TIMEOUT, "TIMEOUT")
+
+    def _forced_ending(self, exc: Interrupted) -> Ending:
+        """The ending of a run whose tick a second signal broke into: the node whose code was running
+        (and its ancestors) marked RUNNING, so that stopping the tree halts it like any running node."""
+        stuck = _running_node(exc)
+        where = None
+        if stuck is not None:
+            node: Behaviour | None = stuck
+            while node is not None:
+                node.status = Status.RUNNING  # it was inside its tick: it had not ended
+                node = node.parent
+            where = node_path(stuck)
+        reason = f"'{where}' never ended its tick; a second signal stopped it" if where else "a tick never ended"
+        return Ending(EndKind.INTERRUPTED, "INTERRUPTED", reason, failed_path=where, forced=True)
 
     def _tick_tree(self) -> None:
         """One tick of the tree, through the node statistics' visitor when they are kept."""
@@ -199,12 +220,28 @@ class Run:
     def _emit_collisions(self, seen: int) -> int:
         """A ``collision`` event for each collision the backend counted past the first ``seen``; how
         many have had their event."""
+        self._contact()
         collisions = self.backend.collisions
         if len(collisions) <= seen:
             return seen
         for c in collisions[seen:]:
             self.events.emit(c.t, "collision", x=round(c.x, 6), y=round(c.y, 6))
         return len(collisions)
+
+    def _contact(self) -> None:
+        """Contact is a collision: a backend whose clearance reached :data:`CONTACT` but that counted
+        no collision (its contact detection missed it, or it has none) gets one, at the robot's pose
+        when the runner sees it (at most a tick late), so that behaviours fail with COLLISION, the
+        report counts it and ``expect: {no_collision: true}`` fails, on every backend."""
+        backend = self.backend
+        if backend.collisions or not backend.min_clearance <= CONTACT:
+            return
+        pose = backend.true_pose() or backend.pose()
+        if pose is not None:
+            x, y = pose.x, pose.y
+        else:
+            x, y = self.trajectory[-1][1:3] if self.trajectory else (0.0, 0.0)
+        backend.collisions.append(Collision(backend.time(), x, y))
 
     def _pace(self, realtime: float, wall_start: float) -> None:
         """Wait until the wall clock catches up with simulated time / ``realtime`` (``--realtime``)."""
@@ -227,23 +264,35 @@ class Run:
             ending.kind.report_status,
             self._cut_short_reason(ending, interrupts),
             ending.code,
-            node_path(running) if running is not None else None,
+            ending.failed_path or (node_path(running) if running is not None else None),
         )
         self.root.stop(Status.INVALID)  # ends the running behaviours: events, robot stopped
+        if ending.forced:
+            self._stop_motors()
         return verdict
+
+    def _stop_motors(self) -> None:
+        """Stop the robot whatever the tree did (a tick broken into may have left any command)."""
+        try:
+            if self.backend.exists():
+                self.backend.drive(0.0, 0.0)
+        except Exception:  # noqa: S110 - a robot already gone is stopped; close() tries again
+            pass
 
     def _cut_short_reason(self, ending: Ending, interrupts: Interrupts) -> str | None:
         """Why a run that the tree did not end was cut short, in the report's words."""
         if ending.kind is EndKind.TIMEOUT:
             return f"time limit of {self.mission.time_limit:g} s reached"
         if ending.kind is EndKind.INTERRUPTED:
-            return f"interrupted by {interrupts.name} at {self.backend.time():.1f} s"
+            said = f"interrupted by {interrupts.name} at {self.backend.time():.1f} s"
+            return f"{said}: {ending.reason}" if ending.reason else said
         return ending.reason
 
     def _result(self, verdict: Verdict, wall: float) -> RunResult:
         """The run's result: the verdict, the robot's final state, events, phases, the learnt map,
         whether it reached the maze's goal and whether the mission's ``expect:`` held."""
         sim = self.backend
+        self._contact()
         final = snapshot(sim)
         true_pose = sim.true_pose()
         learnt = learnt_map(self.root)
@@ -323,12 +372,25 @@ class NodeStats(py_trees.visitors.VisitorBase):
             row["running_time"] = round(row["running_time"] + self.period, 9)
 
 
+def _running_node(exc: BaseException) -> Behaviour | None:
+    """The innermost tree node whose method was running where ``exc`` was raised (None: no node's)."""
+    found = None
+    tb = exc.__traceback__
+    while tb is not None:
+        owner = tb.tb_frame.f_locals.get("self")
+        if isinstance(owner, Behaviour):
+            found = owner
+        tb = tb.tb_next
+    return found
+
+
 def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> RunResult:
     """Build and run ``mission`` once."""
     return Run(mission, seed).run(**kwargs)
 
 
 __all__ = [
+    "CONTACT",
     "EndKind",
     "Ending",
     "NodeStats",
