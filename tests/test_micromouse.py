@@ -4,6 +4,7 @@ maze's goal region reported by runs, and generated mazes of the contest kind."""
 
 import math
 from collections import deque
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -32,7 +33,7 @@ def test_the_example_reads_in_the_issues_coordinates():
 
 
 def test_text_round_trips():
-    text = open(EXAMPLE).read()
+    text = Path(EXAMPLE).read_text()
     assert to_text(parse_micromouse(text)) == text
 
 
@@ -64,7 +65,7 @@ def reachable(cells, start):
     seen, todo = {start}, deque([start])
     while todo:
         i, j = todo.popleft()
-        for side, (di, dj) in zip("NESW", ((0, 1), (1, 0), (0, -1), (-1, 0))):
+        for side, (di, dj) in zip("NESW", ((0, 1), (1, 0), (0, -1), (-1, 0)), strict=True):
             nxt = (i + di, j + dj)
             if side in cells.open_sides(i, j) and nxt not in seen:
                 seen.add(nxt)

@@ -1,5 +1,6 @@
 """The simulated Thymio against the course's numbers (robot.md, mazes.md)."""
 
+import itertools
 import math
 from types import MappingProxyType
 
@@ -221,7 +222,7 @@ def test_a_gap_a_hair_below_the_record_is_recorded():
         exact = tracker.exact(list(tracker.walls), entity.shape, 0.3, 0.1 + step * 2e-8, 1.0, 0.0)
         assert sim.min_clearance == pytest.approx(exact, abs=1e-12)
         records.append(sim.min_clearance)
-    assert all(later < earlier for earlier, later in zip(records, records[1:]))
+    assert all(later < earlier for earlier, later in itertools.pairwise(records))
 
 
 def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch):
