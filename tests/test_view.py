@@ -150,7 +150,7 @@ def test_a_replay_closed_early_just_ends(pg, tmp_path):
 
 def test_without_pygame_the_error_says_how_to_install_it(monkeypatch):
     monkeypatch.setitem(sys.modules, "pygame", None)
-    with pytest.raises(UserError, match=r"pygame is not installed \(hint: pip install 'thymio-bt\[viz\]'\)"):
+    with pytest.raises(UserError, match=r"pygame is not installed \(hint: pip install 'thymio-bt\[viz\]', or in a"):
         Viewer(Maze())
 
 
@@ -199,8 +199,54 @@ def test_view_without_pygame_is_a_user_error(monkeypatch):
     from thymio_bt.cli import main
 
     monkeypatch.setitem(sys.modules, "pygame", None)
+    monkeypatch.delenv("SDL_VIDEODRIVER", raising=False)
+    monkeypatch.setenv("DISPLAY", ":0")  # a display: pygame is what is missing
     result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view"])
     assert result.exit_code == 2 and "pip install 'thymio-bt[viz]'" in result.output
+    assert "in a checkout: pip install -e '.[viz]'" in result.output  # the PyPI form fails there
+
+
+def _headless(**env):
+    """The environment of a shell with no display (nor SDL driver chosen), plus ``env``."""
+    import os
+
+    clean = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "SDL_VIDEODRIVER")}
+    return {**clean, **env}
+
+
+@pytest.mark.parametrize("command", ["run", "replay"])
+def test_view_without_a_display_ends_at_once_naming_what_to_use(tmp_path, command):
+    import subprocess
+
+    args = ["run", "square", "--set", "time_limit=5", "--report", "r.json"] if command == "run" else ["replay", "x"]
+    done = subprocess.run(
+        [sys.executable, "-m", "thymio_bt", *args, "--view"],
+        cwd=tmp_path,
+        env=_headless(),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith("error: no display: --view needs a window, and DISPLAY and WAYLAND_DISPLAY")
+    assert "--plot" in done.stderr and "--gif" in done.stderr and "Traceback" not in done.stderr
+    assert ("--groot2" in done.stderr) == (command == "run")  # replay has no Groot2 monitor
+    assert not (tmp_path / "r.json").exists()  # refused before the run
+
+
+def test_view_refuses_sdl_falling_back_to_its_offscreen_driver(tmp_path):
+    import subprocess
+
+    _require.module("pygame")
+    done = subprocess.run(
+        [sys.executable, "-m", "thymio_bt", "run", "square", "--set", "time_limit=5", "--view"],
+        cwd=tmp_path,
+        env=_headless(DISPLAY=":9999"),  # a display that does not answer: SDL draws offscreen
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2 and "error: no display: --view needs a window, and SDL found none" in done.stderr
 
 
 def test_a_mapping_mission_shows_its_map_live(pg, tmp_path):

@@ -52,6 +52,10 @@ def replay(
 
     pictures = Pictures(plot, plot_signals, gif)
     try:
+        if view:
+            from thymio_bt.viz.display import require_display
+
+            require_display("without a display, draw the log to files: --plot run.png, --gif run.gif (or .mp4)")
         pictures.check()
         recording = read_log(log, partial)
         damage_note(log, recording)

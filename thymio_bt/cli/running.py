@@ -56,6 +56,13 @@ if TYPE_CHECKING:
     from thymio_bt.viz.window import LiveView
 
 
+#: what ``run`` shows without a display, for ``--view`` refused there
+NO_DISPLAY_HINT = (
+    "without a display, draw the run to files: --plot run.png, --gif run.gif (or .mp4), "
+    "or watch it live in Groot2: --groot2 --realtime 1"
+)
+
+
 @main.command()
 @click.argument("mission", type=click.Path(path_type=Path))
 @click.option(
@@ -138,6 +145,10 @@ def run(
     """Run MISSION (a YAML file) and print a summary."""
     pictures = Pictures(plot, plot_signals, gif)
     try:
+        if view:
+            from thymio_bt.viz.display import require_display
+
+            require_display(NO_DISPLAY_HINT)
         from thymio_bt.mission import load_mission
 
         overrides = parse_overrides(sets)

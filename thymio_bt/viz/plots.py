@@ -31,6 +31,7 @@ from typing import Any
 from thymio_bt.errors import UserError
 from thymio_bt.logs.recording import Recording
 from thymio_bt.robot.model import COURSE
+from thymio_bt.viz.display import INSTALL_HINT
 
 KEY_EVENTS = {"delete_entity": ("tab:red", "deleted"), "spawn_entity": ("tab:green", "spawned")}
 
@@ -39,7 +40,7 @@ def _pyplot() -> Any:
     try:
         import matplotlib
     except ImportError:
-        raise UserError("plots need matplotlib (hint: pip install 'thymio-bt[viz]')") from None
+        raise UserError(f"plots need matplotlib (hint: {INSTALL_HINT})") from None
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -43,6 +43,7 @@ from thymio_bt.maze import Maze
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.result import RunResult, learnt_map
 from thymio_bt.run.runner import Run, StopRun
+from thymio_bt.viz.display import INSTALL_HINT
 from thymio_bt.viz.plots import _outline, _rays
 
 #: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
@@ -96,7 +97,7 @@ def _pygame() -> Any:
     try:
         import pygame
     except ImportError:
-        raise UserError("pygame is not installed (hint: pip install 'thymio-bt[viz]')") from None
+        raise UserError(f"pygame is not installed (hint: {INSTALL_HINT})") from None
     return pygame
 
 
