@@ -6,8 +6,8 @@ beside the robot. A decision is therefore taken when the wall ahead first comes 
 an opening is found by its edge and then reached by odometry.
 
 This module holds the conditions (``WallAhead``, ``SideOpen``, ``IsDeadEnd``) and ``ChooseTurn``;
-``WallFollow`` lives in :mod:`thymio_bt.behaviours.wall_follow` and the corridor's geometry in
-:mod:`thymio_bt.behaviours.corridor`; their names still import from here.
+``WallFollow`` lives in :mod:`thymio_bt.behaviours.wall_follow` (its name still imports from here)
+and the corridor's geometry in :mod:`thymio_bt.behaviours.corridor`.
 
 Example::
 
@@ -28,39 +28,12 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, RobotBehaviour
-from thymio_bt.behaviours.corridor import (
-    AXLE_X,
-    FRONT_PAIR,
-    FRONT_SENSORS,
-    GLINT_BELOW,
-    GLINT_JUMP,
-    RANGE_MAX,
-    REAR_PAIR,
-    RETAKE_ANGLE,
-    RETAKE_MAX,
-    SQUARING_READINGS,
-    WALL_RESIDUAL,
-    WALL_SPAN,
-    Side,
-    line_direction,
-    side_ray,
-)
+from thymio_bt.behaviours.corridor import RANGE_MAX, Side, side_ray
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
 from thymio_bt.inputs.fields import Length
 
 __all__ = [
-    "AXLE_X",
-    "FRONT_PAIR",
-    "FRONT_SENSORS",
-    "GLINT_BELOW",
-    "GLINT_JUMP",
     "RANGE_MAX",
-    "REAR_PAIR",
-    "RETAKE_ANGLE",
-    "RETAKE_MAX",
-    "SQUARING_READINGS",
-    "WALL_RESIDUAL",
-    "WALL_SPAN",
     "ChooseTurn",
     "ChooseTurnParams",
     "IsDeadEnd",
@@ -72,7 +45,6 @@ __all__ = [
     "WallAheadParams",
     "WallFollow",
     "WallFollowParams",
-    "line_direction",
     "side_ray",
 ]
 
