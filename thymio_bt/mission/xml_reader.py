@@ -31,20 +31,27 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
+from thymio_bt.behaviours.btcpp_control import BTCPP_IDS
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
 from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, MISSION_TAG, RESERVED
 
-_FROM_BUILTIN = {ident: kind for kind, ident in BUILTIN.items()}
+#: BT.CPP built-in -> the node kind of BT.CPP's semantics (an element without _thymio)
+_FROM_BUILTIN = dict(BTCPP_IDS)
 #: BT.CPP nodes that thymio-bt cannot run, with what to use instead
 _UNSUPPORTED = {
-    "Timeout": "BT.CPP's Timeout counts wall-clock milliseconds: use thymio-bt's timeout (seconds: simulated)",
-    "Delay": "BT.CPP's Delay counts wall-clock milliseconds: use thymio-bt's delay (seconds: simulated)",
     "Sleep": "use Wait (seconds: simulated)",
-    "Script": "scripts are not supported: use SetBlackboard",
-    "SequenceWithMemory": "BT.CPP's SequenceWithMemory resumes at a failed child: use Sequence (which restarts)",
+    "AlwaysSuccess": "use Wait with seconds: 0, or ForceSuccess around a node",
+    "AlwaysFailure": "use ForceFailure around a node",
+    "Script": "scripts are not supported yet: use SetBlackboard",
+    "ScriptCondition": "scripts are not supported yet: use a condition behaviour",
+    "Precondition": "scripts are not supported yet: use IfThenElse with a condition behaviour",
+    "UnsetBlackboard": "not supported yet: use SetBlackboard",
+    **{f"Switch{n}": "not supported yet: use IfThenElse on a condition behaviour" for n in range(2, 7)},
 }
+#: BT.CPP's pre- and post-condition attributes (scripts), not supported yet
+_SCRIPT_ATTRS = ("_skipIf", "_successIf", "_failureIf", "_while", "_onSuccess", "_onFailure", "_onHalted", "_post")
 MAX_DEPTH = 200
 
 
@@ -165,6 +172,8 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
     marked = element.attrs.get(KIND_ATTR, "")
     if BUILTIN.get(marked) != ident and not (marked == "repeat" and ident == "Sequence"):
         marked = ""  # the mark of thymio-bt's node applies to the element the export writes for it only
+    if not marked:
+        _refuse_scripts(element, file)
     if ident in _UNSUPPORTED and not marked:
         raise UserError(
             Problem(
@@ -209,6 +218,12 @@ def _body(
         return {"policy": policy, **{k: _value(v) for k, v in attrs.items()}, "children": _list(children, element)}
     if kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
         return {**{k: _value(v) for k, v in attrs.items()}, "children": _list(children, element)}
+    if kind.startswith("bt_"):  # BT.CPP's own node: its ports under their names
+        ports = {k: _value(v) for k, v in attrs.items()}
+        return {
+            **ports,
+            **({"do": children[0]} if _is_decorator(ident) and children else {"children": _list(children, element)}),
+        }
     if not children:  # a behaviour or condition
         return {k: _value(v) for k, v in attrs.items()}
     renamed = {"num_cycles": "times", "num_attempts": "times"}  # a decorator
@@ -220,6 +235,28 @@ def _body(
     if extra and len(children) > 1:
         body[extra] = children[1]
     return body
+
+
+def _is_decorator(ident: str) -> bool:
+    """Whether BT.CPP's node ``ident`` is a decorator (one child, under ``do``)."""
+    from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL
+
+    return any(cls.btcpp_id == ident and cls.category == "decorator" for cls in BTCPP_CONTROL)  # type: ignore[attr-defined]
+
+
+def _refuse_scripts(element: _Element, file: str) -> None:
+    """BT.CPP's pre/post-condition attributes are scripts, which are not supported yet: refused."""
+    for key in _SCRIPT_ATTRS:
+        if key in element.attrs:
+            raise UserError(
+                Problem(
+                    f"<{element.tag} {key}=...>: BT.CPP's scripts are not supported yet",
+                    file,
+                    element.line,
+                    element.column,
+                    hint="write the condition as a node: IfThenElse or ReactiveSequence with a condition behaviour",
+                )
+            )
 
 
 def _repeat_until(element: _Element, file: str) -> _Element:
