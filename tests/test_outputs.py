@@ -117,3 +117,35 @@ def test_a_log_that_cannot_be_written_mid_run_ends_the_run_and_keeps_the_report(
     assert report["code"] == "STOPPED" and "cannot write the log big.jsonl: File too large" in report["reason"]
     assert 0 < report["sim_time"] < 100
     assert sorted(p.name for p in tmp_path.iterdir()) == ["big.jsonl", "r.json"]
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", SQUARE, "--report"],
+        ["tree", SQUARE, "--btcpp"],
+        ["sweep", SQUARE, "--runs", "1", "--out"],
+        ["schema", "-o"],
+    ],
+)
+def test_a_folder_the_system_refuses_is_refused_before_any_work(command):
+    """/proc exists and root may 'write' there by its mode bits, but no file can be created in it."""
+    result = invoke(*command, "/proc/thymio-bt-out.json")
+    assert result.exit_code == 2, result.output
+    assert "cannot create a file in /proc" in result.output and "Traceback" not in result.output
+    assert "SUCCESS" not in result.output and "succeeded" not in result.output  # nothing ran
+
+
+def test_a_new_file_follows_the_umask_and_a_replaced_file_keeps_its_mode(tmp_path):
+    old = os.umask(0o027)
+    try:
+        Output(tmp_path / "new.json", "--report").write_text("{}")
+        replaced = tmp_path / "kept.json"
+        replaced.write_text("old")
+        replaced.chmod(0o604)
+        Output(replaced, "--report").write_text("{}")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "new.json").stat().st_mode & 0o777 == 0o640  # 0666 less the umask, not mkstemp's 0600
+    assert replaced.stat().st_mode & 0o777 == 0o604
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.json", "new.json"]  # no probe or temporary left

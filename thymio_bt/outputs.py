@@ -7,7 +7,8 @@ Every command that writes (``--report``, ``sweep --out``, ``schema -o``, ``maze 
   a FIFO, a device or a folder), so a 200-run sweep does not fail at the end;
 - the text goes to a temporary file in the target's folder, renamed over the target only once
   complete: a full disk or a crash never leaves half a report or a ``*.tmp`` behind;
-- the message says which path was actually written.
+- the message says which path was actually written;
+- a new file's permissions follow the umask (as ``open()``'s would), a replaced file keeps its own.
 
 Example:
 
@@ -76,18 +77,32 @@ class Output:
     def staged(self) -> Iterator[Path]:
         """A temporary path (same folder and suffix) to write; renamed over the target on success,
         removed on any failure. A write error becomes a UserError naming the target."""
-        fd, name = tempfile.mkstemp(
-            prefix=f".{self.path.stem}.", suffix=f".tmp{self.path.suffix}", dir=self.path.parent
-        )
-        os.close(fd)
-        tmp = Path(name)
+        tmp: Path | None = None
         try:
+            fd, name = tempfile.mkstemp(
+                prefix=f".{self.path.stem}.", suffix=f".tmp{self.path.suffix}", dir=self.path.parent
+            )
+            os.close(fd)
+            tmp = Path(name)
             yield tmp
+            os.chmod(tmp, _mode_for(self.path))
             os.replace(tmp, self.path)
         except OSError as exc:
             raise UserError(f"cannot write {self.path}: {exc.strerror or exc}") from None
         finally:
-            tmp.unlink(missing_ok=True)
+            if tmp is not None:
+                tmp.unlink(missing_ok=True)
+
+
+def _mode_for(path: Path) -> int:
+    """The permissions a written file gets: those of the file it replaces, else what the umask
+    allows of rw-rw-rw- (as ``open()`` would give; the temporary file itself is private, 0600)."""
+    try:
+        return path.stat().st_mode & 0o777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def check_writable(path: Path, option: str) -> None:
@@ -106,3 +121,11 @@ def check_writable(path: Path, option: str) -> None:
         raise UserError(f"{option} {path}: the folder {folder} does not exist (hint: mkdir -p {folder})")
     if not os.access(folder, os.W_OK | os.X_OK):
         raise UserError(f"{option} {path}: the folder {folder} is not writable (hint: choose another folder)")
+    try:  # the system may still refuse (a read-only or virtual file system such as /proc): try it now
+        fd, probe = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".probe", dir=folder)
+    except OSError as exc:
+        raise UserError(
+            f"{option} {path}: cannot create a file in {folder}: {exc.strerror or exc} (hint: choose another folder)"
+        ) from None
+    os.close(fd)
+    os.unlink(probe)
