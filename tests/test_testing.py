@@ -120,3 +120,49 @@ def test_a_run_without_mapping_behaviours_reports_no_map():
 
     result = run_tree({"SetBlackboard": {"key": "maze_map", "value": 3}}, world("corridor"), seconds=5)
     assert result.status == "SUCCESS" and result.maze_map is None and "map" not in result.report()
+
+
+BACK_OFF = '''
+from py_trees.common import Status
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
+
+
+class BackOff(RobotBehaviour):
+    """Reverse for a second."""
+
+    yaml_name = "BackOff"
+    Params = BehaviourParams
+    moves = True
+
+    def step(self):
+        if self.elapsed() >= 1.0:
+            return Status.SUCCESS
+        self.robot.drive(-0.05, 0.0)
+        return Status.RUNNING
+'''
+
+
+def test_run_tree_takes_plugins_relative_to_the_test_file_or_as_classes(pytester):
+    """A newcomer's layout: the test and its plugins/ folder away from where pytest is started."""
+    folder = pytester.mkpydir("students")
+    (folder / "plugins").mkdir()
+    (folder / "plugins" / "back_off.py").write_text(BACK_OFF)
+    (folder / "test_back_off.py").write_text(
+        "import importlib.util, pathlib\n"
+        "from thymio_bt.testing import run_tree, world\n"
+        "def test_a_relative_path(thymio):\n"
+        "    result = thymio.run_tree('BackOff', world('arena'), plugins=['plugins/back_off.py'])\n"
+        "    assert result.status == 'SUCCESS' and result.final_pose['x'] < 0.66\n"
+        "def test_the_class_itself():\n"
+        "    source = pathlib.Path(__file__).parent / 'plugins/back_off.py'\n"
+        "    spec = importlib.util.spec_from_file_location('bo', source)\n"
+        "    module = importlib.util.module_from_spec(spec)\n"
+        "    spec.loader.exec_module(module)\n"
+        "    assert run_tree('BackOff', world('arena'), plugins=[module.BackOff]).status == 'SUCCESS'\n"
+        "def test_a_missing_file_says_where_it_looked():\n"
+        "    import pytest\n"
+        "    from thymio_bt.errors import UserError\n"
+        "    with pytest.raises(UserError, match='relative to the calling test.s folder, .*students'):\n"
+        "        run_tree('BackOff', world('arena'), plugins=['plugins/missing.py'])\n"
+    )
+    pytester.runpytest_subprocess("-p", "no:cacheprovider", "students").assert_outcomes(passed=3)

@@ -16,14 +16,30 @@ A tree that fails says which node and why, and every node's statistics come with
 ('FAILURE', 'COLLISION', 'sequence/MoveDistance', 'the robot hit a wall')
 >>> result.node_stats["sequence/MoveDistance"]
 {'ticks': 65, 'successes': 0, 'failures': 1, 'running_time': 6.4}
+
+A behaviour of your own comes in through ``plugins``: the class itself, a ``.py`` file (a relative
+path is relative to the calling test's file) or ``"package.module:Class"``:
+
+>>> from py_trees.common import Status
+>>> from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
+>>> class Creep(RobotBehaviour):
+...     '''Drive slowly for ever.'''
+...     Params, moves = BehaviourParams, True
+...     def step(self):
+...         self.robot.drive(0.02, 0.0)
+...         return Status.RUNNING
+>>> result = run_tree("Creep", world("arena"), seconds=2, plugins=[Creep])
+>>> result.status, round(result.final_pose["x"], 2)  # from x = 0.7
+('TIMEOUT', 0.74)
 """
 
 from __future__ import annotations
 
+import sys
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 import yaml
@@ -31,6 +47,12 @@ import yaml
 from thymio_bt.errors import UserError, did_you_mean
 from thymio_bt.maze import Maze, maze_from_grid
 from thymio_bt.run.runner import Run, RunResult
+
+if TYPE_CHECKING:
+    from thymio_bt.mission.registry import Registry
+
+#: a plugin as :func:`run_tree` takes it: a ``.py`` path, ``"package.module:Class"``, or the class
+Plugin = str | Path | type
 
 #: Small worlds of 0.2 m cells; ``>`` marks the start (base_link at the cell centre).
 PRESETS: dict[str, str] = {
@@ -115,26 +137,69 @@ def run_tree(
     seconds: float = 60.0,
     seed: int = 0,
     substitute: dict[str, Any] | None = None,
+    plugins: Sequence[Plugin] = (),
     **settings: Any,
 ) -> RunResult:
     """Run ``tree`` (a node as written in mission YAML, as a dict or YAML text) for at most
     ``seconds`` of simulated time in ``maze``; returns the run report's :class:`RunResult` with
     per-node statistics in ``result.node_stats``.
 
-    ``substitute`` maps node-path globs to scripted stubs (see :func:`run_mission_file`);
-    ``settings`` are more mission keys: ``parameters``, ``subtrees``, ``noise``, ``tick_hz``.
+    ``plugins`` are behaviours from outside the package, as a mission's ``plugins:`` lists them: a
+    ``.py`` file (a relative path is relative to the folder of the file that calls ``run_tree``,
+    your test), ``"package.module:Class"``, or the class itself. ``substitute`` maps node-path
+    globs to scripted stubs (see :func:`run_mission_file`); ``settings`` are more mission keys:
+    ``parameters``, ``subtrees``, ``noise``, ``tick_hz``.
     """
     from thymio_bt.mission import load_mission
 
     if isinstance(tree, str):
         tree = yaml.safe_load(tree)
+    registry, refs = _plugins(plugins, _caller_folder())
     with tempfile.TemporaryDirectory(prefix="thymio-bt-test-") as tmp:
         maze_file = Path(tmp) / "maze.yaml"
         maze_file.write_text(yaml.safe_dump(maze.to_yaml_dict(), sort_keys=False))
         mission_file = Path(tmp) / "mission.yaml"
-        mission_file.write_text(mission_text(tree, maze_file.name, start, seconds, **settings))
-        mission = load_mission(mission_file)
+        mission_file.write_text(mission_text(tree, maze_file.name, start, seconds, plugins=refs or None, **settings))
+        mission = load_mission(mission_file, registry=registry)
     return Run(mission, seed, substitutions=substitute, node_stats=True).run()
+
+
+def _caller_folder() -> Path:
+    """The folder of the nearest calling file outside thymio-bt (a test), or the working folder."""
+    package = Path(__file__).resolve().parent
+    frame = sys._getframe(1)
+    while frame is not None:
+        file = Path(frame.f_code.co_filename)
+        if not file.name.startswith("<") and package not in file.resolve().parents:
+            return file.resolve().parent
+        frame = frame.f_back  # type: ignore[assignment]
+    return Path.cwd()
+
+
+def _plugins(plugins: Sequence[Plugin], folder: Path) -> tuple[Registry | None, list[str]]:
+    """A registry with the plugin classes among ``plugins`` (None: none), and the others as a
+    mission's ``plugins:`` entries, a relative ``.py`` path made absolute from ``folder``."""
+    from thymio_bt.mission.registry import default_registry
+
+    registry, refs = None, []
+    for plugin in plugins:
+        if isinstance(plugin, type):
+            registry = registry or default_registry().copy()
+            try:
+                registry.register(plugin)
+            except (TypeError, ValueError) as exc:
+                raise UserError(f"plugins: {exc}") from None
+        elif str(plugin).endswith(".py"):
+            path = folder / plugin
+            if not path.is_file():
+                raise UserError(
+                    f"plugin file not found: {plugin} (hint: a relative path is relative to the calling "
+                    f"test's folder, {folder}; or pass the behaviour's class itself)"
+                )
+            refs.append(str(path.resolve()))
+        else:
+            refs.append(str(plugin))
+    return registry, refs
 
 
 def run_mission_file(
