@@ -137,6 +137,15 @@ class TreePlanner(ParameterReader):
         file = where[0]
         if isinstance(value, str):
             return value, None, where, where
+        if isinstance(value, list):  # e.g. repeat: {do: [a, b]}: one node is expected there
+            key = path.rpartition(".")[2]
+            self.problem(
+                f"a list of {len(value)} nodes where one node is expected: wrap several nodes in a sequence",
+                where,
+                path,
+                f"e.g. '{key}: {{sequence: [...]}}'" if key.isidentifier() else "e.g. '- sequence: [...]'",
+            )
+            return None
         if not (isinstance(value, MarkedDict) and len(value) == 1):
             keys = f" (found keys: {', '.join(map(str, value))})" if isinstance(value, dict) and value else ""
             self.problem(
