@@ -86,3 +86,41 @@ def test_importing_the_logs_package_stays_light():
     code = f"import sys, thymio_bt.logs; print(','.join(m for m in {heavy!r} if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == ""
+
+
+def _edit(lines, tmp_path, index, change):
+    """The log with line ``index`` (0-based) parsed, changed by ``change`` and written back."""
+    record = json.loads(lines[index])
+    change(record)
+    path = tmp_path / "bad.jsonl"
+    path.write_text("\n".join([*lines[:index], json.dumps(record), *lines[index + 1 :]]) + "\n")
+    return path
+
+
+#: damage that replay used to read and export then tripped over (a traceback, half a file left)
+EXPORT_DAMAGE = {
+    "tree not a list": (0, lambda r: r.update(tree="nope"), "header line: tree"),
+    "uid above 65535": (0, lambda r: r["tree"][0].update(uid=70000), "header line: tree.0.uid"),
+    "parent unknown": (0, lambda r: r["tree"][1].update(parent=99), "parent 99 is not listed before it"),
+    "unknown status letter": (4, lambda r: r["nodes"].update({next(iter(r["nodes"])): "Z"}), "tick line: nodes"),
+    "tick without its number": (4, lambda r: r.pop("tick"), "tick line: tick: Field required"),
+    "t = 1e300": (4, lambda r: r.update(t=1e300), "tick line: t"),
+    "t negative": (4, lambda r: r.update(t=-5.0), "tick line: t"),
+    "t going back": (4, lambda r: r.update(t=0.05), "is before the previous tick's"),
+    "sim_time not a number": (-1, lambda r: r.update(sim_time="abc"), "end line: sim_time"),
+}
+
+
+@pytest.mark.parametrize("how", sorted(EXPORT_DAMAGE))
+@pytest.mark.parametrize(
+    "command", [["replay"], ["export", "-o", "{tmp}/out.mcap"], ["export", "--btlog", "{tmp}/out.btlog"]]
+)
+def test_damage_an_export_would_trip_on_is_found_when_reading(good_log, tmp_path, how, command):
+    index, change, message = EXPORT_DAMAGE[how]
+    path = _edit(good_log, tmp_path, index % len(good_log), change)
+    args = [a.replace("{tmp}", str(tmp_path)) for a in command]
+    result = CliRunner().invoke(main, [args[0], str(path), *args[1:]])
+    assert result.exit_code == 2 and message in result.output, result.output
+    line = index % len(good_log) + 1
+    assert f"{path}:{line}:" in result.output and "Traceback" not in result.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.jsonl"]  # no partial .mcap, .btlog or bag-tmp

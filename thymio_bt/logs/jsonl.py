@@ -34,15 +34,15 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, FiniteFloat, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError, model_validator
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_text
 from thymio_bt.inputs.validation import validate
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+from thymio_bt.logs.records import STATUS_LETTER, LogEnd, LogHeader, TickRecord
 from thymio_bt.maze import Maze
 
 
@@ -87,6 +87,15 @@ class JsonlWriter:
             self._file = None
 
 
+#: the longest run a log may describe, in simulated seconds (a year): past it a time is damage
+MAX_TIME = 3.2e7
+#: node uids are BT.CPP's (16 bits: the Groot2 log stores them so)
+MAX_UID = 65535
+
+_Time = Annotated[float, Field(ge=0, le=MAX_TIME, allow_inf_nan=False)]
+_Uid = Annotated[int, Field(ge=1, le=MAX_UID)]
+
+
 class _Pose(BaseModel):
     x: FiniteFloat
     y: FiniteFloat
@@ -94,26 +103,52 @@ class _Pose(BaseModel):
 
 
 class _Tick(BaseModel):
-    """What a replay needs of a tick line; other keys are kept as they are."""
+    """What a replay or an export needs of a tick line; other keys are kept as they are."""
 
     model_config = ConfigDict(extra="allow")
-    t: FiniteFloat
+    t: _Time
+    tick: Annotated[int, Field(ge=0)]
     pose: _Pose | None
     cmd: tuple[FiniteFloat, FiniteFloat]
     vel: tuple[FiniteFloat, FiniteFloat]
     prox: dict[str, FiniteFloat | None] | None
     running: list[str] = []
+    nodes: dict[str, Literal[tuple(STATUS_LETTER.values())]] = {}  # type: ignore[valid-type]  # the letters
+
+
+class _TreeNode(BaseModel):
+    model_config = ConfigDict(extra="allow")
+    uid: _Uid
+    path: str
+    name: str
+    kind: str
+    parent: _Uid | None
 
 
 class _Header(BaseModel):
     model_config = ConfigDict(extra="allow")
     mission: str = ""
     maze: dict[str, Any]
+    tree: list[_TreeNode] = []
+
+    @model_validator(mode="after")
+    def _parents_come_first(self) -> _Header:
+        """Each node's parent is a node listed before it (pre-order), and no uid is used twice."""
+        seen: set[int] = set()
+        for node in self.tree:
+            if node.uid in seen:
+                raise ValueError(f"uid {node.uid} is used twice")
+            if node.parent is not None and node.parent not in seen:
+                raise ValueError(f"node {node.uid}'s parent {node.parent} is not listed before it")
+            seen.add(node.uid)
+        return self
 
 
 class _End(BaseModel):
     model_config = ConfigDict(extra="allow")
     status: str
+    sim_time: _Time | None = None
+    collisions: Annotated[int, Field(ge=0)] | None = None
     events: list[dict[str, Any]] = []
 
 
@@ -130,9 +165,14 @@ def read_jsonl(path: Path, partial: bool = False) -> Recording:
             Problem("the log is empty", str(path), hint="logs are written by thymio-bt run --log FILE.jsonl")
         )
     recording: Recording | None = None
+    last_t = 0.0
     for number, line in enumerate(lines, 1):
         try:
             kind, obj = _line(line, number == 1)
+            if kind == "tick":
+                if obj["t"] < last_t:
+                    raise ValueError(f"tick line: t: {obj['t']} is before the previous tick's {last_t}")
+                last_t = obj["t"]
         except ValueError as exc:
             if number == 1:
                 raise UserError(
@@ -156,7 +196,7 @@ def read_jsonl(path: Path, partial: bool = False) -> Recording:
                     str(path),
                     number,
                     1,
-                    hint=f"replay the {number - 2} ticks before it with --partial",
+                    hint=f"replay the {_ticks(number - 2)} before it with --partial",
                 )
             ) from None
         if kind == "header":
@@ -198,3 +238,8 @@ def _line(line: str, first: bool) -> tuple[str, dict[str, Any]]:
         where = ".".join(str(step) for step in err["loc"])
         raise ValueError(f"{kind} line: {where}: {err['msg']}") from None
     return kind, obj
+
+
+def _ticks(count: int) -> str:
+    """``count`` ticks in words: "1 tick", "3 ticks"."""
+    return f"{count} tick" if count == 1 else f"{count} ticks"
