@@ -59,7 +59,7 @@ def approx_segment(wall, start, end, tol=1e-6) -> None:
     want = [start, end]
     if math.dist(got[0], want[0]) > math.dist(got[0], want[1]):
         want.reverse()
-    for g, w in zip(got, want):
+    for g, w in zip(got, want, strict=True):
         assert g == pytest.approx(w, abs=tol), (wall.name, got, want)
 
 
