@@ -1,21 +1,28 @@
 """thymio-bt calibrate: a profile measured on a backend, then used with --robot FILE. In the
 simulation (fast) and against the Aseba Playground (real time, CI installs it)."""
 
+import math
 import subprocess
 import sys
+from pathlib import Path
 
 import _require
 import pytest
 
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.robot.calibrate import table_rows
+from thymio_bt.mission.expect import front_gap
+from thymio_bt.robot.calibrate import noise_floor, table_rows
+from thymio_bt.robot.calibration import CalibrationTable
+from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI, robot_model
 from thymio_bt.run.runner import Run
 
+MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 
-def _calibrate(tmp_path, backend, *args):
-    out = tmp_path / "measured.yaml"
+
+def _calibrate(tmp_path, backend, *args, robot="enki"):
+    out = tmp_path / f"measured_{robot}.yaml"
     result = subprocess.run(
         [
             sys.executable,
@@ -25,7 +32,7 @@ def _calibrate(tmp_path, backend, *args):
             "--backend",
             backend,
             "--robot",
-            "enki",
+            robot,
             "-o",
             str(out),
             *args,
@@ -51,7 +58,7 @@ def _check_against_enki(model, reading_tolerance):
 def test_calibrating_the_simulated_enki_robot_finds_its_numbers(tmp_path):
     path, model = _calibrate(tmp_path, "sim")
     _check_against_enki(model, 0.02)
-    assert model.name == "measured" and model.hull == ENKI.hull  # the rest is the base model's
+    assert model.name == "measured_enki" and model.hull == ENKI.hull  # the rest is the base model's
     assert robot_model(str(path)) is model
 
 
@@ -81,21 +88,76 @@ def test_a_bad_profile_is_located(tmp_path):
 
 
 def test_the_table_is_the_median_per_bin_strictly_decreasing_and_ends_at_zero():
-    samples = [
-        (0.0098, 4400),
-        (0.0101, 4420),
-        (0.0102, 4380),
-        (0.02, 4300),
-        (0.0248, 4310),
-        (0.03, 4000),
-        (0.145, 1200),
-        (0.15, 0),
+    samples = [  # farthest first, as the approach takes them
         (0.16, 0),
+        (0.15, 0),
+        (0.145, 1200),
+        (0.03, 4000),
+        (0.0248, 4310),
+        (0.02, 4300),
+        (0.0102, 4380),
+        (0.0101, 4420),
+        (0.0098, 4400),
     ]
     rows = table_rows(samples)
-    assert rows == [(0.01, 4400.0), (0.02, 4300.0), (0.03, 4000.0), (0.145, 1200.0), (0.15, 0.0)]
+    assert rows == [(0.01, 4400.0), (0.02, 4300.0), (0.03, 4000.0), (0.145, 1200.0), (0.1455, 0.0)]
     with pytest.raises(ValueError, match="never saw the wall go out of range"):
-        table_rows([(0.01, 4400), (0.02, 4300)])
+        table_rows([(0.02, 4300), (0.01, 4400)])
+
+
+def test_noise_beyond_the_range_never_becomes_a_row():
+    """The issue's table ended '..., 1221, 0.5, 0.0': a 5 mm bin at the range's edge held readings in
+    range and noise (Enki's empty sensors read 0-8), so every noisy 'nothing' read as a wall 14.5 cm
+    ahead. The noise floor comes from the readings far from the wall; the table ends at the last
+    reading above it, and the profile keeps the floor."""
+    far = [(0.30 - 0.002 * i, i % 9) for i in range(60)]  # 30 to 18 cm: noise 0-8
+    edge = [(0.1415, 2), (0.1405, 7), (0.1399, 1227), (0.1396, 3), (0.1392, 1236), (0.139, 1240)]
+    near = [(0.13, 1363), (0.12, 1521), (0.06, 3027), (0.055, 0), (0.05, 3366), (0.01, 4448)]  # a dropout
+    samples = far + edge + near
+    floor = noise_floor(samples, base=0.0)
+    assert floor == 16.0
+    rows = table_rows(samples, floor)
+    # the edge: 13.92 cm, the first of three readings in range in a row (the lone 1227 farther is not)
+    assert rows[-1] == (0.1405, 0.0) and rows[-2] == (0.14, 1238.0)
+    assert (0.055, 0.0) not in rows and rows[-3:-1] == [(0.13, 1363.0), (0.14, 1238.0)]
+    assert all(reading > floor for _, reading in rows[:-1])
+    table = CalibrationTable.of_rows(rows, floor=floor)
+    assert all(table.to_metres(noise) == math.inf for noise in range(17))
+
+
+def _maze_part1_2(robot):
+    result = Run(load_mission(MISSIONS / "maze_part1_2.yaml", {"robot": str(robot)})).run()
+    report = result.report()
+    part1 = next(e for e in report["events"] if e["kind"] == "behaviour_end" and e["path"] == "course/part 1")
+    return report, front_gap(load_mission(MISSIONS / "maze_part1_2.yaml").maze, ENKI, Pose(**part1["pose"]))
+
+
+@pytest.mark.parametrize("robot", ["course", "enki"])
+def test_a_profile_measured_in_the_simulator_behaves_like_its_robot(tmp_path, robot):
+    """The issue's repro: calibrate --backend sim --robot enki, then maze_part1_2 with the profile
+    ended FAILURE (ChooseTurn decided 'dead end' right after the respawn); calibrate --robot course
+    failed ('the approach never saw the wall'). Now both run the course mission as their built-in
+    model does: SUCCESS, part 1's stop gap within 2 mm, the end within 5 mm."""
+    path, model = _calibrate(tmp_path, "sim", robot=robot)
+    assert model.calibration.floor == robot_model(robot).calibration.floor
+    measured, measured_gap = _maze_part1_2(path)
+    builtin, builtin_gap = _maze_part1_2(robot)
+    assert builtin["status"] == "SUCCESS", builtin["reason"]
+    assert measured["status"] == "SUCCESS", measured["reason"]
+    assert measured_gap == pytest.approx(builtin_gap, abs=0.002)
+    end, expected_end = measured["final_pose"], builtin["final_pose"]
+    assert math.dist((end["x"], end["y"]), (expected_end["x"], expected_end["y"])) < 0.005
+
+
+def test_a_profile_without_a_floor_takes_its_base_models(tmp_path):
+    """A profile written before the floor was measured: readings at the base's noise level still mean nothing."""
+    path = tmp_path / "old.yaml"
+    path.write_text(
+        "base: enki\nname: old\ncalibration:\n  distances: [0.01, 0.14, 0.145, 0.15]\n"
+        "  readings: [4448, 1221, 0.5, 0]\n"
+    )
+    table = robot_model(str(path)).calibration
+    assert table.floor == ENKI.calibration.floor and table.to_metres(8) == math.inf
 
 
 def test_calibrating_on_the_aseba_playground_matches_enki(tmp_path):

@@ -56,7 +56,6 @@ def calibrate_command(backend: str, backend_opts: tuple[str, ...], robot: str, o
     printed pose): 2 s straight, a slow approach to 8 mm, a spin. About 25 s in real time.
     """
     from thymio_bt.robot.calibrate import calibrate
-    from thymio_bt.robot.model import robot_model
     from thymio_bt.robot.profile import profile_text
 
     try:
@@ -67,7 +66,7 @@ def calibrate_command(backend: str, backend_opts: tuple[str, ...], robot: str, o
             device.request_spawn(device.robot_name, spec.start)
             device.advance(0.0)
             with Interrupts():
-                result = calibrate(device, robot_model(robot), spec.maze, say=lambda text: click.echo(text, err=True))
+                result = calibrate(device, device.model, spec.maze, say=lambda text: click.echo(text, err=True))
         except ValueError as exc:
             raise UserError(f"calibrate: {exc}") from None
         finally:
@@ -102,13 +101,18 @@ def _corridor(robot: str, backend: str, backend_opts: tuple[str, ...]) -> tuple[
 
     from thymio_bt.mission import load_mission
     from thymio_bt.robot.calibrate import arena
+    from thymio_bt.robot.model import robot_model
 
+    # a robot whose simulated sensors give metres (the course's rays) is measured through its
+    # calibration, as a real robot's readings: calibrate measures readings
+    sensors = "sensor_model: raw\n" if robot_model(robot).sensor_model == "rays" else ""
     with tempfile.TemporaryDirectory() as tmp:
         maze_file = Path(tmp) / "corridor.yaml"
         maze_file.write_text(yaml.safe_dump(arena().to_yaml_dict(), sort_keys=False))
         mission_file = Path(tmp) / "calibrate.yaml"
         mission_file.write_text(
-            f"name: calibrate\nmaze: {maze_file}\nstart: start\nrobot: {robot}\ntime_limit: 120\ntree:\n  Stop: {{}}\n"
+            f"name: calibrate\nmaze: {maze_file}\nstart: start\nrobot: {robot}\n{sensors}time_limit: 120\n"
+            "tree:\n  Stop: {}\n"
         )
         spec = load_mission(mission_file)
         device = backend_for(spec, 0, backend, backend_opts)

@@ -20,12 +20,15 @@ From the shell::
     thymio-bt calibrate --backend playground --robot enki -o enki_measured.yaml
     thymio-bt run missions/maze_part1_2.yaml --backend playground --robot enki_measured.yaml
 
-Example (the corridor, and a table from approach samples: the nearest bin reading 0 ends it)::
+Example (the corridor, and a table from approach samples, farthest first: a reading at or below
+the noise floor means nothing in range, and the table reads 0 just beyond the last reading above it)::
 
     >>> len(arena().walls), arena().spawn("start")
     (4, Pose(x=0.15, y=0.1, yaw=0.0))
-    >>> table_rows([(0.010, 4200), (0.011, 4300), (0.020, 4100), (0.030, 3500), (0.030, 3600), (0.035, 0)])
-    [(0.01, 4250.0), (0.02, 4100.0), (0.03, 3550.0), (0.035, 0.0)]
+    >>> samples = [(0.30, 6), (0.04, 3), (0.030, 3600), (0.030, 3500), (0.020, 4100), (0.011, 4300), (0.010, 4200)]
+    >>> floor = noise_floor(samples)
+    >>> floor, table_rows(samples, floor)
+    (12.0, [(0.01, 4250.0), (0.02, 4100.0), (0.03, 3550.0), (0.0305, 0.0)])
 """
 
 from __future__ import annotations
@@ -49,6 +52,12 @@ END, WIDTH = 0.6, 0.2
 START = Pose(0.15, WIDTH / 2, 0.0)
 SPEED_UNITS, SPIN_UNITS = 150, 100
 APPROACH_SPEED, CLOSEST, BIN = 0.02, 0.008, 0.005
+#: no Thymio sees a wall this far (m; Enki's range is 0.14): readings from there on are the noise floor
+FAR = 0.25
+#: readings above the noise floor in a row that mark the range's edge
+IN_A_ROW = 3
+#: the table's last row, reading 0, is this far beyond the farthest reading in range (m)
+EDGE = 0.0005
 
 
 def arena() -> Maze:
@@ -75,8 +84,10 @@ class Calibration:
     base: RobotModel
     metres_per_unit: float
     wheel_separation: float
-    samples: list[tuple[float, int]] = field(default_factory=list)  # (distance, raw)
+    samples: list[tuple[float, int]] = field(default_factory=list)  # (distance, raw), farthest first
     rows: list[tuple[float, float]] = field(default_factory=list)  # the table
+    #: readings at or below this mean nothing in range (:func:`noise_floor`)
+    floor: float = 0.0
 
     def profile(self, name: str) -> Profile:
         """The profile file's content, named ``name``, with the scales against the base model for the record."""
@@ -85,7 +96,9 @@ class Calibration:
             name=name,
             metres_per_unit=round(self.metres_per_unit, 9),
             wheel_separation=round(self.wheel_separation, 5),
-            calibration=TableRows(distances=[round(d, 4) for d, _ in self.rows], readings=[r for _, r in self.rows]),
+            calibration=TableRows(
+                distances=[round(d, 5) for d, _ in self.rows], readings=[r for _, r in self.rows], floor=self.floor
+            ),
             measured={
                 "speed_scale": round(self.metres_per_unit / self.base.metres_per_unit, 4),
                 "wheel_separation_scale": round(self.wheel_separation / self.base.wheel_separation, 4),
@@ -112,32 +125,49 @@ class Calibration:
 
     def table(self) -> CalibrationTable:
         """The measured rows as a calibration table."""
-        return CalibrationTable(tuple(d for d, _ in self.rows), tuple(r for _, r in self.rows), source="calibrate")
+        return CalibrationTable.of_rows(self.rows, source="calibrate", floor=self.floor)
 
 
-def table_rows(samples: list[tuple[float, int]]) -> list[tuple[float, float]]:
-    """A strictly decreasing table from (distance, raw) samples: the median of each 5 mm bin, rows
-    that would not decrease dropped, ending at the nearest bin reading 0 beyond the last seen."""
+def noise_floor(samples: list[tuple[float, int]], base: float = 0.0) -> float:
+    """The reading at or below which a sensor sees nothing: twice the largest reading taken with the
+    wall beyond :data:`FAR` (out of any Thymio's range), and never below ``base`` (the base model's).
+
+    >>> noise_floor([(0.30, 3), (0.28, 8), (0.05, 3366)]), noise_floor([(0.30, 0)], base=20.0)
+    (16.0, 20.0)
+    """
+    far = [raw for distance, raw in samples if distance >= FAR]
+    return max(float(base), 2.0 * max(far, default=0))
+
+
+def table_rows(samples: list[tuple[float, int]], floor: float = 0.0) -> list[tuple[float, float]]:
+    """A strictly decreasing table from (distance, raw) approach samples, farthest first: the median
+    of each 5 mm bin of the readings above ``floor`` (the noise floor) from the range's edge on,
+    rows that would not decrease dropped, then a 0 just beyond the edge.
+
+    The edge is the first sample of the first :data:`IN_A_ROW` readings in a row above the floor: a
+    stray reading farther out does not move it, a single reading dropping to noise nearer is left
+    out, and no bin mixes readings in range with noise (a row of noise would make every noisy
+    "nothing" read as an obstacle at the range's end)."""
+    above = [raw > floor for _, raw in samples]
+    start = next((i for i in range(len(samples)) if all(above[i : i + IN_A_ROW])), len(samples))
+    near = [
+        (d, raw) for (d, raw), seen in zip(samples[start:], above[start:], strict=True) if seen and math.isfinite(d)
+    ]
+    if start == 0 or len(near) < 2:
+        raise ValueError(
+            "the approach never saw the wall go out of range, or never saw it: "
+            f"{len(samples)} readings, {len(near)} in range (is the robot facing the wall?)"
+        )
+    edge = near[0][0]
     bins: dict[int, list[int]] = {}
-    for distance, raw in samples:
-        if math.isfinite(distance):
-            bins.setdefault(round(distance / BIN), []).append(raw)
+    for distance, raw in near:
+        bins.setdefault(round(distance / BIN), []).append(raw)
     rows: list[tuple[float, float]] = []
     for index in sorted(bins):
         reading = float(statistics.median(bins[index]))
-        distance = index * BIN
-        if reading <= 0:
-            if rows:
-                rows.append((distance, 0.0))
-                break
-            continue
         if not rows or reading < rows[-1][1]:
-            rows.append((distance, reading))
-    if len(rows) < 2 or rows[-1][1] != 0.0:
-        raise ValueError(
-            "the approach never saw the wall go out of range, or never saw it: "
-            f"{len(samples)} readings (is the robot facing the wall?)"
-        )
+            rows.append((index * BIN, reading))
+    rows.append((round(max(edge, rows[-1][0]) + EDGE, 5), 0.0))
     return rows
 
 
@@ -202,5 +232,6 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     rate = turned / (track[-1][0] - track[0][0])
     wheel_separation = 2 * SPIN_UNITS * metres_per_unit / rate
     result = Calibration(model, metres_per_unit, wheel_separation, samples)
-    result.rows = table_rows(samples)
+    result.floor = noise_floor(samples, model.calibration.floor)
+    result.rows = table_rows(samples, result.floor)
     return result

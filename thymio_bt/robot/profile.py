@@ -11,6 +11,7 @@ else (geometry, sensor poses, the simulator's sensor model) comes from the base:
     calibration:                       # front-centre reading against distance, nearest first
       distances: [0.01, 0.02, 0.03, 0.0933]
       readings: [4279, 4139, 3515, 0]
+      floor: 0                         # readings at or below it mean nothing in range (noise)
 
 Example::
 
@@ -49,6 +50,11 @@ class TableRows(BaseModel):
 
     distances: list[float] = Field(description="metres, increasing")
     readings: list[float] = Field(description="raw prox.horizontal, decreasing, ending at 0")
+    floor: float | None = Field(
+        None,
+        ge=0,
+        description="readings at or below this are noise: nothing in range (default: the base model's)",
+    )
 
 
 class Profile(BaseModel):
@@ -116,8 +122,12 @@ def read_profile(path: str, models: tuple[tuple[str, RobotModel], ...]) -> Robot
         changes["wheel_separation"] = profile.wheel_separation
     if profile.calibration is not None:
         try:
+            table = profile.calibration
             changes["calibration"] = CalibrationTable(
-                tuple(profile.calibration.distances), tuple(profile.calibration.readings), source=str(path)
+                tuple(table.distances),
+                tuple(table.readings),
+                source=str(path),
+                floor=base.calibration.floor if table.floor is None else table.floor,
             )
         except ValueError as exc:
             raise UserError(Problem(f"'calibration': {exc}", str(path), *marks.get("calibration", (1, 1)))) from None

@@ -61,10 +61,11 @@ def _pose_of(x: float, y: float, angle: float) -> Pose:
     return new_pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
 
 
-def _raw_model(seed: int) -> RawProximityModel:
+def _raw_model(seed: int, model: RobotModel) -> RawProximityModel:
+    """Noisy integer readings through ``model``'s calibration (a profile's measured table included)."""
     import numpy as np  # only raw mode needs it: keeps ~50 ms off every start-up
 
-    return RawProximityModel(np.random.default_rng((seed, 1)))
+    return RawProximityModel(np.random.default_rng((seed, 1)), model.calibration)
 
 
 class _ConeSensors:
@@ -195,7 +196,7 @@ class Simulation(Backend):
         self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
         #: noise-free metres are cast only when read (noise draws from streams whose order must hold)
         self._lazy_scan = self.config.sensor_model == "metres" and not self._range_noise
-        self._raw_model = _raw_model(self.config.seed) if self.config.sensor_model == "raw" else None
+        self._raw_model = _raw_model(self.config.seed, self.model) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, _Body] = {}
         self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)  # (step, entity, its pose)
