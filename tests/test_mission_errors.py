@@ -168,6 +168,44 @@ def test_overrides_are_checked_like_the_file() -> None:
     assert all(p.file == "--set" for p in problems.values())
 
 
+def test_a_set_value_out_of_range_is_said_at_set_with_the_file_s_hint() -> None:
+    """``--set cruise=10`` is the same mistake as ``speed: 10`` in the file: the same 'did you mean'
+    hint, said once, at ``--set`` (not at the file's line that uses ``$cruise``)."""
+    with pytest.raises(UserError) as info:
+        load_mission(ROOT / "missions" / "maze_part1_2.yaml", overrides={"cruise": "10"})
+    [problem] = info.value.problems  # three MoveUntilWall use $cruise: one fix
+    assert (problem.file, problem.line) == ("--set", 0)
+    assert problem.message.startswith("cruise=10: Input should be less than or equal to 0.2")
+    assert problem.hint.startswith("did you mean 10cm/s? a bare number is in m/s")
+
+
+def test_a_bare_number_parameter_used_as_a_speed_gets_the_unit_hint(tmp_path: Path) -> None:
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "maze: arena\nstart: centre\nparameters: {cruise: 10}\ntree: {MoveUntilWall: {speed: $cruise}}\n"
+    )
+    with pytest.raises(UserError) as info:
+        load_mission(mission)
+    [problem] = info.value.problems
+    assert (problem.line, problem.hint.split("?")[0]) == (4, "did you mean 10cm/s")
+
+
+@pytest.mark.parametrize(
+    "args, said",
+    [
+        (["--robot", "missing.yaml"], "error: --robot: robot profile not found: missing.yaml [at robot]"),
+        (["--set", "robot=missing.yaml"], "error: --set: robot profile not found: missing.yaml [at robot]"),
+        (["--robot", "cours"], "error: --robot: robot must be one of course, enki, real"),
+    ],
+)
+def test_a_bad_robot_is_said_at_the_option_that_gave_it(tmp_path: Path, args: list[str], said: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "thymio_bt", "run", "square", *args], cwd=tmp_path, capture_output=True, text=True
+    )
+    assert done.returncode == 2 and done.stderr.startswith(said), done.stderr
+    assert "include file" not in done.stderr and "Traceback" not in done.stderr
+
+
 REFERENCES = """\
 maze: two_parts_maze
 start: part1

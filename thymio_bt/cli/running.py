@@ -150,10 +150,11 @@ def run(
 
             require_display(NO_DISPLAY_HINT)
         from thymio_bt.mission import load_mission
+        from thymio_bt.mission.settings import ROBOT_OPTION
 
         overrides = parse_overrides(sets)
         if robot is not None:
-            overrides["robot"] = robot
+            overrides[ROBOT_OPTION] = robot  # --set robot=NAME, its problems said at --robot
         report_out = _check_outputs(report, pictures, log)
         spec = load_mission(mission, overrides, maze=maze, start=start)
         runner = _prepare(spec, seed, backend, backend_opts)

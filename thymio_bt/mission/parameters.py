@@ -38,6 +38,29 @@ from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
 _INVALID = object()
 
 
+@dataclass(frozen=True, slots=True)
+class SetValue(Quantity):
+    """A mission parameter's value given by ``--set NAME=TEXT``: a node that refuses it (used
+    through ``$NAME``) reports the problem at ``--set``, with the hint the same text gets in a file.
+
+    >>> SetValue(10.0, "speed", name="cruise", text="10").bare
+    10.0
+    >>> SetValue(0.1, "speed", name="cruise", text="10cm/s").bare is None
+    True
+    """
+
+    name: str = ""
+    text: str = ""
+
+    @property
+    def bare(self) -> float | None:
+        """The value as a bare number when it was typed as one (``10``), else None."""
+        try:
+            return float(self.text)
+        except ValueError:
+            return None
+
+
 def reference_name(raw: Any) -> str | None:
     """The parameter a ``$name`` value refers to (``"$cruise"`` -> ``cruise``), None for any other value."""
     if isinstance(raw, str) and raw.startswith("$") and raw[1:].isidentifier():
@@ -59,6 +82,10 @@ class _Reading:
     refs: dict[str, str] = field(default_factory=dict)
     #: a misspelt key was reported: the field it meant is 'missing' too, say it once
     unknown: bool = False
+    #: parameter -> the ``--set`` value its ``$name`` stands for (a problem with it is reported there)
+    set_values: dict[str, SetValue] = field(default_factory=dict)
+    #: parameter -> the bare number its ``$name`` stands for (for the hint of the unit it meant)
+    bare: dict[str, float] = field(default_factory=dict)
 
     @property
     def file(self) -> str:
@@ -124,6 +151,12 @@ class ParameterReader(Checker):
             if isinstance(raw, str) and raw.startswith("bb:"):
                 self._blackboard_ref(reading, key, raw, vwhere)
                 return
+        name = reference_name(raw)
+        looked = scope.get(name) if name is not None and name in scope.names() else None
+        if isinstance(looked, SetValue):
+            reading.set_values[key] = looked
+        elif isinstance(looked, Quantity) and looked.kind is None:
+            reading.bare[key] = looked.value  # cruise: 10 in parameters:, used as $cruise
         value = self.field_value(reading.fields[key], raw, scope, vwhere, f"{reading.path}.{key}")
         if value is not _INVALID:
             reading.values[key] = value
@@ -169,7 +202,13 @@ class ParameterReader(Checker):
         where = self.where_value(body, key, reading.file) if key in body else reading.where
         field_info = reading.fields.get(key) if isinstance(key, str) else None
         message = err["msg"].removeprefix("Value error, ")
-        hint = _error_hint(err, field_info, body.get(key))
+        hint = _error_hint(err, field_info, reading.bare.get(key, body.get(key)) if isinstance(key, str) else None)
+        given = reading.set_values.get(key) if isinstance(key, str) else None
+        if given is not None:  # the value came from --set: say so there (once), with the file's hint
+            message = f"{given.name}={given.text}: {message} (where {reading.kind}.{key} uses it)"
+            where, hint = ("--set", 0, 0), _error_hint(err, field_info, given.bare)
+            if any(p.file == "--set" and p.message == message for p in self.problems):
+                return  # another use of the same value: the same fix
         if err["type"] == "missing":
             message = f"{reading.kind} needs '{key}'"
             hint = missing_hint or (field_info.description if field_info else "") or ""

@@ -29,6 +29,7 @@ from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.checker import Checker, Scope, Where
 from thymio_bt.mission.expect import Expect
+from thymio_bt.mission.parameters import SetValue
 from thymio_bt.robot.model import ROBOTS, robot_model
 from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.robot.profile import is_profile_path
@@ -51,6 +52,8 @@ OVERRIDABLE = (
     "noise.odometry",
 )
 _OVERRIDE: Where = ("--set", 0, 0)
+#: the override that ``run --robot NAME`` makes: ``--set robot=NAME``, its problems said at ``--robot``
+ROBOT_OPTION = "--robot"
 
 
 class SettingsReader(Checker):
@@ -108,8 +111,8 @@ class SettingsReader(Checker):
             self._setting(name, _whole_or_text(text) if name == "seed" else text, _OVERRIDE, values)
         elif name == "sensor_model":
             self._sensor_model(text, _OVERRIDE, values)
-        elif name == "robot":
-            self._robot(text, _OVERRIDE, values)
+        elif name in ("robot", ROBOT_OPTION):
+            self._robot(text, (ROBOT_OPTION, 0, 0) if name == ROBOT_OPTION else _OVERRIDE, values)
         elif name in params:
             self._override_parameter(name, text, params)
         else:
@@ -126,7 +129,7 @@ class SettingsReader(Checker):
             if error:
                 self.problem(f"--set {name}: {error}", _OVERRIDE, name)
                 return
-            new = Quantity(new.value, new.kind or old.kind)
+            new = SetValue(new.value, new.kind or old.kind, name=name, text=text)
         params[name] = new
 
     def _noise(self, noise_raw: dict[str, Any], data: MarkedDict, file: str, values: dict[str, Any]) -> None:
@@ -186,6 +189,14 @@ class SettingsReader(Checker):
                 if Path(value).is_absolute() or not Path(where[0]).is_file()
                 else Path(where[0]).parent / value
             )
+            if not path.exists():
+                self.problem(
+                    f"robot profile not found: {path}",
+                    where,
+                    "robot",
+                    "make one with 'thymio-bt calibrate -o FILE.yaml', or name a built-in robot: " + ", ".join(ROBOTS),
+                )
+                return
             try:
                 robot_model(str(path.resolve()))
             except UserError as exc:
