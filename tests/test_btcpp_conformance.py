@@ -10,6 +10,7 @@ from _require import module
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from thymio_bt.behaviours import btcpp_decorators as bd
 from thymio_bt.behaviours import btcpp_nodes as bn
 from thymio_bt.behaviours.ticking import tick
 
@@ -47,11 +48,11 @@ def build(node, calls, log):
     if ident == "ParallelAll":
         return bn.ParallelAll(ident, kids, ports["max_failures"])
     if ident == "Repeat":
-        return bn.Repeat(ident, kids[0], ports["num_cycles"])
+        return bd.Repeat(ident, kids[0], ports["num_cycles"])
     if ident == "RetryUntilSuccessful":
-        return bn.RetryUntilSuccessful(ident, kids[0], ports["num_attempts"])
-    cls = getattr(bn, ident)
-    return cls(ident, kids[0]) if issubclass(cls, bn._Decorator) else cls(ident, kids)
+        return bd.RetryUntilSuccessful(ident, kids[0], ports["num_attempts"])
+    cls = getattr(bn, ident, None) or getattr(bd, ident)
+    return cls(ident, kids[0]) if issubclass(cls, bd.BtDecorator) else cls(ident, kids)
 
 
 def run_here(node, ticks):

@@ -32,9 +32,9 @@ def test_bt_cpp_built_ins_are_read_as_bt_cpp_nodes(tmp_path):
 
     tree = read_xml_mission(_write(tmp_path))["tree"]
     children = tree["bt_sequence"]["children"]
-    assert list(children[0]) == ["bt_repeat"] and children[0]["bt_repeat"]["num_cycles"] == 2
+    assert list(children[0]) == ["bt_repeat"] and children[0]["bt_repeat"]["num_cycles"] == "2"
     assert list(children[0]["bt_repeat"]["do"]) == ["bt_sequence_with_memory"]
-    assert children[1]["bt_timeout"]["msec"] == 1500
+    assert children[1]["bt_timeout"]["msec"] == "1500"
 
 
 def test_a_timeout_counts_milliseconds_of_simulated_time(tmp_path):
@@ -47,10 +47,10 @@ def test_a_timeout_counts_milliseconds_of_simulated_time(tmp_path):
     assert first["sim_time"] == report["sim_time"]  # deterministic: no wall clock
 
 
-def test_a_script_attribute_is_refused_with_its_line(tmp_path):
-    path = _write(tmp_path, extra=' _skipIf="x == 1"')
+def test_a_script_error_is_a_file_line_error_before_the_run(tmp_path):
+    path = _write(tmp_path, extra=' _skipIf="x == "')
     done = subprocess.run(
         [sys.executable, "-m", "thymio_bt.cli", "validate", str(path)], capture_output=True, text=True
     )
     assert done.returncode == 2 and "Traceback" not in done.stderr
-    assert f"{path}:11:" in done.stderr and "_skipIf" in done.stderr and "hint" in done.stderr
+    assert f"{path}:11:" in done.stderr and "invalid script 'x == '" in done.stderr and "hint" in done.stderr

@@ -9,23 +9,39 @@ Example::
     >>> BTCPP_CONTROL[0].yaml_name, BTCPP_CONTROL[0].btcpp_id
     ('bt_sequence', 'Sequence')
     >>> sorted(BTCPP_IDS)[:3]
-    ['Delay', 'Fallback', 'ForceFailure']
+    ['AlwaysFailure', 'AlwaysSuccess', 'Delay']
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import Annotated, Any, ClassVar, Literal
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
-from pydantic import Field, create_model
+from pydantic import AfterValidator, Field, create_model
 
+from thymio_bt.behaviours import btcpp_decorators as bd
 from thymio_bt.behaviours import btcpp_nodes as bn
-from thymio_bt.behaviours.control_node import ControlNode, ControlParams
+from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse
+
+#: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
+_PRE = ("failure_if", "success_if", "skip_if", "while_true")
+_POST = ("on_halted", "on_failure", "on_success", "post")
+#: XML attribute -> its name here
+CONDITION_ATTRS = {
+    "_failureIf": "failure_if",
+    "_successIf": "success_if",
+    "_skipIf": "skip_if",
+    "_while": "while_true",
+    "_onHalted": "on_halted",
+    "_onFailure": "on_failure",
+    "_onSuccess": "on_success",
+    "_post": "post",
+}
 
 
-class Timeout(bn._Decorator):
+class Timeout(bd.BtDecorator):
     """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (simulated)."""
 
     def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
@@ -54,7 +70,7 @@ class Timeout(bn._Decorator):
         super().halt()
 
 
-class Delay(bn._Decorator):
+class Delay(bd.BtDecorator):
     """BT.CPP's ``Delay``: RUNNING for ``delay_msec`` (simulated), then the child."""
 
     def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
@@ -79,24 +95,6 @@ class Delay(bn._Decorator):
         """The delay forgotten, the child reset."""
         self.until = None
         super().halt()
-
-
-class Sleep(bn.BtNode):
-    """BT.CPP's ``Sleep``: RUNNING for ``msec`` (simulated), then SUCCESS."""
-
-    def __init__(self, name: str, msec: int, clock: Callable[[], float]) -> None:
-        super().__init__(name, [])
-        self.msec, self.clock = msec, clock
-        self.until = 0.0
-
-    def bt_tick(self) -> Any:
-        """RUNNING until the time is over."""
-        if self.status is not Status.RUNNING:
-            if self.msec <= 0:
-                return Status.SUCCESS
-            self.until = self.clock() + self.msec / 1000.0
-            return Status.RUNNING
-        return Status.RUNNING if self.clock() < self.until - 1e-9 else Status.SUCCESS
 
 
 class BtControl(ControlNode):
@@ -126,7 +124,7 @@ def _composite(cls: type[bn.BtNode]) -> Callable[..., Behaviour]:
     return lambda name, children, ports, ctx: cls(name, children)
 
 
-def _decorator(cls: type[bn._Decorator]) -> Callable[..., Behaviour]:
+def _decorator(cls: type[bd.BtDecorator]) -> Callable[..., Behaviour]:
     """How a decorator of ``cls`` is built (its one child, no ports)."""
     return lambda name, children, ports, ctx: cls(name, children[0])
 
@@ -177,21 +175,21 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
     ),
     _kind("IfThenElse", "bt_if_then_else", "composite", _composite(bn.IfThenElse), "BT.CPP's IfThenElse."),
     _kind("WhileDoElse", "bt_while_do_else", "composite", _composite(bn.WhileDoElse), "BT.CPP's WhileDoElse."),
-    _kind("Inverter", "bt_inverter", "decorator", _decorator(bn.Inverter), "BT.CPP's Inverter."),
-    _kind("ForceSuccess", "bt_force_success", "decorator", _decorator(bn.ForceSuccess), "BT.CPP's ForceSuccess."),
-    _kind("ForceFailure", "bt_force_failure", "decorator", _decorator(bn.ForceFailure), "BT.CPP's ForceFailure."),
+    _kind("Inverter", "bt_inverter", "decorator", _decorator(bd.Inverter), "BT.CPP's Inverter."),
+    _kind("ForceSuccess", "bt_force_success", "decorator", _decorator(bd.ForceSuccess), "BT.CPP's ForceSuccess."),
+    _kind("ForceFailure", "bt_force_failure", "decorator", _decorator(bd.ForceFailure), "BT.CPP's ForceFailure."),
     _kind(
         "KeepRunningUntilFailure",
         "bt_keep_running_until_failure",
         "decorator",
-        _decorator(bn.KeepRunningUntilFailure),
+        _decorator(bd.KeepRunningUntilFailure),
         "BT.CPP's KeepRunningUntilFailure.",
     ),
     _kind(
         "Repeat",
         "bt_repeat",
         "decorator",
-        lambda name, children, ports, ctx: bn.Repeat(name, children[0], ports["num_cycles"]),
+        lambda name, children, ports, ctx: bd.Repeat(name, children[0], ports["num_cycles"]),
         "BT.CPP's Repeat: the child num_cycles times, going on within the tick after a child done at once.",
         num_cycles=(int, ..., "how many successes (-1: for ever)"),
     ),
@@ -199,7 +197,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "RetryUntilSuccessful",
         "bt_retry_until_successful",
         "decorator",
-        lambda name, children, ports, ctx: bn.RetryUntilSuccessful(name, children[0], ports["num_attempts"]),
+        lambda name, children, ports, ctx: bd.RetryUntilSuccessful(name, children[0], ports["num_attempts"]),
         "BT.CPP's RetryUntilSuccessful.",
         num_attempts=(int, ..., "how many tries (-1: for ever)"),
     ),
@@ -207,7 +205,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "RunOnce",
         "bt_run_once",
         "decorator",
-        lambda name, children, ports, ctx: bn.RunOnce(name, children[0], ports["then_skip"]),
+        lambda name, children, ports, ctx: bd.RunOnce(name, children[0], ports["then_skip"]),
         "BT.CPP's RunOnce.",
         then_skip=(bool, True, "after the first run: skipped (true) or the same status (false)"),
     ),
@@ -230,3 +228,87 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
 )
 #: BT.CPP node ID -> its node kind here
 BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}  # type: ignore[attr-defined]
+
+
+def _script(text: Any) -> Any:
+    """A script port, parsed when the mission is read: its error is the node's, with file:line."""
+    from thymio_bt.behaviours.btcpp_script import ScriptError, parse
+
+    if text is None:
+        return None
+    try:
+        parse(str(text))
+    except ScriptError as exc:
+        raise refuse(f"invalid script '{text}': {exc}", "BT.CPP's script language: see docs/btcpp.md") from None
+    return str(text)
+
+
+Code = Annotated[str, AfterValidator(_script)]
+OptionalCode = Annotated[str | None, AfterValidator(_script)]
+
+
+def _scripted(kind: str) -> Callable[..., Behaviour]:
+    """How the script nodes are built (imported when used: the script language stays out of start-up)."""
+
+    def make(name: str, children: list[Behaviour], ports: dict[str, Any], ctx: Any) -> Behaviour:
+        from thymio_bt.behaviours import btcpp_scripted as bs
+
+        if kind == "Precondition":
+            otherwise = {"SUCCESS": Status.SUCCESS, "FAILURE": Status.FAILURE, "RUNNING": Status.RUNNING}
+            return bs.Precondition(name, children[0], bs.parse(ports["if"]), otherwise[ports["else"]])
+        if kind == "conditions":
+            scripts = {k: bs.parse(v) for k, v in ports.items() if v is not None}
+            return bs.Conditioned(name, children[0], scripts)
+        cases = [str(ports[f"case_{i}"]) for i in range(1, int(kind[-1]) + 1)]
+        return bs.Switch(name, children, str(ports["variable"]), cases)
+
+    return make
+
+
+_TEXT = (str, ..., "text, or {key} for a blackboard entry")
+#: BT.CPP's leaves, kept with the script nodes: node kind -> BT.CPP ID (filled in below)
+BTCPP_SCRIPTED: tuple[type[ControlNode], ...] = (
+    _kind(
+        "Precondition",
+        "bt_precondition",
+        "decorator",
+        _scripted("Precondition"),
+        "BT.CPP's Precondition: the child if the script 'if' holds when it starts.",
+        **{
+            "if": (Code, ..., "the condition (a script)"),
+            "else": (Literal["SUCCESS", "FAILURE", "RUNNING"], "FAILURE", "the status otherwise"),
+        },
+    ),
+    *(
+        _kind(
+            f"Switch{n}",
+            f"bt_switch{n}",
+            "composite",
+            _scripted(f"Switch{n}"),
+            f"BT.CPP's Switch{n}: {n} cases and a default, the last child.",
+            variable=_TEXT,
+            **{f"case_{i}": (str, ..., f"the value of case {i}") for i in range(1, n + 1)},
+        )
+        for n in range(2, 7)
+    ),
+    _kind(
+        "conditions",
+        "bt_conditions",
+        "decorator",
+        _scripted("conditions"),
+        "BT.CPP's pre/post-condition attributes (_skipIf=... on a node in XML) on the node under do.",
+        **{key: (OptionalCode, None, f"BT.CPP's _{key}") for key in (*_PRE, *_POST)},
+    ),
+)
+BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in BTCPP_SCRIPTED if c.btcpp_id != "conditions"})  # type: ignore[attr-defined]
+BTCPP_IDS.update(
+    {
+        "Script": "bt_script",
+        "ScriptCondition": "bt_script_condition",
+        "SetBlackboard": "bt_set_blackboard",
+        "UnsetBlackboard": "bt_unset_blackboard",
+        "AlwaysSuccess": "bt_always_success",
+        "AlwaysFailure": "bt_always_failure",
+        "Sleep": "bt_sleep",
+    }
+)

@@ -13,6 +13,7 @@ again from its root within the same tick. Here the topmost BT.CPP node of the tr
 Example (BT.CPP's Sequence restarts after a failure; SequenceWithMemory resumes at the failed child)::
 
     >>> from py_trees.behaviours import Failure, Success
+    >>> from thymio_bt.behaviours.btcpp_decorators import RetryUntilSuccessful
     >>> from thymio_bt.behaviours.ticking import tick
     >>> seq = SequenceWithMemory("memory", [Success("a"), Failure("b")])
     >>> retry = RetryUntilSuccessful("retry", seq, 2)
@@ -22,7 +23,7 @@ Example (BT.CPP's Sequence restarts after a failure; SequenceWithMemory resumes 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from typing import Any
 
 import py_trees
@@ -43,7 +44,7 @@ class _Skipped:
 
 
 SKIPPED: Any = _Skipped()
-_COMPLETED = (SUCCESS, FAILURE)
+COMPLETED = (SUCCESS, FAILURE)
 
 
 def execute(child: Behaviour) -> Any:
@@ -52,7 +53,7 @@ def execute(child: Behaviour) -> Any:
     StatefulActionNode); a condition runs every time (a SyncActionNode)."""
     if isinstance(child, BtNode):
         return child.execute_tick()
-    if child.status in _COMPLETED and not isinstance(child, ConditionBehaviour):
+    if child.status in COMPLETED and not (isinstance(child, ConditionBehaviour) or getattr(child, "bt_sync", False)):
         return child.status
     tick(child)
     return child.status
@@ -63,7 +64,7 @@ def reset(child: Behaviour) -> None:
     if isinstance(child, BtNode):
         if child.status is RUNNING:
             child.halt()
-        child.status = IDLE
+        child.reset_status()
     elif child.status is not IDLE:
         child.stop(IDLE)  # py_trees: terminate(INVALID), a halt when it was RUNNING
 
@@ -91,6 +92,10 @@ class BtNode(py_trees.composites.Composite):
         """BT.CPP's ``halt()``: every child reset (a RUNNING one halted), the node's own state reset."""
         for child in self.children:
             reset(child)
+        self.status = IDLE
+
+    def reset_status(self) -> None:
+        """BT.CPP's ``resetStatus()``: IDLE, the node's state kept."""
         self.status = IDLE
 
     def tick_direct(self) -> None:
@@ -312,7 +317,7 @@ class ParallelAll(BtNode):
             if i in self.completed:
                 continue
             status = execute(child)
-            if status in _COMPLETED:
+            if status in COMPLETED:
                 self.completed.add(i)
                 self.failures += status is FAILURE
             elif status is SKIPPED:
@@ -391,142 +396,3 @@ class WhileDoElse(BtNode):
             return RUNNING
         super().halt()
         return status
-
-
-class _Decorator(BtNode):
-    """A BT.CPP decorator: one child, reset after the tick when it completed (``DecoratorNode::executeTick``)."""
-
-    def __init__(self, name: str, child: Behaviour) -> None:
-        super().__init__(name, [child])
-        self.decorated = child
-
-    def execute_tick(self) -> Any:
-        """The decorator's tick, then its child reset if it completed."""
-        status = super().execute_tick()
-        if self.decorated.status in _COMPLETED:
-            reset(self.decorated)
-        return status
-
-
-class _Mapped(_Decorator):
-    """Inverter, ForceSuccess, ForceFailure: the child's completed status mapped."""
-
-    outcome: dict[Status, Status] = {}
-
-    def bt_tick(self) -> Any:
-        """The child's status, SUCCESS and FAILURE mapped."""
-        self.status = RUNNING
-        status = execute(self.decorated)
-        if status in _COMPLETED:
-            reset(self.decorated)
-            return self.outcome[status]
-        return status
-
-
-class Inverter(_Mapped):
-    """BT.CPP's ``Inverter``: SUCCESS and FAILURE swapped."""
-
-    outcome = {SUCCESS: FAILURE, FAILURE: SUCCESS}
-
-
-class ForceSuccess(_Mapped):
-    """BT.CPP's ``ForceSuccess``: SUCCESS once the child completes."""
-
-    outcome = {SUCCESS: SUCCESS, FAILURE: SUCCESS}
-
-
-class ForceFailure(_Mapped):
-    """BT.CPP's ``ForceFailure``: FAILURE once the child completes."""
-
-    outcome = {SUCCESS: FAILURE, FAILURE: FAILURE}
-
-
-class KeepRunningUntilFailure(_Mapped):
-    """BT.CPP's ``KeepRunningUntilFailure``: RUNNING after each success (the child again next tick)."""
-
-    outcome = {SUCCESS: RUNNING, FAILURE: FAILURE}
-
-
-class _Loop(_Decorator):
-    """Repeat and RetryUntilSuccessful: the child again after a SUCCESS (Repeat) or FAILURE (Retry)."""
-
-    again: Status = SUCCESS
-
-    def __init__(self, name: str, child: Behaviour, times: int) -> None:
-        super().__init__(name, child)
-        self.times, self.count = times, 0
-
-    def bt_tick(self) -> Any:
-        """BT.CPP's ``RepeatNode::tick`` (and ``RetryNode::tick``)."""
-        looping = self.count < self.times or self.times == -1
-        self.status = RUNNING
-        while looping:
-            before = self.decorated.status
-            status = execute(self.decorated)
-            if status is RUNNING:
-                return RUNNING
-            if status is SKIPPED:
-                reset(self.decorated)
-                return SKIPPED
-            reset(self.decorated)
-            if status is not self.again:
-                self.count = 0
-                return status
-            self.count += 1
-            looping = self.count < self.times or self.times == -1
-            if before is IDLE and looping:
-                self.emit_wake_up()
-                return RUNNING
-        self.count = 0
-        return self.again
-
-    def halt(self) -> None:
-        """The count reset, the child reset."""
-        self.count = 0
-        super().halt()
-
-
-class Repeat(_Loop):
-    """BT.CPP's ``Repeat``: the child ``num_cycles`` times (-1: for ever); a failure ends it."""
-
-
-class RetryUntilSuccessful(_Loop):
-    """BT.CPP's ``RetryUntilSuccessful``: the child again after a failure, ``num_attempts`` tries in all."""
-
-    again = FAILURE
-
-
-class RunOnce(_Decorator):
-    """BT.CPP's ``RunOnce``: the child until it completes once; then SKIPPED (``then_skip``) or that status."""
-
-    def __init__(self, name: str, child: Behaviour, then_skip: bool = True) -> None:
-        super().__init__(name, child)
-        self.then_skip = then_skip
-        self.done: Any = None
-
-    def bt_tick(self) -> Any:
-        """BT.CPP's ``RunOnceNode::tick``."""
-        if self.done is not None:
-            return SKIPPED if self.then_skip else self.done
-        self.status = RUNNING
-        status = execute(self.decorated)
-        if status in _COMPLETED:
-            self.done = status
-            reset(self.decorated)
-        return status
-
-
-class Constant(BtNode):
-    """BT.CPP's ``AlwaysSuccess`` / ``AlwaysFailure``: a leaf that returns ``result`` at once."""
-
-    def __init__(self, name: str, result: Status) -> None:
-        super().__init__(name, [])
-        self.result = result
-
-    def bt_tick(self) -> Any:
-        """The constant status."""
-        return self.result
-
-
-#: BT.CPP node ID -> how to build it from (name, children, ports)
-Builder = Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]

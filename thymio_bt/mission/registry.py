@@ -27,7 +27,8 @@ from types import ModuleType
 from typing import Any
 
 from thymio_bt.behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
-from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL
+from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL, BTCPP_SCRIPTED
+from thymio_bt.behaviours.btcpp_scripted import BTCPP_LEAVES
 from thymio_bt.errors import Problem, UserError
 
 ENTRY_POINT_GROUP = "thymio_bt.behaviours"
@@ -226,7 +227,7 @@ def default_registry() -> Registry:
     """The built-in behaviours plus those installed through the entry-point group."""
     global _DEFAULT
     if _DEFAULT is None:
-        registry = Registry((*BUILTIN, *CONTROL, *BTCPP_CONTROL))
+        registry = Registry((*BUILTIN, *CONTROL, *BTCPP_CONTROL, *BTCPP_SCRIPTED, *BTCPP_LEAVES))
         for cls in _entry_point_classes():
             try:
                 registry.register(cls)

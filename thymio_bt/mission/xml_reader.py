@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 from xml.parsers import expat
 
-from thymio_bt.behaviours.btcpp_control import BTCPP_IDS
+from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
@@ -40,18 +40,8 @@ from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, MISSION_TAG, RESERVED
 #: BT.CPP built-in -> the node kind of BT.CPP's semantics (an element without _thymio)
 _FROM_BUILTIN = dict(BTCPP_IDS)
 #: BT.CPP nodes that thymio-bt cannot run, with what to use instead
-_UNSUPPORTED = {
-    "Sleep": "use Wait (seconds: simulated)",
-    "AlwaysSuccess": "use Wait with seconds: 0, or ForceSuccess around a node",
-    "AlwaysFailure": "use ForceFailure around a node",
-    "Script": "scripts are not supported yet: use SetBlackboard",
-    "ScriptCondition": "scripts are not supported yet: use a condition behaviour",
-    "Precondition": "scripts are not supported yet: use IfThenElse with a condition behaviour",
-    "UnsetBlackboard": "not supported yet: use SetBlackboard",
-    **{f"Switch{n}": "not supported yet: use IfThenElse on a condition behaviour" for n in range(2, 7)},
-}
-#: BT.CPP's pre- and post-condition attributes (scripts), not supported yet
-_SCRIPT_ATTRS = ("_skipIf", "_successIf", "_failureIf", "_while", "_onSuccess", "_onFailure", "_onHalted", "_post")
+_UNSUPPORTED: dict[str, str] = {}
+
 MAX_DEPTH = 200
 
 
@@ -172,8 +162,6 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
     marked = element.attrs.get(KIND_ATTR, "")
     if BUILTIN.get(marked) != ident and not (marked == "repeat" and ident == "Sequence"):
         marked = ""  # the mark of thymio-bt's node applies to the element the export writes for it only
-    if not marked:
-        _refuse_scripts(element, file)
     if ident in _UNSUPPORTED and not marked:
         raise UserError(
             Problem(
@@ -193,10 +181,17 @@ def _node(element: _Element, file: str, trees: dict[str, _Element], stack: tuple
         kind = marked
     else:
         unprefixed = ident[len("Thymio") :]
-        kind = _FROM_BUILTIN.get(ident, unprefixed if ident.startswith("Thymio") and unprefixed in RESERVED else ident)
+        thymio_style = ident == "SetBlackboard" and "output_key" not in attrs  # thymio-bt's (key, value)
+        kind = (
+            "SetBlackboard"
+            if thymio_style
+            else _FROM_BUILTIN.get(
+                ident, unprefixed if ident.startswith("Thymio") and unprefixed in RESERVED else ident
+            )
+        )
     body: dict[str, Any] = {"name": attrs.pop("name")} if "name" in attrs else {}
     body.update(_body(ident, kind, attrs, children, element, file))
-    return _marked({kind: _marked(body, element)}, element)
+    return _with_conditions(_marked({kind: _marked(body, element)}, element), element)
 
 
 def _body(
@@ -218,12 +213,12 @@ def _body(
         return {"policy": policy, **{k: _value(v) for k, v in attrs.items()}, "children": _list(children, element)}
     if kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
         return {**{k: _value(v) for k, v in attrs.items()}, "children": _list(children, element)}
-    if kind.startswith("bt_"):  # BT.CPP's own node: its ports under their names
-        ports = {k: _value(v) for k, v in attrs.items()}
-        return {
-            **ports,
-            **({"do": children[0]} if _is_decorator(ident) and children else {"children": _list(children, element)}),
-        }
+    if kind.startswith("bt_"):  # BT.CPP's own node: its ports as written (the node's model reads them)
+        category = _category(ident)
+        if category == "leaf":
+            return dict(attrs)
+        nodes = {"do": children[0]} if category == "decorator" and children else {"children": _list(children, element)}
+        return {**attrs, **nodes}
     if not children:  # a behaviour or condition
         return {k: _value(v) for k, v in attrs.items()}
     renamed = {"num_cycles": "times", "num_attempts": "times"}  # a decorator
@@ -237,26 +232,26 @@ def _body(
     return body
 
 
-def _is_decorator(ident: str) -> bool:
-    """Whether BT.CPP's node ``ident`` is a decorator (one child, under ``do``)."""
-    from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL
+def _category(ident: str) -> str:
+    """What BT.CPP's node ``ident`` is here: "decorator" (one child, under ``do``), "composite"
+    (``children``) or "leaf" (ports only)."""
+    from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL, BTCPP_SCRIPTED
 
-    return any(cls.btcpp_id == ident and cls.category == "decorator" for cls in BTCPP_CONTROL)  # type: ignore[attr-defined]
+    for cls in (*BTCPP_CONTROL, *BTCPP_SCRIPTED):
+        if cls.btcpp_id == ident:  # type: ignore[attr-defined]
+            return cls.category
+    return "leaf"
 
 
-def _refuse_scripts(element: _Element, file: str) -> None:
-    """BT.CPP's pre/post-condition attributes are scripts, which are not supported yet: refused."""
-    for key in _SCRIPT_ATTRS:
-        if key in element.attrs:
-            raise UserError(
-                Problem(
-                    f"<{element.tag} {key}=...>: BT.CPP's scripts are not supported yet",
-                    file,
-                    element.line,
-                    element.column,
-                    hint="write the condition as a node: IfThenElse or ReactiveSequence with a condition behaviour",
-                )
-            )
+def _with_conditions(node: MarkedDict, element: _Element) -> MarkedDict:
+    """``node`` under a ``bt_conditions`` node when its element has BT.CPP's pre/post-condition
+    attributes (``_skipIf``, ``_while``, ``_onSuccess``...), else ``node``."""
+    scripts = {CONDITION_ATTRS[k]: v for k, v in element.attrs.items() if k in CONDITION_ATTRS}
+    if not scripts:
+        return node
+    body = next(iter(node.values()))
+    name = body.get("name", element.tag) if isinstance(body, dict) else element.tag
+    return _marked({"bt_conditions": _marked({"name": name, **scripts, "do": node}, element)}, element)
 
 
 def _repeat_until(element: _Element, file: str) -> _Element:
