@@ -100,3 +100,41 @@ def test_colour_follows_no_color_and_the_color_option(monkeypatch):
     monkeypatch.setenv("NO_COLOR", "1")
     assert "\x1b[" not in status_line(color=True)
     assert "\x1b[" in status_line("--color", "always", color=False)
+
+
+def test_replay_prints_the_summary_run_prints_not_a_python_dict(tmp_path):
+    log = tmp_path / "run.jsonl"
+    ran = invoke("run", "missions/square.yaml", "--log", log)
+    replayed = invoke("replay", log)
+    assert replayed.exit_code == 0 and "{'x'" not in replayed.output
+    pose_line = next(line for line in ran.output.splitlines() if "final pose" in line)
+    assert pose_line in replayed.output.splitlines()  # '  final pose: x=0.4500 m  y=...'
+    assert replayed.output.startswith("square: SUCCESS after 22.7 s simulated, 228 ticks\n")
+
+
+def test_behaviour_help_fits_the_terminal_width():
+    import os
+    import subprocess
+    import sys
+
+    for columns in (60, 80, 120):
+        done = subprocess.run(
+            [sys.executable, "-m", "thymio_bt", "behaviours", "MoveUntilWall"],
+            env={**os.environ, "COLUMNS": str(columns)},
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        lines = done.stdout.splitlines()
+        assert max(len(line) for line in lines) <= columns, (columns, max(lines, key=len))
+        text = " ".join(done.stdout.split())
+        for words in ("centre_gain", "steer to the middle of the corridor", "front_center_right", "do not stop"):
+            assert words in text, words
+
+
+def test_tree_draws_to_the_mission_file_s_name_as_documented(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "my_square.yaml").write_text("name: another_name\nmaze: arena\nstart: centre\ntree: Stop\n")
+    assert invoke("tree", "my_square.yaml", "--dot").exit_code == 0
+    assert (tmp_path / "my_square.dot").is_file() and not (tmp_path / "another_name.dot").exists()
+    assert "the MISSION file's name" in " ".join(invoke("tree", "--help").output.split())

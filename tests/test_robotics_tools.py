@@ -301,3 +301,13 @@ def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
         )
         with pytest.raises(UserError, match=re.escape(message)):
             load_mission(bad)
+
+
+def test_the_page_says_what_the_export_does_with_subtrees(tmp_path):
+    """docs/robotics_tools.md once said subtrees were "expanded in place": the export keeps them."""
+    page = " ".join(Path("docs/robotics_tools.md").read_text().split())
+    assert "expanded in place" not in page and "Subtrees stay subtrees in the export" in page
+    done = thymio_bt("tree", "missions/maze_part1_2.yaml", "--btcpp", tmp_path / "t.xml")
+    assert done.returncode == 0, done.stderr
+    xml = (tmp_path / "t.xml").read_text()
+    assert '<SubTree ID="to_dead_end"' in xml and '<BehaviorTree ID="to_dead_end">' in xml

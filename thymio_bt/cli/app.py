@@ -81,6 +81,17 @@ def parse_pairs(values: tuple[str, ...], option: str, example: str) -> dict[str,
     return out
 
 
+def pose_text(pose: dict[str, float] | None) -> str:
+    """A report's or log's pose as the summaries print it.
+
+    >>> pose_text({"x": 0.45, "y": 0.3, "yaw": 1.5707963}), pose_text(None)
+    ('x=0.4500 m  y=0.3000 m  yaw=90.00 deg', 'no robot')
+    """
+    if not pose:
+        return "no robot"
+    return f"x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg"
+
+
 def json_text(data: Any) -> str:
     """``data`` as the JSON the commands write: indented, strict (no NaN), with a final newline.
 

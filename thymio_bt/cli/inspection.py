@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -129,7 +130,8 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
     "--output",
     "-o",
     help="File to write (- = standard output); its suffix picks the format when no flag does. "
-    "Default with a format flag: MISSION's name with that suffix, in the current folder.",
+    "Default with a format flag: the MISSION file's name with that suffix (missions/square.yaml: square.dot), "
+    "in the current folder.",
 )
 @path_option(
     "--btcpp",
@@ -194,7 +196,7 @@ def _registry(mission: Path | None) -> Registry:
 @path_option("--mission", help="Include the behaviours of this mission's plugins (runs their code).")
 def behaviours(name: str | None, mission: Path | None) -> None:
     """List the behaviours, or document one (its parameters, units, defaults, ranges)."""
-    from thymio_bt.mission.node_docs import behaviour_help, behaviour_list
+    from thymio_bt.mission.node_docs import behaviour_help, behaviour_list, parameter_rows
 
     try:
         registry = _registry(mission)
@@ -207,7 +209,81 @@ def behaviours(name: str | None, mission: Path | None) -> None:
         from thymio_bt.errors import did_you_mean
 
         fail(UserError(f"no behaviour named '{name}' (hint: {did_you_mean(name, registry)})"))
-    click.echo(behaviour_help(registry[name]))
+    click.echo(fit_help(behaviour_help(registry[name]), parameter_rows(registry[name]), _terminal_width()))
+
+
+def _terminal_width() -> int:
+    """The terminal's width in columns (``COLUMNS`` when set; 80 when not a terminal), at least 60."""
+    import shutil
+
+    return max(60, shutil.get_terminal_size().columns)
+
+
+def fit_help(text: str, rows: Sequence[tuple[str, ...]], width: int) -> str:
+    """A node's help (:func:`~thymio_bt.mission.node_docs.behaviour_help`) fitted to ``width``
+    columns: its parameter table (``rows``) laid out again with the type and description wrapped in
+    their columns, its prose lines wrapped; the indented examples as they are.
+
+    >>> rows = [("speed", "float", "m/s", "0.1", "> 0 <= 0.2", "cruise speed, until the wall comes in range")]
+    >>> text = "Move\n\nParameters:\n  (the table, one line per row)\n  speed ...\n\nValues accept units."
+    >>> print(fit_help(text, rows, 60))
+    Move
+    <BLANKLINE>
+    Parameters:
+      parameter  type   unit  default  range       description
+      speed      float  m/s   0.1      > 0 <= 0.2  cruise speed,
+                                                   until the wall
+                                                   comes in range
+    <BLANKLINE>
+    Values accept units.
+    """
+    import textwrap
+
+    lines = text.split("\n")
+    if rows and "Parameters:" in lines:
+        at = lines.index("Parameters:") + 1
+        lines[at : at + 1 + len(rows)] = _table(rows, width)
+    out = []
+    for line in lines:
+        if len(line) > width and not line.startswith(" "):
+            out += textwrap.wrap(line, width) or [""]
+        else:
+            out.append(line)
+    return "\n".join(out)
+
+
+def _table(rows: Sequence[tuple[str, ...]], width: int) -> list[str]:
+    """The parameter table in ``width`` columns: each cell wrapped in its column (the type and the
+    default at most 20 wide, the description what is left), a row over as many lines as its cells
+    need; where that leaves the description under 24 columns, one block per parameter instead."""
+    import textwrap
+
+    header = ("parameter", "type", "unit", "default", "range", "description")
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(6)]
+    widths[1], widths[3] = min(widths[1], 20), min(widths[3], 20)
+    widths[5] = width - 2 - sum(widths[:5]) - 2 * 5
+    if widths[5] < 24:
+        return _blocks(rows, width)
+    out = []
+    for row in [header, *rows]:
+        cells = [textwrap.wrap(cell, w, break_on_hyphens=False) or [""] for cell, w in zip(row, widths, strict=True)]
+        for i in range(max(len(c) for c in cells)):
+            parts = [(c[i] if i < len(c) else "").ljust(w) for c, w in zip(cells, widths, strict=True)]
+            out.append(("  " + "  ".join(parts)).rstrip())
+    return out
+
+
+def _blocks(rows: Sequence[tuple[str, ...]], width: int) -> list[str]:
+    """The parameters one block each, for a narrow terminal: ``name: type, unit, default, range``,
+    then the description indented, both wrapped to ``width``."""
+    import textwrap
+
+    out = []
+    for name, kind, unit, default, limits, description in rows:
+        facts = ", ".join(f for f in (kind, unit, f"default {default}" if default else "", limits) if f)
+        out += textwrap.wrap(f"{name}: {facts}", width, initial_indent="  ", subsequent_indent="      ")
+        out += textwrap.wrap(description, width, initial_indent="      ", subsequent_indent="      ")
+    return out
 
 
 @main.command("backends")

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, cast
 
 import click
 
-from thymio_bt.cli.app import fail, main, path_option, viewer_options
+from thymio_bt.cli.app import fail, main, path_option, pose_text, viewer_options
 from thymio_bt.cli.pictures import Pictures
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import STDOUT, check_writable
@@ -59,11 +59,7 @@ def replay(
         pictures.check()
         recording = read_log(log, partial)
         damage_note(log, recording)
-        end = recording.end
-        click.echo(
-            f"{recording.mission}: {end.get('status')} after {end.get('sim_time', 0):.1f} s simulated, "
-            f"{len(recording.samples)} ticks; final pose {end.get('final_pose')}"
-        )
+        _replay_summary(recording)
         if not (pictures.wanted or view):
             click.echo(
                 "nothing to draw (hint: --view, --plot FILE.png, --plot-signals FILE.png or --gif FILE.gif)", err=True
@@ -75,6 +71,22 @@ def replay(
             replay_in_window(recording, 1.0 if speedup is None else speedup)
     except UserError as exc:
         fail(exc)
+
+
+def _replay_summary(recording: Recording) -> None:
+    """The logged run's summary, as ``run`` prints it: status, time, ticks, final pose, collisions,
+    and where and why it did not succeed."""
+    end = recording.end
+    status = end.get("status") or "UNFINISHED"  # a damaged log read with --partial has no end
+    ticks = len(recording.samples)
+    click.echo(f"{recording.mission}: {status} after {end.get('sim_time', 0):.1f} s simulated, {ticks} ticks")
+    click.echo(f"  final pose: {pose_text(end.get('final_pose'))}")
+    if "collisions" in end:
+        click.echo(f"  collisions: {end['collisions']}")
+    if end.get("failed_path"):
+        click.echo(f"  failed at: {end['failed_path']}")
+    if end.get("reason"):
+        click.echo(f"  reason: [{end.get('code')}] {end['reason']}")
 
 
 @main.command()

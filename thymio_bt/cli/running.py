@@ -21,7 +21,6 @@ Example::
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from collections.abc import Callable
@@ -40,6 +39,7 @@ from thymio_bt.cli.app import (
     parse_overrides,
     parse_pairs,
     path_option,
+    pose_text,
     viewer_options,
 )
 from thymio_bt.cli.pictures import Pictures
@@ -336,11 +336,7 @@ def _summary(result: RunResult, err: bool = False) -> None:
         + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
         f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)"
     )
-    pose = result.final_pose
-    if pose:
-        echo(f"  final pose: x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg")
-    else:
-        echo("  final pose: no robot")
+    echo(f"  final pose: {pose_text(result.final_pose)}")
     echo(f"  collisions: {result.collisions}   min clearance: {clearance_text(result.min_clearance)}")
     if result.status != "SUCCESS":
         echo(f"  failed at: {result.failed_path}", err=True)
