@@ -4,6 +4,7 @@ one message naming the line, and `--partial` replays what is readable before the
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -124,3 +125,96 @@ def test_damage_an_export_would_trip_on_is_found_when_reading(good_log, tmp_path
     line = index % len(good_log) + 1
     assert f"{path}:{line}:" in result.output and "Traceback" not in result.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.jsonl"]  # no partial .mcap, .btlog or bag-tmp
+
+
+def _bag_with_header(path, header):
+    from thymio_bt.logs.rosbag import RosbagWriter
+
+    writer = RosbagWriter(path)
+    writer.header(header)
+    writer.close()
+    return path
+
+
+@pytest.mark.parametrize("header", [[1, 2, 3], {"mission": "no maze here"}, {"maze": "not a mapping"}])
+def test_a_bag_whose_header_is_not_a_log_header_is_one_message(tmp_path, header):
+    path = _bag_with_header(tmp_path / "odd.mcap", header)
+    result = CliRunner().invoke(main, ["replay", str(path)])
+    assert result.exit_code == 2, result.output
+    assert "not a thymio-bt bag: its /thymio_bt/header message is not a log header" in result.output
+    assert "Traceback" not in result.output
+
+
+def _replay_in_a_child(path):
+    """Replay ``path`` in a child process; its exit code, output and peak memory (MiB)."""
+    code = (
+        "import resource, subprocess, sys\n"
+        f"done = subprocess.run([sys.executable, '-m', 'thymio_bt.cli', 'replay', {str(path)!r}],"
+        " capture_output=True, text=True, timeout=60)\n"
+        "peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024\n"
+        "print(done.returncode, round(peak)); print(done.stdout + done.stderr)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=90).stdout
+    head, _, text = out.partition("\n")
+    rc, peak = map(int, head.split())
+    return rc, text, peak
+
+
+def _zip_bomb(log: Path, out: Path, declared: int | None) -> Path:
+    """``log`` (an MCAP file thymio-bt wrote) with its first chunk replaced by 1.5 GiB of zeros
+    packed with zstd (48 kB), declaring ``declared`` bytes (None: what the original chunk declared);
+    no summary section, so a reader must walk the data."""
+    import struct
+
+    import zstandard
+
+    packer = zstandard.ZstdCompressor(level=1).compressobj()
+    zeros = bytes(1 << 20)
+    packed = b"".join(packer.compress(zeros) for _ in range(1536)) + packer.flush()
+    data, offset = log.read_bytes(), 8
+    body_out, first = bytearray(data[:8]), True
+    while offset + 9 <= len(data):
+        opcode, length = struct.unpack_from("<BQ", data, offset)
+        body = data[offset + 9 : offset + 9 + length]
+        offset += 9 + length
+        if opcode == 0x06 and first:  # a chunk
+            first = False
+            start, end, unpacked, _ = struct.unpack_from("<QQQI", body)
+            size = unpacked if declared is None else declared
+            body = struct.pack("<QQQII", start, end, size, 0, 4) + b"zstd" + struct.pack("<Q", len(packed)) + packed
+        elif opcode == 0x02:  # the footer: no summary, then the closing magic
+            body_out += struct.pack("<BQ", opcode, 20) + bytes(20) + data[:8]
+            break
+        elif opcode not in (0x01, 0x0F):  # keep the header and the data end only
+            continue
+        body_out += struct.pack("<BQ", opcode, len(body)) + body
+    out.write_bytes(bytes(body_out))
+    return out
+
+
+@pytest.mark.parametrize(
+    "declared, message",
+    [
+        (1536 << 20, "a chunk of the bag unpacks to 1536 MiB, past the 64 MiB"),
+        (None, "a zstd chunk unpacks to more than the"),  # it lies: rosbags unpacked it whole (3.1 GB)
+    ],
+)
+def test_an_mcap_zip_bomb_is_refused_before_it_is_unpacked(tmp_path, declared, message):
+    log = tmp_path / "run.mcap"
+    assert CliRunner().invoke(main, ["run", "missions/square.yaml", "-q", "--log", str(log)]).exit_code == 0
+    bomb = _zip_bomb(log, tmp_path / "bomb.mcap", declared)
+    assert bomb.stat().st_size < 100_000
+    rc, text, peak = _replay_in_a_child(bomb)
+    assert rc == 2 and message in text and "Traceback" not in text, text
+    assert peak < 300, f"{peak} MiB used before refusing"
+
+
+def test_a_rosbag2_folder_whose_mcap_is_a_fifo_is_refused_at_once(tmp_path):
+    import os
+
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information: {version: 9, storage_identifier: mcap}\n")
+    os.mkfifo(bag / "bag_0.mcap")
+    rc, text, _ = _replay_in_a_child(bag)  # a hang would hit the 60 s timeout, an error
+    assert rc == 2 and "bag_0.mcap in the bag is not a regular file" in text and "Traceback" not in text, text

@@ -211,8 +211,10 @@ def read_rosbag(path: Path) -> Recording:
     from rosbags.highlevel import AnyReader
 
     from thymio_bt.inputs.validation import validate
+    from thymio_bt.logs.bag_check import check_bag
     from thymio_bt.maze import Maze
 
+    check_bag(path)
     header: dict[str, Any] = {}
     ticks: dict[int, dict[str, Any]] = {}
     events: list[dict[str, Any]] = []
@@ -259,6 +261,14 @@ def read_rosbag(path: Path) -> Recording:
         ) from None
     if not header:
         raise UserError(Problem("not a thymio-bt bag: no /thymio_bt/header message", str(path)))
+    if not isinstance(header, dict) or not isinstance(header.get("maze"), dict):
+        raise UserError(
+            Problem(
+                "not a thymio-bt bag: its /thymio_bt/header message is not a log header with a maze",
+                str(path),
+                hint="bags are written by thymio-bt run --log FILE.mcap",
+            )
+        )
     samples = [s for _, s in sorted(ticks.items()) if "tick" in s]
     for s in samples:
         s["prox"] = s["prox"] or None
