@@ -220,20 +220,27 @@ def _terminal_width() -> int:
 
 
 def fit_help(text: str, rows: Sequence[tuple[str, ...]], width: int) -> str:
-    """A node's help (:func:`~thymio_bt.mission.node_docs.behaviour_help`) fitted to ``width``
+    r"""A node's help (:func:`~thymio_bt.mission.node_docs.behaviour_help`) fitted to ``width``
     columns: its parameter table (``rows``) laid out again with the type and description wrapped in
     their columns, its prose lines wrapped; the indented examples as they are.
 
     >>> rows = [("speed", "float", "m/s", "0.1", "> 0 <= 0.2", "cruise speed, until the wall comes in range")]
     >>> text = "Move\n\nParameters:\n  (the table, one line per row)\n  speed ...\n\nValues accept units."
-    >>> print(fit_help(text, rows, 60))
+    >>> print(fit_help(text, rows, 72))
     Move
     <BLANKLINE>
     Parameters:
       parameter  type   unit  default  range       description
-      speed      float  m/s   0.1      > 0 <= 0.2  cruise speed,
-                                                   until the wall
+      speed      float  m/s   0.1      > 0 <= 0.2  cruise speed, until the wall
                                                    comes in range
+    <BLANKLINE>
+    Values accept units.
+    >>> print(fit_help(text, rows, 50))  # too narrow for the table: a block per parameter
+    Move
+    <BLANKLINE>
+    Parameters:
+      speed: float, m/s, default 0.1, > 0 <= 0.2
+          cruise speed, until the wall comes in range
     <BLANKLINE>
     Values accept units.
     """
