@@ -32,6 +32,7 @@ from thymio_bt.errors import Problem, UserError, did_you_mean
 if TYPE_CHECKING:
     from thymio_bt.mission import Mission
     from thymio_bt.robot.interface import Backend
+    from thymio_bt.robot.model import RobotModel
 
 ENTRY_POINT_GROUP = "thymio_bt.backends"
 
@@ -52,6 +53,9 @@ class BackendKind:
     options: type[BackendOptions] = BackendOptions
     #: whether runs on it take real time (a real robot, a real-time simulator)
     realtime: bool = False
+    #: the robot model it drives when the mission names none (or the course's, which is the
+    #: simulator's Gazebo robot): a real Thymio is ``real``, the Playground's is ``enki``
+    robot: str = "course"
 
     def parse_options(self, raw: Mapping[str, Any], where: tuple[str, int, int] = ("--backend-opt", 0, 0)) -> Any:
         """Validate ``raw`` settings against :attr:`options`; :class:`UserError` says what is wrong."""
@@ -93,12 +97,22 @@ class SimOptions(BackendOptions):
     physics_hz: float = Field(100.0, ge=50.0, le=2000.0, description="physics sub-steps per simulated second")
 
 
+def _placed() -> Any:
+    """A ``placed`` option: the robot stands at the mission's start already."""
+    return Field(
+        False,
+        description="the robot already stands at the mission's start: no operator is asked to place it "
+        "(for a run with nobody at the keyboard; a later respawn still asks)",
+    )
+
+
 class TdmOptions(BackendOptions):
     """The ``tdm`` backend's settings: where the Thymio Device Manager is."""
 
     host: str | None = Field(None, description="Thymio Device Manager host (default: found on this machine)")
     port: int | None = Field(None, ge=1, le=65535, description="Thymio Device Manager TCP port")
     password: str | None = Field(None, description="Thymio Device Manager password, if it has one")
+    placed: bool = _placed()
 
 
 def _latency(default: float, more: str) -> Any:
@@ -118,6 +132,7 @@ class AsebaOptions(BackendOptions):
     latency: float = _latency(
         0.2, " (behaviours stop early by it); 0.2 was measured on the Playground, measure your robot's"
     )
+    placed: bool = _placed()
 
 
 class PlaygroundOptions(BackendOptions):
@@ -176,6 +191,7 @@ BUILTIN: dict[str, BackendKind] = {
             "thymio_bt.backends.real.thymio:create_tdm",
             TdmOptions,
             realtime=True,
+            robot="real",
         ),
         BackendKind(
             "aseba",
@@ -183,6 +199,7 @@ BUILTIN: dict[str, BackendKind] = {
             "thymio_bt.backends.real.aseba:create_aseba",
             AsebaOptions,
             realtime=True,
+            robot="real",
         ),
         BackendKind(
             "playground",
@@ -191,6 +208,7 @@ BUILTIN: dict[str, BackendKind] = {
             "thymio_bt.backends.playground.backend:create_playground",
             PlaygroundOptions,
             realtime=True,
+            robot="enki",
         ),
         BackendKind(
             "ros2",
@@ -229,3 +247,38 @@ def backend_kind(name: str) -> BackendKind:
     if name not in kinds:
         raise UserError(Problem(f"no backend named '{name}'", "--backend", hint=did_you_mean(name, kinds)))
     return kinds[name]
+
+
+def robot_for(mission: Mission, backend: str, say: Callable[[str], None] | None = None) -> RobotModel:
+    """The robot model backend ``backend`` drives ``mission`` with: the mission's, unless that is the
+    course's (the default, which is the simulator's Gazebo robot and describes no other backend's):
+    then the backend's own (:attr:`BackendKind.robot`), and ``say`` (standard error by default) tells
+    the user. A wrong model is no small matter: the course's sensor model on Enki's robot took a wall
+    it was pushing for open space and reported SUCCESS.
+
+    >>> from thymio_bt.mission import load_mission
+    >>> robot_for(load_mission("maze_part1_2"), "sim").name
+    'course'
+    >>> robot_for(load_mission("maze_part1_2"), "playground", say=print).name
+    [thymio-bt] --backend playground: robot model 'enki' (Enki's Thymio), not the course's (--robot chooses)
+    'enki'
+    """
+    from thymio_bt.robot.model import ROBOTS, robot_model
+
+    own = backend_kind(backend).robot
+    if mission.robot != "course" or own == "course":
+        return robot_model(mission.robot)
+    text = (
+        f"[thymio-bt] --backend {backend}: robot model '{own}' ({_ROBOT_WORDS.get(own, own)}), "
+        "not the course's (--robot chooses)"
+    )
+    if say is None:
+        import sys
+
+        print(text, file=sys.stderr)
+    else:
+        say(text)
+    return ROBOTS[own]
+
+
+_ROBOT_WORDS = {"enki": "Enki's Thymio", "real": "a real Thymio"}

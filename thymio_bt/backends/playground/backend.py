@@ -23,9 +23,8 @@ from thymio_bt.backends.real.aseba import AsebaNode
 from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose, RobotLost
-from thymio_bt.robot.model import RobotModel, robot_model
+from thymio_bt.robot.model import ROBOTS, RobotModel
 from thymio_bt.robot.placement import ContactTracker, placement_problem
-from thymio_bt.robot.profile import is_profile_path
 
 if TYPE_CHECKING:
     from thymio_bt.backends import PlaygroundOptions
@@ -56,10 +55,10 @@ class PlaygroundRobot(ThymioRobot):
         model: RobotModel,
         latency: float = 0.2,
     ) -> None:
-        self.playground, self.enki, self.world, self.maze, self.model = playground, enki, world, maze, model
+        self.playground, self.enki, self.world, self.maze = playground, enki, world, maze
         self._contacts = ContactTracker(maze, model)
         self.latency = latency
-        super().__init__(node, config, say=lambda text: None)  # deleting needs nobody: the robot is parked
+        super().__init__(node, config, say=lambda text: None, model=model)  # deleting needs nobody: it is parked
 
     def true_pose(self) -> Pose | None:
         """The pose the simulation has (None once the Playground is gone)."""
@@ -111,8 +110,11 @@ class PlaygroundRobot(ThymioRobot):
 
 
 def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -> PlaygroundRobot:
-    """The ``playground`` backend kind: start a Playground on the mission's maze, connect to its Thymio."""
-    model = robot_model(mission.robot)
+    """The ``playground`` backend kind: start a Playground on the mission's maze, connect to its
+    Thymio; its model is ``enki`` unless the mission names another than the course's."""
+    from thymio_bt.backends import robot_for
+
+    model = robot_for(mission, "playground")
     port = free_port()
     world = playground_world(mission.maze, Pose(*model.axle_of(mission.start)), port)
     playground = Playground.start(world.text, port, options.timeout)
@@ -124,6 +126,6 @@ def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -
         raise
     scale = options.speed_scale
     if scale is None:
-        scale = 1.0 if is_profile_path(mission.robot) else SPEED_SCALE
+        scale = SPEED_SCALE if ROBOTS.get(model.name) is model else 1.0  # a profile measured its own
     config = RealConfig.of_model(model, scale)
     return PlaygroundRobot(node, config, playground, enki, world, mission.maze, model, options.latency)

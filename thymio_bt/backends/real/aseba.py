@@ -13,7 +13,9 @@ measured with thymiodirect 0.1.2 on the Aseba Playground 1.6.99:
   not only at the backend's 10 Hz ticks: a speed that changes in a step (a turn starting) was
   sampled a tick apart, and each 90° turn's odometry came out up to 5° off on the Playground;
 - values arrive as unsigned 16-bit words and are returned signed;
-- a robot that sends nothing for :data:`LOST_AFTER` seconds, or a connection that fails, raises
+- a link that fails (a cable pulled, a TCP peer gone) is recorded, not raised in thymiodirect's
+  threads (which would print a traceback); a robot that sends nothing for :data:`LOST_AFTER`
+  seconds, or a connection that fails, raises
   :class:`~thymio_bt.robot.interface.RobotLost` at the next read: the run ends as FAILURE ``ROBOT_LOST``.
 
 With a robot (or the Playground) to talk to::
@@ -32,6 +34,7 @@ Example (the words it receives)::
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import io
 import socket
 import threading
@@ -102,6 +105,38 @@ class _SocketIO(io.RawIOBase):
         super().close()
 
 
+class _SerialIO(io.RawIOBase):
+    """A serial port (pyserial) as the byte stream thymiodirect reads, failing as :class:`_SocketIO`
+    does: a pulled cable (a read or write error) is recorded in ``failed``, not raised in
+    thymiodirect's reader thread, which would die with a traceback on the user's terminal."""
+
+    def __init__(self, port: Any) -> None:
+        self.port = port
+        self.failed: BaseException | None = None
+
+    def read(self, n: int = -1) -> bytes:
+        if self.failed is None:
+            try:
+                return bytes(self.port.read(n))
+            except OSError as exc:  # serial.SerialException is one: the link is gone
+                self.failed = exc
+        time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
+        return b""
+
+    def write(self, data: Any) -> int:
+        if self.failed is None:
+            try:
+                self.port.write(data)
+            except OSError as exc:
+                self.failed = exc
+        return len(data)
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):  # a port already gone is closed
+            self.port.close()
+        super().close()
+
+
 def _thymiodirect() -> Any:
     return optional_module("thymiodirect.connection", "the 'aseba' backend", _INSTALL_HINT).Connection
 
@@ -129,7 +164,7 @@ def _open_stream(device: str, timeout: float) -> Any:
 
     port = device or _only_serial_port(Connection)
     try:
-        return serial.Serial(port, timeout=0.2)
+        return _SerialIO(serial.Serial(port, timeout=0.2))
     except (OSError, serial.SerialException) as exc:
         raise UserError(
             Problem(
@@ -292,10 +327,12 @@ class AsebaNode(Node):
 
 
 def create_aseba(mission: Mission, seed: int, options: AsebaOptions) -> ThymioRobot:
-    """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model."""
-    from thymio_bt.robot.model import robot_model
+    """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model (``real``
+    unless it names another than the course's)."""
+    from thymio_bt.backends import robot_for
 
-    config = RealConfig.of_model(robot_model(mission.robot))
-    robot = ThymioRobot(AsebaNode.connect(options.device, options.timeout), config=config)
+    model = robot_for(mission, "aseba")
+    node = AsebaNode.connect(options.device, options.timeout)
+    robot = ThymioRobot(node, config=RealConfig.of_model(model), model=model, placed=options.placed)
     robot.latency = options.latency
     return robot

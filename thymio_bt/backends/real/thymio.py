@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING, Any
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
-from thymio_bt.robot.model import COURSE, RobotModel, integrate_arc
+from thymio_bt.robot.model import COURSE, REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:
     from thymio_bt.backends import TdmOptions
@@ -238,6 +238,9 @@ class ThymioRobot(Backend):
     ``clock`` and ``sleep`` (wall-clock seconds, and waiting) and ``ask`` and ``say`` (the operator's
     console) are injectable so tests run without waiting or typing. ``spawn`` starts with the robot
     present at that pose; without it, the robot is absent until a spawn request is served.
+    ``model`` is what the robot is (:data:`~thymio_bt.robot.model.REAL` unless told: behaviours read
+    its sensor poses and geometry as ``robot.model``); ``config`` defaults to that model's numbers.
+    ``placed``: the robot already stands where the first spawn puts it (no operator is asked then).
     """
 
     def __init__(
@@ -250,10 +253,15 @@ class ThymioRobot(Backend):
         sleep: Callable[[float], None] = time.sleep,
         ask: Callable[[str], str] = input,
         say: Callable[[str], None] = print,
+        model: RobotModel = REAL,
+        placed: bool = False,
     ) -> None:
         super().__init__()
         self.node = node
-        self.config = config or RealConfig()
+        self.model = model
+        self.config = config or RealConfig.of_model(model)
+        self._placed = placed  # the first spawn needs nobody: the robot stands there already
+        self._spawned = False  # whether a spawn has placed the robot (the next ones move it mid-run)
         self.robot_name = robot_name
         self._clock, self._sleep, self._ask, self._say = clock, sleep, ask, say
         self._start = clock()
@@ -336,7 +344,7 @@ class ThymioRobot(Backend):
         """Odometry's base_link pose (it drifts: there is no ground truth); None while absent."""
         if not self._present:
             return None
-        base = COURSE.base_of(*self._axle)
+        base = self.model.base_of(*self._axle)
         return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
 
     def true_pose(self) -> Pose | None:
@@ -419,7 +427,7 @@ class ThymioRobot(Backend):
 
     def _place(self, pose: Pose) -> None:
         """The robot now stands at ``pose``: reset odometry and the command, take fresh readings."""
-        self._axle = COURSE.axle_of(pose)
+        self._axle = self.model.axle_of(pose)
         self._cmd = Twist()
         self._present = True
         self._read_at = self._read_wheels()
@@ -435,9 +443,14 @@ class ThymioRobot(Backend):
         return None
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
-        problem = self._operator_places(pose)
+        if self._placed:  # the operator said so before the run (--backend-opt placed=true)
+            self._placed = False
+            problem = None
+        else:
+            problem = self._operator_places(pose)
         if problem is None:
             self._place(pose)
+            self._spawned = True
         return problem
 
     def _operator_places(self, pose: Pose) -> str | None:
@@ -455,15 +468,31 @@ class ThymioRobot(Backend):
         finally:
             self._paused += self._clock() - asked
         if answer is None:
-            return "no operator to place the robot (standard input is closed)"
+            if self._spawned:
+                return (
+                    "no operator to place the robot (standard input is closed): a spawn during the run "
+                    "moves the robot, which needs someone at the keyboard"
+                )
+            return (
+                "no operator to place the robot (standard input is closed); for a run with nobody at "
+                "the keyboard, stand the robot at the start first and pass --backend-opt placed=true"
+            )
         if answer.strip().lower() in ("q", "quit", "n", "no"):
             return "the operator refused to place the robot"
         return None
 
 
 def create_tdm(mission: Mission, seed: int, options: TdmOptions) -> ThymioRobot:
-    """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's robot model."""
-    from thymio_bt.robot.model import robot_model
+    """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's
+    robot model (``real`` unless it names another than the course's)."""
+    from thymio_bt.backends import robot_for
 
-    config = RealConfig.of_model(robot_model(mission.robot))
-    return ThymioRobot.connect(options.host, options.port, options.password, config=config)
+    model = robot_for(mission, "tdm")
+    return ThymioRobot.connect(
+        options.host,
+        options.port,
+        options.password,
+        config=RealConfig.of_model(model),
+        model=model,
+        placed=options.placed,
+    )
