@@ -4,7 +4,7 @@ the end in the right pocket within 2 cm, the hull never touching a wall, the bon
 missions leave the maze through its gap (their own expect: goal region, no contact).
 
 Real time: about 9 minutes together, the two 6x6 runs 3.5-4.5 minutes each (CI installs the
-Playground: .ci/setup.d/20-aseba.sh).
+Playground: .ci/setup.d/20-aseba.sh), so they are marked slow: ``pytest --run-slow`` runs them.
 """
 
 import math
@@ -20,6 +20,7 @@ from thymio_bt.robot.model import ENKI
 from thymio_bt.run.runner import Run
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
+pytestmark = pytest.mark.slow
 
 
 @pytest.fixture(scope="module", autouse=True)
