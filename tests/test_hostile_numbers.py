@@ -120,3 +120,30 @@ def test_a_start_in_or_over_an_obstacle_is_refused(tmp_path, start, reason):
     )
     result = invoke("run", SQUARE, "--maze", str(maze), "--start", start)
     assert result.exit_code == 2 and "impossible start pose" in result.output and reason in result.output
+
+
+BIG = "9" * 400
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        f"time_limit: {BIG}",  # a setting
+        f"seed: -{BIG}",
+        "parameters: {cruise: " + BIG + "}",  # a parameter
+    ],
+)
+def test_a_400_digit_integer_in_a_file_is_refused_where_it_stands(tmp_path, line):
+    path = tmp_path / "big.yaml"
+    path.write_text(f"name: big\nmaze: two_parts_maze\nstart: part1\n{line}\ntree:\n  MoveUntilWall: {{speed: 0.1}}\n")
+    result = invoke("run", str(path))
+    assert result.exit_code == 2 and "Traceback" not in result.output, result.output
+    assert f"{path}:4:" in result.output and "a number of 400 digits is too large" in result.output
+
+
+def test_a_400_digit_speed_in_a_behaviour_is_refused_where_it_stands(tmp_path):
+    path = tmp_path / "big.yaml"
+    path.write_text(f"name: big\nmaze: two_parts_maze\nstart: part1\ntree:\n  MoveUntilWall: {{speed: {BIG}}}\n")
+    result = invoke("validate", str(path))
+    assert result.exit_code == 2 and "Traceback" not in result.output, result.output
+    assert f"{path}:5:" in result.output and "a number of 400 digits is too large" in result.output

@@ -21,6 +21,7 @@ Example::
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -41,6 +42,10 @@ MAX_NESTING = 200
 _STANDARD_TAG = "tag:yaml.org,2002:"
 
 Mark = tuple[int, int]
+
+
+#: the largest integer a file may hold: the largest a float can (about 1.8e308)
+MAX_INT = int(sys.float_info.max)
 
 
 class MarkedDict(dict):
@@ -129,6 +134,23 @@ class _Loader(yaml.SafeLoader):
                 )
             ) from None
 
+    def construct_bounded_int(self, node: ScalarNode) -> int:
+        """An integer, refused where it stands when no float can hold it: a 400-digit number would
+        overflow the first float it meets (a time limit, a speed) far from its line. Smaller ones
+        go on to the range checks of the setting or parameter they are given to."""
+        value: int = self.construct_yaml_int(node)
+        if abs(value) > MAX_INT:
+            digits = len(str(abs(value)))
+            raise UserError(
+                Problem(
+                    f"a number of {digits} digits is too large (no number here goes past about 1.8e308)",
+                    self.filename,
+                    *_mark(node),
+                    hint="write it with an exponent (1e30) if you mean a float, or quote it to keep it as text",
+                )
+            )
+        return value
+
     def construct_timestamp_as_text(self, node: ScalarNode) -> str:
         """Dates and times stay text: missions have no use for them, and bad dates must not crash."""
         return str(self.construct_scalar(node))
@@ -193,6 +215,7 @@ def _tag_name(tag: str) -> str:
 _Loader.add_constructor(_STANDARD_TAG + "map", _Loader.construct_mapping)
 _Loader.add_constructor(_STANDARD_TAG + "seq", _Loader.construct_sequence)
 _Loader.add_constructor(_STANDARD_TAG + "timestamp", _Loader.construct_timestamp_as_text)
+_Loader.add_constructor(_STANDARD_TAG + "int", _Loader.construct_bounded_int)
 _Loader.add_constructor(None, _Loader.construct_undefined)
 
 
