@@ -82,6 +82,15 @@ def test_an_include_that_is_a_fifo_is_refused(tmp_path):
     assert done.returncode == 2 and "not a regular file" in done.stderr
 
 
+def test_an_include_that_is_a_loop_of_symbolic_links_is_refused(tmp_path):
+    (tmp_path / "a.yaml").symlink_to("b.yaml")
+    (tmp_path / "b.yaml").symlink_to("a.yaml")
+    (tmp_path / "m.yaml").write_text("maze: two_parts_maze\nstart: part1\ninclude: [a.yaml]\ntree: Stop\n")
+    done = cli(["validate", "m.yaml"], tmp_path)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "m.yaml:3:11: included file a.yaml is a loop of symbolic links" in done.stderr
+
+
 @pytest.mark.parametrize("args, name", [(["validate", "m.xml"], "m.xml"), (["maze", "import", "w.world"], "w.world")])
 def test_a_binary_xml_file_gets_a_message_not_a_traceback(tmp_path, args, name):
     (tmp_path / name).write_bytes(b"\xff\xfe\x00<root BTCPP_format='4'>")

@@ -207,8 +207,17 @@ class Assembler(SettingsReader):
     def _include(self, ref: str, path: Path, where: Where, at: str, stack: list[Path]) -> None:
         """One included file ``ref`` (relative to ``path``): its plugins, includes and subtrees; its
         parameters are read later, before the including file's."""
-        target = (path.parent / ref).resolve()
         shown = Path(os.path.normpath(path.parent / ref))  # as the user would write it ...
+        try:
+            target = (path.parent / ref).resolve()
+        except (RuntimeError, OSError):  # Python 3.11 raises RuntimeError for a loop of links
+            self.problem(
+                f"included file {shown} is a loop of symbolic links",
+                where,
+                at,
+                "point the include at a real file",
+            )
+            return
         if shown.resolve() != target:
             shown = target  # ... unless symbolic links disagree
         if target in stack:
