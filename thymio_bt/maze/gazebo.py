@@ -33,12 +33,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from xml.parsers import expat
 
 from pydantic import ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.reading import read_bytes
+from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.maze.model import Maze, Spawn, Wall
 
 Vec = tuple[float, float, float]
@@ -117,55 +117,24 @@ class _Doc:
 
 
 def _parse(path: Path) -> _Doc:
-    """Parse XML with line numbers; DOCTYPE/ENTITY declarations are refused (billion laughs)."""
+    """Parse the world with line numbers, under :func:`~thymio_bt.inputs.xmlparse.parse_xml`'s guards
+    (no DOCTYPE or ENTITY, bounded nesting)."""
     file = str(path)
-    data = read_bytes(path, "world")
     builder = ET.TreeBuilder()
-    parser = expat.ParserCreate()
     marks: dict[ET.Element, tuple[int, int]] = {}
 
-    def start(tag: str, attrs: dict[str, str]) -> None:
-        marks[builder.start(tag, attrs)] = (parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+    def start(tag: str, attrs: dict[str, str], line: int, column: int) -> None:
+        marks[builder.start(tag, attrs)] = (line, column)
 
-    def refuse(*_: Any) -> None:
-        raise UserError(
-            Problem(
-                "DOCTYPE and ENTITY declarations are not allowed in a world file",
-                file,
-                parser.CurrentLineNumber,
-                parser.CurrentColumnNumber + 1,
-                hint="SDF files never need them; remove the <!DOCTYPE ...> block",
-            )
-        )
-
-    parser.buffer_text = True
-    parser.StartElementHandler = start
-    parser.EndElementHandler = builder.end
-    parser.CharacterDataHandler = builder.data
-    parser.StartDoctypeDeclHandler = refuse
-    parser.EntityDeclHandler = refuse
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as exc:
-        raise UserError(
-            Problem(
-                f"not a valid XML file: {expat.ErrorString(exc.code)}",
-                file,
-                exc.lineno,
-                exc.offset + 1,
-                hint="a Gazebo .world file is SDF (XML) starting with <sdf version=...>",
-            )
-        ) from None
-    except (LookupError, ValueError) as exc:  # an encoding expat does not know, e.g. EBCDIC
-        raise UserError(
-            Problem(
-                f"cannot read the XML: {exc}",
-                file,
-                1,
-                1,
-                hint='save the world as UTF-8 (<?xml version="1.0" encoding="UTF-8"?>)',
-            )
-        ) from None
+    parse_xml(
+        read_bytes(path, "world"),
+        file,
+        "world file",
+        start,
+        builder.end,
+        builder.data,
+        hint="a Gazebo .world file is SDF (XML) starting with <sdf version=...>",
+    )
     root = builder.close()
     doc = _Doc(file, root, marks)
     if root.tag != "sdf":
