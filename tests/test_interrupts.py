@@ -203,6 +203,21 @@ def test_a_second_signal_ends_a_run_stuck_inside_a_tick(tmp_path, sig, code):
     assert "Traceback" not in err and "INTERRUPTED" in out
 
 
+def test_a_run_stuck_in_its_first_tick_still_leaves_a_whole_log(tmp_path):
+    _stuck_mission(tmp_path)
+    (tmp_path / "stuck.py").write_text(STUCK.replace("if self.ticks > 3:", "if self.ticks > 0:"))
+    proc = start(["run", "stuck.yaml", "--report", "r.json", "--log", "r.jsonl"], tmp_path)
+    wait_for(tmp_path / "stuck.txt")
+    proc.send_signal(signal.SIGINT)
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=10)
+    assert proc.returncode == 130, err
+    lines = [json.loads(line) for line in (tmp_path / "r.jsonl").read_text().splitlines()]
+    assert [r["kind"] for r in lines] == ["header", "end"] and lines[-1]["status"] == "INTERRUPTED"
+    assert json.loads((tmp_path / "r.json").read_text())["ticks"] == 0
+
+
 def test_a_second_signal_stops_the_motors_of_a_run_stuck_inside_a_tick(tmp_path, monkeypatch):
     import threading
 

@@ -246,6 +246,7 @@ class _Hooks:
             from thymio_bt.logs.recording import Recorder
 
             self.recorder = Recorder(log_path=log, keep=keep)
+            self.recorder.begin(runner)  # the log's header now: a run stuck in its first tick keeps it
             self.extra.append(self.recorder)
         if live_tree:
             from thymio_bt.viz.terminal import LiveTree

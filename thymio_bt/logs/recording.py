@@ -72,6 +72,13 @@ class Recorder:
         self._run: Run | None = None
         self._header: dict[str, Any] = {}
 
+    def begin(self, run: Run) -> None:
+        """Open the log and write its header for ``run`` before its first tick, so that a run whose
+        first tick never ends (a plugin stuck in it, then Ctrl-C) still leaves a whole log; the
+        first tick does it otherwise. Once only."""
+        if self._run is None:
+            self._open(run)
+
     def _open(self, run: Run) -> None:
         from thymio_bt.logs.records import LogHeader, tree_nodes
 
