@@ -54,7 +54,11 @@ class Bridge:
         port = free_port()
         self.world = playground_world(mission.maze, Pose(*ENKI.axle_of(mission.start)), port)
         self.playground = Playground.start(self.world.text, port)
-        self.enki = EnkiRobot.find(self.playground.bus)
+        try:
+            self.enki = EnkiRobot.find(self.playground.bus)
+        except BaseException:
+            self.playground.stop()
+            raise
         self.tty = folder / "thymio-tty"
         self.socat = subprocess.Popen(
             ["socat", f"PTY,link={self.tty},raw,echo=0", f"TCP:127.0.0.1:{port}"],
@@ -64,7 +68,9 @@ class Bridge:
         deadline = time.monotonic() + 5
         while not self.tty.exists() and time.monotonic() < deadline:
             time.sleep(0.05)
-        assert self.tty.exists(), "socat made no pty"
+        if not self.tty.exists():
+            self.close()
+            pytest.fail("socat made no pty")
 
     def place(self, pose: Pose) -> None:
         """What an operator does at a prompt: put the robot at ``pose`` (base_link)."""
