@@ -102,3 +102,122 @@ def run_btcpp(bt, node: tuple, ticks: int) -> list:
         if status.name != "RUNNING":
             break
     return trace
+
+
+#: pre/post-condition attributes a generated node may carry (over the entries v and h)
+CONDITIONS = {
+    "_skipIf": ["v > 2", "v == 1", "false"],
+    "_successIf": ["v >= 3", "v == 2"],
+    "_failureIf": ["v == 4", "v > 5"],
+    "_while": ["v < 4", "v != 3"],
+    "_onSuccess": ["v += 1", "v := v * 2"],
+    "_onFailure": ["v -= 1", "v := 0"],
+    "_onHalted": ["h += 1"],
+    "_post": ["h := h + 2"],
+}
+SCRIPTS = ["v += 1", "v := v > 2 ? 0 : v + 1", "h := h + v", "v := (v + 3) * 2 - v"]
+CHECKS = ["v > 1", "v == 0 || h > 2", "!(v < 2) && h >= 0", "v + h > 3"]
+
+
+def random_scripted_tree(rng: random.Random, depth: int = 0, counter=None) -> tuple:
+    """A random tree with scripts: Script / ScriptCondition / AlwaysSuccess leaves besides the
+    scripted ones, and BT.CPP's pre/post-condition attributes on some nodes (as a 4th element)."""
+    counter = counter if counter is not None else [0]
+    if depth < 4 and rng.random() >= 0.15 + 0.15 * depth:
+        ident = rng.choice(sorted(CONTROLS))
+        low, high, _ = CONTROLS[ident]
+        children = [random_scripted_tree(rng, depth + 1, counter) for _ in range(rng.randint(low, high))]
+        node = (ident, _ports(rng, ident, len(children)), children)
+    else:
+        roll = rng.random()
+        if roll < 0.2:
+            node = ("Script", rng.choice(SCRIPTS), "")
+        elif roll < 0.35:
+            node = ("ScriptCondition", rng.choice(CHECKS), "")
+        elif roll < 0.42:
+            node = (rng.choice(["AlwaysSuccess", "AlwaysFailure"]), "", "")
+        else:
+            node = random_tree(rng, 99, counter)
+    if rng.random() < 0.35:
+        keys = rng.sample(sorted(CONDITIONS), rng.randint(1, 2))
+        node = (*node, {k: rng.choice(CONDITIONS[k]) for k in keys})
+    return node
+
+
+def _ports(rng: random.Random, ident: str, n: int) -> dict:
+    """Valid ports of a control node of ``n`` children."""
+    kind = CONTROLS[ident][2]
+    if kind == "parallel":
+        return {
+            "success_count": rng.choice([-1, *range(1, n + 1)]),
+            "failure_count": rng.choice([-1, *range(1, n + 1)]),
+        }
+    if kind == "parallel_all":
+        return {"max_failures": rng.choice([-1, *range(1, n + 1)])}
+    if kind == "repeat":
+        return {"num_cycles": rng.randint(1, 3)}
+    if kind == "retry":
+        return {"num_attempts": rng.randint(1, 3)}
+    return {}
+
+
+def to_scripted_xml(node: tuple) -> str:
+    """A scripted tree as BT.CPP XML."""
+    attrs = "".join(f' {k}="{v}"' for k, v in (node[3] if len(node) > 3 else {}).items())
+    ident = node[0]
+    if ident == "Leaf":
+        return f'<L name="{node[2]}"{attrs}/>'
+    if ident in ("Script", "ScriptCondition"):
+        return f'<{ident} code="{node[1]}"{attrs}/>'
+    if ident in ("AlwaysSuccess", "AlwaysFailure"):
+        return f"<{ident}{attrs}/>"
+    ports = "".join(f' {k}="{v}"' for k, v in node[1].items())
+    return f"<{ident}{ports}{attrs}>" + "".join(to_scripted_xml(c) for c in node[2]) + f"</{ident}>"
+
+
+def scripted_document(node: tuple) -> str:
+    """The whole document: the entries v and h set to 0 first, then the tree."""
+    body = '<Sequence><Script code="v := 0; h := 0"/>' + to_scripted_xml(node) + "</Sequence>"
+    return f'<root BTCPP_format="4"><BehaviorTree ID="Main">{body}</BehaviorTree></root>'
+
+
+def leaf_scripts(node: tuple, out=None) -> dict:
+    """Each scripted leaf's script by name, in a scripted tree."""
+    out = {} if out is None else out
+    if node[0] == "Leaf":
+        out[node[2]] = node[1]
+    elif node[0] in CONTROLS:
+        for child in node[2]:
+            leaf_scripts(child, out)
+    return out
+
+
+def run_btcpp_xml(bt, xml: str, plan: dict, ticks: int) -> tuple[list, dict]:
+    """BT.CPP's trace of a whole XML document (leaves ``L`` scripted by ``plan``) and its final
+    entries v and h."""
+    codes = {"S": bt.NodeStatus.SUCCESS, "F": bt.NodeStatus.FAILURE, "R": bt.NodeStatus.RUNNING}
+    calls, log = {}, []
+
+    def step(leaf):
+        name = leaf.name()
+        index = calls.get(name, 0)
+        calls[name] = index + 1
+        log.append(("t", name))
+        script = plan[name]
+        return codes[script[min(index, len(script) - 1)]]
+
+    factory = bt.BehaviorTreeFactory()
+    factory.register_simple_stateful_action("L", step, step, lambda leaf: log.append(("h", leaf.name())))
+    tree = factory.create_tree_from_text(xml)
+    trace = []
+    for _ in range(ticks):
+        try:
+            status = tree.tick_once().name
+        except RuntimeError:  # BT.CPP refuses what happened (e.g. a skipped IfThenElse condition)
+            status = "ERROR"
+        trace.append((tuple(log), status))
+        log.clear()
+        if status != "RUNNING":
+            break
+    board = tree.root_blackboard()
+    return trace, {key: board.get_double(key) for key in ("v", "h")}

@@ -5,7 +5,14 @@ leaves halted, the same status at the same tick (#33). BT.CPP is driven by tickO
 import random
 
 import pytest
-from _btcpp_trees import random_tree, run_btcpp
+from _btcpp_trees import (
+    leaf_scripts,
+    random_scripted_tree,
+    random_tree,
+    run_btcpp,
+    run_btcpp_xml,
+    scripted_document,
+)
 from _require import module
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
@@ -79,3 +86,84 @@ def test_generated_trees_tick_as_in_behaviortree_cpp(chunk):
         if expected != got:
             differences.append((seed, tree, expected, got))
     assert not differences, differences[:1]
+
+
+SCRIPTED_TREES = 3000
+
+
+def build_scripted(node, calls, log, ctx):
+    """thymio-bt's tree for a generated tree with scripts and pre/post-conditions."""
+    from thymio_bt.behaviours import btcpp_scripted as bs
+
+    ident = node[0]
+    if ident in ("Script", "ScriptCondition"):
+        cls = bs.Script if ident == "Script" else bs.ScriptCondition
+        built = cls(ident, cls.Params(code=node[1]), ctx)
+    elif ident in ("AlwaysSuccess", "AlwaysFailure"):
+        cls = bs.AlwaysSuccess if ident == "AlwaysSuccess" else bs.AlwaysFailure
+        built = cls(ident, cls.Params(), ctx)
+    elif ident == "Leaf":
+        built = Leaf(node[2], node[1], calls, log)
+    else:
+        children = [build_scripted(child, calls, log, ctx) for child in node[2]]
+        built = build((ident, node[1], [("Leaf", "S", f"_{i}") for i in range(len(children))]), calls, log)
+        for child in children:  # the generated children in place of the placeholders
+            child.parent = built
+        built.children[:] = children
+        if isinstance(built, bd.BtDecorator):
+            built.decorated = children[0]
+    if len(node) > 3:
+        from thymio_bt.behaviours.btcpp_control import CONDITION_ATTRS
+
+        scripts = {CONDITION_ATTRS[k]: bs.parse(v) for k, v in node[3].items()}
+        built = bs.Conditioned(built.name, built, scripts)
+    return built
+
+
+def run_scripted_here(node, ticks):
+    """thymio-bt's trace of a scripted tree (after ``v := 0; h := 0``) and its final v and h."""
+    from types import SimpleNamespace
+
+    from py_trees.blackboard import Blackboard
+
+    from thymio_bt.behaviours import btcpp_scripted as bs
+
+    Blackboard.storage.clear()
+    ctx = SimpleNamespace(robot=SimpleNamespace(exists=lambda: False), now=lambda: 0.0, collision_count=lambda: 0)
+    calls, log = {}, []
+    init = bs.Script("init", bs.Script.Params(code="v := 0; h := 0"), ctx)
+    root = bn.Sequence("root", [init, build_scripted(node, calls, log, ctx)])
+    trace = []
+    for _ in range(ticks):
+        try:
+            tick(root)
+            status = root.status.name
+        except bn.NeverYields:
+            raise
+        except RuntimeError:  # as BT.CPP refuses it
+            status = "ERROR"
+        trace.append((tuple(log), status))
+        log.clear()
+        if status != "RUNNING":
+            break
+    board = {key: float(Blackboard.storage["/" + key]) for key in ("v", "h")}
+    Blackboard.storage.clear()
+    return trace, board
+
+
+@pytest.mark.parametrize("chunk", range(3))
+def test_generated_trees_with_scripts_and_conditions_run_as_in_behaviortree_cpp(chunk):
+    bt = module("behaviortreepy")
+    differences, never = [], 0
+    for seed in range(chunk * SCRIPTED_TREES // 3, (chunk + 1) * SCRIPTED_TREES // 3):
+        tree = random_scripted_tree(random.Random(seed))
+        try:
+            got = run_scripted_here(tree, TICKS)
+        except bn.NeverYields:  # BT.CPP's tickOnce() would never return: not run there
+            never += 1
+            continue
+        expected = run_btcpp_xml(bt, scripted_document(tree), leaf_scripts(tree), TICKS)
+        if expected != got:
+            differences.append((seed, scripted_document(tree), expected, got))
+    assert not differences, (len(differences), differences[:1])
+    assert never < SCRIPTED_TREES // 100

@@ -41,6 +41,8 @@ class _Mapped(BtDecorator):
     """Inverter, ForceSuccess, ForceFailure: the child's completed status mapped."""
 
     outcome: dict[Status, Status] = {}
+    #: what a skipped child makes of it
+    skipped: Any = SKIPPED
 
     def bt_tick(self) -> Any:
         """The child's status, SUCCESS and FAILURE mapped."""
@@ -49,7 +51,7 @@ class _Mapped(BtDecorator):
         if status in bn.COMPLETED:
             bn.reset(self.decorated)
             return self.outcome[status]
-        return status
+        return self.skipped if status is SKIPPED else status
 
 
 class Inverter(_Mapped):
@@ -74,6 +76,7 @@ class KeepRunningUntilFailure(_Mapped):
     """BT.CPP's ``KeepRunningUntilFailure``: RUNNING after each success (the child again next tick)."""
 
     outcome = {SUCCESS: RUNNING, FAILURE: FAILURE}
+    skipped = RUNNING  # BT.CPP returns its own status, RUNNING, for a skipped child
 
 
 class _Loop(BtDecorator):

@@ -44,19 +44,32 @@ class _Skipped:
 
 
 SKIPPED: Any = _Skipped()
+#: how many times one tick may re-tick the tree for wake-ups before it is an error (BT.CPP hangs)
+MAX_PASSES = 10_000
+
+
+class NeverYields(RuntimeError):
+    """A tree that asks to be woken up again at every pass of a tick: BT.CPP's tickOnce() never returns."""
+
+
 COMPLETED = (SUCCESS, FAILURE)
 
 
 def execute(child: Behaviour) -> Any:
     """BT.CPP's ``executeTick`` of any child: a BT.CPP node's own, or py_trees' tick of another node.
     An action that completed and was not reset returns that status again without running (BT.CPP's
-    StatefulActionNode); a condition runs every time (a SyncActionNode)."""
+    StatefulActionNode); a condition runs every time (a SyncActionNode). A child that returns IDLE
+    (a WhileDoElse whose condition was skipped) is an error, as in BT.CPP."""
     if isinstance(child, BtNode):
-        return child.execute_tick()
-    if child.status in COMPLETED and not (isinstance(child, ConditionBehaviour) or getattr(child, "bt_sync", False)):
+        status = child.execute_tick()
+    elif child.status in COMPLETED and not (isinstance(child, ConditionBehaviour) or getattr(child, "bt_sync", False)):
         return child.status
-    tick(child)
-    return child.status
+    else:
+        tick(child)
+        status = child.status
+    if status is IDLE:
+        raise RuntimeError(f"'{child.name}' returned IDLE: a child should not (BT.CPP refuses it too)")
+    return status
 
 
 def reset(child: Behaviour) -> None:
@@ -81,7 +94,8 @@ class BtNode(py_trees.composites.Composite):
     def execute_tick(self) -> Any:
         """One BT.CPP ``executeTick``: :meth:`bt_tick`, the status kept (IDLE if SKIPPED)."""
         status = self.bt_tick()
-        self.status = IDLE if status is SKIPPED else status
+        if status is not SKIPPED:  # skipped: the status the tick left (RUNNING if it set it, as BT.CPP)
+            self.status = status
         return status
 
     def bt_tick(self) -> Any:
@@ -107,9 +121,13 @@ class BtNode(py_trees.composites.Composite):
             return
         self.wake = False
         status = self.execute_tick()
+        passes = 1
         while status is RUNNING and self.wake:
+            if passes >= MAX_PASSES:  # BT.CPP would never return from this tickOnce()
+                raise NeverYields(f"'{self.name}' was woken up {passes} times in one tick: the tree never yields")
             self.wake = False
             status = self.execute_tick()
+            passes += 1
 
     def tick(self) -> Iterator[Behaviour]:
         """py_trees' generator tick: the direct tick, then the nodes it left active (for visitors)."""

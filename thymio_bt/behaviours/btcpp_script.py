@@ -289,6 +289,16 @@ def _read(name: str) -> Script:
     return read
 
 
+def _typed(name: str, old: Any, new: Any) -> Any:
+    """``new`` as the type of the entry it replaces: BT.CPP keeps a whole-number entry whole (a
+    fraction is an error), like ``v := 0; v := 2.5``."""
+    if isinstance(old, int) and not isinstance(old, bool) and isinstance(new, float):
+        if not new.is_integer():
+            raise ScriptError(f"'{name}' holds a whole number: cannot assign {new:g} to it")
+        return int(new)
+    return new
+
+
 def _assign(name: str, op: str, value: Script) -> Script:
     """An assignment's closure: its value is the value written."""
 
@@ -302,7 +312,7 @@ def _assign(name: str, op: str, value: Script) -> Script:
             new = current + _text(new) if text else _arith(op[0], current, new)
         elif op == "=" and name in board and isinstance(board[name], (int, float)) and isinstance(new, str):
             new = _number(new)
-        board[name] = new
+        board[name] = _typed(name, board.get(name), new)
         return new
 
     return assign

@@ -314,10 +314,13 @@ class Conditioned(bn.BtNode):
         status = self._pre()
         if status is None:
             status = bn.execute(self.children[0])
+            if status is bn.SKIPPED:  # the node's status as its tick left it (RUNNING if it set it)
+                self.status = self.children[0].status
         if status in (Status.SUCCESS, Status.FAILURE):
             self._post("on_success" if status is Status.SUCCESS else "on_failure")
             self._post("post")
-        self.status = Status.INVALID if status is bn.SKIPPED else status
+        if status is not bn.SKIPPED:
+            self.status = status
         return status
 
     def _pre(self) -> Any:
