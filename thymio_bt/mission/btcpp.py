@@ -39,6 +39,7 @@ from typing import Any
 
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.behaviours.base import ConditionBehaviour
+from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
 from thymio_bt.mission.plan import Mission, NodePlan
@@ -88,9 +89,15 @@ RESERVED = frozenset(
 _BUILTIN_PORTS = {("repeat", "times"): "num_cycles", ("retry", "times"): "num_attempts"}
 
 
+#: a bt_* node kind -> its BT.CPP ID
+_BT_ID = {kind: ident for ident, kind in BTCPP_IDS.items()}
+
+
 def node_id(node: TreeNode, children: int) -> str:
     """The BT.CPP node ID of a logged node."""
     kind = node["kind"]
+    if kind in _BT_ID:
+        return _BT_ID[kind]
     if kind == "repeat" and children == 2:
         return "Sequence"  # the outer element of a do-while loop (repeat_until_elements)
     if kind in RESERVED:
@@ -114,6 +121,8 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any], children: int)
     kind = node["kind"]
     if kind == "repeat" and children == 2:
         return {}  # a do-while loop: it ends by its condition, not a count
+    if kind in _BT_ID:  # BT.CPP's own node: its ports, without the time limit every behaviour has
+        return {k: _port_value(v) for k, v in params.items() if v is not None and k != "timeout"}
     if kind == "parallel":
         one = params.get("policy") == "success_on_one"
         ports = {"success_count": "1" if one else "-1", "failure_count": "1"}
@@ -174,8 +183,14 @@ def tree_xml(
     elements: dict[int, ET.Element] = {}
     loops: dict[int, ET.Element] = {}  # a do-while loop's uid -> the element its body and condition go in
     used: dict[str, tuple[str, set[str]]] = {}
+    conditions: dict[int, dict[str, str]] = {}  # a bt_conditions node's uid -> the attributes of its child
     for n in nodes:
         parent = tree if n["parent"] is None else loops.get(n["parent"], elements[n["parent"]])
+        if n["kind"] == "bt_conditions":  # BT.CPP's _skipIf=... attributes, on the node under it
+            names = {name: attr for attr, name in CONDITION_ATTRS.items()}
+            conditions[n["uid"]] = {names[k]: str(v) for k, v in params.get(n["uid"], {}).items() if v is not None}
+            elements[n["uid"]] = parent
+            continue
         if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
             parent = ET.SubElement(parent, "Inverter", _onFailure=f"__until_{uids[n['parent']]} := true")
         if n["uid"] in subtrees:
@@ -186,7 +201,8 @@ def tree_xml(
         ports = _ports(n, ident, params.get(n["uid"], {}), children[n["uid"]])
         used.setdefault(ident, (n["kind"], set()))[1].update(ports)
         marked = {KIND_ATTR: n["kind"]} if _is_control(registry, n["kind"]) else {}
-        attrs = {"name": n["name"], **ports, **marked, "_uid": str(uids[n["uid"]])}
+        scripts = conditions.get(n["parent"], {}) if n["parent"] is not None else {}
+        attrs = {"name": n["name"], **ports, **marked, **scripts, "_uid": str(uids[n["uid"]])}
         if n["kind"] == "repeat" and children[n["uid"]] == 2:
             elements[n["uid"]] = loops[n["uid"]] = repeat_until_elements(parent, attrs, uids[n["uid"]])[0]
         else:
@@ -199,7 +215,7 @@ def tree_xml(
 def _is_control(registry: Registry, kind: str) -> bool:
     """Whether ``kind`` is a composite or decorator (its element is marked with :data:`KIND_ATTR`)."""
     cls = registry.get(kind)
-    return isinstance(cls, type) and issubclass(cls, ControlNode)
+    return isinstance(cls, type) and issubclass(cls, ControlNode) and kind not in _BT_ID
 
 
 #: BT.CPP's built-in node IDs an export uses besides BUILTIN's (no TreeNodesModel entry)
@@ -210,7 +226,7 @@ def _model(model: ET.Element, used: Mapping[str, tuple[str, set[str]]], registry
     """The ``<TreeNodesModel>``: every node ID ``used`` that is not BT.CPP's, with its ports (a
     plugin that was not imported declares the ports the tree gives it)."""
     for ident, (kind, ports) in sorted(used.items()):
-        if ident in BUILTIN.values() or ident in _EXPORT_BUILTINS:
+        if ident in BUILTIN.values() or ident in _EXPORT_BUILTINS or ident in BTCPP_IDS:
             continue
         cls = registry.get(kind)
         entry = ET.SubElement(model, _category(cls), ID=ident)
@@ -328,3 +344,48 @@ def mission_nodes(mission: Mission) -> tuple[list[TreeNode], dict[int, dict[str,
 
     visit(mission.tree, None, "")
     return nodes, params, subtrees
+
+
+def palette_xml(registry: Registry | None = None) -> str:
+    """A Groot2 palette: a ``<TreeNodesModel>`` of every robot behaviour and condition of ``registry``
+    (the default: the built-ins and installed plugins) with their ports, to import in Groot2 beside
+    its own built-ins (BT.CPP's control nodes, which run here with BT.CPP's semantics).
+
+    Example::
+
+        >>> text = palette_xml()
+        >>> '<Action ID="MoveUntilWall">' in text, '<Condition ID="WallAhead">' in text, "bt_sequence" in text
+        (True, True, False)
+    """
+    registry = registry or default_registry()
+    root = ET.Element("root", BTCPP_format="4")
+    used = {
+        (("Thymio" + name) if name in RESERVED else name): (name, set[str]())
+        for name, cls in registry.behaviours()
+        if not name.startswith("bt_")
+    }
+    _model(ET.SubElement(root, "TreeNodesModel"), used, registry)
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def yaml_hint(kind: str) -> str | None:
+    """The hint for a BT.CPP node name written in a YAML mission (``Fallback:``): thymio-bt's own
+    node of that role, and BT.CPP's semantics as ``bt_*``; None for another name.
+
+    Example::
+
+        >>> yaml_hint("Fallback")
+        "Fallback is `selector` here (BT.CPP's own Fallback, tick for tick: `bt_fallback`)"
+        >>> yaml_hint("IfThenElse"), yaml_hint("MoveUntilWal")
+        ("IfThenElse is `bt_if_then_else` in YAML (BT.CPP's own IfThenElse)", None)
+    """
+    from thymio_bt.behaviours.btcpp_control import BTCPP_IDS
+
+    ours = {ident: kind for kind, ident in BUILTIN.items()}.get(kind)
+    bt = BTCPP_IDS.get(kind)
+    if ours is not None:
+        return f"{kind} is `{ours}` here (BT.CPP's own {kind}, tick for tick: `{bt}`)"
+    if bt is not None:
+        return f"{kind} is `{bt}` in YAML (BT.CPP's own {kind})"
+    return None
