@@ -113,7 +113,10 @@ def _kind(ident: str, yaml: str, category: str, make: Callable[..., Behaviour], 
     """A :class:`BtControl` subclass for BT.CPP's ``ident`` with its ``ports`` (name: (type, default))."""
     fields: dict[str, Any] = {k: (t, Field(d, description=desc)) for k, (t, d, desc) in ports.items()}
     params = create_model(f"{ident}Params", __base__=ControlParams, **fields) if fields else ControlParams
-    example = f"e.g. '{yaml}: " + ("[A, B]'" if category == "composite" else "{do: CHILD}'")
+    given = "".join(f"{k}: ..., " for k, (_, d, _) in ports.items() if d is ...)
+    example = f"e.g. '{yaml}: " + (
+        f"{{{given}children: [A, B]}}'" if category == "composite" else f"{{{given}do: CHILD}}'"
+    )
     attrs = {"__doc__": doc, "yaml_name": yaml, "category": category, "Params": params, "btcpp_id": ident}
     attrs.update(make=staticmethod(make), example=example, short_form=category == "decorator" and not ports)
     return type(f"Bt{ident}", (BtControl,), attrs)
