@@ -383,3 +383,19 @@ def test_loading_and_validating_leave_the_blackboard_empty() -> None:
     result = CliRunner().invoke(main, ["validate", *map(str, MISSIONS)])
     assert result.exit_code == 0
     assert _blackboard_state() == ({}, {}, {})
+
+
+@pytest.mark.parametrize(
+    "kind, hint",
+    [
+        ("Fallback", "Fallback is `selector` here"),
+        ("Inverter", "Inverter is `invert` here"),
+        ("IfThenElse", "IfThenElse is `bt_if_then_else` in YAML"),
+    ],
+)
+def test_a_btcpp_node_name_in_yaml_says_what_it_is_called_here(tmp_path, kind, hint):
+    path = tmp_path / "m.yaml"
+    path.write_text(f"name: m\nmaze: two_parts_maze\nstart: part1\ntree:\n  {kind}:\n    - Stop: {{}}\n")
+    with pytest.raises(UserError) as exc:
+        load_mission(path)
+    assert f"unknown node type '{kind}'" in str(exc.value) and hint in str(exc.value)

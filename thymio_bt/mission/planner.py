@@ -30,6 +30,7 @@ from thymio_bt.errors import did_you_mean, type_name
 from thymio_bt.inputs.units import Quantity
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.assemble import Assembly, Subtree
+from thymio_bt.mission.btcpp import yaml_hint
 from thymio_bt.mission.checker import Scope, Where
 from thymio_bt.mission.parameters import ParameterReader, parse_value_kind
 from thymio_bt.mission.plan import NodePlan
@@ -108,9 +109,8 @@ class TreePlanner(ParameterReader):
             return self._behaviour(kind, body, at)
         if kind in self.subtrees:
             return self._use_subtree(kind, body, at)
-        self.problem(
-            f"unknown node type '{kind}'", where, node_path, did_you_mean(kind, [*self.registry, *self.subtrees])
-        )
+        hint = yaml_hint(kind) or did_you_mean(kind, [*self.registry, *self.subtrees])
+        self.problem(f"unknown node type '{kind}'", where, node_path, hint)
         return None
 
     def _over_limits(self, where: Where, path: str, depth: int) -> bool:
