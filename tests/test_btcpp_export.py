@@ -88,3 +88,16 @@ def test_a_do_while_loop_is_written_with_built_ins_and_read_back_as_one_repeat(t
     assert '<Sequence name="bonus maze" _thymio="repeat"' in xml and "<KeepRunningUntilFailure>" in xml
     body = read_xml_mission(tmp_path / "bonus.xml")["tree"]["repeat"]
     assert sorted(body) == ["do", "name", "until"] and "IsDeadEnd" in body["until"]
+
+
+def test_the_palette_command_writes_the_leaves_groot2_imports(tmp_path):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    out = tmp_path / "palette.xml"
+    result = CliRunner().invoke(main, ["palette", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    text = out.read_text()
+    assert text.startswith('<root BTCPP_format="4">') and '<Action ID="MoveUntilWall">' in text
+    assert '<Condition ID="WallAhead">' in text and "Sequence" not in text  # Groot2 has its own built-ins

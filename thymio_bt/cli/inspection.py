@@ -183,6 +183,23 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
         click.echo(f"wrote {out}", err=True)
 
 
+@main.command()
+@path_option("--output", "-o", help="File to write (default: standard output).")
+@path_option("--mission", help="Include the behaviours of this mission's plugins (runs their code).")
+def palette(output: Path | None, mission: Path | None) -> None:
+    """Write the Groot2 palette: a TreeNodesModel of every robot behaviour and condition, to import in
+    Groot2 beside its own built-ins (docs/btcpp.md)."""
+    from thymio_bt.mission.btcpp import palette_xml
+
+    try:
+        out = Output(output if output is not None else Path("-"), "--output")
+        out.write_text(palette_xml(_registry(mission)))
+    except UserError as exc:
+        fail(exc)
+    if not out.is_stdout:
+        click.echo(f"wrote {out}", err=True)
+
+
 def _registry(mission: Path | None) -> Registry:
     """The node registry: the installed nodes, plus the ``plugins:`` of ``mission`` when one is given
     (their code runs: that is what naming the mission asks for)."""
