@@ -29,11 +29,11 @@ import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from xml.parsers import expat
 
 from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
+from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
 from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, MISSION_TAG, RESERVED
 
@@ -41,8 +41,6 @@ from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, MISSION_TAG, RESERVED
 _FROM_BUILTIN = dict(BTCPP_IDS)
 #: BT.CPP nodes that thymio-bt cannot run, with what to use instead
 _UNSUPPORTED: dict[str, str] = {}
-
-MAX_DEPTH = 200
 
 
 @dataclass
@@ -55,64 +53,25 @@ class _Element:
 
 
 def _parse(path: Path) -> _Element:
-    """The element tree of the XML file, with places; no DTD, no entities, bounded depth."""
+    """The element tree of the XML file, with places, under :func:`~thymio_bt.inputs.xmlparse.parse_xml`'s
+    guards (no DTD, no entities, bounded depth)."""
     file = str(path)
-    data = read_bytes(path, "mission")
-    parser = expat.ParserCreate()
     stack: list[_Element] = []
     roots: list[_Element] = []
 
-    def refuse(*_: Any) -> None:
-        raise UserError(
-            Problem(
-                "DTDs and entities are not allowed in a mission",
-                file,
-                parser.CurrentLineNumber,
-                parser.CurrentColumnNumber + 1,
-                hint="remove the <!DOCTYPE ...> part",
-            )
-        )
-
-    def start(tag: str, attrs: dict[str, str]) -> None:
-        if len(stack) >= MAX_DEPTH:
-            raise UserError(
-                Problem(
-                    f"the XML is nested deeper than {MAX_DEPTH} levels",
-                    file,
-                    parser.CurrentLineNumber,
-                    parser.CurrentColumnNumber + 1,
-                )
-            )
-        element = _Element(tag, attrs, parser.CurrentLineNumber, parser.CurrentColumnNumber + 1)
+    def start(tag: str, attrs: dict[str, str], line: int, column: int) -> None:
+        element = _Element(tag, attrs, line, column)
         (stack[-1].children if stack else roots).append(element)
         stack.append(element)
 
-    parser.StartDoctypeDeclHandler = refuse
-    parser.EntityDeclHandler = refuse
-    parser.StartElementHandler = start
-    parser.EndElementHandler = lambda tag: stack.pop()
-    try:
-        parser.Parse(data, True)
-    except expat.ExpatError as exc:
-        raise UserError(
-            Problem(
-                f"invalid XML: {expat.errors.messages[exc.code]}",
-                file,
-                exc.lineno,
-                exc.offset + 1,
-                hint="check that every <Node ...> is closed (<Node/> or </Node>)",
-            )
-        ) from None
-    except (LookupError, ValueError) as exc:  # an encoding expat does not know, e.g. EBCDIC
-        raise UserError(
-            Problem(
-                f"cannot read the XML: {exc}",
-                file,
-                1,
-                1,
-                hint='save the mission as UTF-8 (<?xml version="1.0" encoding="UTF-8"?>)',
-            )
-        ) from None
+    parse_xml(
+        read_bytes(path, "mission"),
+        file,
+        "mission",
+        start,
+        lambda tag: stack.pop(),
+        hint="check that every <Node ...> is closed (<Node/> or </Node>)",
+    )
     if not roots or roots[0].tag != "root":
         raise UserError(
             Problem(
