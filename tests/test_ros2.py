@@ -268,7 +268,9 @@ def test_nothing_to_drive_fails_quickly_with_a_reason(ros2_env, tmp_path):
     code, report = _run(ros2_env, "maze_part1_2", next(_domains), tmp_path)
     assert time.monotonic() - start < 20
     assert code == 1 and report["status"] == "FAILURE" and report["code"] == "ROBOT_LOST"
-    assert "nothing heard on /odom or /clock" in report["reason"]
+    reason = report["reason"]  # what was waited for, how long, and how to start a server
+    assert reason.startswith("nothing answered: no message on /clock or /odom and no /spawn_entity")
+    assert " within 5.0 s (ROS_DOMAIN_ID=" in reason and "'thymio-bt serve ros2 --maze " in reason
 
 
 def _probe_speed(env: Path, domain: int) -> float:

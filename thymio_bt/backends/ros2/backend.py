@@ -8,7 +8,10 @@ DeleteEntity call Gazebo's services, completing over later ticks like the simula
 Time: when someone publishes ``/clock`` the run lives in that simulated time, and each 10 Hz tick
 waits until the clock reaches it and the sensors have published their reading of that moment (the
 ticks are laid on the sensors' own 10 Hz grid, so a tick reads what was sensed at its time);
-otherwise the run is paced by the wall clock, as on a real robot.
+otherwise the run is paced by the wall clock, as on a real robot. A ``serve ros2`` says which world
+it serves: a mission on another maze is refused, and its world is stepped in lock, held at each tick
+until the tick's command is sent (:mod:`.lockstep`); a simulator that cannot be held (Gazebo) is
+followed, and ticks that woke after their time are counted and reported when the run closes.
 
 The robot already in the world is adopted when it stands at the mission's start (within 2 cm and
 3 degrees), else deleted and spawned there. A topic that stays silent for ``timeout`` seconds ends
@@ -25,44 +28,43 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 import threading
 import time
-from collections.abc import Callable, Generator
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.backends.ros2 import import_rclpy
-from thymio_bt.backends.ros2.messages import odometry_of, reading_of, set_pose, stamp_ns
+from thymio_bt.backends.ros2.entities import POLL, EntitySteps
+from thymio_bt.backends.ros2.lockstep import Lateness, WorldLink
+from thymio_bt.backends.ros2.messages import odometry_of, reading_of, stamp_ns
 from thymio_bt.backends.ros2.node import SpunNode
-from thymio_bt.backends.ros2.services import call_service, fail
 from thymio_bt.backends.ros2.topics import TopicMap
+from thymio_bt.backends.ros2.world import maze_problem
+from thymio_bt.errors import UserError
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import (
     ROBOT_ENTITY,
     SENSOR_NAMES,
-    Backend,
     Pose,
-    Request,
-    RequestState,
     RobotLost,
     Scan,
     Twist,
 )
 from thymio_bt.robot.model import RobotModel, robot_model
-from thymio_bt.robot.placement import ContactTracker, placement_problem
+from thymio_bt.robot.placement import ContactTracker
 
 if TYPE_CHECKING:
     from thymio_bt.backends import Ros2Options
     from thymio_bt.mission import Mission
 
-#: the robot in the world is the mission's start when it is this close (m, rad)
-ADOPT_DISTANCE, ADOPT_ANGLE = 0.02, math.radians(3.0)
-#: how often (wall s) a waiting tick looks again when no message wakes it
-POLL = 0.05
 
-_Step = Generator[None, None, None]
+#: how long (wall s) to wait for a first message: Fast DDS's discovery took up to 3.3 s here (its
+#: participants announce themselves again every 3 s; a run that started 2 s after its server missed it)
+DISCOVERY = 5.0
 
 
-class Ros2Robot(Backend):
+class Ros2Robot(EntitySteps):
     """A Thymio behind ROS 2 topics and services (see the module docstring)."""
 
     def __init__(
@@ -75,16 +77,16 @@ class Ros2Robot(Backend):
         clock: str = "auto",
         robot_xml: str | None = None,
         node_name: str = "thymio_bt",
+        maze_file: str = "",
     ) -> None:
         super().__init__()
         import_rclpy()  # first: without ROS, a UserError that says how to get it
         from geometry_msgs.msg import Twist as TwistMsg
-        from nav_msgs.msg import Odometry
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile, qos_profile_sensor_data
         from rosgraph_msgs.msg import Clock
         from std_msgs.msg import String
 
-        self.topics, self.maze, self.model = topics, maze, model
+        self.topics, self.maze, self.model, self._maze_file = topics, maze, model, maze_file or maze.name
         self.timeout, self.latency, self.robot_name = timeout, latency, ROBOT_ENTITY
         self._TwistMsg = TwistMsg
         self._ros = SpunNode(node_name)
@@ -101,18 +103,12 @@ class Ros2Robot(Backend):
         self._present = False
         self._first_spawn = True  # the first spawn may adopt the robot in the world
         self._cmd = Twist()
-        self._steps: list[tuple[Request, _Step]] = []
+        self._steps = []
         self._closed = False
         self._contacts = ContactTracker(maze, model)
         node = self._node
         node.create_subscription(Clock, topics.clock, self._on_clock, qos_profile_sensor_data)
-        node.create_subscription(Odometry, topics.odom, self._on_odom, qos_profile_sensor_data)
-        if topics.sensor_type == "LaserScan":
-            from sensor_msgs.msg import LaserScan as SensorMsg
-        else:
-            from sensor_msgs.msg import Range as SensorMsg
-        for name, topic in topics.sensors.items():
-            node.create_subscription(SensorMsg, topic, self._on_sensor(name), qos_profile_sensor_data)
+        self._subscribe_readings(qos_profile_sensor_data)
         if robot_xml is None and topics.robot_description:
             latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
             node.create_subscription(String, topics.robot_description, self._on_description, latched)
@@ -121,11 +117,28 @@ class Ros2Robot(Backend):
 
         self._spawn_client = node.create_client(SpawnEntity, topics.spawn) if topics.spawn else None
         self._delete_client = node.create_client(DeleteEntity, topics.delete) if topics.delete else None
+        self._link = WorldLink(node, self._cond)
+        self._late = Lateness(round(1e9 / topics.sensor_rate))
         self._ros.start("thymio-bt-ros2")
         self._wall_start = time.monotonic()
         self._sim_time = self._detect_clock(clock)
+        if self._sim_time:
+            self._check_world()
         self._start_ns = self._deadline_ns = self._now_ns()
         self._started = False
+
+    def _subscribe_readings(self, qos: Any) -> None:
+        """Subscribe to the odometry and the sensors (best effort, as sensor data; again, reliable,
+        when stepping a world in lock: there the one reading of a tick must not be lost)."""
+        from nav_msgs.msg import Odometry
+
+        if self.topics.sensor_type == "LaserScan":
+            from sensor_msgs.msg import LaserScan as SensorMsg
+        else:
+            from sensor_msgs.msg import Range as SensorMsg
+        self._node.create_subscription(Odometry, self.topics.odom, self._on_odom, qos)
+        for name, topic in self.topics.sensors.items():
+            self._node.create_subscription(SensorMsg, topic, self._on_sensor(name), qos)
 
     # ------------------------------------------------------------ callbacks (executor thread)
     def _on_clock(self, msg: Any) -> None:
@@ -135,8 +148,11 @@ class Ros2Robot(Backend):
             self._cond.notify_all()
 
     def _on_odom(self, msg: Any) -> None:
+        odom = odometry_of(msg)
         with self._cond:
-            self._odom = odometry_of(msg)
+            if self._odom is not None and odom[0] < self._odom[0]:
+                return  # an older one, through the other subscription
+            self._odom = odom
             self._odom_wall = time.monotonic()
             self._odom_count += 1
             self._cond.notify_all()
@@ -145,8 +161,11 @@ class Ros2Robot(Backend):
         limit = self.model.range_max
 
         def store(msg: Any) -> None:
+            reading = reading_of(msg, self.topics.sensor_type, limit)
             with self._cond:
-                self._ranges[name] = reading_of(msg, self.topics.sensor_type, limit)
+                if name in self._ranges and reading[0] < self._ranges[name][0]:
+                    return  # an older one, through the other subscription
+                self._ranges[name] = reading
                 self._sensor_wall[name] = time.monotonic()
                 self._cond.notify_all()
 
@@ -154,6 +173,19 @@ class Ros2Robot(Backend):
 
     def _on_description(self, msg: Any) -> None:
         self._xml = msg.data
+
+    def _check_world(self) -> None:
+        """Refuse (exit 2) a mission on another maze than the one ``serve ros2`` serves."""
+        world = self._link.wait_world(max(self.timeout, DISCOVERY))
+        problem = maze_problem(world, self.maze) if world is not None else None
+        if problem:
+            self._ros.close()
+            x, y, yaw = world.start if world is not None else (0.0, 0.0, 0.0)
+            raise UserError(
+                f"--backend ros2: {problem}; the run would drive blind through walls it does not know "
+                f"(hint: restart the server on the mission's maze, 'thymio-bt serve ros2 --maze "
+                f"{self._maze_file}', or run the mission with --maze {world.maze if world else ''})"
+            )
 
     # ----------------------------------------------------------------- time
     def _detect_clock(self, mode: str) -> bool:
@@ -166,13 +198,31 @@ class Ros2Robot(Backend):
                     f"no message on {self.topics.clock} within {self.timeout:g} s",
                 )
             return mode == "sim"
-        deadline = time.monotonic() + min(self.timeout, 2.0)
+        deadline = time.monotonic() + max(self.timeout, DISCOVERY)
+        odom_since: float | None = None  # when odometry was first heard (a robot's driver, or a simulator)
         with self._cond:
             while self._clock_ns is None and time.monotonic() < deadline:
-                if self._odom is not None and not self._node.count_publishers(self.topics.clock):
-                    break
+                if odom_since is None and self._odom is not None:
+                    odom_since = time.monotonic()
+                if odom_since is not None and time.monotonic() - odom_since > 1.0:
+                    break  # odometry for a while and no clock: a real robot (the clock would have come with it)
                 self._cond.wait(POLL)
             return self._clock_ns is not None
+
+    def _nothing_answered(self) -> str:
+        """What to say when no simulator or driver answered at all: what was waited for, how long, and
+        how to start one."""
+        clients = ((self.topics.spawn, self._spawn_client), (self.topics.delete, self._delete_client))
+        services = [name for name, client in clients if client is not None and not client.service_is_ready()]
+        env = os.environ
+        return (
+            f"nothing answered: no message on {self.topics.clock} or {self.topics.odom}"
+            + (f" and no {' or '.join(services)} service" if services else "")
+            + f" within {time.monotonic() - self._wall_start:.1f} s (ROS_DOMAIN_ID={env.get('ROS_DOMAIN_ID', '0')}, "
+            f"ROS_AUTOMATIC_DISCOVERY_RANGE={env.get('ROS_AUTOMATIC_DISCOVERY_RANGE', 'unset')}); start a simulator "
+            f"in the same domain ('thymio-bt serve ros2 --maze {self._maze_file}', or the course's Gazebo launch) "
+            "or the robot's ROS driver, then run again"
+        )
 
     def _start(self) -> None:
         """Start the run's time now; in simulated time, at the sensors' next reading (waited for),
@@ -187,6 +237,14 @@ class Ros2Robot(Backend):
                 f"no message on {', '.join(self.topics.sensors.values())} within {self.timeout:g} s",
             )
             self._start_ns = self._deadline_ns = max(stamp for stamp, _ in self._ranges.values())
+            world = self._link.world
+            if world is not None and world.lockstep:
+                from rclpy.qos import QoSProfile
+
+                self._subscribe_readings(QoSProfile(depth=10))
+                self._start_ns = self._deadline_ns = self._link.hold(
+                    self._cmd, self._now_ns(), self._start_ns, self._late.sensor_period_ns, self.timeout
+                )
             self._wait_sim_tick()
         self._started = True
 
@@ -260,18 +318,17 @@ class Ros2Robot(Backend):
         ``advance(0)`` (the runner's, after asking for the start pose) waits for the requests to end."""
         if duration <= 0.0:
             if not self._started and self._clock_ns is None and self._odom is None:
-                raise RobotLost(
-                    f"nothing heard on {self.topics.odom} or {self.topics.clock}: is the simulator or "
-                    f"the robot's driver running, with the same ROS_DOMAIN_ID "
-                    f"({os.environ.get('ROS_DOMAIN_ID', '0')})?"
-                )
+                raise RobotLost(self._nothing_answered())
             self._finish_requests()
             if not self._started:
                 self._start()
             return
         self._deadline_ns += round(duration * 1e9)
         if self._sim_time:
+            if self._link.engaged:
+                self._link.step(self._cmd if self._present else Twist(), self._deadline_ns)
             self._wait_sim_tick()
+            self._late.tick(self._now_ns() - self._deadline_ns)
         else:
             lag = (self._deadline_ns - self._now_ns()) / 1e9
             if lag > 0:
@@ -288,7 +345,6 @@ class Ros2Robot(Backend):
         (or a sensor period more has passed: a sensor that skips a beat does not stall the run)."""
         deadline = self._deadline_ns
         sensor_ns = round(1e9 / self.topics.sensor_rate)
-        odom_ns = round(1e9 / self.topics.odom_rate)
 
         def fresh() -> bool:
             now = self._clock_ns or 0
@@ -296,23 +352,35 @@ class Ros2Robot(Backend):
                 return False
             if not self._present or now >= deadline + sensor_ns:
                 return True
-            odom = self._odom
-            return (
-                odom is not None
-                and odom[0] > deadline - odom_ns
-                and all(
-                    name in self._ranges and self._ranges[name][0] > deadline - sensor_ns
-                    for name in self.topics.sensors
-                )
-            )
+            if self._link.engaged and not self._link.robot_held(deadline):
+                return True  # held there with no robot (deleted, its answer on the way): no reading comes
+            return not self._stale(deadline)
 
         wall_deadline = time.monotonic() + self.timeout
+        stale: list[str] = []
         with self._cond:
             while not fresh():
                 if time.monotonic() > max(wall_deadline, self._clock_wall + self.timeout):
+                    if self._link.engaged and (self._clock_ns or 0) >= deadline:
+                        stale = self._stale(deadline)
                     break
                 self._cond.wait(POLL)
+        if stale:  # held at the tick (so the clock is silent), waiting for these
+            raise RobotLost(f"no message on {', '.join(stale)} for {self.timeout:g} s")
         self._check_alive()
+
+    def _stale(self, tick_ns: int) -> list[str]:
+        """The topics whose reading of the tick at ``tick_ns`` has not come (none while the robot is absent)."""
+        if not self._present:
+            return []
+        odom, odom_ns = self._odom, round(1e9 / self.topics.odom_rate)
+        sensor_ns = round(1e9 / self.topics.sensor_rate)
+        stale = [] if odom is not None and odom[0] > tick_ns - odom_ns else [self.topics.odom]
+        return stale + [
+            topic
+            for name, topic in self.topics.sensors.items()
+            if name not in self._ranges or self._ranges[name][0] <= tick_ns - sensor_ns
+        ]
 
     def _check_alive(self) -> None:
         now = time.monotonic()
@@ -327,124 +395,6 @@ class Ros2Robot(Backend):
                 if now - self._sensor_wall.get(name, 0.0) > self.timeout:
                     raise RobotLost(f"no message on {topic} for {self.timeout:g} s")
 
-    # ------------------------------------------------------------ entities
-    def spawn_problem(self, name: str, pose: Pose) -> str | None:
-        """Why the robot cannot be spawned at ``pose``: one robot, once, at finite numbers, clear of walls."""
-        if name != self.robot_name:
-            return f"this backend drives one robot, '{self.robot_name}', not '{name}'"
-        if self._present:
-            return f"an entity named '{name}' already exists: delete it first"
-        if not all(math.isfinite(v) for v in pose.as_tuple()):
-            return "the pose must be finite numbers"
-        return placement_problem(self.maze, self.model, pose) if self.maze.walls or self.maze.obstacles else None
-
-    def serve_requests(self) -> None:
-        """Start the queued requests; they move on at every tick (:meth:`_pump`)."""
-        pending, self._requests = self._requests, []
-        for request in pending:
-            steps = self._delete(request) if request.kind == "delete" else self._spawn(request)
-            self._steps.append((request, steps))
-
-    def _pump(self) -> None:
-        """Move the requests on, one at a time and in order (a spawn asked after a delete waits)."""
-        self.serve_requests()
-        while self._steps:
-            request, steps = self._steps[0]
-            try:
-                next(steps)
-                return
-            except StopIteration:
-                self._steps.pop(0)
-
-    def _finish_requests(self) -> None:
-        self._pump()
-        while self._steps:
-            with self._cond:
-                self._cond.wait(POLL)
-            self._pump()
-
-    def _call_delete(self, request: Request) -> Generator[None, None, Any]:
-        """Gazebo's DeleteEntity of ``request``'s entity, over later ticks (see :func:`call_service`)."""
-        from gazebo_msgs.srv import DeleteEntity
-
-        message = DeleteEntity.Request(name=request.entity)
-        return (yield from call_service(self._delete_client, self.topics.delete, message, request, self.timeout))
-
-    def _delete(self, request: Request) -> _Step:
-        if request.entity != self.robot_name or not self._present:
-            fail(
-                request,
-                f"no entity named '{request.entity}' (existing: {self.robot_name if self._present else 'none'})",
-            )
-            return
-        self._stop_motors()
-        if (yield from self._call_delete(request)) is None:
-            return
-        self._present, self._cmd = False, Twist()
-        request.state = RequestState.SUCCEEDED
-
-    def _spawn(self, request: Request) -> _Step:
-        from gazebo_msgs.srv import SpawnEntity
-
-        assert request.pose is not None
-        seen = (yield from self._robot_in_world()) if self._first_spawn else None
-        self._first_spawn = False
-        if (
-            seen is not None
-            and seen.distance_to(request.pose) <= ADOPT_DISTANCE
-            and abs(math.remainder(seen.yaw - request.pose.yaw, math.tau)) <= ADOPT_ANGLE
-        ):
-            self._present = True  # the robot already stands there: adopt it
-            request.state = RequestState.SUCCEEDED
-            return
-        # elsewhere: take it away first, as the course does
-        if seen is not None and (yield from self._call_delete(request)) is None:
-            return
-        message = SpawnEntity.Request(name=request.entity, xml=self._xml or "", reference_frame="world")
-        set_pose(message.initial_pose, request.pose)
-        count = self._odom_count
-        if (yield from call_service(self._spawn_client, self.topics.spawn, message, request, self.timeout)) is None:
-            return
-        with self._cond:
-            self._ranges.clear()  # readings from before: the new robot's come next
-        deadline = time.monotonic() + self.timeout
-        while (
-            self._odom_count == count
-            or not self._odom_after_spawn(request.pose)
-            or len(self._ranges) < len(self.topics.sensors)
-        ):
-            if time.monotonic() > deadline:
-                silent = (
-                    [self.topics.odom]
-                    if self._odom_count == count
-                    else [t for n, t in self.topics.sensors.items() if n not in self._ranges]
-                )
-                fail(request, f"spawned, but no message on {', '.join(silent)} within {self.timeout:g} s")
-                return
-            yield
-        self._present, self._cmd = True, Twist()
-        request.state = RequestState.SUCCEEDED
-
-    def _odom_after_spawn(self, pose: Pose) -> bool:
-        """Whether the latest odometry is the new robot's (within a few cm of where it was put)."""
-        odom = self._odom
-        return odom is not None and math.hypot(odom[1] - pose.x, odom[2] - pose.y) < 0.05
-
-    def _robot_in_world(self) -> Generator[None, None, Pose | None]:
-        """Where the robot already in the world is (from /odom), or None when none publishes."""
-        if self._odom is None:
-            deadline = time.monotonic() + min(self.timeout, 2.0)
-            while (
-                self._odom is None
-                and (time.monotonic() < deadline or self._node.count_publishers(self.topics.odom))
-                and time.monotonic() < deadline + self.timeout
-            ):
-                yield
-        odom = self._odom
-        if odom is None or time.monotonic() - self._odom_wall > 1.0:
-            return None
-        return Pose(odom[1], odom[2], odom[3])
-
     # ------------------------------------------------------------ closing
     def _stop_motors(self) -> None:
         self._cmd = Twist()
@@ -456,13 +406,22 @@ class Ros2Robot(Backend):
             return
         self._closed = True
         try:
+            from rclpy.duration import Duration
+
+            step_pub = self._link.release()
             if self._present:
                 self._stop_motors()
-                from rclpy.duration import Duration
-
                 self._cmd_pub.wait_for_all_acked(Duration(seconds=1))
+            step_pub.wait_for_all_acked(Duration(seconds=1))
         finally:
             self._ros.close()
+        late = self._late.summary()
+        if late:
+            print(
+                f"warning: --backend ros2: {late}: the simulator ran ahead of this run (a loaded machine?); "
+                "its verdict may differ from the direct run's (hint: slow the simulator down, or free the CPU)",
+                file=sys.stderr,
+            )
 
 
 def create_ros2(mission: Mission, seed: int, options: Ros2Options) -> Ros2Robot:
@@ -476,5 +435,12 @@ def create_ros2(mission: Mission, seed: int, options: Ros2Options) -> Ros2Robot:
 
         xml = read_text(options.robot_xml, "world")
     return Ros2Robot(
-        topics, mission.maze, robot_model(mission.robot), options.timeout, options.latency, options.clock, xml
+        topics,
+        mission.maze,
+        robot_model(mission.robot),
+        options.timeout,
+        options.latency,
+        options.clock,
+        xml,
+        maze_file=os.path.normpath(mission.maze_file) if mission.maze_file else mission.maze.name,
     )
