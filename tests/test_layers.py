@@ -116,5 +116,7 @@ def test_the_architecture_page_names_every_package_and_root_module():
     page = Path("docs/architecture.md").read_text()
     rooms = [p.name + "/" for p in Path("thymio_bt").iterdir() if (p / "__init__.py").exists() and p.name != "data"]
     rooms += [p.name for p in Path("thymio_bt").glob("*.py")]
+    modules = [p.stem for p in Path("thymio_bt").rglob("*.py") if not p.stem.startswith("__") and "data" not in p.parts]
     missing = [room for room in sorted(rooms) if f"`{room}`" not in page]
+    missing += [module for module in sorted(set(modules)) if f"`{module}`" not in page and f"`{module}.py`" not in page]
     assert not missing, f"docs/architecture.md does not describe {missing}"
