@@ -191,9 +191,29 @@ COURSE = RobotModel(
 )
 
 
-def _from_axle(x_cm: float, y_cm: float, yaw: float, name: str) -> SensorPose:
-    """A sensor given in Enki's frame (cm, about the wheel axle) in base_link metres."""
-    return SensorPose(name, x_cm / 100 + COURSE.axle_x, y_cm / 100, yaw)
+def _from_axle(*poses: tuple[float, float, float]) -> tuple[SensorPose, ...]:
+    """The seven sensors, given in :data:`~thymio_bt.robot.interface.SENSOR_NAMES` order in Enki's
+    frame (x, y in cm about the wheel axle; yaw), in base_link metres."""
+    return tuple(
+        SensorPose(name, x_cm / 100 + COURSE.axle_x, y_cm / 100, yaw)
+        for name, (x_cm, y_cm, yaw) in zip(SENSOR_NAMES, poses, strict=True)
+    )
+
+
+#: the sensors of Enki's Thymio2 and of Webots' (a real robot), as (x, y) cm about the wheel axle and
+#: yaw, in SENSOR_NAMES order (docs/sources.md, "Enki and the real robot")
+# fmt: off
+_ENKI_SENSORS = (
+    (6.2, 4.85, 0.69813), (7.5, 2.55, 0.34906), (7.95, 0.0, 0.0),
+    (7.5, -2.55, -0.34906), (6.2, -4.85, -0.69813),
+    (-2.95, 2.95, math.pi), (-2.95, -2.95, math.pi),
+)
+_REAL_SENSORS = (
+    (6.34, 5.06, math.radians(39.3)), (7.68, 2.70, math.radians(20.1)), (8.16, 0.0, 0.0),
+    (7.68, -2.70, math.radians(-20.1)), (6.34, -5.06, math.radians(-40.1)),
+    (-3.07, 3.18, math.pi), (-3.07, -3.18, math.pi),
+)
+# fmt: on
 
 
 #: Enki's Thymio2 (Aseba Playground; enki/robots/thymio2/Thymio2.cpp): cone sensors to 14 cm at ±20°/±40°,
@@ -204,15 +224,7 @@ ENKI = replace(
     description="Enki's Thymio2 (Aseba Playground): 3-ray cone sensors to 14 cm, 16.6 cm/s, 9.4 cm wheel base",
     wheel_separation=0.094,
     max_wheel_speed=0.166,
-    sensors=(
-        _from_axle(6.2, 4.85, 0.69813, "front_left"),
-        _from_axle(7.5, 2.55, 0.34906, "front_center_left"),
-        _from_axle(7.95, 0.0, 0.0, "front_center"),
-        _from_axle(7.5, -2.55, -0.34906, "front_center_right"),
-        _from_axle(6.2, -4.85, -0.69813, "front_right"),
-        _from_axle(-2.95, 2.95, math.pi, "rear_left"),
-        _from_axle(-2.95, -2.95, math.pi, "rear_right"),
-    ),
+    sensors=_from_axle(*_ENKI_SENSORS),
     range_max=0.14,
     metres_per_unit=0.166 / 500,
     calibration=ENKI_THYMIO2,
@@ -229,15 +241,7 @@ REAL = replace(
     description="a real Thymio II as Webots models it (a starting point: calibrate your own robot)",
     wheel_separation=0.0935,
     max_wheel_speed=0.20,
-    sensors=(
-        _from_axle(6.34, 5.06, math.radians(39.3), "front_left"),
-        _from_axle(7.68, 2.70, math.radians(20.1), "front_center_left"),
-        _from_axle(8.16, 0.0, 0.0, "front_center"),
-        _from_axle(7.68, -2.70, math.radians(-20.1), "front_center_right"),
-        _from_axle(6.34, -5.06, math.radians(-40.1), "front_right"),
-        _from_axle(-3.07, 3.18, math.pi, "rear_left"),
-        _from_axle(-3.07, -3.18, math.pi, "rear_right"),
-    ),
+    sensors=_from_axle(*_REAL_SENSORS),
     range_max=0.0933,
     metres_per_unit=0.20 / 500,
     calibration=WEBOTS_THYMIO2,
