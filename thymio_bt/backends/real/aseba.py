@@ -68,73 +68,89 @@ def signed(word: int) -> int:
     return word - 0x10000 if word >= 0x8000 else word
 
 
-class _SocketIO(io.RawIOBase):
-    """A TCP socket as the byte stream thymiodirect reads. Reads time out so its thread can stop; a
-    failed link is recorded in ``failed`` (the node reports it as RobotLost) instead of raising in
-    thymiodirect's threads, which would end them with a traceback."""
+class _Link(io.RawIOBase):
+    """A link to the robot as the byte stream thymiodirect reads. A failed link (a closed socket, a
+    pulled cable) is recorded in ``failed`` (the node reports it as RobotLost) instead of raising in
+    thymiodirect's threads, which would end them with a traceback on the user's terminal.
+    Subclasses say how to receive (b"" when nothing came in time), send and close."""
 
-    def __init__(self, sock: socket.socket) -> None:
-        self.sock = sock
-        self.failed: BaseException | None = None
-        sock.settimeout(0.2)
-
-    def read(self, n: int = -1) -> bytes:
-        if self.failed is None:
-            try:
-                data = self.sock.recv(n)
-                if data:
-                    return data
-                self.failed = ConnectionError("the peer closed the connection")
-            except TimeoutError:
-                return b""
-            except OSError as exc:
-                self.failed = exc
-        time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
-        return b""
-
-    def write(self, data: Any) -> int:
-        if self.failed is None:
-            try:
-                self.sock.sendall(data)
-            except OSError as exc:
-                self.failed = exc
-        return len(data)
-
-    def close(self) -> None:
-        self.sock.close()
-        super().close()
-
-
-class _SerialIO(io.RawIOBase):
-    """A serial port (pyserial) as the byte stream thymiodirect reads, failing as :class:`_SocketIO`
-    does: a pulled cable (a read or write error) is recorded in ``failed``, not raised in
-    thymiodirect's reader thread, which would die with a traceback on the user's terminal."""
-
-    def __init__(self, port: Any) -> None:
-        self.port = port
+    def __init__(self) -> None:
         self.failed: BaseException | None = None
 
+    def _receive(self, n: int) -> bytes:
+        raise NotImplementedError
+
+    def _send(self, data: Any) -> None:
+        raise NotImplementedError
+
+    def _shut(self) -> None:
+        raise NotImplementedError
+
     def read(self, n: int = -1) -> bytes:
+        """Up to ``n`` bytes; b"" when none came in time or the link has failed."""
         if self.failed is None:
             try:
-                return bytes(self.port.read(n))
+                return self._receive(n)
             except OSError as exc:  # serial.SerialException is one: the link is gone
                 self.failed = exc
         time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
         return b""
 
     def write(self, data: Any) -> int:
+        """Send ``data`` (dropped once the link has failed, which ``failed`` says)."""
         if self.failed is None:
             try:
-                self.port.write(data)
+                self._send(data)
             except OSError as exc:
                 self.failed = exc
         return len(data)
 
     def close(self) -> None:
-        with contextlib.suppress(OSError):  # a port already gone is closed
-            self.port.close()
+        """Close the link (one already gone is closed)."""
+        with contextlib.suppress(OSError):
+            self._shut()
         super().close()
+
+
+class _SocketIO(_Link):
+    """A TCP socket; reads time out so thymiodirect's thread can stop."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        super().__init__()
+        self.sock = sock
+        sock.settimeout(0.2)
+
+    def _receive(self, n: int) -> bytes:
+        try:
+            data = self.sock.recv(n)
+        except TimeoutError:
+            return b""
+        if not data:
+            raise ConnectionError("the peer closed the connection")
+        return data
+
+    def _send(self, data: Any) -> None:
+        self.sock.sendall(data)
+
+    def _shut(self) -> None:
+        self.sock.close()
+
+
+class _SerialIO(_Link):
+    """A serial port (pyserial): a USB Thymio, or a pseudo-terminal bridged to one."""
+
+    def __init__(self, port: Any) -> None:
+        super().__init__()
+        self.port = port
+
+    def _receive(self, n: int) -> bytes:
+        return bytes(self.port.read(n))
+
+    def _send(self, data: Any) -> None:
+        self.port.write(data)
+
+    def _shut(self) -> None:
+        self.port.close()
 
 
 def _thymiodirect() -> Any:
