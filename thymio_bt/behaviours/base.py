@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 import re
+import signal
 import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -78,13 +79,42 @@ class FailureCode(str, Enum):
 
 
 def describe(exc: BaseException) -> str:
-    """An exception in one line: its type, the last line of its message, and where it was raised."""
-    lines = str(exc).strip().splitlines()
-    text = type(exc).__name__ + (f": {lines[-1]}" if lines else "")
+    """An exception in one line: its type, the last line of its message, and where it was raised
+    (an exception whose ``str()`` itself raises is described by its type alone).
+
+    >>> class Mute(Exception):
+    ...     def __str__(self):
+    ...         raise ValueError("no words")
+    >>> describe(Mute()), describe(SystemExit(0))
+    ('Mute (its message could not be read)', 'SystemExit: 0')
+    """
+    try:
+        lines = str(exc).strip().splitlines()
+    except Exception:  # a plugin's exception whose __str__ is broken: its type still says something
+        lines = ["(its message could not be read)"]
+        text = f"{type(exc).__name__} {lines[0]}"
+    else:
+        text = type(exc).__name__ + (f": {lines[-1]}" if lines else "")
     frames = traceback.extract_tb(exc.__traceback__)
     if frames:
         text += f" (at {Path(frames[-1].filename).name}:{frames[-1].lineno})"
     return text
+
+
+def is_fault(exc: BaseException) -> bool:
+    """Whether ``exc``, raised by a node's (a plugin's) code, is a fault of that code that fails the
+    node: any exception, ``SystemExit`` and other BaseExceptions such as ``asyncio.CancelledError``;
+    not ``GeneratorExit``, nor a ``KeyboardInterrupt`` that may be Ctrl-C's: a subclass (the runner's
+    second signal) or any while Ctrl-C raises one (Python's default SIGINT handler is installed;
+    ``thymio-bt run`` and the sweep workers replace it, so a plugin's own raise is its fault there).
+
+    >>> import asyncio
+    >>> is_fault(asyncio.CancelledError()), is_fault(SystemExit(0)), is_fault(KeyboardInterrupt())
+    (True, True, False)
+    """
+    if isinstance(exc, KeyboardInterrupt):
+        return type(exc) is KeyboardInterrupt and signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+    return not isinstance(exc, GeneratorExit)
 
 
 class EventLog(list):
@@ -209,23 +239,48 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             if self.status is not RUNNING:
                 self.initialise()
             new_status = self.update()
-        except (Exception, SystemExit) as exc:  # a plugin's bug (or ours): fail the node, say where
+        except BaseException as exc:  # a plugin's bug (or ours): fail the node, say where
+            if not is_fault(exc):
+                raise
             new_status = self.fail(FailureCode.EXCEPTION, f"{self.yaml_name} raised {describe(exc)}")
         if new_status.__class__ is not Status:  # a plugin's bug: fail the node, say why
-            new_status = self.fail(FailureCode.FAILED, f"{self.yaml_name} returned {new_status!r}, not a Status")
+            new_status = self.fail(
+                FailureCode.FAILED, f"{self.yaml_name} returned {_safe_repr(new_status)}, not a Status"
+            )
         if new_status is not RUNNING:
             self.stop(new_status)
+            return  # stop() set the status: FAILURE if the node's terminate() raised
         self.status = new_status
 
     def stop(self, new_status: Status) -> None:
         """py_trees' ``Behaviour.stop``, its debug line built only when py_trees logs at debug level
         (it formats two statuses on every stop, logged or not)."""
-        if py_trees.logging.level is py_trees.logging.Level.DEBUG:
-            super().stop(new_status)
-            return
-        self.terminate(new_status)
+        try:
+            if py_trees.logging.level is py_trees.logging.Level.DEBUG:
+                super().stop(new_status)
+                return
+            self.terminate(new_status)
+        except BaseException as exc:  # a plugin's terminate() raised: the node fails, the robot stops
+            if not is_fault(exc):
+                raise
+            new_status = self._failed_terminate(new_status, exc)
         self.status = new_status
         self.iterator = self.tick()
+
+    def _failed_terminate(self, new_status: Status, exc: BaseException) -> Status:
+        """The status of a node whose ``terminate()`` raised ``exc``: FAILURE with code EXCEPTION (a
+        halted node stays INVALID: its parent decides), its end logged and a moving robot stopped by
+        the base class's ``terminate()``."""
+        self.fail(FailureCode.EXCEPTION, f"{self.yaml_name} raised {describe(exc)} in terminate()")
+        if new_status is not Status.INVALID:
+            new_status = Status.FAILURE
+        self.status = Status.RUNNING  # so that the base class logs the end even of a halted node
+        try:
+            RobotBehaviour.terminate(self, new_status)
+        except BaseException as again:  # the robot or the events failed too: nothing more to do here
+            if not is_fault(again):
+                raise
+        return new_status
 
     @property
     def feedback_message(self) -> str:
@@ -346,6 +401,14 @@ class ConditionBehaviour(RobotBehaviour):
 
     emits_events = False
     fails_on_collision = False
+
+
+def _safe_repr(value: Any) -> str:
+    """``repr(value)``, or its type's name when its ``__repr__`` raises (a plugin's broken object)."""
+    try:
+        return repr(value)
+    except Exception:
+        return f"a {type(value).__name__}"
 
 
 def current_pose(robot: Robot) -> Pose:

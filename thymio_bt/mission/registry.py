@@ -120,10 +120,14 @@ class Registry:
             return importlib.import_module(target)
         except UserError:
             raise
-        except Exception as exc:  # the plugin's own import error: report it, do not crash
+        except BaseException as exc:  # the plugin's own import error, sys.exit and Ctrl-C too: report it
+            try:
+                said = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+            except Exception:  # an exception whose str() fails: its type says enough
+                said = type(exc).__name__
             raise UserError(
                 Problem(
-                    f"cannot import plugin '{ref}': {type(exc).__name__}: {exc}",
+                    f"cannot import plugin '{ref}': {said}",
                     *where,
                     hint="check the module name, or give a .py path relative to the mission",
                 )

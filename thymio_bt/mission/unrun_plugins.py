@@ -40,7 +40,12 @@ class UncheckedParams(BaseModel):
 
 def plugin_node_names(path: Path) -> list[str]:
     """The YAML names of the node classes a plugin file defines, read from its syntax tree."""
-    tree = ast.parse(read_text(path, "plugin"), str(path))
+    source = read_text(path, "plugin")
+    try:
+        tree = ast.parse(source, str(path))
+    except (RecursionError, MemoryError, ValueError) as exc:  # nested past the parser's stack, a NUL byte
+        why = "a NUL byte" if isinstance(exc, ValueError) else "nested too deeply to parse"
+        raise SyntaxError(why, (str(path), 1, 1, None)) from None
     names = []
     for node in ast.walk(tree):
         if isinstance(node, ast.ClassDef) and any(_base_name(b) in NODE_BASES for b in node.bases):

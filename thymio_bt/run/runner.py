@@ -31,7 +31,7 @@ from py_trees.common import Status
 
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
-from thymio_bt.behaviours.base import describe, node_path, snapshot
+from thymio_bt.behaviours.base import describe, is_fault, node_path, snapshot
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.mission import Mission, build_tree
@@ -84,6 +84,8 @@ class Run:
         start = self.backend.request_spawn(self.backend.robot_name, mission.start)
         #: why the run cannot start (code, reason): a robot that is not there, a start it was refused
         self.unstarted: tuple[str, str] | None = None
+        #: the node an unstarted run names (one whose constructor raised), if any
+        self.unstarted_path: str | None = None
         try:
             self.backend.advance(0.0)
         except RobotLost as exc:
@@ -110,12 +112,26 @@ class Run:
             collision_count=lambda: len(self.backend.collisions),
         )
         py_trees.blackboard.Blackboard.clear()
-        self.root = build_tree(mission.tree, self.ctx, mission.registry, substitutions)
+        self.root = self._build(substitutions)
         self.substituted = bool(substitutions)
         self.stats = NodeStats(self.period) if node_stats else None
         self.ticks = 0
         self._final_tree: str | None = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
+
+    def _build(self, substitutions: dict[str, Any] | None) -> Behaviour:
+        """The mission's tree; when a node's constructor (a plugin's) raises, a stand-in root that
+        fails, and the run is unstarted: it ends at once, FAILURE with code EXCEPTION naming the node."""
+        try:
+            return build_tree(self.mission.tree, self.ctx, self.mission.registry, substitutions)
+        except BaseException as exc:
+            if isinstance(exc, UserError) or not is_fault(exc):
+                raise
+            where = _building_node(exc)
+            if self.unstarted is None:
+                self.unstarted = ("EXCEPTION", f"'{where}' raised {describe(exc)} when it was built")
+                self.unstarted_path = where
+            return py_trees.behaviours.Failure(name=self.mission.tree.name)
 
     def run(
         self, on_tick: TickHook | None = None, realtime: float | None = None, interrupts: Interrupts | None = None
@@ -146,7 +162,7 @@ class Run:
         if self.unstarted is None:
             return None
         code, reason = self.unstarted
-        return Ending(EndKind.CRASHED, code, reason)
+        return Ending(EndKind.CRASHED, code, reason, failed_path=self.unstarted_path)
 
     def _tick_loop(
         self, on_tick: TickHook | None, realtime: float | None, interrupts: Interrupts, wall_start: float
@@ -213,7 +229,9 @@ class Run:
             self.backend.advance(self.period)
         except RobotLost as exc:  # a real robot gone silent: its own code
             return Ending(EndKind.CRASHED, "ROBOT_LOST", str(exc))
-        except (Exception, SystemExit) as exc:  # a backend's bug (a plugin's, say): end the run, say why
+        except BaseException as exc:  # a backend's bug (a plugin's, say): end the run, say why
+            if not is_fault(exc):
+                raise
             return Ending(EndKind.CRASHED, "BACKEND_ERROR", f"the backend raised {describe(exc)}")
         return None
 
@@ -382,6 +400,18 @@ def _running_node(exc: BaseException) -> Behaviour | None:
             found = owner
         tb = tb.tb_next
     return found
+
+
+def _building_node(exc: BaseException) -> str:
+    """The path of the node whose construction raised ``exc`` (the innermost ``build_tree`` call's)."""
+    where = "the tree"
+    tb = exc.__traceback__
+    while tb is not None:
+        frame = tb.tb_frame
+        if frame.f_code.co_name == "build_tree" and isinstance(frame.f_locals.get("path"), str):
+            where = frame.f_locals["path"]
+        tb = tb.tb_next
+    return where
 
 
 def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> RunResult:
