@@ -63,6 +63,26 @@ NO_DISPLAY_HINT = (
 )
 
 
+#: the slowest ``--realtime`` factor: a simulated second then lasts 11.6 days; below it, the pacing's
+#: wait (simulated time / factor) soon overflows what a timestamp can hold
+SLOWEST = 1e-6
+
+
+def _pacing(factor: float | None) -> float | None:
+    """The ``--realtime`` factor, refused below :data:`SLOWEST`.
+
+    >>> _pacing(1e-300)
+    Traceback (most recent call last):
+    ...
+    click.exceptions.BadParameter: 1e-300 is too slow to pace a run (hint: at least 1e-06, e.g. 0.5 for half speed)
+    """
+    if factor is not None and factor < SLOWEST:
+        raise click.BadParameter(
+            f"{factor:g} is too slow to pace a run (hint: at least {SLOWEST:g}, e.g. 0.5 for half speed)"
+        )
+    return factor
+
+
 @main.command()
 @click.argument("mission", type=click.Path(path_type=Path))
 @click.option(
@@ -82,7 +102,8 @@ NO_DISPLAY_HINT = (
     type=POSITIVE,
     default=None,
     metavar="FACTOR",
-    help="Pace the run against the wall clock (1 = real time).",
+    callback=lambda ctx, param, value: _pacing(value),
+    help=f"Pace the run against the wall clock (1 = real time; at least {SLOWEST:g}).",
 )
 @path_option("--plot", help="Draw the path in the maze (PNG).")
 @path_option("--plot-signals", help="Draw pose, speeds and proximity over time (PNG).")
@@ -197,7 +218,7 @@ def backend_for(spec: Mission, seed: int | None, name: str | None, opts: tuple[s
 
     options = dict(spec.backend_options) if name is None or name == spec.backend else {}
     options.update(parse_pairs(opts, "--backend-opt", "device=/dev/ttyACM0"))
-    kind = backend_kind(name or spec.backend)
+    kind = backend_kind(spec.backend if name is None else name)  # --backend '' is no backend, not the default
     return kind.create(spec, spec.seed if seed is None else seed, options)
 
 
@@ -286,11 +307,16 @@ def _conclude(
             from thymio_bt.viz.terminal import failing_tree
 
             click.echo(failing_tree(runner), err=True)
+    from thymio_bt.run.leftovers import end_despite_threads
+
     if interrupts.signal:
+        end_despite_threads(interrupts.exit_code)
         sys.exit(interrupts.exit_code)
     if window is not None:
         window.finish(result)  # with a display: stays open on the last frame until closed
-    sys.exit(0 if result.status == "SUCCESS" else 1)
+    code = 0 if result.status == "SUCCESS" else 1
+    end_despite_threads(code)  # a plugin's thread left running must not keep the process alive
+    sys.exit(code)
 
 
 class _Progress:
