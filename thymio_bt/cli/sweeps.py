@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
@@ -95,9 +96,17 @@ def sweep(
         fail(exc)
     _sweep_table(data, err=sweep_out is not None and sweep_out.is_stdout)
     if interrupts.signal:
-        sys.exit(interrupts.exit_code)
-    if data["interrupted"]:
-        sys.exit(1)  # a worker died: the sweep did not complete
+        _exit(interrupts.exit_code)
+    # a worker died, or a run broke (its code raised): the sweep did not complete its measurement
+    _exit(1 if data["interrupted"] or data["faulted"] else 0)
+
+
+def _exit(code: int) -> None:
+    """Exit with ``code``, even if a plugin left a thread running in this process (``--workers 1``)."""
+    from thymio_bt.run.leftovers import end_despite_threads
+
+    end_despite_threads(code)
+    sys.exit(code)
 
 
 class _Request(NamedTuple):
@@ -166,7 +175,8 @@ def _matrix(request: _Request, out: Output | None, specs: tuple[str, ...]) -> No
         )
     _matrix_table(cells, rows, list(axes), runs, err=out is not None and out.is_stdout)
     if interrupts.signal:
-        sys.exit(interrupts.exit_code)
+        _exit(interrupts.exit_code)
+    _exit(1 if any(cell.result.faulted for cell in cells) else 0)
 
 
 def _matrix_table(cells: list[Cell], rows: list[dict[str, Any]], names: list[str], runs: int, err: bool) -> None:
@@ -194,25 +204,56 @@ def _matrix_table(cells: list[Cell], rows: list[dict[str, Any]], names: list[str
         )
 
 
+#: seconds the Dask client gets to reach the scheduler and hear its answer
+DASK_TIMEOUT = 5.0
+
+
 def _dask(address: str) -> Any:
-    """A sweep executor on the Dask cluster at ``address``."""
+    """A sweep executor on the Dask cluster at ``address``; an address that is not one, a scheduler
+    that cannot be reached or does not answer within :data:`DASK_TIMEOUT` s, is a :class:`UserError`."""
     try:
         from distributed import Client
     except ImportError:
         raise UserError("--dask needs Dask (hint: pip install 'thymio-bt[dask]')") from None
     from thymio_bt.run.distributed import DaskExecutor
 
+    hint = "hint: start one with: dask scheduler; dask worker ADDRESS; then --dask tcp://HOST:8786"
+    outcome: dict[str, Any] = {}
+
+    def connect() -> None:
+        try:
+            outcome["client"] = Client(address, timeout=DASK_TIMEOUT)
+        except BaseException as exc:  # reported below, whatever Dask raised
+            outcome["error"] = exc
+
+    # Dask's own timeout covers the connection, not the scheduler's answer: a listener that never
+    # answers would hold the client for ever, so the wait is bounded here (a daemon thread is left)
+    waiter = threading.Thread(target=connect, name="dask-connect", daemon=True)
+    waiter.start()
+    waiter.join(DASK_TIMEOUT + 1.0)  # realtime: before the sweep starts
+    if "client" in outcome:
+        return DaskExecutor(outcome["client"])
+    error = outcome.get("error")
+    if error is None:
+        raise UserError(f"--dask {address}: no answer from a Dask scheduler within {DASK_TIMEOUT:g} s ({hint})")
+    if isinstance(error, ValueError | TypeError):
+        raise UserError(f"--dask {address}: not a scheduler address: {_said(error)} ({hint})")
+    raise UserError(f"--dask {address}: cannot reach the scheduler ({_said(error)}) ({hint})")
+
+
+def _said(exc: BaseException) -> str:
+    """An exception's type and message, for a message (its type alone when ``str()`` fails)."""
     try:
-        return DaskExecutor(Client(address, timeout=5))
-    except (OSError, TimeoutError) as exc:
-        raise UserError(
-            f"--dask {address}: cannot reach the scheduler ({exc}) "
-            f"(hint: start one with: dask scheduler; dask worker ADDRESS)"
-        ) from None
+        text = str(exc)
+    except Exception:
+        text = ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
 
 def _sweep_table(data: dict[str, Any], err: bool = False) -> None:
     """The statistics of a sweep's JSON ``data``: success rate, times, errors, failures with how to reproduce them."""
+    from thymio_bt.run.sweep import FAULTS
+
     echo = partial(click.echo, err=err)
     if stopped := data["interrupted"]:
         why = f"interrupted by {stopped}" if stopped.startswith("SIG") else stopped
@@ -238,3 +279,9 @@ def _sweep_table(data: dict[str, Any], err: bool = False) -> None:
         if r["status"] != "SUCCESS":
             echo(f"  seed {r['seed']}: {r['status']} [{r['code']}] {r['failed_path']}: {r['reason']}")
             echo(f"    reproduce: {r['reproduce']}")
+    if data["faulted"]:
+        echo(
+            f"{data['mission']}: {data['faulted']} of {data['runs']} runs broke (their code raised: "
+            f"{', '.join(FAULTS)}): the sweep is incomplete, exit code 1",
+            err=True,
+        )

@@ -183,6 +183,11 @@ def _worker_signals() -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
+#: the codes of a run that broke rather than failed: a node's (a plugin's) code or the backend raised.
+#: Such a run measures nothing about the mission, so a sweep that has one did not complete (exit 1)
+FAULTS = ("EXCEPTION", "BACKEND_ERROR")
+
+
 @dataclass
 class SweepResult:
     """The sweep JSON of DESIGN.md, plus distributions."""
@@ -204,6 +209,11 @@ class SweepResult:
     def reproduce(self, seed: int) -> str:
         """The shell command that runs the sweep's run of ``seed`` again, noise settings included."""
         return shlex.join(("thymio-bt", "run", *self.command, "--seed", str(seed)))
+
+    @property
+    def faulted(self) -> list[dict[str, Any]]:
+        """The runs that broke (code in :data:`FAULTS`): their code raised, unlike a run that failed."""
+        return [r for r in self.results if r["code"] in FAULTS]
 
     @property
     def success_rate(self) -> float:
@@ -234,6 +244,7 @@ class SweepResult:
             "runs": self.runs,
             "runs_requested": self.requested,
             "interrupted": self.interrupted,
+            "faulted": len(self.faulted),
             "successes": self.successes,
             "success_rate": round(self.success_rate, 6),
             "seed_start": self.seed_start,
@@ -313,4 +324,4 @@ def sweep(
     )
 
 
-__all__ = ["Executor", "Job", "LocalPool", "SweepResult", "run_job", "sweep"]
+__all__ = ["FAULTS", "Executor", "Job", "LocalPool", "SweepResult", "run_job", "sweep"]
