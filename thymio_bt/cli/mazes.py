@@ -56,11 +56,29 @@ def maze_import(world: Path, output: Path, model: str | None, cell: float, wall:
             + "\n"
             + yaml.safe_dump(result.to_yaml_dict(), sort_keys=False)
         )
+        _check_size(text, world)
         out.write_text(text)
     except UserError as exc:
         fail(exc)
     if not out.is_stdout:
         click.echo(f"wrote {output}: {len(result.walls)} walls", err=True)
+
+
+def _check_size(text: str, world: Path) -> None:
+    """Refuse a maze file that the maze loader would refuse for its size (``LIMITS["maze"]``), before
+    anything is written (a 0.5 MB maze already takes about 2 s to load and check)."""
+    from thymio_bt.errors import Problem
+    from thymio_bt.inputs.reading import LIMITS, MB
+
+    size, cap = len(text.encode()), LIMITS["maze"]
+    if size > cap:
+        raise UserError(
+            Problem(
+                f"the maze would be {size / MB:.1f} MB, over the {cap / MB:g} MB a maze file may have",
+                str(world),
+                hint="import one model of the world (--model NAME), or fewer walls",
+            )
+        )
 
 
 @maze.command("export")

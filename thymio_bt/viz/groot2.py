@@ -131,28 +131,39 @@ class Groot2Server:
                 continue
             except zmq.ZMQError:
                 return
-            head = frames[0]
-            if len(head) != 6:
-                self.server.send(b"error")
-                continue
-            protocol, kind = head[0], chr(head[1])
-            reply = [head + self.tree_id]
-            with self.lock:
-                if protocol != PROTOCOL:
-                    reply = [b"error"]
-                elif kind == "T":
-                    reply.append(self.xml.encode())
-                elif kind == "S":
-                    reply.append(self.status)
-                elif kind == "B":
-                    names = [n for n in frames[1].decode().split(";") if n] if len(frames) > 1 else []
-                    shown = {n: self.blackboard.get(n, {}) for n in names} if names else self.blackboard
-                    reply.append(self.msgpack.packb(shown))
-                elif kind == "D":
-                    reply.append(json.dumps([]).encode())
-                elif kind not in ("A", "X"):
-                    reply = [b"error"]
-            self.server.send_multipart(reply)
+            self.server.send_multipart(self._answer(frames))
+
+    def _answer(self, frames: list[bytes]) -> list[bytes]:
+        """The reply to one request: a malformed one (a short header, a names frame that is not UTF-8,
+        anything this code fails on) is answered ``error``, and the server goes on serving."""
+        try:
+            return self._reply(frames)
+        except Exception:  # a request this server cannot read: say so, keep the thread alive
+            return [b"error"]
+
+    def _reply(self, frames: list[bytes]) -> list[bytes]:
+        """The reply to a well-formed request (``error`` for an unknown protocol or kind)."""
+        head = frames[0]
+        if len(head) != 6:
+            return [b"error"]
+        protocol, kind = head[0], chr(head[1])
+        reply = [head + self.tree_id]
+        with self.lock:
+            if protocol != PROTOCOL:
+                return [b"error"]
+            if kind == "T":
+                reply.append(self.xml.encode())
+            elif kind == "S":
+                reply.append(self.status)
+            elif kind == "B":
+                names = [n for n in frames[1].decode().split(";") if n] if len(frames) > 1 else []
+                shown = {n: self.blackboard.get(n, {}) for n in names} if names else self.blackboard
+                reply.append(self.msgpack.packb(shown))
+            elif kind == "D":
+                reply.append(json.dumps([]).encode())
+            elif kind not in ("A", "X"):
+                return [b"error"]
+        return reply
 
     def close(self) -> None:
         """Stop serving and release the ports."""
