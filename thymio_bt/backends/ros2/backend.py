@@ -176,7 +176,10 @@ class Ros2Robot(EntitySteps):
 
     def _check_world(self) -> None:
         """Refuse (exit 2) a mission on another maze than the one ``serve ros2`` serves."""
-        world = self._link.wait_world(max(self.timeout, DISCOVERY))
+        spawn = self._spawn_client
+        world = self._link.wait_world(
+            max(self.timeout, DISCOVERY), lambda: spawn is not None and spawn.service_is_ready()
+        )
         problem = maze_problem(world, self.maze) if world is not None else None
         if problem:
             self._ros.close()

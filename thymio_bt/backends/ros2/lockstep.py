@@ -24,14 +24,16 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Callable
 from typing import Any
 
 from thymio_bt.backends.ros2.messages import stamp_ns, stamp_parts
 from thymio_bt.backends.ros2.world import HELD_TOPIC, RELEASE, STEP_TOPIC, WORLD_TOPIC, WorldInfo
 from thymio_bt.robot.interface import RobotLost, Twist
 
-#: how long to wait for a simulator's world topic once its clock is heard, when none is seen (wall s)
-WORLD_GRACE = 1.0
+#: how long to wait for a simulator's world topic once its clock is heard, when none is seen and
+#: nothing shows that it has none (wall s)
+WORLD_GRACE = 2.0
 
 
 class Lateness:
@@ -94,14 +96,19 @@ class WorldLink:
         """Whether the world is not yet held at ``tick_ns``, or is, with the robot in it."""
         return self._held_ns is None or self._held_ns < tick_ns or self._held_robot
 
-    def wait_world(self, timeout: float) -> WorldInfo | None:
-        """The world topic's message: waited for up to ``timeout`` s while someone publishes it, or
-        :data:`WORLD_GRACE` s while nobody is seen to (the course's Gazebo has none)."""
+    def wait_world(self, timeout: float, later: Callable[[], bool]) -> WorldInfo | None:
+        """The world topic's message: waited for up to ``timeout`` s while someone publishes it; while
+        nobody is seen to (the course's Gazebo has none), until ``later()`` (something a stand-in makes
+        after its world topic has been discovered: discovery reports a participant's endpoints in the
+        order they were made) or for :data:`WORLD_GRACE` s: each endpoint is discovered on its own,
+        and a loaded client may hear the clock well before it sees the world topic."""
         start = time.monotonic()
         with self._cond:
             while self.world is None:
                 waited = time.monotonic() - start
-                if waited > timeout or (waited > WORLD_GRACE and not self._node.count_publishers(WORLD_TOPIC)):
+                if waited > timeout:
+                    break
+                if not self._node.count_publishers(WORLD_TOPIC) and (later() or waited > WORLD_GRACE):
                     break
                 self._cond.wait(0.05)
         return self.world

@@ -167,6 +167,7 @@ class GazeboStandIn:
         node.create_subscription(Twist, topics.cmd_vel, self._on_cmd_vel, 1)
         node.create_subscription(TwistStamped, STEP_TOPIC, self._on_step, 10)
         self._held_pub = node.create_publisher(Header, HELD_TOPIC, 10)
+        # the services last: a client that sees them knows it would have seen the world topic (WorldLink)
         node.create_service(SpawnEntity, topics.spawn, self._on_spawn)
         node.create_service(DeleteEntity, topics.delete, self._on_delete)
         self._ros.start("thymio-bt-serve")
