@@ -138,3 +138,19 @@ def test_tree_draws_to_the_mission_file_s_name_as_documented(tmp_path, monkeypat
     assert invoke("tree", "my_square.yaml", "--dot").exit_code == 0
     assert (tmp_path / "my_square.dot").is_file() and not (tmp_path / "another_name.dot").exists()
     assert "the MISSION file's name" in " ".join(invoke("tree", "--help").output.split())
+
+
+def test_a_failure_with_no_node_to_blame_prints_no_failed_at_line(capsys):
+    """A run that ends outside the tree (nothing answered on ROS 2, a robot lost before the first
+    tick) has no failing node: the summary says why, not 'failed at: None'."""
+    from dataclasses import replace
+
+    from thymio_bt.cli.running import _summary
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.runner import Run
+
+    result = Run(load_mission("square")).run()
+    lost = replace(result, status="FAILURE", code="ROBOT_LOST", reason="nothing answered", failed_path=None)
+    _summary(lost)
+    out = capsys.readouterr()
+    assert "reason: [ROBOT_LOST] nothing answered" in out.err and "failed at" not in out.out + out.err

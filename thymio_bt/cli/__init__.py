@@ -13,8 +13,8 @@ family of commands has its module, imported here so that ``main`` has them all:
 Example::
 
     >>> sorted(main.commands)  # doctest: +NORMALIZE_WHITESPACE
-    ['backends', 'behaviours', 'calibrate', 'export', 'maze', 'replay', 'run', 'schema', 'serve', 'sweep',
-     'tree', 'validate']
+    ['backends', 'behaviours', 'calibrate', 'export', 'maze', 'palette', 'replay', 'run', 'schema', 'serve',
+     'sweep', 'tree', 'validate']
 """
 
 from __future__ import annotations

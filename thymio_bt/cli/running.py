@@ -366,5 +366,7 @@ def _summary(result: RunResult, err: bool = False) -> None:
     echo(f"  final pose: {pose_text(result.final_pose)}")
     echo(f"  collisions: {result.collisions}   min clearance: {clearance_text(result.min_clearance)}")
     if result.status != "SUCCESS":
-        echo(f"  failed at: {result.failed_path}", err=True)
+        # no node to blame when the run ended outside the tree (time limit, a lost robot, before a tick)
+        if result.failed_path is not None:
+            echo(f"  failed at: {result.failed_path}", err=True)
         echo(f"  reason: [{result.code}] {result.reason}", err=True)
