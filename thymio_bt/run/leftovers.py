@@ -19,6 +19,7 @@ import os
 import sys
 import threading
 import time
+from pathlib import Path
 
 #: how long (wall-clock seconds) the leftover threads get to end by themselves at shutdown
 GRACE = 1.0
@@ -34,11 +35,18 @@ def end_despite_threads(code: int) -> bool:
     """If non-daemon threads are alive, arrange for the interpreter's shutdown to end the process with
     ``code`` when they are still alive then (after :data:`GRACE`), with a warning naming them; whether
     something was arranged."""
-    if not leftover_threads():
-        return False
+    if not leftover_threads() or not _thymio_bt_process():
+        return False  # a command run inside another program (a test's CliRunner) leaves it its exit
     # threading's own exit hooks run before it joins the threads: the last moment to end anyway
     threading._register_atexit(_end_now, code)  # type: ignore[attr-defined]
     return True
+
+
+def _thymio_bt_process() -> bool:
+    """Whether this process is the ``thymio-bt`` command (its script, or ``python -m thymio_bt``)."""
+    main = sys.modules.get("__main__")
+    spec = getattr(main, "__spec__", None)
+    return Path(sys.argv[0]).name == "thymio-bt" or getattr(spec, "name", "") == "thymio_bt.__main__"
 
 
 def _end_now(code: int) -> None:
