@@ -94,7 +94,7 @@ def test_a_table_must_be_invertible():
 
 
 def test_a_raw_scan_converts_by_sensor_name():
-    raw = dict(zip(SENSOR_NAMES, (0, 4308, 3515, 2570, 1195, 0, 2965)))
+    raw = dict(zip(SENSOR_NAMES, (0, 4308, 3515, 2570, 1195, 0, 2965), strict=True))
     scan = raw_scan_to_metres(raw)
     assert tuple(scan) == SENSOR_NAMES
     assert scan["front_left"] == scan["rear_left"] == math.inf
@@ -111,7 +111,7 @@ def test_without_noise_the_model_reads_the_rounded_table():
 
 
 def test_the_model_is_deterministic_for_a_seed():
-    scan = dict(zip(SENSOR_NAMES, (0.02, 0.05, math.inf, 0.07, 0.09, 0.01, math.inf)))
+    scan = dict(zip(SENSOR_NAMES, (0.02, 0.05, math.inf, 0.07, 0.09, 0.01, math.inf), strict=True))
 
     def readings(seed):
         model = RawProximityModel(np.random.default_rng(seed))
@@ -147,7 +147,7 @@ def test_noisy_readings_are_clipped_at_0_and_nothing_seen_stays_exactly_0():
 
 def test_through_raw_gives_metres_back_within_the_noise():
     model = RawProximityModel(np.random.default_rng(5))
-    scan = dict(zip(SENSOR_NAMES, (0.074, 0.05, 0.03, 0.05, 0.074, math.inf, 0.0955)))
+    scan = dict(zip(SENSOR_NAMES, (0.074, 0.05, 0.03, 0.05, 0.074, math.inf, 0.0955), strict=True))
     back = model.through_raw(scan)
     assert tuple(back) == SENSOR_NAMES
     assert back["rear_left"] == math.inf
