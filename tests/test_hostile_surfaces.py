@@ -10,6 +10,7 @@ import sys
 import threading
 from pathlib import Path
 
+import _require
 import pytest
 from click.testing import CliRunner
 
@@ -165,7 +166,7 @@ def listener():
 
 @pytest.mark.parametrize("garbage", [b"", b"HTTP/1.1 200 OK\r\n\r\nhello" * 50, bytes(range(256)) * 8])
 def test_a_dask_address_that_never_answers_right_is_a_message(tmp_path, listener, garbage):
-    pytest.importorskip("distributed")
+    _require.module("distributed")
     port, answer = listener
     answer["bytes"] = garbage
     done = cli(
@@ -181,14 +182,14 @@ def test_a_dask_address_that_never_answers_right_is_a_message(tmp_path, listener
     "address", ["tcp://127.0.0.1", "tls://", "inproc://", "nonsense://x:1", "tcp://127.0.0.1:99999"]
 )
 def test_a_dask_address_without_a_port_is_a_message(address):
-    pytest.importorskip("distributed")
+    _require.module("distributed")
     result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "1", "--dask", address])
     assert result.exit_code == 2 and result.exception is None or isinstance(result.exception, SystemExit)
     assert f"--dask {address}" in result.output
 
 
 def test_the_groot2_server_survives_a_names_frame_that_is_not_utf8():
-    zmq = pytest.importorskip("zmq")
+    zmq = _require.module("zmq")
     from thymio_bt.viz.groot2 import PROTOCOL, Groot2Server
 
     with socket.socket() as probe:

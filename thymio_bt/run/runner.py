@@ -265,7 +265,7 @@ class Run:
         """Wait until the wall clock catches up with simulated time / ``realtime`` (``--realtime``)."""
         lag = self.backend.time() / realtime - (time.perf_counter() - wall_start)
         if lag > 0:
-            time.sleep(lag)
+            time.sleep(lag)  # realtime: pacing asked for with --realtime
 
     def _end_of_run(self, ending: Ending, interrupts: Interrupts) -> Verdict:
         """The report's status, reason, code and failing node; a run cut short has its running
