@@ -332,14 +332,27 @@ class AsebaNode(Node):
         if self.loop.is_running():
             self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(1.0)
-        if not self.loop.is_running():  # end its pending handlers (else: "Task was destroyed")
-            pending = asyncio.all_tasks(self.loop)
-            for task in pending:
-                task.cancel()
-            if pending:
-                self.loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
-            self.loop.close()
+        if not self.loop.is_running():
+            _finish(self.loop)
         connection.close()
+
+
+def _finish(loop: asyncio.AbstractEventLoop) -> None:
+    """Cancel and await the loop's pending tasks (else: "Task was destroyed"), then close it.
+
+    thymiodirect's refresher stops the loop itself as it ends, so a stop may cut a run short
+    (``Event loop stopped before Future completed``): run it again, a few times at most.
+    """
+    pending = asyncio.all_tasks(loop)
+    for task in pending:
+        task.cancel()
+    finished = asyncio.gather(*pending, return_exceptions=True)
+    for _ in range(5):
+        if finished.done():
+            break
+        with contextlib.suppress(RuntimeError):
+            loop.run_until_complete(finished)
+    loop.close()
 
 
 def create_aseba(mission: Mission, seed: int, options: AsebaOptions) -> ThymioRobot:
