@@ -1,0 +1,308 @@
+"""An assignment file: the worlds a submission runs in, the criteria it is graded on, its palette.
+
+Checked like a mission (file:line errors with hints, a JSON Schema). A minimal one::
+
+    name: stop_at_wall
+    submission: part1.yaml            # the file a student's folder must hold
+    variants:                         # the worlds: the course's and ones the students never saw
+      - {name: course, maze: two_parts_maze, start: part1, seeds: 2}
+      - {name: shifted, maze: two_parts_maze, start: [0.25, 0.1, 0], robot: enki}
+    criteria:                         # judged on the ground truth, never on the tree's own SUCCESS
+      - {name: stops 5 cm from the wall, points: 2, gap: {at: end, distance: 5cm, tolerance: 5mm}}
+      - {name: never touches a wall, points: 1, no_collision: true}
+    palette: {forbid: [WallFollow], penalty: 3}
+
+Example::
+
+    >>> from thymio_bt.inputs.yamlio import loads_yaml
+    >>> a = Assignment.model_validate(loads_yaml(EXAMPLE, "a.yaml"))
+    >>> [v.name for v in a.variants], [c.check for c in a.criteria], a.max_points
+    (['course', 'shifted'], ['gap', 'no_collision'], 3.0)
+    >>> a.variants[0].seed_list, a.criteria[0].applies_to(a.variants[1])
+    ([0, 1], True)
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.validation import locate, validate
+from thymio_bt.inputs.yamlio import load_yaml
+from thymio_bt.maze.model import Angle, Length, Point, Spawn, parsed_quantity
+
+#: seconds, written with a unit or not (``60s``, ``2min``)
+Duration = Annotated[float, parsed_quantity("time")]
+
+EXAMPLE = """\
+name: stop_at_wall
+submission: part1.yaml
+variants:
+  - {name: course, maze: two_parts_maze, start: part1, seeds: 2}
+  - {name: shifted, maze: two_parts_maze, start: [0.25, 0.1, 0], robot: enki}
+criteria:
+  - {name: stops 5 cm from the wall, points: 2, gap: {at: end, distance: 5cm, tolerance: 5mm}}
+  - {name: never touches a wall, points: 1, no_collision: true}
+palette: {forbid: [WallFollow], penalty: 3}
+"""
+
+
+class Generate(BaseModel):
+    """A maze made for the variant, from a seed: ``perfect`` (wall following, exit gap on top),
+    ``path`` (one corridor: a turn at every wall, its far end a dead end) or ``contest``
+    (micromouse: start in a corner, goal at the centre, loops)."""
+
+    model_config = ConfigDict(extra="forbid")
+    kind: Literal["perfect", "path", "contest"] = Field(description="the kind of maze")
+    seed: int = Field(0, ge=0, le=2**31, description="the generator's seed")
+    cols: int = Field(6, ge=2, le=32, description="perfect: columns of cells")
+    rows: int = Field(6, ge=2, le=32, description="perfect: rows of cells")
+    length: int = Field(8, ge=3, le=64, description="path: cells along the corridor")
+    size: int = Field(8, ge=4, le=32, description="contest: cells per side (even)")
+    turns: Literal["left", "right", "any"] = Field("any", description="path: the turns it may have")
+
+
+class GoalDisc(BaseModel):
+    """A disc base_link must end in."""
+
+    model_config = ConfigDict(extra="forbid")
+    centre: Point = Field(description="[x, y]")
+    radius: Length = Field(0.05, gt=0, le=10, description="how far from the centre still counts")
+
+
+class Variant(BaseModel):
+    """One world a submission runs in: a maze (a file, a shipped name or generated), a start, a
+    robot profile and noise seeds; what the criteria compare with (``goal``, ``turns``)."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = Field(min_length=1, max_length=60, pattern=r"^[A-Za-z0-9_.-]+$", description="the variant's name")
+    maze: str | None = Field(None, description="a maze file (relative to the assignment) or a shipped maze's name")
+    generate: Generate | None = Field(None, description="a generated maze instead of a file")
+    mirror: bool = Field(False, description="mirror the maze left-right (left turns become right turns)")
+    start: str | Spawn | None = Field(
+        None, description="a spawn name of the maze or [x, y, yaw]; the mission's own if absent"
+    )
+    robot: Literal["course", "enki", "real"] = Field("course", description="the robot profile")
+    seeds: int | list[int] = Field(1, description="how many noise seeds (0, 1, ...) or the list of seeds")
+    noise: Literal["realistic", "off"] = Field("realistic", description="the noise models, on or off")
+    set: dict[str, str | int | float] = Field(default_factory=dict, description="other --set NAME=VALUE settings")
+    goal: GoalDisc | None = Field(None, description="where a `goal` criterion wants the robot to end")
+    turns: str | None = Field(None, pattern=r"^[LR]*$", description="the turns a `turns` criterion wants, e.g. LLRL")
+
+    @field_validator("seeds")
+    @classmethod
+    def _seeds(cls, value: int | list[int]) -> int | list[int]:
+        count = value if isinstance(value, int) else len(value)
+        if not 1 <= count <= 1000:
+            raise ValueError("a variant runs 1 to 1000 seeds")
+        if isinstance(value, list) and (len(set(value)) != len(value) or min(value) < 0):
+            raise ValueError("seeds must be distinct and >= 0")
+        return value
+
+    @model_validator(mode="after")
+    def _one_maze(self) -> Variant:
+        if self.maze is not None and self.generate is not None:
+            raise ValueError("give `maze` or `generate`, not both")
+        return self
+
+    @property
+    def seed_list(self) -> list[int]:
+        """The seeds this variant runs."""
+        return list(range(self.seeds)) if isinstance(self.seeds, int) else list(self.seeds)
+
+
+class GapCheck(BaseModel):
+    """The front gap (the robot's nose to the wall ahead, by geometry) at a moment of the run."""
+
+    model_config = ConfigDict(extra="forbid")
+    at: Literal["delete", "end"] = Field(description="delete: as the robot is deleted; end: when the run ends")
+    distance: Length = Field(gt=0, le=2, description="the gap wanted")
+    tolerance: Length = Field(0.005, gt=0, le=1, description="how far off still counts")
+
+
+class DeadEndCheck(GapCheck):
+    """The run ends in a dead end: a wall ahead at ``distance`` and walls close on both sides."""
+
+    at: Literal["delete", "end"] = Field("end", description="when to look (end)")
+    side: Length = Field(0.15, gt=0, le=1, description="a side wall at most this far from base_link")
+
+
+class RespawnCheck(BaseModel):
+    """The robot was spawned again at ``pose`` (a spawn name of the variant's maze or [x, y, yaw])."""
+
+    model_config = ConfigDict(extra="forbid")
+    pose: str | Spawn = Field(description="a spawn name or [x, y, yaw]")
+    tolerance: Length = Field(0.01, gt=0, le=1, description="position tolerance")
+    yaw_tolerance: Angle = Field(0.09, gt=0, le=3.2, description="heading tolerance")
+
+
+#: the checks a criterion may make, each judged by the function of that name in :mod:`.checks`
+CHECKS = (
+    "finishes",
+    "no_collision",
+    "max_time",
+    "goal",
+    "gap",
+    "dead_end",
+    "order",
+    "respawn",
+    "turns",
+    "leaves_maze",
+    "min_clearance",
+    "no_reverse",
+)
+
+
+class Criterion(BaseModel):
+    """A named check worth ``points``, over the runs of some variants: passed when at least
+    ``pass_rate`` of them pass it."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = Field(min_length=1, max_length=120, description="what the student sees")
+    points: float = Field(gt=0, le=1000, description="what passing it earns")
+    variants: list[str] | None = Field(None, description="the variants it judges (all when absent)")
+    pass_rate: float = Field(1.0, gt=0, le=1, description="the share of its runs that must pass")
+    finishes: Literal[True] | None = Field(None, description="the tree ends by itself before the time limit")
+    no_collision: Literal[True] | None = Field(None, description="no contact with a wall")
+    max_time: Duration | None = Field(None, gt=0, le=36000, description="the tree ends within this")
+    goal: Literal[True] | GoalDisc | None = Field(None, description="ends in this disc (true: the variant's goal)")
+    gap: GapCheck | None = Field(None, description="the front gap at a moment")
+    dead_end: DeadEndCheck | None = Field(None, description="ends stopped in a dead end")
+    order: list[str] | None = Field(None, min_length=2, description="these event kinds happen, in this order")
+    respawn: RespawnCheck | None = Field(None, description="the robot is spawned again there")
+    turns: Literal[True] | str | None = Field(None, description="the turns taken (true: the variant's)")
+    leaves_maze: Literal[True] | None = Field(None, description="base_link ends outside the maze's walls")
+    min_clearance: Length | None = Field(None, gt=0, le=1, description="never closer to a wall than this")
+    no_reverse: Literal[True] | None = Field(None, description="never drives backwards")
+
+    @model_validator(mode="after")
+    def _one_check(self) -> Criterion:
+        given = [name for name in CHECKS if getattr(self, name) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                f"a criterion makes exactly one check, this one makes {len(given)}"
+                + (f" ({', '.join(given)})" if given else "")
+                + f"; one of: {', '.join(CHECKS)}"
+            )
+        return self
+
+    @property
+    def check(self) -> str:
+        """The name of the check it makes."""
+        return next(name for name in CHECKS if getattr(self, name) is not None)
+
+    def applies_to(self, variant: Variant) -> bool:
+        """Whether it judges ``variant``'s runs."""
+        return self.variants is None or variant.name in self.variants
+
+
+class Palette(BaseModel):
+    """The nodes a student may use, and what breaking a rule costs."""
+
+    model_config = ConfigDict(extra="forbid")
+    allow: list[str] | None = Field(None, description="only these node types (behaviours, composites, decorators)")
+    forbid: list[str] = Field(default_factory=list, description="these node types are not allowed")
+    plugins: bool = Field(False, description="whether a submission may bring Python plugins")
+    include_library: bool = Field(True, description="whether it may include the shipped missions' library")
+    max_nodes: int | None = Field(None, ge=1, le=100_000, description="the most nodes a tree may have")
+    max_depth: int | None = Field(None, ge=1, le=1000, description="the deepest a tree may be")
+    penalty: float = Field(0.0, ge=0, le=1000, description="points lost per rule broken (the score stays >= 0)")
+
+
+class Limits(BaseModel):
+    """What one run of a submission may use before it is stopped."""
+
+    model_config = ConfigDict(extra="forbid")
+    cpu: Duration = Field(20.0, gt=0, le=3600, description="CPU seconds per run")
+    memory: int = Field(1024, ge=64, le=65536, description="MiB of address space per submission's process")
+
+
+class Assignment(BaseModel):
+    """A graded exercise: where submissions run, what they are judged on, which nodes they may use."""
+
+    model_config = ConfigDict(extra="forbid")
+    name: str = Field(min_length=1, max_length=80, description="the assignment's name")
+    title: str = Field("", description="one line for the class page")
+    submission: str | None = Field(None, description="the mission file a student's folder must hold")
+    variants: list[Variant] = Field(min_length=1, description="the worlds every submission runs in")
+    criteria: list[Criterion] = Field(min_length=1, description="what is graded")
+    palette: Palette = Field(default_factory=Palette, description="the nodes allowed")
+    limits: Limits = Field(default_factory=Limits, description="per-run CPU and memory limits")
+    time_limit: Duration | None = Field(None, gt=0, le=36000, description="overrides the missions' time_limit")
+
+    @property
+    def max_points(self) -> float:
+        """The score of a perfect submission."""
+        return sum(c.points for c in self.criteria)
+
+    def variant(self, name: str) -> Variant:
+        """The variant called ``name``."""
+        return next(v for v in self.variants if v.name == name)
+
+
+def load_assignment(path: str | Path) -> Assignment:
+    """Read and check an assignment file; a :class:`UserError` with file:line for every problem."""
+    file = str(path)
+    data = load_yaml(path, "assignment")
+    assignment = validate(Assignment, data, file)
+    problems = []
+    names = [v.name for v in assignment.variants]
+    for i, variant in enumerate(assignment.variants):
+        if names.index(variant.name) != i:
+            line, col = _mark(data, ["variants", i, "name"])
+            problems.append(Problem(f"variant '{variant.name}' is defined twice", file, line, col))
+    for i, criterion in enumerate(assignment.criteria):
+        for j, name in enumerate(criterion.variants or []):
+            if name not in names:
+                line, col = _mark(data, ["criteria", i, "variants", j])
+                problems.append(
+                    Problem(
+                        f"criterion '{criterion.name}' names no variant '{name}'",
+                        file,
+                        line,
+                        col,
+                        hint=did_you_mean(name, names),
+                    )
+                )
+        applies = [v for v in assignment.variants if criterion.applies_to(v)]
+        if criterion.goal is True and any(v.goal is None and not _maze_may_have_goal(v) for v in applies):
+            line, col = _mark(data, ["criteria", i, "goal"])
+            problems.append(
+                Problem(
+                    f"criterion '{criterion.name}' wants the variant's goal, and a variant gives none",
+                    file,
+                    line,
+                    col,
+                    hint="give the variants a `goal: {centre: [x, y], radius: 5cm}`",
+                )
+            )
+        if criterion.turns is True and any(v.turns is None and not _generated_path(v) for v in applies):
+            line, col = _mark(data, ["criteria", i, "turns"])
+            problems.append(
+                Problem(
+                    f"criterion '{criterion.name}' wants the variant's turns, and a variant gives none",
+                    file,
+                    line,
+                    col,
+                    hint="give the variants `turns: LLR...`, or the criterion the turns itself",
+                )
+            )
+    if problems:
+        raise UserError(problems)
+    return assignment
+
+
+def _maze_may_have_goal(variant: Variant) -> bool:
+    """A maze file or a contest maze may hold goal areas (checked when the run is judged)."""
+    return variant.generate is None or variant.generate.kind == "contest"
+
+
+def _generated_path(variant: Variant) -> bool:
+    return variant.generate is not None and variant.generate.kind == "path"
+
+
+def _mark(data: Any, loc: list[Any]) -> tuple[int, int]:
+    return locate(data, loc)

@@ -1,0 +1,163 @@
+"""One student's runs, in the child process :mod:`.isolation` forked for them: every world of the
+assignment with each of its seeds, each run judged by every criterion that applies to its world.
+
+The messages sent back are small: the run's outcome, each criterion's judgement, the node
+statistics (for coverage) and, for the first seed of each world, the trajectory (for pictures).
+
+Example (in this process; the grader runs it in a child)::
+
+    >>> from pathlib import Path
+    >>> from thymio_bt.grade.assignment import Criterion, Variant
+    >>> variant = Variant(name="course", maze="two_parts_maze", start="part1", noise="off")
+    >>> world = World.of(variant, Path("."), Path("."))
+    >>> task = StudentTask("ada", "missions/maze_part1_2.yaml", [world], [
+    ...     Criterion(name="stops 5 cm from the wall", points=2, gap={"at": "delete", "distance": "5cm"})])
+    >>> messages = []
+    >>> grade_runs(task, messages.append)
+    >>> run = messages[-1]
+    >>> run["variant"], run["status"], run["criteria"]["stops 5 cm from the wall"], len(run["trajectory"]) > 10
+    ('course', 'SUCCESS', {'passed': True, 'feedback': None, 'moment': None, 'where': None}, True)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from thymio_bt.errors import UserError
+from thymio_bt.grade.assignment import Criterion
+from thymio_bt.grade.checks import Judgement, RunFacts, judge
+from thymio_bt.grade.isolation import Limits, RunLimit, Send, run_limited
+from thymio_bt.grade.palette import where
+from thymio_bt.grade.worlds import World
+
+if TYPE_CHECKING:
+    from thymio_bt.mission import Mission
+
+#: the most trajectory samples a run sends (for its picture)
+PICTURE_SAMPLES = 300
+
+
+@dataclass
+class StudentTask:
+    """Everything a child needs to run one student's submission (picklable: also a Dask task)."""
+
+    name: str
+    file: str
+    worlds: list[World]
+    criteria: list[Criterion]
+    run_plugins: bool = True
+    limits: Limits | None = None
+    time_limit: float | None = None
+
+    @property
+    def runs(self) -> int:
+        """How many runs the submission makes."""
+        return sum(len(w.seeds) for w in self.worlds)
+
+    def plan(self) -> list[tuple[World, int]]:
+        """Each run's world and seed, in order."""
+        return [(world, seed) for world in self.worlds for seed in world.seeds]
+
+
+def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
+    """Run ``task``'s runs but the first ``skip``, sending a ``start`` then a ``run`` message each."""
+    missions: dict[str, Mission | str] = {}
+    pictured: set[str] = set()
+    for index, (world, seed) in enumerate(task.plan()):
+        if index < skip:
+            pictured.add(world.name)
+            continue
+        send({"kind": "start", "index": index})
+        if world.name not in missions:
+            try:
+                missions[world.name] = world.mission(task.file, task.run_plugins, task.time_limit)
+            except UserError as exc:
+                missions[world.name] = f"the mission cannot run in this world: {exc}"
+        mission = missions[world.name]
+        picture = world.name not in pictured
+        pictured.add(world.name)
+        send(run_message(task, index, world, seed, mission, picture))
+
+
+def run_message(
+    task: StudentTask, index: int, world: World, seed: int, mission: Mission | str, picture: bool
+) -> dict[str, Any]:
+    """Run ``mission`` in ``world`` with ``seed`` and judge it: the ``run`` message."""
+    from thymio_bt.robot.model import robot_model
+    from thymio_bt.run.runner import Run
+
+    head: dict[str, Any] = {"kind": "run", "index": index, "variant": world.name, "seed": seed, "robot": world.robot}
+    criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
+    if isinstance(mission, str):
+        return head | _broken("WORLD_ERROR", mission, criteria)
+    limits = task.limits or Limits()
+    try:
+        result = run_limited(limits, lambda: Run(mission, seed, node_stats=True).run())
+    except RunLimit as exc:
+        return head | _broken("LIMIT", str(exc), criteria)
+    except MemoryError:
+        return head | _broken("LIMIT", f"the run used more than its memory ({limits.memory_mib} MiB)", criteria)
+    except UserError as exc:
+        return head | _broken("WORLD_ERROR", f"the mission cannot run in this world: {exc}", criteria)
+    except SystemExit as exc:
+        return head | _broken("EXCEPTION", f"the submission called sys.exit({exc.code!r})", criteria)
+    except Exception as exc:
+        return head | _broken("EXCEPTION", f"the run raised {type(exc).__name__}: {exc}", criteria)
+    wheres = {node.path: where(node) for node in mission.tree.walk()}
+    facts = RunFacts(result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns)
+    judged = {c.name: _judgement(judge(c, facts), wheres) for c in criteria}
+    message = head | {
+        "status": result.status,
+        "code": result.code,
+        "reason": result.reason,
+        "failed_path": result.failed_path,
+        "where": wheres.get(result.failed_path or ""),
+        "sim_time": round(result.sim_time, 3),
+        "final_pose": result.final_pose,
+        "collisions": result.collisions,
+        "criteria": judged,
+        "node_stats": result.node_stats or {},
+    }
+    if picture:
+        step = max(1, len(result.trajectory) // PICTURE_SAMPLES + 1)
+        samples = result.trajectory[::step] + result.trajectory[-1:]
+        message["trajectory"] = [[round(v, 4) for v in sample] for sample in samples]
+    return message
+
+
+def _judgement(judgement: Judgement, wheres: dict[str, str | None]) -> dict[str, Any]:
+    return {
+        "passed": judgement.passed,
+        "feedback": judgement.feedback,
+        "moment": judgement.moment,
+        "where": wheres.get(judgement.path or ""),
+    }
+
+
+def _broken(code: str, reason: str, criteria: list[Criterion]) -> dict[str, Any]:
+    """A run that could not run or was stopped: every criterion fails with its reason."""
+    judged = {c.name: {"passed": False, "feedback": reason, "moment": None, "where": None} for c in criteria}
+    return {
+        "status": "FAILURE",
+        "code": code,
+        "reason": reason,
+        "failed_path": None,
+        "where": None,
+        "sim_time": 0.0,
+        "final_pose": None,
+        "collisions": 0,
+        "criteria": judged,
+        "node_stats": {},
+    }
+
+
+def died_message(task: StudentTask, message: dict[str, Any]) -> dict[str, Any]:
+    """The ``run`` message of a run whose process died (a :mod:`.isolation` ``died`` message)."""
+    world, seed = task.plan()[message["index"]]
+    criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
+    head = {"kind": "run", "index": message["index"], "variant": world.name, "seed": seed, "robot": world.robot}
+    return head | _broken("CRASH", message["reason"], criteria)
+
+
+__all__ = ["StudentTask", "died_message", "grade_runs", "run_message"]

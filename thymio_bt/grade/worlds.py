@@ -1,0 +1,135 @@
+"""The worlds of an assignment's variants, made ready to run: a maze file, a start and settings.
+
+A generated or mirrored maze is written once into a ``worlds`` folder (next to the results), so
+that the command reproducing a failed run names a file a student can open and run again.
+
+Example::
+
+    >>> import tempfile
+    >>> from thymio_bt.grade.assignment import Variant
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> world = World.of(Variant(name="corridor", generate={"kind": "path", "seed": 4, "turns": "left"}),
+    ...                  Path("."), folder)
+    >>> world.maze_file.name, world.start, world.turns, world.settings["robot"]
+    ('corridor.yaml', 'start', 'LL', 'course')
+    >>> world.run_arguments()[:4]
+    ['--maze', '.../corridor.yaml', '--start', 'start']
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import yaml
+
+from thymio_bt.grade.assignment import GoalDisc, Variant
+from thymio_bt.maze import Maze
+from thymio_bt.maze.files import load_maze, resolve_maze
+from thymio_bt.maze.generate import contest_maze, mirrored, path_maze, perfect_maze, random_path, turns_along
+from thymio_bt.outputs import Output
+from thymio_bt.robot.noise import REALISTIC
+
+if TYPE_CHECKING:
+    from thymio_bt.mission import Mission
+
+#: the settings of a variant with its noise off
+QUIET = {"noise.wheel": "0", "noise.odometry": "0", "noise.range_sd": "0"}
+
+
+@dataclass
+class World:
+    """A variant ready to run: its maze (as a file), start, ``--set`` settings and expectations."""
+
+    name: str
+    maze_file: Path | None
+    maze: Maze | None
+    start: str | None
+    settings: dict[str, str]
+    seeds: list[int]
+    goal: GoalDisc | None = None
+    turns: str | None = None
+    robot: str = "course"
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, variant: Variant, base: Path, folder: Path) -> World:
+        """``variant`` (its maze file relative to ``base``; a made maze written into ``folder``)."""
+        turns = variant.turns
+        maze: Maze | None = None
+        maze_file: Path | None = None
+        if variant.generate is not None:
+            maze, made_turns = _generated(variant)
+            turns = turns or made_turns
+        elif variant.maze is not None:
+            maze_file = resolve_maze(variant.maze, base)
+            maze = load_maze(maze_file)
+        if variant.mirror:
+            if maze is None:
+                raise ValueError("mirror needs the variant's maze")
+            x0, _, x1, _ = maze.bounds()
+            maze = mirrored(maze, (x0 + x1) / 2)
+            turns = turns and turns.translate(str.maketrans("LR", "RL"))
+        if maze is not None and (maze_file is None or variant.mirror):
+            folder.mkdir(parents=True, exist_ok=True)
+            maze_file = folder / f"{variant.name}.yaml"
+            Output(maze_file, "worlds").write_text(yaml.safe_dump(maze.to_yaml_dict(), sort_keys=False))
+        start = variant.start
+        if start is not None and not isinstance(start, str):
+            start = f"{start.x:.6g},{start.y:.6g},{start.yaw:.6g}"
+        elif start is None and variant.generate is not None:
+            start = "start"
+        noise = (
+            {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()} if variant.noise == "realistic" else QUIET
+        )
+        settings = {**noise, **{k: str(v) for k, v in variant.set.items()}, "robot": variant.robot}
+        return cls(
+            variant.name, maze_file, maze, start, settings, variant.seed_list, variant.goal, turns, variant.robot
+        )
+
+    def run_arguments(self) -> list[str]:
+        """The ``thymio-bt run`` arguments that put a mission in this world (all but the seed)."""
+        out = ["--maze", str(self.maze_file)] if self.maze_file else []
+        out += ["--start", self.start] if self.start else []
+        for key, value in sorted(self.settings.items()):
+            out += ["--set", f"{key}={value}"]
+        return out
+
+    def mission(self, path: str | Path, run_plugins: bool = True, time_limit: float | None = None) -> Mission:
+        """The mission at ``path`` in this world (its own ``expect:`` dropped: the criteria judge)."""
+        from dataclasses import replace
+
+        from thymio_bt.mission import load_mission
+
+        settings = dict(self.settings)
+        if time_limit is not None:
+            settings["time_limit"] = f"{time_limit:g}"
+        mission = load_mission(
+            path,
+            settings,
+            maze=str(self.maze_file) if self.maze_file else None,
+            start=self.start,
+            run_plugins=run_plugins,
+        )
+        return replace(mission, expect=None)
+
+
+def _generated(variant: Variant) -> tuple[Maze, str | None]:
+    """The variant's generated maze, and its turns when it is a corridor."""
+    spec = variant.generate
+    assert spec is not None
+    if spec.kind == "perfect":
+        return perfect_maze(spec.cols, spec.rows, spec.seed), None
+    if spec.kind == "contest":
+        from thymio_bt.maze.micromouse import maze_from_cells
+
+        return maze_from_cells(contest_maze(spec.seed, spec.size), f"contest_{spec.size}_seed{spec.seed}"), None
+    wanted = {"left": "R", "right": "L", "any": ""}[spec.turns]  # the turn it must not have
+    for attempt in range(10_000):
+        path = random_path(spec.length, spec.seed * 10_007 + attempt)
+        turns = turns_along(path)
+        if len(turns) >= spec.length // 3 and not (wanted and wanted in turns):  # a turn every 3 cells
+            maze = path_maze(path)
+            return maze.model_copy(update={"name": f"path_{spec.length}_seed{spec.seed}"}), turns
+    raise ValueError(f"no corridor of {spec.length} cells with only {spec.turns} turns")
