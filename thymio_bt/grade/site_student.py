@@ -1,0 +1,249 @@
+"""One student's page of ``grade --html``: why the score is what it is, and where to look.
+
+The score; each criterion with its points, verdict, feedback and ``file:line``; the palette's
+findings; a picture per variant (maze, path, failing moments); the runs that went wrong with the
+command that replays each; the tree with what every node reached over all runs. An invalid
+submission's page shows why it was not run.
+
+Example:
+
+>>> student = {"name": "<b>eve</b>", "status": "invalid", "score": 0, "max": 10,
+...            "messages": ["eve.yaml:3: unknown node type 'Foo'"], "criteria": [], "runs": []}
+>>> page = student_page({"assignment": {"name": "a1"}}, student, {})
+>>> "&lt;b&gt;eve&lt;/b&gt;" in page, "<b>eve" in page, "unknown node type &#x27;Foo&#x27;" in page
+(True, False, True)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from thymio_bt.grade.site_page import (
+    as_dict,
+    as_list,
+    esc,
+    fmt,
+    num,
+    pass_badge,
+    shell,
+    status_badge,
+    where_code,
+)
+from thymio_bt.grade.site_svg import trajectory_svg
+from thymio_bt.maze.model import Maze
+
+_OTHER_SEED = '<span><span class="sw" style="background:#dd6b20"></span>went wrong in another seed\'s run</span>'
+OUTCOMES = {
+    "ok": "reached SUCCESS only",
+    "bad": "reached FAILURE only",
+    "mixed": "reached both SUCCESS and FAILURE",
+    "running": "ticked, never finished",
+    "never": "never ticked",
+}
+
+
+def run_missed(run: dict[str, Any]) -> list[str]:
+    """The criteria ``run`` failed (by name)."""
+    return [name for name, v in as_dict(run.get("criteria")).items() if as_dict(v).get("passed") is False]
+
+
+def run_failed(run: dict[str, Any]) -> bool:
+    """Whether a run went wrong: it did not end in SUCCESS, or it missed a criterion."""
+    return run.get("status") != "SUCCESS" or bool(run_missed(run))
+
+
+def _header(results: dict[str, Any], student: dict[str, Any]) -> str:
+    assignment = as_dict(results.get("assignment"))
+    title = assignment.get("title") or assignment.get("name") or "assignment"
+    maximum = student.get("max", assignment.get("max"))
+    return (
+        f'<p class="back"><a href="../index.html">&larr; class page: {esc(title)}</a></p>'
+        f'<h1 class="student-name">{esc(student.get("name"))}</h1>'
+        f'<p class="sub"><code>{esc(student.get("file"))}</code> {status_badge(student.get("status"))}</p>'
+        f'<div class="score" id="score">{fmt(student.get("score"))} <small>/ {fmt(maximum)}</small></div>'
+    )
+
+
+def _messages(student: dict[str, Any]) -> str:
+    messages = as_list(student.get("messages"))
+    if not messages:
+        return ""
+    why = "was not graded" if student.get("status") != "graded" else "has these messages"
+    items = "".join(f"<li><code>{esc(m)}</code></li>" for m in messages)
+    return (
+        f'<div class="note bad" id="messages"><strong>This submission {why}:</strong>'
+        f'<ul class="messages">{items}</ul></div>'
+    )
+
+
+def _criteria(student: dict[str, Any]) -> str:
+    rows = []
+    for c in as_list(student.get("criteria")):
+        c = as_dict(c)
+        verdict = "pass" if c.get("passed") is True else "fail"
+        runs = f"{fmt(c.get('passed_runs'))} / {fmt(c.get('runs'))}" if num(c.get("runs")) else "–"
+        rows.append(
+            f'<tr class="criterion {verdict}"><td>{esc(c.get("name"))}</td>'
+            f'<td class="num">{fmt(c.get("earned"))} / {fmt(c.get("points"))}</td>'
+            f'<td>{pass_badge(c.get("passed"))}</td><td class="num">{runs}</td>'
+            f"<td>{esc(c.get('feedback'))}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
+        )
+    if not rows:
+        return '<h2>Criteria</h2><p class="muted">No criterion was judged.</p>'
+    return (
+        '<h2>Criteria</h2><table id="criteria"><thead><tr><th>Criterion</th><th class="num">Points</th>'
+        '<th>Result</th><th class="num">Runs passed</th><th>Feedback</th><th>Where</th></tr></thead>'
+        f"<tbody>{''.join(rows)}</tbody></table>"
+    )
+
+
+def _palette(student: dict[str, Any]) -> str:
+    findings = [as_dict(f) for f in as_list(student.get("palette"))]
+    if not findings:
+        return ""
+    rows = "".join(
+        f'<tr class="fail"><td><code>{esc(f.get("node"))}</code></td><td>{esc(f.get("rule"))}</td>'
+        f"<td>{esc(f.get('message'))}</td><td class=where>{where_code(f.get('where'))}</td>"
+        f'<td class="num">&minus;{fmt(f.get("points"))}</td></tr>'
+        for f in findings
+    )
+    return (
+        '<h2>Palette: nodes the assignment does not allow</h2><table id="palette"><thead><tr><th>Node</th>'
+        '<th>Rule</th><th>Message</th><th>Where</th><th class="num">Points</th></tr></thead>'
+        f"<tbody>{rows}</tbody></table>"
+    )
+
+
+def _pictures(results: dict[str, Any], student: dict[str, Any], mazes: dict[str, Maze | str]) -> str:
+    runs = [as_dict(r) for r in as_list(student.get("runs"))]
+    if not runs:
+        return ""
+    variants = [as_dict(v) for v in as_list(as_dict(results.get("assignment")).get("variants"))]
+    known = {str(v.get("name")) for v in variants}
+    variants += [{"name": n} for n in dict.fromkeys(str(r.get("variant")) for r in runs) if n not in known]
+    figures = []
+    for variant in variants:
+        name = str(variant.get("name"))
+        mine = [r for r in runs if str(r.get("variant")) == name]
+        if not mine:
+            continue
+        maze = mazes.get(name)
+        svg, marks = trajectory_svg(maze if isinstance(maze, Maze) else None, variant, mine)
+        failed = sum(run_failed(r) for r in mine)
+        traced = next((r for r in mine if as_list(r.get("trajectory"))), None)
+        caption = f"variant {name}: {failed} of {len(mine)} runs went wrong"
+        if traced is not None:
+            caption += f"; the path drawn is seed {traced.get('seed')}'s"
+        notes = "".join(
+            f'<li style="color:{m.colour}"><span style="color:#1f2933">{esc(m.text)} '
+            f'<span class="muted">({esc(m.seed_text)})</span></span></li>'
+            for m in marks
+        )
+        other = any(not m.traced for m in marks)
+        problem = f'<p class="note warn">{esc(maze)}</p>' if isinstance(maze, str) else ""
+        figures.append(
+            f'<figure class="variant" data-variant="{esc(name)}">{svg}<figcaption>{esc(caption)}'
+            '<div class="legend"><span><span class="sw" style="background:#2b6cb0"></span>path</span>'
+            '<span><span class="sw" style="background:#2f855a"></span>start</span>'
+            '<span><span class="sw" style="background:#1f2933"></span>end</span>'
+            '<span><span class="sw" style="background:#c53030"></span>went wrong (numbered below)</span>'
+            f"{_OTHER_SEED if other else ''}</div>"
+            f"{f'<ol class=messages>{notes}</ol>' if notes else ''}{problem}</figcaption></figure>"
+        )
+    return f'<h2>Where the robot went</h2><div class="figs">{"".join(figures)}</div>'
+
+
+def _failed_runs(student: dict[str, Any]) -> str:
+    runs = [as_dict(r) for r in as_list(student.get("runs"))]
+    failed = [r for r in runs if run_failed(r)]
+    if not runs:
+        return ""
+    if not failed:
+        return f'<h2>Runs</h2><p class="muted">All {len(runs)} runs ended in SUCCESS and met every criterion.</p>'
+    rows = []
+    for r in failed:
+        status = " ".join(str(v) for v in (r.get("status"), r.get("code")) if v)
+        missed = ", ".join(run_missed(r)) or "–"
+        node = ""
+        if r.get("failed_path"):
+            node = f"<br>at <code>{esc(r.get('failed_path'))}</code> {where_code(r.get('where'))}"
+        reason = f"<br>{esc(r.get('reason'))}" if r.get("reason") else ""
+        rows.append(
+            f'<tr class="run fail"><td>{esc(r.get("variant"))}</td><td class="num">{esc(r.get("seed"))}</td>'
+            f"<td>{esc(status)}{reason}{node}</td><td>{esc(missed)}</td>"
+            f'<td class="num">{fmt(r.get("sim_time"), 1)} s</td><td class="num">{fmt(r.get("collisions"))}</td></tr>'
+            f'<tr class="reproduce"><td colspan="6">replay it: '
+            f'<code class="cmd">{esc(r.get("reproduce"))}</code></td></tr>'
+        )
+    return (
+        f"<h2>Runs that went wrong ({len(failed)} of {len(runs)})</h2>"
+        '<table id="failed-runs"><thead><tr><th>Variant</th><th class="num">Seed</th><th>Ended</th>'
+        '<th>Missed</th><th class="num">Time</th><th class="num">Collisions</th></tr></thead>'
+        f"<tbody>{''.join(rows)}</tbody></table>"
+    )
+
+
+def outcome(node: dict[str, Any], never: set[str]) -> str:
+    """What a node reached over all runs: ok, bad, mixed, running or never (see :data:`OUTCOMES`)."""
+    ticks, success, failure = (num(node.get(k)) or 0 for k in ("ticks", "success", "failure"))
+    if ticks <= 0 or node.get("path") in never:
+        return "never"
+    if success and failure:
+        return "mixed"
+    return "ok" if success else "bad" if failure else "running"
+
+
+def _coverage(student: dict[str, Any]) -> str:
+    coverage = as_dict(student.get("coverage"))
+    nodes = [as_dict(n) for n in as_list(coverage.get("nodes"))]
+    if not nodes:
+        return ""
+    never = {str(p) for p in as_list(coverage.get("never_ticked"))}
+    rows = []
+    for node in nodes:
+        kind = outcome(node, never)
+        depth = min(max(int(num(node.get("depth")) or str(node.get("path", "")).count("/")), 0), 30)
+        what = node.get("behaviour") or node.get("kind")
+        what = "" if what == node.get("name") else what
+        ended = ", ".join(
+            f"{esc(child.rsplit('/', 1)[-1])} &times;{fmt(count)}"
+            for child, count in as_dict(node.get("ended_by")).items()
+            if isinstance(child, str)
+        )
+        ended_html = f'<div class="ended">ended by {ended}</div>' if ended else ""
+        label = ' <span class="badge never">never ticked</span>' if kind == "never" else ""
+        rows.append(
+            f'<tr class="tree-node cov-{kind}" title="{esc(node.get("path"))}: {OUTCOMES[kind]}">'
+            f'<td class="node" style="padding-left:{10 + 18 * depth}px"><span class="dot"></span>'
+            f'{esc(node.get("name"))} <span class="kind">{esc(what)}</span>{label}{ended_html}</td>'
+            + "".join(f'<td class="num">{fmt(node.get(k))}</td>' for k in ("ticks", "success", "failure", "running"))
+            + f"<td class=where>{where_code(node.get('where'))}</td></tr>"
+        )
+    legend = "".join(
+        f'<span class="cov-{k}"><span class="dot"></span>{esc(text)}</span>' for k, text in OUTCOMES.items()
+    )
+    untouched = len([r for r in rows if "cov-never" in r])
+    return (
+        f"<h2>The tree over {fmt(coverage.get('runs'))} runs</h2>"
+        f'<p class="sub">{untouched} of {len(rows)} nodes never ticked.</p><div class="legend">{legend}</div>'
+        '<table class="tree" id="coverage"><thead><tr><th>Node</th><th class="num">Ticks</th>'
+        '<th class="num">Success</th><th class="num">Failure</th><th class="num">Running</th><th>Where</th>'
+        f"</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+    )
+
+
+def student_page(results: dict[str, Any], student: dict[str, Any], mazes: dict[str, Maze | str]) -> str:
+    """The whole HTML page of ``student`` (one entry of results' ``students``)."""
+    assignment = as_dict(results.get("assignment"))
+    body = "".join(
+        (
+            _header(results, student),
+            _messages(student),
+            _criteria(student),
+            _palette(student),
+            _pictures(results, student, mazes),
+            _failed_runs(student),
+            _coverage(student),
+        )
+    )
+    return shell(f"{student.get('name')} — {assignment.get('name') or 'grade'}", body)
