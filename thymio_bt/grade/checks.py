@@ -95,9 +95,13 @@ class RunFacts:
         """The first event of ``kind``."""
         return next((e for e in self.result.events if e["kind"] == kind), None)
 
-    def node_before(self, t: float) -> str | None:
-        """The path of the last node that ended at or before ``t``: the one that brought the robot there."""
-        ended = [e for e in self.result.events if e["kind"] == "behaviour_end" and e["t"] <= t + 1e-9]
+    def node_before(self, t: float, event: dict[str, Any] | None = None) -> str | None:
+        """The path of the last node that ended at or before ``t`` (before ``event``, when given):
+        the one that brought the robot there."""
+        events = self.result.events
+        if event is not None:
+            events = events[: next((i for i, e in enumerate(events) if e is event), len(events))]
+        ended = [e for e in events if e["kind"] == "behaviour_end" and e["t"] <= t + 1e-9]
         return ended[-1]["path"] if ended else None
 
 
@@ -175,12 +179,12 @@ def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
             )
         t: float | None = event["t"]
     else:
-        t = None
+        t, event = None, None
     pose = facts.pose_at(t)
     if pose is None:
         return Judgement(False, "no robot to measure", None)
     moment = facts.moment(t)
-    blame = facts.node_before(t if t is not None else math.inf)
+    blame = facts.node_before(t if t is not None else math.inf, event)
     gap = front_gap(facts.maze, facts.model, pose)
     if not math.isfinite(gap):
         return Judgement(False, f"stopped facing no wall (wanted {100 * spec.distance:g} cm from one)", moment, blame)
@@ -260,10 +264,10 @@ def turns_taken(facts: RunFacts) -> list[tuple[str, float]]:
     segment_start: float | None = None
     for t, _, _, yaw in facts.result.trajectory:
         if segment_start is None or any(segment_start < s <= t for s in spawns):
-            segment_start, heading, stable, candidate, since = t, yaw, 0, 0, t
+            segment_start, base, heading, stable, candidate, since = t, yaw, yaw, 0, 0, t
             continue
         heading += math.remainder(yaw - heading, math.tau)  # unwrapped
-        steps = heading / quarter
+        steps = (heading - base) / quarter
         q = round(steps)
         if abs(steps - q) > 1 / 3:  # between two quarter headings: no decision
             continue

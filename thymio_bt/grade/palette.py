@@ -51,6 +51,21 @@ def where(node: NodePlan) -> str | None:
     return f"{file}:{line}" if file else None
 
 
+def wheres(tree: NodePlan) -> dict[str, str | None]:
+    """``file:line`` of each node by its path in the running tree (names from the root, as run
+    reports and events say: ``course/part 1``); the first of two same-named siblings."""
+    found: dict[str, str | None] = {}
+
+    def visit(node: NodePlan, prefix: str) -> None:
+        path = f"{prefix}/{node.name}" if prefix else node.name
+        found.setdefault(path, where(node))
+        for child in node.children:
+            visit(child, path)
+
+    visit(tree, "")
+    return found
+
+
 def check_palette(mission: Mission, palette: Palette) -> list[Finding]:
     """The rules of ``palette`` that ``mission`` breaks, each once, in the tree's order."""
     findings: dict[tuple[str, str | None], Finding] = {}

@@ -28,7 +28,7 @@ from thymio_bt.errors import UserError
 from thymio_bt.grade.assignment import Criterion
 from thymio_bt.grade.checks import Judgement, RunFacts, judge
 from thymio_bt.grade.isolation import Limits, RunLimit, Send, run_limited
-from thymio_bt.grade.palette import where
+from thymio_bt.grade.palette import wheres
 from thymio_bt.grade.worlds import World
 
 if TYPE_CHECKING:
@@ -104,15 +104,15 @@ def run_message(
         return head | _broken("EXCEPTION", f"the submission called sys.exit({exc.code!r})", criteria)
     except Exception as exc:
         return head | _broken("EXCEPTION", f"the run raised {type(exc).__name__}: {exc}", criteria)
-    wheres = {node.path: where(node) for node in mission.tree.walk()}
+    places = wheres(mission.tree)
     facts = RunFacts(result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns)
-    judged = {c.name: _judgement(judge(c, facts), wheres) for c in criteria}
+    judged = {c.name: _judgement(judge(c, facts), places) for c in criteria}
     message = head | {
         "status": result.status,
         "code": result.code,
         "reason": result.reason,
         "failed_path": result.failed_path,
-        "where": wheres.get(result.failed_path or ""),
+        "where": places.get(result.failed_path or ""),
         "sim_time": round(result.sim_time, 3),
         "final_pose": result.final_pose,
         "collisions": result.collisions,
@@ -126,12 +126,12 @@ def run_message(
     return message
 
 
-def _judgement(judgement: Judgement, wheres: dict[str, str | None]) -> dict[str, Any]:
+def _judgement(judgement: Judgement, places: dict[str, str | None]) -> dict[str, Any]:
     return {
         "passed": judgement.passed,
         "feedback": judgement.feedback,
         "moment": judgement.moment,
-        "where": wheres.get(judgement.path or ""),
+        "where": places.get(judgement.path or ""),
     }
 
 

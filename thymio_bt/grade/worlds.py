@@ -18,6 +18,7 @@ Example::
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -63,7 +64,7 @@ class World:
             maze, made_turns = _generated(variant)
             turns = turns or made_turns
         elif variant.maze is not None:
-            maze_file = resolve_maze(variant.maze, base)
+            maze_file = Path(os.path.normpath(resolve_maze(variant.maze, base)))
             maze = load_maze(maze_file)
         if variant.mirror:
             if maze is None:

@@ -27,7 +27,15 @@ KB, MB = 1 << 10, 1 << 20
 #: the largest file of each kind read (bytes). The course's biggest mission is 2 kB, its biggest maze
 #: 3 kB (a 300 x 300 grid maze is 0.5 MB and loads in 2 s), its biggest Gazebo world 75 kB; a
 #: 256 kB mission takes about 3 s to check. A run's JSON-lines log is about 1 kB per tick.
-LIMITS = {"mission": 256 * KB, "include": 256 * KB, "plugin": 1 * MB, "maze": 1 * MB, "world": 8 * MB, "log": 512 * MB}
+LIMITS = {
+    "mission": 256 * KB,
+    "include": 256 * KB,
+    "assignment": 256 * KB,
+    "plugin": 1 * MB,
+    "maze": 1 * MB,
+    "world": 8 * MB,
+    "log": 512 * MB,
+}
 
 
 def read_bytes(path: str | Path, what: str) -> bytes:

@@ -1,0 +1,169 @@
+"""``thymio-bt grade``: a class's submissions run in the assignment's worlds and scored.
+
+Exit codes: 0 every submission was graded (and, with ``--fail-under``, scored at least that); 1 one
+scored less, or could not be graded (stopped, or the grader's error); 2 a bad assignment or command
+line. A student's broken file is not an error of the grader: it is graded ``invalid``.
+
+Example::
+
+    >>> from click.testing import CliRunner
+    >>> from thymio_bt.cli import main
+    >>> result = CliRunner().invoke(main, ["grade", "assignments/course_part1_2.yaml", "nowhere/"])
+    >>> result.exit_code, result.output
+    (2, 'error: submission not found: nowhere (hint: give mission files or folders (subs/*))\\n')
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import click
+
+from thymio_bt.cli.app import fail, json_text, main, path_option
+from thymio_bt.errors import UserError
+from thymio_bt.outputs import Output
+from thymio_bt.run.interrupts import Interrupts
+
+
+@main.command()
+@click.argument("assignment", type=click.Path(path_type=Path))
+@click.argument("submissions", nargs=-1, required=True, type=click.Path(path_type=Path))
+@path_option("--out", help="Write the results JSON here (the contract of docs/grading.md).")
+@path_option("--csv", "csv_file", help="Write a gradebook CSV here: a row per student, a column per criterion.")
+@path_option("--junit", help="Write JUnit XML here: a testsuite per student, a testcase per criterion.")
+@path_option("--html", help="Write a static site into this folder: the class page and a page per student.")
+@click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
+@click.option("--dask", default=None, metavar="ADDRESS", help="Grade on a Dask cluster (needs thymio-bt[dask]).")
+@click.option(
+    "--fail-under",
+    type=click.FloatRange(0, 100_000),
+    default=None,
+    metavar="SCORE",
+    help="Exit 1 when a student scored less than this.",
+)
+def grade(
+    assignment: Path,
+    submissions: tuple[Path, ...],
+    out: Path | None,
+    csv_file: Path | None,
+    junit: Path | None,
+    html: Path | None,
+    workers: int | None,
+    dask: str | None,
+    fail_under: float | None,
+) -> None:
+    """Grade SUBMISSIONS (mission files, or a folder per student) on ASSIGNMENT (a YAML file)."""
+    import os
+
+    from thymio_bt.grade.grader import grade as run_grade
+    from thymio_bt.grade.reports import gradebook_csv, junit_xml, summary_table
+
+    try:
+        outputs = {
+            name: Output(path, option)
+            for name, path, option in (("out", out, "--out"), ("csv", csv_file, "--csv"), ("junit", junit, "--junit"))
+            if path is not None
+        }
+        site = _site_folder(html) if html is not None else None
+        executor = None
+        if dask:
+            from thymio_bt.cli.sweeps import _dask
+
+            executor = _dask(dask)
+        worlds = _worlds_folder(out, html)
+        with Interrupts() as interrupts, _Progress() as progress:
+            results = run_grade(
+                assignment,
+                submissions,
+                workers=workers or os.cpu_count() or 1,
+                worlds=worlds,
+                executor=executor,
+                progress=progress,
+                stop=lambda: interrupts.signal is not None,
+                started=progress.start,
+            )
+        if "out" in outputs:
+            outputs["out"].write_text(json_text(results))
+        if "csv" in outputs:
+            outputs["csv"].write_text(gradebook_csv(results))
+        if "junit" in outputs:
+            outputs["junit"].write_text(junit_xml(results))
+        if site is not None:
+            from thymio_bt.grade.site import write_site
+
+            write_site(results, site)
+    except UserError as exc:
+        fail(exc)
+    click.echo(summary_table(results), err=any(o.is_stdout for o in outputs.values()))
+    if interrupts.signal:
+        sys.exit(interrupts.exit_code)
+    students = results["students"]
+    below = fail_under is not None and any(s["score"] < fail_under - 1e-9 for s in students)
+    sys.exit(1 if below or any(s["status"] == "error" for s in students) else 0)
+
+
+def _site_folder(path: Path) -> Path:
+    """The ``--html`` folder: made if missing, refused if it is a file."""
+    if path.exists() and not path.is_dir():
+        raise UserError(f"--html {path}: is not a folder (hint: give a folder name, e.g. --html site/)")
+    if not path.parent.is_dir():
+        raise UserError(f"--html {path}: the folder {path.parent} does not exist (hint: mkdir -p {path.parent})")
+    path.mkdir(exist_ok=True)
+    return path
+
+
+def _worlds_folder(out: Path | None, html: Path | None) -> Path | None:
+    """Where generated mazes go: beside the results (so the reproduce commands name files that stay)."""
+    if html is not None:
+        return html / "worlds"
+    if out is not None and str(out) != "-":
+        return out.parent / f"{out.stem}_worlds"
+    return None
+
+
+class _Progress:
+    """Students done / total, runs per second and the time left, on one line of a terminal."""
+
+    def __init__(self) -> None:
+        self.enabled = sys.stderr.isatty()
+        self.students = 0
+        self.runs = 0
+        self.total_runs = 0
+        self.done: dict[str, int] = {}
+        self.wanted: dict[str, int] = {}
+        self.began = time.perf_counter()
+        self.shown = 0.0
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.enabled and self.shown:
+            click.echo("", err=True)
+
+    def start(self, runs_per_student: dict[str, int]) -> None:
+        """The grader is about to run: how many runs each student will make."""
+        self.wanted = dict(runs_per_student)
+        self.total_runs = sum(runs_per_student.values())
+        self.began = time.perf_counter()
+
+    def __call__(self, student: str, message: dict[str, Any]) -> None:
+        self.runs += 1
+        self.done[student] = self.done.get(student, 0) + 1
+        if self.done[student] == self.wanted.get(student):
+            self.students += 1
+        now = time.perf_counter()
+        if not self.enabled or now - self.shown < 0.2 and self.runs < self.total_runs:
+            return
+        self.shown = now
+        rate = self.runs / max(now - self.began, 1e-9)
+        left = (self.total_runs - self.runs) / rate if rate else 0.0
+        click.echo(
+            f"\rgraded {self.students}/{len(self.wanted)} students, {self.runs}/{self.total_runs} runs, "
+            f"{rate:.1f} runs/s, {left:.0f} s left ",
+            err=True,
+            nl=False,
+        )
