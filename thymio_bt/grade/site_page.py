@@ -70,7 +70,7 @@ tbody tr:hover { background: #f8fafc; }
 .messages { margin: 6px 0 0; padding-left: 1.2rem; }
 .messages li { margin: 4px 0; }
 .bars { background: var(--card); border: 1px solid var(--line); border-radius: 6px; padding: 8px 14px; }
-.bar-row { display: grid; grid-template-columns: minmax(180px, 2fr) 3fr minmax(150px, 1fr); gap: 12px;
+.bar-row { display: grid; grid-template-columns: minmax(200px, 2fr) 3fr minmax(230px, 1.2fr); gap: 12px;
   align-items: center; padding: 6px 4px; border-radius: 4px; }
 .bar-row.worst { background: var(--bad-bg); }
 #criteria td:first-child { min-width: 170px; }
