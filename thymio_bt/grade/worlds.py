@@ -134,3 +134,14 @@ def _generated(variant: Variant) -> tuple[Maze, str | None]:
             maze = path_maze(path)
             return maze.model_copy(update={"name": f"path_{spec.length}_seed{spec.seed}"}), turns
     raise ValueError(f"no corridor of {spec.length} cells with only {spec.turns} turns")
+
+
+def variant_mission(
+    mission_path: str | Path, variant: Variant, run_plugins: bool = True, base: Path | None = None
+) -> Mission:
+    """The mission at ``mission_path`` in ``variant``'s world (a made maze goes to a temporary
+    folder; ``base``: the folder the variant's maze file is relative to, the current one if None)."""
+    import tempfile
+
+    folder = Path(tempfile.mkdtemp(prefix="thymio-bt-world-"))
+    return World.of(variant, base or Path("."), folder).mission(mission_path, run_plugins)
