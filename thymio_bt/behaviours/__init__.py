@@ -19,6 +19,7 @@ from thymio_bt.behaviours.navigation import (
     TurnUntilClear,
     WaypointsDone,
 )
+from thymio_bt.behaviours.places import InRegion, OutsideMaze
 
 #: Every built-in robot behaviour, in the order ``thymio-bt behaviours`` lists them.
 BUILTIN: tuple[type[RobotBehaviour], ...] = (
@@ -46,6 +47,8 @@ BUILTIN: tuple[type[RobotBehaviour], ...] = (
     MoveCells,
     WallMapped,
     AtTarget,
+    OutsideMaze,
+    InRegion,
 )
 
 #: Every built-in composite and decorator.
