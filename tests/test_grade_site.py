@@ -16,6 +16,7 @@ import contextlib
 import fcntl
 import json
 import os
+import re
 import select
 import shutil
 import signal
@@ -145,6 +146,37 @@ def test_each_variant_is_drawn_with_its_walls_path_and_failing_moments(site):
     alice = next(p for p in written if p.name == "alice.html").read_text()
     assert alice.count('class="trajectory"') == 2 and '<g class="fail-mark">' not in alice
     assert "All 4 runs ended in SUCCESS" in alice
+
+
+def test_the_start_is_drawn_from_a_pose_a_text_or_a_spawn_name(tmp_path):
+    """The contract's {x, y, yaw}, "x,y,yaw" and the maze's spawn name (part1 is (0.1, 0.1, 0)) put
+    the start at the same place; without a start, the path's first sample stands for it."""
+    drawn = {}
+    for n, start in enumerate(({"x": 0.1, "y": 0.1, "yaw": 0.0}, "0.1,0.1,0", "part1", None, "nowhere")):
+        results = sample()
+        for variant in results["assignment"]["variants"]:
+            variant["start"] = start
+        written = write_site(results, tmp_path / f"site{n}")
+        alice = next(p for p in written if p.name == "alice.html").read_text()
+        drawn[str(start)] = re.findall(r"<title>start pose</title><circle cx=\"([\d.]+)\" cy=\"([\d.]+)\"", alice)
+    assert len(drawn["part1"]) == 2  # one per variant
+    assert drawn[str({"x": 0.1, "y": 0.1, "yaw": 0.0})] == drawn["0.1,0.1,0"] == drawn["part1"]
+    assert drawn["None"][0] == drawn["part1"][0]  # the course variant's path starts at part1
+    assert drawn["nowhere"] == drawn["None"]
+
+
+def test_seeds_that_miss_a_criterion_at_nearly_the_same_place_share_a_mark(tmp_path):
+    results = sample()
+    bob = results["students"][1]
+    moment = bob["runs"][1]["criteria"]["stops 5 cm from the wall"]["moment"]
+    moment["x"] += 0.02  # seed 1 stopped 2 cm further: still the same mark
+    written = write_site(results, tmp_path / "site")
+    page = next(p for p in written if p.name == "bob.html").read_text()
+    assert page.count('<g class="fail-mark">') == 1 + 3 and "(seeds 0, 1)" in page
+    moment["x"] += 0.05  # 7 cm further: a mark of its own
+    written = write_site(results, tmp_path / "site2")
+    page = next(p for p in written if p.name == "bob.html").read_text()
+    assert page.count('<g class="fail-mark">') == 2 + 3
 
 
 def test_an_invalid_students_page_says_why(site):
@@ -532,6 +564,56 @@ def test_every_page_loads_cleanly_in_chromium(browser, site, tmp_path, artefacts
         tab.close()
     for shot in shots:
         assert shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 10_000
+
+
+@pytest.mark.slow  # grading the class: 3-10 s
+def test_a_real_grading_of_the_example_class_loads_cleanly(browser, tmp_path):
+    """What ``thymio-bt grade --html`` writes for the example class (the grader's own results, not
+    the sample) passes the same browser check, with a page and a picture per variant for each student."""
+    site = tmp_path / "site"
+    done = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "thymio_bt",
+            "grade",
+            "assignments/course_part1_2.yaml",
+            *sorted(str(p.relative_to(ROOT)) for p in (ROOT / "examples" / "class").iterdir()),
+            "--html",
+            str(site),
+            "--out",
+            str(tmp_path / "results.json"),
+            "--workers",
+            "2",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode in (0, 1), done.stderr
+    results = json.loads((tmp_path / "results.json").read_text())
+    pages = sorted((site / "students").glob("*.html"))
+    assert len(pages) == len(results["students"]) >= 2
+    tab = browser.open((site / "index.html").as_uri())
+    assert tab.problems() == []
+    assert tab.evaluate("document.querySelectorAll('#students tbody tr').length") == len(results["students"])
+    tab.close()
+    variants = len(results["assignment"]["variants"])
+    for page, student in zip(pages, sorted(results["students"], key=lambda s: s["name"]), strict=True):
+        tab = browser.open(page.as_uri())
+        assert tab.problems() == [], page.name
+        dom = tab.evaluate(
+            "({svgs: document.querySelectorAll('svg.trajectory .walls').length,"
+            " criteria: document.querySelectorAll('#criteria tbody tr').length,"
+            " overflow: document.documentElement.scrollWidth > window.innerWidth})"
+        )
+        assert dom == {
+            "svgs": variants if student["runs"] else 0,
+            "criteria": len(student["criteria"]),
+            "overflow": False,
+        }, page.name
+        tab.close()
 
 
 def test_a_hostile_class_runs_nothing_in_chromium(browser, tmp_path):

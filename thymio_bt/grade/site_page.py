@@ -89,8 +89,11 @@ figure svg { display: block; }
 figcaption { font-size: 0.85rem; color: var(--muted); margin-top: 6px; min-width: 260px; }
 .legend { display: flex; flex-wrap: wrap; gap: 4px 14px; font-size: 0.8rem; color: var(--muted); margin-top: 4px; }
 .sw { display: inline-block; width: 12px; height: 12px; border-radius: 3px; vertical-align: -2px; margin-right: 4px; }
-.cmd { display: block; background: #1f2933; color: #f5f7fa; padding: 6px 10px; border-radius: 4px; margin-top: 4px;
+.cmd { display: block; background: #1f2933; color: #f5f7fa; padding: 5px 10px; border-radius: 4px;
   user-select: all; -webkit-user-select: all; cursor: text; }
+.cmd::before { content: "$ "; color: #9aa5b1; }
+tr.reproduce td { padding-top: 0; }
+tr.run td { border-bottom: none; }
 table.tree td { padding: 3px 10px; }
 table.tree td.node { white-space: nowrap; }
 table.tree .kind { color: var(--muted); font-size: 0.82rem; }

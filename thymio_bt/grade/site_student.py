@@ -172,7 +172,7 @@ def _failed_runs(student: dict[str, Any]) -> str:
             f'<tr class="run fail"><td>{esc(r.get("variant"))}</td><td class="num">{esc(r.get("seed"))}</td>'
             f"<td>{esc(status)}{reason}{node}</td><td>{esc(missed)}</td>"
             f'<td class="num">{fmt(r.get("sim_time"), 1)} s</td><td class="num">{fmt(r.get("collisions"))}</td></tr>'
-            f'<tr class="reproduce"><td colspan="6">replay it: '
+            f'<tr class="reproduce"><td colspan="6" title="replay this run">'
             f'<code class="cmd">{esc(r.get("reproduce"))}</code></td></tr>'
         )
     return (

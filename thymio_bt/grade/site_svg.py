@@ -32,6 +32,7 @@ WIDTH, HEIGHT = 560.0, 440.0  # the largest picture, px
 PAD = 14.0  # px around the view
 MARGIN = 0.12  # m of maze shown around where the robot went
 JUMP_SPEED = 0.5  # m/s: over twice a Thymio's top speed, so a respawn (or a teleport), not a path
+MERGE = 0.03  # m: one mark for the runs that missed a criterion this close to each other
 SCALE_BAR = 18.0  # px below the maze for the scale bar
 
 Point = tuple[float, float]
@@ -96,9 +97,10 @@ def _pose(value: Any) -> tuple[float, float, float | None] | None:
     return None if x is None or y is None else (x, y, num(pose.get("yaw")))
 
 
-def failure_marks(run: dict[str, Any]) -> list[tuple[float, float, str]]:
+def failure_marks(run: dict[str, Any]) -> list[tuple[float, float, str, str]]:
     """Where ``run`` went wrong: each failed criterion at its ``moment``; at the run's last pose, the
-    failed criteria without a moment and how the run ended if it did not succeed."""
+    failed criteria without a moment and how the run ended if it did not succeed. Each is
+    (x, y, what: a criterion's name or '' for the end, text)."""
     marks, at_end = [], []
     for name, verdict in as_dict(run.get("criteria")).items():
         verdict = as_dict(verdict)
@@ -110,7 +112,7 @@ def failure_marks(run: dict[str, Any]) -> list[tuple[float, float, str]]:
             at_end.append(str(name) + (f": {feedback}" if feedback else ""))
             continue
         t = fmt(as_dict(verdict.get("moment")).get("t"), 1)
-        marks.append((moment[0], moment[1], f"{name} at t = {t} s" + (f": {feedback}" if feedback else "")))
+        marks.append((moment[0], moment[1], str(name), f"{name} at t = {t} s" + (f": {feedback}" if feedback else "")))
     if run.get("status") not in (None, "SUCCESS"):
         why = " ".join(str(v) for v in (run.get("code"), run.get("reason")) if v)
         at_end.append(f"ended {run.get('status')}" + (f": {why}" if why else ""))
@@ -119,8 +121,31 @@ def failure_marks(run: dict[str, Any]) -> list[tuple[float, float, str]]:
     if last is None and points:
         last = (points[-1][1], points[-1][2], None)
     if at_end and last is not None:
-        marks.append((last[0], last[1], "at the end: " + "; ".join(at_end)))
+        marks.append((last[0], last[1], "", "at the end: " + "; ".join(at_end)))
     return marks
+
+
+def start_pose(value: Any, maze: Maze | None) -> tuple[float, float, float | None] | None:
+    """A variant's start: ``{x, y, yaw}``, ``"x,y,yaw"`` (metres, radians) or a spawn of the maze."""
+    if isinstance(value, str):
+        numbers = value.split(",")
+        if len(numbers) == 3:
+            try:
+                x, y, yaw = (float(n) for n in numbers)
+            except ValueError:
+                return None
+            return (x, y, yaw) if all(map(math.isfinite, (x, y, yaw))) else None
+        if maze is not None and value in maze.spawns:
+            pose = maze.spawn(value)
+            return (pose.x, pose.y, pose.yaw)
+        return None
+    return _pose(value)
+
+
+def _yaw(run: dict[str, Any], index: int) -> float | None:
+    """The heading of a run's trajectory sample ``index``, if it has one."""
+    sample = as_list(as_list(run.get("trajectory"))[index])
+    return num(sample[3]) if len(sample) > 3 else None
 
 
 class _View:
@@ -215,16 +240,20 @@ class Mark:
 
 
 def collect_marks(runs: list[dict[str, Any]], traced: dict[str, Any] | None) -> list[Mark]:
-    """The failure marks of ``runs``; runs that failed the same way at the same place share one."""
-    marks: dict[tuple[float, float, str], Mark] = {}
-    for run in runs:
-        for x, y, text in failure_marks(run):
-            key = (round(x, 3), round(y, 3), text)
-            if key not in marks:
-                marks[key] = Mark(len(marks) + 1, x, y, text)
-            marks[key].seeds.append(str(run.get("seed")))
-            marks[key].traced |= run is traced
-    return list(marks.values())
+    """The failure marks of ``runs``, the drawn run's first: runs (seeds) that missed the same
+    criterion within :data:`MERGE` of each other share one mark, which keeps the first one's text."""
+    marks: list[tuple[str, Mark]] = []
+    ordered = ([traced] if traced is not None else []) + [r for r in runs if r is not traced]
+    for run in ordered:
+        for x, y, what, text in failure_marks(run):
+            mark = next((m for w, m in marks if w == what and math.hypot(m.x - x, m.y - y) <= MERGE), None)
+            if mark is None:
+                mark = Mark(len(marks) + 1, x, y, text)
+                marks.append((what, mark))
+            if str(run.get("seed")) not in mark.seeds:
+                mark.seeds.append(str(run.get("seed")))
+            mark.traced |= run is traced
+    return [m for _, m in marks]
 
 
 def trajectory_svg(maze: Maze | None, variant: dict[str, Any], runs: list[dict[str, Any]]) -> tuple[str, list[Mark]]:
@@ -233,7 +262,9 @@ def trajectory_svg(maze: Maze | None, variant: dict[str, Any], runs: list[dict[s
     traced = next((r for r in runs if samples(r)), None)
     points = samples(traced) if traced is not None else []
     pieces = split_jumps(points)
-    start = _pose(variant.get("start"))
+    start = start_pose(variant.get("start"), maze) or (
+        (points[0][1], points[0][2], _yaw(traced, 0)) if traced is not None and points else None
+    )
     marks = collect_marks(runs, traced)
     seen = [(x, y) for piece in pieces for x, y in piece]
     seen += [(m.x, m.y) for m in marks] + ([start[:2]] if start else [])
@@ -268,7 +299,7 @@ def trajectory_svg(maze: Maze | None, variant: dict[str, Any], runs: list[dict[s
         end = _pose(traced.get("final_pose")) or ((points[-1][1], points[-1][2], None) if points else None)
         if end is not None:
             parts.append(_pose_mark(view, end, "#1f2933", f"final pose (seed {traced.get('seed')})"))
-    for mark in marks:
+    for mark in sorted(marks, key=lambda m: m.traced):  # the drawn run's marks on top
         title = f"{mark.number}. {mark.text} ({mark.seed_text})"
         parts.append(_cross(view, mark.x, mark.y, mark.colour, title, str(mark.number)))
     parts.append(_scale_bar(view))
