@@ -14,6 +14,7 @@ from __future__ import annotations
 import base64
 import contextlib
 import fcntl
+import html
 import json
 import os
 import re
@@ -107,12 +108,12 @@ def test_every_link_resolves_to_a_written_file_and_nothing_is_fetched(site, tmp_
 def test_the_class_page_shows_the_class(site):
     results, written = site
     text = " ".join(Page(written[0]).text)
-    html = written[0].read_text()
-    assert html.count('<tr class="student">') == 3
-    assert html.count('class="bar-row') == len(results["assignment"]["criteria"])
+    index = written[0].read_text()
+    assert index.count('<tr class="student">') == 3
+    assert index.count('class="bar-row') == len(results["assignment"]["criteria"])
     # stops, dead end and no collision are each missed by 1 of 2 graded students; fewest runs pass stops
-    assert html.count("bar-row worst") == 1
-    assert 'bar-row worst" data-criterion="stops 5 cm from the wall"' in html
+    assert index.count("bar-row worst") == 1
+    assert 'bar-row worst" data-criterion="stops 5 cm from the wall"' in index
     assert "Most missed: " in text and "6 / 10" in text  # mean of the graded students (10 and 2)
     assert "2 graded, 1 invalid, 0 error" in text
 
@@ -614,6 +615,8 @@ def test_a_real_grading_of_the_example_class_loads_cleanly(browser, tmp_path):
             "overflow": False,
         }, page.name
         tab.close()
+        text = page.read_text()
+        assert all(text.count(html.escape(m)) == 1 for m in student["messages"]), page.name  # said once
 
 
 def test_a_hostile_class_runs_nothing_in_chromium(browser, tmp_path):

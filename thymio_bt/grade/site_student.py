@@ -78,15 +78,19 @@ def _messages(student: dict[str, Any]) -> str:
 
 def _criteria(student: dict[str, Any]) -> str:
     rows = []
+    messages = {str(m) for m in as_list(student.get("messages"))}
     for c in as_list(student.get("criteria")):
         c = as_dict(c)
         verdict = "pass" if c.get("passed") is True else "fail"
         runs = f"{fmt(c.get('passed_runs'))} / {fmt(c.get('runs'))}" if num(c.get("runs")) else "–"
+        feedback = c.get("feedback")
+        if feedback is not None and str(feedback) in messages:  # said once, above the table
+            feedback = "not run: see why above"
         rows.append(
             f'<tr class="criterion {verdict}"><td>{esc(c.get("name"))}</td>'
             f'<td class="num">{fmt(c.get("earned"))} / {fmt(c.get("points"))}</td>'
             f'<td>{pass_badge(c.get("passed"))}</td><td class="num">{runs}</td>'
-            f"<td>{esc(c.get('feedback'))}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
+            f"<td>{esc(feedback)}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
         )
     if not rows:
         return '<h2>Criteria</h2><p class="muted">No criterion was judged.</p>'
