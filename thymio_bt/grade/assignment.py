@@ -92,6 +92,12 @@ class Variant(BaseModel):
     goal: GoalDisc | None = Field(None, description="where a `goal` criterion wants the robot to end")
     turns: str | None = Field(None, pattern=r"^[LR]*$", description="the turns a `turns` criterion wants, e.g. LLRL")
 
+    @field_validator("noise", mode="before")
+    @classmethod
+    def _noise(cls, value: Any) -> Any:
+        """YAML reads a bare ``off`` (and ``on``) as a boolean."""
+        return {False: "off", True: "realistic"}.get(value, value) if isinstance(value, bool) else value
+
     @field_validator("seeds")
     @classmethod
     def _seeds(cls, value: int | list[int]) -> int | list[int]:
@@ -217,6 +223,7 @@ class Limits(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     cpu: Duration = Field(20.0, gt=0, le=3600, description="CPU seconds per run")
+    wall: Duration | None = Field(None, gt=0, le=36000, description="wall-clock seconds per run (3 x cpu + 5 s)")
     memory: int = Field(1024, ge=64, le=65536, description="MiB of address space per submission's process")
 
 

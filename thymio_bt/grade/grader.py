@@ -120,8 +120,8 @@ def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
 
 
 def _limits(assignment: Assignment) -> Limits:
-    cpu = assignment.limits.cpu
-    return Limits(cpu=cpu, memory_mib=assignment.limits.memory, wall=3 * cpu + 5)
+    limits = assignment.limits
+    return Limits(cpu=limits.cpu, memory_mib=limits.memory, wall=limits.wall or 3 * limits.cpu + 5)
 
 
 def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -> Entry:

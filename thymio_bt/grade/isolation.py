@@ -58,19 +58,25 @@ def run_limited(limits: Limits, run: Callable[[], T]) -> T:
     """``run()`` with its CPU and wall-clock timers set (in a child process): :class:`RunLimit` when
     one fires."""
 
+    fired: list[str] = []
+
     def expired(signum: int, _frame: Any) -> None:
         what = "CPU" if signum == signal.SIGPROF else "wall-clock"
-        raise RunLimit(f"the run used more than its {what} time limit")
+        fired.append(f"the run used more than its {what} time limit")
+        raise RunLimit(fired[0])
 
     signal.signal(signal.SIGPROF, expired)
     signal.signal(signal.SIGALRM, expired)
     signal.setitimer(signal.ITIMER_PROF, limits.cpu)
     signal.setitimer(signal.ITIMER_REAL, limits.wall)
     try:
-        return run()
+        result = run()
     finally:
         signal.setitimer(signal.ITIMER_PROF, 0)
         signal.setitimer(signal.ITIMER_REAL, 0)
+    if fired:  # the run's own fault handling caught it (a node that raised): still a stopped run
+        raise RunLimit(fired[0])
+    return result
 
 
 @dataclass

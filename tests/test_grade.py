@@ -1,0 +1,277 @@
+"""thymio-bt grade: a class of submissions with known defects, each losing the right points; correct
+ones, however written, getting full marks; invalid files; submissions that hang, crash, exit or
+exhaust memory failing their own runs while the grade goes on."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from thymio_bt.cli import main
+from thymio_bt.errors import UserError
+from thymio_bt.grade.assignment import load_assignment
+from thymio_bt.grade.grader import grade
+
+ROOT = Path(__file__).resolve().parent.parent
+PART12 = ROOT / "assignments" / "course_part1_2.yaml"
+CLASS = ROOT / "examples" / "class"
+
+CORRECT_LOOP = (CLASS / "ada" / "part1_2.yaml").read_text()
+
+#: a correct submission written another way: the turn decided by ChooseTurn through the blackboard,
+#: part 2 as a retry of legs, a selector to end at the dead end
+CORRECT_OTHER = """
+name: other
+maze: two_parts_maze
+start: part1
+parameters: {gap: 5cm}
+tree:
+  sequence:
+    name: all
+    children:
+      - MoveUntilWall: {name: first wall, speed: 8cm/s, distance: $gap}
+      - DeleteEntity: {entity: thymio}
+      - SpawnEntity: {entity: thymio, pose: part2}
+      - repeat:
+          name: legs
+          until: IsDeadEnd
+          do:
+            sequence:
+              name: leg
+              children:
+                - parallel:
+                    name: go
+                    policy: success_on_all
+                    children:
+                      - MoveUntilWall: {speed: 12cm/s, distance: $gap, centre: true}
+                      - ChooseTurn: {}
+                - selector:
+                    name: done or turn
+                    children:
+                      - IsDeadEnd
+                      - sequence:
+                          name: turn
+                          children:
+                            - MoveUntilWall: {speed: 12cm/s, distance: 1.5cm}
+                            - TurnAngle: {angle: bb:turn_angle}
+"""
+
+
+def _class(tmp_path: Path, files: dict[str, str]) -> list[Path]:
+    folders = []
+    for name, text in files.items():
+        folder = tmp_path / "subs" / name
+        folder.mkdir(parents=True)
+        (folder / "part1_2.yaml").write_text(text)
+        folders.append(folder)
+    return folders
+
+
+def _by_name(results: dict) -> dict[str, dict]:
+    return {s["name"]: s for s in results["students"]}
+
+
+def _missed(student: dict) -> set[str]:
+    return {c["name"] for c in student["criteria"] if not c["passed"]}
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory: pytest.TempPathFactory) -> dict:
+    """The part 1-2 assignment graded on a class with known defects."""
+    tmp = tmp_path_factory.mktemp("class")
+    folders = _class(
+        tmp,
+        {
+            "correct_loop": CORRECT_LOOP,
+            "correct_other": CORRECT_OTHER,
+            "stops_7cm": CORRECT_LOOP.replace("speed: 10cm/s, distance: 5cm}", "speed: 10cm/s, distance: 7cm}"),
+            "wrong_respawn": CORRECT_LOOP.replace("pose: [0.5, 0.3, pi/2]", "pose: [0.5, 0.32, pi/2]"),
+            "wallfollow": (CLASS / "chen" / "part1_2.yaml").read_text(),
+            "blind": (CLASS / "bob" / "part1_2.yaml").read_text(),
+            "broken": "name: x\nmaze: two_parts_maze\nstart: part1\ntree:\n  Sequense: []\n",
+        },
+    )
+    (tmp / "subs" / "empty").mkdir()
+    return grade(PART12, [*folders, tmp / "subs" / "empty"], workers=2, worlds=tmp / "worlds")
+
+
+def test_correct_submissions_get_full_marks_however_written(graded):
+    students = _by_name(graded)
+    for name in ("correct_loop", "correct_other"):
+        assert students[name]["status"] == "graded"
+        assert students[name]["score"] == students[name]["max"] == 10, _missed(students[name])
+        assert all(c["runs"] == 12 for c in students[name]["criteria"])
+
+
+def test_each_defect_loses_its_points_with_feedback_and_place(graded):
+    students = _by_name(graded)
+    late = students["stops_7cm"]
+    assert _missed(late) == {"part 1 stops 5 cm from the wall"}  # part 2 still stops at 5 cm
+    assert late["score"] == 8
+    first = next(c for c in late["criteria"] if c["name"] == "part 1 stops 5 cm from the wall")
+    assert first["feedback"].startswith("stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm (variant course")
+    assert first["where"].endswith("stops_7cm/part1_2.yaml:11")  # the MoveUntilWall of part 1
+
+    respawn = students["wrong_respawn"]
+    assert "respawns at (0.5, 0.3, yaw pi/2)" in _missed(respawn)
+    spawn = next(c for c in respawn["criteria"] if c["name"] == "respawns at (0.5, 0.3, yaw pi/2)")
+    assert "spawned at (0.500, 0.320" in spawn["feedback"] and spawn["where"].endswith("part1_2.yaml:13")
+
+
+def test_a_forbidden_node_costs_the_penalty_and_is_named(graded):
+    student = _by_name(graded)["wallfollow"]
+    (finding,) = student["palette"]
+    assert finding["node"] == "WallFollow" and finding["points"] == 4
+    assert finding["where"].endswith("wallfollow/part1_2.yaml:13")
+    earned = sum(c["earned"] for c in student["criteria"])
+    assert student["score"] == max(0, earned - 4)
+
+
+def test_a_blind_odometry_solution_loses_the_worlds_it_was_not_written_for(graded):
+    blind = _by_name(graded)["blind"]
+    assert blind["score"] <= 2
+    per_variant: dict[str, set[bool]] = {}
+    for run in blind["runs"]:
+        per_variant.setdefault(run["variant"], set()).add(run["criteria"]["never touches a wall"]["passed"])
+    assert per_variant["course"] == {True}  # it works where it was measured...
+    assert per_variant["long_part1"] == per_variant["shifted_start"] == {False}  # ...and nowhere else
+
+
+def test_broken_and_empty_submissions_are_graded_invalid_with_their_messages(graded):
+    students = _by_name(graded)
+    broken, empty = students["broken"], students["empty"]
+    assert broken["status"] == empty["status"] == "invalid"
+    assert broken["score"] == 0 and "broken/part1_2.yaml:5:3" in broken["messages"][0]
+    assert "did you mean 'sequence'" in broken["messages"][0]
+    assert empty["messages"] == ["no part1_2.yaml, nor any mission file (.yaml or .xml) in empty"]
+
+
+def test_each_failed_run_carries_the_command_that_reproduces_it(graded):
+    late = _by_name(graded)["stops_7cm"]
+    run = next(r for r in late["runs"] if r["variant"] == "tall_part2")
+    assert run["reproduce"].startswith("thymio-bt run ") and "--seed" in run["reproduce"]
+    assert "--set robot=real" in run["reproduce"] and "part12_tall.yaml" in run["reproduce"]
+    assert sum("trajectory" in r for r in late["runs"]) == 4  # one picture per variant
+
+
+def test_coverage_names_every_node_and_those_never_ticked(graded):
+    coverage = _by_name(graded)["correct_loop"]["coverage"]
+    assert coverage["runs"] == 12
+    ticked = {n["path"]: n["ticks"] for n in coverage["nodes"]}
+    assert ticked["mission/part 1"] > 0 and not coverage["never_ticked"]
+
+
+def _plugin_class(tmp_path: Path, bodies: dict[str, str]) -> tuple[Path, list[Path]]:
+    """An assignment that allows plugins (one short world), and a submission per plugin body."""
+    assignment = tmp_path / "a.yaml"
+    assignment.write_text(
+        "name: plugins\nvariants:\n  - {name: course, maze: two_parts_maze, start: part1, seeds: 2, noise: off}\n"
+        "criteria:\n  - {name: ends well, points: 1, finishes: true}\n"
+        "palette: {plugins: true}\nlimits: {cpu: 1s, wall: 3s, memory: 1024}\n"
+    )
+    folders = []
+    for name, body in bodies.items():
+        folder = tmp_path / name
+        folder.mkdir()
+        (folder / "nodes.py").write_text(
+            "import os, sys\nfrom thymio_bt.behaviours import RobotBehaviour\n"
+            "class Bad(RobotBehaviour):\n    '''A node that misbehaves.'''\n"
+            f"    def step(self):\n        {body}\n        return self.succeed()\n"
+        )
+        (folder / "m.yaml").write_text(
+            "maze: two_parts_maze\nstart: part1\nplugins: [nodes.py]\ntree:\n  sequence:\n    children:\n"
+            "      - MoveUntilWall: {speed: 10cm/s, distance: 5cm}\n      - Bad\n"
+        )
+        folders.append(folder)
+    good = tmp_path / "good"
+    good.mkdir()
+    (good / "m.yaml").write_text("maze: two_parts_maze\nstart: part1\ntree:\n  MoveUntilWall: {distance: 5cm}\n")
+    return assignment, [*folders, good]
+
+
+def test_hanging_crashing_exiting_and_greedy_submissions_fail_their_own_runs(tmp_path):
+    assignment, folders = _plugin_class(
+        tmp_path,
+        {
+            "hangs": "while True: pass",
+            "sleeps": "import time; time.sleep(3600)",
+            "crashes": "os._exit(3)",
+            "exits": "sys.exit(0)",
+            "greedy": "x = bytearray(4 << 30)",
+        },
+    )
+    results = _by_name(grade(assignment, folders, workers=2))
+    reasons = {name: results[name]["runs"][0]["reason"] for name in ("hangs", "sleeps", "crashes", "exits", "greedy")}
+    assert reasons["hangs"] in (  # the CPU limit, unless a loaded machine gave it less than 1 s in 3
+        "the run used more than its CPU time limit",
+        "the run used more than its wall-clock time limit",
+    )
+    assert reasons["sleeps"] == "the run used more than its wall-clock time limit"
+    assert reasons["crashes"] == "the run ended its process (exit code 3: os._exit or a crash)"
+    assert "sys.exit" in reasons["exits"] or results["exits"]["runs"][0]["code"] == "EXCEPTION"
+    assert "memory" in reasons["greedy"] or "MemoryError" in reasons["greedy"]
+    for name in reasons:
+        assert results[name]["status"] == "graded" and len(results[name]["runs"]) == 2
+        assert results[name]["score"] == 0
+    assert results["good"]["score"] == 1  # the grade went on for everyone else
+
+
+def test_plugins_are_refused_where_the_assignment_forbids_them(tmp_path):
+    _, folders = _plugin_class(tmp_path, {"sneaky": "pass"})
+    results = _by_name(grade(PART12, folders[:1], workers=1))
+    student = results["sneaky"]
+    assert student["status"] == "invalid" and student["runs"] == []
+    assert "plugins are not allowed in this assignment (nodes.py)" in student["messages"][0]
+
+
+def test_the_command_writes_json_csv_and_valid_junit(tmp_path):
+    subs = tmp_path / "subs"
+    shutil.copytree(CLASS, subs)
+    out, csv, junit = tmp_path / "r.json", tmp_path / "g.csv", tmp_path / "j.xml"
+    result = CliRunner().invoke(
+        main,
+        [
+            "grade",
+            str(PART12),
+            *map(str, sorted(subs.iterdir())),
+            "--out",
+            str(out),
+            "--csv",
+            str(csv),
+            "--junit",
+            str(junit),
+            "--fail-under",
+            "5",
+        ],
+    )
+    assert result.exit_code == 1, result.output  # bob, chen and eve scored under 5
+    results = json.loads(out.read_text())
+    assert [s["name"] for s in results["students"]] == ["ada", "bob", "chen", "dana", "eve"]
+    assert csv.read_text().splitlines()[1].startswith("ada,graded,10,10,2,1,1,2,2,1,1")
+    root = ET.parse(junit).getroot()
+    assert root.tag == "testsuites" and len(root.findall("testsuite")) == 5
+    for suite in root.findall("testsuite"):
+        cases = suite.findall("testcase")
+        assert int(suite.get("tests")) == len(cases) == 7
+        assert int(suite.get("failures")) == sum(c.find("failure") is not None for c in cases)
+        assert int(suite.get("errors")) == sum(c.find("error") is not None for c in cases)
+    assert "most missed" in result.output
+
+
+def test_bad_assignments_are_user_errors_with_places(tmp_path):
+    bad = tmp_path / "a.yaml"
+    bad.write_text(
+        "name: a\nvariants:\n  - {name: v, maze: two_parts_maze}\ncriteria:\n"
+        "  - {name: c, points: 1, no_collision: true, variants: [w]}\n  - {name: d, points: 1}\n"
+    )
+    with pytest.raises(UserError) as err:
+        load_assignment(bad)
+    messages = [str(p) for p in err.value.problems]
+    assert any(m.startswith(f"{bad}:6:5: a criterion makes exactly one check, this one makes 0") for m in messages)
+    result = CliRunner().invoke(main, ["grade", str(bad), str(CLASS / "ada")])
+    assert result.exit_code == 2 and "Traceback" not in result.output
