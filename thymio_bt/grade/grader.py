@@ -7,12 +7,11 @@ the results (the ``results.json`` contract of docs/grading.md).
 
 Example::
 
-    >>> results = grade("assignments/course_part1_2.yaml", ["missions/maze_part1_2.yaml"], workers=1)
-    >>> student = results["students"][0]
-    >>> student["name"], student["status"], student["score"], student["max"]
-    ('maze_part1_2', 'graded', 10.0, 10.0)
-    >>> [p["node"] for p in student["palette"]], results["summary"]["runs"]
-    ([], 12)
+    >>> results = grade("assignments/course_part1_2.yaml", ["examples/class/ada", "examples/class/chen"])
+    >>> [(s["name"], s["status"], s["score"], s["max"]) for s in results["students"]]
+    [('ada', 'graded', 10.0, 10.0), ('chen', 'graded', 1.0, 10.0)]
+    >>> [p["message"] for p in results["students"][1]["palette"]], results["summary"]["runs"]
+    (['WallFollow is not allowed in this assignment'], 24)
 """
 
 from __future__ import annotations
