@@ -45,8 +45,8 @@ if TYPE_CHECKING:
     help="Import the missions' plugins to check their nodes' parameters too (runs their code).",
 )
 def validate(files: tuple[Path, ...], sets: tuple[str, ...], plugins: bool) -> None:
-    """Check mission FILES (and the mazes they name) or maze files without running anything
-    (not even the missions' plugins, unless --plugins)."""
+    """Check mission FILES (and the mazes they name), maze files or assignment files without running
+    anything (not even the missions' plugins, unless --plugins)."""
     bad = 0
     for path in files:
         try:
@@ -66,7 +66,26 @@ def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) ->
     data = None if path.suffix.lower() == ".xml" or micromouse else load_yaml(path)  # .xml: a BT.CPP mission
     if micromouse or isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
         return _check_maze(path, data)
+    if isinstance(data, dict) and "tree" not in data and "criteria" in data:
+        return _check_assignment(path)
     return _check_mission(path, overrides, plugins)
+
+
+def _check_assignment(path: Path) -> str:
+    """Validate an assignment file of ``thymio-bt grade``, its variants' worlds made."""
+    import tempfile
+
+    from thymio_bt.grade.assignment import load_assignment
+    from thymio_bt.grade.worlds import make_worlds
+
+    assignment = load_assignment(path)
+    with tempfile.TemporaryDirectory() as folder:
+        make_worlds(assignment, path, Path(folder))
+    runs = sum(len(v.seed_list) for v in assignment.variants)
+    return (
+        f"assignment: {len(assignment.variants)} variants ({runs} runs a submission), "
+        f"{len(assignment.criteria)} criteria, {assignment.max_points:g} points"
+    )
 
 
 def _check_maze(path: Path, data: Any) -> str:

@@ -30,7 +30,7 @@ from thymio_bt.grade.isolation import ForkPool, Limits
 from thymio_bt.grade.palette import Finding, check_palette
 from thymio_bt.grade.student import StudentTask, died_message, grade_runs
 from thymio_bt.grade.submissions import Submission, find_submissions
-from thymio_bt.grade.worlds import World
+from thymio_bt.grade.worlds import World, make_worlds
 
 #: called with (student, message) as each run ends, in the grader's process
 Progress = Callable[[str, dict[str, Any]], None]
@@ -68,7 +68,7 @@ def grade(
     path = Path(assignment_file)
     assignment = load_assignment(path)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
-    made = [World.of(v, path.parent, folder) for v in assignment.variants]
+    made = make_worlds(assignment, path, folder)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
     by_name = {e.submission.name: e for e in entries}

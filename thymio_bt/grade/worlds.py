@@ -25,7 +25,8 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
-from thymio_bt.grade.assignment import GoalDisc, Variant
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.grade.assignment import Assignment, GoalDisc, Variant
 from thymio_bt.maze import Maze
 from thymio_bt.maze.files import load_maze, resolve_maze
 from thymio_bt.maze.generate import contest_maze, mirrored, path_maze, perfect_maze, random_path, turns_along
@@ -81,6 +82,8 @@ class World:
             start = f"{start.x:.6g},{start.y:.6g},{start.yaw:.6g}"
         elif start is None and variant.generate is not None:
             start = "start"
+        if maze is not None and start is not None:
+            _check_start(variant.name, maze, start, variant.robot)
         noise = (
             {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()} if variant.noise == "realistic" else QUIET
         )
@@ -116,6 +119,27 @@ class World:
         return replace(mission, expect=None)
 
 
+def _check_start(name: str, maze: Maze, start: str, robot: str) -> None:
+    """A variant's start must be a spawn of its maze, or a pose where its robot can stand."""
+    from thymio_bt.inputs.units import UnitError, parse_pose
+    from thymio_bt.robot.interface import Pose
+    from thymio_bt.robot.model import robot_model
+    from thymio_bt.robot.placement import placement_problem
+
+    if start in maze.spawns:
+        pose = maze.spawns[start].pose()
+    else:
+        try:
+            pose = Pose(*parse_pose(start))
+        except UnitError:
+            raise UserError(
+                Problem(f"variant '{name}': its maze has no spawn '{start}'", hint=did_you_mean(start, maze.spawns))
+            ) from None
+    problem = placement_problem(maze, robot_model(robot), pose)
+    if problem:
+        raise UserError(Problem(f"variant '{name}': impossible start {start}: {problem}", hint="pick a free pose"))
+
+
 def _generated(variant: Variant) -> tuple[Maze, str | None]:
     """The variant's generated maze, and its turns when it is a corridor."""
     spec = variant.generate
@@ -145,3 +169,22 @@ def variant_mission(
 
     folder = Path(tempfile.mkdtemp(prefix="thymio-bt-world-"))
     return World.of(variant, base or Path("."), folder).mission(mission_path, run_plugins)
+
+
+def make_worlds(assignment: Assignment, path: Path, folder: Path) -> list[World]:
+    """Every variant's world (made mazes written into ``folder``); a variant that cannot be made
+    is a :class:`UserError` at its place in the assignment file ``path``."""
+    from thymio_bt.inputs.validation import locate
+    from thymio_bt.inputs.yamlio import load_yaml
+
+    worlds = []
+    for i, variant in enumerate(assignment.variants):
+        try:
+            worlds.append(World.of(variant, path.parent, folder))
+        except UserError as exc:
+            key = "start" if variant.start is not None else "maze"
+            line, column = locate(load_yaml(path, "assignment"), ["variants", i, key])
+            raise UserError(
+                [Problem(p.message, str(path), line, column, f"variants.{i}", p.hint) for p in exc.problems]
+            ) from None
+    return worlds
