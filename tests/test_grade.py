@@ -275,3 +275,44 @@ def test_bad_assignments_are_user_errors_with_places(tmp_path):
     assert any(m.startswith(f"{bad}:6:5: a criterion makes exactly one check, this one makes 0") for m in messages)
     result = CliRunner().invoke(main, ["grade", str(bad), str(CLASS / "ada")])
     assert result.exit_code == 2 and "Traceback" not in result.output
+
+
+def test_the_committed_assignment_schema_is_the_generated_one_and_accepts_the_shipped_assignments():
+    import jsonschema
+    import yaml
+
+    from thymio_bt.grade.assignment import assignment_schema
+
+    committed = json.loads((ROOT / "schema" / "assignment.schema.json").read_text())
+    assert committed == assignment_schema(), "run: thymio-bt schema --assignment -o schema/assignment.schema.json"
+    shipped = sorted((ROOT / "assignments").glob("*.yaml"))
+    assert [p.stem for p in shipped] == ["course_6x6", "course_bonus", "course_part1_2", "micromouse"]
+    for path in shipped:
+        jsonschema.validate(yaml.safe_load(path.read_text()), committed)
+    with pytest.raises(jsonschema.ValidationError):
+        jsonschema.validate({"name": "a", "variants": [{"name": "v", "mazee": "x"}], "criteria": []}, committed)
+
+
+def test_validate_checks_assignments_and_their_worlds(tmp_path):
+    result = CliRunner().invoke(main, ["validate", *map(str, sorted((ROOT / "assignments").glob("*.yaml")))])
+    assert result.exit_code == 0, result.output
+    assert "ok: " in result.output and "course_part1_2.yaml (assignment: 4 variants (12 runs a submission)" in (
+        result.output
+    )
+    bad = tmp_path / "a.yaml"
+    bad.write_text(
+        "name: a\nvariants:\n  - {name: v, maze: two_parts_maze, start: part3}\n"
+        "criteria:\n  - {name: c, points: 1, no_collision: true}\n"
+    )
+    result = CliRunner().invoke(main, ["validate", str(bad)])
+    assert result.exit_code == 2
+    assert f"{bad}:3:44: variant 'v': its maze has no spawn 'part3'" in result.output
+    assert "did you mean 'part2'?" in result.output
+
+
+def test_a_shipped_assignment_is_found_by_name():
+    from thymio_bt.grade.assignment import load_assignment
+
+    assert load_assignment("course_bonus").name == "course_bonus"
+    with pytest.raises(UserError, match="did you mean 'course_6x6'"):
+        load_assignment("course_6x7")

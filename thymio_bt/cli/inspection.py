@@ -354,12 +354,19 @@ def backends_command() -> None:
 @main.command()
 @path_option("--output", "-o", default=STDOUT, show_default=True, help="File to write (- = standard output).")
 @path_option("--mission", help="Include the behaviours of this mission's plugins (runs their code).")
-def schema(output: Path, mission: Path | None) -> None:
-    """Print the JSON Schema of mission files (for editors with yaml-language-server)."""
+@click.option("--assignment", is_flag=True, help="The schema of assignment files (thymio-bt grade) instead.")
+def schema(output: Path, mission: Path | None, assignment: bool) -> None:
+    """Print the JSON Schema of mission files, or of assignment files (for editors with
+    yaml-language-server)."""
     from thymio_bt.mission.schema import mission_schema
 
     try:
         out = Output(output, "--output")
+        if assignment:
+            from thymio_bt.grade.assignment import assignment_schema
+
+            out.write_text(json.dumps(assignment_schema(), indent=1) + "\n")
+            return
         out.write_text(json.dumps(mission_schema(_registry(mission)), indent=1) + "\n")
     except UserError as exc:
         fail(exc)

@@ -1,6 +1,7 @@
-"""The files shipped inside the package: the course's mazes, the example missions, the mission schema.
+"""The files shipped inside the package: the course's mazes, the example missions, the course's
+assignments (``thymio-bt grade``), the schemas.
 
-In a checkout, ``mazes``, ``missions`` and ``schema`` here are links to the top-level folders; a wheel
+In a checkout, ``mazes``, ``missions``, ``assignments`` and ``schema`` here are links to the top-level folders; a wheel
 carries copies. Either way they are found through :mod:`importlib.resources`, so ``maze:
 two_parts_maze`` and ``thymio-bt run maze_part1_2`` work from any folder.
 
@@ -18,4 +19,5 @@ from pathlib import Path
 #: the shipped maze files, missions and mission schema
 MAZES = Path(str(files(__name__) / "mazes"))
 MISSIONS = Path(str(files(__name__) / "missions"))
+ASSIGNMENTS = Path(str(files(__name__) / "assignments"))
 SCHEMA = Path(str(files(__name__) / "schema" / "mission.schema.json"))

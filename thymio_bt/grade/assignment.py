@@ -29,6 +29,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from thymio_bt.data import ASSIGNMENTS
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.validation import locate, validate
 from thymio_bt.inputs.yamlio import load_yaml
@@ -250,8 +251,51 @@ class Assignment(BaseModel):
         return next(v for v in self.variants if v.name == name)
 
 
+def assignment_schema() -> dict[str, Any]:
+    """The JSON Schema of assignment files (``thymio-bt schema --assignment``), for editors."""
+    schema = _loosened(Assignment.model_json_schema())
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "thymio-bt assignment"
+    noise = schema["$defs"]["Variant"]["properties"]["noise"]
+    schema["$defs"]["Variant"]["properties"]["noise"] = {"anyOf": [noise, {"type": "boolean"}]}
+    return schema
+
+
+def _loosened(node: Any) -> Any:
+    """The schema as the YAML is written: numbers also as text with units (``5cm``, ``pi/2``),
+    spawns also as ``[x, y, yaw]``."""
+    if isinstance(node, list):
+        return [_loosened(n) for n in node]
+    if not isinstance(node, dict):
+        return node
+    out = {k: _loosened(v) for k, v in node.items()}
+    if out.get("type") == "number":
+        return {"anyOf": [out, {"type": "string"}]}
+    if out.get("$ref") == "#/$defs/Spawn":
+        return {"anyOf": [out, {"type": "array", "minItems": 3, "maxItems": 3}]}
+    if "prefixItems" in out:
+        out["prefixItems"] = [{"anyOf": [{"type": "number"}, {"type": "string"}]} for _ in out["prefixItems"]]
+    return out
+
+
+def resolve_assignment(ref: str | Path) -> Path:
+    """An assignment by path, or by the name of a shipped one (``course_part1_2``)."""
+    path = Path(ref)
+    if path.exists() or path.suffix or len(path.parts) != 1:
+        return path
+    shipped = ASSIGNMENTS / f"{ref}.yaml"
+    if shipped.is_file():
+        return shipped
+    known = sorted(p.stem for p in ASSIGNMENTS.glob("*.yaml"))
+    raise UserError(
+        Problem(f"assignment not found: '{ref}'", hint=f"a file, or a shipped one: {did_you_mean(str(ref), known)}")
+    )
+
+
 def load_assignment(path: str | Path) -> Assignment:
-    """Read and check an assignment file; a :class:`UserError` with file:line for every problem."""
+    """Read and check an assignment file (or a shipped one, by name); a :class:`UserError` with
+    file:line for every problem."""
+    path = resolve_assignment(path)
     file = str(path)
     data = load_yaml(path, "assignment")
     assignment = validate(Assignment, data, file)

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.grade.assignment import Assignment, load_assignment
+from thymio_bt.grade.assignment import Assignment, load_assignment, resolve_assignment
 from thymio_bt.grade.isolation import ForkPool, Limits
 from thymio_bt.grade.palette import Finding, check_palette
 from thymio_bt.grade.student import StudentTask, died_message, grade_runs
@@ -65,7 +65,7 @@ def grade(
     students on a cluster instead of ``workers`` local processes. ``started`` is told how many
     runs each student will make, once the submissions are read; ``progress`` hears each run end."""
     began = time.perf_counter()
-    path = Path(assignment_file)
+    path = resolve_assignment(assignment_file)
     assignment = load_assignment(path)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
     made = make_worlds(assignment, path, folder)
