@@ -133,6 +133,14 @@ def _pacing(factor: float | None) -> float | None:
     help="The robot model: course (default), enki or real (see 'thymio-bt backends').",
 )
 @click.option(
+    "--coverage", is_flag=True, help="Count each node's ticks and results: the tree's coverage, in the report too."
+)
+@path_option(
+    "--coverage-tree",
+    metavar="FILE",
+    help="Draw the tree with its coverage (.dot; .svg or .png need Graphviz's dot); implies --coverage.",
+)
+@click.option(
     "--groot2",
     type=click.IntRange(1, 65534),
     is_flag=False,
@@ -161,10 +169,13 @@ def run(
     backend: str | None,
     backend_opts: tuple[str, ...],
     robot: str | None,
+    coverage: bool,
+    coverage_tree: Path | None,
     groot2: int | None,
 ) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     pictures = Pictures(plot, plot_signals, gif)
+    covered: CoverageRequest | None = None
     try:
         if view:
             from thymio_bt.viz.display import require_display
@@ -177,8 +188,10 @@ def run(
         if robot is not None:
             overrides[ROBOT_OPTION] = robot  # --set robot=NAME, its problems said at --robot
         report_out = _check_outputs(report, pictures, log)
+        if coverage or coverage_tree is not None:
+            covered = CoverageRequest.checked(coverage_tree)
         spec = load_mission(mission, overrides, maze=maze, start=start)
-        runner = _prepare(spec, seed, backend, backend_opts)
+        runner = _prepare(spec, seed, backend, backend_opts, node_stats=covered is not None)
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
         hooks.attach(
             runner,
@@ -190,13 +203,22 @@ def run(
             groot2=groot2,
         )
         result, interrupts = hooks.watch(runner, realtime)
+        if covered is not None:
+            from thymio_bt.mission.tree_rules import condition_names
+            from thymio_bt.run.coverage import Coverage
+
+            covered.done(condition_names(spec.registry), Coverage.of(spec.tree).add(result.node_stats).to_json())
         if report_out is not None:
-            report_out.write_text(json_text(result.report()))
+            data = result.report()
+            if covered is not None:
+                data["coverage"] = covered.data  # a key of its own, after the report's: only when asked
+            report_out.write_text(json_text(data))
         if hooks.recorder is not None:
             pictures.draw(hooks.recorder.finish(result), 4.0 if speedup is None else speedup, quiet)
     except UserError as exc:
         fail(exc)
-    _conclude(runner, result, interrupts, hooks.window, quiet, err=STDOUT in (str(report), str(log)))
+    err = STDOUT in (str(report), str(log))
+    _conclude(runner, result, interrupts, hooks.window, quiet, err, covered.text if covered and not quiet else None)
 
 
 def _check_outputs(report: Path | None, pictures: Pictures, log: Path | None) -> Output | None:
@@ -222,13 +244,16 @@ def backend_for(spec: Mission, seed: int | None, name: str | None, opts: tuple[s
     return kind.create(spec, spec.seed if seed is None else seed, options)
 
 
-def _prepare(spec: Mission, seed: int | None, backend: str | None, backend_opts: tuple[str, ...]) -> Run:
-    """The run of ``spec`` on its backend; the backend is released if the run cannot be prepared."""
+def _prepare(
+    spec: Mission, seed: int | None, backend: str | None, backend_opts: tuple[str, ...], node_stats: bool = False
+) -> Run:
+    """The run of ``spec`` on its backend (its nodes counting their ticks when ``node_stats``); the
+    backend is released if the run cannot be prepared."""
     from thymio_bt.run.runner import Run
 
     device = backend_for(spec, seed, backend, backend_opts)
     try:
-        return Run(spec, seed, backend=device)
+        return Run(spec, seed, node_stats=node_stats, backend=device)
     except BaseException:
         device.close()  # the run never started: release the robot now
         raise
@@ -297,12 +322,20 @@ class _Hooks:
 
 
 def _conclude(
-    runner: Run, result: RunResult, interrupts: Interrupts, window: LiveView | None, quiet: bool, err: bool
+    runner: Run,
+    result: RunResult,
+    interrupts: Interrupts,
+    window: LiveView | None,
+    quiet: bool,
+    err: bool,
+    coverage: str | None = None,
 ) -> NoReturn:
-    """Print the summary (on stderr when ``err``: stdout carries the report or log), show the window's
-    last frame, and exit with the run's code."""
+    """Print the summary (on stderr when ``err``: stdout carries the report or log) and the tree's
+    ``coverage`` when there is one, show the window's last frame, and exit with the run's code."""
     if not quiet:
         _summary(result, err=err)
+        if coverage:
+            click.echo(coverage, err=err)
         if result.status != "SUCCESS":
             from thymio_bt.viz.terminal import failing_tree
 
@@ -317,6 +350,39 @@ def _conclude(
     code = 0 if result.status == "SUCCESS" else 1
     end_despite_threads(code)  # a plugin's thread left running must not keep the process alive
     sys.exit(code)
+
+
+class CoverageRequest:
+    """What ``--coverage`` and ``--coverage-tree FILE`` ask of ``run`` and ``sweep``: the coverage
+    printed as a tree after the summary (:attr:`text`) and drawn to the file when one is named."""
+
+    def __init__(self, out: Output | None, fmt: str) -> None:
+        self.out, self.fmt = out, fmt
+        #: the coverage JSON and its tree as text, once :meth:`done`
+        self.data: dict[str, Any] = {}
+        self.text: str | None = None
+
+    @classmethod
+    def checked(cls, tree: Path | None) -> CoverageRequest:
+        """The request, its file (``tree``) checked before anything runs: writable, a known suffix."""
+        if tree is None:
+            return cls(None, "")
+        fmt = tree.suffix.lower().lstrip(".")
+        if fmt not in ("dot", "svg", "png"):
+            raise UserError(
+                f"--coverage-tree {tree}: cannot tell the format from '{tree.suffix or 'no extension'}' "
+                "(hint: end the name with .dot, .svg or .png)"
+            )
+        return cls(Output(tree, "--coverage-tree"), fmt)
+
+    def done(self, conditions: set[str], data: dict[str, Any]) -> None:
+        """Keep the coverage JSON ``data`` and its text (``conditions``: the names of the nodes to show
+        as true and false); draw it to the file."""
+        from thymio_bt.viz.terminal import coverage_dot, coverage_text, write_graph
+
+        self.data, self.text = data, coverage_text(data, conditions)
+        if self.out is not None:
+            write_graph(coverage_dot(data, conditions), self.out, self.fmt, "--coverage-tree coverage.dot")
 
 
 class _Progress:

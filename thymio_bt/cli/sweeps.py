@@ -63,6 +63,14 @@ T = TypeVar("T")
     metavar="NAME=V1,V2,...",
     help="Sweep every combination of these settings, e.g. --matrix robot=course,enki,real.",
 )
+@click.option(
+    "--coverage", is_flag=True, help="Count each node's ticks and results over the runs: the tree's coverage."
+)
+@path_option(
+    "--coverage-tree",
+    metavar="FILE",
+    help="Draw the tree with its coverage (.dot; .svg or .png need Graphviz's dot); implies --coverage.",
+)
 def sweep(
     mission: Path,
     runs: int,
@@ -74,12 +82,20 @@ def sweep(
     workers: int | None,
     dask: str | None,
     matrix: tuple[str, ...],
+    coverage: bool,
+    coverage_tree: Path | None,
 ) -> None:
     """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
+    from thymio_bt.cli.running import CoverageRequest
     from thymio_bt.run.sweep import sweep as run_sweep
 
+    covered: CoverageRequest | None = None
     try:
         sweep_out = Output(out, "--out") if out is not None else None
+        if coverage or coverage_tree is not None:
+            if matrix:
+                raise UserError("--coverage is for one sweep, not a --matrix (hint: sweep one cell with --set)")
+            covered = CoverageRequest.checked(coverage_tree)
         request = _Request(mission, runs, seed_start, sets, maze, start, _dask(dask) if dask else None, workers)
         if matrix:
             _matrix(request, sweep_out, matrix)
@@ -87,18 +103,36 @@ def sweep(
         result, interrupts = request.execute(
             runs,
             f"{mission.name}: {runs} runs",
-            lambda overrides, **how: run_sweep(mission, runs, seed_start, overrides, request.maze_ref, start, **how),
+            lambda overrides, **how: run_sweep(
+                mission, runs, seed_start, overrides, request.maze_ref, start, coverage=covered is not None, **how
+            ),
         )
         data = result.to_json()
+        if covered is not None and result.coverage is not None:
+            covered.done(_conditions(request), result.coverage)
         if sweep_out is not None:
             sweep_out.write_text(json_text(data))
     except UserError as exc:
         fail(exc)
-    _sweep_table(data, err=sweep_out is not None and sweep_out.is_stdout)
+    err = sweep_out is not None and sweep_out.is_stdout
+    _sweep_table(data, err=err)
+    if covered is not None and covered.text:
+        click.echo(covered.text, err=err)
     if interrupts.signal:
         _exit(interrupts.exit_code)
     # a worker died, or a run broke (its code raised): the sweep did not complete its measurement
     _exit(1 if data["interrupted"] or data["faulted"] else 0)
+
+
+def _conditions(request: _Request) -> set[str]:
+    """The names of the conditions the sweep's mission can use (its plugins read, not run again)."""
+    from thymio_bt.mission import load_mission
+    from thymio_bt.mission.tree_rules import condition_names
+
+    spec = load_mission(
+        request.mission, parse_overrides(request.sets), request.maze_ref, request.start, run_plugins=False
+    )
+    return condition_names(spec.registry)
 
 
 def _exit(code: int) -> None:

@@ -37,6 +37,7 @@ from thymio_bt.errors import Problem, UserError
 from thymio_bt.mission import Mission, build_tree
 from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
+from thymio_bt.run.coverage import NodeStats
 from thymio_bt.run.interrupts import Interrupted, Interrupts
 from thymio_bt.run.phases import phases
 from thymio_bt.run.result import Ending, EndKind, RunResult, Verdict, failing_branch, learnt_map
@@ -114,7 +115,10 @@ class Run:
         py_trees.blackboard.Blackboard.clear()
         self.root = self._build(substitutions)
         self.substituted = bool(substitutions)
+        #: per-node statistics, kept when ``node_stats`` (every node of the tree counts its ticks)
         self.stats = NodeStats(self.period) if node_stats else None
+        if self.stats is not None:
+            self.stats.attach(self.root, self.mission.tree)
         self.ticks = 0
         self._final_tree: str | None = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
@@ -199,14 +203,10 @@ class Run:
         return Ending(EndKind.INTERRUPTED, "INTERRUPTED", reason, failed_path=where, forced=True)
 
     def _tick_tree(self) -> None:
-        """One tick of the tree, through the node statistics' visitor when they are kept."""
+        """One tick of the tree (its nodes count their own ticks when node statistics are kept)."""
         # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
         # every tick for "full" visitors, which cost ~15 % of a run here and we have none
-        if self.stats is None:
-            tick(self.root)  # no visitor: the direct tick, without generators
-        else:
-            for node in self.root.tick():
-                self.stats.run(node)
+        tick(self.root)  # the direct tick, without generators where the node kinds allow it
         self.ticks += 1
 
     def _after_tick(self, on_tick: TickHook | None, interrupts: Interrupts) -> Ending | None:
@@ -365,29 +365,6 @@ class Run:
         pose = self.backend.true_pose()
         if pose is not None:
             self.trajectory.append((self.backend.time(), pose.x, pose.y, pose.yaw))
-
-
-class NodeStats(py_trees.visitors.VisitorBase):
-    """Per-node statistics (like BehaviorTree.CPP's TreeObserver): ticks, successes, failures, and
-    simulated time spent RUNNING, keyed by the node's path."""
-
-    def __init__(self, period: float) -> None:
-        super().__init__(full=False)
-        self.period = period
-        self.table: dict[str, dict[str, float]] = {}
-
-    def run(self, behaviour: Behaviour) -> None:
-        """Count one tick of ``behaviour`` (py_trees calls a visitor with each node its tick passed)."""
-        row = self.table.setdefault(
-            node_path(behaviour), {"ticks": 0, "successes": 0, "failures": 0, "running_time": 0.0}
-        )
-        row["ticks"] += 1
-        if behaviour.status == Status.SUCCESS:
-            row["successes"] += 1
-        elif behaviour.status == Status.FAILURE:
-            row["failures"] += 1
-        elif behaviour.status == Status.RUNNING:
-            row["running_time"] = round(row["running_time"] + self.period, 9)
 
 
 def _running_node(exc: BaseException) -> Behaviour | None:

@@ -47,6 +47,8 @@ class Job:
     #: a digest of every file the mission is read from and of the settings: the workers' cache key, so
     #: a file edited between two sweeps (same path) is read again by long-lived (Ray, Dask) workers
     key: str = ""
+    #: whether the run's tree coverage comes back with its summary (:mod:`thymio_bt.run.coverage`)
+    coverage: bool = False
 
 
 #: a worker's missions, by :attr:`Job.key` (or, for a job made without one, by what it names)
@@ -62,9 +64,11 @@ def content_key(sources: Iterable[Path], *settings: Any) -> str:
 
 
 def run_job(job: Job) -> dict[str, Any]:
-    """Run one job and summarise it (the function executors map); missions are loaded once per worker."""
+    """Run one job and summarise it (the function executors map); missions are loaded once per worker.
+    With :attr:`Job.coverage`, the summary has the run's ``coverage`` JSON too."""
     from thymio_bt.behaviours.base import describe
     from thymio_bt.mission import load_mission
+    from thymio_bt.run.coverage import Coverage
     from thymio_bt.run.runner import Run
 
     key: str | tuple[Any, ...] = job.key or (job.mission, job.overrides, job.maze, job.start)
@@ -72,7 +76,7 @@ def run_job(job: Job) -> dict[str, Any]:
     if mission is None:
         mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
     try:
-        result = Run(mission, job.seed).run()
+        result = Run(mission, job.seed, node_stats=job.coverage).run()
     except Exception as exc:  # that run fails, the sweep goes on and reports it
         return {
             "seed": job.seed,
@@ -105,6 +109,7 @@ def run_job(job: Job) -> dict[str, Any]:
         "collisions": result.collisions,
         "first_stop_error": None if not stops else round(stops[0], 6),
         "wall_time": result.wall_time,
+        **({"coverage": Coverage.of(mission.tree).add(result.node_stats).to_json()} if job.coverage else {}),
     }
 
 
@@ -205,6 +210,8 @@ class SweepResult:
     interrupted: str | None = None
     #: the ``thymio-bt run`` arguments that reproduce one run, but its ``--seed``
     command: tuple[str, ...] = ()
+    #: the tree coverage merged over the runs (:meth:`thymio_bt.run.coverage.Coverage.to_json`), when asked for
+    coverage: dict[str, Any] | None = None
 
     def reproduce(self, seed: int) -> str:
         """The shell command that runs the sweep's run of ``seed`` again, noise settings included."""
@@ -262,6 +269,7 @@ class SweepResult:
                 | ({} if r["status"] == "SUCCESS" else {"reproduce": self.reproduce(r["seed"])})
                 for r in self.results
             ],
+            **({} if self.coverage is None else {"coverage": self.coverage}),
         }
 
 
@@ -275,13 +283,16 @@ def sweep(
     executor: Executor | None = None,
     progress: Callable[[dict[str, Any]], None] | None = None,
     interrupts: Interrupts | None = None,
+    coverage: bool = False,
 ) -> SweepResult:
     """Run ``mission`` ``runs`` times with seeds ``seed_start``... and the realistic noise models on
     (``overrides`` such as ``noise.wheel=0`` change them). A signal noted in ``interrupts`` ends it
-    early with the runs completed so far."""
+    early with the runs completed so far. With ``coverage``, the result has the tree coverage of the
+    runs, merged as they come in."""
     import time
 
     from thymio_bt.mission import load_mission
+    from thymio_bt.run.coverage import Coverage
 
     interrupts = interrupts or Interrupts()
     settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
@@ -289,13 +300,20 @@ def sweep(
     spec = load_mission(mission, settings, maze=maze, start=start)  # fail fast, in this process
     overrides_key = tuple(sorted(settings.items()))
     key = content_key(spec.sources, overrides_key, maze, start)
-    jobs = [Job(str(mission), seed, overrides_key, maze, start, key) for seed in range(seed_start, seed_start + runs)]
+    jobs = [
+        Job(str(mission), seed, overrides_key, maze, start, key, coverage)
+        for seed in range(seed_start, seed_start + runs)
+    ]
+    merged = Coverage.of(spec.tree) if coverage else None
     executor = executor or LocalPool(interrupts=interrupts)
     results = []
     began = time.perf_counter()
     stopped = None
     try:
         for summary in executor.imap_unordered(run_job, jobs):
+            ran = summary.pop("coverage", None)
+            if merged is not None and ran is not None:
+                merged.merge(ran)
             results.append(summary)
             if progress is not None:
                 progress(summary)
@@ -321,6 +339,7 @@ def sweep(
         requested=runs,
         interrupted=interrupts.name or stopped,
         command=command,
+        coverage=None if merged is None else merged.to_json(),
     )
 
 

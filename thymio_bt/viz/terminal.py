@@ -1,5 +1,6 @@
-"""The tree in the terminal: live statuses while a run goes, the failing branch after it,
-and exports to Graphviz (.dot always; .svg/.png when Graphviz's ``dot`` program is installed).
+"""The tree in the terminal: live statuses while a run goes, the failing branch after it, its
+coverage over runs (:mod:`thymio_bt.run.coverage`), and exports to Graphviz (.dot always; .svg/.png
+when Graphviz's ``dot`` program is installed), with the coverage drawn on it when given.
 
 Example:
 
@@ -8,6 +9,16 @@ Example:
     {-} side
         --> MoveDistance
         --> TurnAngle
+>>> node = {"path": "f", "name": "f", "kind": "selector", "behaviour": None, "where": "m.yaml:3", "depth": 0,
+...         "ticks": 9, "success": 1, "failure": 0, "running": 8, "ended_by": {"f/go": 1}}
+>>> check = {**node, "path": "f/near", "name": "near", "kind": "behaviour", "behaviour": "WallAhead",
+...          "depth": 1, "running": 0, "success": 0, "failure": 9, "ended_by": {}}
+>>> go = {**check, "path": "f/go", "name": "go", "behaviour": "MoveDistance", "success": 1, "failure": 0, "running": 8}
+>>> print(coverage_text({"runs": 1, "nodes": [node, check, go]}, conditions={"WallAhead"}))
+tree coverage over 1 run: 3 of 3 nodes ticked
+{o} f          9 ticks: success 1, failure 0, running 8; ended by go x1
+    --> near   9 ticks: true 0, false 9 (never true)
+    --> go     9 ticks: success 1, failure 0, running 8
 """
 
 from __future__ import annotations
@@ -15,6 +26,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
+from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -70,17 +82,29 @@ def tree_text(mission_path: Path, run_plugins: bool = False) -> str:
     return py_trees.display.unicode_tree(_build(mission_path, run_plugins))
 
 
-def export_tree(mission_path: Path, out: Output, fmt: str, run_plugins: bool = False) -> None:
-    """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``."""
-    source = py_trees.display.dot_tree(_build(mission_path, run_plugins)).to_string()
+def export_tree(
+    mission_path: Path, out: Output, fmt: str, run_plugins: bool = False, coverage: Mapping[str, Any] | None = None
+) -> None:
+    """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``;
+    with ``coverage`` (a coverage JSON of this mission), the tree drawn with its counts."""
+    source = (
+        py_trees.display.dot_tree(_build(mission_path, run_plugins)).to_string()
+        if coverage is None
+        else coverage_dot(coverage)
+    )
+    write_graph(source, out, fmt, f"thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot")
+
+
+def write_graph(source: str, out: Output, fmt: str, instead: str) -> None:
+    """Write the Graphviz ``source`` to ``out``: as it is for ``fmt`` dot, else drawn by Graphviz's
+    ``dot`` (``instead``: the command that writes the .dot, for the hint when it is not installed)."""
     if fmt == "dot":
         out.write_text(source)
         return
     program = shutil.which("dot")
     if program is None:
         raise UserError(
-            f"a .{fmt} needs Graphviz's 'dot' program (hint: apt-get install graphviz, "
-            f"or write the .dot: thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot)"
+            f"a .{fmt} needs Graphviz's 'dot' program (hint: apt-get install graphviz, or write the .dot: {instead})"
         )
     if out.is_stdout:
         sys.stdout.buffer.write(
@@ -89,3 +113,112 @@ def export_tree(mission_path: Path, out: Output, fmt: str, run_plugins: bool = F
         return
     with out.staged() as tmp:
         subprocess.run([program, f"-T{fmt}", "-o", str(tmp)], input=source.encode(), check=True)
+
+
+#: how each node kind is drawn in a terminal (py_trees' symbols: with memory in braces)
+_SYMBOLS = {"sequence": "{-}", "reactive_sequence": "[-]", "selector": "{o}", "reactive_selector": "[o]"}
+
+
+def _symbol(kind: str) -> str:
+    """The terminal symbol of a node ``kind`` (a BT.CPP kind by its family)."""
+    if kind in _SYMBOLS:
+        return _SYMBOLS[kind]
+    if kind == "behaviour":
+        return "-->"
+    if "parallel" in kind:
+        return "/_/"
+    if "sequence" in kind or "fallback" in kind:
+        family = "-" if "sequence" in kind else "o"
+        return f"[{family}]" if "reactive" in kind else f"{{{family}}}"
+    return "-^-"
+
+
+def _counts(node: Mapping[str, Any], conditions: Collection[str]) -> str:
+    """What a node's coverage says: its ticks and results, or that it never ran."""
+    if not node["ticks"]:
+        return "never ticked"
+    ticks = f"{node['ticks']} tick{'s' * (node['ticks'] != 1)}"
+    if node["behaviour"] in conditions:
+        never = " (never true)" if not node["success"] else " (never false)" if not node["failure"] else ""
+        return f"{ticks}: true {node['success']}, false {node['failure']}{never}"
+    text = f"{ticks}: success {node['success']}, failure {node['failure']}, running {node['running']}"
+    if node["ended_by"]:
+        enders = ", ".join(f"{path.rpartition('/')[2]} x{n}" for path, n in node["ended_by"].items())
+        text += f"; ended by {enders}"
+    return text
+
+
+def coverage_text(coverage: Mapping[str, Any], conditions: Collection[str] = ()) -> str:
+    """The tree with each node's coverage (``run --coverage``): ticks and results (``conditions``, the
+    behaviour names of conditions, as true and false), the child that ended each composite, and
+    the nodes that never ran."""
+    nodes = coverage["nodes"]
+    runs = coverage["runs"]
+    ticked = sum(1 for n in nodes if n["ticks"])
+    lines = [f"tree coverage over {runs} run{'s' * (runs != 1)}: {ticked} of {len(nodes)} nodes ticked"]
+    left = ["    " * n["depth"] + f"{_symbol(n['kind'])} {n['name']}" for n in nodes]
+    width = min(max((len(text) for text in left), default=0), 60)
+    for text, node in zip(left, nodes, strict=True):
+        lines.append(f"{text.ljust(width)}   {_counts(node, conditions)}")
+    return "\n".join(lines)
+
+
+#: how each node family is drawn in a Graphviz picture (shape, fill when ticked), like py_trees' dot
+_DOT_LOOK = {
+    "sequence": ("box", "#ff9900"),
+    "selector": ("octagon", "#00ffff"),
+    "parallel": ("parallelogram", "#ffd700"),
+    "decorator": ("ellipse", "#f8f8ff"),
+    "behaviour": ("ellipse", "#d3d3d3"),
+}
+
+
+def _family(kind: str) -> str:
+    """A node kind's family for drawing: sequence, selector, parallel, decorator or behaviour."""
+    symbol = _symbol(kind)
+    return {"-->": "behaviour", "/_/": "parallel", "-^-": "decorator"}.get(
+        symbol, "sequence" if "-" in symbol else "selector"
+    )
+
+
+def _quoted(text: str) -> str:
+    """``text`` as a Graphviz quoted string (lines joined by ``\\n``)."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+
+
+def coverage_dot(coverage: Mapping[str, Any], conditions: Collection[str] = ()) -> str:
+    """The tree as Graphviz .dot text with each node's coverage: its counts under its name, the nodes
+    that never ran dashed and grey, each edge labelled with how often that child ended its parent.
+
+    >>> node = {"path": "s", "name": "s", "kind": "sequence", "behaviour": None, "where": "m.yaml:3", "depth": 0,
+    ...         "ticks": 0, "success": 0, "failure": 0, "running": 0, "ended_by": {}}
+    >>> print(coverage_dot({"runs": 1, "nodes": [node]}))  # doctest: +NORMALIZE_WHITESPACE
+    digraph coverage {
+    graph [ordering=out, fontname="sans"];
+    node [fontname="sans", fontsize=10];
+    n0 [label="s\\nsequence\\nnever ticked", shape=box, style=dashed, color=grey60, fontcolor=grey45];
+    }
+    """
+    nodes = coverage["nodes"]
+    lines = ["digraph coverage {", 'graph [ordering=out, fontname="sans"];', 'node [fontname="sans", fontsize=10];']
+    stack: list[tuple[int, Mapping[str, Any]]] = []  # the ancestors of the node being drawn
+    for i, node in enumerate(nodes):
+        shape, fill = _DOT_LOOK[_family(node["kind"])]
+        label = _quoted(f"{node['name']}\n{node['behaviour'] or node['kind']}\n{_counts(node, conditions)}")
+        if node["ticks"]:
+            look = f'style=filled, fillcolor="{fill}"'
+            if node["behaviour"] in conditions and not node["success"]:
+                look += ", color=red, penwidth=2"
+        else:
+            look = "style=dashed, color=grey60, fontcolor=grey45"
+        lines.append(f"n{i} [label={label}, shape={shape}, {look}];")
+        while stack and nodes[stack[-1][0]]["depth"] >= node["depth"]:
+            stack.pop()
+        if stack:
+            parent, data = stack[-1]
+            ended = data["ended_by"].get(node["path"])
+            edge = f" [label={_quoted(f'ended it x{ended}')}]" if ended else ""
+            lines.append(f"n{parent} -> n{i}{edge};")
+        stack.append((i, node))
+    lines.append("}")
+    return "\n".join(lines) + "\n"

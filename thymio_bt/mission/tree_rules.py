@@ -1,0 +1,342 @@
+"""The structural rules of the teaching lint (:mod:`thymio_bt.mission.lint`): what each node of a
+tree can end with, and what that makes of its siblings and of the loops above it: ``unreachable``,
+``reactive-restart`` and ``forever``; and what a finding is.
+
+A node can end with S (SUCCESS), F (FAILURE), both, or neither (it never ends: a ``repeat:
+forever`` of a child that never fails). A leaf is a condition (it answers at once), an instant
+action (``Stop``, ``SetBlackboard``...), a long action (it runs over ticks) or unknown (a plugin not
+imported: no finding rests on it).
+
+Example::
+
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> rules = TreeRules(load_mission("maze_bonus"))
+    >>> loop = rules.tree
+    >>> sorted(rules.outcomes(loop)), rules.may_run(loop), rules.nature(loop.children[1])
+    (['F', 'S'], True, 'condition')
+    >>> list(rules.findings())
+    []
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator, Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from thymio_bt.behaviours.base import ConditionBehaviour
+from thymio_bt.mission.plan import Mission, NodePlan
+
+SEQUENCES = ("sequence", "reactive_sequence", "bt_sequence", "bt_sequence_with_memory", "bt_reactive_sequence")
+SELECTORS = ("selector", "reactive_selector", "bt_fallback", "bt_reactive_fallback")
+REACTIVE = ("reactive_sequence", "bt_reactive_sequence", "reactive_selector", "bt_reactive_fallback")
+#: leaves that never return RUNNING although they are actions, not conditions
+INSTANT = ("Stop", "SetBlackboard", "PlanMove")
+#: leaves whose result is known: they cannot end otherwise (Stop fails only without a robot)
+ALWAYS = {
+    "bt_always_success": "S",
+    "bt_always_failure": "F",
+    "bt_script": "S",
+    "bt_set_blackboard": "S",
+    "bt_unset_blackboard": "S",
+    "SetBlackboard": "S",
+    "Stop": "S",
+}
+#: the control kinds that stop a child only as :meth:`TreeRules._way_out` says
+MODELLED = (
+    *SEQUENCES,
+    *SELECTORS,
+    *("parallel", "repeat", "retry", "delay", "invert", "force_success", "force_failure", "one_shot", "until"),
+    *("guard", "bt_repeat", "bt_inverter", "bt_run_once"),
+)
+S, F = "S", "F"
+BOTH = frozenset((S, F))
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One finding: where (file and line), the rule's id, what is wrong and what to do."""
+
+    file: str
+    line: int
+    rule: str
+    message: str
+    hint: str
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}: [{self.rule}] {self.message} (hint: {self.hint})"
+
+
+def is_condition(cls: Any) -> bool:
+    """Whether a node class is a condition: it answers at once, true (SUCCESS) or false (FAILURE)."""
+    return isinstance(cls, type) and (
+        issubclass(cls, ConditionBehaviour) or getattr(cls, "yaml_name", "") == "bt_script_condition"
+    )
+
+
+def condition_names(registry: Any) -> set[str]:
+    """The YAML names of the conditions in ``registry``."""
+    return {name for name, cls in registry.behaviours() if is_condition(cls)}
+
+
+def finding_at(node: NodePlan, rule: str, message: str, hint: str) -> Finding:
+    """A finding at ``node``'s place."""
+    return Finding(node.where[0], node.where[1], rule, message, hint)
+
+
+class TreeRules:
+    """The rules on the tree's structure: what each node can end with, and what that makes of its
+    siblings and of the loops above it."""
+
+    def __init__(self, mission: Mission) -> None:
+        self.registry = mission.registry
+        self.tree = mission.tree
+        self._outcomes: dict[int, frozenset[str]] = {}
+
+    def findings(self) -> Iterator[Finding]:
+        """Every finding of the tree rules, parents first."""
+        yield from self._walk(self.tree, ())
+
+    def _walk(self, node: NodePlan, above: tuple[NodePlan, ...]) -> Iterator[Finding]:
+        """The findings at ``node`` (``above``: its ancestors, the root first), then below it; a
+        child found unreachable is not looked into."""
+        unreachable = yield from self._unreachable(node)
+        yield from self._restart(node)
+        yield from self._forever(node, above)
+        for child in node.children:
+            if id(child) not in unreachable:
+                yield from self._walk(child, (*above, node))
+
+    # --- what a node can end with ------------------------------------------------------------
+
+    def _class(self, node: NodePlan) -> Any:
+        """The class of a behaviour node (None when the registry lacks it)."""
+        return self.registry.get(node.behaviour) if node.behaviour and self.registry is not None else None
+
+    def nature(self, node: NodePlan) -> str:
+        """A leaf's nature: ``condition``, ``instant`` (an action done in one tick), ``long`` (runs over
+        ticks) or ``unknown`` (a plugin not imported)."""
+        cls = self._class(node)
+        if cls is None or getattr(cls, "unrun_plugin", False):
+            return "unknown"
+        if is_condition(cls):
+            return "condition"
+        if getattr(cls, "bt_sync", False) or node.behaviour in INSTANT or node.behaviour in ALWAYS:
+            return "instant"
+        return "long"
+
+    def outcomes(self, node: NodePlan) -> frozenset[str]:
+        """What ``node`` can end with: S (success), F (failure); empty when it never ends."""
+        key = id(node)
+        if key not in self._outcomes:
+            self._outcomes[key] = frozenset(self._ends(node))
+        return self._outcomes[key]
+
+    def _ends(self, node: NodePlan) -> set[str]:
+        """:meth:`outcomes`, worked out (conservatively: both when the kind is not known here)."""
+        kind, kids, opts = node.kind, node.children, node.options
+        if kind == "behaviour":
+            known = ALWAYS.get(node.behaviour or "")
+            return {known} if known and self.nature(node) != "unknown" else set(BOTH)
+        child = self.outcomes(kids[0]) if kids else BOTH
+        if kind in SEQUENCES or kind in SELECTORS:
+            go_on, stop = (S, F) if kind in SEQUENCES else (F, S)
+            ends: set[str] = set()
+            for kid in kids:
+                got = self.outcomes(kid)
+                ends |= got & {stop}
+                if go_on not in got:
+                    return ends
+            return ends | {go_on}
+        if kind == "parallel":
+            every = [self.outcomes(k) for k in kids]
+            win = all if opts.get("policy", "success_on_all") == "success_on_all" else any
+            return ({S} if win(S in e for e in every) else set()) | ({F} if any(F in e for e in every) else set())
+        return self._decorated(kind, kids, opts, child)
+
+    def _decorated(self, kind: str, kids: list[NodePlan], opts: Mapping[str, Any], child: frozenset[str]) -> set[str]:
+        """:meth:`outcomes` of a decorator over a child that can end with ``child``."""
+        swap = {S: F, F: S}
+        forever = (kind == "repeat" and opts.get("times") == "forever") or (
+            kind == "bt_repeat" and opts.get("num_cycles") == -1
+        )
+        if kind == "repeat" and len(kids) == 2:  # repeat until: the body, then the condition
+            return set(child & {F}) | ({S} if S in child and S in self.outcomes(kids[1]) else set())
+        if forever or kind == "bt_keep_running_until_failure":
+            return set(child & {F})
+        if kind in ("invert", "bt_inverter"):
+            return {swap[c] for c in child}
+        if kind in ("force_success", "bt_force_success", "force_failure", "bt_force_failure"):
+            return ({S} if "success" in kind else {F}) if child else set()
+        if kind in ("timeout", "bt_timeout"):
+            return set(child) | {F}
+        if kind == "until":
+            return {S} if (S if opts.get("status") == "success" else F) in child else set()
+        if kind == "guard":
+            condition = self.outcomes(kids[1])
+            return ({F} if F in condition or F in child else set()) | ({S} if S in child and S in condition else set())
+        if kind == "bt_retry_until_successful" and opts.get("num_attempts") == -1:
+            return set(child & {S})
+        if kind in ("repeat", "retry", "delay", "one_shot", "bt_repeat", "bt_retry_until_successful", "bt_run_once"):
+            return set(child)
+        if kind == "bt_delay":
+            return set(child)
+        return set(BOTH)
+
+    # --- the rules -----------------------------------------------------------------------------
+
+    def _unreachable(self, node: NodePlan) -> Generator[Finding, None, set[int]]:
+        """``unreachable``: the first child that cannot run in ``node``; returns the ids of the children
+        that cannot run."""
+        kind, kids = node.kind, node.children
+        blocker: NodePlan | None = None
+        if kind in SEQUENCES or kind in SELECTORS:
+            go_on = S if kind in SEQUENCES else F
+            blocker = next((k for k in kids[:-1] if go_on not in self.outcomes(k)), None)
+            if blocker is not None:
+                after = kids[kids.index(blocker) + 1 :]
+                yield self._unreachable_finding(node, blocker, after[0], go_on, len(after))
+                return {id(k) for k in after}
+        elif kind == "repeat" and len(kids) == 2 and S not in self.outcomes(kids[0]):
+            yield finding_at(
+                kids[1],
+                "unreachable",
+                f"the until condition '{kids[1].name}' of '{node.name}' is never checked: "
+                f"'{kids[0].name}' {self._why(kids[0], S)}",
+                "the condition is checked after each success of the loop's body",
+            )
+            return {id(kids[1])}
+        elif kind == "guard" and S not in self.outcomes(kids[1]):
+            yield finding_at(
+                kids[0],
+                "unreachable",
+                f"'{kids[0].name}' never runs: the condition '{kids[1].name}' of guard '{node.name}' "
+                f"{self._why(kids[1], S)}",
+                "a guard runs its child only while its condition succeeds",
+            )
+            return {id(kids[0])}
+        return set()
+
+    def _why(self, node: NodePlan, missing: str) -> str:
+        """Why ``node`` never ends with ``missing``, in words."""
+        got = self.outcomes(node)
+        if not got:
+            return "never ends"
+        return "always succeeds" if got == {S} else "always fails" if got == {F} else "never " + missing
+
+    def _unreachable_finding(self, node: NodePlan, blocker: NodePlan, first: NodePlan, go_on: str, n: int) -> Finding:
+        """The finding of the children after ``blocker`` in the sequence or selector ``node``."""
+        what = "sequence" if go_on == S else "selector"
+        more = f" (nor the {n - 1} after it)" if n > 1 else ""
+        if go_on == S:
+            hint = (
+                "a sequence goes on to its next child only when one succeeds: remove the children after it, or fix it"
+            )
+        else:
+            hint = "a selector tries its next child only when one fails: put the child that always succeeds last"
+        return finding_at(
+            first,
+            "unreachable",
+            f"'{first.name}' never runs{more}: '{blocker.name}' before it in {what} '{node.name}' "
+            f"{self._why(blocker, go_on)}",
+            hint,
+        )
+
+    def may_run(self, node: NodePlan) -> bool:
+        """Whether ``node`` can return RUNNING when ticked again after it ended: it holds a long action
+        (a ``one_shot`` returns its result without running its child again)."""
+        if node.kind == "behaviour":
+            return self.nature(node) == "long"
+        if node.kind in ("one_shot", "bt_run_once"):
+            return False
+        return any(self.may_run(k) for k in node.children)
+
+    def unguarded(self, node: NodePlan) -> bool:
+        """Whether ``node``, ticked from the start, reaches a long action before any condition that
+        could fail and stop it (a selector's first instant child ends or gates it too)."""
+        kind, kids = node.kind, node.children
+        if kind == "behaviour":
+            return self.nature(node) == "long"
+        if kind == "guard":
+            return F not in self.outcomes(kids[1]) and self.unguarded(kids[0])
+        if kind == "parallel":
+            return any(self.unguarded(k) for k in kids)
+        if kind in SEQUENCES or kind in SELECTORS:
+            for kid in kids:
+                if self.may_run(kid):
+                    return self.unguarded(kid)
+                if kind in SELECTORS or F in self.outcomes(kid):
+                    return False
+            return False
+        return bool(kids) and self.unguarded(kids[0])
+
+    def _restart(self, node: NodePlan) -> Iterator[Finding]:
+        """``reactive-restart``: the children of a reactive composite started again at every tick."""
+        if node.kind not in REACTIVE:
+            return
+        kids = node.children
+        sequence = "sequence" in node.kind
+        for i, kid in enumerate(kids[:-1]):
+            if not any(self.may_run(k) for k in kids[i + 1 :]):
+                break
+            if sequence and self.may_run(kid):
+                yield finding_at(
+                    kid,
+                    "reactive-restart",
+                    f"'{kid.name}' runs over several ticks but is not the last child of reactive sequence "
+                    f"'{node.name}': once a later child runs, every tick starts '{kid.name}' again (it had "
+                    "succeeded) and halts the later child",
+                    "before the last child put only conditions; make the steps one sequence, e.g. "
+                    "reactive_sequence: [CONDITION, sequence: [STEP, STEP]], or wrap the step in one_shot",
+                )
+            elif not sequence and self.unguarded(kid):
+                yield finding_at(
+                    kid,
+                    "reactive-restart",
+                    f"'{kid.name}' starts an action with no condition first, and reactive selector "
+                    f"'{node.name}' ticks it from the start at every tick: once it fails and a later child "
+                    f"runs, '{kid.name}' starts again at every tick and halts it",
+                    "begin each higher-priority child with a condition that fails at once when it does not "
+                    "apply, e.g. sequence: [ObstacleAhead, AVOID]",
+                )
+
+    def _forever(self, node: NodePlan, above: tuple[NodePlan, ...]) -> Iterator[Finding]:
+        """``forever``: a loop that never ends, with nothing above it that could stop it."""
+        opts = node.options
+        endless = (node.kind == "repeat" and opts.get("times") == "forever" and len(node.children) == 1) or (
+            node.kind == "bt_repeat" and opts.get("num_cycles") == -1
+        )
+        if not endless or self.outcomes(node) or self._way_out(node, above):
+            return
+        yield finding_at(
+            node,
+            "forever",
+            f"'{node.name}' repeats for ever: '{node.children[0].name}' never fails, and nothing above it "
+            "can stop it: the run can only end at its time limit (status TIMEOUT)",
+            "give the repeat times: N or until: CONDITION, or put it under a timeout or a guard",
+        )
+
+    def _way_out(self, node: NodePlan, above: tuple[NodePlan, ...]) -> bool:
+        """Whether an ancestor of ``node`` can stop it: a timeout, a guard whose condition can fail, a
+        parallel whose other child can end it, a reactive composite's earlier child that can preempt."""
+        for parent, via in zip(reversed(above), (node, *reversed(above[1:])), strict=True):
+            kind, kids = parent.kind, parent.children
+            others = [k for k in kids if k is not via]
+            earlier = kids[: kids.index(via)]
+            if kind in ("timeout", "bt_timeout") or (
+                kind == "guard" and via is kids[0] and F in self.outcomes(kids[1])
+            ):
+                return True
+            if kind == "parallel" and any(
+                F in self.outcomes(k) or (parent.options.get("policy") == "success_on_one" and S in self.outcomes(k))
+                for k in others
+            ):
+                return True
+            if kind in REACTIVE and any((F if "sequence" in kind else S) in self.outcomes(k) for k in earlier):
+                return True
+            if kind not in MODELLED:
+                return True  # a kind this lint does not model: it may stop its child
+        return False
+
+
+__all__ = ["BOTH", "Finding", "TreeRules", "condition_names", "finding_at", "is_condition"]
