@@ -8,13 +8,13 @@ family of commands has its module, imported here so that ``main`` has them all:
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
 ``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
-(``grade``) and :mod:`~thymio_bt.cli.serving` (``serve ros2``).
+(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``) and :mod:`~thymio_bt.cli.serving` (``serve ros2``).
 
 Example::
 
     >>> sorted(main.commands)  # doctest: +NORMALIZE_WHITESPACE
-    ['backends', 'behaviours', 'calibrate', 'export', 'grade', 'maze', 'palette', 'replay', 'run', 'schema',
-     'serve', 'sweep', 'tree', 'validate']
+    ['backends', 'behaviours', 'calibrate', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
+     'schema', 'serve', 'sweep', 'tree', 'validate']
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from thymio_bt.cli.app import POSITIVE, main
 from thymio_bt.cli.calibration import calibrate_command
 from thymio_bt.cli.grading import grade
 from thymio_bt.cli.inspection import backends_command, behaviours, schema, tree, validate
+from thymio_bt.cli.linting import lint
 from thymio_bt.cli.logs import export, replay
 from thymio_bt.cli.mazes import maze, maze_export, maze_import
 from thymio_bt.cli.pictures import PICTURE_SUFFIXES
@@ -38,6 +39,7 @@ __all__ = [
     "calibrate_command",
     "export",
     "grade",
+    "lint",
     "main",
     "maze",
     "maze_export",

@@ -319,7 +319,7 @@ class TreeRules:
     def _way_out(self, node: NodePlan, above: tuple[NodePlan, ...]) -> bool:
         """Whether an ancestor of ``node`` can stop it: a timeout, a guard whose condition can fail, a
         parallel whose other child can end it, a reactive composite's earlier child that can preempt."""
-        for parent, via in zip(reversed(above), (node, *reversed(above[1:])), strict=True):
+        for parent, via in zip(reversed(above), (node, *reversed(above))[: len(above)], strict=True):
             kind, kids = parent.kind, parent.children
             others = [k for k in kids if k is not via]
             earlier = kids[: kids.index(via)]
