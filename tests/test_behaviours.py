@@ -338,6 +338,8 @@ RESTART_PARAMS = {
     "MoveCells": {**GRID, "distance": -0.2},  # backwards: three cells ahead is the wall
     "WallMapped": GRID,
     "AtTarget": {**GRID, "target": "centre"},
+    "OutsideMaze": {},
+    "InRegion": {"centre": [0.7, 0.7], "radius": "5cm"},
 }
 #: the behaviours still running 0.2 s after they start with the parameters above
 STILL_RUNNING = {

@@ -316,3 +316,19 @@ def test_a_shipped_assignment_is_found_by_name():
     assert load_assignment("course_bonus").name == "course_bonus"
     with pytest.raises(UserError, match="did you mean 'course_6x6'"):
         load_assignment("course_6x7")
+
+
+@pytest.mark.parametrize(
+    ("assignment", "solution", "penalty"),
+    [
+        ("course_bonus", "missions/maze_bonus.yaml", 3),  # it includes the library, which the bonus forbids
+        ("course_6x6", "examples/wall_follower_left.yaml", 0),
+        ("course_6x6", "examples/wall_follower_right.yaml", 0),
+        ("micromouse", "missions/micromouse.yaml", 0),
+    ],
+)
+def test_the_shipped_solutions_pass_every_criterion_of_the_shipped_assignments(assignment, solution, penalty):
+    (student,) = grade(assignment, [ROOT / solution], workers=2)["students"]
+    assert student["status"] == "graded"
+    assert not _missed(student), [c["feedback"] for c in student["criteria"] if not c["passed"]]
+    assert student["score"] == student["max"] - penalty

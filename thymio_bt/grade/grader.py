@@ -238,7 +238,7 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
                 "passed": False,
                 "runs": 0,
                 "passed_runs": 0,
-                "feedback": "; ".join(entry.messages),
+                "feedback": f"not graded: the submission is {entry.status} (see its messages)",
                 "where": None,
             }
             for c in assignment.criteria
