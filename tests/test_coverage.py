@@ -173,6 +173,15 @@ def test_coverages_add_merge_and_round_trip_through_json():
     assert isinstance(tables[0], NodeTable) and Coverage.of(mission.tree).add(None).runs == 0
 
 
+def test_a_table_s_rows_keep_the_ended_by_through_json():
+    mission = load_mission("maze_bonus")
+    table = Run(mission, 0, node_stats=True).run().node_stats
+    full = Coverage.of(mission.tree).add(table).to_json()
+    assert Coverage.of(mission.tree).add(json.loads(json.dumps(table.rows()))).to_json() == full
+    lost = Coverage.of(mission.tree).add(json.loads(json.dumps(table))).to_json()  # JSON drops the detail
+    assert lost["nodes"][0]["ended_by"] == {} and full["nodes"][0]["ended_by"] == {"bonus maze/IsDeadEnd": 1}
+
+
 def test_run_coverage_adds_the_key_last_and_only_when_asked(tmp_path):
     plain, covered = tmp_path / "plain.json", tmp_path / "covered.json"
     assert CliRunner().invoke(main, ["run", "square", "--report", str(plain)]).exit_code == 0

@@ -124,8 +124,10 @@ class Coverage:
         )
 
     def add(self, table: Mapping[str, Mapping[str, Any]] | None) -> Coverage:
-        """Add one run's ``node_stats`` (a :class:`NodeTable`, or rows with at least ``ticks``,
-        ``successes`` and ``failures``); nodes it does not name were not ticked. Returns ``self``."""
+        """Add one run's ``node_stats``: a :class:`NodeTable`, or rows with at least ``ticks``,
+        ``successes`` and ``failures`` (with ``running`` and ``ended_by`` too, as
+        :meth:`NodeTable.rows` gives them, for a table that went through JSON); nodes it does not
+        name were not ticked. Returns ``self``."""
         if table is None:
             return self
         detail = getattr(table, "detail", {})
@@ -189,6 +191,11 @@ class NodeTable(dict[str, dict[str, float]]):
     ) -> None:
         super().__init__(rows or {})
         self.detail: dict[str, dict[str, Any]] = dict(detail or {})
+
+    def rows(self) -> dict[str, dict[str, Any]]:
+        """Plain rows with their :attr:`detail` in them: what :meth:`Coverage.add` reads in full after
+        a JSON round trip (JSON keeps a dict's items, not the table's :attr:`detail`)."""
+        return {path: {**row, **self.detail.get(path, {})} for path, row in self.items()}
 
 
 class _Slot:
