@@ -99,16 +99,13 @@ def grade(
 
 
 def _warm() -> None:
-    """Import what every run needs before the children are forked: each inherits it, instead of
-    importing it again for each student."""
-    from importlib import import_module
+    """Before the children are forked, import and run once what every run needs (a shipped
+    mission, no student's code): each child inherits it warm instead of paying for it again
+    (0.1 s of a student's 0.5 s)."""
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.runner import Run
 
-    from thymio_bt.backends import backend_kind
-    from thymio_bt.run import runner  # noqa: F401 - imported for the children
-
-    factory = backend_kind("sim").factory
-    if isinstance(factory, str):
-        import_module(factory.partition(":")[0])
+    Run(load_mission("maze_part1_2"), node_stats=True).run()
 
 
 def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
