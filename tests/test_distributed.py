@@ -54,3 +54,22 @@ def test_the_cli_sweeps_on_a_dask_scheduler(cluster):
 def test_an_unreachable_scheduler_is_a_user_error():
     result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "2", "--dask", "tcp://127.0.0.1:9"])
     assert result.exit_code == 2 and "cannot reach the scheduler" in result.output
+
+
+def test_the_cli_grades_on_a_dask_scheduler_as_it_does_locally(cluster, tmp_path):
+    """Each student's runs on a worker, still in a child process under the limits: the same grades."""
+    subs = ["examples/class/ada", "examples/class/dana", "examples/class/eve"]
+    outs = {}
+    for where, extra in (("dask", ["--dask", cluster.scheduler_address]), ("local", ["--workers", "1"])):
+        outs[where] = tmp_path / f"{where}.json"
+        result = CliRunner().invoke(main, ["grade", "course_part1_2", *subs, "--out", str(outs[where]), *extra])
+        assert result.exit_code == 0, result.output
+    import json
+
+    dask, local = (json.loads(outs[w].read_text())["students"] for w in ("dask", "local"))
+    assert (
+        [(s["name"], s["status"], s["score"]) for s in dask]
+        == [(s["name"], s["status"], s["score"]) for s in local]
+        == [("ada", "graded", 10.0), ("dana", "graded", 6.0), ("eve", "invalid", 0.0)]
+    )
+    assert [r["final_pose"] for r in dask[1]["runs"]] == [r["final_pose"] for r in local[1]["runs"]]
