@@ -332,3 +332,55 @@ def test_the_shipped_solutions_pass_every_criterion_of_the_shipped_assignments(a
     assert student["status"] == "graded"
     assert not _missed(student), [c["feedback"] for c in student["criteria"] if not c["passed"]]
     assert student["score"] == student["max"] - penalty
+
+
+def test_ctrl_c_stops_the_grade_at_once_keeps_what_was_done_and_leaves_no_child(tmp_path):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    folders = _class(tmp_path, {f"s{i:02d}": CORRECT_LOOP for i in range(30)})
+    out = tmp_path / "r.json"
+    cmd = [sys.executable, "-m", "thymio_bt.cli", "grade", str(PART12), *map(str, folders), "--out", str(out)]
+    process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30  # realtime: waiting for the first children to be forked
+    while time.monotonic() < deadline and not _children(process.pid):
+        time.sleep(0.05)  # realtime: polling another process
+    time.sleep(0.5)  # realtime: let a few runs finish
+    process.send_signal(signal.SIGINT)
+    began = time.monotonic()
+    _, err = process.communicate(timeout=20)
+    assert process.returncode == 130, err
+    assert time.monotonic() - began < 3  # realtime: the children are killed, not waited for
+    assert not _children(process.pid) and "Traceback" not in err
+    results = json.loads(out.read_text())
+    statuses = {s["status"] for s in results["students"]}
+    assert "error" in statuses  # those not finished say so...
+    assert all(s["score"] == 10 for s in results["students"] if s["status"] == "graded")  # ...the others stand
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (from /proc)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rpartition(")")[2].split()[1]) == pid:
+                found.append(int(entry.name))
+    return found
+
+
+def test_the_progress_line_says_students_runs_rate_and_time_left(monkeypatch, capsys):
+    from thymio_bt.cli.grading import _Progress
+
+    progress = _Progress()
+    progress.enabled = True
+    progress.start({"ada": 2, "bob": 2})
+    for student in ("ada", "ada", "bob", "bob"):
+        progress(student, {"kind": "run"})
+    line = capsys.readouterr().err.split("\r")[-1]
+    assert line.startswith("graded 2/2 students, 4/4 runs, ") and " runs/s, 0 s left" in line
