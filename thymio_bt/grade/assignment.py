@@ -319,28 +319,22 @@ def load_assignment(path: str | Path) -> Assignment:
                     )
                 )
         applies = [v for v in assignment.variants if criterion.applies_to(v)]
-        if criterion.goal is True and any(v.goal is None and not _maze_may_have_goal(v) for v in applies):
-            line, col = _mark(data, ["criteria", i, "goal"])
-            problems.append(
-                Problem(
-                    f"criterion '{criterion.name}' wants the variant's goal, and a variant gives none",
-                    file,
-                    line,
-                    col,
-                    hint="give the variants a `goal: {centre: [x, y], radius: 5cm}`",
-                )
-            )
-        if criterion.turns is True and any(v.turns is None and not _generated_path(v) for v in applies):
-            line, col = _mark(data, ["criteria", i, "turns"])
-            problems.append(
-                Problem(
-                    f"criterion '{criterion.name}' wants the variant's turns, and a variant gives none",
-                    file,
-                    line,
-                    col,
-                    hint="give the variants `turns: LLR...`, or the criterion the turns itself",
-                )
-            )
+        for check, missing, hint in (
+            (
+                "goal",
+                lambda v: v.goal is None and not _maze_may_have_goal(v),
+                "a `goal: {centre: [x, y], radius: 5cm}`",
+            ),
+            (
+                "turns",
+                lambda v: v.turns is None and not _generated_path(v),
+                "`turns: LLR...` (or the criterion its own)",
+            ),
+        ):
+            if getattr(criterion, check) is True and any(missing(v) for v in applies):
+                line, col = _mark(data, ["criteria", i, check])
+                message = f"criterion '{criterion.name}' wants the variant's {check}, and a variant gives none"
+                problems.append(Problem(message, file, line, col, hint=f"give the variants {hint}"))
     if problems:
         raise UserError(problems)
     return assignment

@@ -67,29 +67,27 @@ class RunFacts:
     turns: str | None = None
     cache: dict[str, Any] = field(default_factory=dict)
 
-    def moment(self, t: float | None = None) -> dict[str, float] | None:
-        """The true position at ``t`` (the last sample at or before it; the end when None)."""
+    def sample(self, t: float | None = None) -> tuple[float, float, float, float] | None:
+        """The trajectory's true (t, x, y, yaw) at ``t``: the last sample at or before it, the first
+        when none is; the end when ``t`` is None; None without a trajectory."""
         trajectory = self.result.trajectory
         if not trajectory:
             return None
-        sample = (
-            trajectory[-1]
-            if t is None
-            else max((s for s in trajectory if s[0] <= t + 1e-9), default=trajectory[0], key=lambda s: s[0])
+        if t is None:
+            return trajectory[-1]
+        return max((s for s in trajectory if s[0] <= t + 1e-9), default=trajectory[0], key=lambda s: s[0])
+
+    def moment(self, t: float | None = None) -> dict[str, float] | None:
+        """The true position at ``t`` (the end when None), as results show a failing moment."""
+        sample = self.sample(t)
+        return (
+            None if sample is None else {"t": round(sample[0], 3), "x": round(sample[1], 4), "y": round(sample[2], 4)}
         )
-        return {"t": round(sample[0], 3), "x": round(sample[1], 4), "y": round(sample[2], 4)}
 
     def pose_at(self, t: float | None) -> Pose | None:
         """The true pose at ``t`` (the end when None)."""
-        trajectory = self.result.trajectory
-        if not trajectory:
-            return None
-        sample = (
-            trajectory[-1]
-            if t is None
-            else max((s for s in trajectory if s[0] <= t + 1e-9), default=trajectory[0], key=lambda s: s[0])
-        )
-        return Pose(*sample[1:4])
+        sample = self.sample(t)
+        return None if sample is None else Pose(*sample[1:4])
 
     def first(self, kind: str) -> dict[str, Any] | None:
         """The first event of ``kind``."""
