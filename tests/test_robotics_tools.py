@@ -161,9 +161,9 @@ def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_pat
         (("<MoveUntilWall ", "<MoveUntilWal "), "unknown node type 'MoveUntilWal'", "did you mean 'MoveUntilWall'?"),
         (('distance="0.05"', 'distance="5 apples"'), "unknown unit 'apples'", ""),
         (
-            ('<SubTree ID="to_dead_end"', '<SubTree ID="to_dead_end" speed="{cruise}"'),
-            "with ports (speed) is not supported",
-            "one <BehaviorTree> per use",
+            ('<SubTree ID="to_dead_end"', '<SubTree ID="to_dead_end" turn="left"'),
+            "which <SubTree ID=\"to_dead_end\"> sets to the literal 'left'",
+            "a literal port is read as its text",
         ),
         (("</root>", ""), "not a valid XML file", ""),
     ],
@@ -304,7 +304,7 @@ def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
     for body, message in (
         ('<SubTree ID="nowhere"/>', 'names no <BehaviorTree ID="nowhere">'),
         ('<SubTree ID="loop"/>', "subtree 'loop' uses itself"),
-        ('<SubTree ID="loop" speed="{v}"/>', "with ports (speed) is not supported"),
+        ('<SubTree ID="loop" _autoremap="maybe"/>', '_autoremap="maybe" is not true or false'),
     ):
         bad.write_text(
             f'<root BTCPP_format="4" main_tree_to_execute="MainTree">\n'

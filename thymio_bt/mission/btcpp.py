@@ -195,7 +195,8 @@ def tree_xml(
             parent = ET.SubElement(parent, "Inverter", _onFailure=f"__until_{uids[n['parent']]} := true")
         if n["uid"] in subtrees:
             sid = subtrees[n["uid"]]
-            ET.SubElement(parent, "SubTree", {"ID": sid, "name": n["name"], "_uid": str(wrappers[n["uid"]])})
+            attrs = {"ID": sid, "name": n["name"], "_autoremap": "true", "_uid": str(wrappers[n["uid"]])}
+            ET.SubElement(parent, "SubTree", attrs)  # a YAML subtree shares the run's blackboard
             parent = ET.SubElement(root, "BehaviorTree", ID=sid)
         ident = node_id(n, children[n["uid"]])
         ports = _ports(n, ident, params.get(n["uid"], {}), children[n["uid"]])
