@@ -260,6 +260,19 @@ def test_the_command_writes_json_csv_and_valid_junit(tmp_path):
         assert int(suite.get("tests")) == len(cases) == 7
         assert int(suite.get("failures")) == sum(c.find("failure") is not None for c in cases)
         assert int(suite.get("errors")) == sum(c.find("error") is not None for c in cases)
+    # as autograders read it (junitparser, an independent reader of JUnit XML)
+    from junitparser import Error, Failure, JUnitXml
+
+    for suite, student in zip(JUnitXml.fromfile(str(junit)), results["students"], strict=True):
+        assert (suite.name, suite.tests) == (student["name"], 7)
+        for case, criterion in zip(suite, student["criteria"], strict=True):
+            outcome = [type(r) for r in case.result]
+            if student["status"] != "graded":
+                assert outcome == [Error]
+            elif criterion["passed"]:
+                assert outcome == []
+            else:
+                assert outcome == [Failure] and case.result[0].message == criterion["feedback"]
     assert "most missed" in result.output
 
 
