@@ -397,3 +397,19 @@ def test_the_progress_line_says_students_runs_rate_and_time_left(monkeypatch, ca
         progress(student, {"kind": "run"})
     line = capsys.readouterr().err.split("\r")[-1]
     assert line.startswith("graded 2/2 students, 4/4 runs, ") and " runs/s, 0 s left" in line
+
+
+def test_a_gap_after_a_node_is_measured_when_that_node_ended(tmp_path):
+    assignment = tmp_path / "a.yaml"
+    assignment.write_text(
+        "name: a\nvariants:\n  - {name: c, maze: two_parts_maze, start: part1, noise: off}\ncriteria:\n"
+        "  - {name: first stop, points: 1, gap: {after: MoveUntilWall, distance: 5cm}}\n"
+        "  - {name: part 1, points: 1, gap: {after: mission/part 1, distance: 5cm}}\n"
+    )
+    students = _by_name(grade(assignment, [CLASS / "ada", CLASS / "dana"], workers=1))
+    assert students["ada"]["score"] == 2 and students["dana"]["score"] == 0
+    assert students["dana"]["criteria"][1]["where"].endswith("dana/part1_2.yaml:10")
+    bad = tmp_path / "b.yaml"
+    bad.write_text(assignment.read_text().replace("{after: MoveUntilWall, ", "{at: end, after: MoveUntilWall, "))
+    with pytest.raises(UserError, match="give the moment to measure"):
+        load_assignment(bad)

@@ -125,15 +125,26 @@ class GapCheck(BaseModel):
     """The front gap (the robot's nose to the wall ahead, by geometry) at a moment of the run."""
 
     model_config = ConfigDict(extra="forbid")
-    at: Literal["delete", "end"] = Field(description="delete: as the robot is deleted; end: when the run ends")
+    at: Literal["delete", "end"] | None = Field(
+        None, description="delete: as the robot is deleted; end: when the run ends"
+    )
+    after: str | None = Field(
+        None, min_length=1, description="when the first node of this type (MoveUntilWall) or path (a glob) ended"
+    )
     distance: Length = Field(gt=0, le=2, description="the gap wanted")
     tolerance: Length = Field(0.005, gt=0, le=1, description="how far off still counts")
+
+    @model_validator(mode="after")
+    def _one_moment(self) -> GapCheck:
+        if (self.at is None) == (self.after is None):
+            raise ValueError("give the moment to measure: `at: delete`, `at: end` or `after: NODE`")
+        return self
 
 
 class DeadEndCheck(GapCheck):
     """The run ends in a dead end: a wall ahead at ``distance`` and walls close on both sides."""
 
-    at: Literal["delete", "end"] = Field("end", description="when to look (end)")
+    at: Literal["delete", "end"] | None = Field("end", description="when to look (end)")
     side: Length = Field(0.15, gt=0, le=1, description="a side wall at most this far from base_link")
 
 

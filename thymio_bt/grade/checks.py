@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from fnmatch import fnmatchcase
 from typing import Any
 
 from thymio_bt.grade.assignment import Criterion, GoalDisc
@@ -169,20 +170,35 @@ def _goal(criterion: Criterion, facts: RunFacts) -> Judgement:
 def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
     spec = criterion.gap or criterion.dead_end
     assert spec is not None
-    if spec.at == "delete":
+    blame = None
+    if spec.after is not None:
+        ended = next(
+            (
+                e
+                for e in facts.result.events
+                if e["kind"] == "behaviour_end" and (e["name"] == spec.after or fnmatchcase(e["path"], spec.after))
+            ),
+            None,
+        )
+        if ended is None:
+            return Judgement(False, f"no {spec.after} ended, so the gap after it cannot be measured", facts.moment())
+        t: float | None = ended["t"]
+        blame = ended["path"]
+    elif spec.at == "delete":
         event = facts.first("delete_entity")
         if event is None:
             return Judgement(
                 False, "the robot was never deleted, so its stop before the delete cannot be measured", facts.moment()
             )
-        t: float | None = event["t"]
+        t = event["t"]
+        blame = facts.node_before(t, event)
     else:
-        t, event = None, None
+        t = None
+        blame = facts.node_before(math.inf)
     pose = facts.pose_at(t)
     if pose is None:
         return Judgement(False, "no robot to measure", None)
     moment = facts.moment(t)
-    blame = facts.node_before(t if t is not None else math.inf, event)
     gap = front_gap(facts.maze, facts.model, pose)
     if not math.isfinite(gap):
         return Judgement(False, f"stopped facing no wall (wanted {100 * spec.distance:g} cm from one)", moment, blame)
