@@ -10,10 +10,10 @@ The rules, by id (the first three, on the tree's structure, are :mod:`thymio_bt.
 - ``reactive-restart``: the classic trap of reactive composites, which tick their children from the
   first one at every tick. A child of a reactive sequence that runs over several ticks (an action)
   before another child that does too: once the later child runs, the earlier one, which had
-  succeeded, is started again at every tick and halts the later one (py_trees restarts it,
-  BT.CPP 4 refuses such a tree). A child of a reactive selector that starts an action without a
-  condition first, before a child that runs: once it fails, it is started again at every tick and
-  halts the lower-priority child. A condition before an action is the intended use: conditions
+  succeeded, is started again at every tick and halts the later one (py_trees and BT.CPP 4 alike;
+  BT.CPP asks for a single asynchronous child). A child of a reactive selector that starts an
+  action without a condition first, before a child that runs: once it fails, it is started again
+  at every tick and halts the lower-priority child. A condition before an action is the intended use: conditions
   are checked at every tick, a running action goes on.
 - ``forever``: a ``repeat: forever`` whose child never fails, with nothing above it to stop it (a
   timeout, a guard, a parallel, a reactive composite's condition): the run can only end at its time limit.
