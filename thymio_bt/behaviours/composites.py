@@ -14,7 +14,7 @@ Written ``sequence: [A, B]`` or ``sequence: {name: legs, children: [A, B]}``.
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import py_trees
 from py_trees.common import ParallelPolicy
@@ -23,56 +23,53 @@ from pydantic import Field, field_validator
 from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse
 
 
-class Sequence(ControlNode):
+class _Memory(ControlNode):
+    """A py_trees sequence or selector: ``memory`` resumes at the running child, without it every
+    tick starts again from the first child (a reactive composite)."""
+
+    category = "composite"
+    #: the py_trees composite built, and whether it remembers the running child
+    composite: ClassVar[type[py_trees.composites.Sequence] | type[py_trees.composites.Selector]]
+    memory: ClassVar[bool] = True
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
+        """The py_trees composite, with or without memory."""
+        return cls.composite(name, memory=cls.memory, children=children)
+
+
+class Sequence(_Memory):
     """Run the children in order; fail at the first failure (resumes at the running child)."""
 
     yaml_name = "sequence"
-    category = "composite"
     example = "e.g. 'sequence: [{MoveUntilWall: {}}, {TurnAngle: {angle: 90deg}}]'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
-        """A py_trees ``Sequence`` with memory."""
-        return py_trees.composites.Sequence(name, memory=True, children=children)
+    composite = py_trees.composites.Sequence
 
 
-class ReactiveSequence(ControlNode):
+class ReactiveSequence(_Memory):
     """Like sequence, but start again from the first child every tick (conditions stay checked)."""
 
     yaml_name = "reactive_sequence"
-    category = "composite"
     example = "e.g. 'reactive_sequence: [{WallAhead: {}}, {TurnAngle: {angle: 90deg}}]'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
-        """A py_trees ``Sequence`` without memory."""
-        return py_trees.composites.Sequence(name, memory=False, children=children)
+    composite = py_trees.composites.Sequence
+    memory = False
 
 
-class Selector(ControlNode):
+class Selector(_Memory):
     """Try the children in order until one does not fail (resumes at the running child)."""
 
     yaml_name = "selector"
-    category = "composite"
     example = "e.g. 'selector: [{WallAhead: {}}, {MoveDistance: {distance: 10cm}}]'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
-        """A py_trees ``Selector`` with memory."""
-        return py_trees.composites.Selector(name, memory=True, children=children)
+    composite = py_trees.composites.Selector
 
 
-class ReactiveSelector(ControlNode):
+class ReactiveSelector(_Memory):
     """Like selector, but re-try the higher-priority children every tick."""
 
     yaml_name = "reactive_selector"
-    category = "composite"
     example = "e.g. 'reactive_selector: [{ObstacleAhead: {}}, {GoToPose: {goal: [1, 0, 0]}}]'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:
-        """A py_trees ``Selector`` without memory."""
-        return py_trees.composites.Selector(name, memory=False, children=children)
+    composite = py_trees.composites.Selector
+    memory = False
 
 
 class ParallelParams(ControlParams):
