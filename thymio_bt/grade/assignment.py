@@ -236,7 +236,7 @@ class Limits(BaseModel):
     model_config = ConfigDict(extra="forbid")
     cpu: Duration = Field(20.0, gt=0, le=3600, description="CPU seconds per run")
     wall: Duration | None = Field(None, gt=0, le=36000, description="wall-clock seconds per run (3 x cpu + 5 s)")
-    memory: int = Field(1024, ge=64, le=65536, description="MiB of address space per submission's process")
+    memory: int = Field(1024, ge=64, le=65536, description="MiB of address space a submission's process may add")
 
 
 class Assignment(BaseModel):
