@@ -18,7 +18,7 @@ Written ``repeat: {times: 4, do: CHILD}``; those without parameters also as ``in
 from __future__ import annotations
 
 from collections.abc import Iterator
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal, get_args
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -33,6 +33,26 @@ _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or
 _RETRY_EXAMPLE = "e.g. 'retry: {times: 3, do: {MoveUntilWall: {}}}'"
 
 
+def _times(value: Any, message: str, example: str) -> int:
+    """A count of ``repeat`` or ``retry``: a whole number >= 1, else refused with ``message``."""
+    count = whole(value)
+    if count is None or count < 1:
+        raise refuse(message, example)
+    return count
+
+
+def _one_of(field: str, message: str) -> Any:
+    """A validator of the ``Literal`` parameter ``field``: a value that is not one of its choices is
+    refused with ``message`` (pydantic's own would not name the decorator)."""
+
+    def known(cls: type[ControlParams], value: Any) -> Any:
+        if value not in get_args(cls.model_fields[field].annotation):
+            raise refuse(message)
+        return value
+
+    return field_validator(field, mode="before")(known)
+
+
 class RepeatParams(ControlParams):
     """How many times ``repeat`` runs its child."""
 
@@ -45,10 +65,7 @@ class RepeatParams(ControlParams):
     def _count(cls, value: Any) -> Any:
         if value == "forever":
             return value
-        count = whole(value)
-        if count is None or count < 1:
-            raise refuse("repeat times must be a whole number >= 1 or 'forever'", _REPEAT_EXAMPLE)
-        return count
+        return _times(value, "repeat times must be a whole number >= 1 or 'forever'", _REPEAT_EXAMPLE)
 
 
 class Repeat(ControlNode):
@@ -77,10 +94,7 @@ class RetryParams(ControlParams):
     @field_validator("times", mode="before")
     @classmethod
     def _count(cls, value: Any) -> Any:
-        count = whole(value)
-        if count is None or count < 1:
-            raise refuse("retry times must be a whole number >= 1", _RETRY_EXAMPLE)
-        return count
+        return _times(value, "retry times must be a whole number >= 1", _RETRY_EXAMPLE)
 
 
 class Retry(ControlNode):
@@ -153,43 +167,42 @@ class Delay(py_trees.decorators.Decorator, ControlNode):
         return self.decorated.status
 
 
-class Invert(ControlNode):
+class _Outcome(ControlNode):
+    """A decorator that only changes how the child's result reads (RUNNING stays RUNNING): a py_trees
+    decorator of the child, no parameters, so it may be written ``kind: CHILD``."""
+
+    short_form = True
+    #: the py_trees decorator that maps the child's status
+    wraps: ClassVar[type[py_trees.decorators.Decorator]]
+
+    @classmethod
+    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
+        """The py_trees decorator of the child."""
+        return cls.wraps(name=name, child=children[0])
+
+
+class Invert(_Outcome):
     """Swap SUCCESS and FAILURE of the child (RUNNING stays RUNNING)."""
 
     yaml_name = "invert"
-    short_form = True
     example = "e.g. 'invert: {WallAhead: {}}'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
-        """A py_trees ``Inverter`` of the child."""
-        return py_trees.decorators.Inverter(name=name, child=children[0])
+    wraps = py_trees.decorators.Inverter
 
 
-class ForceSuccess(ControlNode):
+class ForceSuccess(_Outcome):
     """Report SUCCESS when the child fails (RUNNING stays RUNNING)."""
 
     yaml_name = "force_success"
-    short_form = True
     example = "e.g. 'force_success: {MoveDistance: {distance: 5cm}}'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
-        """A py_trees ``FailureIsSuccess`` of the child."""
-        return py_trees.decorators.FailureIsSuccess(name=name, child=children[0])
+    wraps = py_trees.decorators.FailureIsSuccess
 
 
-class ForceFailure(ControlNode):
+class ForceFailure(_Outcome):
     """Report FAILURE when the child succeeds (RUNNING stays RUNNING)."""
 
     yaml_name = "force_failure"
-    short_form = True
     example = "e.g. 'force_failure: {WallAhead: {}}'"
-
-    @classmethod
-    def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
-        """A py_trees ``SuccessIsFailure`` of the child."""
-        return py_trees.decorators.SuccessIsFailure(name=name, child=children[0])
+    wraps = py_trees.decorators.SuccessIsFailure
 
 
 class UntilParams(ControlParams):
@@ -199,12 +212,7 @@ class UntilParams(ControlParams):
         description="the child's result that ends the wait: success or failure"
     )
 
-    @field_validator("status", mode="before")
-    @classmethod
-    def _known(cls, value: Any) -> Any:
-        if value not in ("success", "failure"):
-            raise refuse("until status must be success or failure")
-        return value
+    _known = _one_of("status", "until status must be success or failure")
 
 
 class Until(ControlNode):
@@ -249,12 +257,7 @@ class OneShotParams(ControlParams):
         "success", description="success: only a success counts; completion: any result"
     )
 
-    @field_validator("on", mode="before")
-    @classmethod
-    def _known(cls, value: Any) -> Any:
-        if value not in ("success", "completion"):
-            raise refuse("one_shot on must be success or completion")
-        return value
+    _known = _one_of("on", "one_shot on must be success or completion")
 
 
 class OneShot(ControlNode):
