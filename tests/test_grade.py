@@ -179,9 +179,9 @@ def _plugin_class(tmp_path: Path, bodies: dict[str, str]) -> tuple[Path, list[Pa
         folder = tmp_path / name
         folder.mkdir()
         (folder / "nodes.py").write_text(
-            "import os, sys\nfrom thymio_bt.behaviours import RobotBehaviour\n"
+            "import os, sys\nfrom py_trees.common import Status\nfrom thymio_bt.behaviours import RobotBehaviour\n"
             "class Bad(RobotBehaviour):\n    '''A node that misbehaves.'''\n"
-            f"    def step(self):\n        {body}\n        return self.succeed()\n"
+            f"    def step(self):\n        {body}\n        return Status.SUCCESS\n"
         )
         (folder / "m.yaml").write_text(
             "maze: two_parts_maze\nstart: part1\nplugins: [nodes.py]\ntree:\n  sequence:\n    children:\n"
@@ -203,6 +203,7 @@ def test_hanging_crashing_exiting_and_greedy_submissions_fail_their_own_runs(tmp
             "crashes": "os._exit(3)",
             "exits": "sys.exit(0)",
             "greedy": "x = bytearray(4 << 30)",
+            "spawns": "import subprocess; subprocess.Popen(['sleep', '1000'], start_new_session=False)",
         },
     )
     results = _by_name(grade(assignment, folders, workers=2))
@@ -219,6 +220,8 @@ def test_hanging_crashing_exiting_and_greedy_submissions_fail_their_own_runs(tmp
         assert results[name]["status"] == "graded" and len(results[name]["runs"]) == 2
         assert results[name]["score"] == 0
     assert results["good"]["score"] == 1  # the grade went on for everyone else
+    assert results["spawns"]["score"] == 1  # it ended well, and what it started was killed with it:
+    assert not [p for p in Path("/proc").glob("[0-9]*/cmdline") if _read(p) == b"sleep\x001000\x00"]
 
 
 def test_plugins_are_refused_where_the_assignment_forbids_them(tmp_path):
@@ -371,6 +374,13 @@ def test_ctrl_c_stops_the_grade_at_once_keeps_what_was_done_and_leaves_no_child(
     statuses = {s["status"] for s in results["students"]}
     assert "error" in statuses  # those not finished say so...
     assert all(s["score"] == 10 for s in results["students"] if s["status"] == "graded")  # ...the others stand
+
+
+def _read(path: Path) -> bytes:
+    try:
+        return path.read_bytes()
+    except OSError:
+        return b""
 
 
 def _children(pid: int) -> list[int]:

@@ -25,6 +25,7 @@ Example (the work function runs in the child; here it just echoes)::
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import resource
@@ -131,12 +132,12 @@ class ForkPool(Generic[T]):
                     self._reap(child, results[index], waiting, index)
                 for fd, (index, child) in list(children.items()):
                     if time.monotonic() - child.heard > self.limits.wall + 10:
-                        os.kill(child.pid, signal.SIGKILL)
+                        _kill(child.pid)
                         del children[fd]
                         self._reap(child, results[index], waiting, index, hung=True)
         finally:
             for _, child in children.values():
-                os.kill(child.pid, signal.SIGKILL)
+                _kill(child.pid)
                 os.waitpid(child.pid, 0)
                 os.close(child.fd)
         return [(task, results[i]) for i, task in enumerate(tasks)]
@@ -161,6 +162,8 @@ class ForkPool(Generic[T]):
             finally:
                 os._exit(code)
         os.close(write)
+        with contextlib.suppress(OSError):  # the child does it too: whichever runs first
+            os.setpgid(pid, pid)
         return _Child(task, pid, read, runs, [], time.monotonic())
 
     def _read(self, child: _Child[T], messages: list[dict[str, Any]]) -> bool:
@@ -195,6 +198,7 @@ class ForkPool(Generic[T]):
         """The child ended: if it left runs undone, report the one it died in and queue the rest."""
         os.close(child.fd)
         _, status = os.waitpid(child.pid, 0)
+        _kill(child.pid)  # what it started and left behind, in its process group
         if child.done >= child.runs:
             return
         died = {
@@ -209,8 +213,16 @@ class ForkPool(Generic[T]):
             waiting.append((index, child.done + 1))
 
 
+def _kill(pid: int) -> None:
+    """Kill the process group of the child ``pid``: the child and whatever it started."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(pid, signal.SIGKILL)
+
+
 def _child_setup(limits: Limits, runs: int) -> None:
-    """In a new child: its limits, no terminal output, the grader's signals left to the grader."""
+    """In a new child: a process group of its own (killed whole), its limits, no terminal output,
+    the grader's signals left to the grader."""
+    os.setpgid(0, 0)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # on top of what the process maps already (a Dask worker's threads and arenas map gigabytes
