@@ -116,6 +116,11 @@ def mission_options(set_help: str, start_help: str) -> Callable[[F], F]:
         path_option("--maze", help="Run in another maze file."),
         click.option("--start", default=None, metavar="X,Y,YAW", help=start_help),
     )
+    return _stacked(options)
+
+
+def _stacked(options: tuple[Callable[[F], F], ...]) -> Callable[[F], F]:
+    """One decorator applying ``options`` so that ``--help`` lists them in the order given."""
 
     def apply(command: F) -> F:
         for option in reversed(options):
@@ -123,6 +128,19 @@ def mission_options(set_help: str, start_help: str) -> Callable[[F], F]:
         return command
 
     return apply
+
+
+def coverage_options(coverage_help: str) -> Callable[[F], F]:
+    """The options that measure the tree's coverage (``--coverage``, ``--coverage-tree``), in that order."""
+    options = (
+        click.option("--coverage", is_flag=True, help=coverage_help),
+        path_option(
+            "--coverage-tree",
+            metavar="FILE",
+            help="Draw the tree with its coverage (.dot; .svg or .png need Graphviz's dot); implies --coverage.",
+        ),
+    )
+    return _stacked(options)
 
 
 def viewer_options(command: F) -> F:

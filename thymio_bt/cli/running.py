@@ -32,6 +32,7 @@ import click
 
 from thymio_bt.cli.app import (
     POSITIVE,
+    coverage_options,
     fail,
     json_text,
     main,
@@ -132,14 +133,7 @@ def _pacing(factor: float | None) -> float | None:
     metavar="NAME",
     help="The robot model: course (default), enki or real (see 'thymio-bt backends').",
 )
-@click.option(
-    "--coverage", is_flag=True, help="Count each node's ticks and results: the tree's coverage, in the report too."
-)
-@path_option(
-    "--coverage-tree",
-    metavar="FILE",
-    help="Draw the tree with its coverage (.dot; .svg or .png need Graphviz's dot); implies --coverage.",
-)
+@coverage_options("Count each node's ticks and results: the tree's coverage, in the report too.")
 @click.option(
     "--groot2",
     type=click.IntRange(1, 65534),

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
 
 import click
 
-from thymio_bt.cli.app import fail, json_text, main, mission_options, parse_overrides, path_option
+from thymio_bt.cli.app import coverage_options, fail, json_text, main, mission_options, parse_overrides, path_option
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
 from thymio_bt.run.interrupts import Interrupts
@@ -63,14 +63,7 @@ T = TypeVar("T")
     metavar="NAME=V1,V2,...",
     help="Sweep every combination of these settings, e.g. --matrix robot=course,enki,real.",
 )
-@click.option(
-    "--coverage", is_flag=True, help="Count each node's ticks and results over the runs: the tree's coverage."
-)
-@path_option(
-    "--coverage-tree",
-    metavar="FILE",
-    help="Draw the tree with its coverage (.dot; .svg or .png need Graphviz's dot); implies --coverage.",
-)
+@coverage_options("Count each node's ticks and results over the runs: the tree's coverage.")
 def sweep(
     mission: Path,
     runs: int,
