@@ -12,6 +12,7 @@ import pytest
 from py_trees.common import Status
 
 from thymio_bt.backends.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
+from thymio_bt.backends.real.thymio import TdmAddress
 from thymio_bt.behaviours import Context
 from thymio_bt.behaviours.motion import MoveUntilWall
 from thymio_bt.errors import UserError
@@ -439,6 +440,15 @@ def test_connect_failures_are_user_errors_with_hints(monkeypatch, fake, message)
     assert message in str(error.value) and "hint:" in str(error.value)
 
 
+def test_connect_names_the_address_and_robot_it_was_given(monkeypatch):
+    monkeypatch.setitem(sys.modules, "tdmclient", FakeTdm(refuse=True).module)
+    with pytest.raises(UserError, match="at 10.0.0.2:9000"):
+        TdmNode.connect(TdmAddress("10.0.0.2", 9000))
+    monkeypatch.setitem(sys.modules, "tdmclient", FakeTdm(node=None).module)
+    with pytest.raises(UserError, match="no Thymio named 'bob' appeared within 2 s"):
+        ThymioRobot.connect(TdmAddress(robot_name="bob", timeout=2.0))
+
+
 class FakeClient:
     """What a tdmclient ClientAsyncCacheNode asks of its client; delivers scripted variable updates."""
 
@@ -592,8 +602,8 @@ def test_the_tdm_backend_takes_the_robot_model_and_its_options(monkeypatch):
 
     seen = {}
 
-    def connect(cls, host=None, port=None, password=None, **kwargs):
-        seen.update(host=host, port=port, config=kwargs["config"])
+    def connect(cls, address, **kwargs):
+        seen.update(host=address.tdm_addr, port=address.tdm_port, config=kwargs["config"])
         return make(FakeNode())[0]
 
     monkeypatch.setattr(ThymioRobot, "connect", classmethod(connect))

@@ -144,6 +144,22 @@ class Node(ABC):
         """Release the robot (the default node holds nothing)."""
 
 
+@dataclass(frozen=True, slots=True)
+class TdmAddress:
+    """Which Thymio Device Manager to reach (host and port; None: tdmclient's local default) and
+    which of its robots to take (None: the first one), waiting at most ``timeout`` seconds for it."""
+
+    tdm_addr: str | None = None
+    tdm_port: int | None = None
+    password: str | None = None
+    robot_name: str | None = None
+    timeout: float = 10.0
+
+
+#: the Thymio Device Manager of this machine and its first robot
+LOCAL_TDM = TdmAddress()
+
+
 def import_tdmclient() -> ModuleType:
     """tdmclient, imported on first use so that the package works without the optional extra."""
     return optional_module("tdmclient", "the 'tdm' backend", _INSTALL_HINT)
@@ -163,34 +179,31 @@ class TdmNode(Node):
         self.node = node
 
     @classmethod
-    def connect(
-        cls,
-        tdm_addr: str | None = None,
-        tdm_port: int | None = None,
-        password: str | None = None,
-        robot_name: str | None = None,
-        timeout: float = 10.0,
-    ) -> TdmNode:
-        """Connect to the TDM (local by default), lock the first robot (or ``robot_name``) and wait
-        for the variables. Raises :class:`UserError` with a hint when any of it is impossible."""
+    def connect(cls, address: TdmAddress = LOCAL_TDM) -> TdmNode:
+        """Connect to the TDM at ``address`` (local by default), lock its first robot (or the one
+        ``address`` names) and wait for the variables. Raises :class:`UserError` with a hint when any
+        of it is impossible."""
         tdmclient = import_tdmclient()
+        robot_name = address.robot_name
         try:
-            client = tdmclient.ClientAsync(tdm_addr=tdm_addr, tdm_port=tdm_port, password=password)
+            client = tdmclient.ClientAsync(
+                tdm_addr=address.tdm_addr, tdm_port=address.tdm_port, password=address.password
+            )
         except OSError as exc:
-            where = f"{tdm_addr or '127.0.0.1'}:{tdm_port or 8596}"
+            where = f"{address.tdm_addr or '127.0.0.1'}:{address.tdm_port or 8596}"
             raise UserError(
                 Problem(
                     f"cannot reach the Thymio Device Manager at {where}: {exc}",
                     hint="start Thymio Suite (it runs the device manager), or pass its address",
                 )
             ) from None
-        found = tdmclient.aw(client.wait_for_node(timeout=timeout, node_name=robot_name))
+        found = tdmclient.aw(client.wait_for_node(timeout=address.timeout, node_name=robot_name))
         if found is None:
             client.disconnect()
             which = f"named '{robot_name}' " if robot_name else ""
             raise UserError(
                 Problem(
-                    f"no Thymio {which}appeared within {timeout:g} s",
+                    f"no Thymio {which}appeared within {address.timeout:g} s",
                     hint="switch the robot on and plug it (or its dongle) in, or start a "
                     "simulated robot from Thymio Suite's Playground",
                 )
@@ -282,17 +295,10 @@ class ThymioRobot(Backend):
             self._place(spawn)
 
     @classmethod
-    def connect(
-        cls,
-        tdm_addr: str | None = None,
-        tdm_port: int | None = None,
-        password: str | None = None,
-        node_name: str | None = None,
-        timeout: float = 10.0,
-        **kwargs: Any,
-    ) -> ThymioRobot:
-        """A backend over the first robot the local (or given) Thymio Device Manager knows."""
-        return cls(TdmNode.connect(tdm_addr, tdm_port, password, node_name, timeout), **kwargs)
+    def connect(cls, address: TdmAddress = LOCAL_TDM, **kwargs: Any) -> ThymioRobot:
+        """A backend over the first robot the local (or given) Thymio Device Manager knows;
+        ``kwargs`` go to the constructor."""
+        return cls(TdmNode.connect(address), **kwargs)
 
     def __enter__(self) -> ThymioRobot:
         return self
@@ -489,9 +495,7 @@ def create_tdm(mission: Mission, seed: int, options: TdmOptions) -> ThymioRobot:
 
     model = robot_for(mission, "tdm")
     return ThymioRobot.connect(
-        options.host,
-        options.port,
-        options.password,
+        TdmAddress(options.host, options.port, options.password),
         config=RealConfig.of_model(model),
         model=model,
         placed=options.placed,
