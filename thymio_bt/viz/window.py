@@ -46,20 +46,23 @@ from thymio_bt.run.runner import Run, StopRun
 from thymio_bt.viz.display import INSTALL_HINT
 from thymio_bt.viz.plots import _outline, _rays
 
-#: Colours (RGB): matplotlib's tab10 where plots.py uses it, so pictures and window agree.
+#: matplotlib's tab10 colours that plots.py draws with ("tab:blue", "tab:red", "tab:green"), as RGB,
+#: so that pictures and window agree.
+TAB_BLUE, TAB_RED, TAB_GREEN = (31, 119, 180), (214, 39, 40), (44, 160, 44)
+#: Colours (RGB) of the window: tab10's where plots.py uses it for the same thing.
 BACKGROUND = (250, 250, 250)
 WALL = (64, 64, 64)
-OBSTACLE = (31, 119, 180)
-TRAIL = (31, 119, 180)
+OBSTACLE = TAB_BLUE
+TRAIL = TAB_BLUE
 ROBOT_FILL = (174, 199, 232)
 ROBOT_EDGE = (0, 0, 0)
-RAY_HIT = (214, 39, 40)
+RAY_HIT = TAB_RED
 RAY_FREE = (180, 180, 180)
 BAR = (40, 40, 40)
 BAR_TEXT = (235, 235, 235)
 PAUSED_TEXT = (255, 190, 60)
-MAP_VISITED = (44, 160, 44)
-MAP_WALL = (214, 39, 40)
+MAP_VISITED = TAB_GREEN
+MAP_WALL = TAB_RED
 
 #: Height of the status bar (pixels), margin around the world (metres), and the largest jump of
 #: the base_link between ticks still drawn as one line (a larger one is a respawn, as in plots.py).
