@@ -146,8 +146,7 @@ class Node(ABC):
 
 @dataclass(frozen=True, slots=True)
 class TdmAddress:
-    """Which Thymio Device Manager to reach (host and port; None: tdmclient's local default) and
-    which of its robots to take (None: the first one), waiting at most ``timeout`` seconds for it."""
+    """The Thymio Device Manager to reach (None: the local one), its robot to take (None: the first), the wait (s)."""
 
     tdm_addr: str | None = None
     tdm_port: int | None = None
@@ -180,9 +179,8 @@ class TdmNode(Node):
 
     @classmethod
     def connect(cls, address: TdmAddress = LOCAL_TDM) -> TdmNode:
-        """Connect to the TDM at ``address`` (local by default), lock its first robot (or the one
-        ``address`` names) and wait for the variables. Raises :class:`UserError` with a hint when any
-        of it is impossible."""
+        """Connect to the TDM at ``address``, lock its robot and wait for the variables. Raises
+        :class:`UserError` with a hint when any of it is impossible."""
         tdmclient = import_tdmclient()
         robot_name = address.robot_name
         try:
