@@ -274,3 +274,17 @@ def test_a_broken_assignment_is_a_user_error(tmp_path):
     (tmp_path / "a.yaml").write_text("name: t\nvariants: []\n")
     result = CliRunner().invoke(main, ["lint", "square", "--assignment", str(tmp_path / "a.yaml")])
     assert result.exit_code == 2 and "a.yaml" in result.output
+
+
+def test_lint_without_assignment_loads_no_physics_engine():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\nfrom thymio_bt.cli import main\nsys.argv = ['thymio-bt', 'lint', 'missions/maze_bonus.yaml']\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        "print('pymunk' in sys.modules, any(m.startswith('thymio_bt.backends.') for m in sys.modules), file=sys.stderr)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "False False"
