@@ -353,10 +353,10 @@ class Run:
         """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
         With nodes substituted (a test of part of a mission), where it ends is not checked."""
         from thymio_bt.mission.expect import check
-        from thymio_bt.robot.model import robot_model
 
         expect = self.mission.expect if places else self.mission.expect.without_places()
-        result.expectations = check(expect, result, self.mission.maze, robot_model(self.mission.robot))
+        # the robot that ran (a calibrated profile, a backend's own), not only the one the mission names
+        result.expectations = check(expect, result, self.mission.maze, self.backend.model)
         if result.status == "SUCCESS" and result.expectations:
             result.status, result.code, result.failed_path = "FAILURE", "EXPECTATION", "expect"
             result.reason = "; ".join(result.expectations)
