@@ -24,7 +24,7 @@ Example::
     >>> for line in xml.splitlines()[1:4]:
     ...     print(line)
       <BehaviorTree ID="MainTree">
-        <SubTree ID="to_dead_end" name="bonus maze" _uid="1" />
+        <SubTree ID="to_dead_end" name="bonus maze" _autoremap="true" _uid="1" />
       </BehaviorTree>
 """
 
