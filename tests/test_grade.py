@@ -423,3 +423,10 @@ def test_a_gap_after_a_node_is_measured_when_that_node_ended(tmp_path):
     bad.write_text(assignment.read_text().replace("{after: MoveUntilWall, ", "{at: end, after: MoveUntilWall, "))
     with pytest.raises(UserError, match="give the moment to measure"):
         load_assignment(bad)
+
+
+def test_coverage_says_which_child_ended_each_composite(graded):
+    nodes = {n["path"]: n for n in _by_name(graded)["correct_loop"]["coverage"]["nodes"]}
+    ended = nodes["mission/part 2/one corridor/end or turn"]["ended_by"]
+    assert ended["mission/part 2/one corridor/end or turn/IsDeadEnd"] == 12  # once a run, at the dead end
+    assert ended["mission/part 2/one corridor/end or turn/turn left"] > 12

@@ -117,13 +117,20 @@ def run_message(
         "final_pose": result.final_pose,
         "collisions": result.collisions,
         "criteria": judged,
-        "node_stats": result.node_stats or {},
+        "node_stats": _rows(result.node_stats),
     }
     if picture:
         step = max(1, len(result.trajectory) // PICTURE_SAMPLES + 1)
         samples = result.trajectory[::step] + result.trajectory[-1:]
         message["trajectory"] = [[round(v, 4) for v in sample] for sample in samples]
     return message
+
+
+def _rows(stats: dict[str, dict[str, float]] | None) -> dict[str, Any]:
+    """The run's node statistics as JSON can carry them (with each composite's ``ended_by``)."""
+    from thymio_bt.run.coverage import NodeTable
+
+    return stats.rows() if isinstance(stats, NodeTable) else dict(stats or {})
 
 
 def _judgement(judgement: Judgement, places: dict[str, str | None]) -> dict[str, Any]:
