@@ -218,3 +218,35 @@ def test_a_rosbag2_folder_whose_mcap_is_a_fifo_is_refused_at_once(tmp_path):
     os.mkfifo(bag / "bag_0.mcap")
     rc, text, _ = _replay_in_a_child(bag)  # a hang would hit the 60 s timeout, an error
     assert rc == 2 and "bag_0.mcap in the bag is not a regular file" in text and "Traceback" not in text, text
+
+
+@pytest.mark.parametrize("suffix", [".mcap", ".btlog", ".jsonl"])
+def test_an_export_that_fails_midway_leaves_nothing_behind(good_log, tmp_path, monkeypatch, suffix):
+    """Whole or not at all: the writer writes a staged file (outputs.Output.staged), renamed at the end."""
+    import thymio_bt.logs as logs
+
+    log = tmp_path / "in" / "ok.jsonl"
+    log.parent.mkdir()
+    log.write_text("\n".join(good_log) + "\n")
+    real_open = logs.open_writer
+
+    def failing_writer(path):
+        writer = real_open(path)
+        ticks = {"n": 0}
+        tick = writer.tick
+
+        def tick_then_fail(record):
+            ticks["n"] += 1
+            if ticks["n"] == 5:
+                raise OSError(28, "No space left on device")
+            tick(record)
+
+        writer.tick = tick_then_fail
+        return writer
+
+    monkeypatch.setattr(logs, "open_writer", failing_writer)
+    out = tmp_path / "out"
+    out.mkdir()
+    result = CliRunner().invoke(main, ["export", str(log), "-o", str(out / f"run{suffix}")])
+    assert result.exit_code == 2 and "No space left on device" in result.output
+    assert sorted(p.name for p in out.iterdir()) == []  # no partial file, no staged file or folder

@@ -24,7 +24,7 @@ import click
 from thymio_bt.cli.app import fail, main, path_option, pose_text, viewer_options
 from thymio_bt.cli.pictures import Pictures
 from thymio_bt.errors import UserError
-from thymio_bt.outputs import STDOUT, check_writable
+from thymio_bt.outputs import STDOUT, Output, check_writable
 
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
@@ -124,7 +124,17 @@ def export(log: Path, output: Path | None, btlog: Path | None, partial: bool) ->
 
 
 def _write_log(recording: Recording, target: Path) -> None:
-    """Write ``recording`` to ``target`` in the format its suffix names (the file is closed however it ends)."""
+    """Write ``recording`` to ``target`` in the format its suffix names: whole or not at all (the
+    writer writes a staged file of the same suffix, renamed over the target once closed)."""
+    if str(target) == STDOUT:
+        _write_records(recording, target)
+        return
+    with Output(target, "--output").staged() as staged:
+        _write_records(recording, staged)
+
+
+def _write_records(recording: Recording, target: Path) -> None:
+    """The records of ``recording`` through the writer of ``target``'s format (closed however it ends)."""
     from thymio_bt.logs import open_writer
 
     writer = open_writer(target)
