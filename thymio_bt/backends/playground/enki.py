@@ -51,6 +51,15 @@ class EnkiRobot:
         jeepney = _jeepney()
         connection = jeepney.io.blocking.open_dbus_connection(bus=bus)
         world = jeepney.DBusAddress("/world", bus_name=SERVICE, interface="ch.epfl.mobots.EnkiWorld")
+        try:
+            return cls(connection, cls._first_thymio(jeepney, connection, world, timeout))
+        except BaseException:  # no Playground, or Ctrl-C while waiting: let go of the bus
+            connection.close()
+            raise
+
+    @staticmethod
+    def _first_thymio(jeepney: Any, connection: Any, world: Any, timeout: float) -> str:
+        """The object path of the world's first Thymio, once the Playground has registered."""
         deadline = time.monotonic() + timeout
         while True:
             reply = connection.send_and_get_reply(
@@ -59,7 +68,6 @@ class EnkiRobot:
             if reply.header.message_type == jeepney.MessageType.method_return and reply.body[0]:
                 break
             if time.monotonic() > deadline:
-                connection.close()
                 raise UserError(
                     Problem(
                         f"the Aseba Playground's D-Bus interface did not appear within {timeout:g} s",
@@ -70,7 +78,7 @@ class EnkiRobot:
         reply = connection.send_and_get_reply(
             jeepney.new_method_call(world, "PhysicalObject", "s", (reply.body[0][0],))
         )
-        return cls(connection, reply.body[0])
+        return str(reply.body[0])
 
     def _call(self, message: Any) -> Any:
         """Send ``message``; its reply's body, or RobotLost when the Playground does not answer."""

@@ -5,6 +5,15 @@ Traps measured on the Playground 1.6.99 and avoided here: the Playground needs a
 connect to probe its port can crash it, so readiness is read from ``/proc/net/tcp`` (the port in
 LISTEN); it binds every interface, so the port is a free one.
 
+Nothing it starts outlives a Ctrl-C or a SIGTERM. While a Playground runs, either signal, when
+nobody else handles it (a run's own handler does, from its first tick to its last), stops every
+Playground first, then raises :class:`PlaygroundInterrupted` (a KeyboardInterrupt: the command
+exits 130 or 143). Without that, a SIGTERM while it started (or before the run took over) killed
+thymio-bt and left the Playground, its bus and its folder behind. A signal that comes while a
+program is being started or stopped waits until it is recorded or gone. Started from the main
+thread, the programs also get SIGTERM from the kernel when thymio-bt dies any other way (SIGKILL;
+``setpriv --pdeathsig``).
+
 With the Playground installed (``apt-get install aseba dbus``)::
 
     with Playground.start(world_text, port) as pg:      # a private bus, a temporary HOME
@@ -19,14 +28,19 @@ Example (the port it is given, and how its readiness is seen)::
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import signal
 import socket
 import subprocess
 import tempfile
+import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
+from types import FrameType
+from typing import IO, Any
 
 from thymio_bt.errors import Problem, UserError
 
@@ -54,6 +68,114 @@ def listening(port: int) -> bool:
     return False
 
 
+class PlaygroundInterrupted(KeyboardInterrupt):
+    """SIGINT or SIGTERM while a Playground ran and nobody else handled it: raised once every
+    Playground is stopped, to end the command as the signal would have.
+
+    >>> PlaygroundInterrupted(signal.SIGTERM).exit_code      # the shell's code for the signal
+    143
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+    @property
+    def exit_code(self) -> int:
+        """130 after SIGINT, 143 after SIGTERM (as :class:`~thymio_bt.run.interrupts.Interrupted`)."""
+        return 128 + self.signum
+
+
+#: the signals that would end thymio-bt, and their handlers before any Playground
+_SIGNALS: dict[int, Any] = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
+
+
+class _Guard:
+    """SIGINT and SIGTERM while Playgrounds run (see the module docstring): the live Playgrounds, and
+    the signal held back while one is being started or stopped."""
+
+    def __init__(self) -> None:
+        self.alive: list[Playground] = []
+        self.holding = 0
+        self.pending: int | None = None
+        self.installed: set[int] = set()
+
+    def handle(self, signum: int, frame: FrameType | None) -> None:
+        """The signal handler: stop every Playground and raise, or hold the signal back."""
+        if not self.alive:  # all stopped; another handler put this one back on leaving: be the default
+            signal.signal(signum, _SIGNALS[signum])
+            self.installed.discard(signum)
+            signal.raise_signal(signum)
+        elif self.holding:
+            self.pending = self.pending or signum
+        else:
+            self._fire(signum)
+
+    def _fire(self, signum: int) -> None:
+        for playground in list(self.alive):
+            playground.stop()
+        raise PlaygroundInterrupted(signum)
+
+    @contextlib.contextmanager
+    def held(self) -> Iterator[None]:
+        """Hold signals back for the block; one that came is raised at its end (:meth:`check`)."""
+        self.holding += 1
+        try:
+            yield
+        finally:
+            self.holding -= 1
+        self.check()
+
+    def check(self) -> None:
+        """Act on a signal held back, once nothing holds it any more."""
+        if self.pending is not None and not self.holding:
+            signum, self.pending = self.pending, None
+            self._fire(signum)
+
+    def add(self, playground: Playground) -> None:
+        """A Playground starts: handle the signals left at their defaults (from the main thread only)."""
+        self.alive.append(playground)
+        if threading.current_thread() is threading.main_thread():
+            for sig, default in _SIGNALS.items():
+                if signal.getsignal(sig) == default:
+                    signal.signal(sig, self.handle)
+                    self.installed.add(sig)
+
+    def remove(self, playground: Playground) -> None:
+        """A Playground stopped: after the last one, the defaults again where this handler still is."""
+        if playground in self.alive:
+            self.alive.remove(playground)
+        if not self.alive and threading.current_thread() is threading.main_thread():
+            for sig in list(self.installed):
+                if signal.getsignal(sig) == self.handle:
+                    signal.signal(sig, _SIGNALS[sig])
+                    self.installed.discard(sig)
+
+
+_GUARD = _Guard()
+
+
+#: the longest path of a Unix socket (the bus's) that Linux takes (``sun_path``: 108 bytes with its NUL)
+SOCKET_PATH = 107
+
+
+def _short_tmp() -> str:
+    """The temporary folder, or /tmp when the bus's socket in it would be too long (dbus-daemon then
+    fails: "Socket name too long"; a pytest tmp_path as TMPDIR is that long)."""
+    base = tempfile.gettempdir()
+    room = len(os.fsencode(base)) + len("/thymio-bt-playground-12345678/bus")
+    return base if room <= SOCKET_PATH else "/tmp"
+
+
+def _orphan_proof(command: list[str]) -> list[str]:
+    """``command`` made to end with thymio-bt (SIGTERM from the kernel when it dies), from the main
+    thread only: the signal follows the thread that started it, and a worker thread may end first."""
+    setpriv = shutil.which("setpriv")  # util-linux
+    if setpriv is None or threading.current_thread() is not threading.main_thread():
+        return command
+    return [setpriv, "--pdeathsig", "TERM", "--", *command]
+
+
 class Playground:
     """A running Playground and its private session bus (see the module docstring)."""
 
@@ -68,47 +190,53 @@ class Playground:
                 raise UserError(
                     Problem(f"the 'playground' backend needs {program}, which is not installed", hint=_INSTALL_HINT)
                 )
-        folder = Path(tempfile.mkdtemp(prefix="thymio-bt-playground-"))
+        playground = None
+        try:
+            with _GUARD.held():  # the folder made and recorded, or neither
+                playground = cls(Path(tempfile.mkdtemp(prefix="thymio-bt-playground-", dir=_short_tmp())), [], "", port)
+                playground.bus = f"unix:path={playground.folder / 'bus'}"
+                _GUARD.add(playground)
+            playground._launch(world_text, timeout)
+        except BaseException:
+            if playground is not None:
+                playground.stop()
+            raise
+        return playground
+
+    def _launch(self, world_text: str, timeout: float) -> None:
+        """Start the bus, then the Playground on it, waiting for each."""
+        folder = self.folder
         (folder / "home").mkdir()
         (folder / "run").mkdir(mode=0o700)
         world = folder / "world.playground"
         world.write_text(world_text)
-        bus = f"unix:path={folder / 'bus'}"
-        log = (folder / "playground.log").open("wb")
-        processes: list[subprocess.Popen[bytes]] = []
-        playground = cls(folder, processes, bus, port)
-        try:
-            processes.append(
-                subprocess.Popen(
-                    [DBUS, "--session", "--nofork", f"--address={bus}"],
-                    stdout=log,
-                    stderr=subprocess.STDOUT,
-                    start_new_session=True,
-                )
-            )
-            playground._wait(lambda: (folder / "bus").exists(), timeout, "its D-Bus session bus")
+        with (folder / "playground.log").open("wb") as log:
+            self._spawn([DBUS, "--session", "--nofork", f"--address={self.bus}"], log)
+            self._wait(lambda: (folder / "bus").exists(), timeout, "its D-Bus session bus")
             env = {
                 **os.environ,
                 "HOME": str(folder / "home"),
                 "XDG_RUNTIME_DIR": str(folder / "run"),
                 "QT_QPA_PLATFORM": "offscreen",
-                "DBUS_SESSION_BUS_ADDRESS": bus,
+                "DBUS_SESSION_BUS_ADDRESS": self.bus,
             }
-            processes.append(
+            self._spawn([PLAYGROUND, str(world)], log, env=env)
+        self._wait(lambda: listening(self.port), timeout, f"the robot's port {self.port}")
+
+    def _spawn(self, command: list[str], log: IO[bytes], env: dict[str, str] | None = None) -> None:
+        """Start ``command`` in its own session (a Ctrl-C in the terminal is thymio-bt's to handle),
+        recorded before a signal is acted on."""
+        with _GUARD.held():
+            self.processes.append(
                 subprocess.Popen(
-                    [PLAYGROUND, str(world)],
-                    cwd=folder,
+                    _orphan_proof(command),
+                    cwd=self.folder,
                     env=env,
                     stdout=log,
                     stderr=subprocess.STDOUT,
                     start_new_session=True,
                 )
             )
-            playground._wait(lambda: listening(port), timeout, f"the robot's port {port}")
-        except BaseException:
-            playground.stop()
-            raise
-        return playground
 
     def _wait(self, ready: object, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout
@@ -117,32 +245,43 @@ class Playground:
                 if process.poll() is not None:
                     raise UserError(
                         Problem(
-                            f"the Aseba Playground stopped while starting (exit {process.returncode}); "
-                            f"its output: {self.folder / 'playground.log'}",
+                            f"the Aseba Playground stopped while starting (exit {process.returncode}): "
+                            f"{self._said()}",  # its folder, and the log in it, are removed next
                             hint=_INSTALL_HINT,
                         )
                     )
             if time.monotonic() > deadline:
                 raise UserError(
                     Problem(
-                        f"the Aseba Playground did not open {what} within {timeout:g} s",
-                        hint=f"its output: {self.folder / 'playground.log'}",
+                        f"the Aseba Playground did not open {what} within {timeout:g} s: {self._said()}",
+                        hint="a loaded machine may need more: --backend-opt timeout=30",
                     )
                 )
             time.sleep(0.02)  # realtime: starting a program, not a simulation step
 
+    def _said(self) -> str:
+        """The last lines the bus and the Playground wrote, for an error message."""
+        try:
+            lines = (self.folder / "playground.log").read_text(errors="replace").strip().splitlines()
+        except OSError:
+            lines = []
+        return " / ".join(lines[-3:])[-400:] or "it wrote nothing"
+
     def stop(self) -> None:
-        """Stop every process it started (by PID, the Playground first) and remove its folder."""
-        for process in reversed(self.processes):
-            if process.poll() is None:
-                process.send_signal(signal.SIGTERM)
-                try:
-                    process.wait(3.0)
-                except subprocess.TimeoutExpired:
-                    process.kill()
-                    process.wait()
-        self.processes.clear()
-        shutil.rmtree(self.folder, ignore_errors=True)
+        """Stop every process it started (by PID, the Playground first) and remove its folder; a
+        signal meanwhile (a second Ctrl-C) waits until that is done. Again: no effect."""
+        with _GUARD.held():
+            for process in reversed(self.processes):
+                if process.poll() is None:
+                    process.send_signal(signal.SIGTERM)
+                    try:
+                        process.wait(3.0)
+                    except subprocess.TimeoutExpired:
+                        process.kill()
+                        process.wait()
+            self.processes.clear()
+            shutil.rmtree(self.folder, ignore_errors=True)
+            _GUARD.remove(self)
 
     def __enter__(self) -> Playground:
         return self

@@ -16,7 +16,12 @@ measured with thymiodirect 0.1.2 on the Aseba Playground 1.6.99:
 - a link that fails (a cable pulled, a TCP peer gone) is recorded, not raised in thymiodirect's
   threads (which would print a traceback); a robot that sends nothing for :data:`LOST_AFTER`
   seconds, or a connection that fails, raises
-  :class:`~thymio_bt.robot.interface.RobotLost` at the next read: the run ends as FAILURE ``ROBOT_LOST``.
+  :class:`~thymio_bt.robot.interface.RobotLost` at the next read: the run ends as FAILURE ``ROBOT_LOST``;
+- thymiodirect trusts its peer, so it is given whole messages only, each judged first
+  (:mod:`~thymio_bt.backends.real.frames`): garbage, a message cut short or one no Thymio sends
+  fails the link (RobotLost, with the reason), what a Thymio may ignore is dropped;
+- a ``tcp:HOST:PORT`` device is checked before connecting (:func:`tcp_address`): a port above 65535
+  would wrap round to another one.
 
 With a robot (or the Playground) to talk to::
 
@@ -41,6 +46,7 @@ import threading
 import time
 from typing import TYPE_CHECKING, Any
 
+from thymio_bt.backends.real.frames import HEADER, MAX_PAYLOAD, Gate, LinkError
 from thymio_bt.backends.real.thymio import (
     PROX_VARIABLE,
     SPEED_VARIABLES,
@@ -60,7 +66,12 @@ if TYPE_CHECKING:
 LOST_AFTER = 0.8
 #: How often the robot is asked for its variables (s), and how often it is looked for while connecting.
 REFRESH, DISCOVER = 0.03, 0.1
+#: A message begun but not finished within this long (s) was cut short: the link has failed.
+CUT_SHORT = LOST_AFTER
+#: The variables (name: words) the link reads and writes: a node without them is no Thymio II.
+REQUIRED = {PROX_VARIABLE: 7, **dict.fromkeys((*SPEED_VARIABLES, *TARGET_VARIABLES), 1)}
 _INSTALL_HINT = "pip install 'thymio-bt[aseba]'"
+_TCP_HINT = "write tcp:HOST:PORT with a port from 1 to 65535, e.g. tcp:127.0.0.1:33333"
 
 
 def signed(word: int) -> int:
@@ -68,14 +79,49 @@ def signed(word: int) -> int:
     return word - 0x10000 if word >= 0x8000 else word
 
 
+def tcp_address(device: str) -> tuple[str, int]:
+    """The host and port of a ``tcp:HOST:PORT`` device (an IPv6 host in brackets); a UserError with a
+    hint when the host is empty or the port is not a number from 1 to 65535 (70000 would wrap).
+
+    >>> tcp_address("tcp:127.0.0.1:33333"), tcp_address("tcp:[::1]:33333")
+    (('127.0.0.1', 33333), ('::1', 33333))
+    >>> tcp_address("tcp:127.0.0.1:70000")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: --backend-opt device=tcp:127.0.0.1:70000: the port is 70000, above 65535 (hint: ...)
+    """
+    host, sep, port = device.removeprefix("tcp:").rpartition(":")
+    if host.startswith("[") and host.endswith("]"):
+        host = host[1:-1]
+    if not sep:
+        problem = "no HOST:PORT after tcp:"
+    elif not host.strip():
+        problem = "no host before the port"
+    elif not port:
+        problem = "no port after the host"
+    elif not (port.isascii() and port.isdigit()):
+        problem = f"the port {port!r} is not a number"
+    elif not 1 <= int(port) <= 0xFFFF:
+        problem = f"the port is {int(port)}, " + ("below 1" if int(port) < 1 else "above 65535")
+    else:
+        return host, int(port)
+    raise UserError(Problem(f"--backend-opt device={device}: {problem}", hint=_TCP_HINT))
+
+
 class _Link(io.RawIOBase):
-    """A link to the robot as the byte stream thymiodirect reads. A failed link (a closed socket, a
-    pulled cable) is recorded in ``failed`` (the node reports it as RobotLost) instead of raising in
-    thymiodirect's threads, which would end them with a traceback on the user's terminal.
-    Subclasses say how to receive (b"" when nothing came in time), send and close."""
+    """A link to the robot as the byte stream thymiodirect reads: whole messages only, each judged by
+    a :class:`~thymio_bt.backends.real.frames.Gate` first, so that nothing the peer sends can raise
+    in thymiodirect's threads (which would end them with a traceback on the user's terminal).
+
+    A failed link (a closed socket, a pulled cable, a message cut short or refused) is recorded in
+    ``failed``, which the node reports as RobotLost. Subclasses say how to receive (b"" when nothing
+    came in time), send and close."""
 
     def __init__(self) -> None:
         self.failed: BaseException | None = None
+        self.gate = Gate(REQUIRED)
+        self.stopping = False  # set on close: a message being received is given up
+        self._ready = bytearray()  # whole messages the gate passed, not yet read
 
     def _receive(self, n: int) -> bytes:
         raise NotImplementedError
@@ -87,14 +133,53 @@ class _Link(io.RawIOBase):
         raise NotImplementedError
 
     def read(self, n: int = -1) -> bytes:
-        """Up to ``n`` bytes; b"" when none came in time or the link has failed."""
-        if self.failed is None:
+        """Up to ``n`` bytes of the messages passed; b"" when none came in time or the link has failed."""
+        if n == 0:
+            return b""
+        if not self._ready and self.failed is None:
             try:
-                return self._receive(n)
-            except OSError as exc:  # serial.SerialException is one: the link is gone
+                self._next_message()
+            except OSError as exc:  # serial.SerialException is one, and LinkError: the link is gone
                 self.failed = exc
-        time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
-        return b""
+        if not self._ready:
+            if self.failed is not None:
+                time.sleep(0.05)  # realtime: a dead link (thymiodirect's reader would spin), not a sim step
+            return b""
+        size = len(self._ready) if n < 0 else n
+        data = bytes(self._ready[:size])
+        del self._ready[:size]
+        return data
+
+    def _next_message(self) -> None:
+        """Receive one message (or nothing, when none is begun in time) and keep it if the gate passes it."""
+        header = self._take(HEADER.size, idle=True)
+        if header is None:
+            return
+        length, source, kind = HEADER.unpack(header)
+        if length > MAX_PAYLOAD:
+            raise LinkError(
+                f"a message {length} bytes long arrived (Aseba's are at most {MAX_PAYLOAD}): "
+                "the peer does not speak Aseba, or the line carries garbage"
+            )
+        payload = self._take(length, idle=False) if length else b""
+        if payload is not None and self.gate.admits(source, kind, payload):
+            self._ready += header + payload
+
+    def _take(self, n: int, idle: bool) -> bytes | None:
+        """``n`` bytes; None when ``idle`` and nothing came in time, or on close. LinkError when a
+        message stops arriving for :data:`CUT_SHORT` s."""
+        data = bytearray()
+        since = time.monotonic()
+        while len(data) < n and not self.stopping:
+            chunk = self._receive(n - len(data))
+            if chunk:
+                data += chunk
+                since = time.monotonic()
+            elif idle and not data:
+                return None
+            elif time.monotonic() - since > CUT_SHORT:
+                raise LinkError(f"a message was cut short: nothing more for {CUT_SHORT:g} s")
+        return bytes(data) if len(data) == n else None
 
     def write(self, data: Any) -> int:
         """Send ``data`` (dropped once the link has failed, which ``failed`` says)."""
@@ -107,6 +192,7 @@ class _Link(io.RawIOBase):
 
     def close(self) -> None:
         """Close the link (one already gone is closed)."""
+        self.stopping = True
         with contextlib.suppress(OSError):
             self._shut()
         super().close()
@@ -161,13 +247,8 @@ def _open_stream(device: str, timeout: float) -> Any:
     """The byte stream to ``device``: ``tcp:HOST:PORT``, a serial port, or "" for the only Thymio on USB."""
     Connection = _thymiodirect()
     if device.startswith("tcp:"):
-        host, _, port = device[4:].rpartition(":")
         try:
-            sock = socket.create_connection((host or "127.0.0.1", int(port)), timeout=timeout)
-        except ValueError:
-            raise UserError(
-                Problem(f"bad device '{device}'", hint="write tcp:HOST:PORT, e.g. tcp:127.0.0.1:33333")
-            ) from None
+            sock = socket.create_connection(tcp_address(device), timeout=timeout)
         except OSError as exc:
             raise UserError(
                 Problem(
@@ -248,6 +329,7 @@ class AsebaNode(Node):
         def serve() -> None:  # a daemon thread: its children (thymiodirect's reader) are daemons too
             loop = asyncio.new_event_loop()
             asyncio.set_event_loop(loop)
+            loop.set_exception_handler(lambda loop, context: _failed_in_loop(stream, context))
             connection = Connection(stream, refreshing_rate=REFRESH, discover_rate=DISCOVER, loop=loop)
             connection.set_refreshing_coverage({PROX_VARIABLE, *SPEED_VARIABLES})
             made.update(connection=connection, loop=loop)
@@ -256,26 +338,20 @@ class AsebaNode(Node):
 
         thread = threading.Thread(target=serve, name="aseba", daemon=True)
         thread.start()
-        ready.wait(timeout)
-        connection = made.get("connection")
-        deadline = time.monotonic() + timeout
-        while connection is not None and not connection.remote_node_set and time.monotonic() < deadline:
-            time.sleep(0.02)  # realtime: connecting, waiting for the robot's description
-        if connection is None or not connection.remote_node_set:
-            if connection is not None:
-                connection.shutdown()
+        try:
+            ready.wait(timeout)
+            connection = made.get("connection")
+            deadline = time.monotonic() + timeout
+            if connection is None or not _wait(lambda: bool(connection.remote_node_set), stream, deadline):
+                raise _no_thymio(device, timeout, stream, "answered")
+            node = cls(connection, next(iter(connection.remote_node_set)), made["loop"], device, thread)
+            if not _wait(node._has_variables, stream, time.monotonic() + timeout):
+                raise _no_thymio(device, timeout, stream, "sent its variables")
+        except BaseException:  # a UserError, or Ctrl-C while waiting: let go of the link
+            if made.get("connection") is not None:
+                made["connection"].shutdown()
             stream.close()
-            raise UserError(
-                Problem(
-                    f"no Thymio answered on {device or 'the serial port'} within {timeout:g} s",
-                    hint="switch the robot on; a simulated one needs the Playground running",
-                )
-            )
-        node_id = next(iter(connection.remote_node_set))
-        node = cls(connection, node_id, made["loop"], device, thread)
-        deadline = time.monotonic() + timeout
-        while not node._has_variables() and time.monotonic() < deadline:
-            time.sleep(0.02)  # realtime: waiting for its first variables
+            raise
         node.set_motors(0, 0)
         return node
 
@@ -327,6 +403,7 @@ class AsebaNode(Node):
         self.set_motors(0, 0)
         self._closed = True
         connection = self.connection
+        connection.io.stopping = True  # a message being received is given up
         connection.shutdown()  # its loops end within a read timeout or a refresh
         connection.input_thread.join(1.0)
         if self.loop.is_running():
@@ -335,6 +412,44 @@ class AsebaNode(Node):
         if not self.loop.is_running():
             _finish(self.loop)
         connection.close()
+
+
+def _wait(condition: Any, stream: _Link, deadline: float) -> bool:
+    """Wait until ``condition()`` holds (True), the deadline passes or the link fails (False)."""
+    while not condition():
+        if stream.failed is not None or time.monotonic() > deadline:
+            return False
+        time.sleep(0.02)  # realtime: connecting, waiting for the robot
+    return True
+
+
+def _no_thymio(device: str, timeout: float, stream: _Link, what: str) -> UserError:
+    """Why connecting to ``device`` failed: the link's failure, a node that is no Thymio, or silence."""
+    where = device or "the serial port"
+    if stream.failed is not None:
+        return UserError(
+            Problem(
+                f"the link to {where} failed while connecting: {stream.failed}",
+                hint="is it a Thymio (or the Playground's robot port)? Nothing else speaks Aseba there",
+            )
+        )
+    refused = "; ".join(stream.gate.refused.values())
+    return UserError(
+        Problem(
+            f"no Thymio {what} on {where} within {timeout:g} s" + (f" ({refused})" if refused else ""),
+            hint="another Aseba node answered there: name the Thymio's device or port"
+            if refused
+            else "switch the robot on; a simulated one needs the Playground running",
+        )
+    )
+
+
+def _failed_in_loop(stream: _Link, context: dict[str, Any]) -> None:
+    """thymiodirect raised in its event loop (asyncio would print a traceback): the link has failed,
+    which the next read says."""
+    if stream.failed is None and not stream.stopping:
+        error = context.get("exception")
+        stream.failed = LinkError(f"thymiodirect failed: {error!r}" if error else str(context.get("message")))
 
 
 def _finish(loop: asyncio.AbstractEventLoop) -> None:
