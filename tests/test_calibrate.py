@@ -2,8 +2,13 @@
 simulation (fast) and against the Aseba Playground (real time, CI installs it)."""
 
 import math
+import os
+import shutil
+import signal
 import subprocess
 import sys
+import tempfile
+import time
 from pathlib import Path
 
 import _require
@@ -12,13 +17,17 @@ import pytest
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
 from thymio_bt.mission.expect import front_gap
-from thymio_bt.robot.calibrate import noise_floor, table_rows
+from thymio_bt.robot.calibrate import Stopped, calibrate, noise_floor, table_rows
 from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI, robot_model
 from thymio_bt.run.runner import Run
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
+
+
+def thymio_bt(*args):
+    return subprocess.run([sys.executable, "-m", "thymio_bt", *args], capture_output=True, text=True, timeout=60)
 
 
 def _calibrate(tmp_path, backend, *args, robot="enki"):
@@ -85,6 +94,176 @@ def test_a_bad_profile_is_located(tmp_path):
     mission.write_text("maze: two_parts_maze\nstart: part1\nrobot: missing.yaml\ntree:\n  Stop: {}\n")
     with pytest.raises(UserError, match="missing.yaml"):
         load_mission(mission)
+
+
+@pytest.mark.parametrize(
+    "calibration, said",
+    [
+        ("  distances: [0.01, .nan, 0.05]\n  readings: [4000, 2000, 0]\n", "distance 2 is nan"),
+        ("  distances: [0.01, 0.03, 0.05]\n  readings: [.inf, 2000, 0]\n", "reading 1 is inf"),
+        ("  distances: [0.01, 0.03, 0.05]\n  readings: [4000, 2000, 0]\n  floor: .inf\n", "floor is inf"),
+    ],
+)
+def test_a_profile_with_a_table_of_nan_or_infinity_is_refused_at_its_line(tmp_path, calibration, said):
+    path = tmp_path / "nan.yaml"
+    path.write_text(f"base: enki\nname: nan\ncalibration:\n{calibration}")
+    with pytest.raises(UserError) as info:
+        robot_model(str(path))
+    assert str(info.value).startswith(f"{path}:3:1: 'calibration': {said}: a calibration table holds finite numbers")
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"maze: two_parts_maze\nstart: part1\nrobot: {path.name}\ntree:\n  Stop: {{}}\n")
+    done = thymio_bt("run", str(mission))
+    assert done.returncode == 2 and f"error: {path}:3:1: 'calibration': {said}" in done.stderr, done.stderr
+
+
+def test_an_empty_backend_name_is_refused_as_run_refuses_it(tmp_path):
+    out = tmp_path / "p.yaml"
+    done = thymio_bt("calibrate", "--backend", "", "-o", str(out))
+    run = thymio_bt("run", "square", "--backend", "")
+    assert done.returncode == run.returncode == 2, done.stderr
+    assert "error: --backend: no backend named ''" in done.stderr
+    assert done.stderr.splitlines()[-1] == run.stderr.splitlines()[-1]  # the one check, not a copy
+    assert not out.exists()
+
+
+class _Drives:
+    """A backend that records the drive commands it is given."""
+
+    def __init__(self, backend):
+        self.backend, self.drives = backend, []
+
+    def __getattr__(self, name):
+        return getattr(self.backend, name)
+
+    def drive(self, linear, angular):
+        self.drives.append((linear, angular))
+        self.backend.drive(linear, angular)
+
+
+@pytest.mark.parametrize("ticks, step", [(3, "1/3 speed"), (40, "2/3 proximity")])
+def test_calibrate_stops_at_the_tick_it_is_asked_to_with_the_motors_stopped(ticks, step):
+    from thymio_bt.cli.calibration import _corridor
+
+    spec, device = _corridor("enki", "sim", ())
+    device.request_spawn(device.robot_name, spec.start)
+    asked = []
+
+    def stopped():
+        asked.append(device.time())
+        return len(asked) > ticks
+
+    robot = _Drives(device)
+    with pytest.raises(Stopped) as info:
+        calibrate(robot, device.model, spec.maze, say=lambda text: None, stopped=stopped)
+    device.close()
+    assert info.value.step == step and str(info.value) == f"stopped during {step}"
+    assert len(asked) == ticks + 1 and device.time() == asked[-1]  # asked every tick; nothing ran after
+    assert robot.drives[-1] == (0.0, 0.0) and robot.drives[-2] != (0.0, 0.0)
+
+
+def _started_calibrating(process, step="1/3 speed"):
+    """Wait until ``process`` (calibrate) says it started ``step``; what it said so far."""
+    said = []
+    while not said or step not in said[-1]:
+        line = process.stderr.readline()
+        assert line, "".join(said)
+        said.append(line)
+    return said
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_calibrate_on_a_robot_within_a_second_writing_nothing(tmp_path, signum):
+    """Before: calibrate ignored Ctrl-C and SIGTERM, measured on for 20 s and wrote the profile, exit 0."""
+    _require.module("thymiodirect")
+    from _fake_aseba import FakeThymio
+
+    robot = FakeThymio()
+    out = tmp_path / "p.yaml"
+    args = ["--backend", "aseba", "--backend-opt", f"device={robot.device}", "--backend-opt", "placed=true"]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "thymio_bt", "calibrate", *args, "-o", str(out)], stderr=subprocess.PIPE, text=True
+    )
+    said = _started_calibrating(process)
+    time.sleep(0.5)  # realtime: the robot is driving
+    assert robot.target("left") == robot.target("right") > 0
+    sent = time.monotonic()
+    process.send_signal(signum)
+    rest = process.communicate(timeout=10)[1]
+    robot.close()
+    assert process.returncode == 128 + signum, rest
+    assert robot.stopped_at is not None and robot.stopped_at - sent < 1.0  # the motors, within a second
+    assert robot.target("left") == robot.target("right") == 0
+    name = signal.Signals(signum).name
+    assert f"calibrate: interrupted by {name}, stopped during 1/3 speed: {out} not written" in rest
+    assert "Traceback" not in "".join(said) + rest
+    assert not out.exists()
+
+
+def _playground_calibrate(tmp: Path, out: Path) -> subprocess.Popen:
+    for need in ("asebaplayground", "dbus-daemon"):
+        _require.program(need)
+    for need in ("thymiodirect", "jeepney"):
+        _require.module(need)
+    return subprocess.Popen(
+        [sys.executable, "-m", "thymio_bt", "calibrate", "--backend", "playground", "-o", str(out)],
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "TMPDIR": str(tmp)},
+    )
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_stops_calibrate_on_the_playground_within_a_second_and_stops_the_playground(tmp_path, signum):
+    tmp = Path(tempfile.mkdtemp(prefix="tbt-", dir="/tmp"))  # short: the Playground's bus socket is in it
+    try:
+        process = _playground_calibrate(tmp, tmp_path / "p.yaml")
+        _started_calibrating(process, "2/3 proximity")
+        sent = time.monotonic()
+        process.send_signal(signum)
+        rest = process.communicate(timeout=10)[1]
+        took = time.monotonic() - sent
+        assert process.returncode == 128 + signum, rest
+        assert "stopped during 2/3 proximity" in rest and "Traceback" not in rest
+        assert took < 1.5  # measured 0.2-0.45 s: a tick, the robot's link, the Playground stopped
+        assert list(tmp.iterdir()) == [] and not (tmp_path / "p.yaml").exists()
+        assert _left_in(tmp) == []
+    finally:
+        _end_leftovers(tmp)
+
+
+def test_a_sigterm_while_calibrates_playground_starts_leaves_nothing_behind(tmp_path):
+    tmp = Path(tempfile.mkdtemp(prefix="tbt-", dir="/tmp"))
+    try:
+        process = _playground_calibrate(tmp, tmp_path / "p.yaml")
+        deadline = time.monotonic() + 20
+        while not list(tmp.glob("*/bus")) and time.monotonic() < deadline:
+            time.sleep(0.002)
+        process.send_signal(signal.SIGTERM)
+        rest = process.communicate(timeout=10)[1]
+        assert process.returncode == 143 and "Traceback" not in rest, rest
+        assert list(tmp.iterdir()) == []
+        assert _left_in(tmp) == []
+    finally:
+        _end_leftovers(tmp)
+
+
+def _left_in(tmp: Path) -> list[int]:
+    """The processes still running whose command line names ``tmp`` (a Playground, its bus)."""
+    found = []
+    for cmdline in Path("/proc").glob("[0-9]*/cmdline"):
+        try:
+            if str(tmp).encode() in cmdline.read_bytes():
+                found.append(int(cmdline.parent.name))
+        except OSError:
+            continue
+    return found
+
+
+def _end_leftovers(tmp: Path) -> None:
+    """End what a failing version left in ``tmp`` (this test's own processes), and remove it."""
+    for pid in _left_in(tmp):
+        os.kill(pid, signal.SIGKILL)
+    shutil.rmtree(tmp, ignore_errors=True)
 
 
 def test_the_table_is_the_median_per_bin_strictly_decreasing_and_ends_at_zero():

@@ -165,3 +165,18 @@ def test_the_enki_table_is_its_closed_form_and_sees_to_14_cm():
     # the same reading means a longer distance on Enki's hotter curve
     assert raw_to_metres(3366, ENKI_THYMIO2) == pytest.approx(0.05)
     assert raw_to_metres(3366) == pytest.approx(0.033, abs=0.001)
+
+
+@pytest.mark.parametrize(
+    "distances, readings, floor, said",
+    [
+        ((0.01, math.nan, 0.05), (4000.0, 2000.0, 0.0), 0.0, "distance 2 is nan"),  # passed every ordering check
+        ((0.01, 0.03, math.inf), (4000.0, 2000.0, 0.0), 0.0, "distance 3 is inf"),
+        ((0.01, 0.03, 0.05), (math.inf, 2000.0, 0.0), 0.0, "reading 1 is inf"),
+        ((0.01, 0.03, 0.05), (4000.0, 2000.0, 0.0), math.inf, "floor is inf"),  # every reading noise
+        ((-math.inf, 0.03, 0.05), (4000.0, 2000.0, 0.0), 0.0, "distance 1 is -inf"),
+    ],
+)
+def test_a_table_holds_finite_numbers(distances, readings, floor, said):
+    with pytest.raises(ValueError, match=f"^{said}: a calibration table holds finite numbers$"):
+        CalibrationTable(distances, readings, floor=floor)

@@ -16,8 +16,9 @@ Example::
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 import click
 
@@ -55,7 +56,8 @@ def calibrate_command(backend: str, backend_opts: tuple[str, ...], robot: str, o
     The robot faces a wall along a corridor (a simulator builds it; a real robot is placed at the
     printed pose): 2 s straight, a slow approach to 8 mm, a spin. About 25 s in real time.
     """
-    from thymio_bt.robot.calibrate import calibrate
+    from thymio_bt.robot.calibrate import Stopped, calibrate
+    from thymio_bt.robot.interface import RobotLost
     from thymio_bt.robot.profile import profile_text
 
     try:
@@ -65,18 +67,36 @@ def calibrate_command(backend: str, backend_opts: tuple[str, ...], robot: str, o
         try:
             device.request_spawn(device.robot_name, spec.start)
             device.advance(0.0)
-            with Interrupts():
-                result = calibrate(device, device.model, spec.maze, say=lambda text: click.echo(text, err=True))
-        except ValueError as exc:
+            with Interrupts() as interrupts:  # Ctrl-C and SIGTERM: asked after every tick
+                result = calibrate(
+                    device,
+                    device.model,
+                    spec.maze,
+                    say=lambda text: click.echo(text, err=True),
+                    stopped=lambda: interrupts.signal is not None,
+                )
+        except Stopped as exc:
+            _interrupted(interrupts, exc, output)
+        except (ValueError, RobotLost) as exc:
             raise UserError(f"calibrate: {exc}") from None
         finally:
-            device.close()
+            device.close()  # the motors stopped, the Playground (or the link) closed
         out.write_text(profile_text(result.profile(name or output.stem)))
     except UserError as exc:
         fail(exc)
     for line in result.summary():
         click.echo(line)
     click.echo(f"wrote {output}: use it with --robot {output}", err=True)
+
+
+def _interrupted(interrupts: Interrupts, stopped: Exception, output: Path) -> NoReturn:
+    """A Ctrl-C or SIGTERM stopped the measuring: say so, write nothing, exit with the signal's code
+    (130, 143) as ``run`` does, even if a leftover thread would keep the process alive."""
+    from thymio_bt.run.leftovers import end_despite_threads
+
+    click.echo(f"calibrate: interrupted by {interrupts.name}, {stopped}: {output} not written", err=True)
+    end_despite_threads(interrupts.exit_code)
+    sys.exit(interrupts.exit_code)
 
 
 def _check_request(output: Path, robot: str) -> None:

@@ -15,6 +15,9 @@ Each measure skips its first half second (start-up, the robot's own delays). On 
 ground truth the pose is odometry, which counts wheel turns in the same units: the speed and wheel
 base then only check themselves, while the table is as good as the robot was placed.
 
+``stopped`` is asked after every tick: once it says so (a Ctrl-C), the robot is told to stop and
+:class:`Stopped` is raised, naming the measure it cut short; nothing is measured from half a run.
+
 From the shell::
 
     thymio-bt calibrate --backend playground --robot enki -o enki_measured.yaml
@@ -75,6 +78,18 @@ def arena() -> Maze:
             "spawns": {"start": {"x": START.x, "y": START.y, "yaw": START.yaw}},
         }
     )
+
+
+class Stopped(Exception):
+    """The calibration was stopped (``stopped()`` said so) during the measure named ``step``.
+
+    >>> str(Stopped("2/3 proximity"))
+    'stopped during 2/3 proximity'
+    """
+
+    def __init__(self, step: str) -> None:
+        super().__init__(f"stopped during {step}")
+        self.step = step
 
 
 @dataclass
@@ -171,10 +186,29 @@ def table_rows(samples: list[tuple[float, int]], floor: float = 0.0) -> list[tup
     return rows
 
 
-def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[str], None] = print) -> Calibration:
-    """Run the three measures on ``backend`` (a robot of base ``model`` at :data:`START` in ``maze``)."""
+def calibrate(
+    backend: Backend,
+    model: RobotModel,
+    maze: Maze,
+    say: Callable[[str], None] = print,
+    stopped: Callable[[], bool] = lambda: False,
+) -> Calibration:
+    """Run the three measures on ``backend`` (a robot of base ``model`` at :data:`START` in ``maze``);
+    :class:`Stopped` once ``stopped()`` is true (asked every tick), the robot told to stop."""
     sensor = model.sensor("front_center")
     period = TICK
+    step = ""
+
+    def tick() -> None:
+        backend.advance(period)
+        if stopped():
+            backend.drive(0.0, 0.0)  # a real robot's targets are sent now; closing it stops it again
+            raise Stopped(step)
+
+    def measure(name: str, text: str) -> None:
+        nonlocal step
+        step = name
+        say(f"{name}: {text}")
 
     def truth() -> Pose:
         pose = backend.true_pose()
@@ -186,15 +220,15 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
         out = []
         for _ in range(round(seconds / period)):
             backend.drive(linear, angular)  # again every tick: a robot whose motors vary per command averages
-            backend.advance(period)
+            tick()
             out.append((backend.time(), truth()))
         backend.drive(0.0, 0.0)
         for _ in range(5):  # let it come to rest
-            backend.advance(period)
+            tick()
         return out
 
     # 1. speed, straight at SPEED_UNITS
-    say("1/3 speed: 2 s straight")
+    measure("1/3 speed", "2 s straight")
     speed_cmd = SPEED_UNITS * model.metres_per_unit
     track = run_for(2.0, speed_cmd, 0.0)[5:]
     (t0, p0), (t1, p1) = track[0], track[-1]
@@ -202,7 +236,7 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     metres_per_unit = model.metres_per_unit * speed / speed_cmd
 
     # 2. proximity, a slow approach
-    say(f"2/3 proximity: approaching the wall at {APPROACH_SPEED * 100:g} cm/s")
+    measure("2/3 proximity", f"approaching the wall at {APPROACH_SPEED * 100:g} cm/s")
     raw_of = getattr(backend, "proximity_raw", None)
     if raw_of is None:
         raise ValueError(
@@ -212,7 +246,7 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     samples: list[tuple[float, int]] = []
     for _ in range(round(2 * END / APPROACH_SPEED / period)):
         backend.drive(APPROACH_SPEED, 0.0)
-        backend.advance(period)
+        tick()
         pose, raw = truth(), raw_of()
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         x, y = pose.x + sensor.x * c - sensor.y * s, pose.y + sensor.x * s + sensor.y * c
@@ -224,7 +258,7 @@ def calibrate(backend: Backend, model: RobotModel, maze: Maze, say: Callable[[st
     backend.drive(0.0, 0.0)
 
     # 3. wheel base, a spin after backing off
-    say("3/3 wheel base: backing off 10 cm, then 3 s turning")
+    measure("3/3 wheel base", "backing off 10 cm, then 3 s turning")
     run_for(2.0, -0.05, 0.0)
     spin_wheel = SPIN_UNITS * model.metres_per_unit
     track = run_for(3.0, 0.0, 2 * spin_wheel / model.wheel_separation)[5:]

@@ -75,6 +75,13 @@ class CalibrationTable:
         d, r = self.distances, self.readings
         if len(d) != len(r) or len(d) < 2:
             raise ValueError("a calibration table needs at least two (distance, reading) rows")
+        # NaN passes every ordering check below (each comparison with it is false), and an infinite
+        # row makes the interpolation NaN: neither is a measurement
+        for what, values in (("distance", d), ("reading", r), ("floor", (self.floor,))):
+            bad = next((i for i, value in enumerate(values) if not math.isfinite(value)), None)
+            if bad is not None:
+                row = f" {bad + 1}" if what != "floor" else ""
+                raise ValueError(f"{what}{row} is {values[bad]}: a calibration table holds finite numbers")
         if any(b <= a for a, b in pairwise(d)) or any(b >= a for a, b in pairwise(r)):
             raise ValueError("distances must increase and readings decrease strictly")
         if r[-1] != 0 or d[0] < 0:
@@ -87,6 +94,10 @@ class CalibrationTable:
 
         >>> CalibrationTable.of_rows([(0.01, 4000), (0.05, 0)]).to_raw(0.02)
         3000.0
+        >>> CalibrationTable.of_rows([(0.01, 4000), (math.nan, 0)])
+        Traceback (most recent call last):
+        ...
+        ValueError: distance 2 is nan: a calibration table holds finite numbers
         """
         return cls(tuple(d for d, _ in rows), tuple(float(r) for _, r in rows), source, floor)
 
