@@ -161,6 +161,58 @@ def _ports(rng: random.Random, ident: str, n: int) -> dict:
     return {}
 
 
+#: the dense trees' extra nodes: ID -> (min children, max children)
+DENSE_EXTRA = {"RunOnce": (1, 1), "Precondition": (1, 1), "Switch2": (3, 3)}
+#: the dense trees' conditions: constant ones too, so that nodes are often skipped
+DENSE_CONDITIONS = {
+    "_skipIf": ["true", "false", "v > 1", "h > 0"],
+    "_successIf": ["v == 2", "h > 1", "false"],
+    "_failureIf": ["v == 3", "v + h > 4", "false"],
+    "_while": ["true", "v < 3", "h < 2", "v != 1"],
+    "_onSuccess": ["v += 1", "h += 1"],
+    "_onFailure": ["v -= 1", "h := h + 1"],
+    "_onHalted": ["h += 1", "v += 2"],
+    "_post": ["v := v > 3 ? 0 : v + 1"],
+}
+
+
+def random_dense_tree(rng: random.Random, depth: int = 0, counter=None) -> tuple:
+    """A small tree dense in pre/post-conditions (half its nodes), with RunOnce, Precondition and
+    Switch2 besides :data:`CONTROLS`: skips, halts and scripts meet more often than in
+    :func:`random_scripted_tree` (whose seeds are unchanged)."""
+    counter = counter if counter is not None else [0]
+    if depth < 3 and rng.random() >= 0.2 + 0.2 * depth:
+        ident = rng.choice(sorted(CONTROLS) + sorted(DENSE_EXTRA))
+        low, high = DENSE_EXTRA.get(ident) or CONTROLS[ident][:2]
+        children = [random_dense_tree(rng, depth + 1, counter) for _ in range(rng.randint(low, min(high, 3)))]
+        node = (ident, _dense_ports(rng, ident, len(children)), children)
+    else:
+        roll = rng.random()
+        if roll < 0.2:
+            node = ("Script", rng.choice(SCRIPTS), "")
+        elif roll < 0.3:
+            node = ("ScriptCondition", rng.choice(CHECKS), "")
+        elif roll < 0.4:
+            node = (rng.choice(["AlwaysSuccess", "AlwaysFailure"]), "", "")
+        else:
+            node = random_tree(rng, 99, counter)
+    if rng.random() < 0.5:
+        keys = rng.sample(sorted(DENSE_CONDITIONS), rng.randint(1, 3))
+        node = (*node, {k: rng.choice(DENSE_CONDITIONS[k]) for k in keys})
+    return node
+
+
+def _dense_ports(rng: random.Random, ident: str, n: int) -> dict:
+    """Valid ports of a dense tree's control node."""
+    if ident == "RunOnce":
+        return {"then_skip": rng.choice(["true", "false"])}
+    if ident == "Precondition":
+        return {"if": rng.choice(["v > 1", "h == 0", "true", "false"]), "else": rng.choice(["SUCCESS", "FAILURE"])}
+    if ident == "Switch2":
+        return {"variable": "{v}", "case_1": str(rng.randint(0, 2)), "case_2": str(rng.randint(1, 3))}
+    return _ports(rng, ident, n)
+
+
 def to_scripted_xml(node: tuple) -> str:
     """A scripted tree as BT.CPP XML."""
     attrs = "".join(f' {k}="{v}"' for k, v in (node[3] if len(node) > 3 else {}).items())
@@ -186,7 +238,7 @@ def leaf_scripts(node: tuple, out=None) -> dict:
     out = {} if out is None else out
     if node[0] == "Leaf":
         out[node[2]] = node[1]
-    elif node[0] in CONTROLS:
+    elif isinstance(node[2], list):
         for child in node[2]:
             leaf_scripts(child, out)
     return out

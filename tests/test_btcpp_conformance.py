@@ -7,6 +7,7 @@ import random
 import pytest
 from _btcpp_trees import (
     leaf_scripts,
+    random_dense_tree,
     random_scripted_tree,
     random_tree,
     run_btcpp,
@@ -104,6 +105,15 @@ def build_scripted(node, calls, log, ctx):
         built = cls(ident, cls.Params(), ctx)
     elif ident == "Leaf":
         built = Leaf(node[2], node[1], calls, log)
+    elif ident in ("RunOnce", "Precondition", "Switch2"):
+        children = [build_scripted(child, calls, log, ctx) for child in node[2]]
+        ports = node[1]
+        if ident == "RunOnce":
+            built = bd.RunOnce(ident, children[0], ports["then_skip"] == "true")
+        elif ident == "Precondition":
+            built = bs.Precondition(ident, children[0], bs.parse(ports["if"]), Status[ports["else"]])
+        else:
+            built = bs.Switch(ident, children, ports["variable"], [ports["case_1"], ports["case_2"]])
     else:
         children = [build_scripted(child, calls, log, ctx) for child in node[2]]
         built = build((ident, node[1], [("Leaf", "S", f"_{i}") for i in range(len(children))]), calls, log)
@@ -151,19 +161,97 @@ def run_scripted_here(node, ticks):
     return trace, board
 
 
+def scripted_difference(bt, tree, seed=None):
+    """None when BT.CPP and thymio-bt run the scripted ``tree`` alike, else what differs; "never"
+    when thymio-bt stops a tick that never yields (BT.CPP's tickOnce() would not return: not run there)."""
+    try:
+        got = run_scripted_here(tree, TICKS)
+    except bn.NeverYields:
+        return "never"
+    expected = run_btcpp_xml(bt, scripted_document(tree), leaf_scripts(tree), TICKS)
+    return None if expected == got else (seed, scripted_document(tree), expected, got)
+
+
+def scripted_differences(bt, generator, seeds):
+    """The differences over the trees ``generator`` makes from ``seeds``, and how many never yield."""
+    results = [scripted_difference(bt, generator(random.Random(seed)), seed) for seed in seeds]
+    return [r for r in results if r not in (None, "never")], results.count("never")
+
+
 @pytest.mark.parametrize("chunk", range(3))
 def test_generated_trees_with_scripts_and_conditions_run_as_in_behaviortree_cpp(chunk):
     bt = module("behaviortreepy")
-    differences, never = [], 0
-    for seed in range(chunk * SCRIPTED_TREES // 3, (chunk + 1) * SCRIPTED_TREES // 3):
-        tree = random_scripted_tree(random.Random(seed))
-        try:
-            got = run_scripted_here(tree, TICKS)
-        except bn.NeverYields:  # BT.CPP's tickOnce() would never return: not run there
-            never += 1
-            continue
-        expected = run_btcpp_xml(bt, scripted_document(tree), leaf_scripts(tree), TICKS)
-        if expected != got:
-            differences.append((seed, scripted_document(tree), expected, got))
+    seeds = range(chunk * SCRIPTED_TREES // 3, (chunk + 1) * SCRIPTED_TREES // 3)
+    differences, never = scripted_differences(bt, random_scripted_tree, seeds)
     assert not differences, (len(differences), differences[:1])
     assert never < SCRIPTED_TREES // 100
+
+
+DENSE_TREES = 2000
+
+
+@pytest.mark.parametrize("chunk", range(2))
+def test_trees_dense_in_conditions_run_as_in_behaviortree_cpp(chunk):
+    """Small trees with conditions on half their nodes, RunOnce, Precondition and Switch2: a skipped
+    branch under IfThenElse/WhileDoElse left RUNNING, then halted with its _onHalted (#33)."""
+    bt = module("behaviortreepy")
+    seeds = range(chunk * DENSE_TREES // 2, (chunk + 1) * DENSE_TREES // 2)
+    differences, never = scripted_differences(bt, random_dense_tree, seeds)
+    assert not differences, (len(differences), differences[:1])
+    assert never < DENSE_TREES // 100
+
+
+#: the scripted seeds that differed before #33's fixes (found among 0..40000 of each generator):
+#: IfThenElse/WhileDoElse halted themselves (IDLE) after a SKIPPED branch, where BT.CPP only resets
+#: their children and stays RUNNING, so a later halt runs their _onHalted
+REGRESSIONS = [
+    *((random_scripted_tree, seed) for seed in (7625, 10018, 15296, 16578, 17850, 39149)),
+    *((random_dense_tree, seed) for seed in (2846, 5058, 6567, 12810)),
+]
+#: a pre-condition's status (_failureIf...) must be the status of the node it is on: these need the
+#: change to btcpp_scripted.Conditioned.execute_tick described in docs/btcpp.md (Known)
+NEEDS_CONDITIONED_STATUS = pytest.mark.xfail(
+    strict=True, reason="Conditioned keeps a pre-condition's status on the wrapper only (docs/btcpp.md)"
+)
+REGRESSIONS_CONDITIONED = [
+    pytest.param(random_scripted_tree, s, marks=NEEDS_CONDITIONED_STATUS) for s in (6270, 19793, 35855, 38670)
+]
+
+
+@pytest.mark.parametrize(("generator", "seed"), [*REGRESSIONS, *REGRESSIONS_CONDITIONED])
+def test_seeds_that_differed_run_as_in_behaviortree_cpp(generator, seed):
+    bt = module("behaviortreepy")
+    assert scripted_difference(bt, generator(random.Random(seed)), seed) is None
+
+
+#: hand-written trees for what no generated seed met
+SEQUENCE_KEEPS_SKIPPED_COUNT = (  # BT.CPP's Sequence keeps skipped_count_ after a FAILURE: ticked
+    "WhileDoElse",  # again un-reset (a WhileDoElse's condition), it counts on: all skipped, SKIPPED
+    {},
+    [
+        ("Sequence", {}, [("AlwaysSuccess", "", "", {"_skipIf": "true"}), ("Leaf", "FS", "L1")]),
+        ("Leaf", "S", "L2"),
+        ("Leaf", "R", "L3"),
+    ],
+)
+FORCED_STATUS_STAYS = (  # L1 is FAILURE by _failureIf: re-ticked un-reset, it is FAILURE again
+    "WhileDoElse",  # without running (a stateful action), and its _onFailure runs again
+    {},
+    [
+        ("Leaf", "S", "L1", {"_failureIf": "v == 0", "_onFailure": "h += 1"}),
+        ("Leaf", "S", "L2"),
+        ("Leaf", "RRS", "L3"),
+    ],
+)
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        pytest.param(SEQUENCE_KEEPS_SKIPPED_COUNT, id="sequence-keeps-skipped-count"),
+        pytest.param(FORCED_STATUS_STAYS, id="forced-status-stays", marks=NEEDS_CONDITIONED_STATUS),
+    ],
+)
+def test_hand_written_trees_run_as_in_behaviortree_cpp(tree):
+    bt = module("behaviortreepy")
+    assert scripted_difference(bt, tree) is None

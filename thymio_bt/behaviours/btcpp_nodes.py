@@ -104,9 +104,14 @@ class BtNode(py_trees.composites.Composite):
 
     def halt(self) -> None:
         """BT.CPP's ``halt()``: every child reset (a RUNNING one halted), the node's own state reset."""
+        self.reset_children()
+        self.status = IDLE
+
+    def reset_children(self) -> None:
+        """BT.CPP's ``resetChildren()``: every child reset (a RUNNING one halted); the node's own
+        status is left as it is (RUNNING during its tick: a SKIPPED result keeps it so)."""
         for child in self.children:
             reset(child)
-        self.status = IDLE
 
     def reset_status(self) -> None:
         """BT.CPP's ``resetStatus()``: IDLE, the node's state kept."""
@@ -170,7 +175,7 @@ class _Sequential(BtNode):
     def bt_tick(self) -> Any:
         """BT.CPP's ``SequenceNode::tick`` (and its two siblings)."""
         count = len(self.children)
-        if self.status is not RUNNING:
+        if self.status is IDLE:  # BT.CPP: !isStatusActive(status()); a completed node keeps its count
             self.skipped = 0
         self.status = RUNNING
         while self.index < count:
@@ -187,22 +192,18 @@ class _Sequential(BtNode):
                 if self.memory:
                     for other in self.children[self.index :]:
                         reset(other)
-                else:
-                    self.halt_children_and_restart()
+                else:  # BT.CPP keeps skipped_count_ here (reset when next ticked from IDLE)
+                    self.reset_children()
+                    self.index = 0
                 return status
             self.index += 1
             if self.wakes and before is IDLE and self.index < count:
                 self.emit_wake_up()
                 return RUNNING
         all_skipped = self.skipped == count
-        self.halt_children_and_restart()
-        return SKIPPED if all_skipped else self.go_on
-
-    def halt_children_and_restart(self) -> None:
-        """Every child reset, back to the first child."""
-        for child in self.children:
-            reset(child)
+        self.reset_children()
         self.index = self.skipped = 0
+        return SKIPPED if all_skipped else self.go_on
 
     def halt(self) -> None:
         """BT.CPP's halt: back to the first child (SequenceWithMemory keeps its place)."""
@@ -380,7 +381,8 @@ class IfThenElse(BtNode):
         status = execute(self.children[self.branch])
         if status is RUNNING:
             return RUNNING
-        self.halt()
+        self.reset_children()  # not a halt: a SKIPPED branch leaves this node RUNNING, as in BT.CPP
+        self.branch = 0
         return status
 
     def halt(self) -> None:
@@ -412,5 +414,5 @@ class WhileDoElse(BtNode):
                 status = FAILURE
         if status is RUNNING:
             return RUNNING
-        super().halt()
+        self.reset_children()  # not a halt: a SKIPPED branch leaves this node RUNNING, as in BT.CPP
         return status
