@@ -2,7 +2,9 @@
 
 import json
 import math
+from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
@@ -154,3 +156,11 @@ def test_a_failure_with_no_node_to_blame_prints_no_failed_at_line(capsys):
     _summary(lost)
     out = capsys.readouterr()
     assert "reason: [ROBOT_LOST] nothing answered" in out.err and "failed at" not in out.out + out.err
+
+
+@pytest.mark.parametrize("mission", sorted(p.name for p in Path("missions").glob("*.yaml")))
+def test_tree_draws_every_shipped_mission(mission):
+    """Drawing builds the tree without a robot: no behaviour may need one to be built."""
+    result = CliRunner().invoke(main, ["tree", f"missions/{mission}"])
+    assert result.exit_code == 0, result.output
+    assert len(result.output.splitlines()) >= 2  # the root and its children

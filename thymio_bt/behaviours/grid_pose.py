@@ -77,10 +77,14 @@ class OnGrid(RobotBehaviour):
     ) -> None:
         super().__init__(name, params, ctx, blackboard_refs)
         self.board = self.blackboard("map", write=(params.key,))
-        self.model: RobotModel = self.robot.model
         self.grid = self._grid()
         self._map: CellMap | None = None
         self._goal: set[Cell] | None = None
+
+    @property
+    def model(self) -> RobotModel:
+        """The robot's own geometry (asked when needed: a tree is also built without a robot, to draw it)."""
+        return self.robot.model
 
     def _grid(self) -> tuple[int, int, float, float] | str:
         """cols, rows and the grid's origin (the bottom-left post's centre), or why they are unknown."""

@@ -200,7 +200,8 @@ class MoveUntilWall(RobotBehaviour):
         if not self.wall_seen:
             return self.fail(
                 FailureCode.NO_WALL,
-                f"no wall came within {self.robot.model.range_max:g} m of {self.params.sensor} in {self.params.timeout:g} s",
+                f"no wall came within {self.robot.model.range_max:g} m of {self.params.sensor} "
+                f"in {self.params.timeout:g} s",
             )
         return super().on_timeout()
 
