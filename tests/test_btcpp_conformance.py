@@ -208,14 +208,9 @@ REGRESSIONS = [
     *((random_scripted_tree, seed) for seed in (7625, 10018, 15296, 16578, 17850, 39149)),
     *((random_dense_tree, seed) for seed in (2846, 5058, 6567, 12810)),
 ]
-#: a pre-condition's status (_failureIf...) must be the status of the node it is on: these need the
-#: change to btcpp_scripted.Conditioned.execute_tick described in docs/btcpp.md (Known)
-NEEDS_CONDITIONED_STATUS = pytest.mark.xfail(
-    strict=True, reason="Conditioned keeps a pre-condition's status on the wrapper only (docs/btcpp.md)"
-)
-REGRESSIONS_CONDITIONED = [
-    pytest.param(random_scripted_tree, s, marks=NEEDS_CONDITIONED_STATUS) for s in (6270, 19793, 35855, 38670)
-]
+#: a pre-condition's status (_failureIf...) is the status of the node it is on: a leaf ticked again
+#: un-reset (a WhileDoElse's condition) returns it without running
+REGRESSIONS_CONDITIONED = [(random_scripted_tree, s) for s in (6270, 19793, 35855, 38670)]
 
 
 @pytest.mark.parametrize(("generator", "seed"), [*REGRESSIONS, *REGRESSIONS_CONDITIONED])
@@ -249,7 +244,7 @@ FORCED_STATUS_STAYS = (  # L1 is FAILURE by _failureIf: re-ticked un-reset, it i
     "tree",
     [
         pytest.param(SEQUENCE_KEEPS_SKIPPED_COUNT, id="sequence-keeps-skipped-count"),
-        pytest.param(FORCED_STATUS_STAYS, id="forced-status-stays", marks=NEEDS_CONDITIONED_STATUS),
+        pytest.param(FORCED_STATUS_STAYS, id="forced-status-stays"),
     ],
 )
 def test_hand_written_trees_run_as_in_behaviortree_cpp(tree):

@@ -1,7 +1,8 @@
 """Files the user asked for: ``-`` is standard output, a file is written whole or not at all.
 
 Every command that writes (``--report``, ``sweep --out``, ``schema -o``, ``maze import -o``, ``tree -o``,
-``export -o`` (its log writers write a staged file), ``grade``'s outputs and site, pictures) goes through here, so that the same promises hold everywhere:
+``export -o`` (its log writers write a staged file), ``grade``'s outputs and site, pictures) goes through
+here, so that the same promises hold everywhere:
 
 - the target is checked *before* any work starts (its folder exists and is writable, and it is not
   a FIFO, a device or a folder), so a 200-run sweep does not fail at the end;

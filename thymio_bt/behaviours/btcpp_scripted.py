@@ -316,6 +316,8 @@ class Conditioned(bn.BtNode):
             status = bn.execute(self.children[0])
             if status is bn.SKIPPED:  # the node's status as its tick left it (RUNNING if it set it)
                 self.status = self.children[0].status
+        elif status in (Status.SUCCESS, Status.FAILURE):
+            self.children[0].status = status  # BT.CPP: the node and its conditions have one status
         if status in (Status.SUCCESS, Status.FAILURE):
             self._post("on_success" if status is Status.SUCCESS else "on_failure")
             self._post("post")
