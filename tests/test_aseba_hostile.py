@@ -30,6 +30,7 @@ from _fake_aseba import (
     words,
 )
 
+from thymio_bt.backends.playground.process import _GUARD, PlaygroundInterrupted
 from thymio_bt.backends.real.aseba import tcp_address
 from thymio_bt.errors import UserError
 
@@ -254,3 +255,55 @@ def test_a_signal_while_the_playground_starts_leaves_nothing_behind(moment, sign
         for pid in _ours(tmp):
             os.kill(pid, signal.SIGKILL)
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+class _Started:
+    """Stands for a running Playground in the signal guard: records that it was stopped."""
+
+    def __init__(self):
+        self.stopped = 0
+
+    def stop(self):
+        self.stopped += 1
+        _GUARD.remove(self)
+
+
+def test_a_signal_while_a_playground_runs_stops_it_then_ends_the_command():
+    playground = _Started()
+    _GUARD.add(playground)
+    try:
+        with pytest.raises(PlaygroundInterrupted) as info:
+            signal.raise_signal(signal.SIGTERM)
+            time.sleep(1)  # the handler raises here
+        assert info.value.exit_code == 143 and playground.stopped == 1
+        assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL  # the last one stopped: the default again
+    finally:
+        playground.stop()
+
+
+def test_a_signal_while_a_process_is_started_waits_until_it_is_recorded():
+    playground = _Started()
+    _GUARD.add(playground)
+    try:
+        with pytest.raises(PlaygroundInterrupted) as info, _GUARD.held():
+            signal.raise_signal(signal.SIGINT)
+            time.sleep(0.05)
+            assert playground.stopped == 0  # not yet: held
+        assert info.value.exit_code == 130 and playground.stopped == 1
+    finally:
+        playground.stop()
+
+
+def test_once_every_playground_stopped_a_handler_put_back_by_another_acts_as_the_default():
+    """A run's own handler takes SIGINT over and puts the guard's back when it ends, after the
+    Playground was closed: Ctrl-C is then a plain KeyboardInterrupt again, and the default is restored."""
+    playground = _Started()
+    _GUARD.add(playground)
+    guard = signal.signal(signal.SIGINT, lambda *_: None)  # the run's handler
+    playground.stop()
+    signal.signal(signal.SIGINT, guard)  # the run ends: the guard's handler is back, no Playground
+    with pytest.raises(KeyboardInterrupt) as info:
+        signal.raise_signal(signal.SIGINT)
+        time.sleep(1)
+    assert type(info.value) is KeyboardInterrupt and playground.stopped == 1
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -199,6 +199,20 @@ def test_a_signal_stops_calibrate_on_a_robot_within_a_second_writing_nothing(tmp
     assert not out.exists()
 
 
+def test_a_robot_lost_while_calibrating_is_a_message_not_a_traceback(tmp_path):
+    _require.module("thymiodirect")
+    from _fake_aseba import VARIABLES, FakeThymio, frame, words
+
+    robot = FakeThymio(frame(VARIABLES, words(60000, 1)), after=1.0)  # variables past its memory
+    out = tmp_path / "p.yaml"
+    args = ["--backend", "aseba", "--backend-opt", f"device={robot.device}", "--backend-opt", "placed=true"]
+    done = thymio_bt("calibrate", *args, "-o", str(out))
+    robot.close()
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "error: calibrate: the connection to the Thymio on tcp:127.0.0.1:" in done.stderr
+    assert "node 1 sent variables up to word 60001 of its 11" in done.stderr and not out.exists()
+
+
 def _playground_calibrate(tmp: Path, out: Path) -> subprocess.Popen:
     for need in ("asebaplayground", "dbus-daemon"):
         _require.program(need)
