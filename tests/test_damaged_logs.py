@@ -220,7 +220,7 @@ def test_a_rosbag2_folder_whose_mcap_is_a_fifo_is_refused_at_once(tmp_path):
     assert rc == 2 and "bag_0.mcap in the bag is not a regular file" in text and "Traceback" not in text, text
 
 
-@pytest.mark.parametrize("suffix", [".mcap", ".btlog", ".jsonl"])
+@pytest.mark.parametrize("suffix", [".mcap", ".btlog", ".jsonl", ""])  # "": a rosbag2 folder
 def test_an_export_that_fails_midway_leaves_nothing_behind(good_log, tmp_path, monkeypatch, suffix):
     """Whole or not at all: the writer writes a staged file (outputs.Output.staged), renamed at the end."""
     import thymio_bt.logs as logs

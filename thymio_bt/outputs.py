@@ -33,6 +33,8 @@ thymio_bt.errors.UserError: --report .../run.json: the folder ... does not exist
 from __future__ import annotations
 
 import os
+import secrets
+import shutil
 import sys
 import tempfile
 from collections.abc import Iterator
@@ -93,6 +95,21 @@ class Output:
         finally:
             if tmp is not None:
                 tmp.unlink(missing_ok=True)
+
+    @contextmanager
+    def staged_folder(self) -> Iterator[Path]:
+        """A path for a new folder beside the target (not made yet: the writer makes it), renamed
+        to the target once written, removed on any failure. A target that exists is refused."""
+        if self.path.exists():
+            raise UserError(f"{self.option} {self.path}: exists (hint: remove it, or give another path)")
+        tmp = self.path.with_name(f".{self.path.name}-{secrets.token_hex(4)}-staged")  # no suffix, as the target
+        try:
+            yield tmp
+            os.rename(tmp, self.path)
+        except OSError as exc:
+            raise UserError(f"cannot write {self.path}: {exc.strerror or exc}") from None
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
 
 
 def _mode_for(path: Path) -> int:

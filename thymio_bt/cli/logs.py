@@ -129,7 +129,8 @@ def _write_log(recording: Recording, target: Path) -> None:
     if str(target) == STDOUT:
         _write_records(recording, target)
         return
-    with Output(target, "--output").staged() as staged:
+    output = Output(target, "--output")
+    with output.staged() if target.suffix else output.staged_folder() as staged:  # a rosbag2 folder
         _write_records(recording, staged)
 
 
