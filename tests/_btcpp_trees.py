@@ -129,18 +129,28 @@ def random_scripted_tree(rng: random.Random, depth: int = 0, counter=None) -> tu
         children = [random_scripted_tree(rng, depth + 1, counter) for _ in range(rng.randint(low, high))]
         node = (ident, _ports(rng, ident, len(children)), children)
     else:
-        roll = rng.random()
-        if roll < 0.2:
-            node = ("Script", rng.choice(SCRIPTS), "")
-        elif roll < 0.35:
-            node = ("ScriptCondition", rng.choice(CHECKS), "")
-        elif roll < 0.42:
-            node = (rng.choice(["AlwaysSuccess", "AlwaysFailure"]), "", "")
-        else:
-            node = random_tree(rng, 99, counter)
-    if rng.random() < 0.35:
-        keys = rng.sample(sorted(CONDITIONS), rng.randint(1, 2))
-        node = (*node, {k: rng.choice(CONDITIONS[k]) for k in keys})
+        node = _scripted_leaf(rng, counter, (0.2, 0.35, 0.42))
+    return _conditioned(rng, node, 0.35, CONDITIONS, 2)
+
+
+def _scripted_leaf(rng: random.Random, counter: list, cuts: tuple[float, float, float]) -> tuple:
+    """A Script, ScriptCondition, AlwaysSuccess/Failure or scripted leaf, by where a draw falls
+    among ``cuts``."""
+    roll = rng.random()
+    if roll < cuts[0]:
+        return ("Script", rng.choice(SCRIPTS), "")
+    if roll < cuts[1]:
+        return ("ScriptCondition", rng.choice(CHECKS), "")
+    if roll < cuts[2]:
+        return (rng.choice(["AlwaysSuccess", "AlwaysFailure"]), "", "")
+    return random_tree(rng, 99, counter)
+
+
+def _conditioned(rng: random.Random, node: tuple, chance: float, table: dict, most: int) -> tuple:
+    """``node`` with 1 to ``most`` pre/post-condition attributes of ``table``, with probability ``chance``."""
+    if rng.random() < chance:
+        keys = rng.sample(sorted(table), rng.randint(1, most))
+        node = (*node, {k: rng.choice(table[k]) for k in keys})
     return node
 
 
@@ -187,19 +197,8 @@ def random_dense_tree(rng: random.Random, depth: int = 0, counter=None) -> tuple
         children = [random_dense_tree(rng, depth + 1, counter) for _ in range(rng.randint(low, min(high, 3)))]
         node = (ident, _dense_ports(rng, ident, len(children)), children)
     else:
-        roll = rng.random()
-        if roll < 0.2:
-            node = ("Script", rng.choice(SCRIPTS), "")
-        elif roll < 0.3:
-            node = ("ScriptCondition", rng.choice(CHECKS), "")
-        elif roll < 0.4:
-            node = (rng.choice(["AlwaysSuccess", "AlwaysFailure"]), "", "")
-        else:
-            node = random_tree(rng, 99, counter)
-    if rng.random() < 0.5:
-        keys = rng.sample(sorted(DENSE_CONDITIONS), rng.randint(1, 3))
-        node = (*node, {k: rng.choice(DENSE_CONDITIONS[k]) for k in keys})
-    return node
+        node = _scripted_leaf(rng, counter, (0.2, 0.3, 0.4))
+    return _conditioned(rng, node, 0.5, DENSE_CONDITIONS, 3)
 
 
 def _dense_ports(rng: random.Random, ident: str, n: int) -> dict:
