@@ -131,7 +131,9 @@ def _pacing(factor: float | None) -> float | None:
     "--robot",
     default=None,
     metavar="NAME",
-    help="The robot model: course (default), enki or real (see 'thymio-bt backends').",
+    help="The robot model: course, enki, real or a calibrated profile FILE.yaml; by default the "
+    "mission's, else the backend's own (course in the simulation, enki on the Playground, real on a "
+    "Thymio; see 'thymio-bt backends').",
 )
 @coverage_options("Count each node's ticks and results: the tree's coverage, in the report too.")
 @click.option(
