@@ -77,11 +77,12 @@ def scripts(node: tuple, out=None) -> dict:
     return out
 
 
-def run_btcpp(bt, node: tuple, ticks: int) -> list:
-    """BT.CPP's trace: per tickOnce(), the leaves ticked ("t", name) and halted ("h", name) in
-    order, and the tree's status; it stops when the tree completes."""
+def scripted_factory(bt, plan: dict) -> tuple:
+    """A BT.CPP factory whose leaf ``L`` returns, at each tick, the next status of its script in
+    ``plan`` (by the leaf's name; the last one repeats), and the log it appends ticks ("t", name)
+    and halts ("h", name) to."""
     codes = {"S": bt.NodeStatus.SUCCESS, "F": bt.NodeStatus.FAILURE, "R": bt.NodeStatus.RUNNING}
-    plan, calls, log = scripts(node), {}, []
+    calls, log = {}, []
 
     def step(leaf):
         name = leaf.name()
@@ -93,6 +94,13 @@ def run_btcpp(bt, node: tuple, ticks: int) -> list:
 
     factory = bt.BehaviorTreeFactory()
     factory.register_simple_stateful_action("L", step, step, lambda leaf: log.append(("h", leaf.name())))
+    return factory, log
+
+
+def run_btcpp(bt, node: tuple, ticks: int) -> list:
+    """BT.CPP's trace: per tickOnce(), the leaves ticked ("t", name) and halted ("h", name) in
+    order, and the tree's status; it stops when the tree completes."""
+    factory, log = scripted_factory(bt, scripts(node))
     tree = factory.create_tree_from_text(document(node))
     trace = []
     for _ in range(ticks):
@@ -246,19 +254,7 @@ def leaf_scripts(node: tuple, out=None) -> dict:
 def run_btcpp_xml(bt, xml: str, plan: dict, ticks: int) -> tuple[list, dict]:
     """BT.CPP's trace of a whole XML document (leaves ``L`` scripted by ``plan``) and its final
     entries v and h."""
-    codes = {"S": bt.NodeStatus.SUCCESS, "F": bt.NodeStatus.FAILURE, "R": bt.NodeStatus.RUNNING}
-    calls, log = {}, []
-
-    def step(leaf):
-        name = leaf.name()
-        index = calls.get(name, 0)
-        calls[name] = index + 1
-        log.append(("t", name))
-        script = plan[name]
-        return codes[script[min(index, len(script) - 1)]]
-
-    factory = bt.BehaviorTreeFactory()
-    factory.register_simple_stateful_action("L", step, step, lambda leaf: log.append(("h", leaf.name())))
+    factory, log = scripted_factory(bt, plan)
     tree = factory.create_tree_from_text(xml)
     trace = []
     for _ in range(ticks):

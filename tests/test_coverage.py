@@ -3,9 +3,9 @@ child that ended each composite, merging over runs and processes, and run/sweep 
 reports keep the contract's keys and order and add "coverage" only when asked."""
 
 import json
-import shutil
 import textwrap
 
+import _require
 import pytest
 from click.testing import CliRunner
 
@@ -207,8 +207,8 @@ def test_coverage_tree_draws_a_dot_and_refuses_an_unknown_suffix(tmp_path):
     assert not (tmp_path / "cov.txt").exists()
 
 
-@pytest.mark.skipif(shutil.which("dot") is None, reason="Graphviz's dot draws the .svg")
 def test_coverage_tree_draws_an_svg_with_graphviz(tmp_path):
+    _require.program("dot")  # Graphviz draws the .svg: CI installs it (.ci/setup.d/10-graphviz.sh)
     svg = tmp_path / "cov.svg"
     assert CliRunner().invoke(main, ["run", "square", "-q", "--coverage-tree", str(svg)]).exit_code == 0
     assert "<svg" in svg.read_text()

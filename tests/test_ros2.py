@@ -281,6 +281,11 @@ def _probe_speed(env: Path, domain: int) -> float:
         "while len(got) < 5: rclpy.spin_once(n, timeout_sec=1.0)\n"
         "t = got[-1].twist.twist\nprint(abs(t.linear.x) + abs(t.angular.z))\n"
     )
+    return float(_ros_python(env, domain, script))
+
+
+def _ros_python(env: Path, domain: int, script: str) -> str:
+    """What ``script`` prints, run by the ROS 2 venv's Python on ``domain`` (a separate node)."""
     result = subprocess.run(
         [str(env / "bin" / "python"), "-c", script],
         capture_output=True,
@@ -289,7 +294,7 @@ def _probe_speed(env: Path, domain: int) -> float:
         env=_environment(domain),
     )
     assert result.returncode == 0, result.stderr
-    return float(result.stdout.strip())
+    return result.stdout.strip()
 
 
 def test_a_missing_service_fails_the_run_and_stops_the_motors(ros2_env, tmp_path):

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import _require
 import pytest
-from test_ros2 import MISSIONS, ROOT, _direct, _environment, _pose_at, _run, serving
+from test_ros2 import MISSIONS, ROOT, _direct, _environment, _pose_at, _ros_python, _run, serving
 
 from thymio_bt.backends.sim.world import Simulation
 from thymio_bt.mission import load_mission
@@ -43,15 +43,7 @@ def _echo_world(env: Path, domain: int) -> dict | None:
         "while not got and time.monotonic() < end: rclpy.spin_once(n, timeout_sec=1.0)\n"
         "print(got[0] if got else 'null')\n"
     )
-    result = subprocess.run(
-        [str(env / "bin" / "python"), "-c", script],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        env=_environment(domain),
-    )
-    assert result.returncode == 0, result.stderr
-    return json.loads(result.stdout)
+    return json.loads(_ros_python(env, domain, script))
 
 
 def test_a_mission_on_another_maze_is_refused(ros2_env, tmp_path):
