@@ -23,7 +23,6 @@ class SpinUntilClearParams(BehaviourParams):
 class SpinUntilClear(RobotBehaviour):
     """Turn in place until all five front sensors read nothing (inf)."""
 
-    yaml_name = "SpinUntilClear"
     Params = SpinUntilClearParams
     moves = True
 

@@ -190,3 +190,38 @@ def test_a_plugin_that_is_not_python_is_located_without_running_it(tmp_path):
     with pytest.raises(UserError) as err:
         load_mission(mission, run_plugins=False)
     assert "invalid Python" in err.value.problems[0].message and err.value.problems[0].line == 2
+
+
+SUBCLASS_PLUGIN = '''\
+from thymio_bt.behaviours.maze import WallAhead
+from thymio_bt.behaviours.motion import Stop
+
+class NearWall(WallAhead):
+    """WallAhead under another name."""
+
+class Halt(Stop):
+    """Stop, named by its body."""
+    yaml_name = "HaltNow"
+
+class FullStop(Halt):
+    """A subclass of a plugin's own node."""
+'''
+
+
+@pytest.mark.parametrize("imported", [True, False])
+def test_a_plugin_may_subclass_a_builtin_and_its_own_nodes(tmp_path, imported):
+    """A subclass is a node of its own name (not its parent's, which would clash with the built-in),
+    whether the plugin is imported (run) or only read (validate)."""
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    (tmp_path / "sub.py").write_text(SUBCLASS_PLUGIN)
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "maze: arena\nstart: centre\nplugins: [sub.py]\n"
+        "tree:\n  sequence: [{NearWall: {distance: 3cm}}, HaltNow, FullStop, WallAhead]\n"
+    )
+    result = CliRunner().invoke(main, ["validate", str(mission), *(["--plugins"] if imported else [])])
+    assert result.exit_code == 0, result.output
+    assert ("not checked" in result.output) is not imported

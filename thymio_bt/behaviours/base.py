@@ -10,8 +10,7 @@ Example::
     >>> class CreepParams(BehaviourParams):
     ...     "Creep forward."
     >>> class Creep(RobotBehaviour):
-    ...     "Creep forward until something ends it."
-    ...     yaml_name = "Creep"
+    ...     "Creep forward until something ends it (its YAML name is its class name)."
     ...     Params = CreepParams
     ...     moves = True
     ...     def step(self):
@@ -177,7 +176,7 @@ def node_path(node: py_trees.behaviour.Behaviour) -> str:
 class RobotBehaviour(py_trees.behaviour.Behaviour):
     """Base of the behaviours that act on or sense the robot."""
 
-    #: The name used in mission YAML and in events.
+    #: The name used in mission YAML and in events: the class's name unless its body sets one.
     yaml_name: ClassVar[str] = ""
     #: The pydantic model of the parameters.
     Params: ClassVar[type[BaseModel]] = BehaviourParams
@@ -194,6 +193,12 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     created = 0
     #: the feedback line, or a template and its arguments not formatted yet (see :meth:`say`)
     _feedback: str | tuple[str, tuple[Any, ...]]
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Name the subclass: its own ``yaml_name``, else its class name (never its parent's)."""
+        super().__init_subclass__(**kwargs)
+        if "yaml_name" not in cls.__dict__:
+            cls.yaml_name = cls.__name__
 
     def __init__(
         self, name: str, params: BaseModel, ctx: Context, blackboard_refs: dict[str, str] | None = None

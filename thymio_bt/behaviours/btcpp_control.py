@@ -15,15 +15,16 @@ Example::
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Annotated, Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
-from pydantic import AfterValidator, Field, create_model
+from pydantic import Field, create_model
 
 from thymio_bt.behaviours import btcpp_decorators as bd
 from thymio_bt.behaviours import btcpp_nodes as bn
-from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse
+from thymio_bt.behaviours import btcpp_scripted as bs
+from thymio_bt.behaviours.control_node import ControlNode, ControlParams
 
 #: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
 _PRE = ("failure_if", "success_if", "skip_if", "while_true")
@@ -233,29 +234,10 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
 BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}  # type: ignore[attr-defined]
 
 
-def _script(text: Any) -> Any:
-    """A script port, parsed when the mission is read: its error is the node's, with file:line."""
-    from thymio_bt.behaviours.btcpp_script import ScriptError, parse
-
-    if text is None:
-        return None
-    try:
-        parse(str(text))
-    except ScriptError as exc:
-        raise refuse(f"invalid script '{text}': {exc}", "BT.CPP's script language: see docs/btcpp.md") from None
-    return str(text)
-
-
-Code = Annotated[str, AfterValidator(_script)]
-OptionalCode = Annotated[str | None, AfterValidator(_script)]
-
-
 def _scripted(kind: str) -> Callable[..., Behaviour]:
-    """How the script nodes are built (imported when used: the script language stays out of start-up)."""
+    """How the script nodes are built from their ports."""
 
     def make(name: str, children: list[Behaviour], ports: dict[str, Any], ctx: Any) -> Behaviour:
-        from thymio_bt.behaviours import btcpp_scripted as bs
-
         if kind == "Precondition":
             otherwise = {"SUCCESS": Status.SUCCESS, "FAILURE": Status.FAILURE, "RUNNING": Status.RUNNING}
             return bs.Precondition(name, children[0], bs.parse(ports["if"]), otherwise[ports["else"]])
@@ -278,7 +260,7 @@ BTCPP_SCRIPTED: tuple[type[ControlNode], ...] = (
         _scripted("Precondition"),
         "BT.CPP's Precondition: the child if the script 'if' holds when it starts.",
         **{
-            "if": (Code, ..., "the condition (a script)"),
+            "if": (bs.Code, ..., "the condition (a script)"),
             "else": (Literal["SUCCESS", "FAILURE", "RUNNING"], "FAILURE", "the status otherwise"),
         },
     ),
@@ -300,18 +282,8 @@ BTCPP_SCRIPTED: tuple[type[ControlNode], ...] = (
         "decorator",
         _scripted("conditions"),
         "BT.CPP's pre/post-condition attributes (_skipIf=... on a node in XML) on the node under do.",
-        **{key: (OptionalCode, None, f"BT.CPP's _{key}") for key in (*_PRE, *_POST)},
+        **{key: (bs.OptionalCode, None, f"BT.CPP's _{key}") for key in (*_PRE, *_POST)},
     ),
 )
 BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in BTCPP_SCRIPTED if c.btcpp_id != "conditions"})  # type: ignore[attr-defined]
-BTCPP_IDS.update(
-    {
-        "Script": "bt_script",
-        "ScriptCondition": "bt_script_condition",
-        "SetBlackboard": "bt_set_blackboard",
-        "UnsetBlackboard": "bt_unset_blackboard",
-        "AlwaysSuccess": "bt_always_success",
-        "AlwaysFailure": "bt_always_failure",
-        "Sleep": "bt_sleep",
-    }
-)
+BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in bs.BTCPP_LEAVES})

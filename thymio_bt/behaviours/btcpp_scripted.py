@@ -23,6 +23,7 @@ Example::
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator, MutableMapping
 from typing import Annotated, Any, ClassVar
 
@@ -69,26 +70,40 @@ def run_script(script: Code_, where: str) -> Any:
         raise ScriptError(f"{where}: {exc}") from None
 
 
-def _code(text: str) -> str:
-    """A script parameter, parsed when the mission is read (its error is the node's, with file:line)."""
+def _code(text: Any) -> Any:
+    """A script parameter or port, parsed when the mission is read (its error is the node's, with
+    file:line); None stays None (a pre/post-condition not given)."""
+    if text is None:
+        return None
     try:
-        parse(text)
+        parse(str(text))
     except ScriptError as exc:
         raise refuse(f"invalid script '{text}': {exc}", "BT.CPP's script language: see docs/btcpp.md") from None
-    return text
+    return str(text)
 
 
 Code = Annotated[str, AfterValidator(_code)]
+OptionalCode = Annotated[str | None, AfterValidator(_code)]
 
 
-class _Leaf(RobotBehaviour):
-    """A BT.CPP built-in leaf: no robot, no events; ``bt_sync``: ticked again even once completed."""
+class BtLeaf(RobotBehaviour):
+    """A BT.CPP built-in leaf: no robot, no events; ``bt_sync``: ticked again even once completed.
+
+    Its BT.CPP ID is its class name, its YAML name that ID in snake case after ``bt_``
+    (``ScriptCondition``: ``bt_script_condition``).
+    """
 
     btcpp_id: ClassVar[str] = ""
     bt_sync: ClassVar[bool] = True
     needs_robot = False
     emits_events = False
     fails_on_collision = False
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Name the leaf after BT.CPP's node."""
+        cls.btcpp_id = cls.__name__
+        cls.yaml_name = "bt_" + re.sub(r"(?<!^)(?=[A-Z])", "_", cls.__name__).lower()
+        super().__init_subclass__(**kwargs)
 
 
 class CodeParams(BehaviourParams):
@@ -97,11 +112,9 @@ class CodeParams(BehaviourParams):
     code: Code = Field(description="the script (BT.CPP's script language)")
 
 
-class Script(_Leaf):
+class Script(BtLeaf):
     """BT.CPP's ``Script``: run ``code`` on the blackboard, SUCCESS."""
 
-    yaml_name = "bt_script"
-    btcpp_id = "Script"
     Params = CodeParams
 
     def __init__(self, name: str, params: CodeParams, ctx: Any, blackboard_refs: dict[str, str] | None = None) -> None:
@@ -117,9 +130,6 @@ class Script(_Leaf):
 class ScriptCondition(Script):
     """BT.CPP's ``ScriptCondition``: SUCCESS if ``code`` is true, else FAILURE."""
 
-    yaml_name = "bt_script_condition"
-    btcpp_id = "ScriptCondition"
-
     def step(self) -> Status:
         """The script's truth."""
         return Status.SUCCESS if truth(run_script(self.script, self.name)) else Status.FAILURE
@@ -132,11 +142,9 @@ class SetParams(BehaviourParams):
     output_key: str = Field(description="the entry written")
 
 
-class SetBlackboard(_Leaf):
+class SetBlackboard(BtLeaf):
     """BT.CPP's ``SetBlackboard``: ``output_key`` gets ``value`` (``{key}``: a copy of that entry)."""
 
-    yaml_name = "bt_set_blackboard"
-    btcpp_id = "SetBlackboard"
     Params = SetParams
 
     def step(self) -> Status:
@@ -152,11 +160,9 @@ class KeyParams(BehaviourParams):
     key: str = Field(description="the entry")
 
 
-class UnsetBlackboard(_Leaf):
+class UnsetBlackboard(BtLeaf):
     """BT.CPP's ``UnsetBlackboard``: remove the entry ``key`` (SUCCESS even if there was none)."""
 
-    yaml_name = "bt_unset_blackboard"
-    btcpp_id = "UnsetBlackboard"
     Params = KeyParams
 
     def step(self) -> Status:
@@ -165,22 +171,16 @@ class UnsetBlackboard(_Leaf):
         return Status.SUCCESS
 
 
-class AlwaysSuccess(_Leaf):
+class AlwaysSuccess(BtLeaf):
     """BT.CPP's ``AlwaysSuccess``."""
-
-    yaml_name = "bt_always_success"
-    btcpp_id = "AlwaysSuccess"
 
     def step(self) -> Status:
         """SUCCESS."""
         return Status.SUCCESS
 
 
-class AlwaysFailure(_Leaf):
+class AlwaysFailure(BtLeaf):
     """BT.CPP's ``AlwaysFailure``."""
-
-    yaml_name = "bt_always_failure"
-    btcpp_id = "AlwaysFailure"
 
     def step(self) -> Status:
         """FAILURE."""
@@ -193,11 +193,9 @@ class MsecParams(BehaviourParams):
     msec: int = Field(ge=0, description="milliseconds of simulated time")
 
 
-class Sleep(_Leaf):
+class Sleep(BtLeaf):
     """BT.CPP's ``Sleep``: RUNNING for ``msec`` milliseconds of simulated time, then SUCCESS."""
 
-    yaml_name = "bt_sleep"
-    btcpp_id = "Sleep"
     bt_sync = False
     Params = MsecParams
 
@@ -211,7 +209,7 @@ class Sleep(_Leaf):
 
 
 #: BT.CPP's leaves, as robot behaviours of the mission language
-BTCPP_LEAVES: tuple[type[RobotBehaviour], ...] = (
+BTCPP_LEAVES: tuple[type[BtLeaf], ...] = (
     Script,
     ScriptCondition,
     SetBlackboard,

@@ -48,7 +48,7 @@ class ControlParams(BaseModel):
 class ControlNode:
     """A composite or decorator kind of the mission language."""
 
-    #: the node's name in mission YAML (``sequence``, ``repeat``, ...)
+    #: the node's name in mission YAML (``sequence``, ``repeat``, ...): the class's name unless its body sets one
     yaml_name: ClassVar[str] = ""
     category: ClassVar[Literal["composite", "decorator"]] = "decorator"
     Params: ClassVar[type[BaseModel]] = ControlParams
@@ -61,6 +61,12 @@ class ControlNode:
     short_form: ClassVar[bool] = False
     #: how to write it, for hints and docs
     example: ClassVar[str] = ""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Name the subclass: its own ``yaml_name``, else its class name (never its parent's)."""
+        super().__init_subclass__(**kwargs)
+        if "yaml_name" not in cls.__dict__:
+            cls.yaml_name = cls.__name__
 
     @classmethod
     def keys(cls) -> tuple[str, ...]:

@@ -27,7 +27,6 @@ class DeleteEntity(RobotBehaviour):
         - DeleteEntity: {entity: thymio}
     """
 
-    yaml_name = "DeleteEntity"
     Params = DeleteEntityParams
     needs_robot = False
     fails_on_collision = False
@@ -68,7 +67,6 @@ class SpawnEntity(RobotBehaviour):
         - SpawnEntity: {pose: part2}          # a named spawn of the mission's maze
     """
 
-    yaml_name = "SpawnEntity"
     Params = SpawnEntityParams
     needs_robot = False
     fails_on_collision = False

@@ -106,7 +106,6 @@ class MapWalls(Sensing):
         - MapWalls: {cell: 18cm}
     """
 
-    yaml_name = "MapWalls"
     Params = MapWallsParams
     moves = True
 
@@ -174,7 +173,6 @@ class PlanMove(OnGrid):
         - TurnAngle: {angle: bb:move_turn}
     """
 
-    yaml_name = "PlanMove"
     Params = PlanMoveParams
 
     def __init__(
@@ -224,7 +222,6 @@ class WallMapped(ConditionBehaviour, OnGrid):
         - selector: [WallMapped, {MoveCells: {distance: bb:move_distance}}]
     """
 
-    yaml_name = "WallMapped"
     Params = WallMappedParams
 
     def step(self) -> Status:
@@ -248,7 +245,6 @@ class AtTarget(ConditionBehaviour, OnGrid):
         - repeat: {until: {AtTarget: {target: centre}}, do: ...}
     """
 
-    yaml_name = "AtTarget"
     Params = AtTargetParams
 
     def step(self) -> Status:

@@ -64,7 +64,6 @@ class WallAhead(ConditionBehaviour):
         - guard: {condition: {invert: WallAhead}, do: {MoveDistance: {distance: 1}}}
     """
 
-    yaml_name = "WallAhead"
     Params = WallAheadParams
 
     def step(self) -> Status:
@@ -90,7 +89,6 @@ class SideOpen(ConditionBehaviour):
         - SideOpen: {side: left}
     """
 
-    yaml_name = "SideOpen"
     Params = SideOpenParams
 
     def step(self) -> Status:
@@ -114,7 +112,6 @@ class IsDeadEnd(ConditionBehaviour):
         - IsDeadEnd: {}
     """
 
-    yaml_name = "IsDeadEnd"
     Params = IsDeadEndParams
     needs_robot = False
 
@@ -159,7 +156,6 @@ class ChooseTurn(RobotBehaviour):
         - TurnAngle: {angle: bb:turn_angle}
     """
 
-    yaml_name = "ChooseTurn"
     Params = ChooseTurnParams
     fails_on_collision = False
 

@@ -111,7 +111,6 @@ class MoveUntilWall(RobotBehaviour):
         - MoveUntilWall: {speed: 10cm/s, distance: 5cm}
     """
 
-    yaml_name = "MoveUntilWall"
     Params = MoveUntilWallParams
     moves = True
 
@@ -242,7 +241,6 @@ class MoveDistance(RobotBehaviour):
         - MoveDistance: {distance: 30cm}
     """
 
-    yaml_name = "MoveDistance"
     Params = MoveDistanceParams
     moves = True
 
@@ -328,7 +326,6 @@ class TurnAngle(RobotBehaviour):
         - TurnAngle: {angle: bb:move_turn, pivot: 3mm}
     """
 
-    yaml_name = "TurnAngle"
     Params = TurnAngleParams
     moves = True
     FINE_WINDOW = math.radians(10.0)
@@ -398,7 +395,6 @@ class Stop(RobotBehaviour):
         - Stop: {}
     """
 
-    yaml_name = "Stop"
     Params = StopParams
     moves = True
 
@@ -423,7 +419,6 @@ class Wait(RobotBehaviour):
         - Wait: {seconds: 2}
     """
 
-    yaml_name = "Wait"
     Params = WaitParams
     needs_robot = False
     fails_on_collision = False

@@ -73,7 +73,6 @@ class MoveCells(Sensing):
         - MoveCells: {distance: bb:move_distance, speed: 20cm/s}
     """
 
-    yaml_name = "MoveCells"
     Params = MoveCellsParams
     moves = True
 

@@ -117,7 +117,6 @@ class GoToPose(RobotBehaviour):
         - GoToPose: {goal: [0.5, 0.3], max_speed: 5cm/s}
     """
 
-    yaml_name = "GoToPose"
     Params = GoToPoseParams
     moves = True
 
@@ -158,7 +157,6 @@ class FollowWaypoints(RobotBehaviour):
         - FollowWaypoints: {waypoints: [[0.5, -0.4], [0.5, 0.4]]}
     """
 
-    yaml_name = "FollowWaypoints"
     Params = FollowWaypointsParams
     moves = True
 
@@ -221,7 +219,6 @@ class WaypointsDone(ConditionBehaviour):
         - repeat: {until: WaypointsDone, do: ...}
     """
 
-    yaml_name = "WaypointsDone"
     Params = WaypointsDoneParams
     needs_robot = False
 
@@ -259,7 +256,6 @@ class ObstacleAhead(ConditionBehaviour):
         - ObstacleAhead: {thresholds: [0.025, 0.03, 0.03, 0.03, 0.025]}
     """
 
-    yaml_name = "ObstacleAhead"
     Params = ObstacleAheadParams
 
     def step(self) -> Status:
@@ -325,7 +321,6 @@ class TurnUntilClear(_CountingTurn):
         - TurnUntilClear: {direction: left}
     """
 
-    yaml_name = "TurnUntilClear"
     Params = TurnUntilClearParams
 
     def start(self) -> None:
@@ -370,7 +365,6 @@ class TurnBack(_CountingTurn):
         - TurnBack: {}
     """
 
-    yaml_name = "TurnBack"
     Params = TurnBackParams
 
     def step(self) -> Status:
@@ -407,7 +401,6 @@ class SetBlackboard(RobotBehaviour):
         - SetBlackboard: {key: avoid_turn, value: 0}
     """
 
-    yaml_name = "SetBlackboard"
     Params = SetBlackboardParams
     needs_robot = False
     emits_events = False

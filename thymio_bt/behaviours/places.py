@@ -58,7 +58,6 @@ class OutsideMaze(ConditionBehaviour):
         - repeat: {until: OutsideMaze, do: {sequence: [...]}}
     """
 
-    yaml_name = "OutsideMaze"
     Params = OutsideMazeParams
 
     def step(self) -> Status:
@@ -111,7 +110,6 @@ class InRegion(ConditionBehaviour):
         - InRegion: {}                                   # the maze's goal region
     """
 
-    yaml_name = "InRegion"
     Params = InRegionParams
 
     def step(self) -> Status:

@@ -88,7 +88,6 @@ class WallFollow(RobotBehaviour):
         - WallFollow: {side: left}
     """
 
-    yaml_name = "WallFollow"
     Params = WallFollowParams
     moves = True
 

@@ -62,8 +62,6 @@ class Registry:
         existing = self._classes.get(name)
         if existing is not None and existing is not cls:
             raise ValueError(f"two nodes are named '{name}': {existing.__module__} and {cls.__module__}")
-        if not cls.yaml_name:
-            cls.yaml_name = name
         self._classes[name] = cls
 
     def copy(self) -> Registry:
@@ -157,7 +155,7 @@ class Registry:
         else:
             path = self._plugin_file(target, base_dir, where) if target.endswith(".py") else _source(ref, where)
             try:
-                names = plugin_node_names(path)
+                names = plugin_node_names(path, known={cls.__name__ for cls in self._classes.values()})
             except SyntaxError as exc:
                 raise UserError(
                     Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0, exc.offset or 0)

@@ -20,6 +20,7 @@ Example::
 from __future__ import annotations
 
 import ast
+from collections.abc import Collection
 from pathlib import Path
 
 from py_trees.common import Status
@@ -38,17 +39,20 @@ class UncheckedParams(BaseModel):
     model_config = ConfigDict(extra="allow")
 
 
-def plugin_node_names(path: Path) -> list[str]:
-    """The YAML names of the node classes a plugin file defines, read from its syntax tree."""
+def plugin_node_names(path: Path, known: Collection[str] = ()) -> list[str]:
+    """The YAML names of the node classes a plugin file defines, read from its syntax tree: classes
+    deriving from a thymio-bt base, from a ``known`` node class (``WallFollow``) or from a node
+    class the file defined before."""
     source = read_text(path, "plugin")
     try:
         tree = ast.parse(source, str(path))
     except (RecursionError, MemoryError, ValueError) as exc:  # nested past the parser's stack, a NUL byte
         why = "a NUL byte" if isinstance(exc, ValueError) else "nested too deeply to parse"
         raise SyntaxError(why, (str(path), 1, 1, None)) from None
-    names = []
+    bases, names = {*NODE_BASES, *known}, []
     for node in ast.walk(tree):
-        if isinstance(node, ast.ClassDef) and any(_base_name(b) in NODE_BASES for b in node.bases):
+        if isinstance(node, ast.ClassDef) and any(_base_name(b) in bases for b in node.bases):
+            bases.add(node.name)
             names.append(_yaml_name(node) or node.name)
     return names
 
