@@ -119,6 +119,24 @@ def mission_options(set_help: str, start_help: str) -> Callable[[F], F]:
     return _stacked(options)
 
 
+def backend_options(backend_help: str, default: str | None = None) -> Callable[[F], F]:
+    """Where a command reaches its robot: ``--backend NAME`` and ``--backend-opt KEY=VALUE``, in that order."""
+    options = (
+        click.option(
+            "--backend", "backend", default=default, show_default=default is not None, metavar="NAME", help=backend_help
+        ),
+        click.option(
+            "--backend-opt",
+            "backend_opts",
+            multiple=True,
+            metavar="KEY=VALUE",
+            help="A setting of the backend, e.g. --backend-opt device=/dev/ttyACM0 (repeatable; see "
+            "'thymio-bt backends').",
+        ),
+    )
+    return _stacked(options)
+
+
 def _stacked(options: tuple[Callable[[F], F], ...]) -> Callable[[F], F]:
     """One decorator applying ``options`` so that ``--help`` lists them in the order given."""
 

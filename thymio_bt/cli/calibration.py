@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, NoReturn
 
 import click
 
-from thymio_bt.cli.app import fail, main
+from thymio_bt.cli.app import backend_options, fail, main
 from thymio_bt.cli.running import backend_for
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
@@ -34,15 +34,7 @@ if TYPE_CHECKING:
 
 
 @main.command("calibrate")
-@click.option(
-    "--backend",
-    "backend",
-    default="sim",
-    show_default=True,
-    metavar="NAME",
-    help="The robot to measure: playground, aseba (a real Thymio), sim, ... (see 'thymio-bt backends').",
-)
-@click.option("--backend-opt", "backend_opts", multiple=True, metavar="KEY=VALUE", help="A setting of the backend.")
+@backend_options("The robot to measure: playground, aseba (a real Thymio), sim, ... (see 'thymio-bt backends').", "sim")
 @click.option(
     "--robot", default="enki", show_default=True, help="The built-in model to start from (course, enki, real)."
 )

@@ -32,6 +32,7 @@ import click
 
 from thymio_bt.cli.app import (
     POSITIVE,
+    backend_options,
     coverage_options,
     fail,
     json_text,
@@ -112,20 +113,9 @@ def _pacing(factor: float | None) -> float | None:
 @viewer_options
 @path_option("--log", "log", help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
 @click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
-@click.option(
-    "--backend",
-    "backend",
-    default=None,
-    metavar="NAME",
-    help="Where the mission runs: sim (default: the pymunk simulation) or another backend "
-    "(see 'thymio-bt backends'); default: the mission's backend: block, else sim.",
-)
-@click.option(
-    "--backend-opt",
-    "backend_opts",
-    multiple=True,
-    metavar="KEY=VALUE",
-    help="A setting of the backend, e.g. --backend-opt device=/dev/ttyACM0 (repeatable).",
+@backend_options(
+    "Where the mission runs: sim (default: the pymunk simulation) or another backend "
+    "(see 'thymio-bt backends'); default: the mission's backend: block, else sim."
 )
 @click.option(
     "--robot",
