@@ -31,13 +31,10 @@ from thymio_bt.maze import Maze
 from thymio_bt.maze.files import load_maze, resolve_maze
 from thymio_bt.maze.generate import contest_maze, mirrored, path_maze, perfect_maze, random_path, turns_along
 from thymio_bt.outputs import Output
-from thymio_bt.robot.noise import REALISTIC
+from thymio_bt.robot.noise import REALISTIC, NoiseConfig
 
 if TYPE_CHECKING:
     from thymio_bt.mission import Mission
-
-#: the settings of a variant with its noise off
-QUIET = {"noise.wheel": "0", "noise.odometry": "0", "noise.range_sd": "0"}
 
 
 @dataclass
@@ -84,9 +81,7 @@ class World:
             start = "start"
         if maze is not None and start is not None:
             _check_start(variant.name, maze, start, variant.robot)
-        noise = (
-            {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()} if variant.noise == "realistic" else QUIET
-        )
+        noise = (REALISTIC if variant.noise == "realistic" else NoiseConfig()).settings()
         settings = {**noise, **{k: str(v) for k, v in variant.set.items()}, "robot": variant.robot}
         return cls(
             variant.name, maze_file, maze, start, settings, variant.seed_list, variant.goal, turns, variant.robot

@@ -38,6 +38,16 @@ class NoiseConfig(BaseModel):
         ),
     )
 
+    def settings(self) -> dict[str, str]:
+        """These values as a mission's ``--set`` overrides (what a sweep or a graded world passes on).
+
+        >>> NoiseConfig().settings()
+        {'noise.range_sd': '0', 'noise.wheel': '0', 'noise.odometry': '0'}
+        >>> REALISTIC.settings()["noise.wheel"]
+        '0.027'
+        """
+        return {f"noise.{name}": repr(value).removesuffix(".0") for name, value in self.model_dump().items()}
+
     @property
     def enabled(self) -> bool:
         """Whether any noise model is on."""

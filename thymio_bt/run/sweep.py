@@ -295,7 +295,7 @@ def sweep(
     from thymio_bt.run.coverage import Coverage
 
     interrupts = interrupts or Interrupts()
-    settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
+    settings = REALISTIC.settings()
     settings.update(overrides or {})
     spec = load_mission(mission, settings, maze=maze, start=start)  # fail fast, in this process
     overrides_key = tuple(sorted(settings.items()))
