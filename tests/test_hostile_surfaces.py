@@ -83,10 +83,16 @@ def test_a_plugin_fault_ends_the_run_failure_with_report_and_log(tmp_path, where
         assert last["status"] == "FAILURE" and last["code"] == "EXCEPTION"
 
 
-def test_a_plugin_thread_left_running_does_not_keep_the_process_alive(tmp_path):
+@pytest.mark.parametrize(
+    "command",
+    [CLI, [sys.executable, "-m", "thymio_bt.cli"], [str(Path(sys.executable).with_name("thymio-bt"))]],
+    ids=["python -m thymio_bt", "python -m thymio_bt.cli", "thymio-bt"],
+)
+def test_a_plugin_thread_left_running_does_not_keep_the_process_alive(tmp_path, command):
     start = "import threading, time; threading.Thread(target=time.sleep, args=(3600,), name='sleeper').start()"
     mission = hostile(tmp_path, step=f"if not hasattr(self, 'once'): self.once = 1; {start}")
-    done = cli(["run", mission.name, "--report", "r.json"], tmp_path, timeout=60)
+    args = [*command, "run", mission.name, "--report", "r.json"]
+    done = subprocess.run(args, cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert "'sleeper'" in done.stderr and "Traceback" not in done.stderr
     assert json.loads((tmp_path / "r.json").read_text())["status"] == "SUCCESS"

@@ -43,10 +43,15 @@ def end_despite_threads(code: int) -> bool:
 
 
 def _thymio_bt_process() -> bool:
-    """Whether this process is the ``thymio-bt`` command (its script, or ``python -m thymio_bt``)."""
+    """Whether this process is the ``thymio-bt`` command (its script, ``python -m thymio_bt`` or
+    ``python -m thymio_bt.cli``)."""
     main = sys.modules.get("__main__")
     spec = getattr(main, "__spec__", None)
-    return Path(sys.argv[0]).name == "thymio-bt" or getattr(spec, "name", "") == "thymio_bt.__main__"
+    return Path(sys.argv[0]).name == "thymio-bt" or getattr(spec, "name", "") in _MAIN_MODULES
+
+
+#: the modules that run the command under ``python -m``
+_MAIN_MODULES = ("thymio_bt.__main__", "thymio_bt.cli.__main__")
 
 
 def _end_now(code: int) -> None:
