@@ -225,3 +225,17 @@ def test_a_plugin_may_subclass_a_builtin_and_its_own_nodes(tmp_path, imported):
     result = CliRunner().invoke(main, ["validate", str(mission), *(["--plugins"] if imported else [])])
     assert result.exit_code == 0, result.output
     assert ("not checked" in result.output) is not imported
+
+
+def test_a_plugin_that_failed_to_import_fails_again_in_the_same_process(tmp_path):
+    """The second mission naming a broken plugin gets the same error, not the half-run module."""
+    (tmp_path / "broken.py").write_text(
+        "from thymio_bt.behaviours import RobotBehaviour\n"
+        "class Half(RobotBehaviour):\n    pass\n"
+        "raise ValueError('late')\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [broken.py]\ntree: Half\n")
+    for _ in range(2):
+        with pytest.raises(UserError, match="ValueError: late"):
+            load_mission(mission)

@@ -166,7 +166,9 @@ class Registry:
 
 
 def _import_file(path: Path) -> ModuleType:
-    """The module of a ``.py`` plugin file, run once per process (a name of its own in ``sys.modules``)."""
+    """The module of a ``.py`` plugin file, run once per process (a name of its own in ``sys.modules``);
+    one whose code raised is forgotten, as Python's import does, so the next load raises again rather
+    than hand out a half-run module."""
     name = f"thymio_bt_plugin_{abs(hash(str(path)))}"
     module = sys.modules.get(name)
     if module is None:
@@ -174,7 +176,11 @@ def _import_file(path: Path) -> ModuleType:
         assert spec and spec.loader
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
-        spec.loader.exec_module(module)
+        try:
+            spec.loader.exec_module(module)
+        except BaseException:
+            del sys.modules[name]
+            raise
     return module
 
 
