@@ -247,3 +247,18 @@ def test_the_coverage_tree_says_true_and_false_for_conditions_and_marks_nodes_ne
     assert lines[-1] == "--> Wait never ticked"
     dot = coverage_dot(data, conditions={"WallAhead"})
     assert "color=red" in dot and "style=dashed" in dot
+
+
+def test_tree_shows_the_coverage_a_report_holds_and_refuses_another_tree_s(tmp_path):
+    report, dot = tmp_path / "r.json", tmp_path / "c.dot"
+    assert CliRunner().invoke(main, ["run", "square", "-q", "--coverage", "--report", str(report)]).exit_code == 0
+    shown = CliRunner().invoke(main, ["tree", "missions/square.yaml", "--coverage", str(report), "-o", str(dot)])
+    assert shown.exit_code == 0, shown.output
+    assert shown.output.startswith("tree coverage over 1 run: 4 of 4 nodes ticked\n-^- four sides")
+    assert dot.read_text().startswith("digraph coverage {") and "ended it x4" in dot.read_text()
+    other = CliRunner().invoke(main, ["tree", "missions/maze_part1_2.yaml", "--coverage", str(report)])
+    assert other.exit_code == 2 and "its coverage is of another tree" in other.output
+    plain = tmp_path / "plain.json"
+    assert CliRunner().invoke(main, ["run", "square", "-q", "--report", str(plain)]).exit_code == 0
+    none = CliRunner().invoke(main, ["tree", "missions/square.yaml", "--coverage", str(plain)])
+    assert none.exit_code == 2 and "holds no tree coverage" in none.output and "--coverage --report" in none.output

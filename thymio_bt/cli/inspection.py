@@ -157,14 +157,34 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
     metavar="OUT.xml",
     help="Write the tree as BehaviorTree.CPP v4 XML (Groot2 opens it) instead of a drawing.",
 )
+@path_option(
+    "--coverage",
+    "coverage_report",
+    metavar="REPORT.json",
+    help="Show the tree with the coverage that REPORT holds: the JSON of 'run --coverage --report' or "
+    "'sweep --coverage --out' for this mission.",
+)
 @click.option("--plugins", is_flag=True, help="Import the mission's plugins (runs their code; default: read only).")
-def tree(mission: Path, fmt: str | None, output: Path | None, btcpp: Path | None, plugins: bool) -> None:
-    """Print the tree of MISSION; write it as .dot/.svg/.png or BT.CPP XML when asked."""
+def tree(
+    mission: Path,
+    fmt: str | None,
+    output: Path | None,
+    btcpp: Path | None,
+    coverage_report: Path | None,
+    plugins: bool,
+) -> None:
+    """Print the tree of MISSION; write it as .dot/.svg/.png or BT.CPP XML when asked.
+
+    With --coverage, the tree shows how often each node ran and with what result, from a report
+    written earlier (no run now).
+    """
     try:
         if btcpp is not None:
+            if coverage_report is not None:
+                raise UserError("--btcpp writes the tree alone (hint: drop --coverage, or --btcpp)")
             _write_btcpp(mission, btcpp, plugins)
         else:
-            _draw_tree(mission, fmt, output, plugins)
+            _draw_tree(mission, fmt, output, plugins, coverage_report)
     except UserError as exc:
         fail(exc)
 
@@ -180,9 +200,10 @@ def _write_btcpp(mission: Path, btcpp: Path, plugins: bool) -> None:
         click.echo(f"wrote {out}", err=True)
 
 
-def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: bool) -> None:
-    """``tree``: print the tree and, with a format (a flag, or ``output``'s suffix), write it as .dot/.svg/.png."""
-    from thymio_bt.viz.terminal import export_tree, tree_text
+def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: bool, report: Path | None) -> None:
+    """``tree``: print the tree and, with a format (a flag, or ``output``'s suffix), write it as
+    .dot/.svg/.png; with a ``report``, the tree with the coverage it holds."""
+    from thymio_bt.viz.terminal import coverage_text, export_tree, tree_text
 
     if fmt is None and output is not None:
         fmt = output.suffix.lower().lstrip(".")
@@ -191,15 +212,48 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
                 f"--output {output}: cannot tell the format from '{output.suffix or 'no extension'}' "
                 f"(hint: end the name with .dot, .svg or .png, or add --dot/--svg/--png)"
             )
+    coverage, conditions = _coverage_of(report, mission, plugins) if report is not None else (None, set())
+    text = tree_text(mission, plugins) if coverage is None else coverage_text(coverage, conditions)
     if fmt is None:
-        click.echo(tree_text(mission, plugins))
+        click.echo(text)
         return
     out = Output(output if output is not None else Path(mission.stem).with_suffix(f".{fmt}"), "--output")
     if not out.is_stdout:
-        click.echo(tree_text(mission, plugins))
-    export_tree(mission, out, fmt, plugins)
+        click.echo(text)
+    export_tree(mission, out, fmt, plugins, coverage, conditions)
     if not out.is_stdout:
         click.echo(f"wrote {out}", err=True)
+
+
+def _coverage_of(report: Path, mission: Path, plugins: bool) -> tuple[dict[str, Any], set[str]]:
+    """The coverage ``report`` holds, checked to be of ``mission``'s tree, and the mission's condition names."""
+    from thymio_bt.inputs.reading import read_text
+    from thymio_bt.mission import load_mission
+    from thymio_bt.mission.tree_rules import condition_names
+    from thymio_bt.run.coverage import plan_paths
+
+    text = read_text(report, "report")
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise UserError(f"{report}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") from None
+    coverage = data.get("coverage") if isinstance(data, dict) else None
+    if not (isinstance(coverage, dict) and isinstance(coverage.get("nodes"), list) and "runs" in coverage):
+        raise UserError(
+            f"{report}: holds no tree coverage (hint: write one with 'thymio-bt run {mission} --coverage "
+            f"--report {report.name}' or 'thymio-bt sweep {mission} --coverage --out {report.name}')"
+        )
+    spec = load_mission(mission, run_plugins=plugins)
+    ours = [path for _, path, _ in plan_paths(spec.tree)]
+    theirs = [node.get("path") if isinstance(node, dict) else None for node in coverage["nodes"]]
+    if ours != theirs:
+        pairs = zip(ours, theirs, strict=False)  # the first difference, if the shorter list has one
+        differs = next((f"'{a}' here, '{b}' there" for a, b in pairs if a != b), "a node more or less")
+        raise UserError(
+            f"{report}: its coverage is of another tree than {mission}'s ({differs}) "
+            "(hint: run the mission as it is now with --coverage)"
+        )
+    return coverage, condition_names(spec.registry)
 
 
 @main.command()

@@ -35,6 +35,7 @@ LIMITS = {
     "maze": 1 * MB,
     "world": 8 * MB,
     "log": 512 * MB,
+    "report": 512 * MB,
 }
 
 

@@ -83,14 +83,20 @@ def tree_text(mission_path: Path, run_plugins: bool = False) -> str:
 
 
 def export_tree(
-    mission_path: Path, out: Output, fmt: str, run_plugins: bool = False, coverage: Mapping[str, Any] | None = None
+    mission_path: Path,
+    out: Output,
+    fmt: str,
+    run_plugins: bool = False,
+    coverage: Mapping[str, Any] | None = None,
+    conditions: Collection[str] = (),
 ) -> None:
     """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``;
-    with ``coverage`` (a coverage JSON of this mission), the tree drawn with its counts."""
+    with ``coverage`` (a coverage JSON of this mission), the tree drawn with its counts (``conditions``
+    as in :func:`coverage_dot`)."""
     source = (
         py_trees.display.dot_tree(_build(mission_path, run_plugins)).to_string()
         if coverage is None
-        else coverage_dot(coverage)
+        else coverage_dot(coverage, conditions)
     )
     write_graph(source, out, fmt, f"thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot")
 
