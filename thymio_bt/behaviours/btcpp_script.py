@@ -1,86 +1,133 @@
 """BT.CPP 4's script language (``Script``, ``ScriptCondition``, ``Precondition``, ``_skipIf``...),
 parsed into Python closures by a small recursive-descent parser: nothing is ever ``eval``-ed.
 
-Values are numbers, strings (``'text'``), booleans (``true``/``false``) and blackboard entries by
-name; an enum (a name given in ``enums``) stands for its number. Operators, loosest first:
-assignment (``:=`` creates an entry, ``=`` writes an existing one, ``+= -= *= /=``), the ternary
-``c ? a : b``, ``||``, ``&&``, comparisons (``== != < <= > >=``), ``|``, ``^``, ``&``, ``+ -``
-and ``..`` (string concatenation), ``* /``, then ``!``, ``-`` and ``~``. Statements are separated by
-``;``; a script's value is its last statement's.
+It follows BT.CPP 4.8 (the version behaviortreepy bundles) as it behaves, checked against it by
+``tests/test_btcpp_script.py``, quirks included:
+
+- values are whole numbers (``3``, ``0x10``, ``true`` is 1), doubles (``2.5``, ``1e3``), strings
+  (``'text'`` or ``"text"``) and blackboard entries by name; an enum stands for its number;
+- arithmetic (``+ - * /``) gives a double; ``/`` by zero gives ``inf`` or ``nan``; ``+`` of two
+  strings joins them; any other mix of a string and a number is an error, as is ``..`` (string
+  concatenation) of two numbers; a double in a string reads as C's ``%f`` (``2.500000``);
+- ``a - b + c`` is ``a - (b + c)``: BT.CPP evaluates ``+ -`` and ``* /`` right to left;
+- one expression uses one family of operators, arithmetic (``+ - * /``, prefix ``-``), bitwise
+  (``& | ^``, prefix ``~ !``) or concatenation (``..``): mixing them needs parentheses;
+- comparisons chain (``a < b < c``), compare a string with a number as a number and numbers
+  within 1.2e-7 as equal; ``&&`` and ``||`` evaluate both sides, left to right at one level, and
+  want 0 or 1 (or a double); comparisons and logic give 1.0 or 0.0;
+- ``c ? a : b`` does not chain without parentheses, nor does an assignment; ``:=`` creates an
+  entry, ``=`` writes an existing one converted to its type (a whole-number entry refuses a
+  fraction), ``+= -= *= /=`` compute in doubles (``+=`` of a string joins).
+
+Statements are separated by ``;``; a script's value is its last statement's.
 
 Example::
 
     >>> board = {}
     >>> run = parse("count := 3; count += 2; msg := 'n=' .. count; count > 4 && msg != ''")
     >>> run(board), board
-    (True, {'count': 5, 'msg': 'n=5'})
-    >>> parse("half := 5 / 2; 'h=' .. half")(board)           # as BT.CPP writes a double
+    (1.0, {'count': 5, 'msg': 'n=5'})
+    >>> parse("half := 5 / 2; 'h=' .. half")(board)           # a double, as BT.CPP writes it
     'h=2.500000'
-    >>> parse("x := (1 + 2) * 4 / 3")(board), parse("x == 4 ? 'four' : 'other'")(board)
-    (4.0, 'four')
-    >>> parse("x := ")
-    Traceback (most recent call last):
-    ...
-    thymio_bt.behaviours.btcpp_script.ScriptError: expected a value at the end of the script
+    >>> parse("x := 10 - 4 - 3")(board)                       # 10 - (4 - 3), as BT.CPP computes it
+    9.0
+    >>> try:
+    ...     parse("x := 1 + 2 & 3")
+    ... except ScriptError as exc:
+    ...     print(exc)
+    '&' after '+': arithmetic, bitwise and '..' do not mix without parentheses
 """
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable, MutableMapping
 from typing import Any
+
+from thymio_bt.behaviours.btcpp_values import (
+    INT64,
+    ScriptError,
+    arith,
+    bits,
+    compare,
+    concat,
+    converted,
+    is_number,
+    logic,
+    shown,
+    string_number,
+    ternary_truth,
+    text,
+    unary,
+)
 
 Board = MutableMapping[str, Any]
 Script = Callable[[Board], Any]
 
 _TOKEN = re.compile(
-    r"\s*(?:(?P<num>0x[0-9a-fA-F]+|\d+\.\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?|\d+(?:[eE][-+]?\d+)?)"
+    r"\s*(?:(?P<num>0[xX][0-9a-fA-F]+|\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)"
     r"|(?P<str>'[^']*'|\"[^\"]*\")"
-    r"|(?P<name>[A-Za-z_@][A-Za-z0-9_.@]*(?<!\.))"
+    r"|(?P<name>[A-Za-z_@][A-Za-z0-9_]*)"
     r"|(?P<op>:=|\+=|-=|\*=|/=|==|!=|<=|>=|&&|\|\||\.\.|[-+*/<>!?:;()=&|^~]))"
 )
 _ASSIGN = (":=", "=", "+=", "-=", "*=", "/=")
 _COMPARE = ("==", "!=", "<", "<=", ">", ">=")
-
-
-class ScriptError(ValueError):
-    """A script that does not parse, or that fails as it runs (a missing entry, a wrong type)."""
+#: the operator families an expression may not mix (BT.CPP's grammar: ``dsl::groups``)
+_FAMILY = {"+": "arithmetic", "-": "arithmetic", "*": "arithmetic", "/": "arithmetic"}
+_FAMILY.update({"&": "bitwise", "|": "bitwise", "^": "bitwise", "~": "bitwise", "!": "bitwise", "..": "concatenation"})
 
 
 def tokenize(text: str) -> list[tuple[str, Any]]:
     """The script's tokens: (kind, value) with kind ``num``, ``str``, ``name`` or ``op``."""
     tokens: list[tuple[str, Any]] = []
     position = 0
-    text = text.rstrip()
-    while position < len(text):
-        match = _TOKEN.match(text, position)
+    end = len(text.rstrip())
+    while position < end:
+        match = _TOKEN.match(text, position, end)
         if match is None or match.end() == position:
             raise ScriptError(f"unexpected character {text[position:].lstrip()[:1]!r} at column {position + 1}")
         kind = match.lastgroup or ""
         value: Any = match.group(kind)
         if kind == "num":
-            value = (
-                int(value, 16)
-                if value.startswith("0x")
-                else float(value)
-                if "." in value or "e" in value.lower()
-                else int(value)
-            )
+            value = _literal(value, text[match.end() : match.end() + 1])
         elif kind == "str":
             value = value[1:-1]
+        elif kind == "name" and re.match(r"(?:true|false)\w", value):
+            raise ScriptError(f"'{value}': a name may not start with true or false")
         tokens.append((kind, value))
         position = match.end()
     return tokens
 
 
+def _literal(text: str, after: str) -> int | float:
+    """A number literal: a whole number (int64) or a double; a letter or ``.`` right after it is an error."""
+    if after == "." or after.isalpha() or after == "_":
+        raise ScriptError(f"invalid suffix on the number {text}{after}")
+    if text[:2] in ("0x", "0X"):
+        value: int | float = int(text, 16)
+    elif "." in text or "e" in text.lower():
+        value = float(text)
+        if math.isinf(value):
+            raise ScriptError(f"the number {text} is out of range")
+        return value
+    else:
+        value = int(text)
+    if not INT64[0] <= value <= INT64[1]:
+        raise ScriptError(f"the number {text} is out of range")
+    return value
+
+
 def parse(text: str, enums: dict[str, int] | None = None) -> Script:
     """The script as a function of the blackboard (a mapping) that returns the script's value."""
+    if text and not text.strip():
+        raise ScriptError("a script of blanks only (BT.CPP accepts an empty one)")
     parser = _Parser(tokenize(text), enums or {})
-    statements = [parser.assignment()]
+    if parser.at_end():
+        return lambda board: None
+    statements = [parser.statement()]
     while parser.accept(";"):
-        if parser.at_end():
-            break
-        statements.append(parser.assignment())
+        statements.append(parser.statement())
     if not parser.at_end():
         raise ScriptError(f"unexpected {parser.peek()[1]!r}")
 
@@ -93,62 +140,13 @@ def parse(text: str, enums: dict[str, int] | None = None) -> Script:
     return run
 
 
-def truth(value: Any) -> bool:
-    """A value as a condition: BT.CPP casts numbers and booleans (a string is an error)."""
-    if isinstance(value, str):
-        raise ScriptError(f"the string '{value}' is not a condition")
-    return bool(value)
-
-
-def _number(value: Any) -> Any:
-    """A value as a number for arithmetic (a string of a number converts, as in BT.CPP)."""
-    if isinstance(value, bool):
-        return int(value)
-    if isinstance(value, (int, float)):
-        return value
-    try:
-        return float(value)
-    except (TypeError, ValueError):
-        raise ScriptError(f"'{value}' is not a number") from None
-
-
-def _compare(op: str, left: Any, right: Any) -> bool:
-    """A comparison; a string beside a number is read as a number."""
-    if isinstance(left, str) != isinstance(right, str) or not isinstance(left, str):
-        left, right = _number(left), _number(right)
-    if op == "==":
-        return bool(left == right)
-    if op == "!=":
-        return bool(left != right)
-    try:
-        return bool({"<": left < right, "<=": left <= right, ">": left > right, ">=": left >= right}[op])
-    except TypeError:
-        raise ScriptError(f"cannot compare '{left}' and '{right}'") from None
-
-
-def _arith(op: str, left: Any, right: Any) -> Any:
-    """``+ - * /`` and the bitwise operators on numbers."""
-    a, b = _number(left), _number(right)
-    if op == "+":
-        return a + b
-    if op == "-":
-        return a - b
-    if op == "*":
-        return a * b
-    if op == "/":
-        if b == 0:
-            raise ScriptError("division by zero")
-        return a / b
-    if isinstance(a, float) or isinstance(b, float):
-        raise ScriptError(f"'{op}' needs whole numbers")
-    return {"&": a & b, "|": a | b, "^": a ^ b}[op]
-
-
 class _Parser:
-    """Recursive descent over the tokens; each method returns a closure of the board."""
+    """Recursive descent over the tokens; each method returns a closure of the board. ``family``
+    is the operator family the expression being read uses (parentheses start a new one)."""
 
     def __init__(self, tokens: list[tuple[str, Any]], enums: dict[str, int]) -> None:
         self.tokens, self.enums, self.index = tokens, enums, 0
+        self.family: tuple[str, str] | None = None
 
     def peek(self) -> tuple[str, Any]:
         return self.tokens[self.index] if self.index < len(self.tokens) else ("end", None)
@@ -160,13 +158,36 @@ class _Parser:
         kind, value = self.peek()
         if kind == "op" and value in ops:
             self.index += 1
+            self._joins(str(value))
             return str(value)
         return None
+
+    def _joins(self, op: str) -> None:
+        """Note that the expression uses ``op``; one of another family is an error."""
+        family = _FAMILY.get(op)
+        if family is None:
+            return
+        if self.family is not None and self.family[0] != family:
+            raise ScriptError(
+                f"'{op}' after '{self.family[1]}': arithmetic, bitwise and '..' do not mix without parentheses"
+            )
+        self.family = self.family or (family, op)
 
     def expect(self, op: str) -> None:
         if not self.accept(op):
             found = self.peek()[1]
             raise ScriptError(f"expected '{op}'" + (f", found {found!r}" if found is not None else " at the end"))
+
+    def nested(self) -> Script:
+        """A whole expression with operator families of its own (in parentheses, a ternary's middle)."""
+        outer, self.family = self.family, None
+        inner = self.assignment()
+        self.family = outer
+        return inner
+
+    def statement(self) -> Script:
+        self.family = None
+        return self.assignment()
 
     def assignment(self) -> Script:
         kind, name = self.peek()
@@ -176,67 +197,96 @@ class _Parser:
                 if name in self.enums or name in ("true", "false"):
                     raise ScriptError(f"cannot assign to '{name}'")
                 self.index += 2
-                value = self.assignment()
-                return _assign(str(name), str(op[1]), value)
+                value = self.ternary()
+                if self.peek()[0] == "op" and self.peek()[1] in _ASSIGN:
+                    raise ScriptError("an assignment's value cannot be an assignment (add parentheses)")
+                return _assign(str(name), str(op[1]), value, self.enums)
         return self.ternary()
 
     def ternary(self) -> Script:
-        condition = self.binary(0)
+        condition = self.logical()
         if not self.accept("?"):
             return condition
-        then = self.ternary()
+        then = self.nested()
         self.expect(":")
-        other = self.ternary()
-        return lambda b: then(b) if truth(condition(b)) else other(b)
+        other = self.logical()
+        if self.peek() == ("op", "?"):
+            raise ScriptError("'?' after 'c ? a : b' needs parentheses")
+        return lambda b: then(b) if ternary_truth(condition(b)) else other(b)
 
-    _LEVELS: tuple[tuple[str, ...], ...] = (
-        ("||",),
-        ("&&",),
-        _COMPARE,
-        ("|",),
-        ("^",),
-        ("&",),
-        ("+", "-", ".."),
-        ("*", "/"),
-    )
-
-    def binary(self, level: int) -> Script:
-        if level == len(self._LEVELS):
-            return self.unary()
-        left = self.binary(level + 1)
-        ops = self._LEVELS[level]
-        if ops is _COMPARE:
-            return self._comparisons(left, level)
-        while (op := self.accept(*ops)) is not None:
-            right = self.binary(level + 1)
-            left = _combine(op, left, right)
+    def logical(self) -> Script:
+        left = self.comparison()
+        while (op := self.accept("&&", "||")) is not None:
+            right = self.comparison()
+            left = (lambda lf, rt, o: lambda b: logic(o, lf(b), rt(b)))(left, right, op)
         return left
 
-    def _comparisons(self, first: Script, level: int) -> Script:
-        """``a < b <= c``: each pair compared, all must hold (BT.CPP chains comparisons)."""
-        operands, ops = [first], []
+    def comparison(self) -> Script:
+        """``a < b <= c``: each pair compared in turn, stopping at the first that fails."""
+        operands, ops = [self.bitwise_or()], []
         while (op := self.accept(*_COMPARE)) is not None:
             ops.append(op)
-            operands.append(self.binary(level + 1))
+            operands.append(self.bitwise_or())
         if not ops:
-            return first
+            return operands[0]
+        enums = self.enums
 
-        def chain(b: Board) -> bool:
-            values = [operand(b) for operand in operands]
-            return all(_compare(op, values[i], values[i + 1]) for i, op in enumerate(ops))
+        def chain(b: Board) -> float:
+            left = operands[0](b)
+            for op, operand in zip(ops, operands[1:], strict=True):
+                right = operand(b)
+                if not compare(op, left, right, enums):
+                    return 0.0
+                left = right
+            return 1.0
 
         return chain
+
+    def bitwise_or(self) -> Script:
+        left = self.bitwise_and()
+        while (op := self.accept("|", "^")) is not None:
+            right = self.bitwise_and()
+            left = (lambda lf, rt, o: lambda b: bits(o, lf(b), rt(b)))(left, right, op)
+        return left
+
+    def bitwise_and(self) -> Script:
+        left = self.concatenation()
+        while self.accept("&") is not None:
+            right = self.concatenation()
+            left = (lambda lf, rt: lambda b: bits("&", lf(b), rt(b)))(left, right)
+        return left
+
+    def concatenation(self) -> Script:
+        left = self.sum()
+        while self.accept("..") is not None:
+            right = self.sum()
+            left = (lambda lf, rt: lambda b: concat(lf(b), rt(b)))(left, right)
+        return left
+
+    def sum(self) -> Script:
+        """``+ -``, evaluated right to left as BT.CPP does: ``a - b + c`` is ``a - (b + c)``."""
+        left = self.product()
+        op = self.accept("+", "-")
+        if op is None:
+            return left
+        right = self.sum()
+        return lambda b: arith(op, left(b), right(b))
+
+    def product(self) -> Script:
+        """``* /``, right to left too."""
+        left = self.unary()
+        op = self.accept("*", "/")
+        if op is None:
+            return left
+        right = self.product()
+        return lambda b: arith(op, left(b), right(b))
 
     def unary(self) -> Script:
         op = self.accept("!", "-", "~")
         if op is None:
             return self.primary()
         inner = self.unary()
-        if op == "!":
-            return lambda b: not truth(inner(b))
-        if op == "-":
-            return lambda b: -_number(inner(b))
-        return lambda b: ~int(_number(inner(b)))
+        return lambda b: unary(op, inner(b))
 
     def primary(self) -> Script:
         kind, value = self.peek()
@@ -247,35 +297,21 @@ class _Parser:
             return lambda b: value
         if kind == "name":
             if value in ("true", "false"):
-                flag = value == "true"
+                flag = int(value == "true")
                 return lambda b: flag
             if value in self.enums:
-                number = self.enums[value]
+                number = float(self.enums[value])
                 return lambda b: number
             return _read(str(value))
         if value == "(":
-            inner = self.assignment()
+            inner = self.nested()
             self.expect(")")
             return inner
+        if value == "+" and self.peek()[0] == "num":  # a literal's sign
+            number = self.peek()[1]
+            self.index += 1
+            return lambda b: number
         raise ScriptError(f"expected a value, found {value!r}")
-
-
-def _combine(op: str, left: Script, right: Script) -> Script:
-    """A binary operator's closure (``&&`` and ``||`` short-circuit)."""
-    if op == "&&":
-        return lambda b: truth(left(b)) and truth(right(b))
-    if op == "||":
-        return lambda b: truth(left(b)) or truth(right(b))
-    if op == "..":
-        return lambda b: _text(left(b)) + _text(right(b))
-    return lambda b: _arith(op, left(b), right(b))
-
-
-def _text(value: Any) -> str:
-    """A value in a string concatenation."""
-    if isinstance(value, (bool, float)):
-        return f"{float(value):f}"  # BT.CPP writes numbers it computed with std::to_string
-    return str(value)
 
 
 def _read(name: str) -> Script:
@@ -289,30 +325,35 @@ def _read(name: str) -> Script:
     return read
 
 
-def _typed(name: str, old: Any, new: Any) -> Any:
-    """``new`` as the type of the entry it replaces: BT.CPP keeps a whole-number entry whole (a
-    fraction is an error), like ``v := 0; v := 2.5``."""
-    if isinstance(old, int) and not isinstance(old, bool) and isinstance(new, float):
-        if not new.is_integer():
-            raise ScriptError(f"'{name}' holds a whole number: cannot assign {new:g} to it")
-        return int(new)
-    return new
-
-
-def _assign(name: str, op: str, value: Script) -> Script:
-    """An assignment's closure: its value is the value written."""
+def _assign(name: str, op: str, value: Script, enums: dict[str, int]) -> Script:
+    """An assignment's closure: its value is the entry's new value."""
 
     def assign(board: Board) -> Any:
+        if name not in board:
+            if op != ":=":
+                raise ScriptError(f"'{name}' is not on the blackboard: create it with '{name} := ...'")
+            board[name] = None  # BT.CPP creates the entry, empty, before it computes the value
         new = value(board)
-        if op != ":=" and name not in board:
-            raise ScriptError(f"'{name}' is not on the blackboard: create it with '{name} := ...'")
-        if op in ("+=", "-=", "*=", "/="):
-            current = board[name]
-            text = op == "+=" and isinstance(current, str)
-            new = current + _text(new) if text else _arith(op[0], current, new)
-        elif op == "=" and name in board and isinstance(board[name], (int, float)) and isinstance(new, str):
-            new = _number(new)
-        board[name] = _typed(name, board.get(name), new)
+        if new is None:
+            raise ScriptError(f"the value written to '{name}' is not set")
+        old = board.get(name)
+        if old is None:
+            if op not in (":=", "="):
+                raise ScriptError(f"'{name}' has no value for '{op}'")
+        elif op in (":=", "="):
+            if isinstance(new, str) and not isinstance(old, str) and is_number(old):
+                new = string_number(new, enums)  # BT.CPP stores the number as a double
+            else:
+                new = converted(name, old, new)
+        elif is_number(new):
+            if not is_number(old):
+                raise ScriptError(f"'{op}' needs a number in '{name}', which holds {shown(old)}")
+            new = converted(name, old, arith(op[0], old, new))
+        elif isinstance(new, str) and op == "+=":
+            new = converted(name, old, text(old) + new)
+        else:
+            raise ScriptError(f"'{op}' of {shown(new)} is not permitted")
+        board[name] = new
         return new
 
     return assign

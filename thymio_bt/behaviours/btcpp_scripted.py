@@ -36,7 +36,8 @@ from thymio_bt.behaviours import btcpp_decorators as bd
 from thymio_bt.behaviours import btcpp_nodes as bn
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
 from thymio_bt.behaviours.btcpp_script import Script as Code_
-from thymio_bt.behaviours.btcpp_script import ScriptError, parse, truth
+from thymio_bt.behaviours.btcpp_script import ScriptError, parse
+from thymio_bt.behaviours.btcpp_values import truth
 from thymio_bt.behaviours.control_node import refuse
 
 
