@@ -51,10 +51,10 @@ def test_run_ends_interrupted_with_report_and_log_end(tmp_path, sig, code):
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == code, err
     report = json.loads((tmp_path / "r.json").read_text())
-    assert report["status"] == "INTERRUPTED" and report["code"] == "INTERRUPTED"
+    assert report["status"] == "FAILURE" and report["code"] == "INTERRUPTED"  # the contract's three statuses
     assert signal.Signals(sig).name in report["reason"] and 0 < report["sim_time"] < 30
     last = json.loads((tmp_path / "r.jsonl").read_text().splitlines()[-1])
-    assert last["kind"] == "end" and last["status"] == "INTERRUPTED"
+    assert last["kind"] == "end" and (last["status"], last["code"]) == ("FAILURE", "INTERRUPTED")
     assert last["sim_time"] == report["sim_time"]
     assert "Traceback" not in err and "INTERRUPTED" in out
 
@@ -192,13 +192,13 @@ def test_a_second_signal_ends_a_run_stuck_inside_a_tick(tmp_path, sig, code):
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == code, err
     report = json.loads((tmp_path / "r.json").read_text())
-    assert report["status"] == report["code"] == "INTERRUPTED" and report["failed_path"] == "sequence/Stuck"
+    assert (report["status"], report["code"], report["failed_path"]) == ("FAILURE", "INTERRUPTED", "sequence/Stuck")
     assert signal.Signals(sig).name in report["reason"] and "never ended its tick" in report["reason"]
     assert report["ticks"] == 3 and report["sim_time"] == 0.3
     ends = [e for e in report["events"] if e["kind"] == "behaviour_end"]
     assert [e["name"] for e in ends] == ["Stuck"]  # halted like any running node: its motors stopped
     lines = [json.loads(line) for line in (tmp_path / "r.jsonl").read_text().splitlines()]
-    assert lines[-1]["kind"] == "end" and lines[-1]["status"] == "INTERRUPTED"
+    assert lines[-1]["kind"] == "end" and lines[-1]["code"] == "INTERRUPTED"
     assert [r["tick"] for r in lines if "tick" in r] == [1, 2, 3]
     assert "Traceback" not in err and "INTERRUPTED" in out
 
@@ -214,7 +214,7 @@ def test_a_run_stuck_in_its_first_tick_still_leaves_a_whole_log(tmp_path):
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == 130, err
     lines = [json.loads(line) for line in (tmp_path / "r.jsonl").read_text().splitlines()]
-    assert [r["kind"] for r in lines] == ["header", "end"] and lines[-1]["status"] == "INTERRUPTED"
+    assert [r["kind"] for r in lines] == ["header", "end"] and lines[-1]["code"] == "INTERRUPTED"
     assert json.loads((tmp_path / "r.json").read_text())["ticks"] == 0
 
 
@@ -241,6 +241,6 @@ def test_a_second_signal_stops_the_motors_of_a_run_stuck_inside_a_tick(tmp_path,
             result = run.run(interrupts=interrupts)
     except KeyboardInterrupt:
         pytest.fail("the second Ctrl-C escaped the run: no result, the robot left driving")
-    assert (result.status, result.failed_path, interrupts.exit_code) == ("INTERRUPTED", "sequence/Stuck", 130)
+    assert (result.code, result.failed_path, interrupts.exit_code) == ("INTERRUPTED", "sequence/Stuck", 130)
     command = run.backend.command()
     assert (command.linear, command.angular) == (0.0, 0.0)

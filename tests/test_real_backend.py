@@ -577,7 +577,7 @@ def test_a_signal_stops_the_real_robot_and_ends_the_run_interrupted(sig):
 
     with Interrupts() as interrupts:
         result = run.run(on_tick=signal_at_tick_20, interrupts=interrupts)
-    assert result.status == "INTERRUPTED" and result.code == "INTERRUPTED" and result.ticks == 20
+    assert result.status == "FAILURE" and result.code == "INTERRUPTED" and result.ticks == 20
     assert signal.Signals(sig).name in result.reason and interrupts.exit_code == 128 + sig
     assert node.closed and node.writes[-1] == (0, 0)  # motors stopped, robot released
     assert result.report()["sim_time"] == pytest.approx(1.9)

@@ -362,7 +362,7 @@ def test_a_run_stopped_while_driving_stops_the_robot(ros2_env, tmp_path):
             if run.poll() is None:
                 run.kill()
         assert _probe_speed(ros2_env, domain) == 0.0
-    assert json.loads(report.read_text())["status"] == "INTERRUPTED"
+    assert json.loads(report.read_text())["code"] == "INTERRUPTED"
 
 
 def test_a_driver_publishing_range_in_wall_time(ros2_env, tmp_path):

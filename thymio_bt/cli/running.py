@@ -407,11 +407,14 @@ def clearance_text(gap: float | None) -> str:
 def _summary(result: RunResult, err: bool = False) -> None:
     """The run's status, times, final pose and clearance; where and why it failed, on stderr."""
     echo = partial(click.echo, err=err)
-    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow", "INTERRUPTED": "yellow"}[result.status]
+    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow"}[result.status]
+    shown = result.status
+    if result.code == "INTERRUPTED":  # a FAILURE by the report's contract, said as what it was
+        colour, shown = "yellow", f"{result.status} (INTERRUPTED)"
     rtf = result.real_time_factor
     echo(
         f"{result.mission}: "
-        + click.style(result.status, fg=colour, bold=True)
+        + click.style(shown, fg=colour, bold=True)
         + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
         f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)"
     )

@@ -3,12 +3,12 @@
 A signal arriving in the middle of a physics step or of a write must not leave a half-updated world,
 a robot driving on, or a report unwritten. So the handler only notes the signal; :class:`~thymio_bt.
 runner.Run` and :func:`~thymio_bt.run.sweep.sweep` look at it once per tick (or per result), stop the
-robot, and end with status ``INTERRUPTED``, their report and log complete.
+robot, and end with status ``FAILURE`` and code ``INTERRUPTED``, their report and log complete.
 
 A tick that never ends (a plugin's endless loop inside ``step()``, a blocking call) never reaches
 that check. So a second signal raises :class:`Interrupted` (a :class:`KeyboardInterrupt`) at once,
 out of whatever the main thread is running: the run loop catches it, stops the motors, and ends the
-run the same way (status ``INTERRUPTED``, the stuck node named, report and log complete); outside a
+run the same way (code ``INTERRUPTED``, the stuck node named, report and log complete); outside a
 run loop it ends the command with the first signal's exit code.
 
 Example (a Ctrl-C before the first tick: the run ticks once, then ends):
@@ -19,8 +19,8 @@ Example (a Ctrl-C before the first tick: the run ticks once, then ends):
 >>> with Interrupts() as interrupts:
 ...     os.kill(os.getpid(), signal.SIGINT)  # noted by the handler, not raised
 ...     result = Run(load_mission("maze_bonus")).run(interrupts=interrupts)
->>> result.status, result.ticks, result.reason
-('INTERRUPTED', 1, 'interrupted by SIGINT at 0.0 s')
+>>> result.status, result.code, result.ticks, result.reason
+('FAILURE', 'INTERRUPTED', 1, 'interrupted by SIGINT at 0.0 s')
 >>> interrupts.name, interrupts.exit_code  # the CLI exits with that code
 ('SIGINT', 130)
 """

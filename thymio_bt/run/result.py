@@ -115,12 +115,13 @@ class EndKind(Enum):
 
     @property
     def report_status(self) -> str:
-        """The report's status of a run cut short this way: a stopped or crashed run is a FAILURE.
+        """The report's status of a run cut short this way: one of the report contract's three, so a
+        stopped, crashed or interrupted run is a FAILURE (its ``code`` says which).
 
-        >>> EndKind.TIMEOUT.report_status, EndKind.CRASHED.report_status
-        ('TIMEOUT', 'FAILURE')
+        >>> EndKind.TIMEOUT.report_status, EndKind.CRASHED.report_status, EndKind.INTERRUPTED.report_status
+        ('TIMEOUT', 'FAILURE', 'FAILURE')
         """
-        return self.name if self in (EndKind.TIMEOUT, EndKind.INTERRUPTED) else "FAILURE"
+        return "TIMEOUT" if self is EndKind.TIMEOUT else "FAILURE"
 
 
 @dataclass(frozen=True)

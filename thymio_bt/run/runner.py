@@ -141,7 +141,7 @@ class Run:
         self, on_tick: TickHook | None = None, realtime: float | None = None, interrupts: Interrupts | None = None
     ) -> RunResult:
         """Tick until the tree ends or the time limit; ``realtime`` paces the loop (1.0 = real time).
-        A signal noted in ``interrupts`` ends the run at the next tick with status INTERRUPTED.
+        A signal noted in ``interrupts`` ends the run at the next tick: FAILURE, code INTERRUPTED.
         The backend is closed (a real robot's motors stopped) however the run ends, even on Ctrl-C."""
         try:
             return self._run(on_tick, realtime, interrupts or Interrupts())
