@@ -288,3 +288,11 @@ def test_lint_without_assignment_loads_no_physics_engine():
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
     assert done.returncode == 0, done.stderr
     assert done.stderr.strip().splitlines()[-1] == "False False"
+
+
+def test_standard_output_holds_the_findings_only_and_a_shipped_assignment_is_found_by_name():
+    clean = CliRunner().invoke(main, ["lint", "square"])
+    assert (clean.exit_code, clean.stdout, clean.stderr) == (0, "", "square: no findings\n")
+    ada = str(ROOT / "examples/class/ada/part1_2.yaml")
+    by_name = CliRunner().invoke(main, ["lint", ada, "--assignment", "course_part1_2"])  # its mazes are beside it
+    assert (by_name.exit_code, by_name.stdout, by_name.stderr) == (0, "", "part1_2: no findings\n")

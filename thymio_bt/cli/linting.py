@@ -1,5 +1,5 @@
 """``thymio-bt lint``: the teaching lint of a mission (:mod:`thymio_bt.mission.lint`), one finding per
-line as ``file:line: [rule-id] message (hint: ...)``.
+line as ``file:line: [rule-id] message (hint: ...)`` on standard output; the count on standard error.
 
 With ``--assignment``, the mission also runs once in each variant's world of the assignment, noise
 off, its nodes counting their ticks; a condition never true in any variant and the nodes no variant
@@ -53,7 +53,7 @@ def lint(mission: Path, assignment: Path | None) -> None:
     for finding in findings:
         click.echo(str(finding))
     count = len(findings)
-    click.echo(f"{mission.stem}: {count or 'no'} finding{'s' * (count != 1)}", err=bool(findings))
+    click.echo(f"{mission.stem}: {count or 'no'} finding{'s' * (count != 1)}", err=True)
     sys.exit(1 if findings else 0)
 
 
@@ -69,11 +69,12 @@ def assignment_findings(mission: Path, assignment: Path) -> list[Finding]:
 def assignment_coverage(mission: Path, assignment: Path) -> tuple[Mission, dict[str, Any]]:
     """The coverage JSON of one noise-free run of ``mission`` in each variant of ``assignment``
     (its first seed, the assignment's time limit), and the mission as the last variant loaded it."""
-    from thymio_bt.grade.assignment import load_assignment
+    from thymio_bt.grade.assignment import load_assignment, resolve_assignment
     from thymio_bt.grade.worlds import variant_mission
     from thymio_bt.run.coverage import Coverage
     from thymio_bt.run.runner import Run
 
+    assignment = resolve_assignment(assignment)  # a shipped one by name: its mazes are beside it
     task = load_assignment(assignment)
     merged: Coverage | None = None
     spec: Mission | None = None
