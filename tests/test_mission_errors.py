@@ -163,9 +163,18 @@ def test_overrides_are_checked_like_the_file() -> None:
     with pytest.raises(UserError) as info:
         load_mission(ROOT / "missions" / "maze_part1_2.yaml", overrides={"crusie": "0.15", "final_stop": "5deg"})
     problems = {p.message: p for p in info.value.problems}
-    assert problems["--set crusie: no such parameter"].hint == "did you mean 'cruise'?"
+    assert problems["no such parameter 'crusie'"].hint == "did you mean 'cruise'?"
     assert any("expected a length" in m for m in problems), list(problems)
     assert all(p.file == "--set" for p in problems.values())
+
+
+def test_a_noise_override_is_said_at_set_not_at_the_mission() -> None:
+    with pytest.raises(UserError) as info:
+        load_mission(ROOT / "missions" / "square.yaml", overrides={"noise.wheeel": "0.1", "noise.range_sd": "9"})
+    assert sorted((p.file, p.path) for p in info.value.problems) == [
+        ("--set", "noise.range_sd"),
+        ("--set", "noise.wheeel"),
+    ]
 
 
 def test_a_set_value_out_of_range_is_said_at_set_with_the_file_s_hint() -> None:

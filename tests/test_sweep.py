@@ -106,3 +106,10 @@ def test_a_bad_matrix_axis_is_a_user_error():
     assert result.exit_code == 2 and "--matrix expects NAME=VALUE,VALUE" in result.output
     result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--matrix", "robot=course,marvin"])
     assert result.exit_code == 2 and "robot must be one of" in result.output
+
+
+def test_a_bad_matrix_value_is_said_at_matrix_and_nothing_comes_before_an_error(tmp_path):
+    bad = CliRunner().invoke(main, ["sweep", "square", "--runs", "2", "--matrix", "robot=course,nosuch"])
+    assert bad.exit_code == 2 and bad.output.startswith("error: --matrix: robot must be one of"), bad.output
+    missing = CliRunner().invoke(main, ["sweep", str(tmp_path / "none.yaml"), "--runs", "2"])
+    assert missing.exit_code == 2 and missing.output.startswith("error: ") and "runs" not in missing.output

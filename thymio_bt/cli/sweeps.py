@@ -90,6 +90,7 @@ def sweep(
                 raise UserError("--coverage is for one sweep, not a --matrix (hint: sweep one cell with --set)")
             covered = CoverageRequest.checked(coverage_tree)
         request = _Request(mission, runs, seed_start, sets, maze, start, _dask(dask) if dask else None, workers)
+        request.check(matrix)  # before the progress bar says anything
         if matrix:
             _matrix(request, sweep_out, matrix)
             return
@@ -153,6 +154,25 @@ class _Request(NamedTuple):
     def maze_ref(self) -> str | None:
         """The ``--maze`` option as the sweep takes it."""
         return str(self.maze) if self.maze else None
+
+    def check(self, matrix: tuple[str, ...]) -> None:
+        """Load the mission with the ``--set`` options, and with each value of each ``--matrix``
+        axis: a mistake is a :class:`UserError` (said at ``--matrix`` for an axis's value)."""
+        from dataclasses import replace
+
+        from thymio_bt.mission import load_mission
+        from thymio_bt.run.matrix import parse_axes
+
+        overrides = parse_overrides(self.sets)
+        load_mission(self.mission, overrides, self.maze_ref, self.start, run_plugins=False)
+        for name, values in parse_axes(matrix).items():
+            for value in values:
+                try:
+                    load_mission(self.mission, {**overrides, name: value}, self.maze_ref, self.start, run_plugins=False)
+                except UserError as exc:
+                    raise UserError(
+                        [replace(p, file="--matrix") if p.file == "--set" else p for p in exc.problems]
+                    ) from None
 
     def execute(self, length: int, label: str, work: Callable[..., T]) -> tuple[T, Interrupts]:
         """``work(overrides, executor=, progress=, interrupts=)`` under a progress bar of ``length`` runs;

@@ -274,7 +274,10 @@ def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> t
     """Parse ``X,Y,YAW`` (e.g. ``0.5,0.3,pi/2`` or ``50cm, 30cm, 90deg``) into metres and radians."""
     parts = [p for p in str(text).split(",")]
     if len(parts) != 3:
-        raise UnitError(f"expected X,Y,YAW (three comma-separated values), got '{text}'")
+        raise UnitError(
+            f"expected X,Y,YAW (three comma-separated values), got '{text}'",
+            "e.g. 0.5,0.3,pi/2 (metres and radians) or 50cm,30cm,90deg; or the name of a spawn of the maze",
+        )
     x, y, yaw = (parse_value(p, resolve) for p in parts)
     for name, q, kind in (("X", x, "length"), ("Y", y, "length"), ("YAW", yaw, "angle")):
         if q.kind not in (None, kind):

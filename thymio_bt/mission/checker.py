@@ -176,7 +176,8 @@ class Checker:
             try:
                 return self._heading(Pose(*parse_pose(raw)), where, path)
             except UnitError as exc:
-                self.problem(str(exc), where, path)
+                spawns = f"; the maze's spawns: {', '.join(maze.spawns)}" if maze and maze.spawns else ""
+                self.problem(str(exc), where, path, (exc.hint + spawns) if exc.hint else "")
                 return None
         if not isinstance(raw, list) or len(raw) != 3:
             spawns = f", or one of the maze's spawns: {', '.join(maze.spawns)}" if maze and maze.spawns else ""

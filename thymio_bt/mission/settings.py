@@ -9,10 +9,11 @@ Example::
     >>> mission = load_mission("maze_part1_2", overrides={"tick_hz": "20 Hz", "cruise": "15cm/s"})
     >>> mission.tick_hz, mission.parameters["cruise"], mission.sensor_model
     (20.0, 0.15, 'metres')
-    >>> load_mission("maze_part1_2", overrides={"cruise": "90deg"})
-    Traceback (most recent call last):
-    ...
-    thymio_bt.errors.UserError: --set: --set cruise: expected a speed (in m/s), got an angle [at cruise]
+    >>> try:
+    ...     load_mission("maze_part1_2", overrides={"cruise": "90deg"})
+    ... except UserError as exc:
+    ...     print(exc)
+    --set: cruise: expected a speed (in m/s), got an angle [at cruise] (hint: write a speed: 10cm/s or 0.1 m/s)
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from thymio_bt.errors import UserError, did_you_mean
-from thymio_bt.inputs.units import Quantity, check_kind
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.units import Quantity, check_kind, kind_hint
 from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.checker import Checker, Scope, Where
@@ -116,9 +117,7 @@ class SettingsReader(Checker):
         elif name in params:
             self._override_parameter(name, text, params)
         else:
-            self.problem(
-                f"--set {name}: no such parameter", _OVERRIDE, name, did_you_mean(name, [*params, *OVERRIDABLE])
-            )
+            self.problem(f"no such parameter '{name}'", _OVERRIDE, name, did_you_mean(name, [*params, *OVERRIDABLE]))
 
     def _override_parameter(self, name: str, text: str, params: dict[str, Any]) -> None:
         """``--set NAME=TEXT`` of a mission parameter: a quantity keeps the kind of its unit."""
@@ -127,7 +126,7 @@ class SettingsReader(Checker):
         if isinstance(old, Quantity) and isinstance(new, Quantity):
             error = check_kind(new, old.kind)
             if error:
-                self.problem(f"--set {name}: {error}", _OVERRIDE, name)
+                self.problem(f"{name}: {error}", _OVERRIDE, name, kind_hint(old.kind))
                 return
             new = SetValue(new.value, new.kind or old.kind, name=name, text=text)
         params[name] = new
@@ -141,7 +140,12 @@ class SettingsReader(Checker):
         try:
             values["noise"] = NoiseConfig.model_validate(noise_raw)
         except ValidationError as exc:
-            self.problems.extend(problems_from(exc, data.get("noise", {}), file, NoiseConfig, "noise."))
+            written = data.get("noise", {})
+            for problem in problems_from(exc, written, file, NoiseConfig, "noise."):
+                key = problem.path.removeprefix("noise.")
+                if not isinstance(written, dict) or key not in written or written[key] != noise_raw.get(key):
+                    problem = Problem(problem.message, *_OVERRIDE, problem.path, problem.hint)  # --set gave it
+                self.problems.append(problem)
             values["noise"] = NoiseConfig()
 
     def _setting(self, key: str, raw: Any, where: Where, values: dict[str, Any]) -> None:
@@ -172,10 +176,11 @@ class SettingsReader(Checker):
             values["sensor_model"] = value
         else:
             self.problem(
-                f"sensor_model must be one of {', '.join(SENSOR_MODELS)}, got {value!r}",
+                f"sensor_model must be one of rays, {', '.join(SENSOR_MODELS)}, got {value!r}",
                 where,
                 "sensor_model",
-                "raw: a real Thymio's integer readings through its calibration table; cone: Enki's three-ray cones",
+                "rays (or metres): the course's exact rays; raw: a real Thymio's integer readings through its "
+                "calibration table; cone: Enki's three-ray cones",
             )
 
     def _robot(self, value: Any, where: Where, values: dict[str, Any]) -> None:

@@ -12,8 +12,8 @@ Example::
     >>> maze = load_maze(resolve_maze("two_parts_maze"))
     >>> placement_problem(maze, COURSE, Pose(0.1, 0.1, 0.0)) is None      # the robot fits there
     True
-    >>> placement_problem(maze, COURSE, Pose(0.0, 0.1, 0.0))
-    'pose (0.000, 0.100) puts the robot outside the maze (x in [-0.005, 2.005], y in [-0.005, 0.805])'
+    >>> print(placement_problem(maze, COURSE, Pose(0.0, 0.1, 0.0)))
+    pose (0.000, 0.100) puts part of the robot outside the maze (walls span x in [-0.005, 2.005], y in [-0.005, 0.805])
     >>> round(clearance(maze, COURSE, Pose(0.1, 0.1, 0.0)), 4), round(ray_distance(maze, 0.1, 0.1, 0.0), 4)
     (0.0391, 0.495)
 """
@@ -136,8 +136,8 @@ def placement_problem(maze: Maze | MazeShapes, model: RobotModel, pose: Pose) ->
         xmin, ymin, xmax, ymax = shapes.bounds
         if not all(xmin <= x <= xmax and ymin <= y <= ymax for x, y in hull):
             return (
-                f"pose ({pose.x:.3f}, {pose.y:.3f}) puts the robot outside the maze "
-                f"(x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])"
+                f"pose ({pose.x:.3f}, {pose.y:.3f}) puts part of the robot outside the maze "
+                f"(walls span x in [{xmin:.3f}, {xmax:.3f}], y in [{ymin:.3f}, {ymax:.3f}])"
             )
     hx0, hy0, hx1, hy1 = _box(hull)
     for polygon, (x0, y0, x1, y1) in zip(shapes.polygons, shapes.boxes, strict=True):
