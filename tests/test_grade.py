@@ -348,6 +348,9 @@ def test_the_shipped_solutions_pass_every_criterion_of_the_shipped_assignments(a
     assert student["status"] == "graded"
     assert not _missed(student), [c["feedback"] for c in student["criteria"] if not c["passed"]]
     assert student["score"] == student["max"] - penalty
+    if penalty:  # named where the student's file includes the library, as every other finding is
+        line = next(n for n, text in enumerate((ROOT / solution).read_text().splitlines(), 1) if "include:" in text)
+        assert [f["where"] for f in student["palette"]] == [f"{ROOT / solution}:{line}"]
 
 
 def test_ctrl_c_stops_the_grade_at_once_keeps_what_was_done_and_leaves_no_child(tmp_path):

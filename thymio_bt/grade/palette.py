@@ -95,7 +95,9 @@ def check_palette(mission: Mission, palette: Palette) -> list[Finding]:
         library = _library()
         for source in mission.sources[1:]:
             if source.suffix in (".yaml", ".yml") and _digest(source) in library:
-                add("include_library", None, str(source), f"includes the shipped library file {source.name}")
+                file, line, _ = mission.included_at.get(source, (str(source), 0, 0))
+                at = f"{file}:{line}" if line else file
+                add("include_library", None, at, f"includes the shipped library file {source.name}")
     return list(findings.values())
 
 

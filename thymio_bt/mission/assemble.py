@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -95,6 +95,8 @@ class Assembly:
     start_where: Where
     #: every file the mission was read from: itself, its includes, its maze and its .py plugins
     sources: tuple[Path, ...] = ()
+    #: each included file and where it was included (file, line, column)
+    included_at: dict[Path, Where] = field(default_factory=dict)
 
 
 class Assembler(SettingsReader):
@@ -106,7 +108,8 @@ class Assembler(SettingsReader):
         self.run_plugins = run_plugins
         self.subtrees: dict[str, Subtree] = {}
         self.included_parameters: list[tuple[MarkedDict, str]] = []
-        self.included: set[Path] = set()
+        #: each included file, with where it was first included (the place of its ``include:`` item)
+        self.included: dict[Path, Where] = {}
 
     def assemble(
         self,
@@ -155,6 +158,7 @@ class Assembler(SettingsReader):
             start,
             start_where,
             sources,
+            dict(self.included),
         )
 
     def _plugins(self, data: MarkedDict, path: Path) -> None:
@@ -231,7 +235,7 @@ class Assembler(SettingsReader):
             return
         if target in self.included:
             return  # included twice (e.g. by two included files): once is enough
-        self.included.add(target)
+        self.included[target] = where
         if not target.exists():
             self.problem(
                 f"included file not found: {shown}",

@@ -97,5 +97,6 @@ def load_mission(
         registry=assembly.registry,
         start_where=assembly.start_where,
         sources=assembly.sources,
+        included_at=assembly.included_at,
         **assembly.settings,
     )

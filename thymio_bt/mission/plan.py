@@ -81,5 +81,7 @@ class Mission:
     start_where: tuple[str, int, int] = ("", 0, 0)
     #: every file the mission was read from: itself, its includes, its maze and its .py plugins
     sources: tuple[Path, ...] = ()
+    #: each included file and where it was included (file, line, column)
+    included_at: dict[Path, tuple[str, int, int]] = field(default_factory=dict)
     #: what counts as success besides the tree's status (:mod:`thymio_bt.mission.expect`), or None
     expect: Any = None
