@@ -164,3 +164,18 @@ def test_tree_draws_every_shipped_mission(mission):
     result = CliRunner().invoke(main, ["tree", f"missions/{mission}"])
     assert result.exit_code == 0, result.output
     assert len(result.output.splitlines()) >= 2  # the root and its children
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["run", "square", "--report", "-", "--log", "-"],
+        ["sweep", "square", "--runs", "2", "--workers", "2", "--dask", "tcp://127.0.0.1:1"],
+        ["grade", "course_bonus", "missions/maze_bonus.yaml", "--workers", "1", "--dask", "tcp://127.0.0.1:1"],
+        ["tree", "square", "--svg", "--png"],
+    ],
+    ids=["report and log on stdout", "sweep workers and dask", "grade workers and dask", "two drawings"],
+)
+def test_options_that_exclude_each_other_are_refused_not_one_quietly_dropped(args):
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 2 and "exclude each other (hint: " in result.output, result.output

@@ -104,6 +104,23 @@ def json_text(data: Any) -> str:
     return json.dumps(data, indent=1, allow_nan=False) + "\n"
 
 
+#: the hint when --workers and --dask are both given
+DASK_ONLY = "the Dask cluster's workers run the work: drop --workers"
+
+
+def not_both(first: str, second: str, given: bool, hint: str) -> None:
+    """Refuse two options that exclude each other (``given``: both were), rather than quietly use one.
+
+    >>> not_both("--workers", "--dask", False, "")
+    >>> not_both("--workers", "--dask", True, "the cluster decides")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.errors.UserError: --workers and --dask exclude each other (hint: the cluster decides)
+    """
+    if given:
+        raise UserError(f"{first} and {second} exclude each other (hint: {hint})")
+
+
 def path_option(*names: str, help: str, default: Any = None, **settings: Any) -> Callable[[F], F]:
     """An option that takes a file path (a :class:`~pathlib.Path`); ``settings`` go to :func:`click.option`."""
     return click.option(*names, type=click.Path(path_type=Path), default=default, help=help, **settings)

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from thymio_bt.cli.app import fail, main, parse_overrides, path_option
+from thymio_bt.cli.app import fail, main, not_both, parse_overrides, path_option
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import STDOUT, Output
 
@@ -142,9 +142,9 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
 
 @main.command()
 @click.argument("mission", type=click.Path(path_type=Path))
-@click.option("--dot", "fmt", flag_value="dot", help="Write a Graphviz .dot file.")
-@click.option("--svg", "fmt", flag_value="svg", help="Write an SVG (needs Graphviz's dot program).")
-@click.option("--png", "fmt", flag_value="png", help="Write a PNG (needs Graphviz's dot program).")
+@click.option("--dot", "formats", flag_value="dot", multiple=True, help="Write a Graphviz .dot file.")
+@click.option("--svg", "formats", flag_value="svg", multiple=True, help="Write an SVG (needs Graphviz's dot program).")
+@click.option("--png", "formats", flag_value="png", multiple=True, help="Write a PNG (needs Graphviz's dot program).")
 @path_option(
     "--output",
     "-o",
@@ -167,7 +167,7 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
 @click.option("--plugins", is_flag=True, help="Import the mission's plugins (runs their code; default: read only).")
 def tree(
     mission: Path,
-    fmt: str | None,
+    formats: tuple[str, ...],
     output: Path | None,
     btcpp: Path | None,
     coverage_report: Path | None,
@@ -179,6 +179,10 @@ def tree(
     written earlier (no run now).
     """
     try:
+        kinds = sorted(set(formats))
+        if len(kinds) > 1:
+            not_both(f"--{kinds[0]}", f"--{kinds[1]}", True, "one drawing at a time: run tree once per format")
+        fmt = kinds[0] if kinds else None
         if btcpp is not None:
             if coverage_report is not None:
                 raise UserError("--btcpp writes the tree alone (hint: drop --coverage, or --btcpp)")

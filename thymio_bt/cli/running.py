@@ -38,6 +38,7 @@ from thymio_bt.cli.app import (
     json_text,
     main,
     mission_options,
+    not_both,
     parse_overrides,
     parse_pairs,
     path_option,
@@ -209,6 +210,8 @@ def run(
 
 def _check_outputs(report: Path | None, pictures: Pictures, log: Path | None) -> Output | None:
     """Refuse, before anything runs, a report, picture or log that cannot be written; the report's output."""
+    both = str(report) == STDOUT and str(log) == STDOUT
+    not_both("--report -", "--log -", both, "one of them to standard output, the other to a file")
     report_out = Output(report, "--report") if report is not None else None
     pictures.check()
     if log is not None and str(log) != STDOUT:

@@ -26,7 +26,17 @@ from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
 
 import click
 
-from thymio_bt.cli.app import coverage_options, fail, json_text, main, mission_options, parse_overrides, path_option
+from thymio_bt.cli.app import (
+    DASK_ONLY,
+    coverage_options,
+    fail,
+    json_text,
+    main,
+    mission_options,
+    not_both,
+    parse_overrides,
+    path_option,
+)
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
 from thymio_bt.run.interrupts import Interrupts
@@ -84,6 +94,7 @@ def sweep(
 
     covered: CoverageRequest | None = None
     try:
+        not_both("--workers", "--dask", workers is not None and dask is not None, DASK_ONLY)
         sweep_out = Output(out, "--out") if out is not None else None
         if coverage or coverage_tree is not None:
             if matrix:
