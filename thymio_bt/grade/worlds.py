@@ -62,7 +62,7 @@ class World:
             maze, made_turns = _generated(variant)
             turns = turns or made_turns
         elif variant.maze is not None:
-            maze_file = Path(os.path.normpath(resolve_maze(variant.maze, base)))
+            maze_file = Path(os.path.normpath(resolve_maze(variant.maze, base, "the assignment file")))
             maze = load_maze(maze_file)
         if variant.mirror:
             if maze is None:

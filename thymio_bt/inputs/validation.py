@@ -109,6 +109,10 @@ def problems_from(
                 hint = str(ctx["hint"])
             elif "ge" in ctx or "le" in ctx or "gt" in ctx or "lt" in ctx:
                 hint = "allowed range: " + ", ".join(f"{k} {v}" for k, v in ctx.items())
+            elif kind == "too_short" and loc:  # an empty list: say what it is for
+                owner = _model_at(model, loc[:-1])
+                field = _field(owner, str(loc[-1])) if owner else None
+                hint = f"{loc[-1]}: {field.description}" if field and field.description else ""
             line, col = locate(data, loc)
         problems.append(Problem(message, filename, line, col, path, hint))
     return problems

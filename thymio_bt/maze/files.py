@@ -58,8 +58,9 @@ def load_maze(path: str | Path) -> Maze:
     return validate(Maze, data, str(path))
 
 
-def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
-    """Find a maze by path (relative to ``relative_to``) or by name in the project's mazes/."""
+def resolve_maze(ref: str, relative_to: Path | None = None, owner: str = "the mission file") -> Path:
+    """Find a maze by path (relative to ``relative_to``, the folder of ``owner``) or by name in the
+    project's mazes/."""
     candidates = []
     ref_path = Path(ref)
     if relative_to is not None and not ref_path.is_absolute():
@@ -75,7 +76,7 @@ def resolve_maze(ref: str, relative_to: Path | None = None) -> Path:
         Problem(
             f"maze not found: '{ref}'",
             hint=(
-                "a path relative to the mission file, or a named maze: "
+                f"a path relative to {owner}, or a named maze: "
                 + (did_you_mean(ref, known) if known else "none installed")
             ),
         )

@@ -164,7 +164,10 @@ class SettingsReader(Checker):
         kind, lo, hi = SETTING_RANGES[key]
         value = self.quantity(raw, Scope({}), where, key, kind)
         if value is not None and not lo <= value <= hi:
-            self.problem(f"{key} must be between {lo:g} and {hi:g}, got {value:g}", where, key)
+            example = (
+                "time_limit: 120 (simulated seconds)" if key == "time_limit" else "tick_hz: 10 (the course's rate)"
+            )
+            self.problem(f"{key} must be between {lo:g} and {hi:g}, got {value:g}", where, key, f"e.g. {example}")
         elif value is not None:
             values[key] = value
 
