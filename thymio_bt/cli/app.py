@@ -104,10 +104,6 @@ def json_text(data: Any) -> str:
     return json.dumps(data, indent=1, allow_nan=False) + "\n"
 
 
-#: the hint when --workers and --dask are both given
-DASK_ONLY = "the Dask cluster's workers run the work: drop --workers"
-
-
 def not_both(first: str, second: str, given: bool, hint: str) -> None:
     """Refuse two options that exclude each other (``given``: both were), rather than quietly use one.
 
@@ -119,6 +115,12 @@ def not_both(first: str, second: str, given: bool, hint: str) -> None:
     """
     if given:
         raise UserError(f"{first} and {second} exclude each other (hint: {hint})")
+
+
+def workers_or_dask(workers: int | None, dask: str | None) -> None:
+    """``--workers`` is for a local pool, ``--dask`` for a cluster: not both."""
+    hint = "the Dask cluster's workers run the work: drop --workers"
+    not_both("--workers", "--dask", workers is not None and dask is not None, hint)
 
 
 def path_option(*names: str, help: str, default: Any = None, **settings: Any) -> Callable[[F], F]:

@@ -22,7 +22,7 @@ from typing import Any
 
 import click
 
-from thymio_bt.cli.app import DASK_ONLY, fail, json_text, main, not_both, path_option
+from thymio_bt.cli.app import fail, json_text, main, path_option, workers_or_dask
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
 from thymio_bt.run.interrupts import Interrupts
@@ -68,7 +68,7 @@ def grade(
             if path is not None
         }
         site = _site_folder(html) if html is not None else None
-        not_both("--workers", "--dask", workers is not None and dask is not None, DASK_ONLY)
+        workers_or_dask(workers, dask)
         executor = None
         if dask:
             from thymio_bt.cli.sweeps import _dask

@@ -27,15 +27,14 @@ from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
 import click
 
 from thymio_bt.cli.app import (
-    DASK_ONLY,
     coverage_options,
     fail,
     json_text,
     main,
     mission_options,
-    not_both,
     parse_overrides,
     path_option,
+    workers_or_dask,
 )
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
@@ -94,7 +93,7 @@ def sweep(
 
     covered: CoverageRequest | None = None
     try:
-        not_both("--workers", "--dask", workers is not None and dask is not None, DASK_ONLY)
+        workers_or_dask(workers, dask)
         sweep_out = Output(out, "--out") if out is not None else None
         if coverage or coverage_tree is not None:
             if matrix:
