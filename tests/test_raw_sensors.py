@@ -43,4 +43,4 @@ def test_the_course_missions_also_succeed_in_raw_mode():
 def test_sensor_model_must_be_known():
     with pytest.raises(UserError) as err:
         load_mission("missions/square.yaml", {"sensor_model": "lidar"})
-    assert "sensor_model must be one of metres, raw" in str(err.value)
+    assert "sensor_model must be one of rays, metres, raw, cone" in str(err.value)
