@@ -63,6 +63,13 @@ class WallFollowParams(BehaviourParams):
     until: Literal["exit", "goal"] = Field(
         "exit", description="stop when leaving the maze's bounding box, or on reaching the goal"
     )
+    exit_margin: Length = Field(
+        0.03,
+        ge=0,
+        le=0.2,
+        description="with until: exit, how far beyond the maze's bounding box base_link must believe itself "
+        "(the distances it goes by are off by a centimetre or two after a long maze)",
+    )
     goal: tuple[float, float] | None = Field(None, description="goal position [x, y] for until: goal")
     goal_radius: Length = Field(0.05, gt=0, le=1.0, description="how close to the goal counts")
     timeout: Duration = Field(600.0, gt=0, le=36000, description="time limit in simulated seconds")
@@ -174,7 +181,8 @@ class WallFollow(RobotBehaviour):
             return math.hypot(x - p.goal[0], y - p.goal[1]) <= p.goal_radius
         assert self.ctx.bounds is not None
         xmin, ymin, xmax, ymax = self.ctx.bounds
-        if xmin <= x <= xmax and ymin <= y <= ymax:
+        margin = p.exit_margin
+        if xmin - margin <= x <= xmax + margin and ymin - margin <= y <= ymax + margin:
             return False
         # out of the maze's box, and no wall in front: a robot whose distances are off by a few
         # centimetres believes it is out while still beside a wall
