@@ -92,6 +92,9 @@ class CellMap:
     start: Cell | None = None
     #: how much longer than the geometry the side sensors read a side wall (learnt in corridors)
     side_bias: RunningMedian = field(default_factory=RunningMedian)
+    #: how far the map's pose may have drifted along x and along y since a wall ahead last fixed
+    #: that coordinate (grows with the distance driven: a turn's heading error turns into drift)
+    drift: dict[str, float] = field(default_factory=lambda: {"x": 0.0, "y": 0.0})
     #: the cells a plan last went for as "the goal" (the maze's goal region or the centre block)
     goal: set[Cell] = field(default_factory=set)
     #: the grid's pitch and its origin in the world (the bottom-left post's centre), for drawing

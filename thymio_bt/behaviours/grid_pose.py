@@ -35,6 +35,11 @@ LEFT_OF = {"E": "N", "N": "W", "W": "S", "S": "E"}
 RIGHT_OF = {"E": "S", "S": "W", "W": "N", "N": "E"}
 #: a wall ahead whose ±20° readings say the robot is turned more than this is not believed square
 MAX_TILT = math.radians(8.0)
+#: how much the map's pose may drift per metre driven without a wall ahead to fix it (a turn a few
+#: degrees off, then a straight run through open cells: 7 cm per metre was seen on Enki's Thymio)
+DRIFT_PER_METRE = 0.1
+#: the drift a wall-ahead fix accepts at most, as a fraction of the cell (a wall a cell away is not this one)
+MAX_DRIFT = 0.25
 
 
 class MazeMapParams(BehaviourParams):
@@ -216,7 +221,8 @@ class Sensing(OnGrid):
         gate: float,
     ) -> None:
         """Take ``gain`` of what the wall on ``side`` of the cell centred at ``centre`` says (front,
-        ±20° readings) into the map's pose; a shift along the heading over ``gate`` is not believed."""
+        ±20° readings) into the map's pose; a shift along the heading over ``gate`` (plus the drift
+        the map may have gathered along it since its last such fix) is not believed."""
         heading = HEADING[side]
         c, s = math.cos(heading), math.sin(heading)
         x, y, yaw = self.pose()
@@ -224,5 +230,16 @@ class Sensing(OnGrid):
         measured_yaw, measured_along = self.wall_fix(*readings, side, face)
         along = 0.0 if measured_along is None else measured_along - (x * c + y * s)
         turn = 0.0 if measured_yaw is None else wrap_angle(measured_yaw - yaw)
-        if abs(along) <= gate and (along or turn):
+        drift = self.cell_map().drift
+        axis = "x" if side in ("E", "W") else "y"
+        if abs(along) <= gate + drift[axis] and (along or turn):
             self.nudge(heading, gain * along, 0.0, turn_gain * turn)
+            if measured_along is not None:
+                drift[axis] *= 1.0 - gain
+
+    def drifted(self, distance: float) -> None:
+        """The robot drove ``distance`` (m) on the map's pose: each coordinate may be that much
+        (:data:`DRIFT_PER_METRE`) further off, up to :data:`MAX_DRIFT` of a cell."""
+        drift, most = self.cell_map().drift, MAX_DRIFT * self.params.cell
+        for axis in drift:
+            drift[axis] = min(most, drift[axis] + DRIFT_PER_METRE * distance)

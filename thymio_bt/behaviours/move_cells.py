@@ -89,6 +89,7 @@ class MoveCells(Sensing):
         self.steady = {"front_left": 0, "front_right": 0}  # ticks each side wall has been in view
         self.votes: dict[tuple[Cell, str], list[int]] = {}  # (cell, side) -> [wall, open] readings
         self.outliers: deque[float] = deque(maxlen=_PERSIST)  # the latest side fixes beyond the gate
+        self.last = self.odometry()[:2]  # where the axle was last tick, for the drift driven
 
     def _left(self, x: float, y: float) -> float:
         """The coordinate of (x, y) to the left of the heading (y facing E, -x facing N, ...)."""
@@ -99,6 +100,9 @@ class MoveCells(Sensing):
         p = self.params
         scan = self.robot.proximity()
         assert scan is not None
+        odometry = self.odometry()
+        self.drifted(math.dist(odometry[:2], self.last))
+        self.last = odometry[:2]
         self._map_sides(scan)
         self._fix_across(scan)
         self._fix_along(scan)
