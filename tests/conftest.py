@@ -1,8 +1,13 @@
 """Our own suite clears py_trees' global blackboard around every test (the plugin does it only after
 tests that made thymio-bt behaviours), and skips the tests marked ``slow`` (real time over ~20 s:
-the Playground missions) unless asked: ``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets."""
+the Playground missions) unless asked: ``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets.
+Once the tests are over, a process that has not ended within :data:`EXIT_GRACE` s prints every
+thread's stack and exits 1: something a test started is holding it (a Dask client waiting on its
+loop once held CI's pytest after its last test until the job's time limit)."""
 
+import faulthandler
 import os
+import sys
 
 import pytest
 
@@ -29,3 +34,14 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+#: wall-clock seconds the process gets to end after the tests
+EXIT_GRACE = 120
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_unconfigure(config):
+    """Arm the watchdog for the interpreter's shutdown (a daemon timer of faulthandler's: it does not
+    itself keep the process alive)."""
+    faulthandler.dump_traceback_later(EXIT_GRACE, exit=True, file=sys.__stderr__)

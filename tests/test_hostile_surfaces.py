@@ -184,6 +184,22 @@ def test_a_dask_address_that_never_answers_right_is_a_message(tmp_path, listener
     assert f"--dask tcp://127.0.0.1:{port}" in done.stderr
 
 
+@pytest.mark.parametrize("garbage", [b"", b"HTTP/1.1 200 OK\r\n\r\nhello" * 50])
+def test_a_refused_dask_address_leaves_nothing_running(listener, garbage):
+    """A Dask client left waiting for an answer kept Dask's loop, and the process hung at exit (CI's
+    pytest did, after its last test): refused, nothing of Dask's is left in the process."""
+    _require.module("distributed")
+    port, answer = listener
+    answer["bytes"] = garbage
+    before = set(threading.enumerate())
+    result = CliRunner().invoke(
+        main, ["sweep", "missions/square.yaml", "--runs", "1", "--dask", f"tcp://127.0.0.1:{port}"]
+    )
+    assert result.exit_code == 2, result.output
+    assert "no answer" in result.output if not garbage else "not as a Dask scheduler" in result.output
+    assert [t.name for t in set(threading.enumerate()) - before if t.is_alive()] == []
+
+
 @pytest.mark.parametrize(
     "address", ["tcp://127.0.0.1", "tls://", "inproc://", "nonsense://x:1", "tcp://127.0.0.1:99999"]
 )

@@ -58,6 +58,7 @@ def grade(
     """Grade SUBMISSIONS (mission files, or a folder per student) on ASSIGNMENT (a YAML file)."""
     import os
 
+    from thymio_bt.cli.sweeps import dask_executor
     from thymio_bt.grade.grader import grade as run_grade
     from thymio_bt.grade.reports import gradebook_csv, junit_xml, summary_table
 
@@ -69,13 +70,8 @@ def grade(
         }
         site = _site_folder(html) if html is not None else None
         workers_or_dask(workers, dask)
-        executor = None
-        if dask:
-            from thymio_bt.cli.sweeps import _dask
-
-            executor = _dask(dask)
         worlds = _worlds_folder(out, html)
-        with Interrupts() as interrupts, _Progress() as progress:
+        with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
             results = run_grade(
                 assignment,
                 submissions,

@@ -16,10 +16,11 @@ Example::
 
 from __future__ import annotations
 
+import asyncio
 import math
 import sys
-import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NamedTuple, TypeVar
@@ -99,18 +100,19 @@ def sweep(
             if matrix:
                 raise UserError("--coverage is for one sweep, not a --matrix (hint: sweep one cell with --set)")
             covered = CoverageRequest.checked(coverage_tree)
-        request = _Request(mission, runs, seed_start, sets, maze, start, _dask(dask) if dask else None, workers)
-        request.check(matrix)  # before the progress bar says anything
-        if matrix:
-            _matrix(request, sweep_out, matrix)
-            return
-        result, interrupts = request.execute(
-            runs,
-            f"{mission.name}: {runs} runs",
-            lambda overrides, **how: run_sweep(
-                mission, runs, seed_start, overrides, request.maze_ref, start, coverage=covered is not None, **how
-            ),
-        )
+        with dask_executor(dask) as executor:
+            request = _Request(mission, runs, seed_start, sets, maze, start, executor, workers)
+            request.check(matrix)  # before the progress bar says anything
+            if matrix:
+                _matrix(request, sweep_out, matrix)
+                return
+            result, interrupts = request.execute(
+                runs,
+                f"{mission.name}: {runs} runs",
+                lambda overrides, **how: run_sweep(
+                    mission, runs, seed_start, overrides, request.maze_ref, start, coverage=covered is not None, **how
+                ),
+            )
         data = result.to_json()
         if covered is not None and result.coverage is not None:
             covered.done(_conditions(request), result.coverage)
@@ -265,6 +267,20 @@ def _matrix_table(cells: list[Cell], rows: list[dict[str, Any]], names: list[str
 DASK_TIMEOUT = 5.0
 
 
+@contextmanager
+def dask_executor(address: str | None) -> Iterator[Any]:
+    """A sweep executor on the Dask cluster at ``address`` (None without one), its client closed
+    after: a client left open keeps reconnecting to a scheduler that has gone."""
+    if address is None:
+        yield None
+        return
+    executor = _dask(address)
+    try:
+        yield executor
+    finally:
+        executor.client.close()
+
+
 def _dask(address: str) -> Any:
     """A sweep executor on the Dask cluster at ``address``; an address that is not one, a scheduler
     that cannot be reached or does not answer within :data:`DASK_TIMEOUT` s, is a :class:`UserError`."""
@@ -275,27 +291,42 @@ def _dask(address: str) -> Any:
     from thymio_bt.run.distributed import DaskExecutor
 
     hint = "hint: start one with: dask scheduler; dask worker ADDRESS; then --dask tcp://HOST:8786"
-    outcome: dict[str, Any] = {}
+    from distributed.comm.addressing import get_address_host_port
 
-    def connect() -> None:
-        try:
-            outcome["client"] = Client(address, timeout=DASK_TIMEOUT)
-        except BaseException as exc:  # reported below, whatever Dask raised
-            outcome["error"] = exc
+    try:
+        port = get_address_host_port(address)[1]
+    except ValueError as error:
+        raise UserError(f"--dask {address}: not a scheduler address: {_said(error)} ({hint})") from None
+    if not 0 < port < 65536:
+        raise UserError(f"--dask {address}: not a scheduler address: port {port} is not 1-65535 ({hint})")
+    # Dask's own timeout covers the connection, not the scheduler's answer, and a Client that never
+    # hears one cannot be abandoned (it holds Dask's loop and hangs the process at exit): the
+    # scheduler is asked who it is first, on a loop of our own that a timeout cancels cleanly
+    try:
+        identity = asyncio.run(asyncio.wait_for(_identity(address), DASK_TIMEOUT))
+    except asyncio.TimeoutError:
+        raise UserError(
+            f"--dask {address}: no answer from a Dask scheduler within {DASK_TIMEOUT:g} s ({hint})"
+        ) from None
+    except OSError as error:  # refused, unreachable, or Dask's own connection timeout
+        raise UserError(f"--dask {address}: cannot reach the scheduler ({_said(error)}) ({hint})") from None
+    except Exception as error:  # Dask's handshake, given garbage, raises anything (even MemoryError)
+        identity = error
+    if not isinstance(identity, dict) or identity.get("type") != "Scheduler":
+        raise UserError(f"--dask {address}: the peer answered, but not as a Dask scheduler ({hint})")
+    return DaskExecutor(Client(address, timeout=DASK_TIMEOUT))
 
-    # Dask's own timeout covers the connection, not the scheduler's answer: a listener that never
-    # answers would hold the client for ever, so the wait is bounded here (a daemon thread is left)
-    waiter = threading.Thread(target=connect, name="dask-connect", daemon=True)
-    waiter.start()
-    waiter.join(DASK_TIMEOUT + 1.0)  # realtime: before the sweep starts
-    if "client" in outcome:
-        return DaskExecutor(outcome["client"])
-    error = outcome.get("error")
-    if error is None:
-        raise UserError(f"--dask {address}: no answer from a Dask scheduler within {DASK_TIMEOUT:g} s ({hint})")
-    if isinstance(error, ValueError | TypeError):
-        raise UserError(f"--dask {address}: not a scheduler address: {_said(error)} ({hint})")
-    raise UserError(f"--dask {address}: cannot reach the scheduler ({_said(error)}) ({hint})")
+
+async def _identity(address: str) -> Any:
+    """What the Dask server at ``address`` says it is (a scheduler answers ``{"type": "Scheduler", ...}``)."""
+    from distributed.comm import connect
+
+    comm = await connect(address, timeout=DASK_TIMEOUT)
+    try:
+        await comm.write({"op": "identity", "reply": True})
+        return await comm.read()
+    finally:
+        comm.abort()
 
 
 def _said(exc: BaseException) -> str:
