@@ -175,6 +175,9 @@ def test_values_at_the_edge_of_their_range(tmp_path):
     assert _found(tmp_path, "MoveDistance: {distance: 10cm, speed: 19.5cm/s}") == [(5, "edge-of-range")]
     assert _found(tmp_path, "WallAhead: {distance: 8cm}") == []
     assert _found(tmp_path, "WallAhead") == []  # a default is not written: not the student's choice
+    # a sensed length's bound is the mission's robot's range: Enki's sensors read to 14 cm
+    assert _found(tmp_path, "WallAhead: {distance: 9.5cm}", "robot: enki\n") == []
+    assert _found(tmp_path, "WallAhead: {distance: 13.5cm}", "robot: enki\n") == [(6, "edge-of-range")]
 
 
 def test_the_cli_prints_one_finding_per_line_and_exits_1_0_or_2(tmp_path):

@@ -215,6 +215,79 @@ def test_a_bad_robot_is_said_at_the_option_that_gave_it(tmp_path: Path, args: li
     assert "include file" not in done.stderr and "Traceback" not in done.stderr
 
 
+SENSED = (
+    "maze: arena\nstart: centre\n{robot}tree:\n  sequence:\n"
+    "    - MoveUntilWall: {{distance: {stop}}}\n    - WallAhead: {{distance: {ahead}}}\n"
+)
+
+
+@pytest.mark.parametrize(
+    "robot, stop, ahead, beyond",
+    [
+        ("course", "9.5cm", "9.75cm", []),
+        (
+            "course",
+            "12cm",
+            "9cm",
+            [(6, "MoveUntilWall: distance 0.12 m is beyond the 'course' robot's sensor range (0.0975 m)")],
+        ),
+        (
+            "real",
+            "9.5cm",
+            "9.5cm",
+            [
+                (6, "MoveUntilWall: distance 0.095 m is beyond the 'real' robot's sensor range (0.0933 m)"),
+                (7, "WallAhead: distance 0.095 m is beyond the 'real' robot's sensor range (0.0933 m)"),
+            ],
+        ),
+        ("enki", "12cm", "14cm", []),
+    ],
+)
+def test_a_sensed_length_is_bounded_by_the_mission_s_robot(
+    tmp_path: Path, robot: str, stop: str, ahead: str, beyond: list
+) -> None:
+    """A stop distance or a wall-ahead threshold must be one the robot's sensors can read: the course
+    robot reads to 9.75 cm, a real Thymio to 9.33 cm, Enki's to 14 cm (the schema's bound)."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text(SENSED.format(robot=f"robot: {robot}\n", stop=stop, ahead=ahead))
+    if not beyond:
+        assert load_mission(mission).robot == robot
+        return
+    with pytest.raises(UserError) as info:
+        load_mission(mission)
+    assert [(p.line, p.message) for p in info.value.problems] == beyond
+    assert all("at most 0.09" in p.hint and "--robot enki: 0.14 m" in p.hint for p in info.value.problems)
+
+
+def test_a_sensed_length_beyond_the_robot_s_range_from_set_is_said_at_set(tmp_path: Path) -> None:
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "maze: arena\nstart: centre\nparameters: {stop: 5cm}\ntree: {MoveUntilWall: {distance: $stop}}\n"
+    )
+    with pytest.raises(UserError) as info:
+        load_mission(mission, overrides={"stop": "12cm"})
+    [problem] = info.value.problems
+    assert (problem.file, problem.message) == (
+        "--set",
+        "stop=12cm: 0.12 m is beyond the 'course' robot's sensor range (0.0975 m)"
+        " (where MoveUntilWall.distance uses it)",
+    )
+    assert load_mission(mission, overrides={"stop": "12cm", "robot": "enki"}).tree.params.distance == pytest.approx(
+        0.12
+    )
+
+
+def test_enki_stops_at_a_distance_the_course_robot_cannot_read(tmp_path: Path) -> None:
+    from thymio_bt.run.runner import Run
+
+    mission = tmp_path / "m.yaml"
+    mission.write_text(SENSED.format(robot="robot: enki\n", stop="12cm", ahead="13cm"))
+    report = Run(load_mission(mission)).run().report()
+    assert report["status"] == "SUCCESS"
+    [stop] = [e for e in report["events"] if e["kind"] == "behaviour_end" and e["name"] == "MoveUntilWall"]
+    assert stop["range"] == pytest.approx(0.12, abs=0.002)
+
+
 REFERENCES = """\
 maze: two_parts_maze
 start: part1

@@ -30,7 +30,8 @@ from pydantic import Field
 from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, RobotBehaviour
 from thymio_bt.behaviours.corridor import RANGE_MAX, Side, side_ray
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
-from thymio_bt.inputs.fields import Length
+from thymio_bt.inputs.fields import SensedLength
+from thymio_bt.robot.model import WIDEST_RANGE
 
 __all__ = [
     "RANGE_MAX",
@@ -52,7 +53,7 @@ __all__ = [
 class WallAheadParams(BehaviourParams):
     """Is a wall ahead?"""
 
-    distance: Length = Field(RANGE_MAX, gt=0, le=RANGE_MAX, description="closer than this counts")
+    distance: SensedLength = Field(RANGE_MAX, gt=0, le=WIDEST_RANGE, description="closer than this counts")
     sensor: Literal["front_center", "front_center_left", "front_center_right"] = "front_center"
 
 

@@ -15,9 +15,18 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
-from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, PerSecond, PerSecondPerMetre, Speed
+from thymio_bt.inputs.fields import (
+    Angle,
+    AngularSpeed,
+    Duration,
+    Length,
+    PerSecond,
+    PerSecondPerMetre,
+    SensedLength,
+    Speed,
+)
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose, wrap_angle
-from thymio_bt.robot.model import COURSE
+from thymio_bt.robot.model import COURSE, WIDEST_RANGE
 
 SensorName = Literal[
     "front_left", "front_center_left", "front_center", "front_center_right", "front_right", "rear_left", "rear_right"
@@ -74,8 +83,8 @@ class MoveUntilWallParams(BehaviourParams):
     """Drive forward until a proximity sensor reads ``distance``."""
 
     speed: Speed = Field(0.1, gt=0, le=0.2, description="cruise speed")
-    distance: Length = Field(
-        0.05, ge=COURSE.range_min, le=COURSE.range_max, description="stop when the sensor reads this"
+    distance: SensedLength = Field(
+        0.05, ge=COURSE.range_min, le=WIDEST_RANGE, description="stop when the sensor reads this"
     )
     sensor: SensorName = Field("front_center", description="the sensor that watches the wall")
     approach_gain: PerSecond = Field(5.0, gt=0, le=10, description="slow-down gain once the wall is in range")

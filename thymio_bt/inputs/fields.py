@@ -58,7 +58,28 @@ class SpawnName:
     """Metadata of a pose type: a named spawn of the mission's maze may be written instead of numbers."""
 
 
+@dataclass(frozen=True, slots=True)
+class SensorRange:
+    """Metadata of a length a proximity sensor must read: the mission reader bounds it by the range
+    of the mission's robot (the field's own ``le``, for the JSON Schema, is the widest robot's)."""
+
+
+def within_sensor_range(field: Any) -> bool:
+    """Whether a pydantic field is a :data:`SensedLength`.
+
+    >>> from pydantic import BaseModel
+    >>> class P(BaseModel):
+    ...     distance: SensedLength = 0.05
+    ...     speed: Speed = 0.1
+    >>> within_sensor_range(P.model_fields["distance"]), within_sensor_range(P.model_fields["speed"])
+    (True, False)
+    """
+    return any(isinstance(meta, SensorRange) for meta in field.metadata)
+
+
 Length = Annotated[float, Unit("m")]
+#: a length a proximity sensor must be able to read (a stop distance, a wall-ahead threshold)
+SensedLength = Annotated[float, Unit("m"), SensorRange()]
 Angle = Annotated[float, Unit("rad")]
 Speed = Annotated[float, Unit("m/s")]
 AngularSpeed = Annotated[float, Unit("rad/s")]

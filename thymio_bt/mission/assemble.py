@@ -33,7 +33,7 @@ from thymio_bt.mission.checker import Scope, Where
 from thymio_bt.mission.registry import Registry, default_registry
 from thymio_bt.mission.settings import MAX_SEED, SENSOR_MODELS, SETTING_RANGES, SettingsReader
 from thymio_bt.robot.interface import Pose
-from thymio_bt.robot.model import robot_model
+from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import placement_problem
 
 __all__ = [
@@ -97,6 +97,14 @@ class Assembly:
     sources: tuple[Path, ...] = ()
     #: each included file and where it was included (file, line, column)
     included_at: dict[Path, Where] = field(default_factory=dict)
+
+    @property
+    def robot(self) -> RobotModel | None:
+        """The mission's robot model (None when ``robot:`` names none: that is reported already)."""
+        try:
+            return robot_model(self.settings.get("robot", "course"))
+        except (KeyError, UserError):
+            return None
 
 
 class Assembler(SettingsReader):

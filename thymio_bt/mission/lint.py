@@ -51,9 +51,11 @@ from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from thymio_bt.inputs.fields import within_sensor_range
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.plan import Mission, NodePlan
 from thymio_bt.mission.tree_rules import Finding, TreeRules, condition_names, finding_at, is_condition
+from thymio_bt.robot.model import robot_model
 
 #: the rule ids, with what each finds (docs/lint.md has an example of each)
 RULES = {
@@ -89,7 +91,7 @@ def lint_mission(path: str | Path) -> list[Finding]:
         data = load_yaml(source)
     assembler = Assembler(run_plugins=False)
     assembly = assembler.assemble(source, data)
-    findings = [*TreeRules(mission).findings(), *_edges(mission.tree)]
+    findings = [*TreeRules(mission).findings(), *_edges(mission.tree, robot_model(mission.robot).range_max)]
     findings += _unused(mission, assembly, assembler.included_parameters)
     return sorted(set(findings), key=lambda f: (f.file != str(mission.file), f.file, f.line, f.rule, f.message))
 
@@ -102,9 +104,10 @@ def _uses(node: NodePlan, use: str = "") -> Iterator[tuple[NodePlan, str]]:
         yield from _uses(child, use)
 
 
-def _edges(tree: NodePlan) -> Iterator[Finding]:
+def _edges(tree: NodePlan, sensor_range: float) -> Iterator[Finding]:
     """``edge-of-range``: each value written within :data:`EDGE` of a bound of its parameter (in a
-    subtree, the use whose value it is is named)."""
+    subtree, the use whose value it is is named); a sensed length's upper bound is ``sensor_range``,
+    the mission's robot's."""
     for node, use in _uses(tree):
         params = node.params
         if params is None:
@@ -114,7 +117,7 @@ def _edges(tree: NodePlan) -> Iterator[Finding]:
             value, field = getattr(params, name, None), fields.get(name)
             if field is None or isinstance(value, bool) or not isinstance(value, int | float):
                 continue
-            for bound, sign in _bounds(field):
+            for bound, sign in _bounds(field, sensor_range):
                 if bound and abs(value - bound) <= EDGE * abs(bound):
                     yield finding_at(
                         node,
@@ -125,13 +128,15 @@ def _edges(tree: NodePlan) -> Iterator[Finding]:
                     )
 
 
-def _bounds(field: Any) -> Iterator[tuple[float, str]]:
-    """The numeric bounds of a pydantic field, with their sign (``> 0``, ``<= 0.2``...)."""
+def _bounds(field: Any, sensor_range: float) -> Iterator[tuple[float, str]]:
+    """The numeric bounds of a pydantic field, with their sign (``> 0``, ``<= 0.2``...); a sensed
+    length's upper bound is the ``sensor_range`` of the robot, when that is nearer."""
+    sensed = within_sensor_range(field)
     for meta in field.metadata:
         for attr, sign in (("gt", ">"), ("ge", ">="), ("lt", "<"), ("le", "<=")):
             bound = getattr(meta, attr, None)
             if isinstance(bound, int | float) and not isinstance(bound, bool):
-                yield float(bound), sign
+                yield (min(float(bound), sensor_range) if sensed and sign == "<=" else float(bound)), sign
 
 
 def _unused(mission: Mission, assembly: Any, included: list[tuple[MarkedDict, str]]) -> Iterator[Finding]:

@@ -17,7 +17,7 @@ import typing
 from typing import Any
 
 from thymio_bt.behaviours import ControlNode
-from thymio_bt.inputs.fields import unit_of
+from thymio_bt.inputs.fields import unit_of, within_sensor_range
 
 
 def _type_name(annotation: Any) -> str:
@@ -43,6 +43,8 @@ def _range(field: Any) -> str:
             value = getattr(meta, attr, None)
             if value is not None:
                 parts.append(f"{sym} {value:.4g}")
+    if within_sensor_range(field):
+        parts.append("and within the robot's sensor range")
     return " ".join(parts)
 
 

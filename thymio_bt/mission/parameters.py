@@ -28,11 +28,12 @@ from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails
 
 from thymio_bt.errors import did_you_mean
-from thymio_bt.inputs.fields import SpawnName, Unit, field_metadata, metadata, unit_of
+from thymio_bt.inputs.fields import SpawnName, Unit, field_metadata, metadata, unit_of, within_sensor_range
 from thymio_bt.inputs.units import Quantity, UnitError, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.maze import Maze
 from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
+from thymio_bt.robot.model import ENKI, RobotModel
 
 #: what :meth:`ParameterReader.convert` returns for a value it reported a problem about
 _INVALID = object()
@@ -103,6 +104,8 @@ class ParameterReader(Checker):
 
     #: the mission's maze, for spawn names written where a pose goes (None: names are not checked)
     maze: Maze | None = None
+    #: the mission's robot, whose sensor range bounds a sensed length (None: only the field's own bounds)
+    robot: RobotModel | None = None
 
     def _params(
         self,
@@ -122,10 +125,41 @@ class ParameterReader(Checker):
         before = len(self.problems)
         for key in keys:
             self._read_key(reading, key, scope, allow_refs)
+        self._sensed(reading)
         params = self._validated(reading, keys, missing_hint)
         if params is None or len(self.problems) > before:
             return None, reading.refs
         return params, reading.refs
+
+    def _sensed(self, reading: _Reading) -> None:
+        """A sensed length past the range of the mission's robot is a problem at its value (and not
+        pydantic's, whose bound is the widest robot's): its sensors never read that far."""
+        robot = self.robot
+        if robot is None:
+            return
+        for key, value in list(reading.values.items()):
+            field = reading.fields.get(key)
+            if field is None or not within_sensor_range(field) or not isinstance(value, float):
+                continue
+            if value <= robot.range_max + 1e-12:
+                continue
+            del reading.values[key]  # said here, not again by pydantic
+            message = f"{value:g} m is beyond the '{robot.name}' robot's sensor range ({robot.range_max:g} m)"
+            hint = (
+                f"its sensors never read further: at most {robot.range_max:g} m, or a robot that sees further "
+                f"(--robot enki: {ENKI.range_max:g} m)"
+            )
+            given = reading.set_values.get(key)
+            if given is not None:  # the value came from --set: said there
+                where: Where = ("--set", 0, 0)
+                message = f"{given.name}={given.text}: {message} (where {reading.kind}.{key} uses it)"
+            else:
+                where = self.where_value(reading.body, key, reading.file)
+                message = f"{reading.kind}: {key} {message}"
+                guess = _unit_guess(field, reading.bare.get(key, reading.body.get(key)))
+                hint = f"did you mean {guess}? a bare number is in m; {hint}" if guess else hint
+            if not any(p.file == where[0] and p.message == message for p in self.problems):
+                self.problem(message, where, f"{reading.path}.{key}", hint)
 
     def _read_key(self, reading: _Reading, key: Any, scope: Scope, allow_refs: bool) -> None:
         """One parameter of the node, into ``reading``: its value, its blackboard key, or a problem."""

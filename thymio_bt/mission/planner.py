@@ -68,6 +68,7 @@ class TreePlanner(ParameterReader):
         self.registry = assembly.registry
         self.subtrees = assembly.subtrees
         self.maze = assembly.maze
+        self.robot = assembly.robot
         self.root_scope = Scope(assembly.parameters)
         self.node_count = 0
         self.too_deep: set[Where] = set()

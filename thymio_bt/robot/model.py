@@ -252,6 +252,8 @@ REAL = replace(
 
 #: The robot models a run can name, by name.
 ROBOTS: dict[str, RobotModel] = {m.name: m for m in (COURSE, ENKI, REAL)}
+#: the furthest any built-in robot's proximity sensors read (m): a sensed length's bound before the robot is known
+WIDEST_RANGE = max(m.range_max for m in ROBOTS.values())
 _MODELS = tuple(ROBOTS.items())  # hashable, for the profile cache
 
 
