@@ -7,6 +7,7 @@ from __future__ import annotations
 import importlib
 import os
 import shutil
+from pathlib import Path
 from types import ModuleType
 
 import pytest
@@ -37,3 +38,15 @@ def program(name: str) -> str:
         missing(f"program {name}")
     assert path is not None
     return path
+
+
+def enki_fix() -> Path:
+    """The library correcting the Playground's Enki (built now if need be), or skip/fail as
+    :func:`missing` does (it needs g++ and libenki-dev)."""
+    from thymio_bt.backends.playground.enki_fix import enki_fix as build
+
+    library, why = build()
+    if library is None:
+        missing(f"the Playground's Enki correction ({why})")
+    assert library is not None
+    return library

@@ -56,7 +56,7 @@ def playground():
     _require.module("jeepney")
     port = free_port()
     world = playground_world(CORRIDOR, Pose(0.09, 0.09, 0.0), port)
-    with Playground.start(world.text, port) as pg:
+    with Playground.start(world.text, port, preload=_require.enki_fix()) as pg:
         yield pg, world
 
 

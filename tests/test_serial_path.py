@@ -53,7 +53,7 @@ class Bridge:
         mission = load_mission(mission_file, {"robot": "enki"})
         port = free_port()
         self.world = playground_world(mission.maze, Pose(*ENKI.axle_of(mission.start)), port)
-        self.playground = Playground.start(self.world.text, port)
+        self.playground = Playground.start(self.world.text, port, preload=_require.enki_fix())
         try:
             self.enki = EnkiRobot.find(self.playground.bus)
         except BaseException:

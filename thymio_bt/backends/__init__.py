@@ -136,7 +136,7 @@ class AsebaOptions(BackendOptions):
 
 
 class PlaygroundOptions(BackendOptions):
-    """The ``playground`` backend's settings: start-up wait, latency and the speed calibration."""
+    """The ``playground`` backend's settings: start-up wait, latency, the speed calibration and Enki's sensor fix."""
 
     timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
     latency: float = _latency(
@@ -151,6 +151,11 @@ class PlaygroundOptions(BackendOptions):
         description="the Playground's Thymio's speed per motor "
         "unit over the robot model's; default: 0.985 (measured against its ground "
         "truth) for a built-in model, 1 for a profile measured by thymio-bt calibrate",
+    )
+    enki_fix: bool = Field(
+        True,
+        description="correct Enki 1.6.99's stale sensor rays (enki-community/enki#68) in the Playground "
+        "(needs g++ and libenki-dev; false runs Enki as installed)",
     )
 
 

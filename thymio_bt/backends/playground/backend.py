@@ -14,9 +14,12 @@ From the shell (the Playground installed)::
 from __future__ import annotations
 
 import math
+import sys
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 from thymio_bt.backends.playground.enki import EnkiRobot
+from thymio_bt.backends.playground.enki_fix import HINT, enki_fix
 from thymio_bt.backends.playground.process import Playground, free_port
 from thymio_bt.backends.playground.world import PlaygroundWorld, playground_world
 from thymio_bt.backends.real.aseba import AsebaNode
@@ -109,6 +112,23 @@ class PlaygroundRobot(ThymioRobot):
             self.playground.stop()
 
 
+#: whether the warning that Enki's sensors could not be corrected was given (once per process)
+_WARNED: list[str] = []
+
+
+def _enki_fix() -> Path | None:
+    """The library correcting Enki's stale sensor rays (:mod:`.enki_fix`); None, with a warning
+    the first time, when it cannot be built here."""
+    library, why = enki_fix()
+    if library is None and not _WARNED:
+        _WARNED.append(why)
+        sys.stderr.write(
+            "warning: the Playground's Enki 1.6.99 keeps stale sensor rays (enki-community/enki#68), so its "
+            f"readings can show walls that are not there; {why} (hint: {HINT})\n"
+        )
+    return library
+
+
 def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -> PlaygroundRobot:
     """The ``playground`` backend kind: start a Playground on the mission's maze, connect to its
     Thymio; its model is ``enki`` unless the mission names another than the course's."""
@@ -117,7 +137,7 @@ def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -
     model = robot_for(mission, "playground")
     port = free_port()
     world = playground_world(mission.maze, Pose(*model.axle_of(mission.start)), port)
-    playground = Playground.start(world.text, port, options.timeout)
+    playground = Playground.start(world.text, port, options.timeout, _enki_fix() if options.enki_fix else None)
     try:
         node = AsebaNode.connect(f"tcp:127.0.0.1:{port}", options.timeout)
         enki = EnkiRobot.find(playground.bus, options.timeout)

@@ -183,8 +183,9 @@ class Playground:
         self.folder, self.processes, self.bus, self.port = folder, processes, bus, port
 
     @classmethod
-    def start(cls, world_text: str, port: int, timeout: float = 10.0) -> Playground:
-        """Write the world, start a session bus and the Playground on it; wait for the robot's port."""
+    def start(cls, world_text: str, port: int, timeout: float = 10.0, preload: Path | None = None) -> Playground:
+        """Write the world, start a session bus and the Playground on it (with the library ``preload``
+        loaded into it: :mod:`.enki_fix`); wait for the robot's port."""
         for program in (PLAYGROUND, DBUS):
             if shutil.which(program) is None:
                 raise UserError(
@@ -196,14 +197,14 @@ class Playground:
                 playground = cls(Path(tempfile.mkdtemp(prefix="thymio-bt-playground-", dir=_short_tmp())), [], "", port)
                 playground.bus = f"unix:path={playground.folder / 'bus'}"
                 _GUARD.add(playground)
-            playground._launch(world_text, timeout)
+            playground._launch(world_text, timeout, preload)
         except BaseException:
             if playground is not None:
                 playground.stop()
             raise
         return playground
 
-    def _launch(self, world_text: str, timeout: float) -> None:
+    def _launch(self, world_text: str, timeout: float, preload: Path | None) -> None:
         """Start the bus, then the Playground on it, waiting for each."""
         folder = self.folder
         (folder / "home").mkdir()
@@ -220,7 +221,9 @@ class Playground:
                 "QT_QPA_PLATFORM": "offscreen",
                 "DBUS_SESSION_BUS_ADDRESS": self.bus,
             }
-            self._spawn([PLAYGROUND, str(world)], log, env=env)
+            # the library is preloaded into the Playground only (``env`` sets it for the program it starts)
+            lead = ["env", f"LD_PRELOAD={preload}"] if preload is not None else []
+            self._spawn([*lead, PLAYGROUND, str(world)], log, env=env)
         self._wait(lambda: listening(self.port), timeout, f"the robot's port {self.port}")
 
     def _spawn(self, command: list[str], log: IO[bytes], env: dict[str, str] | None = None) -> None:
