@@ -307,3 +307,17 @@ def test_once_every_playground_stopped_a_handler_put_back_by_another_acts_as_the
         time.sleep(1)
     assert type(info.value) is KeyboardInterrupt and playground.stopped == 1
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_closing_a_connection_s_loop_after_asyncio_run_elsewhere_in_the_thread():
+    """asyncio.run() (the --dask probe does one) leaves the main thread without a current loop, and
+    closing the Aseba connection's idle loop then raised 'There is no current event loop' (CI's
+    Playground test, after the Dask tests in the same process)."""
+    import asyncio
+
+    from thymio_bt.backends.real.aseba import _finish
+
+    asyncio.run(asyncio.sleep(0))
+    loop = asyncio.new_event_loop()
+    _finish(loop)
+    assert loop.is_closed()

@@ -461,12 +461,13 @@ def _finish(loop: asyncio.AbstractEventLoop) -> None:
     pending = asyncio.all_tasks(loop)
     for task in pending:
         task.cancel()
-    finished = asyncio.gather(*pending, return_exceptions=True)
-    for _ in range(5):
-        if finished.done():
-            break
-        with contextlib.suppress(RuntimeError):
-            loop.run_until_complete(finished)
+    if pending:  # gather() of nothing asks for the thread's current loop: after asyncio.run() there is none
+        finished = asyncio.gather(*pending, return_exceptions=True)
+        for _ in range(5):
+            if finished.done():
+                break
+            with contextlib.suppress(RuntimeError):
+                loop.run_until_complete(finished)
     loop.close()
 
 
