@@ -263,8 +263,11 @@ def _matrix_table(cells: list[Cell], rows: list[dict[str, Any]], names: list[str
         )
 
 
-#: seconds the Dask client gets to reach the scheduler and hear its answer
+#: seconds Dask gets to connect to the scheduler (its own timeout, also the Client's)
 DASK_TIMEOUT = 5.0
+#: seconds the whole question may take: Dask's connection (which retries a refused one for
+#: DASK_TIMEOUT s and then says so) and the scheduler's answer
+ANSWER_TIMEOUT = 2 * DASK_TIMEOUT
 
 
 @contextmanager
@@ -283,7 +286,7 @@ def dask_executor(address: str | None) -> Iterator[Any]:
 
 def _dask(address: str) -> Any:
     """A sweep executor on the Dask cluster at ``address``; an address that is not one, a scheduler
-    that cannot be reached or does not answer within :data:`DASK_TIMEOUT` s, is a :class:`UserError`."""
+    that cannot be reached or does not answer within :data:`ANSWER_TIMEOUT` s, is a :class:`UserError`."""
     try:
         from distributed import Client
     except ImportError:
@@ -303,10 +306,10 @@ def _dask(address: str) -> Any:
     # hears one cannot be abandoned (it holds Dask's loop and hangs the process at exit): the
     # scheduler is asked who it is first, on a loop of our own that a timeout cancels cleanly
     try:
-        identity = asyncio.run(asyncio.wait_for(_identity(address), DASK_TIMEOUT))
+        identity = asyncio.run(asyncio.wait_for(_identity(address), ANSWER_TIMEOUT))
     except asyncio.TimeoutError:
         raise UserError(
-            f"--dask {address}: no answer from a Dask scheduler within {DASK_TIMEOUT:g} s ({hint})"
+            f"--dask {address}: no answer from a Dask scheduler within {ANSWER_TIMEOUT:g} s ({hint})"
         ) from None
     except OSError as error:  # refused, unreachable, or Dask's own connection timeout
         raise UserError(f"--dask {address}: cannot reach the scheduler ({_said(error)}) ({hint})") from None
