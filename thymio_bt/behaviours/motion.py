@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
+from dataclasses import dataclass
 from typing import Literal, get_args
 
 from py_trees.common import Status
@@ -25,7 +26,7 @@ from thymio_bt.inputs.fields import (
     SensedLength,
     Speed,
 )
-from thymio_bt.robot.interface import SENSOR_NAMES, Pose, wrap_angle
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Robot, wrap_angle
 from thymio_bt.robot.model import COURSE, WIDEST_RANGE
 
 SensorName = Literal[
@@ -340,35 +341,16 @@ class TurnAngle(RobotBehaviour):
     FINE_WINDOW = math.radians(10.0)
 
     def start(self) -> None:
-        """The angle to turn (to the snapped heading, if any), and the tolerance a late robot allows."""
-        yaw = current_pose(self.robot).yaw
-        target = yaw + self.params.angle
-        if self.params.snap:
-            target = round(target / self.params.snap) * self.params.snap
-        self.goal = target - yaw  # the signed angle to turn, unwrapped (may exceed pi)
-        self.last_yaw = yaw
-        self.turned = 0.0
-        self.rate = 0.0  # the turn rate last commanded
-        latency = self.latency = self.robot.latency
-        self.gain = late_gain(5.0, self.robot, self.ctx.tick_period)
-        # a late robot cannot stop finer than its slowest turn covers in a tick and its latency
-        self.tolerance = (
-            max(self.params.tolerance, MIN_TURN_RATE * (self.ctx.tick_period + latency))
-            if latency
-            else self.params.tolerance
-        )
+        """The angle to turn (to the snapped heading, if any)."""
+        p = self.params
+        self.turn = Turn.begin(self, p.angle, p.speed, p.tolerance, p.snap)
 
     def step(self) -> Status:
         """Turn on towards the angle (by odometry, or squared by the rear sensors near the end)."""
-        yaw = current_pose(self.robot).yaw
-        delta = wrap_angle(yaw - self.last_yaw)
-        self.last_yaw = yaw
-        self.turned += delta
+        turn = self.turn
+        error = turn.error()
         self.extra = self._end_fields
-        p = self.params
-        # a late robot turns this much more before anything sent now acts
-        error = self.goal - self.turned - self.rate * self.latency
-        if p.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
+        if self.params.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
             scan = self.robot.proximity()
             assert scan is not None
             left, right = scan["rear_left"], scan["rear_right"]
@@ -376,20 +358,70 @@ class TurnAngle(RobotBehaviour):
                 return self.fail(FailureCode.NO_WALL, "the rear sensors see no wall behind the robot")
             # the rear-left sensor reads farther when the robot must still turn left to be square
             error = math.atan2(left - right, REAR_SENSOR_SPACING)
-        if abs(error) <= self.tolerance:
-            self.robot.drive(0.0, 0.0)
-            self.say("turned {:.2f} deg", math.degrees(self.turned))
+        if turn.drive(error, self.params.pivot):
+            self.say("turned {:.2f} deg", math.degrees(turn.turned))
             return Status.SUCCESS
-        rate = approach_speed(abs(error), p.speed, self.gain, MIN_TURN_RATE, self.ctx.tick_period)
-        # about a point ``pivot`` outside the turn: the axle backs away as the robot turns
-        self.rate = math.copysign(rate, error)
-        self.robot.drive(-rate * p.pivot, self.rate)
         self.say("{:.2f} deg to go", math.degrees(error))
         return Status.RUNNING
 
     def _end_fields(self) -> dict[str, float]:
         """The behaviour_end fields: the angle turned."""
-        return {"angle": round(self.turned, 6)}
+        return {"angle": round(self.turn.turned, 6)}
+
+
+@dataclass
+class Turn:
+    """An in-place turn by odometry, driven a tick at a time: TurnAngle's controller, which other
+    behaviours that turn as one of their steps (LookAround) use too.
+
+    ``error()`` reads the heading and says how much is left to turn (what a late robot will still
+    turn from what was sent is counted as turned); ``drive(error)`` commands the turn rate for that
+    error, or stops the robot and says True once it is within the tolerance.
+    """
+
+    robot: Robot
+    goal: float  # the signed angle to turn, unwrapped (may exceed pi)
+    speed: float
+    tolerance: float
+    gain: float
+    period: float
+    latency: float
+    last_yaw: float
+    turned: float = 0.0
+    rate: float = 0.0  # the turn rate last commanded
+
+    @classmethod
+    def begin(cls, behaviour: RobotBehaviour, angle: float, speed: float, tolerance: float, snap: float = 0.0) -> Turn:
+        """A turn by ``angle`` (left positive) from the robot's heading now; with ``snap``, to the
+        nearest multiple of it. A late robot cannot stop finer than its slowest turn covers in a tick
+        and its latency, so its tolerance is at least that."""
+        robot, period = behaviour.robot, behaviour.ctx.tick_period
+        yaw = current_pose(robot).yaw
+        target = yaw + angle
+        if snap:
+            target = round(target / snap) * snap
+        latency = robot.latency
+        if latency:
+            tolerance = max(tolerance, MIN_TURN_RATE * (period + latency))
+        return cls(robot, target - yaw, speed, tolerance, late_gain(5.0, robot, period), period, latency, yaw)
+
+    def error(self) -> float:
+        """The angle still to turn, after what a late robot turns before a command sent now acts."""
+        yaw = current_pose(self.robot).yaw
+        self.turned += wrap_angle(yaw - self.last_yaw)
+        self.last_yaw = yaw
+        return self.goal - self.turned - self.rate * self.latency
+
+    def drive(self, error: float, pivot: float = 0.0) -> bool:
+        """Stop and say True within the tolerance; else command the turn rate for ``error`` about a
+        point ``pivot`` outside the turn (the axle backs away as the robot turns)."""
+        if abs(error) <= self.tolerance:
+            self.robot.drive(0.0, 0.0)
+            return True
+        rate = approach_speed(abs(error), self.speed, self.gain, MIN_TURN_RATE, self.period)
+        self.rate = math.copysign(rate, error)
+        self.robot.drive(-rate * pivot, self.rate)
+        return False
 
 
 class StopParams(BehaviourParams):
