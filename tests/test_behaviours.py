@@ -155,6 +155,70 @@ def test_choose_turn_decides_when_the_wall_first_comes_into_range(grid, start, d
     assert choose["proximity"]["front_center"] > 0.085
 
 
+#: stop 5 cm before the wall, decide beside the approach, look where not sure
+LOOKING_LEG = {
+    "sequence": [
+        {"parallel": {"policy": "success_on_all", "children": [{"MoveUntilWall": {"distance": "5cm"}}, "ChooseTurn"]}},
+        "LookAround",
+    ]
+}
+
+
+@pytest.mark.parametrize(("grid", "decision"), [("L", "right"), ("T", "left"), ("pocket", "dead_end")])
+def test_choose_turn_is_sure_where_its_side_rays_reach_the_side_walls(grid, decision):
+    result = run_tree(LOOKING_LEG, world(grid), seconds=30)
+    choose, look = ends(result, "ChooseTurn")[0], ends(result, "LookAround")[0]
+    assert result.status == "SUCCESS"
+    assert (choose["decision"], choose["certain"]) == (decision, True)
+    assert "looked" not in look and look["pose"] == ends(result, "MoveUntilWall")[0]["pose"]  # it did not move
+
+
+@pytest.mark.parametrize("robot", ["course", "enki", "real"])
+@pytest.mark.parametrize(("grid", "decision"), [("L", "right"), ("T", "left"), ("pocket", "dead_end")])
+def test_look_around_finds_the_open_side_where_the_side_rays_cannot_reach(grid, decision, robot):
+    """On 0.3 m cells the course robot's side rays (10.9 cm reach) see neither side wall, 14.5 cm
+    away: ChooseTurn guesses left, not sure, and LookAround turns to look (Enki's cones reach
+    13.85 cm: the robot may be sure there)."""
+    result = run_tree(LOOKING_LEG, world(grid, cell=0.3), seconds=60, robot=robot)
+    choose, look = ends(result, "ChooseTurn")[0], ends(result, "LookAround")[0]
+    assert result.status == "SUCCESS", result.reason
+    assert look.get("decision", choose["decision"]) == decision
+    if robot == "course":
+        assert choose["certain"] is False
+        assert look["looked"] == (["left"] if decision == "left" else ["left", "right"])
+    assert abs(math.remainder(look["pose"]["yaw"] - choose["pose"]["yaw"], math.tau)) < 0.01  # facing ahead again
+
+
+def test_look_around_halted_mid_turn_stops_the_robot():
+    approach, look = LOOKING_LEG["sequence"]
+    tree = {
+        "sequence": [approach, {"force_success": {"timeout": {"seconds": 0.5, "do": look}}}, {"Wait": {"seconds": 1}}]
+    }
+    result = run_tree(tree, world("L", cell=0.3), seconds=30)
+    halted = ends(result, "LookAround")[0]
+    assert result.status == "SUCCESS" and halted["status"] == "INVALID"
+    assert halted["pose"]["yaw"] > 0.1  # it was turning to look left
+    assert result.final_pose["yaw"] == pytest.approx(halted["pose"]["yaw"], abs=0.01)  # and turned no further
+
+
+def test_look_around_without_a_decision_says_so():
+    result = run_tree("LookAround", world("L"), seconds=5)
+    assert result.status == "FAILURE" and result.code == "INVALID_INPUT"
+    assert "run ChooseTurn first" in result.reason
+
+
+def test_a_decision_taken_close_to_the_wall_is_not_sure_and_looked_at():
+    """A leg that starts 5 cm from the wall ahead: the side rays meet that wall, not the sides, so
+    they tell nothing (they used to make a T junction a dead end); LookAround finds the way."""
+    result = run_tree({"repeat": {"times": 2, "do": LOOKING_LEG}}, world("T"), seconds=30)
+    assert result.status == "SUCCESS"
+    assert [(e["decision"], e["certain"]) for e in ends(result, "ChooseTurn")] == [("left", True), ("left", False)]
+    assert [(e.get("decision"), e.get("looked")) for e in ends(result, "LookAround")] == [
+        (None, None),
+        ("left", ["left"]),
+    ]
+
+
 def test_turn_angle_reads_its_angle_from_the_blackboard():
     tree = {
         "sequence": [
@@ -320,8 +384,8 @@ def test_a_late_robot_makes_move_until_wall_and_turn_angle_lead_by_its_latency(t
 
 #: parameters that make each built-in behaviour do something small in the arena (start: base_link
 #: at (0.7, 0.7) facing +x, a 6 x 6 open floor of 0.2 m cells); each ends with SUCCESS by itself
-#: except SpawnEntity (the robot's name is taken), DeleteEntity once the robot is gone, and
-#: ChooseTurn (no wall ahead comes into range: it runs out of time)
+#: except SpawnEntity (the robot's name is taken), DeleteEntity once the robot is gone, ChooseTurn
+#: (no wall ahead comes into range: it runs out of time) and LookAround (no decision to check)
 GRID = {"cell": 0.2, "wall": 0.01}
 RESTART_PARAMS = {
     "MoveUntilWall": {"distance": "5cm"},
@@ -332,6 +396,7 @@ RESTART_PARAMS = {
     "DeleteEntity": {},
     "SpawnEntity": {"pose": [0.3, 0.3, 0]},
     "ChooseTurn": {"timeout": 1},
+    "LookAround": {},
     "WallAhead": {},
     "SideOpen": {"side": "left"},
     "IsDeadEnd": {},
@@ -400,7 +465,7 @@ def test_every_builtin_behaviour_restarts_after_success_failure_and_halt(name, l
     endings = [e["status"] for e in ends(result, name)]
     if not endings:
         return  # a condition (or SetBlackboard): no events, it answers at once
-    if ending == "finished" and name not in ("ChooseTurn", "SpawnEntity", "DeleteEntity"):
+    if ending == "finished" and name not in ("ChooseTurn", "LookAround", "SpawnEntity", "DeleteEntity"):
         assert endings == ["SUCCESS"] * 3
     elif ending != "finished" and name in STILL_RUNNING:
         assert endings == ["FAILURE" if ending == "timed out" else "INVALID"] * 3

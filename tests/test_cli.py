@@ -69,7 +69,7 @@ def test_validate_checks_missions_and_maze_files():
     result = invoke("validate", "missions/maze_part1_2.yaml", "mazes/two_parts_maze.yaml", "mazes/arena.yaml")
     assert result.exit_code == 0, result.output
     assert "ok: mazes/two_parts_maze.yaml (maze: 21 walls, 0 obstacles, spawns part1, part2, bonus)" in result.output
-    assert "ok: missions/maze_part1_2.yaml (15 nodes, maze two_parts_maze)" in result.output
+    assert "ok: missions/maze_part1_2.yaml (16 nodes, maze two_parts_maze)" in result.output
 
 
 def test_validate_reports_every_impossible_spawn_of_a_maze_with_its_line(tmp_path):

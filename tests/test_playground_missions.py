@@ -16,6 +16,7 @@ from pathlib import Path
 import _require
 import pytest
 
+from thymio_bt.behaviours.maze import turns_decided
 from thymio_bt.logs.recording import Recorder
 from thymio_bt.mission import load_mission
 from thymio_bt.mission.expect import front_gap
@@ -91,11 +92,7 @@ def _part1_2_problems(mission, report):
 
 
 def _bonus_problems(mission, report):
-    turns = "".join(
-        e["decision"][0].upper()
-        for e in report["events"]
-        if e["kind"] == "behaviour_end" and e["name"] == "ChooseTurn" and e.get("decision") in ("left", "right")
-    )
+    turns = turns_decided(report["events"])
     return _problems(mission, report) + ([] if turns == "RRRLRLLLLLR" else [f"turns {turns}"])
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from thymio_bt.behaviours.maze import turns_decided
 from thymio_bt.cli import main
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
@@ -41,11 +42,7 @@ def test_the_mission_table_figures(runs):
     pose = part.final_pose
     assert f"({pose['x']:.3f}, {pose['y']:.3f})" in mission_row("maze_part1_2")
     bonus = runs["maze_bonus"]
-    turns = " ".join(
-        e["decision"][0].upper()
-        for e in bonus.events
-        if e.get("name") == "ChooseTurn" and e["kind"] == "behaviour_end" and e.get("decision") in ("left", "right")
-    )
+    turns = " ".join(turns_decided(bonus.events))
     assert f"turns {turns}, stops at ({bonus.final_pose['x']:.3f}, {bonus.final_pose['y']:.3f})" in mission_row(
         "maze_bonus"
     )

@@ -28,6 +28,7 @@ import pytest
 from thymio_bt.backends.ros2.messages import proximity_range, quaternion_of, stamp_ns, stamp_parts, yaw_of
 from thymio_bt.backends.ros2.topics import COURSE_TOPICS, load_topics
 from thymio_bt.backends.sim.world import Simulation
+from thymio_bt.behaviours.maze import turns_decided
 from thymio_bt.mission import load_mission
 from thymio_bt.robot.interface import Pose
 from thymio_bt.run.runner import Run
@@ -204,11 +205,7 @@ def _direct(mission: str) -> dict:
 
 
 def _turns(report: dict) -> str:
-    return "".join(
-        e["decision"][0].upper()
-        for e in report["events"]
-        if e["kind"] == "behaviour_end" and e["name"] == "ChooseTurn" and e.get("decision") in ("left", "right")
-    )
+    return turns_decided(report["events"])
 
 
 def _pose_at(report: dict, t: float) -> Pose:

@@ -8,7 +8,7 @@ from thymio_bt.behaviours.control_node import ControlNode
 from thymio_bt.behaviours.decorators import DECORATORS
 from thymio_bt.behaviours.entities import DeleteEntity, SpawnEntity
 from thymio_bt.behaviours.mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
-from thymio_bt.behaviours.maze import ChooseTurn, IsDeadEnd, SideOpen, WallAhead, WallFollow
+from thymio_bt.behaviours.maze import ChooseTurn, IsDeadEnd, LookAround, SideOpen, WallAhead, WallFollow
 from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
 from thymio_bt.behaviours.navigation import (
     FollowWaypoints,
@@ -31,6 +31,7 @@ BUILTIN: tuple[type[RobotBehaviour], ...] = (
     DeleteEntity,
     SpawnEntity,
     ChooseTurn,
+    LookAround,
     WallAhead,
     SideOpen,
     IsDeadEnd,

@@ -22,16 +22,18 @@ Example::
 from __future__ import annotations
 
 import math
-from typing import Literal
+from collections.abc import Iterable
+from typing import Any, Literal
 
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, RobotBehaviour
+from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour
 from thymio_bt.behaviours.corridor import RANGE_MAX, Side, side_ray
+from thymio_bt.behaviours.motion import Turn
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
-from thymio_bt.inputs.fields import SensedLength
-from thymio_bt.robot.model import WIDEST_RANGE
+from thymio_bt.inputs.fields import AngularSpeed, SensedLength
+from thymio_bt.robot.model import WIDEST_RANGE, RobotModel
 
 __all__ = [
     "RANGE_MAX",
@@ -39,6 +41,8 @@ __all__ = [
     "ChooseTurnParams",
     "IsDeadEnd",
     "IsDeadEndParams",
+    "LookAround",
+    "LookAroundParams",
     "Side",
     "SideOpen",
     "SideOpenParams",
@@ -47,6 +51,7 @@ __all__ = [
     "WallFollow",
     "WallFollowParams",
     "side_ray",
+    "turns_decided",
 ]
 
 
@@ -133,10 +138,55 @@ class IsDeadEnd(ConditionBehaviour):
 
 
 # ---------------------------------------------------------------- ChooseTurn
+#: a side wall must be this much nearer the centre line than its sensor's reach for ChooseTurn to
+#: trust that sensor's empty reading as an opening (a robot a few mm off the line still sees it)
+REACH_MARGIN = 0.005
+#: stationary front readings LookAround takes of each side (their median counts: one glint does not)
+LOOK_READINGS = 3
+SIDES: tuple[Side, Side] = ("left", "right")
+
+
+def _other(side: Side) -> Side:
+    """The side opposite ``side``."""
+    return "right" if side == "left" else "left"
+
+
+def turns_decided(events: Iterable[dict[str, Any]]) -> str:
+    """The turns a run's tree decided, as ``LRL...``: ChooseTurn's sure decisions and LookAround's
+    corrections of the others, from the run's ``behaviour_end`` events.
+
+    >>> turns_decided([{"kind": "behaviour_end", "name": "ChooseTurn", "decision": "left", "certain": False},
+    ...                {"kind": "behaviour_end", "name": "LookAround", "decision": "right"},
+    ...                {"kind": "behaviour_end", "name": "ChooseTurn", "decision": "left", "certain": True}])
+    'RL'
+    """
+    return "".join(
+        e["decision"][0].upper()
+        for e in events
+        if e["kind"] == "behaviour_end"
+        and e.get("decision") in SIDES
+        and (e["name"] == "LookAround" or (e["name"] == "ChooseTurn" and e.get("certain", True)))
+    )
+
+
+def lateral_reach(model: RobotModel, side: Side) -> float:
+    """How far from the centre line ``side``'s outer sensor sees a wall parallel to the heading.
+
+    >>> from thymio_bt.robot.model import COURSE, ENKI
+    >>> round(lateral_reach(COURSE, "left"), 4), round(lateral_reach(ENKI, "right"), 4)
+    (0.1093, 0.1385)
+    """
+    sensor = next(s for s in model.sensors if s.name == side_ray(side))
+    return abs(sensor.y) + model.range_max * abs(math.sin(sensor.yaw))
+
+
 class ChooseTurnParams(BehaviourParams):
     """Decide the turn at the next wall."""
 
-    key: str = Field("turn", description="blackboard key for the decision; the angle goes to KEY_angle")
+    key: str = Field(
+        "turn",
+        description="blackboard key for the decision; the angle goes to KEY_angle, whether it is sure to KEY_certain",
+    )
     prefer: Side = Field("left", description="the side chosen when both sides are open")
 
 
@@ -144,8 +194,14 @@ class ChooseTurn(RobotBehaviour):
     """Decide left / right / dead end the moment the wall ahead first comes into range.
 
     Run it beside MoveUntilWall (in a parallel): it waits until ``front_center`` first reads a
-    finite range, then reads the ±38° rays, which at that moment cross the sides of the last cell.
-    It writes ``turn`` (``left``, ``right`` or ``dead_end``) and ``turn_angle`` (+pi/2, -pi/2, 0).
+    finite range, then reads the outer rays, which at that moment cross the sides of the last cell.
+    It writes ``turn`` (``left``, ``right`` or ``dead_end``), ``turn_angle`` (+pi/2, -pi/2, 0) and
+    ``turn_certain``. A side whose ray meets a side wall is closed; an empty reading is an opening
+    only where a wall there would be within the ray's reach: the ray met that side's wall on the
+    way, or the other side's wall, seen now, is nearer than the corridor's width measured earlier
+    minus that reach. Where not (a corridor wider than the rays reach, a leg that starts with the wall
+    ahead close, so the rays meet it) the decision is the side that may be open, and
+    ``turn_certain`` is false: LookAround, after the robot stops, turns to look.
 
     Example (YAML)::
 
@@ -164,27 +220,177 @@ class ChooseTurn(RobotBehaviour):
         self, name: str, params: ChooseTurnParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
     ) -> None:
         super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("decision", write=(params.key, f"{params.key}_angle"))
+        key = params.key
+        self.board = self.blackboard("decision", write=(key, f"{key}_angle", f"{key}_certain"))
+        #: the corridor's width between its side walls, last measured with both in view (kept from leg to leg)
+        self.width: float | None = None
+
+    def start(self) -> None:
+        """A new leg: the side walls are not seen yet. The robot's sensor poses and reach."""
+        model = self.robot.model
+        self.reach = {side: lateral_reach(model, side) for side in SIDES}
+        self.rays = {side: next(s for s in model.sensors if s.name == side_ray(side)) for side in SIDES}
+        self.front = next(s for s in model.sensors if s.name == "front_center")
+        self.beside: dict[str, float | None] = {side: None for side in SIDES}
 
     def step(self) -> Status:
-        """Wait for the wall ahead, then decide from the outer rays and write the decision."""
+        """Wait for the wall ahead, watching the side walls, then decide and write the decision."""
         scan = self.robot.proximity()
         assert scan is not None
-        if math.isinf(scan["front_center"]):
+        ahead = scan["front_center"]
+        offsets: dict[Side, float | None] = {side: self._offset(scan[side_ray(side)], side, ahead) for side in SIDES}
+        if offsets["left"] is not None and offsets["right"] is not None:
+            self.width = offsets["left"] + offsets["right"]
+        if math.isinf(ahead):
+            for side in SIDES:
+                self.beside[side] = offsets[side] if offsets[side] is not None else self.beside[side]
             self.feedback_message = "waiting for the wall ahead to come into range"
             return Status.RUNNING
-        left_open, right_open = math.isinf(scan["front_left"]), math.isinf(scan["front_right"])
-        if left_open and right_open:
-            decision = self.params.prefer
-        elif left_open:
-            decision = "left"
-        elif right_open:
-            decision = "right"
-        else:
-            decision = "dead_end"
+        prefer: Side = self.params.prefer
+        # a side is closed where its ray met a side wall; a ray that met the wall ahead tells nothing
+        candidates = [s for s in (prefer, _other(prefer)) if offsets[s] is None]
+        chosen = candidates[0] if candidates else None
+        decision = chosen or "dead_end"
+        certain = chosen is None or (math.isinf(scan[side_ray(chosen)]) and self._surely_open(chosen, offsets))
         angle = {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision]
-        self.board.set(self.params.key, decision)
-        self.board.set(f"{self.params.key}_angle", angle)
-        self.extra = {"decision": decision}
-        self.feedback_message = f"decided {decision}"
+        key = self.params.key
+        self.board.set(key, decision)
+        self.board.set(f"{key}_angle", angle)
+        self.board.set(f"{key}_certain", certain)
+        self.extra = {"decision": decision, "certain": certain}
+        self.feedback_message = f"decided {decision}" + ("" if certain else " (not sure: look)")
         return Status.SUCCESS
+
+    def _offset(self, reading: float, side: Side, ahead: float) -> float | None:
+        """How far from the centre line the ray on ``side`` met a side wall; None when it met none
+        (or met the wall ahead: within 1 cm of where ``front_center`` meets it)."""
+        if math.isinf(reading):
+            return None
+        ray, front = self.rays[side], self.front
+        if ray.x + reading * math.cos(ray.yaw) >= front.x + ahead - 0.01:
+            return None
+        return abs(ray.y) + reading * abs(math.sin(ray.yaw))
+
+    def _surely_open(self, side: Side, offsets: dict[Side, float | None]) -> bool:
+        """Whether ``side``'s empty reading is an opening: a wall there would be within its ray's
+        reach. Where that side's wall was, the ray met it on the way; else the other side's wall,
+        seen now, and the corridor's width measured earlier (one maze, one grid) say it."""
+        seen, other = self.beside[side], offsets[_other(side)]
+        if seen is None and other is not None and self.width is not None:
+            seen = self.width - other
+        return seen is not None and seen <= self.reach[side] - REACH_MARGIN
+
+
+# ---------------------------------------------------------------- LookAround
+class LookAroundParams(BehaviourParams):
+    """Make sure of ChooseTurn's decision by looking."""
+
+    key: str = Field("turn", description="the blackboard key ChooseTurn wrote (and KEY_angle, KEY_certain)")
+    speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="fastest turn rate")
+
+
+class LookAround(RobotBehaviour):
+    """Where ChooseTurn was not sure, turn to look at each side and correct its decision.
+
+    Run it after the approach, stopped before the wall ahead. When ``turn_certain`` is true it
+    succeeds at once without moving. Otherwise it turns a quarter towards the side ChooseTurn
+    chose and reads ``front_center`` (the median of three stationary readings: a wall there reads,
+    an opening does not); if that side is closed it turns to look at the other one; it ends facing
+    the way it came, having rewritten ``turn``, ``turn_angle`` and ``turn_certain``.
+
+    Example (YAML)::
+
+        - parallel: {policy: success_on_all, children: [{MoveUntilWall: {distance: 5cm}}, ChooseTurn]}
+        - LookAround
+        - TurnAngle: {angle: bb:turn_angle}
+    """
+
+    Params = LookAroundParams
+    #: it stops the robot itself if halted mid-turn: a sure decision must send no command at all
+    #: (a noisy wheel errs anew with every command, so one more would change the rest of the run)
+    moves = False
+
+    def __init__(
+        self, name: str, params: LookAroundParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(name, params, ctx, blackboard_refs)
+        key = params.key
+        self.keys = (key, f"{key}_angle", f"{key}_certain")
+        self.board = self.blackboard("decision", write=self.keys)
+
+    def start(self) -> None:
+        """Read the decision: which side to look at first, if any."""
+        self.turn: Turn | None = None
+        self.looks: list[tuple[float, Side | None]] = []  # the turns still to make, each with the side it faces
+        self.facing: Side | None = None  # the side looked at once the turn to it is done
+        self.target: Side | None = None  # the side the turn under way faces (None: ahead)
+        self.readings: list[float] = []
+        self.open: dict[str, bool] = {}
+        key, _, certain_key = self.keys
+        if not self.board.exists(key):
+            self.first: Side | None = None
+            return
+        decision = self.board.get(key)
+        certain = self.board.get(certain_key) if self.board.exists(certain_key) else True
+        self.first = decision if decision in SIDES and not certain else None
+        if self.first is not None:
+            self.looks = [(self._quarter(self.first), self.first)]
+
+    def step(self) -> Status:
+        """Turn, look, and decide once back facing the way the robot came."""
+        if not self.board.exists(self.keys[0]):
+            return self.fail(FailureCode.INVALID_INPUT, f"no decision '{self.keys[0]}' to check: run ChooseTurn first")
+        if self.first is None:
+            self.feedback_message = "ChooseTurn was sure: nothing to look at"
+            return Status.SUCCESS
+        if self.facing is not None:  # stopped, facing a side: read it
+            scan = self.robot.proximity()
+            assert scan is not None
+            self.readings.append(scan["front_center"])
+            if len(self.readings) < LOOK_READINGS:
+                return Status.RUNNING
+            self._seen(self.facing, sorted(self.readings)[LOOK_READINGS // 2])
+        if self.turn is None:
+            if not self.looks:
+                return self._decide()
+            angle, self.target = self.looks.pop(0)
+            self.turn = Turn.begin(self, angle, self.params.speed, 0.0005)
+        if not self.turn.drive(self.turn.error()):
+            self.say("turning to look {}", self.target or "ahead")
+            return Status.RUNNING
+        self.turn, self.facing = None, self.target
+        return Status.RUNNING if self.facing is not None or self.looks else self._decide()
+
+    def terminate(self, new_status: Status) -> None:
+        """Stop the robot if it ends (or is halted) mid-turn, then log the end."""
+        if self.status == Status.RUNNING and self.turn is not None and self.robot.exists():
+            self.robot.drive(0.0, 0.0)
+        super().terminate(new_status)
+
+    def _seen(self, side: Side, reading: float) -> None:
+        """Record what ``side`` looks like and plan the next turn: to the other side if the first is
+        closed, else back to face ahead."""
+        self.open[side], self.readings, self.facing = math.isinf(reading), [], None
+        if side == self.first and not self.open[side]:
+            other = _other(side)
+            self.looks = [(2 * self._quarter(other), other), (self._quarter(side), None)]
+        else:
+            self.looks = [(self._quarter(_other(side)), None)]
+
+    def _decide(self) -> Status:
+        """Write the corrected decision."""
+        assert self.first is not None
+        other = _other(self.first)
+        decision = self.first if self.open.get(self.first) else other if self.open.get(other) else "dead_end"
+        key, angle_key, certain_key = self.keys
+        self.board.set(key, decision)
+        self.board.set(angle_key, {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision])
+        self.board.set(certain_key, True)
+        self.extra = {"decision": decision, "looked": sorted(self.open)}
+        self.feedback_message = f"looked: {decision}"
+        return Status.SUCCESS
+
+    @staticmethod
+    def _quarter(side: str) -> float:
+        """A quarter turn towards ``side``."""
+        return math.pi / 2 if side == "left" else -math.pi / 2

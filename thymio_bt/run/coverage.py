@@ -21,7 +21,7 @@ Example (three runs of the bonus maze; the dead-end check ends the loop once per
 (3, [])
 >>> loop = data["nodes"][0]
 >>> loop["path"], loop["kind"], loop["where"], loop["success"], loop["ended_by"]
-('bonus maze', 'repeat', '...lib/maze_legs.yaml:17', 3, {'bonus maze/IsDeadEnd': 3})
+('bonus maze', 'repeat', '...lib/maze_legs.yaml:18', 3, {'bonus maze/IsDeadEnd': 3})
 >>> Coverage.from_json(data).merge(data).to_json()["runs"]
 6
 """
