@@ -16,6 +16,7 @@ from thymio_bt.cli import main
 from thymio_bt.errors import UserError
 from thymio_bt.grade.assignment import load_assignment
 from thymio_bt.grade.grader import grade
+from thymio_bt.maze.files import load_maze
 
 ROOT = Path(__file__).resolve().parent.parent
 PART12 = ROOT / "assignments" / "course_part1_2.yaml"
@@ -433,3 +434,25 @@ def test_coverage_says_which_child_ended_each_composite(graded):
     ended = nodes["mission/part 2/one corridor/end or turn"]["ended_by"]
     assert ended["mission/part 2/one corridor/end or turn/IsDeadEnd"] == 12  # once a run, at the dead end
     assert ended["mission/part 2/one corridor/end or turn/turn left"] > 12
+
+
+def test_generated_corridors_of_another_pitch_grade_the_route_not_the_looks(tmp_path):
+    """`cell` makes a corridor on a 0.25 m grid, wider than the course robot's side rays reach: the
+    shipped bonus mission stops to look (a quarter turn and back, or three) and still takes the
+    corridor's turns; the `turns` criterion counts the route's turns, not the looks."""
+    from thymio_bt.grade.assignment import Variant
+    from thymio_bt.grade.worlds import World
+
+    variant = {"name": "wide", "generate": {"kind": "path", "length": 10, "seed": 2, "cell": "25cm"}, "noise": "off"}
+    world = World.of(Variant(**variant), tmp_path, tmp_path)
+    ends = {round(c, 3) for wall in load_maze(world.maze_file).walls for point in (wall.start, wall.end) for c in point}
+    assert ends <= {round(0.25 * i, 3) for i in range(12)}
+    assignment = tmp_path / "wide.yaml"
+    assignment.write_text(
+        "name: wide\nsubmission: bonus.yaml\ntime_limit: 300s\nvariants:\n"
+        f"  - {json.dumps(variant)}\n"
+        "criteria:\n  - {name: turns, points: 1, turns: true}\n"
+        "  - {name: dead end, points: 1, dead_end: {distance: 5cm, tolerance: 5mm}}\n"
+    )
+    (student,) = grade(assignment, [ROOT / "missions" / "maze_bonus.yaml"])["students"]
+    assert student["score"] == 2, [c["feedback"] for c in student["criteria"]]

@@ -64,6 +64,9 @@ class Generate(BaseModel):
     length: int = Field(8, ge=3, le=64, description="path: cells along the corridor")
     size: int = Field(8, ge=4, le=32, description="contest: cells per side (even)")
     turns: Literal["left", "right", "any"] = Field("any", description="path: the turns it may have")
+    cell: Length = Field(
+        0.2, ge=0.15, le=0.5, description="perfect and path: the cell pitch, wall centre to wall centre"
+    )
 
 
 class GoalDisc(BaseModel):

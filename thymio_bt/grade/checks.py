@@ -39,8 +39,9 @@ from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import ray_distance
 
-#: a turn is a heading change of a quarter turn that holds this long (s)
-TURN_SETTLE = 0.5
+#: a quarter heading is a turn of the route once the robot has driven this far (m) holding it: a look
+#: to the side and back, turning on the spot, is not a turn taken
+TURN_TRAVEL = 0.02
 #: backwards travel (m) below this is noise, not driving backwards
 REVERSE_SLACK = 0.01
 
@@ -268,17 +269,18 @@ def _respawn(criterion: Criterion, facts: RunFacts) -> Judgement:
 
 
 def turns_taken(facts: RunFacts) -> list[tuple[str, float]]:
-    """The quarter turns the robot made (L or R, and when each ended), from its true headings; a
-    respawn starts the count afresh, and a heading must hold :data:`TURN_SETTLE` s to count."""
+    """The quarter turns of the robot's route (L or R, and when the robot reached each heading), from
+    its true poses; a respawn starts the count afresh, and a heading counts once the robot has driven
+    :data:`TURN_TRAVEL` holding it (looking to a side and back is no turn)."""
     if "turns" in facts.cache:
         return facts.cache["turns"]
     spawns = [e["t"] for e in facts.result.events if e["kind"] == "spawn_entity"]
     out: list[tuple[str, float]] = []
     quarter = math.pi / 2
     segment_start: float | None = None
-    for t, _, _, yaw in facts.result.trajectory:
+    for t, x, y, yaw in facts.result.trajectory:
         if segment_start is None or any(segment_start < s <= t for s in spawns):
-            segment_start, base, heading, stable, candidate, since = t, yaw, yaw, 0, 0, t
+            segment_start, base, heading, stable, candidate, since, origin = t, yaw, yaw, 0, 0, t, (x, y)
             continue
         heading += math.remainder(yaw - heading, math.tau)  # unwrapped
         steps = (heading - base) / quarter
@@ -286,9 +288,9 @@ def turns_taken(facts: RunFacts) -> list[tuple[str, float]]:
         if abs(steps - q) > 1 / 3:  # between two quarter headings: no decision
             continue
         if q != candidate:
-            candidate, since = q, t
-        elif q != stable and t - since >= TURN_SETTLE - 1e-9:
-            out += [("L" if q > stable else "R", t)] * abs(q - stable)
+            candidate, since, origin = q, t, (x, y)
+        elif q != stable and math.hypot(x - origin[0], y - origin[1]) >= TURN_TRAVEL - 1e-9:
+            out += [("L" if q > stable else "R", since)] * abs(q - stable)
             stable = q
     facts.cache["turns"] = out
     return out

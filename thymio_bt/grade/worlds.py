@@ -140,7 +140,7 @@ def _generated(variant: Variant) -> tuple[Maze, str | None]:
     spec = variant.generate
     assert spec is not None
     if spec.kind == "perfect":
-        return perfect_maze(spec.cols, spec.rows, spec.seed), None
+        return perfect_maze(spec.cols, spec.rows, spec.seed, cell=spec.cell), None
     if spec.kind == "contest":
         from thymio_bt.maze.micromouse import maze_from_cells
 
@@ -150,7 +150,7 @@ def _generated(variant: Variant) -> tuple[Maze, str | None]:
         path = random_path(spec.length, spec.seed * 10_007 + attempt)
         turns = turns_along(path)
         if len(turns) >= spec.length // 3 and not (wanted and wanted in turns):  # a turn every 3 cells
-            maze = path_maze(path)
+            maze = path_maze(path, cell=spec.cell)
             return maze.model_copy(update={"name": f"path_{spec.length}_seed{spec.seed}"}), turns
     raise ValueError(f"no corridor of {spec.length} cells with only {spec.turns} turns")
 
