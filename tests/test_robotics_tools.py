@@ -250,8 +250,8 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
             timeout=30,
             env={**os.environ, "COLUMNS": "200", "LINES": "80"},  # the whole tree: it is cut to the screen
         )
-        # 16 nodes of ours and the 6 BT.CPP built-ins that write repeat/until (docs/btcpp.md)
-        assert "part 1 [MoveUntilWall]" in shown.stdout and "22 nodes" in shown.stdout, shown.stderr
+        # 17 nodes of ours and the 6 BT.CPP built-ins that write repeat/until (docs/btcpp.md)
+        assert "part 1 [MoveUntilWall]" in shown.stdout and "23 nodes" in shown.stdout, shown.stderr
         assert "part 2 [SubTree]" in shown.stdout  # the subtree as Groot2 shows one
     finally:
         run.terminate()
@@ -299,7 +299,7 @@ def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
     ]
     assert '<SubTree ID="to_dead_end" name="part 2"' in xml
     uids = sorted(int(u) for u in re.findall(r'_uid="(\d+)"', xml))
-    assert uids == list(range(1, 35))  # BT.CPP's pre-order, SubTree nodes included
+    assert uids == list(range(1, 37))  # BT.CPP's pre-order, SubTree nodes included
     bad = tmp_path / "bad.xml"
     for body, message in (
         ('<SubTree ID="nowhere"/>', 'names no <BehaviorTree ID="nowhere">'),

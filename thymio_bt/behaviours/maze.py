@@ -25,6 +25,7 @@ import math
 from collections.abc import Iterable
 from typing import Any, Literal
 
+from py_trees.blackboard import Client
 from py_trees.common import Status
 from pydantic import Field
 
@@ -169,6 +170,14 @@ def turns_decided(events: Iterable[dict[str, Any]]) -> str:
     )
 
 
+def write_decision(board: Client, key: str, decision: str, certain: bool) -> None:
+    """Write a turn decision as ChooseTurn does: ``key``, ``key_angle`` (the turn TurnAngle makes:
+    +pi/2 left, -pi/2 right, 0 at a dead end) and ``key_certain``."""
+    board.set(key, decision)
+    board.set(f"{key}_angle", {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision])
+    board.set(f"{key}_certain", certain)
+
+
 def lateral_reach(model: RobotModel, side: Side) -> float:
     """How far from the centre line ``side``'s outer sensor sees a wall parallel to the heading.
 
@@ -252,11 +261,7 @@ class ChooseTurn(RobotBehaviour):
         chosen = candidates[0] if candidates else None
         decision = chosen or "dead_end"
         certain = chosen is None or (math.isinf(scan[side_ray(chosen)]) and self._surely_open(chosen, offsets))
-        angle = {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision]
-        key = self.params.key
-        self.board.set(key, decision)
-        self.board.set(f"{key}_angle", angle)
-        self.board.set(f"{key}_certain", certain)
+        write_decision(self.board, self.params.key, decision, certain)
         self.extra = {"decision": decision, "certain": certain}
         self.feedback_message = f"decided {decision}" + ("" if certain else " (not sure: look)")
         return Status.SUCCESS
@@ -382,10 +387,7 @@ class LookAround(RobotBehaviour):
         assert self.first is not None
         other = _other(self.first)
         decision = self.first if self.open.get(self.first) else other if self.open.get(other) else "dead_end"
-        key, angle_key, certain_key = self.keys
-        self.board.set(key, decision)
-        self.board.set(angle_key, {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision])
-        self.board.set(certain_key, True)
+        write_decision(self.board, self.params.key, decision, True)
         self.extra = {"decision": decision, "looked": sorted(self.open)}
         self.feedback_message = f"looked: {decision}"
         return Status.SUCCESS
