@@ -257,6 +257,8 @@ def test_a_sensed_length_is_bounded_by_the_mission_s_robot(
         load_mission(mission)
     assert [(p.line, p.message) for p in info.value.problems] == beyond
     assert all("at most 0.09" in p.hint and "--robot enki: 0.14 m" in p.hint for p in info.value.problems)
+    # the robots named are those that read that far: the course robot (9.75 cm) for 9.5 cm, not 12 cm
+    assert all(("--robot course: 0.0975 m" in p.hint) == (robot == "real") for p in info.value.problems)
 
 
 def test_a_sensed_length_beyond_the_robot_s_range_from_set_is_said_at_set(tmp_path: Path) -> None:
@@ -272,6 +274,7 @@ def test_a_sensed_length_beyond_the_robot_s_range_from_set_is_said_at_set(tmp_pa
         "stop=12cm: 0.12 m is beyond the 'course' robot's sensor range (0.0975 m)"
         " (where MoveUntilWall.distance uses it)",
     )
+    assert "(--robot enki: 0.14 m)" in problem.hint  # the one robot that reads 12 cm
     assert load_mission(mission, overrides={"stop": "12cm", "robot": "enki"}).tree.params.distance == pytest.approx(
         0.12
     )
@@ -481,3 +484,23 @@ def test_a_btcpp_node_name_in_yaml_says_what_it_is_called_here(tmp_path, kind, h
     with pytest.raises(UserError) as exc:
         load_mission(path)
     assert f"unknown node type '{kind}'" in str(exc.value) and hint in str(exc.value)
+
+
+def test_validate_checks_a_mission_for_the_robot_given(tmp_path: Path) -> None:
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\ntree: {MoveUntilWall: {distance: 12cm}}\n")
+    course = CliRunner().invoke(main, ["validate", str(mission)])
+    assert course.exit_code == 2 and "beyond the 'course' robot's sensor range" in course.output
+    assert CliRunner().invoke(main, ["validate", str(mission), "--robot", "enki"]).exit_code == 0
+
+
+@pytest.mark.parametrize("robot", ["enkk", "missing.yaml"])
+def test_a_refused_robot_is_the_one_problem_said(tmp_path: Path, robot: str) -> None:
+    """Checks that need the robot are skipped, not made against the course robot in its place: a
+    12 cm stop and a start against a wall said nothing more."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: [0.03, 0.5, 0]\ntree: {MoveUntilWall: {distance: 12cm}}\n")
+    with pytest.raises(UserError) as info:
+        load_mission(mission, overrides={"--robot": robot})
+    [problem] = info.value.problems
+    assert problem.file == "--robot" and robot in problem.message

@@ -40,17 +40,29 @@ if TYPE_CHECKING:
 @click.argument("files", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="Check missions with these overrides.")
 @click.option(
+    "--robot",
+    default=None,
+    metavar="NAME",
+    help="Check missions for this robot (course, enki, real or a profile FILE.yaml), as 'run --robot' "
+    "would run them: its sensor range bounds stop distances, its size the spawn poses.",
+)
+@click.option(
     "--plugins",
     is_flag=True,
     help="Import the missions' plugins to check their nodes' parameters too (runs their code).",
 )
-def validate(files: tuple[Path, ...], sets: tuple[str, ...], plugins: bool) -> None:
+def validate(files: tuple[Path, ...], sets: tuple[str, ...], robot: str | None, plugins: bool) -> None:
     """Check mission FILES (and the mazes they name), maze files or assignment files without running
     anything (not even the missions' plugins, unless --plugins)."""
+    from thymio_bt.mission.settings import ROBOT_OPTION
+
     bad = 0
     for path in files:
         try:
-            click.echo(f"ok: {path} ({_check_file(path, parse_overrides(sets), plugins)})")
+            overrides = parse_overrides(sets)
+            if robot is not None:
+                overrides[ROBOT_OPTION] = robot  # as run's --robot: its problems said at --robot
+            click.echo(f"ok: {path} ({_check_file(path, overrides, plugins)})")
         except UserError as exc:
             bad += 1
             for problem in exc.problems:

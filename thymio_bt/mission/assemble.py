@@ -97,14 +97,13 @@ class Assembly:
     sources: tuple[Path, ...] = ()
     #: each included file and where it was included (file, line, column)
     included_at: dict[Path, Where] = field(default_factory=dict)
+    #: the robot asked for was refused (that is reported already)
+    robot_refused: bool = False
 
     @property
     def robot(self) -> RobotModel | None:
-        """The mission's robot model (None when ``robot:`` names none: that is reported already)."""
-        try:
-            return robot_model(self.settings.get("robot", "course"))
-        except (KeyError, UserError):
-            return None
+        """The mission's robot model (None when the one asked for was refused)."""
+        return None if self.robot_refused else robot_model(self.settings.get("robot", "course"))
 
 
 class Assembler(SettingsReader):
@@ -147,7 +146,9 @@ class Assembler(SettingsReader):
         settings = self._settings(data, file, params, overrides or {})
         self._subtrees(data, file)
         maze, maze_file = self._maze(data, path, maze_override)
-        start = self._start(data, file, maze, start_override, settings.get("robot", "course"))
+        start = self._start(
+            data, file, maze, start_override, None if self.robot_refused else settings.get("robot", "course")
+        )
         start_where = ("--start", 0, 0) if start_override is not None else self.where_value(data, "start", file)
         if settings.get("expect") is not None and (maze_override is not None or start_override is not None):
             # places are the mission's own maze's: elsewhere only the place-free criteria hold
@@ -167,6 +168,7 @@ class Assembler(SettingsReader):
             start_where,
             sources,
             dict(self.included),
+            self.robot_refused,
         )
 
     def _plugins(self, data: MarkedDict, path: Path) -> None:
@@ -361,8 +363,11 @@ class Assembler(SettingsReader):
             self.adopt(exc.problems, where, "maze")
             return None, None
 
-    def _start(self, data: MarkedDict, file: str, maze: Maze | None, override: str | None, robot: str) -> Pose | None:
-        """The start pose (``start:`` or ``--start``): a spawn name or a pose, free of the walls."""
+    def _start(
+        self, data: MarkedDict, file: str, maze: Maze | None, override: str | None, robot: str | None
+    ) -> Pose | None:
+        """The start pose (``start:`` or ``--start``): a spawn name or a pose, free of ``robot``'s hull
+        and the walls (not checked when the robot was refused)."""
         if override is not None:
             where: Where = ("--start", 0, 0)
             raw: Any = override
@@ -377,7 +382,7 @@ class Assembler(SettingsReader):
             )
             return None
         pose = self.pose(raw, where, "start", Scope({}), maze)
-        if pose is not None and maze is not None:
+        if pose is not None and maze is not None and robot is not None:
             problem = placement_problem(maze, robot_model(robot), pose)
             if problem:
                 self.problem(

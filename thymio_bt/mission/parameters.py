@@ -33,7 +33,7 @@ from thymio_bt.inputs.units import Quantity, UnitError, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.maze import Maze
 from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
-from thymio_bt.robot.model import ENKI, RobotModel
+from thymio_bt.robot.model import ROBOTS, RobotModel
 
 #: what :meth:`ParameterReader.convert` returns for a value it reported a problem about
 _INVALID = object()
@@ -145,9 +145,13 @@ class ParameterReader(Checker):
                 continue
             del reading.values[key]  # said here, not again by pydantic
             message = f"{value:g} m is beyond the '{robot.name}' robot's sensor range ({robot.range_max:g} m)"
-            hint = (
-                f"its sensors never read further: at most {robot.range_max:g} m, or a robot that sees further "
-                f"(--robot enki: {ENKI.range_max:g} m)"
+            further = [m for m in ROBOTS.values() if m.range_max >= value]
+            hint = f"its sensors never read further: at most {robot.range_max:g} m" + (
+                ", or a robot that sees further ("
+                + ", ".join(f"--robot {m.name}: {m.range_max:g} m" for m in further)
+                + ")"
+                if further
+                else ""
             )
             given = reading.set_values.get(key)
             if given is not None:  # the value came from --set: said there

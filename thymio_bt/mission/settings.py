@@ -60,6 +60,10 @@ ROBOT_OPTION = "--robot"
 class SettingsReader(Checker):
     """Reads a mission's settings, and applies ``--set`` to them and to its parameters."""
 
+    #: whether the robot asked for was refused (said already): checks that need it are skipped, not
+    #: made against the course robot
+    robot_refused = False
+
     def _settings(
         self, data: MarkedDict, file: str, params: dict[str, Any], overrides: Mapping[str, str]
     ) -> dict[str, Any]:
@@ -204,11 +208,13 @@ class SettingsReader(Checker):
                     "robot",
                     "make one with 'thymio-bt calibrate -o FILE.yaml', or name a built-in robot: " + ", ".join(ROBOTS),
                 )
+                self.robot_refused = True
                 return
             try:
                 robot_model(str(path.resolve()))
             except UserError as exc:
                 self.adopt(exc.problems, where, "robot")
+                self.robot_refused = True
                 return
             values["robot"] = str(path.resolve())
         else:
@@ -218,6 +224,7 @@ class SettingsReader(Checker):
                 "robot",
                 did_you_mean(str(value), ROBOTS),
             )
+            self.robot_refused = True
 
     def _backend(self, value: Any, where: Where, values: dict[str, Any]) -> None:
         """``backend: NAME`` or ``backend: {name: NAME, OPTION: VALUE, ...}``; the backend checks its options."""
