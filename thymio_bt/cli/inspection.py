@@ -328,7 +328,7 @@ def _terminal_width() -> int:
 def fit_help(text: str, rows: Sequence[tuple[str, ...]], width: int) -> str:
     r"""A node's help (:func:`~thymio_bt.mission.node_docs.behaviour_help`) fitted to ``width``
     columns: its parameter table (``rows``) laid out again with the type and description wrapped in
-    their columns, its prose lines wrapped; the indented examples as they are.
+    their columns, its prose wrapped as paragraphs; the indented examples as they are.
 
     >>> rows = [("speed", "float", "m/s", "0.1", "> 0 <= 0.2", "cruise speed, until the wall comes in range")]
     >>> text = "Move\n\nParameters:\n  (the table, one line per row)\n  speed ...\n\nValues accept units."
@@ -349,6 +349,10 @@ def fit_help(text: str, rows: Sequence[tuple[str, ...]], width: int) -> str:
           cruise speed, until the wall comes in range
     <BLANKLINE>
     Values accept units.
+    >>> print(fit_help("Drive until\nthe wall.\n\n    - MoveUntilWall: {}", [], 72))  # a paragraph, an example
+    Drive until the wall.
+    <BLANKLINE>
+        - MoveUntilWall: {}
     """
     import textwrap
 
@@ -356,13 +360,17 @@ def fit_help(text: str, rows: Sequence[tuple[str, ...]], width: int) -> str:
     if rows and "Parameters:" in lines:
         at = lines.index("Parameters:") + 1
         lines[at : at + 1 + len(rows)] = _table(rows, width)
-    out = []
-    for line in lines:
-        if len(line) > width and not line.startswith(" "):
-            out += textwrap.wrap(line, width) or [""]
-        else:
-            out.append(line)
-    return "\n".join(out)
+    out: list[str] = []
+    prose: list[str] = []  # the lines of the paragraph being read: a docstring's breaks are not the reader's
+    for line in [*lines, ""]:
+        if line and not line.startswith(" "):
+            prose.append(line)
+            continue
+        if prose:
+            out += textwrap.wrap(" ".join(prose), width)
+            prose = []
+        out.append(line)
+    return "\n".join(out[:-1])
 
 
 def _table(rows: Sequence[tuple[str, ...]], width: int) -> list[str]:
