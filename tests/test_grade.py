@@ -456,3 +456,28 @@ def test_generated_corridors_of_another_pitch_grade_the_route_not_the_looks(tmp_
     )
     (student,) = grade(assignment, [ROOT / "missions" / "maze_bonus.yaml"])["students"]
     assert student["score"] == 2, [c["feedback"] for c in student["criteria"]]
+
+
+@pytest.mark.parametrize("cell", [0.2, 0.4])
+def test_a_dead_end_is_judged_on_the_maze_s_own_grid(cell):
+    """At the far end of a corridor, centred, 5 cm from the wall: a dead end on any grid (a fixed
+    0.15 m once said the side walls of a 0.4 m cell, 0.195 m away, were openings); one cell
+    earlier, where the corridor turns, a side is open."""
+    from types import SimpleNamespace
+
+    from thymio_bt.grade.assignment import Criterion
+    from thymio_bt.grade.checks import RunFacts, judge
+    from thymio_bt.maze.generate import path_maze
+    from thymio_bt.robot.model import COURSE
+
+    maze = path_maze([(0, 0), (1, 0), (1, 1), (2, 1)], cell=cell)  # right, up, right: ends at x = 3 cells
+    stop = 3 * cell - 0.005 - 0.05 - (COURSE.sensors[2].x)  # front sensor 5 cm from the end wall's face
+
+    def judged(x: float, y: float) -> tuple[bool, str | None]:
+        run = SimpleNamespace(events=[], trajectory=[(0.0, x, y, 0.0)], final_pose={"x": x, "y": y, "yaw": 0.0})
+        facts = RunFacts(run, maze, COURSE, time_limit=60.0, cell=cell)
+        verdict = judge(Criterion(name="end", points=1, dead_end={"distance": "5cm", "tolerance": "5mm"}), facts)
+        return verdict.passed, verdict.feedback
+
+    assert judged(stop, 1.5 * cell) == (True, None)
+    assert judged(stop - cell, 0.5 * cell) == (False, "stopped where the left side is open: not a dead end")

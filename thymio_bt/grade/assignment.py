@@ -148,7 +148,13 @@ class DeadEndCheck(GapCheck):
     """The run ends in a dead end: a wall ahead at ``distance`` and walls close on both sides."""
 
     at: Literal["delete", "end"] | None = Field("end", description="when to look (end)")
-    side: Length = Field(0.15, gt=0, le=1, description="a side wall at most this far from base_link")
+    side: Length | None = Field(
+        None,
+        gt=0,
+        le=1,
+        description="a side wall at most this far from base_link; by default 3/4 of the maze's grid "
+        "pitch (0.15 m on the course's 0.2 m grid)",
+    )
 
 
 class RespawnCheck(BaseModel):

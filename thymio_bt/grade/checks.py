@@ -42,6 +42,10 @@ from thymio_bt.robot.placement import ray_distance
 #: a quarter heading is a turn of the route once the robot has driven this far (m) holding it: a look
 #: to the side and back, turning on the spot, is not a turn taken
 TURN_TRAVEL = 0.02
+#: at a dead end a side wall is at most this many grid pitches from base_link (3/4: the cell's half
+#: and room for a robot off its centre line; an open side's ray reaches the next cell's far wall,
+#: 1.5 pitches away, or further)
+DEAD_END_SIDE = 0.75
 #: backwards travel (m) below this is noise, not driving backwards
 REVERSE_SLACK = 0.01
 
@@ -58,8 +62,8 @@ class Judgement:
 
 @dataclass
 class RunFacts:
-    """A finished run as the checks see it: its result, the maze it ran in, the robot, and what
-    the variant expects (``goal``, ``turns``)."""
+    """A finished run as the checks see it: its result, the maze it ran in (and its grid pitch), the
+    robot, and what the variant expects (``goal``, ``turns``)."""
 
     result: Any
     maze: Maze
@@ -67,6 +71,8 @@ class RunFacts:
     time_limit: float
     goal: GoalDisc | None = None
     turns: str | None = None
+    #: the maze's grid pitch (m): what "a side wall close by" means at a dead end
+    cell: float = 0.2
     cache: dict[str, Any] = field(default_factory=dict)
 
     def sample(self, t: float | None = None) -> tuple[float, float, float, float] | None:
@@ -212,7 +218,7 @@ def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
             blame,
         )
     if criterion.dead_end is not None:
-        side = criterion.dead_end.side
+        side = criterion.dead_end.side or DEAD_END_SIDE * facts.cell
         for name, turn in (("left", math.pi / 2), ("right", -math.pi / 2)):
             if ray_distance(facts.maze, pose.x, pose.y, pose.yaw + turn) > side:
                 return Judgement(False, f"stopped where the {name} side is open: not a dead end", moment, blame)

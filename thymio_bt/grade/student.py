@@ -105,7 +105,9 @@ def run_message(
     except Exception as exc:
         return head | _broken("EXCEPTION", f"the run raised {type(exc).__name__}: {exc}", criteria)
     places = wheres(mission.tree)
-    facts = RunFacts(result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns)
+    facts = RunFacts(
+        result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns, world.cell
+    )
     judged = {c.name: _judgement(judge(c, facts), places) for c in criteria}
     message = head | {
         "status": result.status,

@@ -51,6 +51,8 @@ class World:
     turns: str | None = None
     robot: str = "course"
     extra: dict[str, Any] = field(default_factory=dict)
+    #: the maze's grid pitch (m): a generated maze's, else the course's
+    cell: float = 0.2
 
     @classmethod
     def of(cls, variant: Variant, base: Path, folder: Path) -> World:
@@ -84,7 +86,16 @@ class World:
         noise = (REALISTIC if variant.noise == "realistic" else NoiseConfig()).settings()
         settings = {**noise, **{k: str(v) for k, v in variant.set.items()}, "robot": variant.robot}
         return cls(
-            variant.name, maze_file, maze, start, settings, variant.seed_list, variant.goal, turns, variant.robot
+            variant.name,
+            maze_file,
+            maze,
+            start,
+            settings,
+            variant.seed_list,
+            variant.goal,
+            turns,
+            variant.robot,
+            cell=_pitch(variant),
         )
 
     def run_arguments(self) -> list[str]:
@@ -133,6 +144,18 @@ def _check_start(name: str, maze: Maze, start: str, robot: str) -> None:
     problem = placement_problem(maze, robot_model(robot), pose)
     if problem:
         raise UserError(Problem(f"variant '{name}': impossible start {start}: {problem}", hint="pick a free pose"))
+
+
+def _pitch(variant: Variant) -> float:
+    """The grid pitch of the variant's maze: a generated one's, else the course's 0.2 m."""
+    spec = variant.generate
+    if spec is None:
+        return 0.2
+    if spec.kind == "contest":
+        from thymio_bt.maze.micromouse import CELL
+
+        return CELL
+    return spec.cell
 
 
 def _generated(variant: Variant) -> tuple[Maze, str | None]:
