@@ -189,6 +189,18 @@ def test_look_around_finds_the_open_side_where_the_side_rays_cannot_reach(grid, 
     assert abs(math.remainder(look["pose"]["yaw"] - choose["pose"]["yaw"], math.tau)) < 0.01  # facing ahead again
 
 
+@pytest.mark.parametrize("offset", [-0.03, 0.03])
+def test_look_around_stops_turning_short_of_a_side_wall_it_would_touch(offset):
+    """3 cm off the centre line of a 0.22 m dead end, the axle is 7.5 cm from a side wall and the
+    hull sweeps 8 cm about it: turning to face that wall would touch it. The turn stops when a front
+    sensor reads under 1 cm, and that side counts as closed."""
+    result = run_tree(LOOKING_LEG, world("pocket", cell=0.22), start=[0.11, 0.11 + offset, 0], seconds=40)
+    look = ends(result, "LookAround")[0]
+    assert result.status == "SUCCESS" and result.collisions == 0, result.reason
+    assert (look["decision"], look["looked"]) == ("dead_end", ["left", "right"])
+    assert abs(result.final_pose["yaw"]) < 0.01  # facing ahead again
+
+
 def test_look_around_halted_mid_turn_stops_the_robot():
     approach, look = LOOKING_LEG["sequence"]
     tree = {

@@ -29,11 +29,19 @@ from py_trees.blackboard import Client
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Context, FailureCode, RobotBehaviour
-from thymio_bt.behaviours.corridor import RANGE_MAX, Side, side_ray
+from thymio_bt.behaviours.base import (
+    BehaviourParams,
+    ConditionBehaviour,
+    Context,
+    FailureCode,
+    RobotBehaviour,
+    current_pose,
+)
+from thymio_bt.behaviours.corridor import FRONT_SENSORS, RANGE_MAX, Side, side_ray
 from thymio_bt.behaviours.motion import Turn
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
 from thymio_bt.inputs.fields import AngularSpeed, SensedLength
+from thymio_bt.robot.interface import wrap_angle
 from thymio_bt.robot.model import WIDEST_RANGE, RobotModel
 
 __all__ = [
@@ -144,6 +152,8 @@ class IsDeadEnd(ConditionBehaviour):
 REACH_MARGIN = 0.005
 #: stationary front readings LookAround takes of each side (their median counts: one glint does not)
 LOOK_READINGS = 3
+#: a front reading under this while LookAround turns to a side: a wall there, too near to turn on (m)
+LOOK_CLEARANCE = 0.01
 SIDES: tuple[Side, Side] = ("left", "right")
 
 
@@ -301,7 +311,9 @@ class LookAround(RobotBehaviour):
     succeeds at once without moving. Otherwise it turns a quarter towards the side ChooseTurn
     chose and reads ``front_center`` (the median of three stationary readings: a wall there reads,
     an opening does not); if that side is closed it turns to look at the other one; it ends facing
-    the way it came, having rewritten ``turn``, ``turn_angle`` and ``turn_certain``.
+    the way it came, having rewritten ``turn``, ``turn_angle`` and ``turn_certain``. A robot off
+    its corridor's centre line may meet a side wall before it faces it: a front reading under 1 cm
+    as it turns to a side stops the turn, that side closed.
 
     Example (YAML)::
 
@@ -324,22 +336,21 @@ class LookAround(RobotBehaviour):
         self.board = self.blackboard("decision", write=self.keys)
 
     def start(self) -> None:
-        """Read the decision: which side to look at first, if any."""
+        """Read the decision: which side to look at first, if any; the heading that is ahead."""
         self.turn: Turn | None = None
-        self.looks: list[tuple[float, Side | None]] = []  # the turns still to make, each with the side it faces
-        self.facing: Side | None = None  # the side looked at once the turn to it is done
-        self.target: Side | None = None  # the side the turn under way faces (None: ahead)
+        self.looks: list[Side | None] = []  # the headings still to face: a side, or ahead (None)
+        self.target: Side | None = None  # what the turn under way faces
+        self.facing: Side | None = None  # the side being read, the turn to it done
         self.readings: list[float] = []
         self.open: dict[str, bool] = {}
+        self.ahead = current_pose(self.robot).yaw if self.robot.exists() else 0.0
         key, _, certain_key = self.keys
-        if not self.board.exists(key):
-            self.first: Side | None = None
-            return
-        decision = self.board.get(key)
-        certain = self.board.get(certain_key) if self.board.exists(certain_key) else True
-        self.first = decision if decision in SIDES and not certain else None
-        if self.first is not None:
-            self.looks = [(self._quarter(self.first), self.first)]
+        self.first: Side | None = None
+        if self.board.exists(key):
+            certain = self.board.get(certain_key) if self.board.exists(certain_key) else True
+            decision = self.board.get(key)
+            self.first = decision if decision in SIDES and not certain else None
+        self.looks = [self.first] if self.first else []
 
     def step(self) -> Status:
         """Turn, look, and decide once back facing the way the robot came."""
@@ -348,18 +359,26 @@ class LookAround(RobotBehaviour):
         if self.first is None:
             self.feedback_message = "ChooseTurn was sure: nothing to look at"
             return Status.SUCCESS
+        scan = self.robot.proximity()
+        assert scan is not None
+        ahead = scan["front_center"]
         if self.facing is not None:  # stopped, facing a side: read it
-            scan = self.robot.proximity()
-            assert scan is not None
-            self.readings.append(scan["front_center"])
+            self.readings.append(ahead)
             if len(self.readings) < LOOK_READINGS:
                 return Status.RUNNING
             self._seen(self.facing, sorted(self.readings)[LOOK_READINGS // 2])
         if self.turn is None:
             if not self.looks:
                 return self._decide()
-            angle, self.target = self.looks.pop(0)
-            self.turn = Turn.begin(self, angle, self.params.speed, 0.0005)
+            self.target = self.looks.pop(0)
+            turned = wrap_angle(current_pose(self.robot).yaw - self.ahead)
+            facing = 0.0 if self.target is None else _quarter(self.target)
+            self.turn = Turn.begin(self, facing - turned, self.params.speed, 0.0005)
+        elif self.target is not None and min(scan[name] for name in FRONT_SENSORS) < LOOK_CLEARANCE:
+            self.robot.drive(0.0, 0.0)  # turning on would touch that side's wall
+            self.turn = None
+            self._seen(self.target, 0.0)
+            return Status.RUNNING
         if not self.turn.drive(self.turn.error()):
             self.say("turning to look {}", self.target or "ahead")
             return Status.RUNNING
@@ -373,14 +392,10 @@ class LookAround(RobotBehaviour):
         super().terminate(new_status)
 
     def _seen(self, side: Side, reading: float) -> None:
-        """Record what ``side`` looks like and plan the next turn: to the other side if the first is
-        closed, else back to face ahead."""
+        """Record what ``side`` looks like and plan the next turns: to the other side if the first
+        is closed, then back to face ahead."""
         self.open[side], self.readings, self.facing = math.isinf(reading), [], None
-        if side == self.first and not self.open[side]:
-            other = _other(side)
-            self.looks = [(2 * self._quarter(other), other), (self._quarter(side), None)]
-        else:
-            self.looks = [(self._quarter(_other(side)), None)]
+        self.looks = [_other(side), None] if side == self.first and not self.open[side] else [None]
 
     def _decide(self) -> Status:
         """Write the corrected decision."""
@@ -392,7 +407,7 @@ class LookAround(RobotBehaviour):
         self.feedback_message = f"looked: {decision}"
         return Status.SUCCESS
 
-    @staticmethod
-    def _quarter(side: str) -> float:
-        """A quarter turn towards ``side``."""
-        return math.pi / 2 if side == "left" else -math.pi / 2
+
+def _quarter(side: Side) -> float:
+    """The heading a quarter turn towards ``side``, from ahead (rad)."""
+    return math.pi / 2 if side == "left" else -math.pi / 2
