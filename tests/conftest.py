@@ -3,10 +3,13 @@ tests that made thymio-bt behaviours), and skips the tests marked ``slow`` (real
 the Playground missions) unless asked: ``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets.
 Once the tests are over, a process that has not ended within :data:`EXIT_GRACE` s prints every
 thread's stack and exits 1: something a test started is holding it (a Dask client waiting on its
-loop once held CI's pytest after its last test until the job's time limit)."""
+loop once held CI's pytest after its last test until the job's time limit). A session started with
+Ctrl-C ignored (a shell's background job: ``nohup ... &``) gets Python's handler back, so that the
+tests of what Ctrl-C does, in this process and in the commands they start, test it."""
 
 import faulthandler
 import os
+import signal
 import sys
 
 import pytest
@@ -19,6 +22,13 @@ pytest_plugins = ["pytester"]
 @pytest.fixture(autouse=True)
 def _clean_blackboard():
     yield from clear_blackboard()
+
+
+def pytest_configure(config):
+    """Ctrl-C as Python sets it up: a non-interactive shell starts background jobs with SIGINT
+    ignored, and children inherit that (every SIGINT test failed under ``nohup .ci/run &``)."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_addoption(parser):
