@@ -162,6 +162,12 @@ def _other(side: Side) -> Side:
     return "right" if side == "left" else "left"
 
 
+def _quarter(side: Side) -> float:
+    """A quarter turn towards ``side`` (rad, left positive): the angle TurnAngle turns, and the
+    heading LookAround faces from ahead."""
+    return math.pi / 2 if side == "left" else -math.pi / 2
+
+
 def turns_decided(events: Iterable[dict[str, Any]]) -> str:
     """The turns a run's tree decided, as ``LRL...``: ChooseTurn's sure decisions and LookAround's
     corrections of the others, from the run's ``behaviour_end`` events.
@@ -180,11 +186,11 @@ def turns_decided(events: Iterable[dict[str, Any]]) -> str:
     )
 
 
-def write_decision(board: Client, key: str, decision: str, certain: bool) -> None:
+def write_decision(board: Client, key: str, decision: Side | Literal["dead_end"], certain: bool) -> None:
     """Write a turn decision as ChooseTurn does: ``key``, ``key_angle`` (the turn TurnAngle makes:
     +pi/2 left, -pi/2 right, 0 at a dead end) and ``key_certain``."""
     board.set(key, decision)
-    board.set(f"{key}_angle", {"left": math.pi / 2, "right": -math.pi / 2, "dead_end": 0.0}[decision])
+    board.set(f"{key}_angle", 0.0 if decision == "dead_end" else _quarter(decision))
     board.set(f"{key}_certain", certain)
 
 
@@ -195,7 +201,7 @@ def lateral_reach(model: RobotModel, side: Side) -> float:
     >>> round(lateral_reach(COURSE, "left"), 4), round(lateral_reach(ENKI, "right"), 4)
     (0.1093, 0.1385)
     """
-    sensor = next(s for s in model.sensors if s.name == side_ray(side))
+    sensor = model.sensor(side_ray(side))
     return abs(sensor.y) + model.range_max * abs(math.sin(sensor.yaw))
 
 
@@ -248,8 +254,8 @@ class ChooseTurn(RobotBehaviour):
         """A new leg: the side walls are not seen yet. The robot's sensor poses and reach."""
         model = self.robot.model
         self.reach = {side: lateral_reach(model, side) for side in SIDES}
-        self.rays = {side: next(s for s in model.sensors if s.name == side_ray(side)) for side in SIDES}
-        self.front = next(s for s in model.sensors if s.name == "front_center")
+        self.rays = {side: model.sensor(side_ray(side)) for side in SIDES}
+        self.front = model.sensor("front_center")
         self.beside: dict[str, float | None] = {side: None for side in SIDES}
 
     def step(self) -> Status:
@@ -338,7 +344,6 @@ class LookAround(RobotBehaviour):
     def start(self) -> None:
         """Read the decision: which side to look at first, if any; the heading that is ahead."""
         self.turn: Turn | None = None
-        self.looks: list[Side | None] = []  # the headings still to face: a side, or ahead (None)
         self.target: Side | None = None  # what the turn under way faces
         self.facing: Side | None = None  # the side being read, the turn to it done
         self.readings: list[float] = []
@@ -350,7 +355,8 @@ class LookAround(RobotBehaviour):
             certain = self.board.get(certain_key) if self.board.exists(certain_key) else True
             decision = self.board.get(key)
             self.first = decision if decision in SIDES and not certain else None
-        self.looks = [self.first] if self.first else []
+        #: the headings still to face: a side, or ahead (None)
+        self.looks: list[Side | None] = [self.first] if self.first else []
 
     def step(self) -> Status:
         """Turn, look, and decide once back facing the way the robot came."""
@@ -406,8 +412,3 @@ class LookAround(RobotBehaviour):
         self.extra = {"decision": decision, "looked": sorted(self.open)}
         self.feedback_message = f"looked: {decision}"
         return Status.SUCCESS
-
-
-def _quarter(side: Side) -> float:
-    """The heading a quarter turn towards ``side``, from ahead (rad)."""
-    return math.pi / 2 if side == "left" else -math.pi / 2

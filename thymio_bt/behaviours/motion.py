@@ -369,7 +369,7 @@ class TurnAngle(RobotBehaviour):
         return {"angle": round(self.turn.turned, 6)}
 
 
-@dataclass
+@dataclass(slots=True)
 class Turn:
     """An in-place turn by odometry, driven a tick at a time: TurnAngle's controller, which other
     behaviours that turn as one of their steps (LookAround) use too.
