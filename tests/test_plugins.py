@@ -58,6 +58,33 @@ def test_a_plugin_behaviour_fails_with_its_own_code(tmp_path):
     assert (result.status, result.code, result.reason) == ("FAILURE", "LINE_LOST", "no line under the robot")
 
 
+def test_a_plugin_behaviour_prepares_its_blackboard_keys_once(tmp_path):
+    """prepare() runs once, when the node is built: its keys serve every restart of the node."""
+    (tmp_path / "laps.py").write_text(
+        "from py_trees.common import Status\n"
+        "from thymio_bt.behaviours import RobotBehaviour\n"
+        "class CountLap(RobotBehaviour):\n"
+        "    'Add one to the laps on the blackboard.'\n"
+        "    needs_robot = False\n"
+        "    prepared = 0\n"
+        "    def prepare(self):\n"
+        "        CountLap.prepared += 1\n"
+        "        self.board = self.blackboard('laps', write=('laps',))\n"
+        "    def step(self):\n"
+        "        laps = self.board.get('laps') + 1 if self.board.exists('laps') else 1\n"
+        "        self.board.set('laps', laps)\n"
+        "        self.feedback_message = f'{laps} laps, prepared {CountLap.prepared} times'\n"
+        "        return Status.SUCCESS\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [laps.py]\ntree: {repeat: {times: 3, do: CountLap}}\n")
+    run = Run(load_mission(mission))
+    result = run.run()
+    assert result.status == "SUCCESS"
+    assert [e["status"] for e in result.events if e["kind"] == "behaviour_end"] == ["SUCCESS"] * 3
+    assert run.root.children[0].feedback_message == "3 laps, prepared 1 times"
+
+
 def test_a_plugin_behaviour_returning_no_status_fails_with_a_reason(tmp_path):
     from thymio_bt.mission import load_mission
     from thymio_bt.run.runner import Run

@@ -1,7 +1,8 @@
 """What every thymio-bt behaviour shares: the robot context, events, failure codes, time limits.
 
 A behaviour is a :class:`py_trees.behaviour.Behaviour` built from a pydantic ``Params`` model and a
-:class:`Context`. Subclasses implement :meth:`RobotBehaviour.start` and :meth:`RobotBehaviour.step`;
+:class:`Context`. Subclasses implement :meth:`RobotBehaviour.start` and :meth:`RobotBehaviour.step`
+(and :meth:`RobotBehaviour.prepare` to attach blackboard keys);
 the base class handles the simulated-time limit, a deleted robot, collisions, stopping the robot
 when the behaviour ends or is interrupted, and the ``behaviour_start``/``behaviour_end`` events.
 
@@ -222,8 +223,13 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self._start_time = 0.0
         self._collisions_at_start = 0
         self._path: str | None = None
+        self.prepare()
 
     # ---------------------------------------------------------------- hooks
+    def prepare(self) -> None:
+        """Called once, when the node is built (``self.params`` set, the robot perhaps not there yet:
+        a tree is also built to be drawn): attach blackboard clients (:meth:`blackboard`), parse code."""
+
     def start(self) -> None:
         """Called when the behaviour starts (after parameters are resolved)."""
 

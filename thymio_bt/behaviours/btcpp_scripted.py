@@ -118,9 +118,9 @@ class Script(BtLeaf):
 
     Params = CodeParams
 
-    def __init__(self, name: str, params: CodeParams, ctx: Any, blackboard_refs: dict[str, str] | None = None) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.script = parse(params.code)
+    def prepare(self) -> None:
+        """Parse the script once."""
+        self.script = parse(self.params.code)
 
     def step(self) -> Status:
         """Run the script."""

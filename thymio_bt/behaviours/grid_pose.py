@@ -21,7 +21,7 @@ from typing import ClassVar, Literal
 from py_trees.common import Status
 from pydantic import BaseModel, Field
 
-from thymio_bt.behaviours.base import BehaviourParams, Context, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
 from thymio_bt.behaviours.cellmap import Cell, CellMap, centre_cells
 from thymio_bt.inputs.fields import Length
 from thymio_bt.robot.interface import wrap_angle
@@ -77,11 +77,9 @@ class OnGrid(RobotBehaviour):
     # declared as the base's type: subclasses' parameters add required fields (MoveCells' distance)
     Params: ClassVar[type[BaseModel]] = MazeMapParams
 
-    def __init__(
-        self, name: str, params: MazeMapParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("map", write=(params.key,))
+    def prepare(self) -> None:
+        """The map's blackboard key and the grid."""
+        self.board = self.blackboard("map", write=(self.params.key,))
         self.grid = self._grid()
         self._map: CellMap | None = None
         self._goal: set[Cell] | None = None

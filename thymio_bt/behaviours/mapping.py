@@ -40,7 +40,7 @@ import math
 from py_trees.common import Access, Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import ConditionBehaviour, Context, FailureCode
+from thymio_bt.behaviours.base import ConditionBehaviour, FailureCode
 from thymio_bt.behaviours.cellmap import STEPS, Cell
 from thymio_bt.behaviours.grid_pose import (
     HEADING,
@@ -175,10 +175,9 @@ class PlanMove(OnGrid):
 
     Params = PlanMoveParams
 
-    def __init__(
-        self, name: str, params: PlanMoveParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
+    def prepare(self) -> None:
+        """The map's key, and the keys of the move written."""
+        super().prepare()
         for key in ("move_centre", "move_turn", "move_distance"):
             self.board.register_key(key, access=Access.WRITE)
 

@@ -32,7 +32,6 @@ from pydantic import Field
 from thymio_bt.behaviours.base import (
     BehaviourParams,
     ConditionBehaviour,
-    Context,
     FailureCode,
     RobotBehaviour,
     current_pose,
@@ -130,11 +129,9 @@ class IsDeadEnd(ConditionBehaviour):
     Params = IsDeadEndParams
     needs_robot = False
 
-    def __init__(
-        self, name: str, params: IsDeadEndParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("decision", read=(params.key,))
+    def prepare(self) -> None:
+        """The decision's key."""
+        self.board = self.blackboard("decision", read=(self.params.key,))
 
     def step(self) -> Status:
         """Read the decision (FAILURE while there is none)."""
@@ -241,11 +238,9 @@ class ChooseTurn(RobotBehaviour):
     Params = ChooseTurnParams
     fails_on_collision = False
 
-    def __init__(
-        self, name: str, params: ChooseTurnParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        key = params.key
+    def prepare(self) -> None:
+        """The decision's keys; no width measured yet."""
+        key = self.params.key
         self.board = self.blackboard("decision", write=(key, f"{key}_angle", f"{key}_certain"))
         #: the corridor's width between its side walls, last measured with both in view (kept from leg to leg)
         self.width: float | None = None
@@ -333,11 +328,9 @@ class LookAround(RobotBehaviour):
     #: (a noisy wheel errs anew with every command, so one more would change the rest of the run)
     moves = False
 
-    def __init__(
-        self, name: str, params: LookAroundParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        key = params.key
+    def prepare(self) -> None:
+        """The decision's keys."""
+        key = self.params.key
         self.keys = (key, f"{key}_angle", f"{key}_certain")
         self.board = self.blackboard("decision", write=self.keys)
 

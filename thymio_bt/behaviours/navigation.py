@@ -19,7 +19,6 @@ from pydantic import Field
 from thymio_bt.behaviours.base import (
     BehaviourParams,
     ConditionBehaviour,
-    Context,
     FailureCode,
     RobotBehaviour,
     current_pose,
@@ -160,11 +159,10 @@ class FollowWaypoints(RobotBehaviour):
     Params = FollowWaypointsParams
     moves = True
 
-    def __init__(
-        self, name: str, params: FollowWaypointsParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("progress", write=(params.key, f"{params.key}_left"))
+    def prepare(self) -> None:
+        """The progress keys."""
+        key = self.params.key
+        self.board = self.blackboard("progress", write=(key, f"{key}_left"))
 
     def start(self) -> None:
         """A fresh controller; resume at the waypoint the blackboard says is next."""
@@ -222,11 +220,9 @@ class WaypointsDone(ConditionBehaviour):
     Params = WaypointsDoneParams
     needs_robot = False
 
-    def __init__(
-        self, name: str, params: WaypointsDoneParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("progress", read=(f"{params.key}_left",))
+    def prepare(self) -> None:
+        """The key of how many waypoints are left."""
+        self.board = self.blackboard("progress", read=(f"{self.params.key}_left",))
 
     def step(self) -> Status:
         """Whether the blackboard says no waypoint is left."""
@@ -278,11 +274,9 @@ class _CountingTurn(RobotBehaviour):
 
     moves = True
 
-    def __init__(
-        self, name: str, params: _CounterParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("counter", write=(params.counter,))
+    def prepare(self) -> None:
+        """The counter's key."""
+        self.board = self.blackboard("counter", write=(self.params.counter,))
 
     def start(self) -> None:
         """Count from the current heading; start the counter at zero if nothing wrote it yet."""
@@ -406,11 +400,9 @@ class SetBlackboard(RobotBehaviour):
     emits_events = False
     fails_on_collision = False
 
-    def __init__(
-        self, name: str, params: SetBlackboardParams, ctx: Context, blackboard_refs: dict[str, str] | None = None
-    ) -> None:
-        super().__init__(name, params, ctx, blackboard_refs)
-        self.board = self.blackboard("writer", write=(params.key,))
+    def prepare(self) -> None:
+        """The key written."""
+        self.board = self.blackboard("writer", write=(self.params.key,))
 
     def step(self) -> Status:
         """Write the value."""
