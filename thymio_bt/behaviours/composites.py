@@ -37,6 +37,23 @@ class _Memory(ControlNode):
         """The py_trees composite, with or without memory."""
         return cls.composite(name, memory=cls.memory, children=children)
 
+    @classmethod
+    def reactive(cls, doc: str, children: str) -> type[_Memory]:
+        """The kind ``reactive_<name>``: this one without memory (only ``memory`` differs, so it is a
+        call, not a class of its own). ``doc`` says what it does, ``children`` is an example list."""
+        name = f"reactive_{cls.yaml_name}"
+        return type(
+            f"Reactive{cls.__name__}",
+            (cls,),
+            {
+                "__doc__": doc,
+                "__module__": cls.__module__,
+                "yaml_name": name,
+                "example": f"e.g. '{name}: {children}'",
+                "memory": False,
+            },
+        )
+
 
 class Sequence(_Memory):
     """Run the children in order; fail at the first failure (resumes at the running child)."""
@@ -44,15 +61,6 @@ class Sequence(_Memory):
     yaml_name = "sequence"
     example = "e.g. 'sequence: [{MoveUntilWall: {}}, {TurnAngle: {angle: 90deg}}]'"
     composite = py_trees.composites.Sequence
-
-
-class ReactiveSequence(_Memory):
-    """Like sequence, but start again from the first child every tick (conditions stay checked)."""
-
-    yaml_name = "reactive_sequence"
-    example = "e.g. 'reactive_sequence: [{WallAhead: {}}, {TurnAngle: {angle: 90deg}}]'"
-    composite = py_trees.composites.Sequence
-    memory = False
 
 
 class Selector(_Memory):
@@ -63,13 +71,14 @@ class Selector(_Memory):
     composite = py_trees.composites.Selector
 
 
-class ReactiveSelector(_Memory):
-    """Like selector, but re-try the higher-priority children every tick."""
-
-    yaml_name = "reactive_selector"
-    example = "e.g. 'reactive_selector: [{ObstacleAhead: {}}, {GoToPose: {goal: [1, 0, 0]}}]'"
-    composite = py_trees.composites.Selector
-    memory = False
+ReactiveSequence = Sequence.reactive(
+    "Like sequence, but start again from the first child every tick (conditions stay checked).",
+    "[{WallAhead: {}}, {TurnAngle: {angle: 90deg}}]",
+)
+ReactiveSelector = Selector.reactive(
+    "Like selector, but re-try the higher-priority children every tick.",
+    "[{ObstacleAhead: {}}, {GoToPose: {goal: [1, 0, 0]}}]",
+)
 
 
 class ParallelParams(ControlParams):

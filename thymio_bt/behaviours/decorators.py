@@ -23,6 +23,7 @@ from typing import Annotated, Any, ClassVar, Literal, get_args
 import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, Status
+from py_trees.decorators import FailureIsSuccess, Inverter, SuccessIsFailure
 from pydantic import Field, field_validator
 
 from thymio_bt.behaviours.control import RepeatUntil, SimTimeout
@@ -180,29 +181,30 @@ class _Outcome(ControlNode):
         """The py_trees decorator of the child."""
         return cls.wraps(name=name, child=children[0])
 
+    @classmethod
+    def of(cls, yaml_name: str, wraps: type[py_trees.decorators.Decorator], doc: str, child: str) -> type[_Outcome]:
+        """The kind ``yaml_name`` (class ``ForceSuccess`` for ``force_success``): ``wraps`` of the child.
+        ``doc`` says what it does, ``child`` is an example of one."""
+        return type(
+            yaml_name.title().replace("_", ""),
+            (cls,),
+            {
+                "__doc__": f"{doc} (RUNNING stays RUNNING).",
+                "__module__": cls.__module__,
+                "yaml_name": yaml_name,
+                "example": f"e.g. '{yaml_name}: {child}'",
+                "wraps": wraps,
+            },
+        )
 
-class Invert(_Outcome):
-    """Swap SUCCESS and FAILURE of the child (RUNNING stays RUNNING)."""
 
-    yaml_name = "invert"
-    example = "e.g. 'invert: {WallAhead: {}}'"
-    wraps = py_trees.decorators.Inverter
-
-
-class ForceSuccess(_Outcome):
-    """Report SUCCESS when the child fails (RUNNING stays RUNNING)."""
-
-    yaml_name = "force_success"
-    example = "e.g. 'force_success: {MoveDistance: {distance: 5cm}}'"
-    wraps = py_trees.decorators.FailureIsSuccess
-
-
-class ForceFailure(_Outcome):
-    """Report FAILURE when the child succeeds (RUNNING stays RUNNING)."""
-
-    yaml_name = "force_failure"
-    example = "e.g. 'force_failure: {WallAhead: {}}'"
-    wraps = py_trees.decorators.SuccessIsFailure
+#: the kinds that only change how the child's result reads: name, py_trees decorator, what it does, a child
+_OUTCOMES = (
+    ("invert", Inverter, "Swap SUCCESS and FAILURE of the child", "{WallAhead: {}}"),
+    ("force_success", FailureIsSuccess, "Report SUCCESS when the child fails", "{MoveDistance: {distance: 5cm}}"),
+    ("force_failure", SuccessIsFailure, "Report FAILURE when the child succeeds", "{WallAhead: {}}"),
+)
+Invert, ForceSuccess, ForceFailure = (_Outcome.of(*row) for row in _OUTCOMES)
 
 
 class UntilParams(ControlParams):
