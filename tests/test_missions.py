@@ -114,6 +114,22 @@ def test_bonus_follows_other_corridors_of_the_same_kind(tmp_path, seed):
     assert math.dist(axle(result.final_pose), ((last[0] + 0.5) * 0.2, (last[1] + 0.5) * 0.2)) < 0.06
 
 
+@pytest.mark.parametrize("robot", ["course", "enki", "real"])
+def test_bonus_takes_another_grid_from_its_cell_parameter(tmp_path, robot):
+    """On a 0.3 m grid the side walls are beyond the course robot's side rays: it stops where cell
+    says, turns to look, and its axle ends near the middle of each corridor it turns into."""
+    path = random_path(10, seed=4)
+    maze = path_maze(path, cell=0.3)
+    (tmp_path / "wide.yaml").write_text(yaml.safe_dump(maze.to_yaml_dict()))
+    s = maze.spawns["start"]
+    start = f"{s.x},{s.y},{s.yaw}"
+    result = run("maze_bonus", overrides={"cell": "30cm", "robot": robot}, maze=tmp_path / "wide.yaml", start=start)
+    assert result.status == "SUCCESS" and result.collisions == 0
+    assert turn_letters(result) == turns_along(path)
+    last = path[-1]
+    assert math.dist(axle(result.final_pose), ((last[0] + 0.5) * 0.3, (last[1] + 0.5) * 0.3)) < 0.08
+
+
 @pytest.mark.parametrize("seed", range(20, 30))
 def test_bonus_with_noise_reaches_the_last_pocket(seed):
     """Lateral drift from odometry errors once made seed 25 turn left into a wall and stop there,

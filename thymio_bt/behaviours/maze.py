@@ -147,6 +147,9 @@ class IsDeadEnd(ConditionBehaviour):
 #: a side wall must be this much nearer the centre line than its sensor's reach for ChooseTurn to
 #: trust that sensor's empty reading as an opening (a robot a few mm off the line still sees it)
 REACH_MARGIN = 0.005
+#: a reading this near the sensor's range says a wall is there, not how far: the weakest signal a
+#: calibration table converts, which a wall further out gives too (Enki's cone, a side wall at a slant)
+SATURATED = 0.001
 #: stationary front readings LookAround takes of each side (their median counts: one glint does not)
 LOOK_READINGS = 3
 #: a front reading under this while LookAround turns to a side: a wall there, too near to turn on (m)
@@ -221,7 +224,8 @@ class ChooseTurn(RobotBehaviour):
     ``turn_certain``. A side whose ray meets a side wall is closed; an empty reading is an opening
     only where a wall there would be within the ray's reach: the ray met that side's wall on the
     way, or the other side's wall, seen now, is nearer than the corridor's width measured earlier
-    minus that reach. Where not (a corridor wider than the rays reach, a leg that starts with the wall
+    minus that reach (a reading within 1 mm of the sensor's range measures no width: a wall further
+    out reads so too). Where not (a corridor wider than the rays reach, a leg that starts with the wall
     ahead close, so the rays meet it) the decision is the side that may be open, and
     ``turn_certain`` is false: LookAround, after the robot stops, turns to look.
 
@@ -251,6 +255,7 @@ class ChooseTurn(RobotBehaviour):
         self.reach = {side: lateral_reach(model, side) for side in SIDES}
         self.rays = {side: model.sensor(side_ray(side)) for side in SIDES}
         self.front = model.sensor("front_center")
+        self.edge = model.range_max - SATURATED
         self.beside: dict[str, float | None] = {side: None for side in SIDES}
 
     def step(self) -> Status:
@@ -259,8 +264,10 @@ class ChooseTurn(RobotBehaviour):
         assert scan is not None
         ahead = scan["front_center"]
         offsets: dict[Side, float | None] = {side: self._offset(scan[side_ray(side)], side, ahead) for side in SIDES}
-        if offsets["left"] is not None and offsets["right"] is not None:
-            self.width = offsets["left"] + offsets["right"]
+        # how far the side walls are, where the readings say it (not at the edge of the range)
+        measured = {side: offsets[side] if scan[side_ray(side)] < self.edge else None for side in SIDES}
+        if measured["left"] is not None and measured["right"] is not None:
+            self.width = measured["left"] + measured["right"]
         if math.isinf(ahead):
             for side in SIDES:
                 self.beside[side] = offsets[side] if offsets[side] is not None else self.beside[side]
@@ -271,7 +278,7 @@ class ChooseTurn(RobotBehaviour):
         candidates = [s for s in (prefer, _other(prefer)) if offsets[s] is None]
         chosen = candidates[0] if candidates else None
         decision = chosen or "dead_end"
-        certain = chosen is None or (math.isinf(scan[side_ray(chosen)]) and self._surely_open(chosen, offsets))
+        certain = chosen is None or (math.isinf(scan[side_ray(chosen)]) and self._surely_open(chosen, measured))
         write_decision(self.board, self.params.key, decision, certain)
         self.extra = {"decision": decision, "certain": certain}
         self.feedback_message = f"decided {decision}" + ("" if certain else " (not sure: look)")
@@ -287,11 +294,11 @@ class ChooseTurn(RobotBehaviour):
             return None
         return abs(ray.y) + reading * abs(math.sin(ray.yaw))
 
-    def _surely_open(self, side: Side, offsets: dict[Side, float | None]) -> bool:
+    def _surely_open(self, side: Side, measured: dict[Side, float | None]) -> bool:
         """Whether ``side``'s empty reading is an opening: a wall there would be within its ray's
         reach. Where that side's wall was, the ray met it on the way; else the other side's wall,
-        seen now, and the corridor's width measured earlier (one maze, one grid) say it."""
-        seen, other = self.beside[side], offsets[_other(side)]
+        measured now, and the corridor's width measured earlier (one maze, one grid) say it."""
+        seen, other = self.beside[side], measured[_other(side)]
         if seen is None and other is not None and self.width is not None:
             seen = self.width - other
         return seen is not None and seen <= self.reach[side] - REACH_MARGIN
