@@ -46,6 +46,7 @@ def test_all_criteria_met_is_a_success_with_the_check_in_the_report(tmp_path):
         ("  max_time: 2s", "max_time: took 4.3 s, more than 2 s"),
         ("  gaps: [{after: MoveUntilWall, distance: 4cm}]", "the front gap was 5.01 cm, not 4 ± 0.3 cm"),
         ("  gaps: [{after: Nothing, distance: 4cm}]", "gaps: no node matching 'Nothing' ended with a robot"),
+        ("  leaves_maze: true", "leaves_maze: ended inside the maze at (0.49, 0.10)"),
     ],
 )
 def test_a_tree_success_that_misses_an_expectation_is_a_failure_naming_it(tmp_path, expect, message):
@@ -110,6 +111,21 @@ def test_expectations_are_validated_with_units_and_places(tmp_path):
 def test_in_another_maze_only_place_free_criteria_hold(tmp_path):
     mission = load_mission("missions/maze_bonus.yaml", maze="mazes/arena.yaml", start="0.6,0.6,0")
     assert mission.expect.goal is None and mission.expect.no_collision
+
+
+def test_the_wall_followers_expect_to_leave_any_maze():
+    """leaves_maze holds in any maze: a wall follower whose odometry says it is out while it is
+    still inside (Enki's robot once on a 0.25 m grid) does not report SUCCESS there."""
+    for side in ("left", "right"):
+        mission = load_mission(f"missions/maze_6x6_{side}.yaml", maze="mazes/arena.yaml", start="0.6,0.6,0")
+        assert mission.expect.goal is None and mission.expect.leaves_maze and mission.expect.no_collision
+
+
+def test_the_schema_knows_every_expectation():
+    from thymio_bt.mission.expect import Expect
+    from thymio_bt.mission.schema import mission_schema
+
+    assert set(mission_schema()["properties"]["expect"]["properties"]) == set(Expect.model_fields)
 
 
 def test_a_sweep_counts_a_missed_expectation_as_a_failure(tmp_path):

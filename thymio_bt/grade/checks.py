@@ -331,8 +331,7 @@ def _leaves_maze(criterion: Criterion, facts: RunFacts) -> Judgement:
     pose = facts.pose_at(None)
     if pose is None:
         return Judgement(False, "no robot at the end of the run")
-    x0, y0, x1, y1 = facts.maze.bounds()
-    if not (x0 <= pose.x <= x1 and y0 <= pose.y <= y1):
+    if facts.maze.outside(pose.x, pose.y):
         return Judgement(True)
     return Judgement(
         False, f"ended inside the maze at ({pose.x:.2f}, {pose.y:.2f})", facts.moment(), facts.node_before(math.inf)

@@ -221,6 +221,12 @@ class Maze(BaseModel):
         xs, ys = [c[0] for c in corners], [c[1] for c in corners]
         return (min(xs), min(ys), max(xs), max(ys))
 
+    def outside(self, x: float, y: float) -> bool:
+        """Whether (x, y) lies beyond the walls' and obstacles' bounding box (:meth:`bounds`): the
+        robot has left the maze."""
+        x0, y0, x1, y1 = self.bounds()
+        return not (x0 <= x <= x1 and y0 <= y <= y1)
+
     def spawn(self, name: str) -> Pose:
         """The pose of a named spawn; an unknown name is a :class:`UserError` with a hint."""
         if name not in self.spawns:

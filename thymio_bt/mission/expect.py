@@ -8,6 +8,7 @@ ground truth after it ends:
 expect:
   goal: {centre: [0.3, 0.489], radius: 1cm}        # where base_link must end
   no_collision: true
+  leaves_maze: false                               # true: base_link ends beyond the walls' box
   max_time: 60s
   gaps:                                            # the front gap to the wall, by geometry,
     - {after: "course/part 1", distance: 5cm, tolerance: 3mm}   # when that node ended
@@ -76,11 +77,13 @@ class Expect(BaseModel):
     model_config = ConfigDict(extra="forbid")
     goal: GoalRegion | None = Field(None, description="where base_link must end")
     no_collision: bool = Field(False, description="no contact with a wall in the whole run")
+    leaves_maze: bool = Field(False, description="base_link ends beyond the bounding box of the maze's walls")
     max_time: Duration | None = Field(None, gt=0, le=36000, description="the mission must end within this")
     gaps: list[GapExpectation] = Field(default_factory=list, description="front gaps when nodes end")
 
     def without_places(self) -> Expect:
-        """The criteria that hold anywhere (no goal, no gaps): for a run in another maze or start."""
+        """The criteria that hold anywhere (no goal, no gaps; ``leaves_maze`` is any maze's): for a
+        run in another maze or from another start."""
         return self.model_copy(update={"goal": None, "gaps": []})
 
 
@@ -98,6 +101,11 @@ def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[st
                     f"goal: ended {1000 * off:.1f} mm from ({expect.goal.centre[0]:g}, "
                     f"{expect.goal.centre[1]:g}), more than {1000 * expect.goal.radius:g} mm"
                 )
+    if expect.leaves_maze:
+        if pose is None:
+            failed.append("leaves_maze: no robot at the end")
+        elif not maze.outside(pose["x"], pose["y"]):
+            failed.append(f"leaves_maze: ended inside the maze at ({pose['x']:.2f}, {pose['y']:.2f})")
     if expect.no_collision and result.collisions:
         failed.append(f"no_collision: {result.collisions} collision{'s' * (result.collisions != 1)}")
     if expect.max_time is not None and result.sim_time > expect.max_time + 1e-9:

@@ -127,6 +127,7 @@ _EXPECT = {
             },
         },
         "no_collision": {"type": "boolean"},
+        "leaves_maze": {"type": "boolean"},
         "max_time": _VALUE,
         "gaps": {
             "type": "array",
