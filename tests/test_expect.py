@@ -47,6 +47,8 @@ def test_all_criteria_met_is_a_success_with_the_check_in_the_report(tmp_path):
         ("  gaps: [{after: MoveUntilWall, distance: 4cm}]", "the front gap was 5.01 cm, not 4 ± 0.3 cm"),
         ("  gaps: [{after: Nothing, distance: 4cm}]", "gaps: no node matching 'Nothing' ended with a robot"),
         ("  leaves_maze: true", "leaves_maze: ended inside the maze at (0.49, 0.10)"),
+        ("  dead_end: {distance: 4cm}", "dead_end: stopped 5.0 cm from the wall ahead, not 4 cm"),
+        ("  dead_end: {distance: 5cm, side: 3cm}", "dead_end: the left side is open"),
     ],
 )
 def test_a_tree_success_that_misses_an_expectation_is_a_failure_naming_it(tmp_path, expect, message):
@@ -119,6 +121,21 @@ def test_the_wall_followers_expect_to_leave_any_maze():
     for side in ("left", "right"):
         mission = load_mission(f"missions/maze_6x6_{side}.yaml", maze="mazes/arena.yaml", start="0.6,0.6,0")
         assert mission.expect.goal is None and mission.expect.leaves_maze and mission.expect.no_collision
+
+
+def test_expectations_may_name_the_mission_s_parameters(tmp_path):
+    """maze_bonus's dead end has its side walls within a cell: `side: $cell`, --set cell changes it."""
+    mission = load_mission("missions/maze_bonus.yaml", {"cell": "30cm"}, maze="mazes/arena.yaml", start="0.6,0.6,0")
+    assert mission.expect.dead_end is not None and mission.expect.dead_end.side == pytest.approx(0.3)
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        MISSION.format(expect="  dead_end: {distance: 5cm, side: $fast}").replace(
+            "tree:", "parameters: {fast: 1 m/s}\ntree:"
+        )
+    )
+    with pytest.raises(UserError) as err:
+        load_mission(path)
+    assert (err.value.problems[0].line, err.value.problems[0].message) == (4, "expected a length (in m), got a speed")
 
 
 def test_the_schema_knows_every_expectation():

@@ -34,10 +34,9 @@ from typing import Any
 
 from thymio_bt.grade.assignment import Criterion, GoalDisc
 from thymio_bt.maze import Maze
-from thymio_bt.mission.expect import front_gap
+from thymio_bt.mission.expect import front_gap, open_side
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
-from thymio_bt.robot.placement import ray_distance
 
 #: a quarter heading is a turn of the route once the robot has driven this far (m) holding it: a look
 #: to the side and back, turning on the spot, is not a turn taken
@@ -218,10 +217,9 @@ def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
             blame,
         )
     if criterion.dead_end is not None:
-        side = criterion.dead_end.side or DEAD_END_SIDE * facts.cell
-        for name, turn in (("left", math.pi / 2), ("right", -math.pi / 2)):
-            if ray_distance(facts.maze, pose.x, pose.y, pose.yaw + turn) > side:
-                return Judgement(False, f"stopped where the {name} side is open: not a dead end", moment, blame)
+        opening = open_side(facts.maze, pose, criterion.dead_end.side or DEAD_END_SIDE * facts.cell)
+        if opening is not None:
+            return Judgement(False, f"stopped where the {opening} side is open: not a dead end", moment, blame)
     return Judgement(True)
 
 

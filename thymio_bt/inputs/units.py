@@ -29,6 +29,7 @@ import math
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from thymio_bt.errors import did_you_mean
 
@@ -308,13 +309,27 @@ def _named(kind: str) -> str:
 ParamResolver = Callable[[str], Quantity]
 
 
-def resolver_from(values: Mapping[str, float | Quantity]) -> ParamResolver:
-    """A resolver for ``$name`` references from a mapping of already-parsed values."""
+def resolver_from(values: Mapping[str, Any]) -> ParamResolver:
+    """A resolver for ``$name`` references from a mapping of parsed values (a parameter that is no
+    number, such as ``bb:key`` or ``true``, is refused where it is used in a number).
+
+    >>> resolve = resolver_from({"cell": Quantity(0.3, "length"), "turn": "bb:turn"})
+    >>> parse_value("0.75 * $cell", resolve)
+    Quantity(value=0.22499999999999998, kind='length')
+    >>> parse_value("$turn", resolve)
+    Traceback (most recent call last):
+    ...
+    thymio_bt.inputs.units.UnitError: parameter '$turn' is 'bb:turn', not a number
+    """
 
     def resolve(name: str) -> Quantity:
         if name not in values:
             raise KeyError(name)
         value = values[name]
-        return value if isinstance(value, Quantity) else Quantity(float(value))
+        if isinstance(value, Quantity):
+            return value
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return Quantity(float(value))
+        raise UnitError(f"parameter '${name}' is {value!r}, not a number")
 
     return resolve

@@ -118,9 +118,10 @@ def problems_from(
     return problems
 
 
-def validate(model: type[M], data: Any, filename: str, prefix: str = "") -> M:
-    """Validate marked data against a pydantic model, raising :class:`UserError` with places."""
+def validate(model: type[M], data: Any, filename: str, prefix: str = "", context: Any = None) -> M:
+    """Validate marked data against a pydantic model, raising :class:`UserError` with places
+    (``context``: pydantic's validation context, e.g. how ``$name`` values resolve)."""
     try:
-        return model.model_validate(data)
+        return model.model_validate(data, context=context)
     except ValidationError as exc:
         raise UserError(problems_from(exc, data, filename, model, prefix)) from None

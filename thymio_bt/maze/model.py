@@ -31,7 +31,7 @@ import math
 from collections.abc import Sequence
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, model_validator
 from pydantic_core import PydanticCustomError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean, type_name
@@ -45,13 +45,14 @@ def _problem(message: str, hint: str) -> PydanticCustomError:
 
 
 def parsed_quantity(kind: str) -> BeforeValidator:
-    """Accept a number or a text with units (``20cm``, ``pi/2``) of ``kind``; errors carry a hint."""
+    """Accept a number or a text with units (``20cm``, ``pi/2``) of ``kind``; errors carry a hint.
+    A ``$name`` resolves where the validation context has a ``resolve`` (the mission's ``expect:``)."""
 
-    def parse(value: Any) -> float:
+    def parse(value: Any, info: ValidationInfo) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
             raise _problem(f"expected a number, got {type_name(value)}", kind_hint(kind))
         try:
-            quantity = parse_value(value)
+            quantity = parse_value(value, (info.context or {}).get("resolve"))
         except UnitError as exc:
             raise _problem(str(exc), exc.hint or kind_hint(kind)) from None
         error = check_kind(quantity, kind)

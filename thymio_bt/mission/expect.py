@@ -9,10 +9,14 @@ expect:
   goal: {centre: [0.3, 0.489], radius: 1cm}        # where base_link must end
   no_collision: true
   leaves_maze: false                               # true: base_link ends beyond the walls' box
+  dead_end: {distance: 5cm, side: $cell}           # facing a wall 5 cm away, walls on both sides
   max_time: 60s
   gaps:                                            # the front gap to the wall, by geometry,
     - {after: "course/part 1", distance: 5cm, tolerance: 3mm}   # when that node ended
 ```
+
+Values may name the mission's parameters (``$cell``). ``goal`` and ``gaps`` are places of the
+mission's own maze: in another maze (``--maze``, ``--start``) only the others are checked.
 
 A run whose tree succeeds but whose expectations do not all hold ends FAILURE with code
 ``EXPECTATION`` and the failed ones in its reason; ``sweep`` counts it as a failure.
@@ -71,6 +75,17 @@ class GapExpectation(BaseModel):
     tolerance: Length = Field(0.003, gt=0, le=1, description="how far off still counts")
 
 
+class DeadEnd(BaseModel):
+    """The robot ends facing a wall, walls on both sides: a dead end, in any maze."""
+
+    model_config = ConfigDict(extra="forbid")
+    distance: Length = Field(gt=0, le=2, description="the front gap expected at the end")
+    tolerance: Length = Field(0.005, gt=0, le=1, description="how far off still counts")
+    side: Length = Field(
+        0.15, gt=0, le=2, description="the side walls are at most this far from base_link (3/4 of a 0.2 m cell)"
+    )
+
+
 class Expect(BaseModel):
     """A mission's success criteria beyond its tree's status."""
 
@@ -78,12 +93,13 @@ class Expect(BaseModel):
     goal: GoalRegion | None = Field(None, description="where base_link must end")
     no_collision: bool = Field(False, description="no contact with a wall in the whole run")
     leaves_maze: bool = Field(False, description="base_link ends beyond the bounding box of the maze's walls")
+    dead_end: DeadEnd | None = Field(None, description="the run ends in a dead end, this far from its wall")
     max_time: Duration | None = Field(None, gt=0, le=36000, description="the mission must end within this")
     gaps: list[GapExpectation] = Field(default_factory=list, description="front gaps when nodes end")
 
     def without_places(self) -> Expect:
-        """The criteria that hold anywhere (no goal, no gaps; ``leaves_maze`` is any maze's): for a
-        run in another maze or from another start."""
+        """The criteria that hold anywhere (no goal, no gaps; ``leaves_maze`` and ``dead_end`` are
+        any maze's): for a run in another maze or from another start."""
         return self.model_copy(update={"goal": None, "gaps": []})
 
 
@@ -106,6 +122,8 @@ def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[st
             failed.append("leaves_maze: no robot at the end")
         elif not maze.outside(pose["x"], pose["y"]):
             failed.append(f"leaves_maze: ended inside the maze at ({pose['x']:.2f}, {pose['y']:.2f})")
+    if expect.dead_end is not None:
+        failed += _dead_end(expect.dead_end, pose, maze, model)
     if expect.no_collision and result.collisions:
         failed.append(f"no_collision: {result.collisions} collision{'s' * (result.collisions != 1)}")
     if expect.max_time is not None and result.sim_time > expect.max_time + 1e-9:
@@ -139,6 +157,27 @@ def _true_pose_at(result: Any, event: dict) -> Pose:
     if not before:
         return Pose(event["pose"]["x"], event["pose"]["y"], event["pose"]["yaw"])
     return Pose(*result.trajectory[before - 1][1:4])
+
+
+def _dead_end(spec: DeadEnd, pose: dict[str, float] | None, maze: Maze, model: RobotModel) -> list[str]:
+    """Why the final ``pose`` (the true one) is not in a dead end as ``spec`` says, if it is not."""
+    if pose is None:
+        return ["dead_end: no robot at the end"]
+    at = Pose(pose["x"], pose["y"], pose["yaw"])
+    gap = front_gap(maze, model, at)
+    if abs(gap - spec.distance) > spec.tolerance:  # inf (no wall ahead) too
+        return [f"dead_end: stopped {100 * gap:.1f} cm from the wall ahead, not {100 * spec.distance:g} cm"]
+    side = open_side(maze, at, spec.side)
+    return [] if side is None else [f"dead_end: the {side} side is open"]
+
+
+def open_side(maze: Maze, pose: Pose, reach: float) -> str | None:
+    """``left`` or ``right``, the first side of ``pose`` with no wall within ``reach`` of base_link
+    (square to the heading), or None: both sides closed."""
+    for name, turn in (("left", math.pi / 2), ("right", -math.pi / 2)):
+        if ray_distance(maze, pose.x, pose.y, pose.yaw + turn) > reach:
+            return name
+    return None
 
 
 def front_gap(maze: Maze, model: RobotModel, pose: Pose) -> float:

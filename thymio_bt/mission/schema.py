@@ -128,6 +128,12 @@ _EXPECT = {
         },
         "no_collision": {"type": "boolean"},
         "leaves_maze": {"type": "boolean"},
+        "dead_end": {
+            "type": "object",
+            "additionalProperties": False,
+            "required": ["distance"],
+            "properties": {"distance": _VALUE, "tolerance": _VALUE, "side": _VALUE},
+        },
         "max_time": _VALUE,
         "gaps": {
             "type": "array",

@@ -25,7 +25,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
-from thymio_bt.inputs.units import Quantity, check_kind, kind_hint
+from thymio_bt.inputs.units import Quantity, check_kind, kind_hint, resolver_from
 from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.checker import Checker, Scope, Where
@@ -73,6 +73,11 @@ class SettingsReader(Checker):
         noise_raw = self._file_settings(data, file, values)
         for name, text in overrides.items():
             self._override(name, text, params, values, noise_raw)
+        if "expect" in data:  # after --set: its values may name the parameters
+            try:
+                values["expect"] = validate(Expect, data["expect"], file, "expect.", {"resolve": resolver_from(params)})
+            except UserError as exc:
+                self.problems.extend(exc.problems)
         self._noise(noise_raw, data, file, values)
         if "sensor_model" not in values:  # the robot's own: the course's rays, Enki's cones, a real robot's readings
             values["sensor_model"] = _SIM_SENSOR_MODEL[robot_model(values.get("robot", "course")).sensor_model]
@@ -90,11 +95,6 @@ class SettingsReader(Checker):
             self._robot(data["robot"], self.where_value(data, "robot", file), values)
         if "backend" in data:
             self._backend(data["backend"], self.where_value(data, "backend", file), values)
-        if "expect" in data:
-            try:
-                values["expect"] = validate(Expect, data["expect"], file, "expect.")
-            except UserError as exc:
-                self.problems.extend(exc.problems)
         if "noise" not in data:
             return {}
         if isinstance(data["noise"], MarkedDict):
