@@ -38,14 +38,16 @@ def part1_2(tmp_path_factory):
 
 
 def test_the_bag_odometry_is_the_report_trajectory(part1_2):
-    reader = module("mcap_ros2.reader")
+    make_reader, decoders = module("mcap.reader").make_reader, module("mcap_ros2.decoder")
     folder, report = part1_2
     odom, topics = [], {}
-    for m in reader.read_ros2_messages(str(folder / "run.mcap")):
-        topics[m.channel.topic] = m.schema.name
-        if m.channel.topic == "/odom":
-            p, q = m.ros_msg.pose.pose.position, m.ros_msg.pose.pose.orientation
-            odom.append((m.log_time_ns / 1e9, p.x, p.y, 2 * math.atan2(q.z, q.w)))
+    with (folder / "run.mcap").open("rb") as bag:
+        reader = make_reader(bag, decoder_factories=[decoders.DecoderFactory()])
+        for schema, channel, message, ros_msg in reader.iter_decoded_messages():
+            topics[channel.topic] = schema.name
+            if channel.topic == "/odom":
+                p, q = ros_msg.pose.pose.position, ros_msg.pose.pose.orientation
+                odom.append((message.log_time / 1e9, p.x, p.y, 2 * math.atan2(q.z, q.w)))
     trajectory = {round(s[0], 6): s[1:] for s in report["trajectory"]}
     assert len(odom) == len(trajectory) == 328  # 329 ticks, one without a robot (deleted)
     for t, x, y, yaw in odom:
