@@ -157,3 +157,13 @@ def test_the_course_missions_meet_their_expectations():
     for name in ("maze_part1_2", "maze_bonus", "course_full"):
         result = Run(load_mission(f"missions/{name}.yaml")).run()
         assert result.status == "SUCCESS" and result.report()["expectations"]["met"], name
+
+
+def test_a_dead_end_expected_where_no_wall_is_ahead_says_so(tmp_path):
+    (tmp_path / "corner.yaml").write_text(
+        "name: corner\nwalls:\n  - {from: [0, 0], to: [0.6, 0]}\n  - {from: [0, 0], to: [0, 0.6]}\n"
+    )
+    path = tmp_path / "m.yaml"
+    path.write_text("maze: corner.yaml\nstart: [0.3, 0.3, 45deg]\nexpect:\n  dead_end: {distance: 5cm}\ntree: Stop\n")
+    result = Run(load_mission(path)).run()
+    assert (result.status, result.reason) == ("FAILURE", "dead_end: stopped facing no wall, not 5 cm from one")

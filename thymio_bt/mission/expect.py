@@ -165,7 +165,9 @@ def _dead_end(spec: DeadEnd, pose: dict[str, float] | None, maze: Maze, model: R
         return ["dead_end: no robot at the end"]
     at = Pose(pose["x"], pose["y"], pose["yaw"])
     gap = front_gap(maze, model, at)
-    if abs(gap - spec.distance) > spec.tolerance:  # inf (no wall ahead) too
+    if math.isinf(gap):
+        return [f"dead_end: stopped facing no wall, not {100 * spec.distance:g} cm from one"]
+    if abs(gap - spec.distance) > spec.tolerance:
         return [f"dead_end: stopped {100 * gap:.1f} cm from the wall ahead, not {100 * spec.distance:g} cm"]
     side = open_side(maze, at, spec.side)
     return [] if side is None else [f"dead_end: the {side} side is open"]
