@@ -73,10 +73,9 @@ def test_a_wall_that_stays_near_stops_it_a_tick_later():
 
 
 def test_approach_gains_are_capped_by_latency_only_on_late_robots():
-    assert late_gain(5.0, SimpleNamespace(latency=0.0), 0.1) == 5.0
-    assert late_gain(5.0, SimpleNamespace(), 0.1) == 5.0
-    assert late_gain(5.0, SimpleNamespace(latency=0.2), 0.1) == pytest.approx(DAMPED_GAIN_DELAY / 0.3)
-    assert late_gain(1.0, SimpleNamespace(latency=0.2), 0.1) == 1.0
+    assert late_gain(5.0, 0.0, 0.1) == 5.0
+    assert late_gain(5.0, 0.2, 0.1) == pytest.approx(DAMPED_GAIN_DELAY / 0.3)
+    assert late_gain(1.0, 0.2, 0.1) == 1.0
 
 
 def test_expected_gaps_are_measured_on_the_true_pose_not_odometry():

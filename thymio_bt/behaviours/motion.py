@@ -51,9 +51,12 @@ REAR_SENSOR_SPACING = 0.061
 DAMPED_GAIN_DELAY = 0.5
 
 
-def late_gain(gain: float, robot: object, period: float) -> float:
-    """``gain``, capped for a robot that declares a latency (see :data:`DAMPED_GAIN_DELAY`)."""
-    latency = getattr(robot, "latency", 0.0)
+def late_gain(gain: float, latency: float, period: float) -> float:
+    """``gain``, capped for a robot with a ``latency`` (s; see :data:`DAMPED_GAIN_DELAY`).
+
+    >>> late_gain(5.0, 0.0, 0.1), round(late_gain(5.0, 0.2, 0.1), 3)  # the simulation; a late robot
+    (5.0, 1.667)
+    """
     return min(gain, DAMPED_GAIN_DELAY / (period + latency)) if latency else gain
 
 
@@ -135,7 +138,7 @@ class MoveUntilWall(RobotBehaviour):
         self.saw_nothing = False  # the last reading was out of range
         # a backend's latency and the approach gain it allows: fixed for the run
         self.latency = self.robot.latency
-        self.gain = late_gain(self.params.approach_gain, self.robot, self.ctx.tick_period)
+        self.gain = late_gain(self.params.approach_gain, self.latency, self.ctx.tick_period)
 
     def _travelled(self, pose: Pose) -> float:
         """How far ``pose`` is from the start along the held heading."""
@@ -403,7 +406,7 @@ class Turn:
         latency = robot.latency
         if latency:
             tolerance = max(tolerance, MIN_TURN_RATE * (period + latency))
-        return cls(robot, target - yaw, speed, tolerance, late_gain(5.0, robot, period), period, latency, yaw)
+        return cls(robot, target - yaw, speed, tolerance, late_gain(5.0, latency, period), period, latency, yaw)
 
     def error(self) -> float:
         """The angle still to turn, after what a late robot turns before a command sent now acts."""

@@ -126,7 +126,7 @@ class WallFollow(RobotBehaviour):
         # a late robot (see Backend.latency) stops early by what its last command still covers,
         # approaches with a damped gain and settles a turn within what its slowest turn covers
         self.latency = self.robot.latency
-        self.gain = late_gain(5.0, self.robot, self.ctx.tick_period)
+        self.gain = late_gain(5.0, self.latency, self.ctx.tick_period)
         self.turn_tolerance = math.radians(0.1)
         if self.latency:
             self.turn_tolerance = max(self.turn_tolerance, MIN_TURN_RATE * (self.ctx.tick_period + self.latency))
