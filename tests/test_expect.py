@@ -47,8 +47,8 @@ def test_all_criteria_met_is_a_success_with_the_check_in_the_report(tmp_path):
         ("  gaps: [{after: MoveUntilWall, distance: 4cm}]", "the front gap was 5.01 cm, not 4 ± 0.3 cm"),
         ("  gaps: [{after: Nothing, distance: 4cm}]", "gaps: no node matching 'Nothing' ended with a robot"),
         ("  leaves_maze: true", "leaves_maze: ended inside the maze at (0.49, 0.10)"),
-        ("  dead_end: {distance: 4cm}", "dead_end: stopped 5.0 cm from the wall ahead, not 4 cm"),
-        ("  dead_end: {distance: 5cm, side: 3cm}", "dead_end: the left side is open"),
+        ("  dead_end: {distance: 4cm}", "dead_end: stopped 5.0 cm from the wall, wanted 4.0 +- 0.5 cm"),
+        ("  dead_end: {distance: 5cm, side: 3cm}", "dead_end: stopped where the left side is open: not a dead end"),
     ],
 )
 def test_a_tree_success_that_misses_an_expectation_is_a_failure_naming_it(tmp_path, expect, message):
@@ -166,4 +166,4 @@ def test_a_dead_end_expected_where_no_wall_is_ahead_says_so(tmp_path):
     path = tmp_path / "m.yaml"
     path.write_text("maze: corner.yaml\nstart: [0.3, 0.3, 45deg]\nexpect:\n  dead_end: {distance: 5cm}\ntree: Stop\n")
     result = Run(load_mission(path)).run()
-    assert (result.status, result.reason) == ("FAILURE", "dead_end: stopped facing no wall, not 5 cm from one")
+    assert (result.status, result.reason) == ("FAILURE", "dead_end: stopped facing no wall (wanted 5 cm from one)")

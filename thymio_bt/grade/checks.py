@@ -34,7 +34,7 @@ from typing import Any
 
 from thymio_bt.grade.assignment import Criterion, GoalDisc
 from thymio_bt.maze import Maze
-from thymio_bt.mission.expect import front_gap, open_side
+from thymio_bt.mission.expect import stop_problem
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
 
@@ -204,22 +204,12 @@ def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
     pose = facts.pose_at(t)
     if pose is None:
         return Judgement(False, "no robot to measure", None)
-    moment = facts.moment(t)
-    gap = front_gap(facts.maze, facts.model, pose)
-    if not math.isfinite(gap):
-        return Judgement(False, f"stopped facing no wall (wanted {100 * spec.distance:g} cm from one)", moment, blame)
-    if abs(gap - spec.distance) > spec.tolerance:
-        return Judgement(
-            False,
-            f"stopped {100 * gap:.1f} cm from the wall, wanted {100 * spec.distance:.1f} +- "
-            f"{100 * spec.tolerance:.1f} cm",
-            moment,
-            blame,
-        )
+    side = None
     if criterion.dead_end is not None:
-        opening = open_side(facts.maze, pose, criterion.dead_end.side or DEAD_END_SIDE * facts.cell)
-        if opening is not None:
-            return Judgement(False, f"stopped where the {opening} side is open: not a dead end", moment, blame)
+        side = criterion.dead_end.side or DEAD_END_SIDE * facts.cell
+    problem = stop_problem(facts.maze, facts.model, pose, spec.distance, spec.tolerance, side)
+    if problem is not None:
+        return Judgement(False, problem, facts.moment(t), blame)
     return Judgement(True)
 
 

@@ -164,13 +164,30 @@ def _dead_end(spec: DeadEnd, pose: dict[str, float] | None, maze: Maze, model: R
     if pose is None:
         return ["dead_end: no robot at the end"]
     at = Pose(pose["x"], pose["y"], pose["yaw"])
-    gap = front_gap(maze, model, at)
+    problem = stop_problem(maze, model, at, spec.distance, spec.tolerance, spec.side)
+    return [] if problem is None else [f"dead_end: {problem}"]
+
+
+def stop_problem(
+    maze: Maze, model: RobotModel, pose: Pose, distance: float, tolerance: float, side: float | None = None
+) -> str | None:
+    """Why a robot at ``pose`` (its true pose) has not stopped ``distance`` ± ``tolerance`` from the
+    wall ahead, or, given ``side``, not in a dead end (a wall within ``side`` on both sides); None
+    when it has. The one judgement of a stop for ``expect:`` and the grader, in the same words.
+
+    >>> from thymio_bt.mission.loader import load_mission
+    >>> from thymio_bt.robot.model import robot_model
+    >>> mission, model = load_mission("maze_part1_2"), robot_model("course")
+    >>> stop_problem(mission.maze, model, mission.start, 0.05, 0.005)  # not moved yet
+    'stopped 43.9 cm from the wall, wanted 5.0 +- 0.5 cm'
+    """
+    gap = front_gap(maze, model, pose)
     if math.isinf(gap):
-        return [f"dead_end: stopped facing no wall, not {100 * spec.distance:g} cm from one"]
-    if abs(gap - spec.distance) > spec.tolerance:
-        return [f"dead_end: stopped {100 * gap:.1f} cm from the wall ahead, not {100 * spec.distance:g} cm"]
-    side = open_side(maze, at, spec.side)
-    return [] if side is None else [f"dead_end: the {side} side is open"]
+        return f"stopped facing no wall (wanted {100 * distance:g} cm from one)"
+    if abs(gap - distance) > tolerance:
+        return f"stopped {100 * gap:.1f} cm from the wall, wanted {100 * distance:.1f} +- {100 * tolerance:.1f} cm"
+    opening = None if side is None else open_side(maze, pose, side)
+    return None if opening is None else f"stopped where the {opening} side is open: not a dead end"
 
 
 def open_side(maze: Maze, pose: Pose, reach: float) -> str | None:
