@@ -3,6 +3,7 @@ stub leaves registered, and that run back here to the identical report (#33)."""
 
 import json
 import re
+import struct
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -62,6 +63,34 @@ def test_every_export_loads_and_runs_in_behaviortree_cpp_with_stub_leaves(missio
     assert set(statuses) <= {bt.NodeStatus.RUNNING, bt.NodeStatus.SUCCESS, bt.NodeStatus.FAILURE}
 
 
+def _uids(xml: str) -> list[tuple[str | None, str, str | None]]:
+    """(BehaviorTree ID, tag, _uid) of every node element, tree by tree."""
+    root = ET.fromstring(xml)
+    return [
+        (tree.get("ID"), e.tag, e.get("_uid"))
+        for tree in root.iter("BehaviorTree")
+        for e in tree.iter()
+        if e is not tree
+    ]
+
+
+@pytest.mark.parametrize("mission", MISSIONS, ids=lambda m: m.stem)
+def test_every_element_carries_the_uid_behaviortree_cpp_gives_it(mission, tmp_path):
+    """Groot2 names nodes by uid: our .btlog and monitor must use BT.CPP's numbering, which counts
+    a subtree's nodes after its <SubTree> and a do-while loop's scaffolding. BT.CPP's own FileLogger
+    writes the tree with the uids it gave."""
+    bt = module("behaviortreepy")
+    xml = _export(mission, tmp_path / "tree.xml")
+    tree = _stub_tree(bt, xml)
+    logger = bt.FileLogger(tree, str(tmp_path / "run.btlog"))
+    tree.tick_once()
+    logger.flush()
+    data = (tmp_path / "run.btlog").read_bytes()
+    length = struct.unpack_from("<i", data, len(b"BTCPP4-FileLogger2") + 1)[0]
+    logged = data[len(b"BTCPP4-FileLogger2") + 5 :][:length].decode()
+    assert _uids(xml) == _uids(logged)
+
+
 def test_a_plugin_mission_exports_its_plugins_and_runs_back_to_the_identical_report(tmp_path):
     from thymio_bt.mission.loader import load_mission
     from thymio_bt.run.runner import Run
@@ -85,7 +114,8 @@ def test_a_do_while_loop_is_written_with_built_ins_and_read_back_as_one_repeat(t
     from thymio_bt.mission.xml_reader import read_xml_mission
 
     xml = _export(Path("missions/maze_bonus.yaml"), tmp_path / "bonus.xml")
-    assert '<Sequence name="bonus maze" _thymio="repeat"' in xml and "<KeepRunningUntilFailure>" in xml
+    assert '<Sequence name="bonus maze" _thymio="repeat" _uid="2">' in xml
+    assert '<Script code="__until_2 := false" _uid="3" />' in xml and '<KeepRunningUntilFailure _uid="5">' in xml
     body = read_xml_mission(tmp_path / "bonus.xml")["tree"]["repeat"]
     assert sorted(body) == ["do", "name", "until"] and "IsDeadEnd" in body["until"]
 

@@ -100,14 +100,20 @@ def parse_btlog(data: bytes):
 
 
 def test_the_groot2_log_holds_one_record_per_status_change(part1_2, tmp_path):
+    from thymio_bt.mission import default_registry
+    from thymio_bt.mission.btcpp import btcpp_tree
+
     folder, _ = part1_2
     done = thymio_bt("export", folder / "run.jsonl", "--btlog", tmp_path / "run.btlog")
     assert done.returncode == 0, done.stderr
     xml, start, records = parse_btlog((tmp_path / "run.btlog").read_bytes())
     log = [json.loads(line) for line in (folder / "run.jsonl").read_text().splitlines()]
-    tree = {n["path"]: n["uid"] for n in log[0]["tree"]}
-    uids_in_xml = {int(u) for u in re.findall(r'_uid="(\d+)"', xml)}
-    assert uids_in_xml == set(tree.values()) and start == 0
+    # each node by its element's _uid: BT.CPP's numbering (test_btcpp_export checks it against BT.CPP's)
+    numbered = btcpp_tree(log[0]["tree"], default_registry())
+    assert numbered.xml == xml
+    tree = {n["path"]: numbered.uids[n["uid"]] for n in log[0]["tree"]}
+    uids_in_xml = sorted(int(u) for u in re.findall(r'_uid="(\d+)"', xml))
+    assert uids_in_xml == list(range(1, 23)) and start == 0  # 16 nodes of ours, 6 of a do-while loop
     expected, last = [], {path: "-" for path in tree}
     code = {"-": 0, "R": 1, "S": 2, "F": 3}
     for tick in log[1:-1]:
@@ -301,7 +307,7 @@ def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
     ]
     assert '<SubTree ID="to_dead_end" name="part 2"' in xml
     uids = sorted(int(u) for u in re.findall(r'_uid="(\d+)"', xml))
-    assert uids == list(range(1, 37))  # BT.CPP's pre-order, SubTree nodes included
+    assert uids == list(range(1, 49))  # BT.CPP's pre-order: SubTree nodes and 2 do-while loops (6 each) included
     bad = tmp_path / "bad.xml"
     for body, message in (
         ('<SubTree ID="nowhere"/>', 'names no <BehaviorTree ID="nowhere">'),

@@ -54,15 +54,17 @@ class BtlogWriter:
         self._last: dict[str, str] = {}
 
     def header(self, header: LogHeader) -> None:
-        """Write the file's head: the magic, the protocol and the tree as BT.CPP XML (uids from the header)."""
+        """Write the file's head: the magic, the protocol and the tree as BT.CPP XML (its nodes numbered as
+        BT.CPP numbers them: the records name those uids)."""
         from thymio_bt.mission import default_registry
-        from thymio_bt.mission.btcpp import tree_xml
+        from thymio_bt.mission.btcpp import btcpp_tree
 
         assert self._file is not None
         nodes = header["tree"]
-        self._uids = {n["path"]: n["uid"] for n in nodes}
+        tree = btcpp_tree(nodes, default_registry())
+        self._uids = {n["path"]: tree.uids[n["uid"]] for n in nodes if n["uid"] in tree.uids}
         self._last = {n["path"]: "-" for n in nodes}
-        xml = tree_xml(nodes, default_registry()).encode("utf-8")
+        xml = tree.xml.encode("utf-8")
         self._file.write(MAGIC + struct.pack("<Bi", PROTOCOL, len(xml)) + xml + struct.pack("<q", 0))
 
     def tick(self, record: TickRecord) -> None:

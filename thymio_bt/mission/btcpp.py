@@ -8,8 +8,9 @@ built-ins and two scripts (:func:`repeat_until_elements`). Nothing needs a custo
 file loads in BT.CPP 4 with only the leaves registered. Behaviours are Actions, conditions
 Conditions, with their parameters as ports; a ``<TreeNodesModel>`` declares every non-built-in node
 (plugins' too) with its ports, units and descriptions from the node registry, so Groot2 can show and
-edit the tree. Nodes carry BT.CPP's pre-order ``_uid`` (1 = the root; the scripts of a do-while
-loop have none: they are not nodes of the mission).
+edit the tree. Every element carries the ``_uid`` BT.CPP gives it (its pre-order number, 1 = the
+root, a subtree's nodes counted after its ``<SubTree>``, a do-while loop's scaffolding counted too),
+so a Groot2 log or monitor of ours names the nodes BT.CPP would.
 
 Example::
 
@@ -20,12 +21,14 @@ Example::
     {1: 'to_dead_end'}
     >>> node_id(nodes[0], children=2), node_id(nodes[1], children=2), params[4]["distance"]
     ('Sequence', 'Sequence', 0.05)
-    >>> xml = tree_xml(nodes, mission.registry, params, subtrees=subtrees)
-    >>> for line in xml.splitlines()[1:4]:
+    >>> tree = btcpp_tree(nodes, mission.registry, params, subtrees=subtrees)
+    >>> for line in tree.xml.splitlines()[1:4]:
     ...     print(line)
       <BehaviorTree ID="MainTree">
         <SubTree ID="to_dead_end" name="bonus maze" _autoremap="true" _uid="1" />
       </BehaviorTree>
+    >>> tree.wrappers, tree.uids[1], tree.uids[2]  # the loop, then 4 scaffolding nodes before its body
+    ({1: 1}, 2, 7)
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ import json
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -132,9 +136,10 @@ def _ports(node: TreeNode, ident: str, params: Mapping[str, Any], children: int)
     return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items() if v is not None}
 
 
-def repeat_until_elements(parent: ET.Element, attrs: dict[str, str], uid: int) -> tuple[ET.Element, ET.Element]:
-    """``repeat: {until: COND, do: BODY}`` in BT.CPP's built-ins, under ``parent``; returns the
-    elements BODY and COND go into. The loop's flag is the blackboard entry ``__until_UID``::
+def repeat_until_elements(parent: ET.Element, attrs: dict[str, str]) -> tuple[ET.Element, ET.Element]:
+    """``repeat: {until: COND, do: BODY}`` in BT.CPP's built-ins, under ``parent``; returns the loop's
+    element and the one BODY and COND go into (COND under an ``Inverter``). The loop's flag is the
+    blackboard entry ``__until_UID``, UID the loop's ``_uid`` (set by :func:`_name_flag`)::
 
         <Sequence _thymio="repeat">                       the loop (name, _uid)
           <Script code="__until_7 := false"/>
@@ -148,28 +153,51 @@ def repeat_until_elements(parent: ET.Element, attrs: dict[str, str], uid: int) -
 
     Tick for tick in BT.CPP as thymio-bt's loop: BODY, COND in the same tick after each success of
     BODY, BODY again the next tick after a failed check, a BODY failure fails the loop."""
-    flag = f"__until_{uid}"
     loop = ET.SubElement(parent, "Sequence", attrs)
-    ET.SubElement(loop, "Script", code=f"{flag} := false")
+    ET.SubElement(loop, "Script", code="")
     fallback = ET.SubElement(loop, "Fallback")
     keep = ET.SubElement(fallback, "KeepRunningUntilFailure")
     body = ET.SubElement(keep, "Sequence")
-    ET.SubElement(fallback, "ScriptCondition", code=flag)
-    return body, body
+    ET.SubElement(fallback, "ScriptCondition", code="")
+    return loop, body
 
 
-def tree_xml(
+def _name_flag(loop: ET.Element, uid: int) -> None:
+    """Write the flag ``__until_UID`` into the scripts of a loop of :func:`repeat_until_elements`."""
+    flag = f"__until_{uid}"
+    script, fallback = loop
+    script.set("code", f"{flag} := false")
+    fallback[1].set("code", flag)
+    fallback[0][0][1].set("_onFailure", f"{flag} := true")
+
+
+@dataclass(frozen=True)
+class BtcppTree:
+    """A tree as BT.CPP XML, and the ``_uid`` BT.CPP gives each planned node's element."""
+
+    #: the XML text
+    xml: str
+    #: a planned node's uid -> its element's ``_uid`` (every node but a ``bt_conditions``, whose
+    #: conditions are attributes of the node under it)
+    uids: dict[int, int]
+    #: a subtree instance root's uid -> the ``_uid`` of the ``<SubTree>`` node that uses it
+    wrappers: dict[int, int]
+    #: how many nodes BT.CPP counts (their ``_uid``s are 1 to ``size``)
+    size: int
+
+
+def btcpp_tree(
     nodes: list[TreeNode],
     registry: Registry,
     params: Mapping[int, Mapping[str, Any]] | None = None,
     tree_id: str = "MainTree",
     settings: Mapping[str, str] | None = None,
     subtrees: Mapping[int, str] | None = None,
-) -> str:
+) -> BtcppTree:
     """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
     lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
     ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
-    tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node (see :func:`xml_uids`)."""
+    tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node."""
     params, subtrees = params or {}, subtrees or {}
     root = ET.Element("root", BTCPP_format="4", main_tree_to_execute=tree_id)
     if settings:
@@ -179,8 +207,9 @@ def tree_xml(
     for n in nodes:
         if n["parent"] is not None:
             children[n["parent"]] += 1
-    uids, wrappers = xml_uids(nodes, subtrees)
     elements: dict[int, ET.Element] = {}
+    own: dict[int, ET.Element] = {}  # a node's uid -> its element (a do-while loop's outer one)
+    uses: dict[int, ET.Element] = {}  # a subtree instance root's uid -> its <SubTree> element
     loops: dict[int, ET.Element] = {}  # a do-while loop's uid -> the element its body and condition go in
     used: dict[str, tuple[str, set[str]]] = {}
     conditions: dict[int, dict[str, str]] = {}  # a bt_conditions node's uid -> the attributes of its child
@@ -192,25 +221,46 @@ def tree_xml(
             elements[n["uid"]] = parent
             continue
         if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
-            parent = ET.SubElement(parent, "Inverter", _onFailure=f"__until_{uids[n['parent']]} := true")
+            parent = ET.SubElement(parent, "Inverter", _onFailure="")
         if n["uid"] in subtrees:
             sid = subtrees[n["uid"]]
-            attrs = {"ID": sid, "name": n["name"], "_autoremap": "true", "_uid": str(wrappers[n["uid"]])}
-            ET.SubElement(parent, "SubTree", attrs)  # a YAML subtree shares the run's blackboard
+            attrs = {"ID": sid, "name": n["name"], "_autoremap": "true"}
+            uses[n["uid"]] = ET.SubElement(parent, "SubTree", attrs)  # a YAML subtree shares the run's blackboard
             parent = ET.SubElement(root, "BehaviorTree", ID=sid)
         ident = node_id(n, children[n["uid"]])
         ports = _ports(n, ident, params.get(n["uid"], {}), children[n["uid"]])
         used.setdefault(ident, (n["kind"], set()))[1].update(ports)
         marked = {KIND_ATTR: n["kind"]} if _is_control(registry, n["kind"]) else {}
         scripts = conditions.get(n["parent"], {}) if n["parent"] is not None else {}
-        attrs = {"name": n["name"], **ports, **marked, **scripts, "_uid": str(uids[n["uid"]])}
+        attrs = {"name": n["name"], **ports, **marked, **scripts}
         if n["kind"] == "repeat" and children[n["uid"]] == 2:
-            elements[n["uid"]] = loops[n["uid"]] = repeat_until_elements(parent, attrs, uids[n["uid"]])[0]
+            own[n["uid"]], elements[n["uid"]] = repeat_until_elements(parent, attrs)
+            loops[n["uid"]] = elements[n["uid"]]
         else:
-            elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
+            own[n["uid"]] = elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
+    number = {element: i for i, element in enumerate(_btcpp_order(root, tree_id), 1)}
+    uids = {uid: number[element] for uid, element in own.items()}
+    for uid in loops:
+        _name_flag(own[uid], uids[uid])
+    for element, i in number.items():
+        element.set("_uid", str(i))
     _model(ET.SubElement(root, "TreeNodesModel"), used, registry)
     ET.indent(root)
-    return ET.tostring(root, encoding="unicode") + "\n"
+    wrappers = {uid: number[element] for uid, element in uses.items()}
+    return BtcppTree(ET.tostring(root, encoding="unicode") + "\n", uids, wrappers, len(number))
+
+
+def _btcpp_order(root: ET.Element, tree_id: str) -> list[ET.Element]:
+    """The node elements of ``root``'s tree ``tree_id`` in the order BT.CPP numbers them: pre-order,
+    each ``<SubTree>`` followed by the nodes of the ``<BehaviorTree>`` it uses."""
+    trees = {tree.get("ID"): tree for tree in root.iter("BehaviorTree")}
+    order: list[ET.Element] = []
+    stack = list(trees[tree_id])[::-1]
+    while stack:
+        element = stack.pop()
+        order.append(element)
+        stack.extend(list(trees[element.get("ID")] if element.tag == "SubTree" else element)[::-1])
+    return order
 
 
 def _is_control(registry: Registry, kind: str) -> bool:
@@ -240,19 +290,6 @@ def _model(model: ET.Element, used: Mapping[str, tuple[str, set[str]]], registry
             port.text = text
         for name in sorted(ports - set(fields)):
             ET.SubElement(entry, "input_port", {"name": name})
-
-
-def xml_uids(nodes: list[TreeNode], subtrees: Mapping[int, str]) -> tuple[dict[int, int], dict[int, int]]:
-    """BT.CPP's pre-order uids once subtree instances are ``<SubTree>`` nodes: (the uid of each node,
-    by its uid in ``nodes``; the uid of the ``<SubTree>`` node above each subtree root)."""
-    uids, wrappers, count = {}, {}, 0
-    for n in nodes:
-        if n["uid"] in subtrees:
-            count += 1
-            wrappers[n["uid"]] = count
-        count += 1
-        uids[n["uid"]] = count
-    return uids, wrappers
 
 
 def _category(cls: Any) -> str:
@@ -315,9 +352,14 @@ def mission_xml(mission: Mission, output: Path | None = None) -> str:
     each subtree instance as its own ``<BehaviorTree>`` used by a ``<SubTree>`` node, its settings
     in a ``<ThymioMission>`` element (BT.CPP ignores it) so that the file runs as the mission did
     (``thymio-bt run mission.xml``)."""
+    return mission_btcpp(mission, output).xml
+
+
+def mission_btcpp(mission: Mission, output: Path | None = None) -> BtcppTree:
+    """:func:`mission_xml`'s XML with the ``_uid`` of each planned node (see :class:`BtcppTree`)."""
     nodes, params, subtrees = mission_nodes(mission)
     folder = (output or Path("mission.xml")).resolve().parent
-    return tree_xml(nodes, mission.registry, params, settings=mission_settings(mission, folder), subtrees=subtrees)
+    return btcpp_tree(nodes, mission.registry, params, settings=mission_settings(mission, folder), subtrees=subtrees)
 
 
 def mission_nodes(mission: Mission) -> tuple[list[TreeNode], dict[int, dict[str, Any]], dict[int, str]]:

@@ -86,6 +86,7 @@ class Groot2Server:
         self.lock = threading.Lock()
         self.xml = ""
         self.uids: list[tuple[int, Behaviour]] = []
+        self.idle = b""  # the status records of the nodes BT.CPP counts that we do not run
         self.status = b""
         self.blackboard: dict[str, Any] = {}
         self.running = True
@@ -96,17 +97,22 @@ class Groot2Server:
         nodes to their BT.CPP uids and starts serving)."""
         if not self.uids:
             from thymio_bt.logs.records import walk
-            from thymio_bt.mission.btcpp import mission_nodes, mission_xml, xml_uids
+            from thymio_bt.mission.btcpp import mission_btcpp, mission_nodes
 
-            self.xml = mission_xml(run.mission)  # as `tree --btcpp` writes it: ports and settings
-            nodes, _, subtrees = mission_nodes(run.mission)
-            uids, wrappers = xml_uids(nodes, subtrees)
-            # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's status.
+            tree = mission_btcpp(run.mission)  # as `tree --btcpp` writes it: ports, settings, BT.CPP's uids
+            self.xml = tree.xml
+            nodes, _, _ = mission_nodes(run.mission)
+            # the plan and the built tree walk in the same pre-order; a <SubTree> node shows its root's
+            # status; a do-while loop's scaffolding (no node of ours) is said IDLE, as every node's
+            # status is in BT.CPP's reply.
             # strict=False: a display hook must not end the run if a tree were built otherwise than planned
             for plan_node, node in zip(nodes, walk(run.root), strict=False):
-                if plan_node["uid"] in wrappers:
-                    self.uids.append((wrappers[plan_node["uid"]], node))
-                self.uids.append((uids[plan_node["uid"]], node))
+                if plan_node["uid"] in tree.wrappers:
+                    self.uids.append((tree.wrappers[plan_node["uid"]], node))
+                if plan_node["uid"] in tree.uids:
+                    self.uids.append((tree.uids[plan_node["uid"]], node))
+            ours = {uid for uid, _ in self.uids}
+            self.idle = b"".join(struct.pack("<HB", uid, 0) for uid in range(1, tree.size + 1) if uid not in ours)
             self.previous = {uid: 0 for uid, _ in self.uids}
             self.thread.start()
         import py_trees
@@ -119,7 +125,7 @@ class Groot2Server:
             records.append(struct.pack("<HB", uid, shown))
         storage = py_trees.blackboard.Blackboard.storage
         with self.lock:
-            self.status = b"".join(records)
+            self.status = b"".join(records) + self.idle
             self.blackboard = {"MainTree": {k.lstrip("/"): jsonable(v) for k, v in storage.items()}}
 
     def _serve(self) -> None:
