@@ -63,6 +63,23 @@ def test_every_export_loads_and_runs_in_behaviortree_cpp_with_stub_leaves(missio
     assert set(statuses) <= {bt.NodeStatus.RUNNING, bt.NodeStatus.SUCCESS, bt.NodeStatus.FAILURE}
 
 
+def test_a_do_while_condition_with_a_precondition_keeps_its_inverter(tmp_path):
+    """A loop's condition that carries BT.CPP's ``_skipIf`` (a bt_conditions node here) is still
+    written under the loop's Inverter, so the export reads back as the same loop."""
+    from thymio_bt.mission.btcpp import mission_xml
+    from thymio_bt.mission.loader import load_mission
+
+    first = tmp_path / "bonus.xml"
+    condition = '<IsDeadEnd name="IsDeadEnd" timeout="60.0" key="turn" _uid="18" />'
+    xml = _export(Path("missions/maze_bonus.yaml"), first)
+    assert condition in xml
+    first.write_text(xml.replace(condition, condition.replace(' _uid="18"', ' _skipIf="false" _uid="18"')))
+    again = mission_xml(load_mission(first), tmp_path / "again.xml")
+    (tmp_path / "again.xml").write_text(again)
+    assert re.search(r'<Inverter _onFailure="__until_2 := true" _uid="17">\s*<IsDeadEnd [^>]*_skipIf="false"', again)
+    assert load_mission(tmp_path / "again.xml").tree.children[-1].kind == "bt_conditions"
+
+
 def _uids(xml: str) -> list[tuple[str | None, str, str | None]]:
     """(BehaviorTree ID, tag, _uid) of every node element, tree by tree."""
     root = ET.fromstring(xml)

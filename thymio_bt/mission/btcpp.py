@@ -215,13 +215,13 @@ def btcpp_tree(
     conditions: dict[int, dict[str, str]] = {}  # a bt_conditions node's uid -> the attributes of its child
     for n in nodes:
         parent = tree if n["parent"] is None else loops.get(n["parent"], elements[n["parent"]])
+        if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
+            parent = ET.SubElement(parent, "Inverter", _onFailure="")
         if n["kind"] == "bt_conditions":  # BT.CPP's _skipIf=... attributes, on the node under it
             names = {name: attr for attr, name in CONDITION_ATTRS.items()}
             conditions[n["uid"]] = {names[k]: str(v) for k, v in params.get(n["uid"], {}).items() if v is not None}
             elements[n["uid"]] = parent
             continue
-        if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
-            parent = ET.SubElement(parent, "Inverter", _onFailure="")
         if n["uid"] in subtrees:
             sid = subtrees[n["uid"]]
             attrs = {"ID": sid, "name": n["name"], "_autoremap": "true"}
