@@ -210,11 +210,11 @@ def btcpp_tree(
     elements: dict[int, ET.Element] = {}
     own: dict[int, ET.Element] = {}  # a node's uid -> its element (a do-while loop's outer one)
     uses: dict[int, ET.Element] = {}  # a subtree instance root's uid -> its <SubTree> element
-    loops: dict[int, ET.Element] = {}  # a do-while loop's uid -> the element its body and condition go in
+    loops: set[int] = set()  # the do-while loops' uids (their body and condition go in elements[uid])
     used: dict[str, tuple[str, set[str]]] = {}
     conditions: dict[int, dict[str, str]] = {}  # a bt_conditions node's uid -> the attributes of its child
     for n in nodes:
-        parent = tree if n["parent"] is None else loops.get(n["parent"], elements[n["parent"]])
+        parent = tree if n["parent"] is None else elements[n["parent"]]
         if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
             parent = ET.SubElement(parent, "Inverter", _onFailure="")
         if n["kind"] == "bt_conditions":  # BT.CPP's _skipIf=... attributes, on the node under it
@@ -235,7 +235,7 @@ def btcpp_tree(
         attrs = {"name": n["name"], **ports, **marked, **scripts}
         if n["kind"] == "repeat" and children[n["uid"]] == 2:
             own[n["uid"]], elements[n["uid"]] = repeat_until_elements(parent, attrs)
-            loops[n["uid"]] = elements[n["uid"]]
+            loops.add(n["uid"])
         else:
             own[n["uid"]] = elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
     number = {element: i for i, element in enumerate(_btcpp_order(root, tree_id), 1)}
