@@ -112,6 +112,7 @@ def _pacing(factor: float | None) -> float | None:
 @path_option("--plot-signals", help="Draw pose, speeds and proximity over time (PNG).")
 @path_option("--gif", help="Animate the run (.gif, or .mp4 with ffmpeg).")
 @viewer_options
+@path_option("--html", help="Write the run as one HTML page to scrub through (see 'thymio-bt view').")
 @path_option("--log", "log", help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
 @click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
 @backend_options(
@@ -151,6 +152,7 @@ def run(
     gif: Path | None,
     view: bool,
     speedup: float | None,
+    html: Path | None,
     log: Path | None,
     live_tree: bool,
     backend: str | None,
@@ -175,6 +177,7 @@ def run(
         if robot is not None:
             overrides[ROBOT_OPTION] = robot  # --set robot=NAME, its problems said at --robot
         report_out = _check_outputs(report, pictures, log)
+        page = Output(html, "--html", stdout_ok=False) if html is not None else None
         if coverage or coverage_tree is not None:
             covered = CoverageRequest.checked(coverage_tree)
         spec = load_mission(mission, overrides, maze=maze, start=start)
@@ -182,9 +185,10 @@ def run(
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
         hooks.attach(
             runner,
-            recorder=pictures.wanted or log is not None,
+            recorder=pictures.wanted or log is not None or page is not None,
             log=log,
-            keep=pictures.wanted,
+            keep=pictures.wanted or page is not None,
+            statuses=page is not None,
             live_tree=live_tree,
             view=(1.0 if speedup is None else speedup) if view else None,
             groot2=groot2,
@@ -201,7 +205,12 @@ def run(
                 data["coverage"] = covered.data  # a key of its own, after the report's: only when asked
             report_out.write_text(json_text(data))
         if hooks.recorder is not None:
-            pictures.draw(hooks.recorder.finish(result), 4.0 if speedup is None else speedup, quiet)
+            recording = hooks.recorder.finish(result)
+            pictures.draw(recording, 4.0 if speedup is None else speedup, quiet)
+            if page is not None:
+                from thymio_bt.viz.page import write_page
+
+                write_page([recording], page.path)
     except UserError as exc:
         fail(exc)
     err = STDOUT in (str(report), str(log))
@@ -274,13 +283,15 @@ class _Hooks:
         live_tree: bool,
         view: float | None,
         groot2: int | None,
+        statuses: bool = False,
     ) -> None:
-        """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``),
+        """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``,
+        with the tree's statuses if ``statuses``),
         the ``live_tree``, a window at speed-up ``view`` and a Groot2 server on port ``groot2``."""
         if recorder:
             from thymio_bt.logs.recording import Recorder
 
-            self.recorder = Recorder(log_path=log, keep=keep)
+            self.recorder = Recorder(log_path=log, keep=keep, statuses=statuses)
             self.recorder.begin(runner)  # the log's header now: a run stuck in its first tick keeps it
             self.extra.append(self.recorder)
         if live_tree:

@@ -65,7 +65,8 @@ class Recorder:
 
     def __init__(self, log_path: str | Path | None = None, keep: bool = True, statuses: bool = False) -> None:
         """``log_path``: the log to write; ``keep``: keep the records in memory too; ``statuses``:
-        with every node's status even without a log (a log has them), for comparing runs."""
+        with every node's status and the blackboard's changes even without a log (a log has them), for
+        comparing runs and for the run's page."""
         self.keep = keep
         self.statuses = statuses
         self.samples: list[dict[str, Any]] = []
@@ -126,12 +127,12 @@ class Recorder:
         }
         if self._writer is not None or self.statuses:
             record["nodes"] = {node_path(n): STATUS_LETTER[n.status.name] for n in run.root.iterate()}
-        if self._writer is not None:
             storage = py_trees.blackboard.Blackboard.storage
             changed = {k: jsonable(v) for k, v in storage.items() if self._blackboard.get(k, object()) != v}
             self._blackboard = dict(storage)
             if changed:
                 record["bb"] = changed
+        if self._writer is not None:
             try:
                 self._writer.tick(record)
             except OSError as exc:  # a full disk, a file size limit: end the run, keep the report
