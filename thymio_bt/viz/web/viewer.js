@@ -438,16 +438,18 @@
   for (const run of runs) {
     const box = el("div", { class: "board", "data-run": String(run.index) });
     box.appendChild(el("h2", {}, single ? "Blackboard" : "Blackboard " + run.letter));
+    const empty = el("p", { class: "empty" }, "(nothing on the blackboard yet)");
     const table = el("table");
-    box.appendChild(table);
+    box.append(empty, table);
     side.appendChild(box);
-    boards.push({ run, table, rows: new Map(), open: new Set() });
+    boards.push({ run, table, empty, rows: new Map() });
   }
 
   function drawBoards() {
     for (const board of boards) {
-      const { run, table, rows } = board;
+      const { run, table, rows, empty } = board;
       const i = run.indexAt(state.time);
+      empty.hidden = Object.keys(run.d.bb).length > 0;
       for (const key of Object.keys(run.d.bb)) {
         if (!rows.has(key)) {
           const row = el("tr", { class: "key", "data-key": key });
