@@ -319,3 +319,63 @@ def test_two_seeds_diverge_where_the_statuses_or_poses_first_differ(browser, tmp
     assert tab.evaluate("document.querySelectorAll('.tree').length") == 2
     screenshot(tab, artefacts(tmp_path) / "viewer_two_seeds_1280.png", 1280, 800)
     tab.close()
+
+
+def test_a_live_run_streams_its_ticks_to_the_page(browser, tmp_path):
+    """``run --web 0`` serves a page with no tick in it; the page fetches every tick and the end as
+    the run goes, and then says what the log says."""
+    log = tmp_path / "live.jsonl"
+    command = [sys.executable, "-m", "thymio_bt", "run", "square", "-q", "--web", "0", "--realtime", "8", "--log"]
+    proc = subprocess.Popen([*command, str(log)], stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stderr is not None
+        line = proc.stderr.readline()
+        assert line.startswith("watch the run at http://127.0.0.1:"), line
+        url = line.split()[-1]
+        tab = browser.open(url)
+        assert tab.evaluate("JSON.parse(document.getElementById('run-data').textContent).runs[0].t") == []
+        deadline = time.monotonic() + 120
+        while tab.evaluate("document.querySelector('.verdict').dataset.verdict") != "SUCCESS":
+            assert time.monotonic() < deadline and proc.poll() in (None, 0), "the page never got the run's end"
+            time.sleep(0.1)
+        assert proc.wait(timeout=60) == 0
+    finally:
+        proc.kill()
+        proc.wait()
+    samples = read_log(log).samples
+    assert tab.evaluate(CONTRACT) == expected(samples[-1])  # it follows the run to its last tick
+    tab.evaluate("location.hash = '#tick=100'")
+    assert tab.evaluate(CONTRACT) == expected(samples[99])  # and keeps every tick it received
+    served = f"request off the machine's files: {url}"  # the page and its polls: the run's own server
+    assert [p for p in tab.problems() if p != served and not p.startswith(served + "ticks?from=")] == []
+    tab.close()
+
+
+def test_the_live_server_answers_only_its_own_host_and_a_busy_port_is_a_user_error():
+    import http.client
+    import socket
+
+    from thymio_bt.viz.live import LiveServer
+
+    server = LiveServer(0)
+    try:
+        for host, path, status in (
+            ("evil.example", "/ticks?from=0", 403),  # DNS rebinding
+            ("127.0.0.1", "/ticks?from=x", 400),
+            ("localhost", "/../etc/passwd", 404),
+            ("127.0.0.1", "/", 503),  # no run yet
+            ("127.0.0.1", "/ticks?from=0", 200),
+        ):
+            connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+            connection.request("GET", path, headers={"Host": f"{host}:{server.port}"})
+            assert connection.getresponse().status == status, (host, path)
+            connection.close()
+    finally:
+        server.close()
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        command = ["run", "square", "-q", "--web", str(busy.getsockname()[1])]
+        done = subprocess.run([sys.executable, "-m", "thymio_bt", *command], capture_output=True, text=True)
+    assert done.returncode == 2 and "error: --web: cannot serve on 127.0.0.1:" in done.stderr, done.stderr
+    assert "Traceback" not in done.stderr

@@ -56,6 +56,7 @@ if TYPE_CHECKING:
     from thymio_bt.robot.interface import Backend
     from thymio_bt.run.runner import Run, RunResult
     from thymio_bt.viz.groot2 import Groot2Server
+    from thymio_bt.viz.live import LiveServer
     from thymio_bt.viz.window import LiveView
 
 
@@ -138,6 +139,16 @@ def _pacing(factor: float | None) -> float | None:
     help="Serve the live tree to Groot2 on 127.0.0.1:PORT and PORT+1 "
     "(default 1667; use with --realtime; needs thymio-bt[groot2]).",
 )
+@click.option(
+    "--web",
+    type=click.IntRange(0, 65535),
+    is_flag=False,
+    flag_value=8765,
+    default=None,
+    metavar="[PORT]",
+    help="Watch the run in a browser: serve its page on 127.0.0.1:PORT (default 8765; 0: any free "
+    "port) as it goes, paced by --realtime (default 1 with --web).",
+)
 def run(
     mission: Path,
     seed: int | None,
@@ -161,6 +172,7 @@ def run(
     coverage: bool,
     coverage_tree: Path | None,
     groot2: int | None,
+    web: int | None,
 ) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     pictures = Pictures(plot, plot_signals, gif)
@@ -182,6 +194,8 @@ def run(
             covered = CoverageRequest.checked(coverage_tree)
         spec = load_mission(mission, overrides, maze=maze, start=start)
         runner = _prepare(spec, seed, backend, backend_opts, node_stats=covered is not None)
+        if web is not None and realtime is None:
+            realtime = 1.0  # a run watched live goes at the speed of the robot
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
         hooks.attach(
             runner,
@@ -192,6 +206,7 @@ def run(
             live_tree=live_tree,
             view=(1.0 if speedup is None else speedup) if view else None,
             groot2=groot2,
+            web=web,
         )
         result, interrupts = hooks.watch(runner, realtime)
         if covered is not None:
@@ -267,6 +282,7 @@ class _Hooks:
         self.recorder: Recorder | None = None
         self.window: LiveView | None = None
         self.monitor: Groot2Server | None = None
+        self.live: LiveServer | None = None
 
     def __call__(self, run: Run) -> None:
         """One tick of ``run``: every hook sees it."""
@@ -284,9 +300,10 @@ class _Hooks:
         view: float | None,
         groot2: int | None,
         statuses: bool = False,
+        web: int | None = None,
     ) -> None:
         """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``,
-        with the tree's statuses if ``statuses``),
+        with the tree's statuses if ``statuses``), a page served live on port ``web``,
         the ``live_tree``, a window at speed-up ``view`` and a Groot2 server on port ``groot2``."""
         if recorder:
             from thymio_bt.logs.recording import Recorder
@@ -308,15 +325,28 @@ class _Hooks:
 
             self.monitor = Groot2Server(groot2)
             self.extra.append(self.monitor)
+        if web is not None:
+            from thymio_bt.viz.live import LiveServer
+
+            self.live = LiveServer(web)
+            self.live.begin(runner)
+            click.echo(f"watch the run at {self.live.url}", err=True)
+            self.extra.append(self.live)
 
     def watch(self, runner: Run, realtime: float | None) -> tuple[RunResult, Interrupts]:
-        """Run ``runner`` under these hooks (Ctrl-C and SIGTERM end it cleanly); close the Groot2 server."""
+        """Run ``runner`` under these hooks (Ctrl-C and SIGTERM end it cleanly); close the Groot2 server
+        and the live page's server (once a page watching it has the run's end)."""
+        result: RunResult | None = None
         try:
             with Interrupts() as interrupts:
                 result = runner.run(on_tick=self, realtime=realtime, interrupts=interrupts)
         finally:
             if self.monitor is not None:
                 self.monitor.close()
+            if self.live is not None:
+                if result is not None:
+                    self.live.finish(result)
+                self.live.close()
         self.progress.done()
         return result, interrupts
 

@@ -93,6 +93,11 @@ def blackboard_changes(samples: list[dict[str, Any]]) -> dict[str, list[list[Any
     return dict(sorted(keys.items()))
 
 
+def event_rows(events: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The run's events as the page keeps them: the fields of :data:`EVENT_FIELDS` only."""
+    return [{k: e[k] for k in EVENT_FIELDS if k in e} for e in events]
+
+
 def _maze(recording: Recording) -> dict[str, Any]:
     """The maze's shapes as flat corner lists, its goal areas and its bounds."""
     maze = recording.maze
@@ -147,5 +152,5 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
         },
         "status": status_changes(samples, [row[0] for row in tree]),
         "bb": blackboard_changes(samples),
-        "events": [{k: e[k] for k in EVENT_FIELDS if k in e} for e in recording.events],
+        "events": event_rows(recording.events),
     }
