@@ -72,6 +72,22 @@ NO_DISPLAY_HINT = (
 SLOWEST = 1e-6
 
 
+def web_address(value: str) -> tuple[str, int]:
+    """``--web``'s ``[ADDRESS:]PORT`` as (address, port); the address is 127.0.0.1 unless given.
+
+    >>> web_address("8765"), web_address("0.0.0.0:0")
+    (('127.0.0.1', 8765), ('0.0.0.0', 0))
+    >>> web_address("localhost:http")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    click.exceptions.BadParameter: 'localhost:http' is not [ADDRESS:]PORT (hint: --web 8765, or 0.0.0.0:8765 ...)
+    """
+    address, _, port = value.rpartition(":")
+    if not port.isdigit() or int(port) > 65535:
+        raise click.BadParameter(f"{value!r} is not [ADDRESS:]PORT (hint: --web 8765, or 0.0.0.0:8765 in a container)")
+    return address or "127.0.0.1", int(port)
+
+
 def _pacing(factor: float | None) -> float | None:
     """The ``--realtime`` factor, refused below :data:`SLOWEST`.
 
@@ -141,13 +157,13 @@ def _pacing(factor: float | None) -> float | None:
 )
 @click.option(
     "--web",
-    type=click.IntRange(0, 65535),
     is_flag=False,
-    flag_value=8765,
+    flag_value="8765",
     default=None,
-    metavar="[PORT]",
+    metavar="[[ADDRESS:]PORT]",
+    callback=lambda ctx, param, value: None if value is None else web_address(value),
     help="Watch the run in a browser: serve its page on 127.0.0.1:PORT (default 8765; 0: any free "
-    "port) as it goes, paced by --realtime (default 1 with --web).",
+    "port; 0.0.0.0:PORT inside a container) as it goes, paced by --realtime (default 1 with --web).",
 )
 def run(
     mission: Path,
@@ -172,7 +188,7 @@ def run(
     coverage: bool,
     coverage_tree: Path | None,
     groot2: int | None,
-    web: int | None,
+    web: tuple[str, int] | None,
 ) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     pictures = Pictures(plot, plot_signals, gif)
@@ -300,10 +316,10 @@ class _Hooks:
         view: float | None,
         groot2: int | None,
         statuses: bool = False,
-        web: int | None = None,
+        web: tuple[str, int] | None = None,
     ) -> None:
         """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``,
-        with the tree's statuses if ``statuses``), a page served live on port ``web``,
+        with the tree's statuses if ``statuses``), a page served live at ``web`` (address, port),
         the ``live_tree``, a window at speed-up ``view`` and a Groot2 server on port ``groot2``."""
         if recorder:
             from thymio_bt.logs.recording import Recorder
@@ -328,9 +344,11 @@ class _Hooks:
         if web is not None:
             from thymio_bt.viz.live import LiveServer
 
-            self.live = LiveServer(web)
+            self.live = LiveServer(web[1], web[0])
             self.live.begin(runner)
             click.echo(f"watch the run at {self.live.url}", err=True)
+            if web[0] not in ("127.0.0.1", "localhost", "::1"):
+                click.echo(f"  (served on {web[0]}: whoever reaches this machine's port {web[1]} can watch)", err=True)
             self.extra.append(self.live)
 
     def watch(self, runner: Run, realtime: float | None) -> tuple[RunResult, Interrupts]:

@@ -1,12 +1,12 @@
 """Watch a run in the browser as it goes: ``thymio-bt run MISSION --web [PORT]``.
 
-A :class:`LiveServer` is an ``on_tick`` hook that serves, on 127.0.0.1 only (``ssh -L``, a
-container's published port and WSL reach it), the run's page (:mod:`thymio_bt.viz.page`) with no
-tick yet at ``/``, and the ticks recorded so far at ``/ticks?from=N`` (JSON: ``ticks`` from index N
-on, in the log's format, the run's ``events`` so far, and its ``end`` once it has one). The page
-polls that every 200 ms and keeps every tick it received, so it can be scrubbed during the run and
-after it. Python's own http.server, in a thread; a request naming another host (DNS rebinding) is
-refused.
+A :class:`LiveServer` is an ``on_tick`` hook that serves, on 127.0.0.1 (``ssh -L`` and WSL reach
+it; inside a container, 0.0.0.0 and a port published to the host's loopback), the run's page
+(:mod:`thymio_bt.viz.page`) with no tick yet at ``/``, and the ticks recorded so far at
+``/ticks?from=N`` (JSON: ``ticks`` from index N on, in the log's format, the run's ``events`` so
+far, and its ``end`` once it has one). The page polls that every 200 ms and keeps every tick it
+received, so it can be scrubbed during the run and after it. Python's own http.server, in a thread;
+a request naming another host (DNS rebinding) is refused.
 
 Example (a run served on a free port and asked for its ticks as the page asks):
 
@@ -55,7 +55,9 @@ LINGER = 5.0
 class LiveServer:
     """Serves the run's page and its ticks as they come (see the module docstring)."""
 
-    def __init__(self, port: int = DEFAULT_PORT) -> None:
+    def __init__(self, port: int = DEFAULT_PORT, address: str = "127.0.0.1") -> None:
+        """Serve on ``address`` (loopback unless told: ``0.0.0.0`` inside a container) and ``port``
+        (0: a free one, then :attr:`port`)."""
         self._recorder = Recorder(statuses=True)
         self._lock = threading.Lock()
         self._page = b""
@@ -64,10 +66,10 @@ class LiveServer:
         self._watched = False  # a page asked for ticks
         self._delivered = False  # a page received the end
         try:
-            self.httpd = ThreadingHTTPServer(("127.0.0.1", port), self._handler())
+            self.httpd = ThreadingHTTPServer((address, port), self._handler())
         except OSError as exc:
             raise UserError(
-                f"--web: cannot serve on 127.0.0.1:{port}: {exc.strerror or exc} (hint: another port, e.g. --web 8766)"
+                f"--web: cannot serve on {address}:{port}: {exc.strerror or exc} (hint: another port, e.g. --web 8766)"
             ) from None
         self.port = self.httpd.server_address[1]
         self.url = f"http://127.0.0.1:{self.port}/"
