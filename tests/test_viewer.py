@@ -379,3 +379,26 @@ def test_the_live_server_answers_only_its_own_host_and_a_busy_port_is_a_user_err
         done = subprocess.run([sys.executable, "-m", "thymio_bt", *command], capture_output=True, text=True)
     assert done.returncode == 2 and "error: --web: cannot serve on 127.0.0.1:" in done.stderr, done.stderr
     assert "Traceback" not in done.stderr
+
+
+def test_an_mcap_log_gives_the_same_page(browser, part12, tmp_path):
+    """``view`` reads any log the project reads: the rosbag2 (MCAP) export of the run shows what
+    the JSON lines log shows (a tick without /odom has no speeds: a gap, not an error)."""
+    from _require import module
+
+    module("rosbags")
+    log, page = part12
+    bag = tmp_path / "run.mcap"
+    for args in (["export", str(log), "-o", str(bag)], ["view", str(bag)]):
+        done = subprocess.run([sys.executable, "-m", "thymio_bt", *args], capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+    samples = read_log(log).samples
+    for fragment in ("#t=4.5", "#t=12.3", "#tick=300"):
+        shown = []
+        for path in (page, tmp_path / "run.html"):
+            tab = browser.open(path.as_uri() + fragment)
+            assert tab.problems() == []
+            shown.append(tab.evaluate(CONTRACT))
+            tab.close()
+        assert shown[0] == shown[1], fragment
+    assert shown[1] == expected(next(s for s in samples if s["tick"] == 300))

@@ -29,6 +29,8 @@ from thymio_bt.robot.model import COURSE
 
 #: decimals the page keeps: poses to 0.1 mm (the DOM contract's 4 decimals), signals to 0.1 mm/s
 DECIMALS = 4
+#: the speeds of a tick whose log has none (a rosbag2 log's tick without /odom: no robot then)
+NO_SPEED = (None, None)
 #: event fields the page shows; the rest (poses, whole proximity scans) the ticks already hold
 EVENT_FIELDS = ("t", "kind", "name", "path", "status", "decision", "reason", "entity", "code")
 
@@ -127,7 +129,7 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
     """The data of one run's page (see the module docstring): JSON-ready, compact."""
     samples = recording.samples
     tree = tree_paths(recording)
-    poses = [s.get("pose") for s in samples]
+    poses = [s.get("pose") for s in samples]  # every field read with get: a log of another format may lack one
     prox_names = [s.name for s in COURSE.sensors]
     end = recording.end
     return {
@@ -140,12 +142,12 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
         "robot": _robot(),
         "tree": tree,
         "t": [s["t"] for s in samples],
-        "tick": [s["tick"] for s in samples],
+        "tick": [s.get("tick", i) for i, s in enumerate(samples)],
         "x": [None if p is None else _r(p["x"]) for p in poses],
         "y": [None if p is None else _r(p["y"]) for p in poses],
         "yaw": [None if p is None else _r(p["yaw"]) for p in poses],
-        "cmd": [[_r(s["cmd"][k]) for s in samples] for k in (0, 1)],
-        "vel": [[_r(s["vel"][k]) for s in samples] for k in (0, 1)],
+        "cmd": [[_r((s.get("cmd") or NO_SPEED)[k]) for s in samples] for k in (0, 1)],
+        "vel": [[_r((s.get("vel") or NO_SPEED)[k]) for s in samples] for k in (0, 1)],
         "prox": {
             "names": prox_names,
             "values": [[_r((s.get("prox") or {}).get(name)) for s in samples] for name in prox_names],

@@ -83,6 +83,7 @@
         return { at: gaps.map((g) => (at += g)), letters: letters.split("") };
       });
       this.events = (d.events || []).slice();
+      this.bbIndex = new Map();
       this.pathD = "";
       this.pathEnds = [];
       for (let i = 0; i < d.t.length; i++) this.extendPath(i);
@@ -116,13 +117,16 @@
       return at < 0 ? "-" : c.letters[at];
     }
 
+    /** The blackboard change of key in effect at index i ([index, value]), or undefined. */
     bbAt(key, i) {
       const changes = this.d.bb[key];
-      const at = lastAtOrBefore(
-        changes.map((c) => c[0]),
-        i,
-      );
-      return at < 0 ? undefined : changes[at];
+      let at = this.bbIndex.get(key);
+      if (!at || at.length !== changes.length) {
+        at = changes.map((c) => c[0]);
+        this.bbIndex.set(key, at);
+      }
+      const k = lastAtOrBefore(at, i);
+      return k < 0 ? undefined : changes[k];
     }
 
     pose(i) {
