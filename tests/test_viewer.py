@@ -211,7 +211,15 @@ def test_keys_step_through_ticks_and_events(browser, part12):
     assert key("]")["time"] == js(events[1])
     assert key("[")["time"] == js(events[0])
     assert key("End")["time"] == js(samples[-1]["t"])
-    assert key("Home")["time"] == js(samples[0]["t"])
+    shown = key("Home")
+    assert shown["time"] == js(samples[0]["t"])
+    whole = tab.evaluate("document.querySelector('svg.maze').getAttribute('viewBox')")
+    key("z")  # up close: 70 cm around the robot
+    x, y, _ = (float(v) for v in shown["pose"].split())
+    box = [float(v) for v in tab.evaluate("document.querySelector('svg.maze').getAttribute('viewBox')").split()]
+    assert box == pytest.approx([x - 0.35, -y - 0.35, 0.7, 0.7])
+    key("z")
+    assert tab.evaluate("document.querySelector('svg.maze').getAttribute('viewBox')") == whole
     assert tab.problems() == []
     tab.close()
 
@@ -402,3 +410,19 @@ def test_an_mcap_log_gives_the_same_page(browser, part12, tmp_path):
             tab.close()
         assert shown[0] == shown[1], fragment
     assert shown[1] == expected(next(s for s in samples if s["tick"] == 300))
+
+
+def test_two_runs_in_different_mazes_are_drawn_side_by_side(browser, part12, tmp_path):
+    log, _ = part12
+    square = tmp_path / "square.jsonl"
+    record("square", square)
+    page = write_page([read_log(square), read_log(log)], tmp_path / "two.html", {"time": 0.0, "tick": 1, "reason": "x"})
+    tab = browser.open(page.as_uri() + "#t=10")
+    assert tab.problems() == []
+    dom = tab.evaluate(
+        """({mazes: [...document.querySelectorAll('svg.maze')].map(s => s.querySelectorAll('.robot').length),
+        trees: [...document.querySelectorAll('.tree')].map(t => t.querySelectorAll('[data-node]').length),
+        divergence: document.documentElement.dataset.divergence})"""
+    )
+    assert dom == {"mazes": [1, 1], "trees": [4, 16], "divergence": "0"}
+    tab.close()

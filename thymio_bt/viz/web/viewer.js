@@ -179,6 +179,7 @@
     breakpoints: [],
     lastFrame: 0,
     follow: DATA.live,
+    zoom: false,
     ended: !DATA.live,
   };
 
@@ -262,7 +263,8 @@
 
   function makeView(group) {
     const box = el("div", { class: "maze-box" });
-    const svg = sv("svg", { class: "maze", viewBox: viewBox(group).join(" "), role: "img" });
+    const box0 = viewBox(group).join(" ");
+    const svg = sv("svg", { class: "maze", viewBox: box0, role: "img" });
     svg.appendChild(sv("title", {}, "maze " + group[0].d.maze.name));
     const maze = group[0].d.maze;
     for (const g of maze.goal) {
@@ -314,13 +316,21 @@
     });
     box.appendChild(readings);
     stage.appendChild(box);
-    views.push({ robots, cells });
+    views.push({ robots, cells, svg, box: box0 });
   }
 
   if (sameMaze) makeView(runs);
   else runs.forEach((r) => makeView([r]));
   if (!sameMaze) stage.classList.add("two");
   if (!single) app.classList.add("two-runs");
+
+  /** Zoomed in, the maze follows the view's first robot shown (a 16 x 16 maze's robot is small). */
+  function frameView(view) {
+    const pose = view.robots.map((e) => e.run.pose(e.shown)).find((p) => p);
+    const half = 0.35;
+    const box = state.zoom && pose ? [pose.x - half, -pose.y - half, 2 * half, 2 * half].join(" ") : view.box;
+    if (view.svg.getAttribute("viewBox") !== box) view.svg.setAttribute("viewBox", box);
+  }
 
   function drawRobots() {
     for (const view of views) {
@@ -352,6 +362,7 @@
           view.cells[k][column].textContent = value === null ? "—" : (value * 100).toFixed(1) + " cm";
         });
       });
+      frameView(view);
     }
   }
 
@@ -526,6 +537,7 @@
     return b;
   });
   if (DATA.divergence) button("≠", "Go to the first divergence (d)", () => seek(DATA.divergence.time, true));
+  const zoomButton = button("zoom", "Follow the robot up close, or show the whole maze (z)", () => toggleZoom());
   const clock = el("output", { id: "clock", class: "clock", "data-time": "0", "data-tick": "0" }, "t = 0 s");
   controls.appendChild(clock);
   timeline.appendChild(controls);
@@ -881,6 +893,12 @@
     requestAnimationFrame(frame);
   }
 
+  function toggleZoom() {
+    state.zoom = !state.zoom;
+    zoomButton.setAttribute("aria-pressed", String(state.zoom));
+    views.forEach(frameView);
+  }
+
   function selectNode(path) {
     state.selected = path;
     nodeSelect.value = path;
@@ -916,6 +934,7 @@
     ["home end", "start or end of the run"],
     ["b", "add the breakpoint chosen below (click a node to choose it)"],
     ["d", "go to the first divergence (two runs)"],
+    ["z", "follow the robot up close, or the whole maze"],
     ["?", "this help"],
   ];
   const dl = el("dl");
@@ -943,6 +962,7 @@
       End: () => seekUser(span()[1]),
       b: () => addBreakpoint({ node: nodeSelect.value, when: whenSelect.value }),
       d: () => DATA.divergence && seekUser(DATA.divergence.time),
+      z: toggleZoom,
       "?": toggleHelp,
     };
     const action = actions[event.key];
@@ -969,6 +989,7 @@
       const answer = await fetch("ticks?from=" + run.n, { cache: "no-store" });
       const data = await answer.json();
       const following = state.follow || !run.n;
+      if (!run.n && data.ticks.length) say("Live: following the run (scrub to look back, End to follow again).");
       for (const rec of data.ticks) run.append(rec);
       if (data.events) run.events = data.events;
       if (data.ticks.length || data.end) {
