@@ -426,3 +426,18 @@ def test_two_runs_in_different_mazes_are_drawn_side_by_side(browser, part12, tmp
     )
     assert dom == {"mazes": [1, 1], "trees": [4, 16], "divergence": "0"}
     tab.close()
+
+
+def test_a_log_cut_before_its_first_tick_shows_the_maze_and_the_tree(browser, part12, tmp_path):
+    log, _ = part12
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text(log.read_text().splitlines()[0] + "\n")
+    page = write_page([read_log(cut)], tmp_path / "cut.html")
+    tab = browser.open(page.as_uri() + "#tick=3")
+    for name in ("ArrowRight", "]", "End", " ", "z"):
+        tab.evaluate(f"document.dispatchEvent(new KeyboardEvent('keydown', {{key: {json.dumps(name)}}}))")
+    assert tab.problems() == []
+    shown = tab.evaluate(CONTRACT)
+    assert (shown["time"], shown["pose"], set(shown["nodes"].values())) == ("0", "", {"INVALID"})
+    assert len(shown["nodes"]) == 16
+    tab.close()
