@@ -8,13 +8,14 @@ family of commands has its module, imported here so that ``main`` has them all:
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
 ``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
-(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``) and :mod:`~thymio_bt.cli.serving` (``serve ros2``).
+(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``), :mod:`~thymio_bt.cli.serving` (``serve ros2``)
+and :mod:`~thymio_bt.cli.viewing` (``view``).
 
 Example::
 
     >>> sorted(main.commands)  # doctest: +NORMALIZE_WHITESPACE
     ['backends', 'behaviours', 'calibrate', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
-     'schema', 'serve', 'sweep', 'tree', 'validate']
+     'schema', 'serve', 'sweep', 'tree', 'validate', 'view']
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from thymio_bt.cli.pictures import PICTURE_SUFFIXES
 from thymio_bt.cli.running import run
 from thymio_bt.cli.serving import serve, serve_ros2
 from thymio_bt.cli.sweeps import sweep
+from thymio_bt.cli.viewing import view
 
 __all__ = [
     "PICTURE_SUFFIXES",
@@ -52,6 +54,7 @@ __all__ = [
     "sweep",
     "tree",
     "validate",
+    "view",
 ]
 
 if __name__ == "__main__":

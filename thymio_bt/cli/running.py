@@ -56,6 +56,7 @@ if TYPE_CHECKING:
     from thymio_bt.robot.interface import Backend
     from thymio_bt.run.runner import Run, RunResult
     from thymio_bt.viz.groot2 import Groot2Server
+    from thymio_bt.viz.live import LiveServer
     from thymio_bt.viz.window import LiveView
 
 
@@ -69,6 +70,22 @@ NO_DISPLAY_HINT = (
 #: the slowest ``--realtime`` factor: a simulated second then lasts 11.6 days; below it, the pacing's
 #: wait (simulated time / factor) soon overflows what a timestamp can hold
 SLOWEST = 1e-6
+
+
+def web_address(value: str) -> tuple[str, int]:
+    """``--web``'s ``[ADDRESS:]PORT`` as (address, port); the address is 127.0.0.1 unless given.
+
+    >>> web_address("8765"), web_address("0.0.0.0:0")
+    (('127.0.0.1', 8765), ('0.0.0.0', 0))
+    >>> web_address("localhost:http")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    click.exceptions.BadParameter: 'localhost:http' is not [ADDRESS:]PORT (hint: --web 8765, or 0.0.0.0:8765 ...)
+    """
+    address, _, port = value.rpartition(":")
+    if not port.isdigit() or int(port) > 65535:
+        raise click.BadParameter(f"{value!r} is not [ADDRESS:]PORT (hint: --web 8765, or 0.0.0.0:8765 in a container)")
+    return address or "127.0.0.1", int(port)
 
 
 def _pacing(factor: float | None) -> float | None:
@@ -112,6 +129,7 @@ def _pacing(factor: float | None) -> float | None:
 @path_option("--plot-signals", help="Draw pose, speeds and proximity over time (PNG).")
 @path_option("--gif", help="Animate the run (.gif, or .mp4 with ffmpeg).")
 @viewer_options
+@path_option("--html", help="Write the run as one HTML page to scrub through (see 'thymio-bt view').")
 @path_option("--log", "log", help="Write one JSON object per tick (JSON lines), for 'thymio-bt replay'.")
 @click.option("--live-tree", is_flag=True, help="Print the tree with statuses whenever it changes.")
 @backend_options(
@@ -137,6 +155,16 @@ def _pacing(factor: float | None) -> float | None:
     help="Serve the live tree to Groot2 on 127.0.0.1:PORT and PORT+1 "
     "(default 1667; use with --realtime; needs thymio-bt[groot2]).",
 )
+@click.option(
+    "--web",
+    is_flag=False,
+    flag_value="8765",
+    default=None,
+    metavar="[[ADDRESS:]PORT]",
+    callback=lambda ctx, param, value: None if value is None else web_address(value),
+    help="Watch the run in a browser: serve its page on 127.0.0.1:PORT (default 8765; 0: any free "
+    "port; 0.0.0.0:PORT inside a container) as it goes, paced by --realtime (default 1 with --web).",
+)
 def run(
     mission: Path,
     seed: int | None,
@@ -151,6 +179,7 @@ def run(
     gif: Path | None,
     view: bool,
     speedup: float | None,
+    html: Path | None,
     log: Path | None,
     live_tree: bool,
     backend: str | None,
@@ -159,6 +188,7 @@ def run(
     coverage: bool,
     coverage_tree: Path | None,
     groot2: int | None,
+    web: tuple[str, int] | None,
 ) -> None:
     """Run MISSION (a YAML file) and print a summary."""
     pictures = Pictures(plot, plot_signals, gif)
@@ -175,19 +205,24 @@ def run(
         if robot is not None:
             overrides[ROBOT_OPTION] = robot  # --set robot=NAME, its problems said at --robot
         report_out = _check_outputs(report, pictures, log)
+        page = Output(html, "--html", stdout_ok=False) if html is not None else None
         if coverage or coverage_tree is not None:
             covered = CoverageRequest.checked(coverage_tree)
         spec = load_mission(mission, overrides, maze=maze, start=start)
         runner = _prepare(spec, seed, backend, backend_opts, node_stats=covered is not None)
+        if web is not None and realtime is None:
+            realtime = 1.0  # a run watched live goes at the speed of the robot
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
         hooks.attach(
             runner,
-            recorder=pictures.wanted or log is not None,
+            recorder=pictures.wanted or log is not None or page is not None,
             log=log,
-            keep=pictures.wanted,
+            keep=pictures.wanted or page is not None,
+            statuses=page is not None,
             live_tree=live_tree,
             view=(1.0 if speedup is None else speedup) if view else None,
             groot2=groot2,
+            web=web,
         )
         result, interrupts = hooks.watch(runner, realtime)
         if covered is not None:
@@ -201,7 +236,12 @@ def run(
                 data["coverage"] = covered.data  # a key of its own, after the report's: only when asked
             report_out.write_text(json_text(data))
         if hooks.recorder is not None:
-            pictures.draw(hooks.recorder.finish(result), 4.0 if speedup is None else speedup, quiet)
+            recording = hooks.recorder.finish(result)
+            pictures.draw(recording, 4.0 if speedup is None else speedup, quiet)
+            if page is not None:
+                from thymio_bt.viz.page import write_page
+
+                write_page([recording], page.path)
     except UserError as exc:
         fail(exc)
     err = STDOUT in (str(report), str(log))
@@ -258,6 +298,7 @@ class _Hooks:
         self.recorder: Recorder | None = None
         self.window: LiveView | None = None
         self.monitor: Groot2Server | None = None
+        self.live: LiveServer | None = None
 
     def __call__(self, run: Run) -> None:
         """One tick of ``run``: every hook sees it."""
@@ -274,13 +315,16 @@ class _Hooks:
         live_tree: bool,
         view: float | None,
         groot2: int | None,
+        statuses: bool = False,
+        web: tuple[str, int] | None = None,
     ) -> None:
-        """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``),
+        """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``,
+        with the tree's statuses if ``statuses``), a page served live at ``web`` (address, port),
         the ``live_tree``, a window at speed-up ``view`` and a Groot2 server on port ``groot2``."""
         if recorder:
             from thymio_bt.logs.recording import Recorder
 
-            self.recorder = Recorder(log_path=log, keep=keep)
+            self.recorder = Recorder(log_path=log, keep=keep, statuses=statuses)
             self.recorder.begin(runner)  # the log's header now: a run stuck in its first tick keeps it
             self.extra.append(self.recorder)
         if live_tree:
@@ -297,15 +341,30 @@ class _Hooks:
 
             self.monitor = Groot2Server(groot2)
             self.extra.append(self.monitor)
+        if web is not None:
+            from thymio_bt.viz.live import LiveServer
+
+            self.live = LiveServer(web[1], web[0])
+            self.live.begin(runner)
+            click.echo(f"watch the run at {self.live.url}", err=True)
+            if web[0] not in ("127.0.0.1", "localhost", "::1"):
+                click.echo(f"  (served on {web[0]}: whoever reaches this machine's port {web[1]} can watch)", err=True)
+            self.extra.append(self.live)
 
     def watch(self, runner: Run, realtime: float | None) -> tuple[RunResult, Interrupts]:
-        """Run ``runner`` under these hooks (Ctrl-C and SIGTERM end it cleanly); close the Groot2 server."""
+        """Run ``runner`` under these hooks (Ctrl-C and SIGTERM end it cleanly); close the Groot2 server
+        and the live page's server (once a page watching it has the run's end)."""
+        result: RunResult | None = None
         try:
             with Interrupts() as interrupts:
                 result = runner.run(on_tick=self, realtime=realtime, interrupts=interrupts)
         finally:
             if self.monitor is not None:
                 self.monitor.close()
+            if self.live is not None:
+                if result is not None:
+                    self.live.finish(result)
+                self.live.close()
         self.progress.done()
         return result, interrupts
 

@@ -1,0 +1,158 @@
+"""What a run's page embeds: a :class:`~thymio_bt.logs.recording.Recording` as compact JSON data.
+
+A page must stay small (a 7000-tick micromouse run in a few MB) yet answer, at any tick, where the
+robot was, what it read, the status of every node and what the blackboard held. So signals are
+columns of numbers rounded as the page shows them (poses to 0.1 mm and 0.1 mrad), each node's status
+is kept only where it changes (tick indices as gaps, with the letters of the log), and each
+blackboard key only where its value changes. :func:`statuses_at` reads the statuses back, as the page's
+JavaScript does.
+
+Example (a log's statuses, their changes, and the statuses at tick index 2 read back):
+
+>>> samples = [{"nodes": {"a": "R", "a/b": "R"}}, {"nodes": {"a": "R", "a/b": "S"}},
+...            {"nodes": {"a": "S", "a/b": "S"}}, {"nodes": {"a": "S", "a/b": "S"}}]
+>>> changes = status_changes(samples, ["a", "a/b"])
+>>> changes
+[[[0, 2], 'RS'], [[0, 1], 'RS']]
+>>> statuses_at(changes, 2), statuses_at(changes, 0)
+(['S', 'S'], ['R', 'R'])
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from itertools import accumulate
+from typing import Any
+
+from thymio_bt.logs.recording import Recording
+from thymio_bt.robot.model import COURSE
+
+#: decimals the page keeps: poses to 0.1 mm (the DOM contract's 4 decimals), signals to 0.1 mm/s
+DECIMALS = 4
+#: the speeds of a tick whose log has none (a rosbag2 log's tick without /odom: no robot then)
+NO_SPEED = (None, None)
+#: event fields the page shows; the rest (poses, whole proximity scans) the ticks already hold
+EVENT_FIELDS = ("t", "kind", "name", "path", "status", "decision", "reason", "entity", "code")
+
+
+def _r(value: Any) -> float | None:
+    """A number as the page keeps it (None stays None)."""
+    return None if value is None else round(float(value), DECIMALS)
+
+
+def tree_paths(recording: Recording) -> list[list[Any]]:
+    """The tree as ``[path, name, kind, parent index or -1]`` rows in pre-order: the header's tree,
+    else (a log without one) the paths of the ticks' ``nodes``, parents made from the paths."""
+    nodes = recording.header.get("tree") or []
+    if nodes:
+        index = {node["uid"]: i for i, node in enumerate(nodes)}
+        return [[n["path"], n["name"], n["kind"], index.get(n["parent"], -1)] for n in nodes]
+    paths: list[str] = []
+    for sample in recording.samples:
+        paths += [p for p in sample.get("nodes", {}) if p not in paths]
+    ordered = sorted(paths, key=lambda p: p.split("/"))
+    rows: list[list[Any]] = []
+    for path in ordered:
+        parent = path.rpartition("/")[0]
+        rows.append([path, path.rpartition("/")[2], "", ordered.index(parent) if parent in ordered else -1])
+    return rows
+
+
+def status_changes(samples: list[dict[str, Any]], paths: list[str]) -> list[list[Any]]:
+    """For each path, ``[gaps, letters]``: the tick indices where its status changes (the first
+    tick included), as gaps from the previous change, and its letter from then on (``-``: INVALID,
+    also for a node a tick does not list)."""
+    out: list[list[Any]] = []
+    for path in paths:
+        gaps: list[int] = []
+        letters: list[str] = []
+        last_index, last = 0, None
+        for i, sample in enumerate(samples):
+            letter = sample.get("nodes", {}).get(path, "-")
+            if letter != last:
+                gaps.append(i - last_index)
+                letters.append(letter)
+                last_index, last = i, letter
+        out.append([gaps, "".join(letters)])
+    return out
+
+
+def statuses_at(changes: list[list[Any]], index: int) -> list[str]:
+    """Each node's status letter at tick index ``index``, read from :func:`status_changes`."""
+    out = []
+    for gaps, letters in changes:
+        at = bisect_right(list(accumulate(gaps)), index) - 1
+        out.append(letters[at] if at >= 0 else "-")
+    return out
+
+
+def blackboard_changes(samples: list[dict[str, Any]]) -> dict[str, list[list[Any]]]:
+    """Each blackboard key's ``[tick index, value]`` at every tick where the log says it changed."""
+    keys: dict[str, list[list[Any]]] = {}
+    for i, sample in enumerate(samples):
+        for key, value in (sample.get("bb") or {}).items():
+            keys.setdefault(str(key), []).append([i, value])
+    return dict(sorted(keys.items()))
+
+
+def event_rows(events: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The run's events as the page keeps them: the fields of :data:`EVENT_FIELDS` only."""
+    return [{k: e[k] for k in EVENT_FIELDS if k in e} for e in events]
+
+
+def _maze(recording: Recording) -> dict[str, Any]:
+    """The maze's shapes as flat corner lists, its goal areas and its bounds."""
+    maze = recording.maze
+
+    def flat(corners: list[tuple[float, float]]) -> list[float | None]:
+        return [_r(v) for corner in corners for v in corner]
+
+    return {
+        "name": maze.name,
+        "walls": [flat(wall.corners()) for wall in maze.walls],
+        "obstacles": [flat(obstacle.corners()) for obstacle in maze.obstacles],
+        "goal": [[_r(v) for v in (*area.start, *area.end)] for area in maze.goal],
+        "bounds": [_r(v) for v in maze.bounds()],
+    }
+
+
+def _robot() -> dict[str, Any]:
+    """The course Thymio's outline and sensors (base_link frame), as the pictures draw it."""
+    return {
+        "hull": [_r(v) for corner in COURSE.hull for v in corner],
+        "sensors": [[s.name, _r(s.x), _r(s.y), _r(s.yaw)] for s in COURSE.sensors],
+        "range": COURSE.range_max,
+    }
+
+
+def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
+    """The data of one run's page (see the module docstring): JSON-ready, compact."""
+    samples = recording.samples
+    tree = tree_paths(recording)
+    poses = [s.get("pose") for s in samples]  # every field read with get: a log of another format may lack one
+    prox_names = [s.name for s in COURSE.sensors]
+    end = recording.end
+    return {
+        "label": label or recording.mission,
+        "mission": recording.mission,
+        "seed": recording.header.get("seed"),
+        "tick_hz": recording.header.get("tick_hz"),
+        "end": {k: end.get(k) for k in ("status", "reason", "code", "failed_path", "sim_time", "collisions")},
+        "maze": _maze(recording),
+        "robot": _robot(),
+        "tree": tree,
+        "t": [s["t"] for s in samples],
+        "tick": [s.get("tick", i) for i, s in enumerate(samples)],
+        "x": [None if p is None else _r(p["x"]) for p in poses],
+        "y": [None if p is None else _r(p["y"]) for p in poses],
+        "yaw": [None if p is None else _r(p["yaw"]) for p in poses],
+        "cmd": [[_r((s.get("cmd") or NO_SPEED)[k]) for s in samples] for k in (0, 1)],
+        "vel": [[_r((s.get("vel") or NO_SPEED)[k]) for s in samples] for k in (0, 1)],
+        "prox": {
+            "names": prox_names,
+            "values": [[_r((s.get("prox") or {}).get(name)) for s in samples] for name in prox_names],
+        },
+        "status": status_changes(samples, [row[0] for row in tree]),
+        "bb": blackboard_changes(samples),
+        "events": event_rows(recording.events),
+    }
