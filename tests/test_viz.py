@@ -146,3 +146,46 @@ def test_the_signals_plot_unwraps_yaw():
     )
     assert all(abs(b - a) < 0.5 for a, b in zip(out[:3], out[1:4], strict=True))
     assert out[5] == 3.1 and abs(out[6] - out[5]) < 0.5  # after a gap: restarts where it is
+
+
+def _edges_and_labels(dot: str) -> tuple[list[str], dict[str, list[str]]]:
+    """The edge lines of a .dot text, and each node's label lines by node id."""
+    import re
+
+    labels = {m[1]: m[2].split("\\n") for m in re.finditer(r'^(n\d+) \[label="((?:[^"\\]|\\.)*)"', dot, re.M)}
+    return [line for line in dot.splitlines() if " -> " in line], labels
+
+
+def test_tree_draws_a_repeat_s_until_and_a_guard_s_condition_as_what_they_are(tmp_path):
+    """issue 46 item 12: the until condition was drawn as one more child of the repeat; it hangs on
+    a dashed edge that says 'until' (a guard's condition: 'condition'), the body on a plain edge."""
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "maze: arena\nstart: centre\ntree:\n"
+        "  sequence:\n"
+        "    - repeat: {until: IsDeadEnd, do: {TurnAngle: {angle: 90deg}}}\n"
+        "    - guard: {condition: {invert: WallAhead}, do: {MoveDistance: {distance: 1cm}}}\n"
+    )
+    done = CliRunner().invoke(main, ["tree", str(mission), "--dot", "-o", "-"])
+    assert done.exit_code == 0, done.output
+    edges, labels = _edges_and_labels(done.stdout)
+    by_child = {labels[edge.split(" -> ")[1].split()[0].rstrip(";")][0]: edge for edge in edges}
+    assert by_child["IsDeadEnd"].endswith('[label="until", style=dashed];')
+    assert by_child["TurnAngle"].endswith(";") and "label" not in by_child["TurnAngle"]
+    assert by_child["invert"].endswith('[label="condition", style=dashed];')
+    assert "label" not in by_child["MoveDistance"]
+
+
+def test_tree_and_coverage_drawings_say_each_label_once(tmp_path):
+    """issue 46 item 12: a node named by its behaviour showed "SideOpen / SideOpen" (name, then
+    behaviour); what a node is is written under its name only when the name does not say it."""
+    report = tmp_path / "r.json"
+    assert CliRunner().invoke(main, ["run", "maze_part1_2", "-q", "--coverage", "--report", str(report)]).exit_code == 0
+    for extra in ([], ["--coverage", str(report)]):
+        done = CliRunner().invoke(main, ["tree", "maze_part1_2", "--dot", "-o", "-", *extra])
+        assert done.exit_code == 0, done.output
+        _, labels = _edges_and_labels(done.stdout)
+        assert len(labels) == 16
+        repeated = [lines for lines in labels.values() if len(set(lines[:2])) < len(lines[:2])]
+        assert repeated == [] and ["IsDeadEnd"] in [lines[:1] for lines in labels.values()]
+        assert ["part 1", "MoveUntilWall"] in [lines[:2] for lines in labels.values()]
