@@ -52,6 +52,8 @@ def test_gif_is_animated_and_large_enough_to_read(bonus_run):
     """issue 46 item 12: it was 560x360, its labels unreadable."""
     gif = PIL.open(bonus_run / "run.gif")
     assert gif.n_frames > 10 and gif.size[0] >= 960 and gif.size[1] >= 400
+    gif.seek(gif.n_frames // 2)
+    assert gif.convert("RGB").getpixel((gif.size[0] // 2, 2)) == (255, 255, 255)  # a white page, not a grey one
 
 
 def _figure_of(draw, monkeypatch, *args):

@@ -190,7 +190,7 @@ def _palette(first: Any) -> Any:
     from matplotlib.colors import to_rgb
     from PIL import Image
 
-    background = first.getpixel((first.width - 1, first.height - 1))
+    background = first.getpixel((0, 0))  # the figure's face: the band above the plot
     ramps = Image.new("RGB", (16, len(MOVING)))
     for row, colour in enumerate(MOVING):
         rgb = to_rgb(colour)
@@ -201,7 +201,16 @@ def _palette(first: Any) -> Any:
     swatch = Image.new("RGB", (first.width, first.height + 40 * len(MOVING)))
     swatch.paste(first, (0, 0))
     swatch.paste(ramps.resize((first.width, 40 * len(MOVING)), Image.Resampling.NEAREST), (0, first.height))
-    return swatch.quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+    palette = swatch.quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+    # Pillow maps a colour onto a palette by boxes of 8 levels a channel, where it may pick a shade
+    # near the background over the background itself (a white page came out light grey): the
+    # entries within 8 levels of the background become the background
+    colours = palette.getpalette() or []
+    for i in range(0, len(colours), 3):
+        if all(abs(c - b) < 8 for c, b in zip(colours[i : i + 3], background, strict=True)):
+            colours[i : i + 3] = background
+    palette.putpalette(colours)
+    return palette
 
 
 def _write_mp4(frames: Iterable[Any], path: Path, fps: int, program: str) -> None:
