@@ -285,3 +285,33 @@ def test_an_mp4_without_ffmpeg_is_one_clean_error_before_the_run(tmp_path):
         f"error: --gif {tmp_path / 'x.mp4'}: cannot write .mp4: ffmpeg is not installed (hint: write a .gif instead)"
     ]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bin"]
+
+
+def test_an_mp4_is_piped_to_ffmpeg_as_whole_frames_of_an_even_size(tmp_path, monkeypatch, bonus_recording):
+    """The .mp4 path without a real ffmpeg (CI has none): a stand-in on PATH reads what ffmpeg would,
+    raw RGB frames of the size given by -s, and writes what it got into the output file."""
+    import json
+    import stat
+    import sys
+
+    from thymio_bt.viz.animation import animate
+
+    program = tmp_path / "bin" / "ffmpeg"
+    program.parent.mkdir()
+    program.write_text(
+        f"#!{sys.executable}\n"
+        "import json, sys\n"
+        "args = sys.argv[1:]\n"
+        "width, height = map(int, args[args.index('-s') + 1].split('x'))\n"
+        "got = len(sys.stdin.buffer.read())\n"
+        "json.dump({'width': width, 'height': height, 'bytes': got, 'args': args}, open(args[-1], 'w'))\n"
+    )
+    program.chmod(program.stat().st_mode | stat.S_IEXEC)
+    monkeypatch.setenv("PATH", str(program.parent))
+    out = animate(bonus_recording, tmp_path / "run.mp4", speedup=20)
+    made = json.loads(out.read_text())
+    frames = len(bonus_recording.samples[::20]) + 1  # every 20th tick, and the last
+    assert made["width"] == 960 and made["height"] % 2 == 0
+    assert made["bytes"] == frames * made["width"] * made["height"] * 3
+    assert made["args"][made["args"].index("-i") + 2 : made["args"].index("-i") + 4] == ["-pix_fmt", "yuv420p"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bin", "run.mp4"]  # the staged file renamed
