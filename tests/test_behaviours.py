@@ -492,6 +492,8 @@ def test_every_builtin_behaviour_restarts_after_success_failure_and_halt(name, l
         ({"WallAhead": {"distance": "5cm"}}, "front_center reads nothing in range"),
         ({"ObstacleAhead": {}}, "reads 0.07"),
         ({"WallMapped": {}}, "side E of cell (0, 0): no wall on the map"),
+        ({"AtTarget": {"target": "goal"}}, "cell (0, 0): not in the goal"),
+        ({"bt_script_condition": {"code": "1 > 2"}}, "'1 > 2' is false"),
     ],
 )
 def test_a_failed_condition_says_what_it_judged(condition, said):
