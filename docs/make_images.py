@@ -11,7 +11,7 @@ from pathlib import Path
 from thymio_bt.logs.recording import Recorder
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
-from thymio_bt.viz import plots
+from thymio_bt.viz import animation, plots
 
 IMAGES = Path(__file__).parent / "images"
 
@@ -37,7 +37,7 @@ def main() -> None:
         if signals_png:
             plots.plot_signals(recording, IMAGES / signals_png)
         if gif:
-            plots.animate(recording, IMAGES / gif, speedup=speedup, fps=8)
+            animation.animate(recording, IMAGES / gif, speedup=speedup, fps=8)
     for picture in sorted(IMAGES.iterdir()):
         print(f"  {picture} ({picture.stat().st_size // 1024} KiB)")
 

@@ -483,3 +483,51 @@ def test_every_builtin_behaviour_restarts_after_success_failure_and_halt(name, l
         assert endings == ["FAILURE" if ending == "timed out" else "INVALID"] * 3
     else:
         assert len(endings) == 3
+
+
+@pytest.mark.parametrize(
+    ("condition", "said"),
+    [
+        ({"SideOpen": {"side": "left"}}, "front_left reads 0.07"),  # the corridor's side wall
+        ({"WallAhead": {"distance": "5cm"}}, "front_center reads nothing in range"),
+        ({"ObstacleAhead": {}}, "reads 0.07"),
+        ({"WallMapped": {}}, "side E of cell (0, 0): no wall on the map"),
+        ({"AtTarget": {"target": "goal"}}, "cell (0, 0): not in the goal"),
+        ({"bt_script_condition": {"code": "1 > 2"}}, "'1 > 2' is false"),
+    ],
+)
+def test_a_failed_condition_says_what_it_judged(condition, said):
+    """issue 46 item 7: the failure's reason is the reading the condition judged, not "'SideOpen'
+    returned FAILURE"; every condition says it (the same trap was in ObstacleAhead and WallMapped)."""
+    result = run_tree(condition, world("corridor"), seconds=2)
+    assert (result.status, result.code) == ("FAILURE", "FAILED")
+    assert said in result.reason and "returned FAILURE" not in result.reason
+
+
+def test_repeat_and_retry_feedback_reads_like_words():
+    """issue 46 item 7: a repeat's feedback is "iteration 2 of 3", not "[status: 1 success from 3]"."""
+    from py_trees.behaviours import Failure, Running, Success
+
+    from thymio_bt.behaviours.decorators import Repeat, RepeatParams, Retry, RetryParams
+
+    def feedback(node, ticks: int) -> str:
+        for _ in range(ticks):
+            node.tick_once()
+        return node.feedback_message
+
+    forever = Repeat.build("loop", RepeatParams(times="forever"), [Success("leg")], None)
+    three = Repeat.build("loop", RepeatParams(times=3), [Success("leg")], None)
+    running = Repeat.build("loop", RepeatParams(times=3), [Running("leg")], None)
+    failed = Repeat.build("loop", RepeatParams(times=3), [Failure("leg")], None)
+    retry = Retry.build("retry", RetryParams(times=3), [Failure("leg")], None)
+    assert [feedback(forever, 1), feedback(three, 2), feedback(three, 1), feedback(running, 1)] == [
+        "iteration 2 (for ever)",
+        "iteration 3 of 3",
+        "done: 3 iterations",
+        "iteration 1 of 3",
+    ]
+    assert [feedback(failed, 1), feedback(retry, 1), feedback(retry, 2)] == [
+        "iteration 1 of 3 failed",
+        "attempt 2 of 3 (1 failed)",
+        "all 3 attempts failed",
+    ]

@@ -142,6 +142,23 @@ def test_tree_draws_to_the_mission_file_s_name_as_documented(tmp_path, monkeypat
     assert "the MISSION file's name" in " ".join(invoke("tree", "--help").output.split())
 
 
+@pytest.mark.parametrize("flag", ["--dot", "--png"])
+def test_a_default_output_name_never_replaces_a_file(tmp_path, monkeypatch, flag):
+    """issue 46 item 11: 'tree bonus.yaml --png' wrote bonus.png over the --plot bonus.png just made.
+    A name the command chose is refused when taken (exit 2, before anything is drawn); -o replaces."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "bonus.yaml").write_text("maze: arena\nstart: centre\ntree: Stop\n")
+    picture = tmp_path / f"bonus.{flag[2:]}"
+    picture.write_bytes(b"the path plot")
+    refused = invoke("tree", "bonus.yaml", flag)
+    assert refused.exit_code == 2 and picture.read_bytes() == b"the path plot"
+    assert f"bonus.{flag[2:]} exists, and a file named by default is never replaced" in refused.output
+    assert f"hint: -o bonus.{flag[2:]} replaces it" in refused.output
+    if flag == "--dot":  # the file named by the user is replaced, as asked (PNG needs Graphviz)
+        assert invoke("tree", "bonus.yaml", flag, "-o", "bonus.dot").exit_code == 0
+        assert picture.read_text().startswith("digraph")
+
+
 def test_a_failure_with_no_node_to_blame_prints_no_failed_at_line(capsys):
     """A run that ends outside the tree (nothing answered on ROS 2, a robot lost before the first
     tick) has no failing node: the summary says why, not 'failed at: None'."""

@@ -299,3 +299,56 @@ def test_standard_output_holds_the_findings_only_and_a_shipped_assignment_is_fou
     ada = str(ROOT / "examples/class/ada/part1_2.yaml")
     by_name = CliRunner().invoke(main, ["lint", ada, "--assignment", "course_part1_2"])  # its mazes are beside it
     assert (by_name.exit_code, by_name.stdout, by_name.stderr) == (0, "", "part1_2: no findings\n")
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        "sequence: [invert: {WallAhead: {distance: 8cm}}, MoveDistance: {distance: 1m}]",
+        "bt_sequence: [invert: ObstacleAhead, Stop, repeat: {times: 3, do: {MoveDistance: {distance: 20cm}}}]",
+        "sequence: [invert: {WallAhead: {distance: 5cm}}, sequence: [GoToPose: {goal: [1.0, 0.45]}, Stop]]",
+    ],
+)
+def test_a_way_ahead_checked_once_before_a_longer_drive(tmp_path, tree):
+    """issue 46 item 6: docs/control_nodes.md's classic mistake, found at the condition's line."""
+    assert _found(tmp_path, tree) == [(5, "checked-once")]
+
+
+@pytest.mark.parametrize(
+    "tree",
+    [
+        "reactive_sequence: [invert: {WallAhead: {distance: 8cm}}, MoveDistance: {distance: 1m}]",  # the fix
+        "guard: {condition: {invert: WallAhead}, do: {MoveDistance: {distance: 1m}}}",
+        "sequence: [SideOpen: {side: left}, TurnAngle: {angle: 90deg}]",  # a decision, then a turn
+        "sequence: [invert: {WallAhead: {distance: 9cm}}, MoveDistance: {distance: 5cm}]",  # within the clearance
+        "sequence: [invert: {WallAhead: {distance: 8cm}}, MoveUntilWall: {distance: 5cm}]",  # stops itself
+        "sequence: [WallAhead: {distance: 8cm}, MoveDistance: {distance: -20cm}]",  # backs away from it
+        "sequence: [invert: ObstacleAhead, SetBlackboard: {key: k, value: 0}]",
+    ],
+)
+def test_a_condition_in_a_sequence_used_as_meant_is_not_checked_once(tmp_path, tree):
+    assert "checked-once" not in {rule for _, rule in _found(tmp_path, tree)}
+
+
+def _shipped_and_documented():
+    """The missions a student is shown: examples, the example submissions of the assignments, and
+    the examples of docs/control_nodes.md (by their name: line)."""
+    files = sorted((ROOT / "examples").rglob("*.yaml"))
+    blocks = re.findall(r"```yaml\n# result: [^\n]*\n(.*?)```", (ROOT / "docs" / "control_nodes.md").read_text(), re.S)
+    return [*files, *blocks]
+
+
+def test_checked_once_finds_only_the_classic_mistake_of_the_shipped_and_documented_missions(tmp_path):
+    """The intended uses of the shipped files (missions/ are linted above) are not found; of
+    docs/control_nodes.md's examples only unguarded_drive, which shows the mistake, is."""
+    found = []
+    for i, item in enumerate(_shipped_and_documented()):
+        path = item if isinstance(item, Path) else tmp_path / f"doc{i}.yaml"
+        if not isinstance(item, Path):
+            path.write_text(item)
+        try:
+            findings = lint_mission(path)
+        except Exception:  # a deliberately broken example submission (eve's misspelt node)
+            continue
+        found += [re.search(r"name: (\w+)", path.read_text())[1] for f in findings if f.rule == "checked-once"]
+    assert found == ["unguarded_drive"]

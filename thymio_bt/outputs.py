@@ -9,7 +9,10 @@ here, so that the same promises hold everywhere:
 - the text goes to a temporary file in the target's folder, renamed over the target only once
   complete: a full disk or a crash never leaves half a report or a ``*.tmp`` behind;
 - the message says which path was actually written;
-- a new file's permissions follow the umask (as ``open()``'s would), a replaced file keeps its own.
+- a new file's permissions follow the umask (as ``open()``'s would), a replaced file keeps its own;
+- a name the command chose by default (:meth:`Output.by_default`: ``tree square.yaml --png`` writes
+  ``square.png``) never replaces an existing file: the command is refused before any work, its hint
+  saying how to name the file to replace it. Only a name the user gave replaces a file.
 
 Example:
 
@@ -27,6 +30,10 @@ thymio_bt.errors.UserError: --report ...: is a folder (hint: give a file name, e
 Traceback (most recent call last):
 ...
 thymio_bt.errors.UserError: --report .../run.json: the folder ... does not exist (hint: mkdir -p ...)
+>>> Output.by_default(folder / "run.json", "--output")  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+thymio_bt.errors.UserError: .../run.json exists, and a file named by default is never replaced (hint: -o ...)
 >>> (folder / "run.json").unlink(); folder.rmdir()
 """
 
@@ -58,6 +65,18 @@ class Output:
             raise UserError(f"{option} cannot write to standard output (hint: give a file name)")
         if not self.is_stdout:
             check_writable(self.path, option)
+
+    @classmethod
+    def by_default(cls, path: Path | str, option: str) -> Output:
+        """The output at ``path``, a name the command chose because ``option`` was not given: refused
+        when a file (or anything) is there already, since the user never asked to replace it."""
+        path = Path(path)
+        if path.exists() or path.is_symlink():
+            raise UserError(
+                f"{path} exists, and a file named by default is never replaced "
+                f"(hint: {_short(option)} {path} replaces it; or {_short(option)} OTHER{path.suffix})"
+            )
+        return cls(path, option, stdout_ok=False)
 
     @property
     def is_stdout(self) -> bool:
@@ -110,6 +129,11 @@ class Output:
             raise UserError(f"cannot write {self.path}: {exc.strerror or exc}") from None
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _short(option: str) -> str:
+    """``-o`` for ``--output`` (what the commands' help shows first), else the option itself."""
+    return "-o" if option == "--output" else option
 
 
 def _mode_for(path: Path) -> int:

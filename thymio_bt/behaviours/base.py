@@ -407,6 +407,18 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.ctx.events.emit(self.ctx.now(), "behaviour_end", **event)
 
 
+class Reading(float):
+    """A range reading as a condition's feedback says it: metres, or "nothing in range" for inf
+    (formatted only when read, as :meth:`RobotBehaviour.say` is).
+
+    >>> f"{Reading(0.0712)}", f"{Reading(math.inf)}"
+    ('0.071 m', 'nothing in range')
+    """
+
+    def __format__(self, spec: str) -> str:
+        return "nothing in range" if math.isinf(self) else f"{float(self):.3f} m"
+
+
 class ConditionBehaviour(RobotBehaviour):
     """A check that answers SUCCESS or FAILURE at once, without events (guards tick them often)."""
 

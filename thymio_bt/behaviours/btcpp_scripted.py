@@ -132,8 +132,11 @@ class ScriptCondition(Script):
     """BT.CPP's ``ScriptCondition``: SUCCESS if ``code`` is true, else FAILURE."""
 
     def step(self) -> Status:
-        """The script's truth."""
-        return Status.SUCCESS if truth(run_script(self.script, self.name)) else Status.FAILURE
+        """The script's truth; the feedback (a failure's reason) says which script and what it gave."""
+        value = run_script(self.script, self.name)
+        holds = truth(value)
+        self.say("'{}' is {} (it gives {!r})", self.params.code, "true" if holds else "false", value)
+        return Status.SUCCESS if holds else Status.FAILURE
 
 
 class SetParams(BehaviourParams):

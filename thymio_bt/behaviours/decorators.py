@@ -69,6 +69,50 @@ class RepeatParams(ControlParams):
         return _times(value, "repeat times must be a whole number >= 1 or 'forever'", _REPEAT_EXAMPLE)
 
 
+class CountedRepeat(py_trees.decorators.Repeat):
+    """py_trees' ``Repeat``, its feedback in words ("iteration 2 of 4"; py_trees' own reads
+    "[status: 0 success from -1]" for a loop for ever).
+
+    >>> from py_trees.behaviours import Success
+    >>> loop = CountedRepeat("loop", Success("leg"), -1)
+    >>> loop.tick_once(); loop.feedback_message
+    'iteration 2 (for ever)'
+    """
+
+    def update(self) -> Status:
+        """py_trees' result, with the iteration the loop is at."""
+        status = super().update()
+        of = "(for ever)" if self.num_success == -1 else f"of {self.num_success}"
+        if status is Status.SUCCESS:
+            self.feedback_message = f"done: {self.success} iterations"
+        else:  # the one running, the one that failed, or the next after a success
+            self.feedback_message = f"iteration {self.success + 1} {of}{' failed' * (status is Status.FAILURE)}"
+        return status
+
+
+class CountedRetry(py_trees.decorators.Retry):
+    """py_trees' ``Retry``, its feedback in words ("attempt 2 of 3"; py_trees' own reads
+    "[status: 1 failure from 3]").
+
+    >>> from py_trees.behaviours import Failure
+    >>> retry = CountedRetry("retry", Failure("leg"), 3)
+    >>> retry.tick_once(); retry.feedback_message
+    'attempt 2 of 3 (1 failed)'
+    """
+
+    def update(self) -> Status:
+        """py_trees' result, with the attempt it is at."""
+        status = super().update()
+        if status is Status.FAILURE:
+            self.feedback_message = f"all {self.num_failures} attempts failed"
+        elif status is Status.SUCCESS:
+            self.feedback_message = f"attempt {self.failures + 1} of {self.num_failures} succeeded"
+        else:
+            failed = f" ({self.failures} failed)" if self.failures else ""
+            self.feedback_message = f"attempt {self.failures + 1} of {self.num_failures}{failed}"
+        return status
+
+
 class Repeat(ControlNode):
     """Run the child again after each success: ``times`` times, forever, or ``until`` a condition succeeds."""
 
@@ -84,7 +128,7 @@ class Repeat(ControlNode):
         if len(children) == 2:
             return RepeatUntil(name, body=children[0], condition=children[1])
         times = -1 if params.times == "forever" else params.times
-        return py_trees.decorators.Repeat(name=name, child=children[0], num_success=times)
+        return CountedRepeat(name=name, child=children[0], num_success=times)
 
 
 class RetryParams(ControlParams):
@@ -108,7 +152,7 @@ class Retry(ControlNode):
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
         """A py_trees ``Retry`` of the child."""
-        return py_trees.decorators.Retry(name=name, child=children[0], num_failures=params.times)
+        return CountedRetry(name=name, child=children[0], num_failures=params.times)
 
 
 class SecondsParams(ControlParams):

@@ -224,8 +224,11 @@ class WallMapped(ConditionBehaviour, OnGrid):
     Params = WallMappedParams
 
     def step(self) -> Status:
-        """Whether the map knows a wall on the side the robot faces."""
-        return Status.SUCCESS if self.cell_map().wall(self.cell(), self.facing()) else Status.FAILURE
+        """Whether the map knows a wall on the side the robot faces; the feedback says which side."""
+        cell, side = self.cell(), self.facing()
+        wall = self.cell_map().wall(cell, side)
+        self.say("side {} of cell {}: {}", side, cell, "a wall" if wall else "no wall on the map")
+        return Status.SUCCESS if wall else Status.FAILURE
 
 
 class AtTargetParams(MazeMapParams):
@@ -247,5 +250,8 @@ class AtTarget(ConditionBehaviour, OnGrid):
     Params = AtTargetParams
 
     def step(self) -> Status:
-        """Whether the robot's cell is one of the target's."""
-        return Status.SUCCESS if self.cell() in self.targets(self.params.target) else Status.FAILURE
+        """Whether the robot's cell is one of the target's; the feedback says which cell."""
+        cell = self.cell()
+        inside = cell in self.targets(self.params.target)
+        self.say("cell {}: {} the {}", cell, "in" if inside else "not in", self.params.target)
+        return Status.SUCCESS if inside else Status.FAILURE

@@ -33,6 +33,7 @@ from thymio_bt.behaviours.base import (
     BehaviourParams,
     ConditionBehaviour,
     FailureCode,
+    Reading,
     RobotBehaviour,
     current_pose,
 )
@@ -85,7 +86,12 @@ class WallAhead(ConditionBehaviour):
         scan = self.robot.proximity()
         assert scan is not None
         reading = scan[self.params.sensor]
-        self.say("{} reads {:.4f}", self.params.sensor, reading)
+        self.say(
+            "{} reads {} (a wall counts at {:.3f} m or less)",
+            self.params.sensor,
+            Reading(reading),
+            self.params.distance,
+        )
         return Status.SUCCESS if reading <= self.params.distance else Status.FAILURE
 
 
@@ -106,10 +112,12 @@ class SideOpen(ConditionBehaviour):
     Params = SideOpenParams
 
     def step(self) -> Status:
-        """Whether the side ray reads nothing."""
+        """Whether the side ray reads nothing; the feedback (a failure's reason) says what it read."""
         scan = self.robot.proximity()
         assert scan is not None
-        return Status.SUCCESS if math.isinf(scan[side_ray(self.params.side)]) else Status.FAILURE
+        ray = side_ray(self.params.side)
+        self.say("{} reads {}", ray, Reading(scan[ray]))
+        return Status.SUCCESS if math.isinf(scan[ray]) else Status.FAILURE
 
 
 class IsDeadEndParams(BehaviourParams):

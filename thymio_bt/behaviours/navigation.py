@@ -20,6 +20,7 @@ from thymio_bt.behaviours.base import (
     BehaviourParams,
     ConditionBehaviour,
     FailureCode,
+    Reading,
     RobotBehaviour,
     current_pose,
 )
@@ -255,9 +256,11 @@ class ObstacleAhead(ConditionBehaviour):
     Params = ObstacleAheadParams
 
     def step(self) -> Status:
-        """Compare the front readings with the thresholds."""
+        """Compare the front readings with the thresholds; the feedback says the nearest one."""
         scan = self.robot.proximity()
         assert scan is not None
+        nearest = min(FRONT, key=lambda name: scan[name])
+        self.say("nearest: {} reads {}", nearest, Reading(scan[nearest]))
         return Status.SUCCESS if _blocked(scan, self.params.thresholds) else Status.FAILURE
 
 

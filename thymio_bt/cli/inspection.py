@@ -162,7 +162,7 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
     "-o",
     help="File to write (- = standard output); its suffix picks the format when no flag does. "
     "Default with a format flag: the MISSION file's name with that suffix (missions/square.yaml: square.dot), "
-    "in the current folder.",
+    "in the current folder; a default name never replaces a file (the command is refused: give -o).",
 )
 @path_option(
     "--btcpp",
@@ -233,7 +233,10 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
     if fmt is None:
         click.echo(text)
         return
-    out = Output(output if output is not None else Path(mission.stem).with_suffix(f".{fmt}"), "--output")
+    if output is None:  # a name of our choosing: it never replaces a file (the --plot just drawn, say)
+        out = Output.by_default(Path(mission.stem).with_suffix(f".{fmt}"), "--output")
+    else:
+        out = Output(output, "--output")
     if not out.is_stdout:
         click.echo(text)
     export_tree(mission, out, fmt, plugins, coverage, conditions)

@@ -41,7 +41,8 @@ if TYPE_CHECKING:
 )
 def lint(mission: Path, assignment: Path | None) -> None:
     """Find what makes MISSION's tree not do what it seems to (unreachable nodes, reactive restarts,
-    endless loops, unused subtrees and parameters, values at the edge of their range)."""
+    endless loops, a way ahead checked once before a longer drive, unused subtrees and parameters,
+    values at the edge of their range)."""
     from thymio_bt.mission.lint import lint_mission
 
     try:

@@ -61,12 +61,16 @@ class Pictures(NamedTuple):
                     f"{option} {path}: cannot write '{path.suffix or 'no extension'}' (hint: use {', '.join(suffixes)})"
                 )
             check_writable(path, option)
+            if option == "--gif" and path.suffix.lower() == ".mp4":
+                from thymio_bt.viz.animation import ffmpeg_program
+
+                ffmpeg_program(path)  # a run must not end in "ffmpeg is not installed"
 
     def draw(self, recording: Recording, speedup: float, quiet: bool) -> None:
         """Draw the pictures asked for from ``recording`` (``speedup``: of the animation), saying what was written."""
         if not self.wanted:
             return
-        from thymio_bt.viz import plots
+        from thymio_bt.viz import animation, plots
 
         for path, draw in ((self.plot, plots.plot_run), (self.plot_signals, plots.plot_signals)):
             if path is not None:
@@ -74,6 +78,6 @@ class Pictures(NamedTuple):
                 if not quiet:
                     click.echo(f"wrote {path}", err=True)
         if self.gif is not None:
-            plots.animate(recording, self.gif, speedup=speedup)
+            animation.animate(recording, self.gif, speedup=speedup)
             if not quiet:
                 click.echo(f"wrote {self.gif}", err=True)

@@ -1,7 +1,7 @@
 """A teaching lint for missions (``thymio-bt lint``): trees that load and run but cannot do what
 their author meant, each finding at its file:line with a hint.
 
-The rules, by id (the first three, on the tree's structure, are :mod:`thymio_bt.mission.tree_rules`):
+The rules, by id (the first four, on the tree's structure, are :mod:`thymio_bt.mission.tree_rules`):
 
 - ``unreachable``: a child that can never run: after a child that never succeeds in a sequence
   (it always fails, or never ends: a ``repeat: forever``), after one that never fails in a selector
@@ -17,6 +17,12 @@ The rules, by id (the first three, on the tree's structure, are :mod:`thymio_bt.
   are checked at every tick, a running action goes on.
 - ``forever``: a ``repeat: forever`` whose child never fails, with nothing above it to stop it (a
   timeout, a guard, a parallel, a reactive composite's condition): the run can only end at its time limit.
+- ``checked-once``: in a plain ``sequence``, a check that the way ahead is clear (``invert: WallAhead``,
+  ``invert: ObstacleAhead``) before a drive that goes farther than the check saw (``MoveDistance``,
+  ``MoveCells``, ``GoToPose``, ``FollowWaypoints``): checked once, before the drive, the run ends
+  in a collision. Told apart from the intended uses of a condition in a sequence (a decision before a
+  turn, ``SideOpen`` then ``TurnAngle``; a check before an instant action; a drive no farther than
+  the clearance checked) by what the condition vouches for and how far the action after it drives.
 - ``unused-subtree``, ``unused-parameter``: a subtree of the mission file that no tree uses, an
   included file none of whose subtrees is used; a parameter of the mission or of a subtree that no
   ``$name`` refers to.
@@ -62,6 +68,7 @@ RULES = {
     "unreachable": "a child that can never run",
     "reactive-restart": "a reactive composite that starts a long action again at every tick",
     "forever": "a repeat: forever with no way out",
+    "checked-once": "a sequence that checks the way is clear once, then drives farther",
     "unused-subtree": "a subtree (or an included file) that no tree uses",
     "unused-parameter": "a parameter that no $name refers to",
     "edge-of-range": "a value within 5 % of a bound of its parameter",

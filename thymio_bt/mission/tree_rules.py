@@ -1,6 +1,6 @@
 """The structural rules of the teaching lint (:mod:`thymio_bt.mission.lint`): what each node of a
 tree can end with, and what that makes of its siblings and of the loops above it: ``unreachable``,
-``reactive-restart`` and ``forever``; and what a finding is.
+``reactive-restart``, ``forever`` and ``checked-once``; and what a finding is.
 
 A node can end with S (SUCCESS), F (FAILURE), both, or neither (it never ends: a ``repeat:
 forever`` of a child that never fails). A leaf is a condition (it answers at once), an instant
@@ -20,6 +20,7 @@ Example::
 
 from __future__ import annotations
 
+import math
 from collections.abc import Generator, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -42,6 +43,26 @@ ALWAYS = {
     "SetBlackboard": "S",
     "Stop": "S",
 }
+#: the sequences that resume at a running child: the children before it are not checked again
+PLAIN_SEQUENCES = ("sequence", "bt_sequence", "bt_sequence_with_memory")
+#: conditions that, inverted, say the way ahead is clear, with the distance (m) they vouch for
+CLEAR_AHEAD = {
+    "WallAhead": lambda params: params.distance,
+    "ObstacleAhead": lambda params: max(params.thresholds),
+}
+#: long actions that drive forward without looking ahead themselves, with how far (m; inf: no bound)
+FORWARD_DRIVES = {
+    "MoveDistance": lambda params: params.distance,
+    "MoveCells": lambda params: params.distance,
+    "GoToPose": lambda params: math.inf,
+    "FollowWaypoints": lambda params: math.inf,
+}
+#: decorators that start their (first) child when they start
+PASS_ON = frozenset(
+    ("repeat", "retry", "timeout", "delay", "force_success", "force_failure", "one_shot", "until", "invert")
+    + ("bt_repeat", "bt_retry_until_successful", "bt_run_once", "bt_timeout", "bt_delay", "bt_inverter")
+    + ("bt_force_success", "bt_force_failure", "bt_keep_running_until_failure")
+)
 #: the control kinds that stop a child only as :meth:`TreeRules._way_out` says
 MODELLED = (
     *SEQUENCES,
@@ -103,6 +124,7 @@ class TreeRules:
         unreachable = yield from self._unreachable(node)
         yield from self._restart(node)
         yield from self._forever(node, above)
+        yield from self._checked_once(node)
         for child in node.children:
             if id(child) not in unreachable:
                 yield from self._walk(child, (*above, node))
@@ -315,6 +337,60 @@ class TreeRules:
             "can stop it: the run can only end at its time limit (status TIMEOUT)",
             "give the repeat times: N or until: CONDITION, or put it under a timeout or a guard",
         )
+
+    def _checked_once(self, node: NodePlan) -> Iterator[Finding]:
+        """``checked-once``: in a plain sequence, a check that the way ahead is clear (``invert:
+        WallAhead``...) before a drive that goes farther than the check saw: the sequence checks it
+        once, before the drive starts, and not while it drives (docs/control_nodes.md's classic
+        mistake). A check before a turn, a decision (``SideOpen``, ``IsDeadEnd``), or a drive no
+        longer than the clearance it vouches for is what it is meant to be, and not found."""
+        if node.kind not in PLAIN_SEQUENCES:
+            return
+        kids = node.children
+        for i, kid in enumerate(kids[:-1]):
+            clear = self._clearance(kid)
+            then = next((k for k in kids[i + 1 :] if self.may_run(k)), None)
+            drive = self._first_drive(then) if clear is not None and then is not None else None
+            if clear is None or drive is None or not drive[1] > clear[1] + 1e-9:
+                continue
+            far = "with no bound" if math.isinf(drive[1]) else f"{drive[1]:g} m"
+            yield finding_at(
+                kid,
+                "checked-once",
+                f"'{clear[0].name}' (inverted: nothing within {clear[1]:g} m ahead) is checked once, then "
+                f"'{drive[0].name}' drives {far}: sequence '{node.name}' does not check it again while "
+                f"'{drive[0].name}' runs, so the robot can drive into what the check meant to avoid",
+                "to keep the condition checked while driving, make the parent a reactive_sequence (or use "
+                "guard: {condition: ..., do: ...}); or drive with MoveUntilWall, which stops at the wall itself",
+            )
+
+    def _clearance(self, node: NodePlan) -> tuple[NodePlan, float] | None:
+        """The condition under ``node`` that says the way ahead is clear (an odd number of inverters
+        over a :data:`CLEAR_AHEAD` condition), with the distance it vouches for; None otherwise."""
+        inverted = False
+        while node.kind in ("invert", "bt_inverter") and node.children:
+            inverted, node = not inverted, node.children[0]
+        how_far = CLEAR_AHEAD.get(node.behaviour or "")
+        if how_far is None or not inverted or not self._known(node):
+            return None
+        return node, how_far(node.params)
+
+    def _first_drive(self, node: NodePlan) -> tuple[NodePlan, float] | None:
+        """The forward drive ``node`` starts with, and how far it goes (inf: no bound); None when it
+        starts with something else, or under a node that may watch it (reactive, guard, parallel)."""
+        kind, kids = node.kind, node.children
+        if kind == "behaviour":
+            how_far = FORWARD_DRIVES.get(node.behaviour or "")
+            far = how_far(node.params) if how_far is not None and self._known(node) else 0.0
+            return (node, far) if far > 0 else None
+        if kind in PLAIN_SEQUENCES or kind in ("selector", "bt_fallback"):
+            first = next((k for k in kids if self.may_run(k)), None)
+            return self._first_drive(first) if first is not None else None
+        return self._first_drive(kids[0]) if kind in PASS_ON and kids else None
+
+    def _known(self, node: NodePlan) -> bool:
+        """Whether ``node``'s values are written (not read from the blackboard when it starts)."""
+        return node.params is not None and not node.blackboard_refs
 
     def _way_out(self, node: NodePlan, above: tuple[NodePlan, ...]) -> bool:
         """Whether an ancestor of ``node`` can stop it: a timeout, a guard whose condition can fail, a

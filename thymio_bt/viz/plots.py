@@ -3,8 +3,8 @@
 matplotlib is imported only here (it is the optional ``viz`` extra), with the Agg backend, so
 plots work headless and a run that asks for none pays nothing.
 
-``plot_signals(recording, "signals.png")`` and ``animate(recording, "run.gif", speedup=4)`` take
-a recording as ``plot_run`` does.
+``plot_signals(recording, "signals.png")`` takes a recording as ``plot_run`` does; the animation
+(``--gif``) is :mod:`thymio_bt.viz.animation`, drawn on the same maze.
 
 Example:
 
@@ -33,10 +33,13 @@ from thymio_bt.logs.recording import Recording
 from thymio_bt.robot.model import COURSE
 from thymio_bt.viz.display import INSTALL_HINT
 
+#: twice the course robot's reach from base_link (m): two outlines whose base_links are farther apart never overlap
+ROBOT_SPAN = 2 * max(math.hypot(x, y) for x, y in COURSE.hull)
 KEY_EVENTS = {"delete_entity": ("tab:red", "deleted"), "spawn_entity": ("tab:green", "spawned")}
 
 
-def _pyplot() -> Any:
+def pyplot() -> Any:
+    """matplotlib's pyplot on the Agg backend (headless); a :class:`UserError` when it is missing."""
     try:
         import matplotlib
     except ImportError:
@@ -47,12 +50,14 @@ def _pyplot() -> Any:
     return plt
 
 
-def _outline(pose: dict[str, float]) -> list[tuple[float, float]]:
+def outline(pose: dict[str, float]) -> list[tuple[float, float]]:
+    """The robot's outline (the course model's hull) at ``pose``, in maze coordinates."""
     c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
     return [(pose["x"] + x * c - y * s, pose["y"] + x * s + y * c) for x, y in COURSE.hull]
 
 
-def _draw_maze(ax: Any, recording: Recording) -> None:
+def draw_maze(ax: Any, recording: Recording) -> None:
+    """The maze's walls and obstacles on ``ax``, its limits holding the maze and the whole trajectory."""
     from matplotlib.patches import Polygon
 
     for wall in recording.maze.walls:
@@ -77,7 +82,7 @@ def _draw_cell_map(ax: Any, cells: dict[str, Any]) -> None:
     c, (ox, oy) = cells["cell"], cells["origin"]
     for n, (i, j) in enumerate(cells["visited"]):
         ax.add_patch(
-            _pyplot().Rectangle(
+            pyplot().Rectangle(
                 (ox + i * c, oy + j * c),
                 c,
                 c,
@@ -116,14 +121,15 @@ def _draw_cell_map(ax: Any, cells: dict[str, Any]) -> None:
 def _draw_robot(ax: Any, pose: dict[str, float], colour: str, label: str | None = None, alpha: float = 0.9) -> Any:
     from matplotlib.patches import Polygon
 
-    patch = Polygon(_outline(pose), closed=True, fill=False, ec=colour, lw=1.2, alpha=alpha, label=label)
+    patch = Polygon(outline(pose), closed=True, fill=False, ec=colour, lw=1.2, alpha=alpha, label=label)
     ax.add_patch(patch)
     return patch
 
 
-def _rays(
+def rays(
     pose: dict[str, float], prox: dict[str, float | None]
 ) -> list[tuple[tuple[float, float], tuple[float, float], bool]]:
+    """Each sensor's ray at ``pose``: (start, end, whether it sees something), out to the range when not."""
     c, s = math.cos(pose["yaw"]), math.sin(pose["yaw"])
     out = []
     for name, x, y, a in ((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors):
@@ -162,9 +168,9 @@ def _segments(recording: Recording) -> list[list[dict[str, Any]]]:
 
 def plot_run(recording: Recording, path: str | Path, title: str | None = None) -> Path:
     """The maze, the trajectory, the robot at key events (delete, spawn, turns, end) and the final rays."""
-    plt = _pyplot()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(9, 5.5), dpi=110)
-    _draw_maze(ax, recording)
+    draw_maze(ax, recording)
     if recording.end.get("map"):
         _draw_cell_map(ax, recording.end["map"])
     for i, part in enumerate(_segments(recording)):
@@ -176,6 +182,7 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
             label="trajectory (base_link)" if i == 0 else None,
         )
     labelled: set[str] = set()
+    turns: list[tuple[float, float]] = []  # where an outline after a turn is drawn: one per place
     for event in recording.events:
         kind = event["kind"]
         pose = event.get("pose")
@@ -183,6 +190,12 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
             colour, label = KEY_EVENTS[kind]
         elif kind == "behaviour_end" and event.get("name") == "TurnAngle" and event.get("status") == "SUCCESS" and pose:
             colour, label = "tab:orange", "after a turn"
+            if any(math.dist(place, (pose["x"], pose["y"])) < ROBOT_SPAN for place in turns):
+                # turned where an outline is drawn already (a cell-by-cell run turns in each cell
+                # up to four times): a dot, not outlines piled up
+                ax.plot(pose["x"], pose["y"], ".", color=colour, ms=4)
+                continue
+            turns.append((pose["x"], pose["y"]))
         elif kind == "collision":
             ax.plot(
                 event["x"],
@@ -208,7 +221,7 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
     last = next((s for s in reversed(recording.samples) if s["pose"]), None)
     if last is not None:
         _draw_robot(ax, last["pose"], "black", "end")
-        for start, end, hit in _rays(last["pose"], last["prox"] or {}):
+        for start, end, hit in rays(last["pose"], last["prox"] or {}):
             ax.plot(
                 [start[0], end[0]],
                 [start[1], end[1]],
@@ -264,116 +277,60 @@ def _behaviour_spans(recording: Recording) -> list[tuple[float, float, str]]:
 
 
 def plot_signals(recording: Recording, path: str | Path) -> Path:
-    """Pose, commanded and actual speeds, and proximity over simulated time, behaviours shaded."""
-    plt = _pyplot()
+    """The behaviours that ran (one row each, as bars over time), then pose, commanded and actual
+    speeds, and proximity over simulated time. A row per behaviour keeps each name on its own line:
+    behaviours that run at once (a parallel's) or one after the other in a blink never overlap."""
+    plt = pyplot()
     samples = recording.samples
     t = [s["t"] for s in samples]
-    fig, axes = plt.subplots(4, 1, figsize=(10, 9), dpi=100, sharex=True)
+    spans = _behaviour_spans(recording)
+    names = list(dict.fromkeys(name for _, _, name in sorted(spans)))  # in the order they first ran
+    rows = max(len(names), 1)
+    fig, axes = plt.subplots(
+        5,
+        1,
+        figsize=(10, 8.5 + 0.22 * rows),
+        dpi=100,
+        sharex=True,
+        gridspec_kw={"height_ratios": [0.22 * rows, 2, 1.6, 1.6, 2]},
+    )
+    ax = axes[0]
+    colours = plt.get_cmap("tab10").colors
+    for row, name in enumerate(names):
+        bars = [(start, max(end - start, 0.05)) for start, end, span in spans if span == name]
+        ax.broken_barh(bars, (row - 0.35, 0.7), color=colours[row % len(colours)])
+    ax.set_yticks(range(len(names)), names, fontsize=8)
+    ax.set_ylim(rows - 0.5, -0.5)
+    ax.set_ylabel("running")
 
     def series(get: Any) -> list[float]:
         return [get(s) if s["pose"] else math.nan for s in samples]
 
-    ax = axes[0]
+    ax = axes[1]
     ax.plot(t, series(lambda s: s["pose"]["x"]), label="x [m]")
     ax.plot(t, series(lambda s: s["pose"]["y"]), label="y [m]")
     ax.plot(t, unwrapped(series(lambda s: s["pose"]["yaw"])), label="yaw [rad, unwrapped]")
     ax.set_ylabel("pose")
-    ax = axes[1]
+    ax = axes[2]
     ax.plot(t, [s["cmd"][0] for s in samples], label="commanded v", drawstyle="steps-post")
     ax.plot(t, [s["vel"][0] for s in samples], label="actual v", ls="--")
     ax.set_ylabel("linear [m/s]")
-    ax = axes[2]
+    ax = axes[3]
     ax.plot(t, [s["cmd"][1] for s in samples], label="commanded ω", drawstyle="steps-post")
     ax.plot(t, [s["vel"][1] for s in samples], label="actual ω", ls="--")
     ax.set_ylabel("angular [rad/s]")
-    ax = axes[3]
+    ax = axes[4]
     for name in (s.name for s in COURSE.sensors):
         values = [(s["prox"] or {}).get(name) for s in samples]
         ax.plot(t, [math.nan if v is None else v for v in values], label=name, lw=1)
     ax.set_ylabel("range [m]")
     ax.set_ylim(0, COURSE.range_max * 1.05)
     ax.set_xlabel("simulated time [s]")
-    colours = plt.get_cmap("tab20").colors
-    names = sorted({name for *_, name in _behaviour_spans(recording)})
-    for start, end, name in _behaviour_spans(recording):
-        colour = colours[names.index(name) % len(colours)]
-        for a in axes:
-            a.axvspan(start, end, color=colour, alpha=0.15, lw=0)
-        axes[0].text(
-            (start + end) / 2,
-            1.0,
-            name,
-            transform=axes[0].get_xaxis_transform(),
-            fontsize=6,
-            rotation=90,
-            va="bottom",
-            ha="center",
-        )
     for a in axes:
-        a.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
         a.grid(True, lw=0.3, alpha=0.5)
-    fig.suptitle(f"{recording.mission}: signals (shaded: the behaviour running)", y=0.995)
+    for a in axes[1:]:
+        a.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
+    fig.suptitle(f"{recording.mission}: signals, and the behaviours running (top)", y=0.995)
+    fig.align_ylabels(axes)
     fig.tight_layout()
     return _save(fig, plt, path)
-
-
-def animate(recording: Recording, path: str | Path, speedup: float = 4.0, fps: int = 10) -> Path:
-    """A GIF (or MP4 when ffmpeg is installed) of the run at ``speedup`` times real time."""
-    plt = _pyplot()
-    from matplotlib import animation
-    from matplotlib.patches import Polygon
-
-    path = Path(path)
-    samples = recording.samples
-    if not samples:
-        raise UserError("nothing to animate: the run has no ticks")
-    step = max(1, round(speedup / fps * _rate(samples)))
-    frames = samples[::step] + ([samples[-1]] if (len(samples) - 1) % step else [])
-    fig, ax = plt.subplots(figsize=(7, 4.5), dpi=80)
-    _draw_maze(ax, recording)
-    (trail,) = ax.plot([], [], color="tab:blue", lw=1.2)
-    body = Polygon([(0, 0)] * len(COURSE.hull), closed=True, fc="tab:blue", ec="black", alpha=0.6)
-    ax.add_patch(body)
-    rays = [ax.plot([], [], lw=0.8)[0] for _ in COURSE.sensors]
-    label = ax.text(0.01, 0.99, "", transform=ax.transAxes, va="top", fontsize=8)
-    xs: list[float] = []
-    ys: list[float] = []
-
-    def draw(sample: dict[str, Any]) -> list[Any]:
-        pose = sample["pose"]
-        if pose is None:
-            body.set_visible(False)
-            for ray in rays:
-                ray.set_data([], [])
-        else:
-            body.set_visible(True)
-            body.set_xy(_outline(pose))
-            xs.append(pose["x"])
-            ys.append(pose["y"])
-            trail.set_data(xs, ys)
-            # a line per sensor: as many as rays
-            for ray, (start, end, hit) in zip(rays, _rays(pose, sample["prox"] or {}), strict=True):
-                ray.set_data([start[0], end[0]], [start[1], end[1]])
-                ray.set_color("tab:red" if hit else "0.7")
-        label.set_text(f"t = {sample['t']:.1f} s   {', '.join(sample.get('running', []))}")
-        return [trail, body, label, *rays]
-
-    anim = animation.FuncAnimation(fig, draw, frames=frames, blit=False)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if path.suffix.lower() == ".mp4":
-            if not animation.writers.is_available("ffmpeg"):
-                raise UserError(f"cannot write {path}: ffmpeg is not installed (hint: write a .gif instead)")
-            anim.save(path, writer=animation.FFMpegWriter(fps=fps))
-        else:
-            anim.save(path, writer=animation.PillowWriter(fps=fps))
-    finally:
-        plt.close(fig)
-    return path
-
-
-def _rate(samples: list[dict[str, Any]]) -> float:
-    if len(samples) < 2:
-        return 10.0
-    dt = samples[1]["t"] - samples[0]["t"]
-    return 1.0 / dt if dt > 0 else 10.0

@@ -26,7 +26,7 @@ from __future__ import annotations
 import shutil
 import subprocess
 import sys
-from collections.abc import Collection, Mapping
+from collections.abc import Collection, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +37,7 @@ from thymio_bt.errors import UserError
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
+    from thymio_bt.mission.plan import NodePlan
     from thymio_bt.outputs import Output
     from thymio_bt.run.runner import Run
 
@@ -93,11 +94,12 @@ def export_tree(
     """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``;
     with ``coverage`` (a coverage JSON of this mission), the tree drawn with its counts (``conditions``
     as in :func:`coverage_dot`)."""
-    source = (
-        py_trees.display.dot_tree(_build(mission_path, run_plugins)).to_string()
-        if coverage is None
-        else coverage_dot(coverage, conditions)
-    )
+    if coverage is None:
+        from thymio_bt.mission import load_mission
+
+        source = plan_dot(load_mission(mission_path, run_plugins=run_plugins).tree)
+    else:
+        source = coverage_dot(coverage, conditions)
     write_graph(source, out, fmt, f"thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot")
 
 
@@ -192,6 +194,37 @@ def _quoted(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
 
 
+#: the children of a kind that are not ordinary children, by position: their role is written on the edge
+_ROLES = {"repeat": {1: "until"}, "guard": {1: "condition"}}
+
+
+def _label(node: Mapping[str, Any]) -> str:
+    """A node's name, and under it what it is (its behaviour or kind) when the name does not say it."""
+    what = node["behaviour"] or node["kind"]
+    return node["name"] if what == node["name"] else f"{node['name']}\n{what}"
+
+
+def plan_dot(plan: NodePlan) -> str:
+    """The mission's tree (``tree --dot/--svg/--png``) as Graphviz .dot text, drawn as
+    :func:`coverage_dot` draws it without counts: a repeat's ``until`` and a guard's ``condition``
+    on a dashed edge that says so, not as one more child.
+
+    >>> from thymio_bt.mission import load_mission
+    >>> print(plan_dot(load_mission("maze_part1_2").tree))  # doctest: +ELLIPSIS
+    digraph tree {
+    ...
+    n... -> n... [label="until", style=dashed];
+    ...
+    """
+    from thymio_bt.run.coverage import plan_paths
+
+    nodes = [
+        {"path": path, "name": n.name, "kind": n.kind, "behaviour": n.behaviour, "depth": depth}
+        for n, path, depth in plan_paths(plan)
+    ]
+    return _dot("tree", nodes, None)
+
+
 def coverage_dot(coverage: Mapping[str, Any], conditions: Collection[str] = ()) -> str:
     """The tree as Graphviz .dot text with each node's coverage: its counts under its name, the nodes
     that never ran dashed and grey, each edge labelled with how often that child ended its parent.
@@ -202,18 +235,27 @@ def coverage_dot(coverage: Mapping[str, Any], conditions: Collection[str] = ()) 
     digraph coverage {
     graph [ordering=out, fontname="sans"];
     node [fontname="sans", fontsize=10];
+    edge [fontname="sans", fontsize=9];
     n0 [label="s\\nsequence\\nnever ticked", shape=box, style=dashed, color=grey60, fontcolor=grey45];
     }
     """
-    nodes = coverage["nodes"]
-    lines = ["digraph coverage {", 'graph [ordering=out, fontname="sans"];', 'node [fontname="sans", fontsize=10];']
+    return _dot("coverage", coverage["nodes"], conditions)
+
+
+def _dot(name: str, nodes: Sequence[Mapping[str, Any]], conditions: Collection[str] | None) -> str:
+    """The .dot text of the tree ``nodes`` (pre-order, with depths), with their coverage counts
+    unless ``conditions`` is None (a tree without coverage: every node filled)."""
+    lines = [f"digraph {name} {{", 'graph [ordering=out, fontname="sans"];', 'node [fontname="sans", fontsize=10];']
+    lines.append('edge [fontname="sans", fontsize=9];')
     stack: list[tuple[int, Mapping[str, Any]]] = []  # the ancestors of the node being drawn
+    children: dict[int, int] = {}  # how many children of each node are drawn so far
     for i, node in enumerate(nodes):
         shape, fill = _DOT_LOOK[_family(node["kind"])]
-        label = _quoted(f"{node['name']}\n{node['behaviour'] or node['kind']}\n{_counts(node, conditions)}")
-        if node["ticks"]:
+        counts = "" if conditions is None else f"\n{_counts(node, conditions)}"
+        label = _quoted(_label(node) + counts)
+        if conditions is None or node["ticks"]:
             look = f'style=filled, fillcolor="{fill}"'
-            if node["behaviour"] in conditions and not node["success"]:
+            if conditions is not None and node["behaviour"] in conditions and not node["success"]:
                 look += ", color=red, penwidth=2"
         else:
             look = "style=dashed, color=grey60, fontcolor=grey45"
@@ -222,8 +264,13 @@ def coverage_dot(coverage: Mapping[str, Any], conditions: Collection[str] = ()) 
             stack.pop()
         if stack:
             parent, data = stack[-1]
-            ended = data["ended_by"].get(node["path"])
-            edge = f" [label={_quoted(f'ended it x{ended}')}]" if ended else ""
+            position = children[parent] = children.get(parent, -1) + 1
+            role = _ROLES.get(data["kind"], {}).get(position)
+            ended = data.get("ended_by", {}).get(node["path"])
+            words = [w for w in (role, f"ended it x{ended}" if ended else None) if w]
+            attributes = [f"label={_quoted(' / '.join(words))}"] if words else []
+            attributes += ["style=dashed"] if role else []
+            edge = f" [{', '.join(attributes)}]" if attributes else ""
             lines.append(f"n{parent} -> n{i}{edge};")
         stack.append((i, node))
     lines.append("}")

@@ -44,7 +44,7 @@ from thymio_bt.robot.model import COURSE
 from thymio_bt.run.result import RunResult, learnt_map
 from thymio_bt.run.runner import Run, StopRun
 from thymio_bt.viz.display import INSTALL_HINT
-from thymio_bt.viz.plots import _outline, _rays
+from thymio_bt.viz.plots import outline, rays
 
 #: matplotlib's tab10 colours that plots.py draws with ("tab:blue", "tab:red", "tab:green"), as RGB,
 #: so that pictures and window agree.
@@ -228,13 +228,13 @@ class Viewer:
         if frame is not None and frame.cells is not None:
             self._draw_cell_map(frame.cells)
         if frame is not None and frame.pose is not None:
-            for start, end, hit in _rays(frame.pose, frame.prox):
+            for start, end, hit in rays(frame.pose, frame.prox):
                 pg.draw.line(screen, RAY_HIT if hit else RAY_FREE, self.to_screen(*start), self.to_screen(*end), 1)
                 if hit:
                     pg.draw.circle(screen, RAY_HIT, self.to_screen(*end), 3)
-            outline = [self.to_screen(*p) for p in _outline(frame.pose)]
-            pg.draw.polygon(screen, ROBOT_FILL, outline)
-            pg.draw.polygon(screen, ROBOT_EDGE, outline, 2)
+            body = [self.to_screen(*p) for p in outline(frame.pose)]
+            pg.draw.polygon(screen, ROBOT_FILL, body)
+            pg.draw.polygon(screen, ROBOT_EDGE, body, 2)
         self._draw_status(frame)
         pg.display.flip()
         self.frames += 1
