@@ -63,8 +63,11 @@ class Recording:
 class Recorder:
     """An ``on_tick`` hook for :meth:`thymio_bt.run.runner.Run.run` that records every tick."""
 
-    def __init__(self, log_path: str | Path | None = None, keep: bool = True) -> None:
+    def __init__(self, log_path: str | Path | None = None, keep: bool = True, statuses: bool = False) -> None:
+        """``log_path``: the log to write; ``keep``: keep the records in memory too; ``statuses``:
+        with every node's status even without a log (a log has them), for comparing runs."""
         self.keep = keep
+        self.statuses = statuses
         self.samples: list[dict[str, Any]] = []
         self._path = Path(log_path) if log_path else None
         self._writer: LogWriter | None = None
@@ -92,6 +95,7 @@ class Recorder:
             start=mission.start.as_dict(),
             maze=mission.maze.to_yaml_dict(),
             tree=tree_nodes(run.root),
+            backend=mission.backend,
         )
         self._header = dict(header)
         if self._path is not None:
@@ -120,8 +124,9 @@ class Recorder:
             "prox": None if scan is None else {k: number(v) for k, v in scan.items()},
             "running": [n.name for n in _running_leaves(run.root)],
         }
-        if self._writer is not None:
+        if self._writer is not None or self.statuses:
             record["nodes"] = {node_path(n): STATUS_LETTER[n.status.name] for n in run.root.iterate()}
+        if self._writer is not None:
             storage = py_trees.blackboard.Blackboard.storage
             changed = {k: jsonable(v) for k, v in storage.items() if self._blackboard.get(k, object()) != v}
             self._blackboard = dict(storage)

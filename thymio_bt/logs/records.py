@@ -39,8 +39,8 @@ class TreeNode(TypedDict):
     parent: int | None
 
 
-class LogHeader(TypedDict):
-    """A log's first record: what the run was (mission, rates, seed, start, the maze and the tree)."""
+class _Header(TypedDict):
+    """What every log's header holds (:class:`LogHeader`)."""
 
     version: int
     mission: str
@@ -49,6 +49,14 @@ class LogHeader(TypedDict):
     start: dict[str, float]
     maze: dict[str, Any]
     tree: list[TreeNode]
+
+
+class LogHeader(_Header, total=False):
+    """A log's first record: what the run was (mission, rates, seed, start, the maze and the tree),
+    and since this field, the ``backend`` kind that ran it (``sim``, ``playground``...), which says
+    whether its ``pose`` is the ground truth (older logs lack it)."""
+
+    backend: str
 
 
 class TickRecord(TypedDict, total=False):
