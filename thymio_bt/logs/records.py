@@ -57,6 +57,8 @@ class LogHeader(_Header, total=False):
     whether its ``pose`` is the ground truth (older logs lack it)."""
 
     backend: str
+    #: the backend's latency in seconds (:attr:`thymio_bt.robot.interface.Robot.latency`)
+    latency: float
 
 
 class TickRecord(TypedDict, total=False):
@@ -69,6 +71,8 @@ class TickRecord(TypedDict, total=False):
     vel: list[float]
     prox: dict[str, float | None] | None
     running: list[str]
+    #: the odometry pose, where it is not ``pose`` (a backend with ground truth and drifting odometry)
+    odom: dict[str, float]
     nodes: dict[str, str]
     bb: dict[str, Any]
 
