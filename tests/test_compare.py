@@ -125,3 +125,22 @@ def test_angles_are_compared_around_the_circle(logs):
     for phase in found.phases:
         if phase["a"]["time"] == west["t"]:
             assert abs(phase["diff"]["yaw_deg"]) == pytest.approx(turned, abs=1e-3)
+
+
+def test_a_log_with_junk_events_is_compared_without_a_traceback(logs, tmp_path):
+    lines = logs[0].read_text().splitlines()
+    end = json.loads(lines[-1])
+    end["events"] = [
+        {"kind": "behaviour_end", "path": "course/part 1", "t": "soon", "range": 0.05},
+        {"kind": "behaviour_end", "path": "course/part 1", "t": 4.2, "range": "far", "pose": "north"},
+        {"kind": "behaviour_end", "path": ["x"], "t": 5.0, "angle": 1.5, "proximity": [1, 2], "name": 3},
+        {"kind": "collision", "t": 4.0, "x": "here"},
+    ]
+    junk = tmp_path / "junk.jsonl"
+    junk.write_text("\n".join([*lines[:-1], json.dumps(end)]) + "\n")
+    out = tmp_path / "junk.json"
+    result = invoke("compare", logs[0], junk, "--json", out)
+    assert result.exit_code == 1 and "Traceback" not in result.output, result.output
+    phases = json.loads(out.read_text())["phases"]
+    junk_part1 = next(p for p in phases if p["node"] == "course/part 1")
+    assert "front" not in junk_part1["b"] and junk_part1["b"]["time"] == 4.2

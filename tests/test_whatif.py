@@ -163,3 +163,20 @@ def test_a_damaged_or_cut_log_is_replayed_up_to_its_last_whole_tick(tmp_path):
         "the log is cut short at 14.9 s (tick 150) with the tree still running; simulated from there" in result.output
     )
     assert result.exit_code == 0 and "Traceback" not in result.output  # the simulator finished the run
+
+
+def test_a_log_with_junk_entity_events_is_replayed_without_a_traceback(tmp_path):
+    record(log=tmp_path / "run.jsonl")
+    lines = (tmp_path / "run.jsonl").read_text().splitlines()
+    end = json.loads(lines[-1])
+    end["events"] = [
+        {"kind": "delete_entity", "t": None},
+        {"kind": "spawn_entity", "t": 4.4, "entity": ["thymio"], "pose": {"x": "a"}},
+        {"kind": "collision", "t": 1e400},
+    ]
+    junk = tmp_path / "junk.jsonl"
+    junk.write_text("\n".join([*lines[:-1], json.dumps(end)]) + "\n")
+    result = invoke("replay", junk, "--mission", MISSION, "--report", tmp_path / "r.json")
+    assert result.exit_code == 1 and "Traceback" not in result.output, result.output
+    divergence = json.loads((tmp_path / "r.json").read_text())["counterfactual"]["divergence"]
+    assert divergence["node"] == "course/DeleteEntity" and divergence["new"] == "delete thymio"

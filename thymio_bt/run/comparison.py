@@ -30,6 +30,7 @@ from typing import Any
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.units import UnitError, parse_value
 from thymio_bt.logs.recording import Recording
+from thymio_bt.logs.records import checked_events, finite
 from thymio_bt.run.divergence import Divergence, first_divergence
 
 #: the unit kind each tolerance takes, and which phase values it bounds
@@ -130,28 +131,39 @@ def phase_values(recording: Recording) -> dict[tuple[str, int], dict[str, Any]]:
     started: dict[str, float] = {}
     seen: dict[str, int] = {}
     out: dict[tuple[str, int], dict[str, Any]] = {}
-    for event in recording.events:
+    for event in checked_events(recording.events):
         path = str(event.get("path", ""))
         if event.get("kind") == "behaviour_start":
             started[path] = event["t"]
         if event.get("kind") != "behaviour_end":
             continue
         seen[path] = seen.get(path, 0) + 1
-        values: dict[str, Any] = {"kind": event.get("name"), "status": event.get("status"), "time": event["t"]}
+        values: dict[str, Any] = {
+            "kind": str(event.get("name")),
+            "status": str(event.get("status")),
+            "time": event["t"],
+        }
         pose = _pose_at(recording, times, event["t"]) or event.get("pose")  # ground truth where logged
         if pose:
             values.update(x=pose["x"], y=pose["y"], yaw_deg=round(math.degrees(pose["yaw"]), 4))
-        if "range" in event:
+        if event.get("range") is not None:
             values["front"] = event["range"]
-        if "angle" in event and pose and path in started:
+        if event.get("angle") is not None and pose and path in started:
             before = _pose_at(recording, times, started[path])
             if before is not None:
                 values["turned_deg"] = round(math.degrees(math.remainder(pose["yaw"] - before["yaw"], math.tau)), 4)
-        prox = event.get("proximity") or {}
-        if "turned_deg" not in values and prox.get("front_left") is not None and prox.get("front_right") is not None:
-            values.update(left=prox["front_left"], right=prox["front_right"])
+        prox = event.get("proximity")
+        prox = prox if isinstance(prox, dict) else {}
+        left, right = finite(prox.get("front_left")), finite(prox.get("front_right"))
+        if "turned_deg" not in values and left is not None and right is not None:
+            values.update(left=left, right=right)
         out[(path, seen[path])] = values
     return out
+
+
+def _text(value: Any) -> str | None:
+    """A name or status from an event: a string, else None."""
+    return value if isinstance(value, str) else None
 
 
 def _pose_at(recording: Recording, times: list[float], t: float) -> dict[str, float] | None:

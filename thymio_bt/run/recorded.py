@@ -28,6 +28,7 @@ import math
 from typing import Any
 
 from thymio_bt.logs.recording import Recording
+from thymio_bt.logs.records import checked_events
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Request, Scan, Twist, new_pose, wrap_angle
 from thymio_bt.robot.model import RobotModel, robot_model
 
@@ -50,7 +51,7 @@ class RecordedRobot(Backend):
         #: the entity requests served so far, as (kind, entity, pose or None), the start's spawn included
         self.served: list[tuple[str, str, dict[str, float] | None]] = []
         self._cmd = Twist()
-        self._crashes = [e for e in recording.events if e.get("kind") == "collision"]
+        self._crashes = [e for e in checked_events(recording.events) if e.get("kind") == "collision"]
         #: when each recorded delete or spawn was served (its event's time), in order
         self.entity_events = entity_events(recording)
         #: the live backend every call goes to once :meth:`go_live` is called, with its clock's offset
@@ -128,7 +129,7 @@ class RecordedRobot(Backend):
         t = self.time()
         while self._crashes and self._crashes[0]["t"] <= t + 1e-9:
             crash = self._crashes.pop(0)
-            self.collisions.append(Collision(crash["t"], crash.get("x", 0.0), crash.get("y", 0.0)))
+            self.collisions.append(Collision(crash["t"], crash.get("x") or 0.0, crash.get("y") or 0.0))
         self.serve_requests()
 
     def serve_requests(self) -> None:
@@ -194,7 +195,7 @@ def entity_events(recording: Recording) -> list[dict[str, Any]]:
     """The deletes and spawns of a recorded run, as its events give them; for a log without its end
     (cut short, damaged), where the ticks show the robot disappear and reappear."""
     if recording.events or recording.end.get("status") != "INCOMPLETE":
-        return [e for e in recording.events if e.get("kind") in ENTITY_EVENTS]
+        return [e for e in checked_events(recording.events) if e.get("kind") in ENTITY_EVENTS]
     found: list[dict[str, Any]] = []
     there = True  # the start's spawn
     for sample in recording.samples:

@@ -200,7 +200,7 @@ class _Watch:
         if abs(new.linear - recorded[0]) > self.tolerance or abs(new.angular - recorded[1]) > self.tolerance:
             return self._divergence(run, sample, list(recorded), [new.linear, new.angular])
         recorded_requests = [
-            (e["t"], _request_text(ENTITY_EVENTS[e["kind"]], e.get("entity", ""), e.get("pose")))
+            (e["t"], _request_text(ENTITY_EVENTS[e["kind"]], str(e.get("entity", "")), e.get("pose")))
             for e in self.robot.entity_events
         ]
         made = [_request_text(*r) for r in self.robot.requests()[1:]]  # the first: the start's spawn
