@@ -180,3 +180,21 @@ def test_a_log_with_junk_entity_events_is_replayed_without_a_traceback(tmp_path)
     assert result.exit_code == 1 and "Traceback" not in result.output, result.output
     divergence = json.loads((tmp_path / "r.json").read_text())["counterfactual"]["divergence"]
     assert divergence["node"] == "course/DeleteEntity" and divergence["new"] == "delete thymio"
+
+
+def test_a_rosbag_log_replays_within_its_rounding(tmp_path):
+    import _require
+
+    _require.module("rosbags")
+    noise = {k: v for k, v in NOISE.items() if k != "noise.odometry"}  # a bag keeps no odometry apart from its pose
+    record(noise, 4, tmp_path / "run.jsonl")
+    assert invoke("export", tmp_path / "run.jsonl", "-o", tmp_path / "run.mcap").exit_code == 0
+    bag = read_log(tmp_path / "run.mcap")
+    assert bag.header["exact"] is False  # float32 scans
+    assert what_if(bag, load_mission(MISSION, noise), tolerance=1e-9).divergence is not None
+    replayed = what_if(bag, load_mission(MISSION, noise))
+    assert replayed.divergence is None and replayed.replayed_ticks == len(bag.samples)
+    result = invoke(
+        "replay", tmp_path / "run.mcap", "--mission", MISSION, *[f"--set={k}={v}" for k, v in noise.items()]
+    )
+    assert "within 0.0001 (this log's numbers are rounded)" in result.output and result.exit_code == 0

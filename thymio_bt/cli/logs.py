@@ -114,7 +114,7 @@ def _what_if(
     from thymio_bt.cli.comparing import read_whole
     from thymio_bt.logs.recording import Recorder
     from thymio_bt.mission import load_mission
-    from thymio_bt.run.whatif import what_if
+    from thymio_bt.run.whatif import COMMAND_TOLERANCE, what_if
 
     report_out = Output(report, "--report") if report is not None else None
     if log_out is not None and str(log_out) != STDOUT:
@@ -131,7 +131,10 @@ def _what_if(
     click.echo(f"{result.mission}: {result.status} after {result.sim_time:.1f} s, {result.ticks} ticks", err=err)
     if result.reason:
         click.echo(f"  reason: [{result.code}] {result.reason}", err=err)
-    if replayed.divergence is None:
+    if replayed.divergence is None and replayed.tolerance > COMMAND_TOLERANCE:
+        said = f"within {replayed.tolerance:g} (this log's numbers are rounded): the verdict is as close"
+        click.echo(f"  the tree commanded what the recorded run did at every tick, {said}", err=err)
+    elif replayed.divergence is None:
         click.echo("  the tree commanded what the recorded run did at every tick: the verdict is exact", err=err)
     for note in replayed.notes:
         click.echo(f"  {note}", err=err)

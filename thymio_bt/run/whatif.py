@@ -46,9 +46,10 @@ from thymio_bt.run.divergence import pose_source
 from thymio_bt.run.recorded import ENTITY_EVENTS, RecordedRobot
 from thymio_bt.run.runner import Run, RunResult, StopRun
 
-#: how far a command may be from the recorded one and still be the same (m/s, rad/s): logs keep
-#: exact numbers; in one written before they named their backend, 6 decimals, and then the
-#: commands computed from them are compared within :data:`ROUNDED_TOLERANCE`
+#: how far a command may be from the recorded one and still be the same (m/s, rad/s): JSON-lines
+#: logs keep exact numbers; one written before they named their backend keeps 6 decimals, a rosbag2
+#: log float32 scans (its header says ``exact: false``), and then the commands computed from them
+#: are compared within :data:`ROUNDED_TOLERANCE`
 COMMAND_TOLERANCE = 1e-9
 ROUNDED_TOLERANCE = 1e-4
 
@@ -90,6 +91,8 @@ class WhatIf:
     replayed_ticks: int
     simulated_ticks: int
     notes: list[str]
+    #: how far the commands could be from the recorded ones and count as the same
+    tolerance: float = COMMAND_TOLERANCE
 
     def counterfactual(self) -> dict[str, Any]:
         """The report's ``counterfactual`` section."""
@@ -123,7 +126,8 @@ def what_if(
     run = Run(mission, int(recording.header.get("seed", mission.seed)), backend=robot)
     _check_tree(recording, run.root)
     if tolerance is None:
-        tolerance = COMMAND_TOLERANCE if "backend" in recording.header else ROUNDED_TOLERANCE
+        exact = "backend" in recording.header and recording.header.get("exact", True)
+        tolerance = COMMAND_TOLERANCE if exact else ROUNDED_TOLERANCE
     watch = _Watch(recording, robot, mission, tolerance, continue_sim)
 
     def hooks(r: Run) -> None:
@@ -132,7 +136,7 @@ def what_if(
             on_tick(r)
 
     result = run.run(on_tick=hooks)
-    return WhatIf(result, watch.divergence, watch.replayed, watch.simulated, watch.notes)
+    return WhatIf(result, watch.divergence, watch.replayed, watch.simulated, watch.notes, tolerance)
 
 
 def _model(mission: Mission, recording: Recording) -> Any:
