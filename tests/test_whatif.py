@@ -198,3 +198,10 @@ def test_a_rosbag_log_replays_within_its_rounding(tmp_path):
         "replay", tmp_path / "run.mcap", "--mission", MISSION, *[f"--set={k}={v}" for k, v in noise.items()]
     )
     assert "within 0.0001 (this log's numbers are rounded)" in result.output and result.exit_code == 0
+
+
+def test_a_run_that_timed_out_replays_to_its_time_limit(tmp_path):
+    record({"time_limit": "5"}, log=tmp_path / "short.jsonl")
+    replayed = what_if(read_log(tmp_path / "short.jsonl"), load_mission(MISSION, {"time_limit": "5"}))
+    assert replayed.divergence is None and replayed.replayed_ticks == 50
+    assert (replayed.result.status, replayed.result.code) == ("TIMEOUT", "TIMEOUT")

@@ -30,6 +30,7 @@ course/part 1 (MoveUntilWall) commanded [0.096504, 0.0] where the recording has 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -194,7 +195,7 @@ class _Watch:
         self.replayed += 1
         if self.divergence is not None:
             self._diverged(run)
-        elif robot.index >= len(robot.samples) - 1 and run.root.status.name == "RUNNING":
+        elif robot.index >= len(robot.samples) - 1 and run.root.status.name == "RUNNING" and not _last_tick(run):
             self._recording_ends(run)
 
     def _difference(self, run: Run, sample: dict[str, Any]) -> CommandDivergence | None:
@@ -271,6 +272,11 @@ class _Watch:
         sim.drive(new.linear, new.angular)
         start = "the ground-truth pose" if source == "ground truth" else f"the {source} pose (no ground truth)"
         self.notes.append(f"{note}, starting at {start} of that tick")
+
+
+def _last_tick(run: Run) -> bool:
+    """Whether this is the run's last tick: its time limit ends it now, as it ended the recorded one."""
+    return run.ticks >= math.ceil(run.mission.time_limit * run.mission.tick_hz - 1e-9)
 
 
 def _shown(value: Any) -> Any:
