@@ -205,3 +205,24 @@ def test_a_run_that_timed_out_replays_to_its_time_limit(tmp_path):
     replayed = what_if(read_log(tmp_path / "short.jsonl"), load_mission(MISSION, {"time_limit": "5"}))
     assert replayed.divergence is None and replayed.replayed_ticks == 50
     assert (replayed.result.status, replayed.result.code) == ("TIMEOUT", "TIMEOUT")
+
+
+def test_a_log_written_before_exact_numbers_replays_within_its_rounding(tmp_path):
+    recording = record(log=tmp_path / "run.jsonl")
+    lines = (tmp_path / "run.jsonl").read_text().splitlines()
+
+    def rounded(value):
+        if isinstance(value, float):
+            return round(value, 6)
+        if isinstance(value, dict):
+            return {k: rounded(v) for k, v in value.items()}
+        return [rounded(v) for v in value] if isinstance(value, list) else value
+
+    header = json.loads(lines[0])
+    del header["backend"], header["latency"]  # what logs held before
+    old = tmp_path / "old.jsonl"
+    old.write_text("\n".join([json.dumps(header)] + [json.dumps(rounded(json.loads(x))) for x in lines[1:]]) + "\n")
+    logged = read_log(old)
+    assert what_if(logged, load_mission(MISSION), tolerance=1e-9).divergence is not None
+    replayed = what_if(logged, load_mission(MISSION))
+    assert replayed.divergence is None and replayed.replayed_ticks == len(recording.samples)

@@ -68,7 +68,8 @@ def test_the_simulator_against_the_playground(playground_log, tmp_path):
     part1 = data["phases"][0]
     assert part1["node"] == "course/part 1" and abs(part1["diff"]["front"]) < 0.005
     turns = [p for p in data["phases"] if p["node"].endswith("TurnAngle")]
-    assert len(turns) == 4 and all(abs(p["diff"]["turned_deg"]) < 5 for p in turns)
+    turned = [(p["a"]["turned_deg"], p["b"]["turned_deg"]) for p in turns]
+    assert len(turns) == 4 and all(abs(b - a) < 5 for a, b in turned), turned
     assert data["divergence"] is not None and data["divergence"]["a"]["pose_source"] == "ground truth"
 
 
