@@ -226,3 +226,15 @@ def test_a_log_written_before_exact_numbers_replays_within_its_rounding(tmp_path
     assert what_if(logged, load_mission(MISSION), tolerance=1e-9).divergence is not None
     replayed = what_if(logged, load_mission(MISSION))
     assert replayed.divergence is None and replayed.replayed_ticks == len(recording.samples)
+
+
+def test_a_log_of_another_tick_rate_or_with_a_junk_header_is_said_not_raised(tmp_path):
+    record(log=tmp_path / "run.jsonl")
+    result = invoke("replay", tmp_path / "run.jsonl", "--mission", MISSION, "--set", "tick_hz=20")
+    assert result.exit_code == 2 and "recorded at 10 Hz, the mission ticks at 20 Hz" in result.output
+    lines = (tmp_path / "run.jsonl").read_text().splitlines()
+    header = {**json.loads(lines[0]), "seed": "lucky", "latency": "slow"}
+    junk = tmp_path / "junk.jsonl"
+    junk.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    result = invoke("replay", junk, "--mission", MISSION)
+    assert result.exit_code == 0 and "the verdict is exact" in result.output, result.output

@@ -28,7 +28,7 @@ import math
 from typing import Any
 
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import checked_events
+from thymio_bt.logs.records import checked_events, finite
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Request, Scan, Twist, new_pose, wrap_angle
 from thymio_bt.robot.model import RobotModel, robot_model
 
@@ -45,7 +45,7 @@ class RecordedRobot(Backend):
         super().__init__()
         self.samples = recording.samples
         self.model = model or robot_model("course")
-        self.latency = float(recording.header.get("latency", 0.0)) if latency is None else latency
+        self.latency = (finite(recording.header.get("latency")) or 0.0) if latency is None else latency
         #: the recorded tick now served (0: the first tick)
         self.index = 0
         #: the entity requests served so far, as (kind, entity, pose or None), the start's spawn included

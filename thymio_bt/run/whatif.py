@@ -40,7 +40,7 @@ from py_trees.behaviour import Behaviour
 from thymio_bt.behaviours.base import node_path
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import STATUS_LETTER
+from thymio_bt.logs.records import STATUS_LETTER, finite
 from thymio_bt.mission import Mission
 from thymio_bt.robot.interface import Backend, new_pose
 from thymio_bt.run.divergence import pose_source
@@ -122,9 +122,19 @@ def what_if(
     A recording of another mission is refused."""
     if not recording.samples:
         raise UserError(Problem("the log has no tick to replay", recording.mission or "the log"))
+    rate = finite(recording.header.get("tick_hz"))
+    if rate is not None and rate != mission.tick_hz:
+        raise UserError(
+            Problem(
+                f"the log was recorded at {rate:g} Hz, the mission ticks at {mission.tick_hz:g} Hz",
+                recording.mission or "the log",
+                hint=f"replay with --set tick_hz={rate:g}",
+            )
+        )
     mission = dataclasses.replace(mission, maze=recording.maze)  # the maze the recorded run was in
     robot = RecordedRobot(recording, _model(mission, recording))
-    run = Run(mission, int(recording.header.get("seed", mission.seed)), backend=robot)
+    seed = recording.header.get("seed")
+    run = Run(mission, seed if isinstance(seed, int) and 0 <= seed < 2**63 else mission.seed, backend=robot)
     _check_tree(recording, run.root)
     if tolerance is None:
         exact = "backend" in recording.header and recording.header.get("exact", True)
