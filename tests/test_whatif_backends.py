@@ -56,13 +56,13 @@ def test_a_playground_log_replays_exactly(playground_log):
 
 
 @pytest.mark.slow
-def test_the_simulator_against_the_playground(playground_log, tmp_path):
-    sim_log = tmp_path / "sim.jsonl"
-    ran = CliRunner().invoke(main, ["run", str(MISSION), "--robot", "enki", "-q", "--log", str(sim_log)])
-    assert ran.exit_code == 0, ran.output
-    out = tmp_path / "compare.json"
-    result = CliRunner().invoke(main, ["compare", str(sim_log), str(playground_log), "--json", str(out)])
+def test_the_simulator_against_the_playground(tmp_path):
+    _require.program("asebaplayground")
+    out, plot = tmp_path / "compare.json", tmp_path / "compare.png"
+    args = ["compare", str(MISSION), "--backends", "sim,playground", "--set", "robot=enki", "--json", str(out)]
+    result = CliRunner().invoke(main, [*args, "--plot", str(plot)])
     assert result.exit_code == 1, result.output  # the Playground's clock runs its own way: times differ past 0.5 s
+    assert "sim: SUCCESS" in result.output and "playground: SUCCESS" in result.output
     data = json.loads(out.read_text())
     assert all(p["a"] is not None and p["b"] is not None for p in data["phases"])  # the same phases, in both
     part1 = data["phases"][0]
@@ -70,7 +70,9 @@ def test_the_simulator_against_the_playground(playground_log, tmp_path):
     turns = [p for p in data["phases"] if p["node"].endswith("TurnAngle")]
     turned = [(p["a"]["turned_deg"], p["b"]["turned_deg"]) for p in turns]
     assert len(turns) == 4 and all(abs(b - a) < 5 for a, b in turned), turned
-    assert data["divergence"] is not None and data["divergence"]["a"]["pose_source"] == "ground truth"
+    divergence = data["divergence"]
+    assert divergence is not None and divergence["a"]["pose_source"] == divergence["b"]["pose_source"] == "ground truth"
+    assert plot.stat().st_size > 10_000
 
 
 def test_a_ros2_log_replays_exactly_and_continues_from_its_odometry(ros2_env, tmp_path):  # noqa: F811
