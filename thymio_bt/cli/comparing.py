@@ -152,7 +152,7 @@ def _value(key: str, value: Any) -> str:
 def _print(result: Comparison, names: tuple[str, str]) -> None:
     """The phase table, the first divergence and the verdict."""
     click.echo(f"A: {names[0]}\nB: {names[1]}")
-    click.echo(f"    {'value':<11} {'A':>11} {'B':>11} {'B - A':>11}")
+    click.echo(f"    {'value':<11} {'A':>13} {'B':>13} {'B - A':>11}")
     exceeded = set(result.exceeded)
     for phase in result.phases:
         a, b, diff = phase["a"] or {}, phase["b"] or {}, phase["diff"] or {}
@@ -164,10 +164,12 @@ def _print(result: Comparison, names: tuple[str, str]) -> None:
         for key in [k for k in diff if k not in ("x", "y")]:
             mark = "  !" if f"{named}: {key}" in exceeded else ""
             if key == "status":
-                click.echo(f"    {key:<11} {a['status']:>11} {b['status']:>11}{mark}")
+                click.echo(f"    {key:<11} {a['status']:>13} {b['status']:>13}{mark}")
                 continue
-            shown = (a.get(key), b.get(key)) if key != "position" else (None, None)
-            row = f"{_value(key, shown[0]):>11} {_value(key, shown[1]):>11} {_value(key, diff[key]):>11}"
+            shown = (_value(key, a.get(key)), _value(key, b.get(key)))
+            if key == "position":  # where each run was, x,y in m
+                shown = (f"{a['x']:.3f},{a['y']:.3f} m", f"{b['x']:.3f},{b['y']:.3f} m")
+            row = f"{shown[0]:>13} {shown[1]:>13} {_value(key, diff[key]):>11}"
             click.echo(f"    {key:<11} {row}{mark}")
     found = result.divergence
     if found is None:
