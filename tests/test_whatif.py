@@ -238,3 +238,18 @@ def test_a_log_of_another_tick_rate_or_with_a_junk_header_is_said_not_raised(tmp
     junk.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
     result = invoke("replay", junk, "--mission", MISSION)
     assert result.exit_code == 0 and "the verdict is exact" in result.output, result.output
+
+
+def test_continue_sim_simulates_the_robot_the_log_was_made_with(tmp_path):
+    record({"robot": "enki"}, log=tmp_path / "enki.jsonl")
+    logged = read_log(tmp_path / "enki.jsonl")
+    logged.header["backend"] = "playground"  # a Playground log: Enki's robot, the mission naming none
+    models = []
+    changed = load_mission(MISSION, {"final_stop": "6cm"})
+    what_if(
+        logged,
+        changed,
+        continue_sim=True,
+        on_tick=lambda run: models.append(run.backend.live and run.backend.live.model.name),
+    )
+    assert models[-1] == "enki" and models[0] is None

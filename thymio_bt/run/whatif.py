@@ -43,6 +43,7 @@ from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import STATUS_LETTER, finite
 from thymio_bt.mission import Mission
 from thymio_bt.robot.interface import Backend, new_pose
+from thymio_bt.robot.model import ROBOTS
 from thymio_bt.run.divergence import pose_source
 from thymio_bt.run.recorded import ENTITY_EVENTS, RecordedRobot
 from thymio_bt.run.runner import Run, RunResult, StopRun
@@ -269,7 +270,10 @@ class _Watch:
 
         robot, sample = self.robot, self.robot.sample
         source = pose_source(self.recording)
-        sim: Backend = backend_kind("sim").create(self.mission, run.seed)
+        mission = self.mission
+        if robot.model.name in ROBOTS:  # the recorded backend's own robot (Enki's on the Playground)
+            mission = dataclasses.replace(mission, robot=robot.model.name)
+        sim: Backend = backend_kind("sim").create(mission, run.seed)
         pose = sample.get("pose")
         if pose is not None:
             sim.request_spawn(robot.robot_name, new_pose(pose["x"], pose["y"], pose["yaw"]))
