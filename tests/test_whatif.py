@@ -243,13 +243,12 @@ def test_a_log_of_another_tick_rate_or_with_a_junk_header_is_said_not_raised(tmp
 def test_continue_sim_simulates_the_robot_the_log_was_made_with(tmp_path):
     record({"robot": "enki"}, log=tmp_path / "enki.jsonl")
     logged = read_log(tmp_path / "enki.jsonl")
-    logged.header["backend"] = "playground"  # a Playground log: Enki's robot, the mission naming none
-    models = []
-    changed = load_mission(MISSION, {"final_stop": "6cm"})
-    what_if(
-        logged,
-        changed,
-        continue_sim=True,
-        on_tick=lambda run: models.append(run.backend.live and run.backend.live.model.name),
-    )
-    assert models[-1] == "enki" and models[0] is None
+    logged.header.update(backend="playground", latency=0.2)  # a Playground log: Enki's robot, late by 0.2 s
+    seen = []
+
+    def look(run):
+        live = run.backend.live
+        seen.append((live and live.model.name, run.backend.latency))
+
+    what_if(logged, load_mission(MISSION, {"final_stop": "6cm"}), continue_sim=True, on_tick=look)
+    assert seen[0] == (None, 0.2) and seen[-1] == ("enki", 0.0)  # the simulator's Enki, on time

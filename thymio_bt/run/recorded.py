@@ -183,6 +183,7 @@ class RecordedRobot(Backend):
             c, s = math.cos(yaw), math.sin(yaw)
             self._frame = (odom.x - (c * truth.x - s * truth.y), odom.y - (s * truth.x + c * truth.y), yaw)
         self._since = self.time() - live.time()
+        self.latency = live.latency  # behaviours that start from now on lead by the live robot's
         self.live = live
 
     def close(self) -> None:

@@ -78,7 +78,8 @@ class CommandDivergence:
         """The divergence in a sentence."""
         return (
             f"from {self.time:g} s (tick {self.tick}) the recording no longer tells what the robot would see: "
-            f"{self.node} ({self.kind}) commanded {_shown(self.new)} where the recording has {_shown(self.recorded)}"
+            f"{self.node} ({self.kind}) commanded {_shown(self.new, self.recorded)} where the recording has "
+            f"{_shown(self.recorded, self.new)}"
         )
 
 
@@ -293,10 +294,12 @@ def _last_tick(run: Run) -> bool:
     return run.ticks >= math.ceil(run.mission.time_limit * run.mission.tick_hz - 1e-9)
 
 
-def _shown(value: Any) -> Any:
-    """A command with 6 decimals, as the messages print it (an entity request as it is)."""
+def _shown(value: Any, other: Any) -> Any:
+    """A command with 6 decimals, as the messages print it, or all of them where 6 do not tell it
+    from ``other`` (an entity request as it is)."""
     if isinstance(value, list) and all(isinstance(v, float) for v in value):
-        return [round(v, 6) for v in value]
+        short = [round(v, 6) for v in value]
+        return short if short != [round(v, 6) for v in other or []] else value
     return value
 
 
