@@ -5,6 +5,7 @@ Exit codes: 0 success, 1 mission FAILURE or time limit, 2 user error (one clear 
 The command group :func:`main` and what the commands share are in :mod:`thymio_bt.cli.app`; each
 family of commands has its module, imported here so that ``main`` has them all:
 :mod:`~thymio_bt.cli.running` (``run``), :mod:`~thymio_bt.cli.logs` (``replay``, ``export``),
+:mod:`~thymio_bt.cli.comparing` (``compare``),
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
 ``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
@@ -14,7 +15,7 @@ and :mod:`~thymio_bt.cli.viewing` (``view``).
 Example::
 
     >>> sorted(main.commands)  # doctest: +NORMALIZE_WHITESPACE
-    ['backends', 'behaviours', 'calibrate', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
+    ['backends', 'behaviours', 'calibrate', 'compare', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
      'schema', 'serve', 'sweep', 'tree', 'validate', 'view']
 """
 
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 from thymio_bt.cli.app import POSITIVE, main
 from thymio_bt.cli.calibration import calibrate_command
+from thymio_bt.cli.comparing import compare
 from thymio_bt.cli.grading import grade
 from thymio_bt.cli.inspection import backends_command, behaviours, schema, tree, validate
 from thymio_bt.cli.linting import lint
@@ -39,6 +41,7 @@ __all__ = [
     "backends_command",
     "behaviours",
     "calibrate_command",
+    "compare",
     "export",
     "grade",
     "lint",

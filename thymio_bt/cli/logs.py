@@ -1,7 +1,9 @@
 """``thymio-bt replay`` and ``thymio-bt export``: what a run log gives without running the mission again.
 
-``replay`` redraws a run (summary line, pictures, a window) from its ``--log`` file; ``export``
-converts a log into another format (rosbag2 ``.mcap``, a Groot2 ``.btlog``, ...).
+``replay`` redraws a run (summary line, pictures, a window) from its ``--log`` file; with
+``--mission CHANGED.yaml`` (or ``--set``) it asks what if: the changed tree re-ticked against the
+recorded readings (:mod:`thymio_bt.run.whatif`). ``export`` converts a log into another format
+(rosbag2 ``.mcap``, a Groot2 ``.btlog``, ...).
 
 Example::
 
@@ -16,12 +18,13 @@ Example::
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, NoReturn, cast
 
 import click
 
-from thymio_bt.cli.app import fail, main, path_option, pose_text, viewer_options
+from thymio_bt.cli.app import fail, json_text, main, parse_overrides, path_option, pose_text, viewer_options
 from thymio_bt.cli.pictures import Pictures
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import STDOUT, Output, check_writable
@@ -38,6 +41,21 @@ if TYPE_CHECKING:
 @path_option("--gif", help="Animate the run.")
 @viewer_options
 @click.option("--partial", is_flag=True, help="Replay a damaged log up to its first damaged line.")
+@path_option(
+    "--mission",
+    metavar="CHANGED.yaml",
+    help="What if: re-tick this mission's tree against the recorded readings, stopping where it commands differently.",
+)
+@click.option("--set", "sets", multiple=True, metavar="NAME=VALUE", help="What if: change a mission parameter.")
+@click.option(
+    "--continue",
+    "continue_in",
+    type=click.Choice(["sim"]),
+    default=None,
+    help="What if: go on in the simulator from the recorded state where the tree decides differently.",
+)
+@path_option("--report", help="What if: write the run report, with its counterfactual section (JSON).")
+@path_option("--log", "log_out", help="What if: write the replayed run's log.")
 def replay(
     log: Path,
     plot: Path | None,
@@ -46,8 +64,14 @@ def replay(
     view: bool,
     speedup: float | None,
     partial: bool,
+    mission: Path | None,
+    sets: tuple[str, ...],
+    continue_in: str | None,
+    report: Path | None,
+    log_out: Path | None,
 ) -> None:
-    """Redraw a run from its --log FILE.jsonl without re-running it."""
+    """Redraw a run from its --log FILE.jsonl without re-running it; with --mission or --set, re-tick
+    a changed tree against it (what if)."""
     from thymio_bt.logs import read_log
 
     pictures = Pictures(plot, plot_signals, gif)
@@ -57,6 +81,8 @@ def replay(
 
             require_display("without a display, draw the log to files: --plot run.png, --gif run.gif (or .mp4)")
         pictures.check()
+        if mission is not None or sets or continue_in or report is not None or log_out is not None:
+            _what_if(log, mission, sets, continue_in is not None, report, log_out, pictures, speedup)
         recording = read_log(log, partial)
         damage_note(log, recording)
         _replay_summary(recording)
@@ -71,6 +97,52 @@ def replay(
             replay_in_window(recording, 1.0 if speedup is None else speedup)
     except UserError as exc:
         fail(exc)
+
+
+def _what_if(
+    log: Path,
+    mission: Path | None,
+    sets: tuple[str, ...],
+    continue_sim: bool,
+    report: Path | None,
+    log_out: Path | None,
+    pictures: Pictures,
+    speedup: float | None,
+) -> NoReturn:
+    """``replay LOG --mission CHANGED.yaml``: re-tick the changed tree against the log, say where it
+    decided differently, write the report, log and pictures asked for, exit as ``run`` does."""
+    from thymio_bt.cli.comparing import read_whole
+    from thymio_bt.logs.recording import Recorder
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.whatif import COMMAND_TOLERANCE, what_if
+
+    report_out = Output(report, "--report") if report is not None else None
+    if log_out is not None and str(log_out) != STDOUT:
+        check_writable(log_out, "--log")
+    recording = read_whole(log)
+    if mission is None and not recording.mission:
+        raise UserError(f"{log} does not name its mission (hint: --mission FILE.yaml)")
+    spec = load_mission(mission if mission is not None else recording.mission, parse_overrides(sets))
+    recorder = Recorder(log_path=log_out, keep=pictures.wanted, statuses=True)
+    replayed = what_if(recording, spec, continue_sim=continue_sim, on_tick=recorder)
+    result = replayed.result
+    err = STDOUT in (str(report), str(log_out))
+    out = replayed.counterfactual()
+    click.echo(f"{result.mission}: {result.status} after {result.sim_time:.1f} s, {result.ticks} ticks", err=err)
+    if result.reason:
+        click.echo(f"  reason: [{result.code}] {result.reason}", err=err)
+    if replayed.divergence is None and replayed.tolerance > COMMAND_TOLERANCE:
+        said = f"within {replayed.tolerance:g} (this log's numbers are rounded): the verdict is as close"
+        click.echo(f"  the tree commanded what the recorded run did at every tick, {said}", err=err)
+    elif replayed.divergence is None:
+        click.echo("  the tree commanded what the recorded run did at every tick: the verdict is exact", err=err)
+    for note in replayed.notes:
+        click.echo(f"  {note}", err=err)
+    click.echo(f"  replayed ticks: {out['replayed_ticks']}, simulated ticks: {out['simulated_ticks']}", err=err)
+    if report_out is not None:
+        report_out.write_text(json_text(replayed.report()))
+    pictures.draw(recorder.finish(result), 4.0 if speedup is None else speedup, quiet=False)
+    sys.exit(0 if result.status == "SUCCESS" else 1)
 
 
 def _replay_summary(recording: Recording) -> None:

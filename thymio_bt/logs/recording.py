@@ -24,6 +24,7 @@ Example (a log written, then read back as it was recorded):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -96,7 +97,8 @@ class Recorder:
             start=mission.start.as_dict(),
             maze=mission.maze.to_yaml_dict(),
             tree=tree_nodes(run.root),
-            backend=mission.backend,
+            backend=backend_name(run.backend, mission.backend),
+            latency=run.backend.latency,
         )
         self._header = dict(header)
         if self._path is not None:
@@ -108,7 +110,7 @@ class Recorder:
     def __call__(self, run: Run) -> None:
         """Record the tick ``run`` just made (the first call writes the log's header); a log that cannot
         be written any more ends the run with :class:`~thymio_bt.run.runner.StopRun`."""
-        from thymio_bt.logs.records import STATUS_LETTER, jsonable, number
+        from thymio_bt.logs.records import STATUS_LETTER, jsonable
 
         if self._run is None:
             self._open(run)
@@ -116,15 +118,19 @@ class Recorder:
         pose = backend.true_pose()
         scan = backend.proximity()
         cmd, vel = backend.command(), backend.velocity()
+        # the robot's numbers exactly as the tree had them: a what-if replay (run.whatif) feeds them back
         record: TickRecord = {
             "t": round(backend.time(), 6),
             "tick": run.ticks,
-            "pose": None if pose is None else {k: round(v, 6) for k, v in pose.as_dict().items()},
-            "cmd": [round(cmd.linear, 6), round(cmd.angular, 6)],
-            "vel": [round(vel.linear, 6), round(vel.angular, 6)],
-            "prox": None if scan is None else {k: number(v) for k, v in scan.items()},
+            "pose": None if pose is None else pose.as_dict(),
+            "cmd": [float(cmd.linear), float(cmd.angular)],
+            "vel": [float(vel.linear), float(vel.angular)],
+            "prox": None if scan is None else {k: None if math.isinf(v) else float(v) for k, v in scan.items()},
             "running": [n.name for n in _running_leaves(run.root)],
         }
+        odom = backend.pose()
+        if odom is not None and odom != pose:  # odometry that is not the pose logged: what the tree read
+            record["odom"] = odom.as_dict()
         if self._writer is not None or self.statuses:
             record["nodes"] = {node_path(n): STATUS_LETTER[n.status.name] for n in run.root.iterate()}
             storage = py_trees.blackboard.Blackboard.storage
@@ -180,6 +186,22 @@ class Recorder:
                 writer.close()
         except OSError:
             pass
+
+
+def backend_name(backend: object, default: str) -> str:
+    """The backend kind (``sim``, ``playground``, ``ros2``...) whose package made ``backend``, else
+    ``default`` (the mission's): ``run --backend`` does not change the mission's."""
+    from thymio_bt.backends import backend_kinds
+
+    module = type(backend).__module__
+    kinds = [(k.name, k.factory.partition(":")[0]) for k in backend_kinds().values() if isinstance(k.factory, str)]
+    for name, factory in kinds:
+        if module == factory:
+            return name
+    for name, factory in kinds:
+        if module.startswith(factory.rpartition(".")[0] + "."):
+            return name
+    return default
 
 
 def _running_leaves(root: Behaviour) -> list[Behaviour]:

@@ -57,6 +57,8 @@ class LogHeader(_Header, total=False):
     whether its ``pose`` is the ground truth (older logs lack it)."""
 
     backend: str
+    #: the backend's latency in seconds (:attr:`thymio_bt.robot.interface.Robot.latency`)
+    latency: float
 
 
 class TickRecord(TypedDict, total=False):
@@ -69,6 +71,8 @@ class TickRecord(TypedDict, total=False):
     vel: list[float]
     prox: dict[str, float | None] | None
     running: list[str]
+    #: the odometry pose, where it is not ``pose`` (a backend with ground truth and drifting odometry)
+    odom: dict[str, float]
     nodes: dict[str, str]
     bb: dict[str, Any]
 
@@ -103,6 +107,42 @@ def tree_nodes(root: Behaviour) -> list[TreeNode]:
         kind = getattr(node, "yaml_name", "") or getattr(node, "node_kind", "") or type(node).__name__
         nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=kind, parent=parent))
     return nodes
+
+
+def finite(value: Any) -> float | None:
+    """``value`` if it is a finite number (not a bool), else None: a log's events are not checked
+    when it is read, and a hostile or damaged one may hold anything.
+
+    >>> finite(0.05), finite("north"), finite(float("nan")), finite(True)
+    (0.05, None, None, None)
+    """
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+        return float(value)
+    return None
+
+
+def checked_events(events: list[Any]) -> list[dict[str, Any]]:
+    """The events of a log that can be used: dicts with a finite time ``t``, their ``pose`` kept
+    only if it is a pose (finite ``x``, ``y``, ``yaw``), their ``range``, ``angle``, ``x`` and ``y``
+    only if finite numbers.
+
+    >>> checked_events([{"t": 1, "pose": {"x": 0, "y": 0, "yaw": "up"}, "range": 0.05}, {"kind": "x"}, 3])
+    [{'t': 1.0, 'pose': None, 'range': 0.05}]
+    """
+    out = []
+    for event in events:
+        if not isinstance(event, dict) or finite(event.get("t")) is None:
+            continue
+        event = {**event, "t": finite(event["t"])}
+        if "pose" in event:
+            pose = event["pose"]
+            ok = isinstance(pose, dict) and all(finite(pose.get(k)) is not None for k in ("x", "y", "yaw"))
+            event["pose"] = {k: float(pose[k]) for k in ("x", "y", "yaw")} if ok else None
+        for key in ("range", "angle", "x", "y"):
+            if key in event:
+                event[key] = finite(event[key])
+        out.append(event)
+    return out
 
 
 def number(value: float | None) -> float | None:

@@ -272,6 +272,7 @@ def read_rosbag(path: Path) -> Recording:
     samples = [s for _, s in sorted(ticks.items()) if "tick" in s]
     for s in samples:
         s["prox"] = s["prox"] or None
+    header["exact"] = False  # float32 scans, a quaternion's yaw, 6 decimals: not the tree's numbers
     return Recording(
         maze=validate(Maze, header["maze"], str(path)),
         mission=header.get("mission", ""),
