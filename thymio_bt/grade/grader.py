@@ -9,7 +9,7 @@ Example::
 
     >>> results = grade("assignments/course_part1_2.yaml", ["examples/class/ada", "examples/class/chen"])
     >>> [(s["name"], s["status"], s["score"], s["max"]) for s in results["students"]]
-    [('ada', 'graded', 10.0, 10.0), ('chen', 'graded', 1.0, 10.0)]
+    [('ada', 'graded', 11.0, 11.0), ('chen', 'graded', 2.0, 11.0)]
     >>> [p["message"] for p in results["students"][1]["palette"]], results["summary"]["runs"]
     (['WallFollow is not allowed in this assignment'], 24)
 """
@@ -25,12 +25,12 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.grade.assignment import Assignment, load_assignment, resolve_assignment
+from thymio_bt.grade.assignment import Assignment, Criterion, resolve_assignment
 from thymio_bt.grade.isolation import ForkPool, Limits
 from thymio_bt.grade.palette import Finding, check_palette
 from thymio_bt.grade.student import StudentTask, died_message, grade_runs
 from thymio_bt.grade.submissions import Submission, find_submissions
-from thymio_bt.grade.worlds import World, make_worlds
+from thymio_bt.grade.worlds import World, load_worlds
 
 #: called with (student, message) as each run ends, in the grader's process
 Progress = Callable[[str, dict[str, Any]], None]
@@ -66,9 +66,8 @@ def grade(
     runs each student will make, once the submissions are read; ``progress`` hears each run end."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
-    assignment = load_assignment(path)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
-    made = make_worlds(assignment, path, folder)
+    assignment, made = load_worlds(path, folder)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
     by_name = {e.submission.name: e for e in entries}
@@ -117,7 +116,7 @@ def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
 
 def _limits(assignment: Assignment) -> Limits:
     limits = assignment.limits
-    return Limits(cpu=limits.cpu, memory_mib=limits.memory, wall=limits.wall or 3 * limits.cpu + 5)
+    return Limits(cpu=limits.cpu, memory_mib=round(limits.memory), wall=limits.wall or 3 * limits.cpu + 5)
 
 
 def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -> Entry:
@@ -169,6 +168,7 @@ def results(
                     "points": c.points,
                     "variants": c.variants or [w.name for w in worlds],
                     "pass_rate": c.pass_rate,
+                    "credit": c.credit,
                     "check": c.check,
                 }
                 for c in assignment.criteria
@@ -235,19 +235,22 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
                 "passed": False,
                 "runs": 0,
                 "passed_runs": 0,
+                "variants": [],
                 "feedback": f"not graded: the submission is {entry.status} (see its messages)",
                 "where": None,
             }
             for c in assignment.criteria
         ]
     )
-    earned = sum(c["earned"] for c in criteria) - sum(f.points for f in entry.findings)
+    earned = sum(c["earned"] for c in criteria)
+    score = round(max(0.0, earned - sum(f.points for f in entry.findings)), 3) if entry.status == "graded" else 0.0
     return {
         "name": submission.name,
         "file": str(submission.file) if submission.file else None,
         "status": entry.status,
-        "score": round(max(0.0, earned), 3) if entry.status == "graded" else 0.0,
+        "score": score,
         "max": assignment.max_points,
+        "penalty": round(score - earned, 3) if entry.status == "graded" else 0.0,
         "messages": entry.messages,
         "criteria": criteria,
         "palette": [f.to_json() for f in entry.findings],
@@ -256,11 +259,29 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
     }
 
 
-def _criterion(criterion: Any, runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """A criterion's line for one student: passed when enough of its runs passed it."""
+def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """A criterion's line for one student. A variant passes when at least ``pass_rate`` of its
+    runs passed; shared credit gives each passed variant its share of the points, ``credit: all``
+    the points only when every variant passed."""
     judged = [(r, r["criteria"][criterion.name]) for r in runs if criterion.name in r["criteria"]]
-    passed_runs = sum(j["passed"] for _, j in judged)
-    passed = bool(judged) and passed_runs >= criterion.pass_rate * len(judged) - 1e-9
+    names = list(dict.fromkeys(r["variant"] for r, _ in judged))
+    variants = []
+    for name in names:
+        mine = [j for r, j in judged if r["variant"] == name]
+        passed_runs = sum(j["passed"] for j in mine)
+        variants.append(
+            {
+                "name": name,
+                "runs": len(mine),
+                "passed_runs": passed_runs,
+                "passed": passed_runs >= criterion.pass_rate * len(mine) - 1e-9,
+            }
+        )
+    passed = bool(variants) and all(v["passed"] for v in variants)
+    counts = criterion.credit == "shared" or passed
+    for v in variants:
+        v["earned"] = round(criterion.points / len(variants), 3) if v["passed"] and counts else 0.0
+    earned = criterion.points if passed else round(sum(v["earned"] for v in variants), 3)
     failed = [(r, j) for r, j in judged if not j["passed"]]
     feedback = None
     where = None
@@ -274,10 +295,11 @@ def _criterion(criterion: Any, runs: list[dict[str, Any]]) -> dict[str, Any]:
     return {
         "name": criterion.name,
         "points": criterion.points,
-        "earned": criterion.points if passed else 0.0,
+        "earned": earned,
         "passed": passed,
         "runs": len(judged),
-        "passed_runs": passed_runs,
+        "passed_runs": sum(j["passed"] for _, j in judged),
+        "variants": variants,
         "feedback": feedback,
         "where": where,
     }

@@ -139,11 +139,16 @@ def _check_start(name: str, maze: Maze, start: str, robot: str) -> None:
             pose = Pose(*parse_pose(start))
         except UnitError:
             raise UserError(
-                Problem(f"variant '{name}': its maze has no spawn '{start}'", hint=did_you_mean(start, maze.spawns))
+                Problem(
+                    f"variant '{name}': its maze has no spawn '{start}'",
+                    path="start",
+                    hint=did_you_mean(start, maze.spawns),
+                )
             ) from None
     problem = placement_problem(maze, robot_model(robot), pose)
     if problem:
-        raise UserError(Problem(f"variant '{name}': impossible start {start}: {problem}", hint="pick a free pose"))
+        message = f"variant '{name}': impossible start {start}: {problem}"
+        raise UserError(Problem(message, path="start", hint="pick a free pose"))
 
 
 def _pitch(variant: Variant) -> float:
@@ -190,19 +195,43 @@ def variant_mission(
 
 
 def make_worlds(assignment: Assignment, path: Path, folder: Path) -> list[World]:
-    """Every variant's world (made mazes written into ``folder``); a variant that cannot be made
-    is a :class:`UserError` at its place in the assignment file ``path``."""
-    from thymio_bt.inputs.validation import locate
+    """Every variant's world (made mazes written into ``folder``); the variants that cannot be made
+    are one :class:`UserError`, each problem at its variant's place in the assignment file ``path``."""
     from thymio_bt.inputs.yamlio import load_yaml
 
-    worlds = []
-    for i, variant in enumerate(assignment.variants):
+    worlds, problems = _worlds(list(enumerate(assignment.variants)), load_yaml(path, "assignment"), path, folder)
+    if problems:
+        raise UserError(problems)
+    return worlds
+
+
+def load_worlds(path: str | Path, folder: Path) -> tuple[Assignment, list[World]]:
+    """Read the assignment at ``path`` and make its worlds in ``folder``: every problem of the file,
+    its schema, variants, criteria, palette, mazes and starts, found and reported at once."""
+    from thymio_bt.grade.assignment import read_assignment
+
+    reading = read_assignment(path)
+    worlds, problems = _worlds(reading.variants, reading.data, Path(reading.file), folder)
+    problems = reading.problems + problems
+    if problems or reading.assignment is None:
+        raise UserError(problems)
+    return reading.assignment, worlds
+
+
+def _worlds(
+    variants: list[tuple[int, Variant]], data: Any, path: Path, folder: Path
+) -> tuple[list[World], list[Problem]]:
+    """The worlds of ``variants`` (each with its index in the file) and the problems of those that
+    cannot be made."""
+    from thymio_bt.inputs.validation import locate
+
+    worlds, problems = [], []
+    for i, variant in variants:
         try:
             worlds.append(World.of(variant, path.parent, folder))
         except UserError as exc:
-            key = "start" if variant.start is not None else "maze"
-            line, column = locate(load_yaml(path, "assignment"), ["variants", i, key])
-            raise UserError(
-                [Problem(p.message, str(path), line, column, f"variants.{i}", p.hint) for p in exc.problems]
-            ) from None
-    return worlds
+            for problem in exc.problems:
+                key = "start" if problem.path == "start" else "maze" if variant.maze is not None else "generate"
+                line, column = locate(data, ["variants", i, key])
+                problems.append(Problem(problem.message, str(path), line, column, f"variants.{i}.{key}", problem.hint))
+    return worlds, problems
