@@ -161,7 +161,7 @@ def test_each_failed_run_carries_the_command_that_reproduces_it(graded):
     late = _by_name(graded)["stops_7cm"]
     run = next(r for r in late["runs"] if r["variant"] == "tall_part2")
     assert run["reproduce"].startswith("thymio-bt run ") and "--seed" in run["reproduce"]
-    assert "--set robot=real" in run["reproduce"] and "part12_tall.yaml" in run["reproduce"]
+    assert "--set robot=real" in run["reproduce"] and "worlds/tall_part2.yaml" in run["reproduce"]
     assert sum("trajectory" in r for r in late["runs"]) == 4  # one picture per variant
 
 

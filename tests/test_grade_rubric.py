@@ -247,3 +247,121 @@ def test_every_problem_of_an_assignment_is_reported_in_one_round(tmp_path):
         f"{bad}:4:21: maze not found: 'no_such_maze'",
     ):
         assert any(line.startswith(f"error: {expected}") for line in lines), (expected, lines)
+
+
+HIDDEN = """\
+name: hidden_worlds
+submission: part1_2.yaml
+variants:
+  - {name: course, maze: two_parts_maze, start: part1, seeds: 1, noise: off}
+  - {name: secret_box, maze: ASSIGNMENTS/worlds/part12_long_part1.yaml, start: [0.18, 0.1, 0], visibility: hidden,
+     noise: off}
+  - {name: secret_corridor, generate: {kind: path, length: 6, seed: secret, turns: left}, visibility: hidden,
+     noise: off}
+criteria:
+  - {name: part 1 stops 5 cm from the wall, points: 2, gap: {at: delete, distance: 5cm, tolerance: 5mm},
+     variants: [course, secret_box]}
+  - {name: never touches a wall, points: 1, no_collision: true}
+"""
+
+
+def _hidden_assignment(tmp_path: Path) -> Path:
+    path = tmp_path / "hidden.yaml"
+    path.write_text(HIDDEN.replace("ASSIGNMENTS", str(PART12.parent)))
+    return path
+
+
+def test_a_secret_seed_needs_the_course_s_secret_and_draws_another_world_for_another_secret(tmp_path, monkeypatch):
+    from thymio_bt.grade.worlds import course_secret, load_worlds
+
+    assignment = _hidden_assignment(tmp_path)
+    monkeypatch.delenv("THYMIO_BT_SECRET", raising=False)
+    result = CliRunner().invoke(main, ["validate", str(assignment)])
+    assert result.exit_code == 2 and "its maze's seed is secret, and no secret was given" in result.output
+    assert f"{assignment}:7:" in result.output and "THYMIO_BT_SECRET" in result.output
+    walls = {}
+    for secret in ("one secret", "another secret"):
+        _, worlds = load_worlds(assignment, tmp_path / secret, secret)
+        corridor = next(w for w in worlds if w.name == "secret_corridor")
+        assert corridor.maze is not None and corridor.maze.name == "secret_corridor"  # no seed in its name
+        walls[secret] = corridor.maze.walls
+    assert walls["one secret"] != walls["another secret"]
+    secret_file = tmp_path / "secret.txt"
+    secret_file.write_text("one secret\n")
+    monkeypatch.setenv("THYMIO_BT_SECRET", "one secret")
+    by_env = load_worlds(assignment, tmp_path / "env", course_secret())[1][2].maze
+    by_file = load_worlds(assignment, tmp_path / "file", course_secret(secret_file))[1][2].maze
+    assert by_env is not None and by_file is not None and by_env.walls == by_file.walls == walls["one secret"]
+
+
+def test_student_pages_carry_nothing_of_a_hidden_world(tmp_path, monkeypatch):
+    monkeypatch.setenv("THYMIO_BT_SECRET", "course secret")
+    assignment = _hidden_assignment(tmp_path)
+    (sub := tmp_path / "subs" / "dana").mkdir(parents=True)
+    (sub / "part1_2.yaml").write_text((CLASS / "dana" / "part1_2.yaml").read_text())
+    site, out = tmp_path / "site", tmp_path / "results.json"
+    args = ["grade", str(assignment), str(sub), "--html", str(site), "--for-students", "--out", str(out)]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0, result.output
+    assert f"wrote the site: {site / 'index.html'} (2 pages)" in result.output
+    text = "\n".join(p.read_text() for p in site.rglob("*") if p.is_file())
+    assert sorted(p.name for p in site.rglob("*")) == ["dana.html", "index.html", "students"]  # no worlds/
+    for secret in ("secret_box", "secret_corridor", "part12_long_part1", "0.18"):
+        assert secret not in text, secret
+    assert text.count("thymio-bt run ") == 1  # the one run of the public world, which failed
+    assert "<li>hidden world 1: 0 points: stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm</li>" in text
+    assert "variant course, seed 0" in text and 'data-variant="course"' in text  # the public world is drawn
+    # the TA's results keep everything
+    import json
+
+    ta = json.loads(out.read_text())
+    assert {v["name"]: v["visibility"] for v in ta["assignment"]["variants"]}["secret_box"] == "hidden"
+    assert any(r["variant"] == "secret_box" and r["reproduce"] for r in ta["students"][0]["runs"])
+
+
+def test_check_judges_the_public_variants_with_the_grader_s_words(tmp_path, monkeypatch):
+    monkeypatch.setenv("THYMIO_BT_SECRET", "course secret")
+    assignment = _hidden_assignment(tmp_path)
+    good = CliRunner().invoke(main, ["check", str(assignment), str(CLASS / "ada" / "part1_2.yaml")])
+    assert good.exit_code == 0, good.output
+    assert good.output.startswith("hidden_worlds: 1 public variant (course), 1 run\n")
+    late = CliRunner().invoke(main, ["check", str(assignment), str(CLASS / "dana" / "part1_2.yaml")])
+    assert late.exit_code == 1
+    assert "FAIL  part 1 stops 5 cm from the wall  0 / 2\n      stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm" in (
+        late.output
+    )
+    assert "secret" not in late.output
+
+
+def test_a_run_s_check_command_prints_the_grader_s_judgement_of_it(tmp_path, monkeypatch):
+    """Issue 42: a reproduce command printed SUCCESS for a run the grader failed."""
+    import json
+    import shlex
+
+    subs = tmp_path / "subs"
+    subs.mkdir()
+    (subs / "dana").mkdir()
+    (subs / "dana" / "part1_2.yaml").write_text((CLASS / "dana" / "part1_2.yaml").read_text())
+    out = tmp_path / "out" / "results.json"
+    out.parent.mkdir()
+    result = CliRunner().invoke(main, ["grade", str(PART12), str(subs / "dana"), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    runs = json.loads(out.read_text())["students"][0]["runs"]
+    run = next(r for r in runs if r["variant"] == "tall_part2" and r["seed"] == 2)
+    for command in (run["reproduce"], run["check"]):  # relative to the results, shipped files by name
+        assert str(ROOT) not in command and str(tmp_path) not in command
+    assert " --maze results_worlds/tall_part2.yaml " in run["reproduce"]  # a copy beside the results
+    assert run["check"] == "thymio-bt check course_part1_2 ../subs/dana/part1_2.yaml --variant tall_part2 --seed 2"
+    course = next(r for r in runs if r["variant"] == "course")
+    assert " --maze two_parts_maze " in course["reproduce"]
+    monkeypatch.chdir(out.parent)
+    args = shlex.split(run["check"])[1:]
+    checked = CliRunner().invoke(main, args)
+    assert checked.exit_code == 1
+    for name, judged in run["criteria"].items():
+        line = f"{'pass' if judged['passed'] else 'FAIL'}  {name}  "
+        assert line in checked.output, (line, checked.output)
+        if not judged["passed"]:
+            assert f"      {judged['feedback']} (variant tall_part2, seed 2, robot real; failed 1 of 1 runs)" in (
+                checked.output
+            )

@@ -8,12 +8,13 @@ family of commands has its module, imported here so that ``main`` has them all:
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
 ``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
-(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``) and :mod:`~thymio_bt.cli.serving` (``serve ros2``).
+(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``) and :mod:`~thymio_bt.cli.serving` (``serve ros2``);
+:mod:`~thymio_bt.cli.checking` (``check``).
 
 Example::
 
     >>> sorted(main.commands)  # doctest: +NORMALIZE_WHITESPACE
-    ['backends', 'behaviours', 'calibrate', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
+    ['backends', 'behaviours', 'calibrate', 'check', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
      'schema', 'serve', 'sweep', 'tree', 'validate']
 """
 
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 from thymio_bt.cli.app import POSITIVE, main
 from thymio_bt.cli.calibration import calibrate_command
+from thymio_bt.cli.checking import check
 from thymio_bt.cli.grading import grade
 from thymio_bt.cli.inspection import backends_command, behaviours, schema, tree, validate
 from thymio_bt.cli.linting import lint
@@ -37,6 +39,7 @@ __all__ = [
     "backends_command",
     "behaviours",
     "calibrate_command",
+    "check",
     "export",
     "grade",
     "lint",

@@ -35,6 +35,12 @@ from thymio_bt.run.interrupts import Interrupts
 @path_option("--csv", "csv_file", help="Write a gradebook CSV here: a row per student, a column per criterion.")
 @path_option("--junit", help="Write JUnit XML here: a testsuite per student, a testcase per criterion.")
 @path_option("--html", help="Write a static site into this folder: the class page and a page per student.")
+@click.option(
+    "--for-students",
+    is_flag=True,
+    help="Write the --html pages for the students: nothing of a hidden variant's maze, path, start or commands.",
+)
+@path_option("--secret", help="The course's secret, for generated worlds with a secret seed (else THYMIO_BT_SECRET).")
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
 @click.option("--dask", default=None, metavar="ADDRESS", help="Grade on a Dask cluster (needs thymio-bt[dask]).")
 @click.option(
@@ -51,6 +57,8 @@ def grade(
     csv_file: Path | None,
     junit: Path | None,
     html: Path | None,
+    for_students: bool,
+    secret: Path | None,
     workers: int | None,
     dask: str | None,
     fail_under: float | None,
@@ -61,6 +69,7 @@ def grade(
     from thymio_bt.cli.sweeps import dask_executor
     from thymio_bt.grade.grader import grade as run_grade
     from thymio_bt.grade.reports import gradebook_csv, junit_xml, summary_table
+    from thymio_bt.grade.worlds import course_secret
 
     try:
         outputs = {
@@ -70,7 +79,10 @@ def grade(
         }
         site = _site_folder(html) if html is not None else None
         workers_or_dask(workers, dask)
-        worlds = _worlds_folder(out, html)
+        if for_students and html is None:
+            raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
+        worlds = _worlds_folder(out, None if for_students else html)
+        relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
         with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
             results = run_grade(
                 assignment,
@@ -81,6 +93,8 @@ def grade(
                 progress=progress,
                 stop=lambda: interrupts.signal is not None,
                 started=progress.start,
+                secret=course_secret(secret),
+                relative_to=relative_to,
             )
         if "out" in outputs:
             outputs["out"].write_text(json_text(results))
@@ -89,9 +103,11 @@ def grade(
         if "junit" in outputs:
             outputs["junit"].write_text(junit_xml(results))
         if site is not None:
+            from thymio_bt.grade.redact import for_students as redacted
             from thymio_bt.grade.site import write_site
 
-            write_site(results, site)
+            pages = write_site(redacted(results) if for_students else results, site)
+            click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
     except UserError as exc:
         fail(exc)
     click.echo(summary_table(results), err=any(o.is_stdout for o in outputs.values()))
@@ -116,7 +132,7 @@ def _worlds_folder(out: Path | None, html: Path | None) -> Path | None:
     """Where generated mazes go: beside the results (so the reproduce commands name files that stay)."""
     if html is not None:
         return html / "worlds"
-    if out is not None and str(out) != "-":
+    if out is not None and str(out) != "-":  # ``--for-students`` pages never hold a world
         return out.parent / f"{out.stem}_worlds"
     return None
 

@@ -63,7 +63,11 @@ class Generate(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     kind: Literal["perfect", "path", "contest"] = Field(description="the kind of maze")
-    seed: int = Field(0, ge=0, le=2**31, description="the generator's seed")
+    seed: Annotated[int, Field(ge=0, le=2**31)] | Literal["secret"] = Field(
+        0,
+        description="the generator's seed, or `secret`: drawn from the course's secret (the "
+        "THYMIO_BT_SECRET environment variable or grade --secret FILE), in no file a student has",
+    )
     cols: int = Field(6, ge=2, le=32, description="perfect: columns of cells")
     rows: int = Field(6, ge=2, le=32, description="perfect: rows of cells")
     length: int = Field(8, ge=3, le=64, description="path: cells along the corridor")
@@ -93,6 +97,11 @@ class Variant(BaseModel):
     mirror: bool = Field(False, description="mirror the maze left-right (left turns become right turns)")
     start: str | Spawn | None = Field(
         None, description="a spawn name of the maze or [x, y, yaw]; the mission's own if absent"
+    )
+    visibility: Literal["public", "hidden"] = Field(
+        "public",
+        description="public: students may see and run it (thymio-bt check); hidden: its maze, path, start "
+        "and reproducing command never reach a student-facing output",
     )
     robot: Literal["course", "enki", "real"] = Field("course", description="the robot profile")
     seeds: int | list[int] = Field(1, description="how many noise seeds (0, 1, ...) or the list of seeds")

@@ -167,10 +167,10 @@ def _before_its_phase(criterion: Criterion, facts: RunFacts) -> str | None:
     return f"ended before the dead end: took {made or 'none'} of the {len(wanted)} {turns} on the way there"
 
 
-def _count(n: int, noun: str) -> str:
+def count(n: int, noun: str) -> str:
     """``n`` things in words: 'no turn', '1 turn', '3 turns'.
 
-    >>> _count(0, "turn"), _count(1, "turn"), _count(3, "left turn")
+    >>> count(0, "turn"), count(1, "turn"), count(3, "left turn")
     ('no turn', '1 turn', '3 left turns')
     """
     return f"no {noun}" if n == 0 else f"{n} {noun}{'s' * (n != 1)}"
@@ -283,7 +283,7 @@ _WAY = {"L": "left", "R": "right"}
 def _turns_in_words(turns: str) -> str:
     """'4 left turns', '1 right turn', '3 turns (left, right, left)', 'no turn'."""
     if len(set(turns)) == 1:
-        return _count(len(turns), f"{_WAY[turns[0]]} turn")
+        return count(len(turns), f"{_WAY[turns[0]]} turn")
     if not turns:
         return "no turn"
     return f"{len(turns)} turns ({', '.join(_WAY[k] for k in turns)})"

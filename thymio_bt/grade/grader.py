@@ -16,6 +16,7 @@ Example::
 
 from __future__ import annotations
 
+import os
 import shlex
 import tempfile
 import time
@@ -28,6 +29,7 @@ from thymio_bt.errors import UserError
 from thymio_bt.grade.assignment import Assignment, Criterion, resolve_assignment
 from thymio_bt.grade.isolation import ForkPool, Limits
 from thymio_bt.grade.palette import Finding, check_palette
+from thymio_bt.grade.redact import feedback_line
 from thymio_bt.grade.student import StudentTask, died_message, grade_runs
 from thymio_bt.grade.submissions import Submission, find_submissions
 from thymio_bt.grade.worlds import World, load_worlds
@@ -58,16 +60,24 @@ def grade(
     progress: Progress | None = None,
     stop: Callable[[], bool] = lambda: False,
     started: Callable[[dict[str, int]], None] | None = None,
+    secret: str | None = None,
+    select: Callable[[list[World]], list[World]] | None = None,
+    relative_to: Path | None = None,
 ) -> dict[str, Any]:
     """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
     with ``imap_unordered`` (:class:`~thymio_bt.run.distributed.DaskExecutor`) to run the
     students on a cluster instead of ``workers`` local processes. ``started`` is told how many
-    runs each student will make, once the submissions are read; ``progress`` hears each run end."""
+    runs each student will make, once the submissions are read; ``progress`` hears each run end.
+    ``secret``: the course's, for generated worlds with a secret seed; ``select``: the worlds to run
+    (all when None); ``relative_to``: the folder the results go to, which the commands reproducing
+    runs are relative to (the current one when None)."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
-    assignment, made = load_worlds(path, folder)
+    assignment, made = load_worlds(path, folder, secret)
+    if select is not None:
+        made = select(made)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
     by_name = {e.submission.name: e for e in entries}
@@ -94,7 +104,7 @@ def grade(
                 heard(task, message)
             if stop():
                 break
-    return results(assignment, path, made, entries, time.perf_counter() - began)
+    return results(assignment, path, made, entries, time.perf_counter() - began, relative_to)
 
 
 def _warm() -> None:
@@ -151,10 +161,16 @@ def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -
 
 
 def results(
-    assignment: Assignment, path: Path, worlds: list[World], entries: list[Entry], wall: float
+    assignment: Assignment,
+    path: Path,
+    worlds: list[World],
+    entries: list[Entry],
+    wall: float,
+    relative_to: Path | None = None,
 ) -> dict[str, Any]:
     """The results.json data."""
-    students = [_student(assignment, worlds, e) for e in entries]
+    commands = Commands(assignment, path, relative_to)
+    students = [_student(assignment, worlds, e, commands) for e in entries]
     graded = [s for s in students if s["status"] == "graded"]
     return {
         "assignment": {
@@ -182,6 +198,7 @@ def results(
                     "robot": w.robot,
                     "seeds": w.seeds,
                     "noise": w.settings.get("noise.wheel", "0") != "0",
+                    "visibility": w.visibility,
                 }
                 for w in worlds
             ],
@@ -209,7 +226,7 @@ def results(
     }
 
 
-def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[str, Any]:
+def _student(assignment: Assignment, worlds: list[World], entry: Entry, commands: Commands) -> dict[str, Any]:
     """One student's entry of results.json."""
     submission = entry.submission
     runs = sorted(entry.runs, key=lambda r: r["index"])
@@ -219,11 +236,8 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
         entry.messages.append(f"only {len(runs)} of {task.runs} runs were made (the grade was stopped)")
     world_of = {w.name: w for w in worlds}
     for run in runs:
-        world = world_of[run["variant"]]
-        args = ["thymio-bt", "run", str(submission.file), *world.run_arguments(), "--seed", str(run["seed"])]
-        if assignment.time_limit is not None:
-            args += ["--set", f"time_limit={assignment.time_limit:g}"]
-        run["reproduce"] = shlex.join(args)
+        run["reproduce"] = commands.run(str(submission.file), world_of[run["variant"]], run["seed"])
+        run["check"] = commands.check(str(submission.file), run["variant"], run["seed"])
     criteria: list[dict[str, Any]] = (
         [_criterion(c, runs) for c in assignment.criteria]
         if entry.status == "graded"
@@ -259,6 +273,39 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
     }
 
 
+@dataclass
+class Commands:
+    """The commands a results file gives to run a submission again: ``thymio-bt run`` to watch a
+    run, ``thymio-bt check`` to judge it as the grader did; files named relative to the results'
+    folder (a shipped maze or assignment by its name), never by the grader's absolute paths."""
+
+    assignment: Assignment
+    path: Path
+    relative_to: Path | None = None
+
+    def _ref(self, file: str | Path) -> str:
+        return os.path.relpath(Path(file).resolve(), (self.relative_to or Path.cwd()).resolve())
+
+    def run(self, file: str, world: World, seed: int) -> str:
+        """The ``thymio-bt run`` command of one run."""
+        args = ["thymio-bt", "run", self._ref(file), *world.run_arguments(self.relative_to), "--seed", str(seed)]
+        if self.assignment.time_limit is not None:
+            args += ["--set", f"time_limit={self.assignment.time_limit:g}"]
+        return shlex.join(args)
+
+    def check(self, file: str, variant: str, seed: int) -> str:
+        """The ``thymio-bt check`` command that runs and judges one run as the grader did."""
+        from thymio_bt.data import ASSIGNMENTS
+
+        shipped = ASSIGNMENTS / self.path.name
+        assignment = (
+            self.path.stem if shipped.is_file() and shipped.resolve() == self.path.resolve() else self._ref(self.path)
+        )
+        return shlex.join(
+            ["thymio-bt", "check", assignment, self._ref(file), "--variant", variant, "--seed", str(seed)]
+        )
+
+
 def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, Any]:
     """A criterion's line for one student. A variant passes when at least ``pass_rate`` of its
     runs passed; shared credit gives each passed variant its share of the points, ``credit: all``
@@ -275,6 +322,7 @@ def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, An
                 "runs": len(mine),
                 "passed_runs": passed_runs,
                 "passed": passed_runs >= criterion.pass_rate * len(mine) - 1e-9,
+                "feedback": next((j["feedback"] for j in mine if not j["passed"]), None),
             }
         )
     passed = bool(variants) and all(v["passed"] for v in variants)
@@ -287,10 +335,7 @@ def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, An
     where = None
     if failed:
         run, first = failed[0]
-        feedback = (
-            f"{first['feedback']} (variant {run['variant']}, seed {run['seed']}, robot {run['robot']}; "
-            f"failed {len(failed)} of {len(judged)} runs)"
-        )
+        feedback = feedback_line(run, first["feedback"], len(failed), len(judged))
         where = first["where"] or run.get("where")
     return {
         "name": criterion.name,

@@ -90,7 +90,7 @@ def _criteria(student: dict[str, Any]) -> str:
             f'<tr class="criterion {verdict}"><td>{esc(c.get("name"))}</td>'
             f'<td class="num">{fmt(c.get("earned"))} / {fmt(c.get("points"))}</td>'
             f'<td>{pass_badge(c.get("passed"))}</td><td class="num">{runs}</td>'
-            f"<td>{esc(feedback)}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
+            f"<td>{esc(feedback)}{_per_variant(c)}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
         )
     if not rows:
         return '<h2>Criteria</h2><p class="muted">No criterion was judged.</p>'
@@ -99,6 +99,19 @@ def _criteria(student: dict[str, Any]) -> str:
         '<th>Result</th><th class="num">Runs passed</th><th>Feedback</th><th>Where</th></tr></thead>'
         f"<tbody>{''.join(rows)}</tbody></table>"
     )
+
+
+def _per_variant(criterion: dict[str, Any]) -> str:
+    """A criterion's points in each variant, and what went wrong there (shared credit)."""
+    variants = [as_dict(v) for v in as_list(criterion.get("variants"))]
+    if len(variants) < 2 or criterion.get("passed") is True:
+        return ""
+    items = "".join(
+        f"<li>{esc(v.get('name'))}: {fmt(v.get('earned'))} points"
+        f"{': ' + esc(v.get('feedback')) if v.get('feedback') else ''}</li>"
+        for v in variants
+    )
+    return f'<ul class="per-variant">{items}</ul>'
 
 
 def _palette(student: dict[str, Any]) -> str:
@@ -129,7 +142,7 @@ def _pictures(results: dict[str, Any], student: dict[str, Any], mazes: dict[str,
     for variant in variants:
         name = str(variant.get("name"))
         mine = [r for r in runs if str(r.get("variant")) == name]
-        if not mine:
+        if not mine or variant.get("visibility") == "hidden":  # a hidden world is not drawn
             continue
         maze = mazes.get(name)
         svg, marks = trajectory_svg(maze if isinstance(maze, Maze) else None, variant, mine)
@@ -166,7 +179,7 @@ def _failed_runs(student: dict[str, Any]) -> str:
         return f'<h2>Runs</h2><p class="muted">All {len(runs)} runs ended in SUCCESS and met every criterion.</p>'
     rows = []
     for r in failed:
-        status = " ".join(str(v) for v in (r.get("status"), r.get("code")) if v)
+        status = " ".join(dict.fromkeys(str(v) for v in (r.get("status"), r.get("code")) if v))  # "TIMEOUT" once
         missed = ", ".join(run_missed(r)) or "–"
         node = ""
         if r.get("failed_path"):
@@ -176,9 +189,12 @@ def _failed_runs(student: dict[str, Any]) -> str:
             f'<tr class="run fail"><td>{esc(r.get("variant"))}</td><td class="num">{esc(r.get("seed"))}</td>'
             f"<td>{esc(status)}{reason}{node}</td><td>{esc(missed)}</td>"
             f'<td class="num">{fmt(r.get("sim_time"), 1)} s</td><td class="num">{fmt(r.get("collisions"))}</td></tr>'
-            f'<tr class="reproduce"><td colspan="6" title="replay this run">'
-            f'<code class="cmd">{esc(r.get("reproduce"))}</code></td></tr>'
         )
+        if r.get("reproduce"):  # not for a hidden world's run on a student's page
+            rows.append(
+                f'<tr class="reproduce"><td colspan="6" title="replay this run">'
+                f'<code class="cmd">{esc(r.get("reproduce"))}</code></td></tr>'
+            )
     return (
         f"<h2>Runs that went wrong ({len(failed)} of {len(runs)})</h2>"
         '<table id="failed-runs"><thead><tr><th>Variant</th><th class="num">Seed</th><th>Ended</th>'
