@@ -34,6 +34,10 @@ from thymio_bt.run.interrupts import Interrupts
 @path_option("--out", help="Write the results JSON here (the contract of docs/grading.md).")
 @path_option("--csv", "csv_file", help="Write a gradebook CSV here: a row per student, a column per criterion.")
 @path_option("--junit", help="Write JUnit XML here: a testsuite per student, a testcase per criterion.")
+@path_option(
+    "--gradescope",
+    help="Write Gradescope's autograder results.json here (one submission; hidden variants' tests after the due date).",
+)
 @path_option("--html", help="Write a static site into this folder: the class page and a page per student.")
 @click.option(
     "--for-students",
@@ -56,6 +60,7 @@ def grade(
     out: Path | None,
     csv_file: Path | None,
     junit: Path | None,
+    gradescope: Path | None,
     html: Path | None,
     for_students: bool,
     secret: Path | None,
@@ -68,15 +73,23 @@ def grade(
 
     from thymio_bt.cli.sweeps import dask_executor
     from thymio_bt.grade.grader import grade as run_grade
-    from thymio_bt.grade.reports import gradebook_csv, junit_xml, summary_table
+    from thymio_bt.grade.reports import gradebook_csv, gradescope_json, junit_xml, summary_table
     from thymio_bt.grade.worlds import course_secret
 
     try:
         outputs = {
             name: Output(path, option)
-            for name, path, option in (("out", out, "--out"), ("csv", csv_file, "--csv"), ("junit", junit, "--junit"))
+            for name, path, option in (
+                ("out", out, "--out"),
+                ("csv", csv_file, "--csv"),
+                ("junit", junit, "--junit"),
+                ("gradescope", gradescope, "--gradescope"),
+            )
             if path is not None
         }
+        if gradescope is not None and len(submissions) != 1:
+            count = len(submissions)
+            raise UserError(f"--gradescope grades one submission, got {count} (hint: Gradescope runs one at a time)")
         site = _site_folder(html) if html is not None else None
         workers_or_dask(workers, dask)
         if for_students and html is None:
@@ -102,6 +115,13 @@ def grade(
             outputs["csv"].write_text(gradebook_csv(results))
         if "junit" in outputs:
             outputs["junit"].write_text(junit_xml(results))
+        if "gradescope" in outputs:
+            if len(results["students"]) != 1:
+                count = len(results["students"])
+                raise UserError(
+                    f"--gradescope: grades one submission, got {count} (hint: Gradescope runs one at a time)"
+                )
+            outputs["gradescope"].write_text(json_text(gradescope_json(results)))
         if site is not None:
             from thymio_bt.grade.redact import for_students as redacted
             from thymio_bt.grade.site import write_site

@@ -74,25 +74,34 @@ def for_students(results: dict[str, Any]) -> dict[str, Any]:
         runs = student.get("runs", [])
         for i, run in enumerate(runs):
             if run.get("variant") in names:
-                runs[i] = _hidden_run(run, names[run["variant"]])
+                runs[i] = _hidden_run(run, run["variant"], names[run["variant"]])
         for criterion in student.get("criteria", []):
             for variant in criterion.get("variants", []):
                 if variant["name"] in names:
-                    variant["name"] = names[variant["name"]]
-                    variant["feedback"] = _POSITION.sub("", variant["feedback"]) if variant.get("feedback") else None
+                    name, variant["name"] = variant["name"], names[variant["name"]]
+                    variant["feedback"] = _unsaid(variant.get("feedback"), name, variant["name"])
             _feedback(criterion, runs, names)
     return seen
 
 
-def _hidden_run(run: dict[str, Any], name: str) -> dict[str, Any]:
+def _unsaid(text: Any, name: str, label: str) -> Any:
+    """``text`` without the positions and the name of the hidden world ``name`` (``label`` instead).
+
+    >>> _unsaid("maze 'box' has no spawn 'part2'; touched a wall near (0.60, 0.10)", "box", "hidden world 1")
+    "maze 'hidden world 1' has no spawn 'part2'; touched a wall"
+    """
+    return _POSITION.sub("", text).replace(name, label) if isinstance(text, str) else text
+
+
+def _hidden_run(run: dict[str, Any], name: str, label: str) -> dict[str, Any]:
     kept = {k: run[k] for k in RUN_KEPT if k in run}
-    kept["variant"] = name
-    if kept.get("reason"):
-        kept["reason"] = _POSITION.sub("", str(kept["reason"]))
+    kept["variant"] = label
+    if "reason" in kept:
+        kept["reason"] = _unsaid(kept["reason"], name, label)
     kept["criteria"] = {
         criterion: {
             "passed": judged.get("passed"),
-            "feedback": _POSITION.sub("", judged["feedback"]) if judged.get("feedback") else judged.get("feedback"),
+            "feedback": _unsaid(judged.get("feedback"), name, label),
             "where": judged.get("where"),
         }
         for criterion, judged in run.get("criteria", {}).items()

@@ -142,3 +142,64 @@ def summary_table(results: dict[str, Any]) -> str:
             mark = "  <- most missed" if c is hardest and c["pass_rate"] < 1 else ""
             lines.append(f"  {100 * c['pass_rate']:5.1f} %  {c['name']}{mark}")
     return "\n".join(lines)
+
+
+def gradescope_json(results: dict[str, Any]) -> dict[str, Any]:
+    """Gradescope's autograder results for the one student of ``results``: the score, and a test
+    per criterion and visibility (its public variants' share ``visible``, its hidden ones'
+    ``after_due_date``), each with the words students see (:func:`~.redact.for_students`), and a
+    ``palette`` test for the penalty.
+
+    >>> results = {"assignment": {"name": "a", "variants": [{"name": "course", "visibility": "public"},
+    ...     {"name": "box", "visibility": "hidden"}]},
+    ...     "students": [{"name": "ada", "status": "graded", "score": 1.0, "max": 2.0, "messages": [],
+    ...     "penalty": 0.0, "palette": [], "runs": [], "criteria": [{"name": "stops", "points": 2.0,
+    ...     "earned": 1.0, "passed": False, "feedback": "...", "where": "m.yaml:10", "variants": [
+    ...         {"name": "course", "passed": True, "earned": 1.0, "feedback": None},
+    ...         {"name": "box", "passed": False, "earned": 0.0, "feedback": "stopped 7.0 cm from the wall"}]}]}]}
+    >>> out = gradescope_json(results)
+    >>> out["score"], [(t["name"], t["score"], t["max_score"], t["visibility"]) for t in out["tests"]]
+    (1.0, [('stops', 1.0, 1.0, 'visible'), ('stops (hidden worlds)', 0.0, 1.0, 'after_due_date')])
+    >>> out["tests"][1]["output"]
+    'hidden world 1: stopped 7.0 cm from the wall (at m.yaml:10)'
+    """
+    from thymio_bt.grade.redact import for_students
+
+    seen = for_students(results)
+    (student,) = seen["students"]
+    hidden = {v["name"] for v in seen["assignment"]["variants"] if v.get("visibility") == "hidden"}
+    tests: list[dict[str, Any]] = []
+    for criterion in student["criteria"]:
+        variants = criterion.get("variants") or []
+        if not variants:  # not graded: the whole criterion, and why
+            tests.append(
+                _test(criterion["name"], criterion["earned"], criterion["points"], criterion.get("feedback"), "visible")
+            )
+            continue
+        share = criterion["points"] / len(variants)
+        where = f" (at {criterion['where']})" if criterion.get("where") else ""
+        for label, visibility, mine in (
+            ("", "visible", [v for v in variants if v["name"] not in hidden]),
+            (" (hidden worlds)", "after_due_date", [v for v in variants if v["name"] in hidden]),
+        ):
+            if mine:
+                said = "\n".join(f"{v['name']}: {v['feedback']}{where}" for v in mine if not v["passed"])
+                earned = sum(v["earned"] for v in mine)
+                tests.append(_test(criterion["name"] + label, earned, share * len(mine), said or None, visibility))
+    if student.get("palette"):
+        findings = "\n".join(_finding(f) for f in student["palette"])
+        tests.append(_test("palette", student.get("penalty", 0.0), 0.0, findings, "visible"))
+    output = "\n".join(student["messages"]) if student["status"] != "graded" else ""
+    return {"score": student["score"], "output": output or f"{student['score']:g} / {student['max']:g}", "tests": tests}
+
+
+def _test(name: str, score: float, most: float, failed: str | None, visibility: str) -> dict[str, Any]:
+    """One Gradescope test: failed (with what went wrong) when ``failed`` says something."""
+    return {
+        "name": name,
+        "score": round(score, 3),
+        "max_score": round(most, 3),
+        "status": "failed" if failed else "passed",
+        "output": failed or "",
+        "visibility": visibility,
+    }
