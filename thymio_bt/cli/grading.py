@@ -39,6 +39,10 @@ from thymio_bt.run.interrupts import Interrupts
     help="Write Gradescope's autograder results.json here (one submission; hidden variants' tests after the due date).",
 )
 @path_option("--html", help="Write a static site into this folder: the class page and a page per student.")
+@path_option(
+    "--update",
+    help="Regrade SUBMISSIONS into these results, keeping the others; written to --out (else this file).",
+)
 @click.option(
     "--for-students",
     is_flag=True,
@@ -62,6 +66,7 @@ def grade(
     junit: Path | None,
     gradescope: Path | None,
     html: Path | None,
+    update: Path | None,
     for_students: bool,
     secret: Path | None,
     workers: int | None,
@@ -87,6 +92,9 @@ def grade(
             )
             if path is not None
         }
+        previous = _previous(update) if update is not None else None
+        if update is not None and out is None:
+            outputs["out"] = Output(update, "--update")
         if gradescope is not None and len(submissions) != 1:
             count = len(submissions)
             raise UserError(f"--gradescope grades one submission, got {count} (hint: Gradescope runs one at a time)")
@@ -94,7 +102,7 @@ def grade(
         workers_or_dask(workers, dask)
         if for_students and html is None:
             raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
-        worlds = _worlds_folder(out, None if for_students else html)
+        worlds = _worlds_folder(out or update, None if for_students else html)
         relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
         with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
             results = run_grade(
@@ -109,6 +117,10 @@ def grade(
                 secret=course_secret(secret),
                 relative_to=relative_to,
             )
+        if previous is not None:
+            from thymio_bt.grade.grader import update as updated
+
+            results = updated(previous, results)
         if "out" in outputs:
             outputs["out"].write_text(json_text(results))
         if "csv" in outputs:
@@ -136,6 +148,19 @@ def grade(
     students = results["students"]
     below = fail_under is not None and any(s["score"] < fail_under - 1e-9 for s in students)
     sys.exit(1 if below or any(s["status"] == "error" for s in students) else 0)
+
+
+def _previous(path: Path) -> dict[str, Any]:
+    """The results ``--update`` regrades into."""
+    import json
+
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise UserError(f"--update {path}: cannot read results from it: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("students"), list):
+        raise UserError(f"--update {path}: not the results.json of thymio-bt grade (hint: give grade's --out file)")
+    return data
 
 
 def _site_folder(path: Path) -> Path:

@@ -30,6 +30,7 @@ from thymio_bt.grade.assignment import Assignment, Criterion, resolve_assignment
 from thymio_bt.grade.isolation import ForkPool, Limits
 from thymio_bt.grade.palette import Finding, check_palette
 from thymio_bt.grade.redact import feedback_line
+from thymio_bt.grade.similarity import similar_groups, tree_shape
 from thymio_bt.grade.student import StudentTask, died_message, grade_runs
 from thymio_bt.grade.submissions import Submission, find_submissions
 from thymio_bt.grade.worlds import World, load_worlds
@@ -171,7 +172,6 @@ def results(
     """The results.json data."""
     commands = Commands(assignment, path, relative_to)
     students = [_student(assignment, worlds, e, commands) for e in entries]
-    graded = [s for s in students if s["status"] == "graded"]
     return {
         "assignment": {
             "name": assignment.name,
@@ -204,25 +204,51 @@ def results(
             ],
         },
         "students": students,
-        "summary": {
-            "students": len(students),
-            **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error")},
-            "runs": sum(len(s["runs"]) for s in students),
-            "wall_time": round(wall, 3),
-            "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
-            "criteria": [
-                {
-                    "name": c.name,
-                    "pass_rate": round(
-                        sum(sc["passed"] for s in graded for sc in s["criteria"] if sc["name"] == c.name) / len(graded),
-                        3,
-                    )
-                    if graded
-                    else None,
-                }
-                for c in assignment.criteria
-            ],
-        },
+        "summary": summary(students, [c.name for c in assignment.criteria], wall),
+        "similar": similar_groups(students),
+    }
+
+
+def summary(students: list[dict[str, Any]], criteria: list[str], wall: float) -> dict[str, Any]:
+    """results.json's ``summary`` of ``students``: counts, runs, the mean score, each criterion's
+    pass rate over the graded students."""
+    graded = [s for s in students if s["status"] == "graded"]
+    return {
+        "students": len(students),
+        **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error")},
+        "runs": sum(len(s["runs"]) for s in students),
+        "wall_time": round(wall, 3),
+        "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
+        "criteria": [
+            {
+                "name": name,
+                "pass_rate": round(
+                    sum(sc["passed"] for s in graded for sc in s["criteria"] if sc["name"] == name) / len(graded), 3
+                )
+                if graded
+                else None,
+            }
+            for name in criteria
+        ],
+    }
+
+
+def update(old: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
+    """``old`` results with the students of ``new`` (a regrade of some of them) in their place, the
+    others kept; the summary and the similar groups made again over everyone."""
+    if old.get("assignment", {}).get("name") != new["assignment"]["name"]:
+        raise UserError(
+            f"--update: those results are of assignment '{old.get('assignment', {}).get('name')}', "
+            f"not '{new['assignment']['name']}' (hint: give the results of the same assignment)"
+        )
+    regraded = {s["name"]: s for s in new["students"]}
+    students = [regraded.pop(s["name"], s) for s in old.get("students", [])] + list(regraded.values())
+    wall = old.get("summary", {}).get("wall_time", 0.0) + new["summary"]["wall_time"]
+    criteria = [c["name"] for c in new["assignment"]["criteria"]]
+    return new | {
+        "students": students,
+        "summary": summary(students, criteria, wall),
+        "similar": similar_groups(students),
     }
 
 
@@ -269,6 +295,7 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry, commands
         "criteria": criteria,
         "palette": [f.to_json() for f in entry.findings],
         "coverage": _coverage(entry.plan, runs),
+        "shape": tree_shape(entry.plan) if entry.plan is not None else None,
         "runs": [{k: v for k, v in r.items() if k not in ("kind", "node_stats")} for r in runs],
     }
 

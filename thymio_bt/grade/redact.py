@@ -62,6 +62,7 @@ def for_students(results: dict[str, Any]) -> dict[str, Any]:
     it reads "hidden world N: stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm"."""
     names = hidden_names(results)
     seen = copy.deepcopy(results)
+    seen.pop("similar", None)  # the TA's
     assignment = seen.get("assignment", {})
     assignment.pop("file", None)
     assignment["variants"] = [
@@ -71,6 +72,7 @@ def for_students(results: dict[str, Any]) -> dict[str, Any]:
     for criterion in assignment.get("criteria", []):
         criterion["variants"] = [names.get(v, v) for v in criterion.get("variants", [])]
     for student in seen.get("students", []):
+        student.pop("shape", None)
         runs = student.get("runs", [])
         for i, run in enumerate(runs):
             if run.get("variant") in names:
