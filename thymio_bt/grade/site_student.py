@@ -213,16 +213,43 @@ def outcome(node: dict[str, Any], never: set[str]) -> str:
     return "ok" if success else "bad" if failure else "running"
 
 
+def tree_guides(depths: list[int]) -> list[str]:
+    """The lines that draw a tree of nodes listed depth first (their ``depths``): each node's
+    branch, and its ancestors' lines going on to their later siblings.
+
+    >>> print("\\n".join(g + name for g, name in zip(tree_guides([0, 1, 2, 2, 1]), "root a a1 a2 b".split())))
+    root
+    ├─ a
+    │  ├─ a1
+    │  └─ a2
+    └─ b
+    """
+
+    def last(i: int) -> bool:  # no later sibling: the next node as shallow comes up first, or none
+        return next((d for d in depths[i + 1 :] if d <= depths[i]), -1) < depths[i]
+
+    guides, open_lines = [], [False] * (max(depths, default=0) + 1)
+    for i, depth in enumerate(depths):
+        if depth == 0:
+            guides.append("")
+            continue
+        line = "".join("│  " if open_lines[k] else "   " for k in range(1, depth))
+        guides.append(line + ("└─ " if last(i) else "├─ "))
+        open_lines[depth] = not last(i)
+    return guides
+
+
 def _coverage(student: dict[str, Any]) -> str:
     coverage = as_dict(student.get("coverage"))
     nodes = [as_dict(n) for n in as_list(coverage.get("nodes"))]
     if not nodes:
         return ""
     never = {str(p) for p in as_list(coverage.get("never_ticked"))}
+    depths = [min(max(int(num(n.get("depth")) or str(n.get("path", "")).count("/")), 0), 30) for n in nodes]
+    guides = tree_guides(depths)
     rows = []
-    for node in nodes:
+    for node, guide in zip(nodes, guides, strict=True):
         kind = outcome(node, never)
-        depth = min(max(int(num(node.get("depth")) or str(node.get("path", "")).count("/")), 0), 30)
         what = node.get("behaviour") or node.get("kind")
         what = "" if what == node.get("name") else what
         ended = ", ".join(
@@ -234,7 +261,7 @@ def _coverage(student: dict[str, Any]) -> str:
         label = ' <span class="badge never">never ticked</span>' if kind == "never" else ""
         rows.append(
             f'<tr class="tree-node cov-{kind}" title="{esc(node.get("path"))}: {OUTCOMES[kind]}">'
-            f'<td class="node" style="padding-left:{10 + 18 * depth}px"><span class="dot"></span>'
+            f'<td class="node"><span class="guide" aria-hidden="true">{guide}</span><span class="dot"></span>'
             f'{esc(node.get("name"))} <span class="kind">{esc(what)}</span>{label}{ended_html}</td>'
             + "".join(f'<td class="num">{fmt(node.get(k))}</td>' for k in ("ticks", "success", "failure", "running"))
             + f"<td class=where>{where_code(node.get('where'))}</td></tr>"
