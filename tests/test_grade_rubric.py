@@ -309,6 +309,8 @@ def test_student_pages_carry_nothing_of_a_hidden_world(tmp_path, monkeypatch):
     for secret in ("secret_box", "secret_corridor", "part12_long_part1", "0.18"):
         assert secret not in text, secret
     assert text.count("thymio-bt run ") == 1  # the one run of the public world, which failed
+    assert text.count("thymio-bt check ") == 1 and "--variant course --seed 0" in text
+    assert "<code>None</code>" not in text
     assert "<li>hidden world 1: 0 points: stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm</li>" in text
     assert "variant course, seed 0" in text and 'data-variant="course"' in text  # the public world is drawn
     # the TA's results keep everything

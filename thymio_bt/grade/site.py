@@ -203,7 +203,8 @@ def class_page(results: dict[str, Any], students: list[dict[str, Any]], stems: l
     body = (
         f"<h1>{esc(title)}</h1>"
         f'<p class="sub">assignment <code>{esc(assignment.get("name"))}</code> '
-        f"from <code>{esc(assignment.get('file'))}</code>, out of {fmt(assignment.get('max'))} points</p>"
+        + (f"from <code>{esc(assignment.get('file'))}</code>, " if assignment.get("file") else "")
+        + f"out of {fmt(assignment.get('max'))} points</p>"
         + _summary(results, students)
         + _bars(stats, most_missed(stats))
         + _table(students, stems, assignment.get("max"))

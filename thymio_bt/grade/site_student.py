@@ -190,11 +190,12 @@ def _failed_runs(student: dict[str, Any]) -> str:
             f"<td>{esc(status)}{reason}{node}</td><td>{esc(missed)}</td>"
             f'<td class="num">{fmt(r.get("sim_time"), 1)} s</td><td class="num">{fmt(r.get("collisions"))}</td></tr>'
         )
-        if r.get("reproduce"):  # not for a hidden world's run on a student's page
-            rows.append(
-                f'<tr class="reproduce"><td colspan="6" title="replay this run">'
-                f'<code class="cmd">{esc(r.get("reproduce"))}</code></td></tr>'
-            )
+        for key, title in (("reproduce", "replay this run"), ("check", "run it and judge it as the grader did")):
+            if r.get(key):  # not for a hidden world's run on a student's page
+                rows.append(
+                    f'<tr class="reproduce"><td colspan="6" title="{title}">'
+                    f'<code class="cmd">{esc(r.get(key))}</code></td></tr>'
+                )
     return (
         f"<h2>Runs that went wrong ({len(failed)} of {len(runs)})</h2>"
         '<table id="failed-runs"><thead><tr><th>Variant</th><th class="num">Seed</th><th>Ended</th>'
