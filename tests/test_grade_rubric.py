@@ -199,18 +199,24 @@ def _corridor_run(events: list[dict], trajectory: list[tuple[float, float, float
     return RunFacts(run, maze, robot_model("course"), time_limit=60.0)
 
 
-def test_a_stop_is_blamed_on_the_move_that_set_the_distance_not_the_turn_after_it():
+def test_a_stop_is_blamed_on_the_move_that_set_the_distance_not_the_turn_after_it(tmp_path):
     """Issue 46: a dead-end stop at 1.4 cm was blamed on the TurnAngle after it (the last node to
     end), not on the MoveUntilWall that drove the robot there."""
-    drive = [(0.1 * i, 0.1 + 0.04 * i, 0.1, 0.0) for i in range(11)]  # to x = 0.5, then a turn on the spot
-    turn = [(1.0 + 0.1 * i, 0.5, 0.1, 0.3 * i) for i in range(1, 6)]
-    events = [
-        {"t": 1.0, "kind": "behaviour_end", "name": "MoveUntilWall", "path": "m/centre the axle"},
-        {"t": 1.5, "kind": "behaviour_end", "name": "TurnAngle", "path": "m/turn left"},
-    ]
-    facts = _corridor_run(events, drive + turn)
-    judged = judge(Criterion(name="stop", points=1, gap={"at": "end", "distance": "5cm"}), facts)
-    assert not judged.passed and judged.path == "m/centre the axle"
+    assignment = tmp_path / "a.yaml"
+    assignment.write_text(
+        "name: a\nvariants: [{name: course, maze: two_parts_maze, start: part1, noise: off}]\n"
+        "criteria: [{name: stop, points: 1, gap: {at: end, distance: 5cm, tolerance: 5mm}}]\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "maze: two_parts_maze\nstart: part1\ntree:\n  sequence:\n    children:\n"
+        "      - MoveUntilWall: {name: centre the axle, distance: 1.5cm}\n"
+        "      - TurnAngle: {angle: 360deg}\n"  # on the spot: base_link swings, the axle stays
+    )
+    (student,) = grade(assignment, [mission], workers=1)["students"]
+    (criterion,) = student["criteria"]
+    assert criterion["feedback"].startswith("stopped 1.5 cm from the wall, wanted 5.0 +- 0.5 cm")
+    assert criterion["where"] == f"{mission}:6"  # the MoveUntilWall, not the TurnAngle on line 7
 
 
 def test_a_dead_end_counts_only_after_the_node_it_names(tmp_path):
@@ -367,3 +373,39 @@ def test_a_run_s_check_command_prints_the_grader_s_judgement_of_it(tmp_path, mon
             assert f"      {judged['feedback']} (variant tall_part2, seed 2, robot real; failed 1 of 1 runs)" in (
                 checked.output
             )
+
+
+@pytest.mark.parametrize(
+    ("children", "passed"),
+    [
+        # stops 9 cm from the wall, waits, then creeps on to 5 cm: its part 1 stop is the first one
+        (
+            ["MoveUntilWall: {speed: 10cm/s, distance: 9cm}", "Wait: {seconds: 1}", "MoveUntilWall: {distance: 5cm}"],
+            False,
+        ),
+        # stops at 5 cm, then turns and drives on elsewhere: the stop before any delete still counts
+        (
+            [
+                "MoveUntilWall: {speed: 10cm/s, distance: 5cm}",
+                "TurnAngle: {angle: 90deg}",
+                "MoveUntilWall: {distance: 5cm}",
+            ],
+            True,
+        ),
+    ],
+)
+def test_a_run_that_never_deletes_the_robot_is_judged_where_it_first_stopped(tmp_path, children, passed):
+    assignment = tmp_path / "a.yaml"
+    assignment.write_text(
+        "name: a\nvariants: [{name: course, maze: two_parts_maze, start: part1, noise: off}]\n"
+        "criteria: [{name: part 1, points: 1, gap: {at: delete, distance: 5cm, tolerance: 5mm}}]\n"
+    )
+    mission = tmp_path / "m.yaml"
+    body = "".join(f"      - {child}\n" for child in children)
+    mission.write_text(f"maze: two_parts_maze\nstart: part1\ntree:\n  sequence:\n    children:\n{body}")
+    (student,) = grade(assignment, [mission], workers=1)["students"]
+    (criterion,) = student["criteria"]
+    assert criterion["passed"] is passed, criterion["feedback"]
+    if not passed:
+        assert criterion["feedback"].startswith("stopped 8.9 cm from the wall")
+        assert criterion["where"] == f"{mission}:6"

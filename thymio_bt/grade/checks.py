@@ -130,7 +130,10 @@ def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
         assert event is not None
         t = event["t"]
         blame = facts.node_that_drove(t, event)
-    else:  # the end; for a stop before the delete, a run that never deleted the robot stopped before it
+    elif spec.at == "delete":  # a run that never deleted the robot: its stop is where it first stopped
+        t = facts.first_stop()
+        blame = facts.node_that_drove(t)
+    else:
         t = None
         blame = facts.node_that_drove(None)
     pose = facts.pose_at(t)

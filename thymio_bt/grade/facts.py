@@ -9,11 +9,13 @@ Example::
     >>> from thymio_bt.robot.model import robot_model
     >>> from types import SimpleNamespace
     >>> drive = [(0.1 * i, 0.1 + 0.04 * i, 0.1, 0.0) for i in range(11)]   # 40 cm/s to x = 0.5
-    >>> turn = [(1.0 + 0.1 * i, 0.5, 0.1, 0.3 * i) for i in range(1, 6)]    # then a turn on the spot
+    >>> model = robot_model("course")
+    >>> axle = model.axle_of(Pose(0.5, 0.1, 0.0))                         # then a turn on the spot
+    >>> turn = [(1.0 + 0.1 * i, p.x, p.y, p.yaw) for i in range(1, 6) for p in [model.base_of(*axle[:2], 0.3 * i)]]
     >>> events = [{"t": 1.0, "kind": "behaviour_end", "name": "MoveUntilWall", "path": "m/go"},
     ...           {"t": 1.5, "kind": "behaviour_end", "name": "TurnAngle", "path": "m/turn"}]
     >>> run = SimpleNamespace(trajectory=drive + turn, events=events)
-    >>> facts = RunFacts(run, path_maze([(0, 0), (1, 0), (2, 0)]), robot_model("course"), time_limit=60.0)
+    >>> facts = RunFacts(run, path_maze([(0, 0), (1, 0), (2, 0)]), model, time_limit=60.0)
     >>> facts.arrived(), facts.node_that_drove(), facts.node_before(math.inf)
     (1.0, 'm/go', 'm/turn')
     >>> speed, t = cruise_speed(facts, 0.0, math.inf)
@@ -36,9 +38,10 @@ from thymio_bt.robot.model import RobotModel
 #: a quarter heading is a turn of the route once the robot has driven this far (m) holding it: a look
 #: to the side and back, turning on the spot, is not a turn taken
 TURN_TRAVEL = 0.02
-#: the robot has arrived where it stops once it stays this close (m) to that place (a turn on the
-#: spot moves base_link less than this)
+#: the robot has arrived where it stops once its wheel axle stays this close (m) to that place
 ARRIVED = 0.003
+#: the robot has come to rest once it stays in place this long (s)
+REST = 0.5
 #: the phase markers every run knows, by the event that marks them
 MARKERS = {"delete": "delete_entity", "spawn": "spawn_entity"}
 
@@ -93,23 +96,47 @@ class RunFacts:
         ended = [e for e in events if e["kind"] == "behaviour_end" and e["t"] <= t + 1e-9]
         return ended[-1]["path"] if ended else None
 
+    def axle(self, sample: tuple[float, float, float, float]) -> tuple[float, float]:
+        """Where the wheel axle's centre was at a trajectory ``sample``: the point a turn on the
+        spot leaves in place (base_link, ahead of it, swings 2.4 cm in a quarter turn)."""
+        return self.model.axle_of(Pose(*sample[1:4]))[:2]
+
     def arrived(self, t: float | None = None) -> float | None:
         """When the robot reached the place it is at at ``t`` (the end when None) and stayed within
-        :data:`ARRIVED` of it: the moment its last drive there ended."""
+        :data:`ARRIVED` of it (its axle: turning on the spot is staying): the moment its last
+        drive there ended."""
         trajectory = self.result.trajectory
         here = self.sample(t)
         if here is None:
             return None
+        at = self.axle(here)
         until = [s for s in trajectory if s[0] <= here[0] + 1e-9]
         for before, after in zip(reversed(until[:-1]), reversed(until), strict=False):
-            if math.dist(before[1:3], here[1:3]) > ARRIVED:
+            if math.dist(self.axle(before), at) > ARRIVED:
                 return after[0]
         return until[0][0] if until else here[0]
 
+    def first_stop(self) -> float | None:
+        """When the robot first came to rest after driving: it then stayed within :data:`ARRIVED`
+        of that place for :data:`REST` s (a turn on the spot is rest), or the run ended; None
+        without a trajectory."""
+        trajectory = self.result.trajectory
+        if not trajectory:
+            return None
+        axles = [self.axle(s) for s in trajectory]
+        for i, here in enumerate(trajectory):
+            if math.dist(axles[i], axles[0]) <= ARRIVED:
+                continue  # not driven yet
+            still = [j for j in range(i, len(trajectory)) if trajectory[j][0] <= here[0] + REST + 1e-9]
+            rested = trajectory[still[-1]][0] >= here[0] + REST - 1e-9
+            if rested and all(math.dist(axles[j], axles[i]) <= ARRIVED for j in still):
+                return float(here[0])
+        return float(trajectory[-1][0])
+
     def node_that_drove(self, t: float | None = None, event: dict[str, Any] | None = None) -> str | None:
         """The node that brought the robot where it is at ``t`` (the end when None): the first to
-        end once it arrived there, not a turn on the spot or a check made after it (before
-        ``event``, when given)."""
+        end once it arrived there (it notices its stop a tick later, perhaps), not a turn on the
+        spot or a check made after it; only nodes that ended before ``event``, when given."""
         end = math.inf if t is None else t
         arrived = self.arrived(t)
         events = self.result.events
@@ -117,7 +144,7 @@ class RunFacts:
             events = events[: next((i for i, e in enumerate(events) if e is event), len(events))]
         if arrived is not None:
             for e in events:
-                if e["kind"] == "behaviour_end" and arrived - 1e-9 <= e["t"] <= end + 1e-9:
+                if e["kind"] == "behaviour_end" and e["t"] >= arrived - 1e-9:
                     return str(e["path"])
         return self.node_before(end, event)
 
