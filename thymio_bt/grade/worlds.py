@@ -264,11 +264,12 @@ def variant_mission(
     mission_path: str | Path, variant: Variant, run_plugins: bool = True, base: Path | None = None
 ) -> Mission:
     """The mission at ``mission_path`` in ``variant``'s world (a made maze goes to a temporary
-    folder; ``base``: the folder the variant's maze file is relative to, the current one if None)."""
+    folder; ``base``: the folder the variant's maze file is relative to, the current one if None; a
+    secret seed from :data:`SECRET_VARIABLE`)."""
     import tempfile
 
     folder = Path(tempfile.mkdtemp(prefix="thymio-bt-world-"))
-    return World.of(variant, base or Path("."), folder).mission(mission_path, run_plugins)
+    return World.of(variant, base or Path("."), folder, course_secret()).mission(mission_path, run_plugins)
 
 
 def make_worlds(assignment: Assignment, path: Path, folder: Path) -> list[World]:
