@@ -312,6 +312,10 @@ def test_student_pages_carry_nothing_of_a_hidden_world(tmp_path, monkeypatch):
     assert f"wrote the site: {site / 'index.html'} (2 pages)" in result.output
     text = "\n".join(p.read_text() for p in site.rglob("*") if p.is_file())
     assert sorted(p.name for p in site.rglob("*")) == ["dana.html", "index.html", "students"]  # no worlds/
+    assert sorted(p.name for p in (tmp_path / "results_worlds").iterdir()) == [
+        "secret_box.yaml",
+        "secret_corridor.yaml",
+    ]
     for secret in ("secret_box", "secret_corridor", "part12_long_part1", "0.18"):
         assert secret not in text, secret
     assert text.count("thymio-bt run ") == 1  # the one run of the public world, which failed

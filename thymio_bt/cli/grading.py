@@ -102,8 +102,10 @@ def grade(
         workers_or_dask(workers, dask)
         if for_students and html is None:
             raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
-        worlds = _worlds_folder(out or update, None if for_students else html)
+        worlds = _worlds_folder(out or update, html)
         relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
+        # pages for students hold the public worlds' mazes (their commands name them), never a hidden one's
+        hidden = (_worlds_folder(out or update, None) or _temporary()) if for_students else None
         with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
             results = run_grade(
                 assignment,
@@ -116,6 +118,7 @@ def grade(
                 started=progress.start,
                 secret=course_secret(secret),
                 relative_to=relative_to,
+                hidden_worlds=hidden,
             )
         if previous is not None:
             from thymio_bt.grade.grader import update as updated
@@ -173,11 +176,18 @@ def _site_folder(path: Path) -> Path:
     return path
 
 
+def _temporary() -> Path:
+    """A new temporary folder (the hidden worlds' mazes, when the results are not written)."""
+    import tempfile
+
+    return Path(tempfile.mkdtemp(prefix="thymio-bt-hidden-worlds-"))
+
+
 def _worlds_folder(out: Path | None, html: Path | None) -> Path | None:
     """Where generated mazes go: beside the results (so the reproduce commands name files that stay)."""
     if html is not None:
         return html / "worlds"
-    if out is not None and str(out) != "-":  # ``--for-students`` pages never hold a world
+    if out is not None and str(out) != "-":
         return out.parent / f"{out.stem}_worlds"
     return None
 

@@ -64,6 +64,7 @@ def grade(
     secret: str | None = None,
     select: Callable[[list[World]], list[World]] | None = None,
     relative_to: Path | None = None,
+    hidden_worlds: Path | None = None,
 ) -> dict[str, Any]:
     """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
@@ -72,11 +73,12 @@ def grade(
     runs each student will make, once the submissions are read; ``progress`` hears each run end.
     ``secret``: the course's, for generated worlds with a secret seed; ``select``: the worlds to run
     (all when None); ``relative_to``: the folder the results go to, which the commands reproducing
-    runs are relative to (the current one when None)."""
+    runs are relative to (the current one when None); ``hidden_worlds``: where the hidden
+    variants' mazes go instead of ``worlds`` (out of a site students see)."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
-    assignment, made = load_worlds(path, folder, secret)
+    assignment, made = load_worlds(path, folder, secret, hidden_worlds)
     if select is not None:
         made = select(made)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
@@ -168,6 +170,7 @@ def results(
     entries: list[Entry],
     wall: float,
     relative_to: Path | None = None,
+    hidden_worlds: Path | None = None,
 ) -> dict[str, Any]:
     """The results.json data."""
     commands = Commands(assignment, path, relative_to)

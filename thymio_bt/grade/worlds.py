@@ -283,14 +283,16 @@ def make_worlds(assignment: Assignment, path: Path, folder: Path) -> list[World]
     return worlds
 
 
-def load_worlds(path: str | Path, folder: Path, secret: str | None = None) -> tuple[Assignment, list[World]]:
-    """Read the assignment at ``path`` and make its worlds in ``folder`` (``secret``: the course's,
-    for secret seeds): every problem of the file, its schema, variants, criteria, palette, mazes
-    and starts, found and reported at once."""
+def load_worlds(
+    path: str | Path, folder: Path, secret: str | None = None, hidden_folder: Path | None = None
+) -> tuple[Assignment, list[World]]:
+    """Read the assignment at ``path`` and make its worlds in ``folder`` (the hidden variants' in
+    ``hidden_folder``, when given; ``secret``: the course's, for secret seeds): every problem of the
+    file, its schema, variants, criteria, palette, mazes and starts, found and reported at once."""
     from thymio_bt.grade.assignment import read_assignment
 
     reading = read_assignment(path)
-    worlds, problems = _worlds(reading.variants, reading.data, Path(reading.file), folder, secret)
+    worlds, problems = _worlds(reading.variants, reading.data, Path(reading.file), folder, secret, hidden_folder)
     problems = reading.problems + problems
     if problems or reading.assignment is None:
         raise UserError(problems)
@@ -298,16 +300,23 @@ def load_worlds(path: str | Path, folder: Path, secret: str | None = None) -> tu
 
 
 def _worlds(
-    variants: list[tuple[int, Variant]], data: Any, path: Path, folder: Path, secret: str | None = None
+    variants: list[tuple[int, Variant]],
+    data: Any,
+    path: Path,
+    folder: Path,
+    secret: str | None = None,
+    hidden_folder: Path | None = None,
 ) -> tuple[list[World], list[Problem]]:
-    """The worlds of ``variants`` (each with its index in the file) and the problems of those that
-    cannot be made."""
+    """The worlds of ``variants`` (each with its index in the file; made mazes into ``folder``, a
+    hidden variant's into ``hidden_folder`` when given) and the problems of those that cannot be
+    made."""
     from thymio_bt.inputs.validation import locate
 
     worlds, problems = [], []
     for i, variant in variants:
         try:
-            worlds.append(World.of(variant, path.parent, folder, secret))
+            made_in = hidden_folder if variant.visibility == "hidden" and hidden_folder is not None else folder
+            worlds.append(World.of(variant, path.parent, made_in, secret))
         except UserError as exc:
             for problem in exc.problems:
                 key = "start" if problem.path == "start" else "generate" if variant.generate is not None else "maze"
