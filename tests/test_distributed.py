@@ -70,6 +70,6 @@ def test_the_cli_grades_on_a_dask_scheduler_as_it_does_locally(cluster, tmp_path
     assert (
         [(s["name"], s["status"], s["score"]) for s in dask]
         == [(s["name"], s["status"], s["score"]) for s in local]
-        == [("ada", "graded", 10.0), ("dana", "graded", 6.0), ("eve", "invalid", 0.0)]
+        == [("ada", "graded", 11.0), ("dana", "graded", 7.0), ("eve", "invalid", 0.0)]
     )
     assert [r["final_pose"] for r in dask[1]["runs"]] == [r["final_pose"] for r in local[1]["runs"]]

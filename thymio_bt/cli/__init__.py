@@ -9,20 +9,21 @@ family of commands has its module, imported here so that ``main`` has them all:
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
 ``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
-(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``), :mod:`~thymio_bt.cli.serving` (``serve ros2``)
-and :mod:`~thymio_bt.cli.viewing` (``view``).
+(``grade``), :mod:`~thymio_bt.cli.linting` (``lint``), :mod:`~thymio_bt.cli.serving` (``serve ros2``),
+:mod:`~thymio_bt.cli.viewing` (``view``) and :mod:`~thymio_bt.cli.checking` (``check``).
 
 Example::
 
     >>> sorted(main.commands)  # doctest: +NORMALIZE_WHITESPACE
-    ['backends', 'behaviours', 'calibrate', 'compare', 'export', 'grade', 'lint', 'maze', 'palette', 'replay', 'run',
-     'schema', 'serve', 'sweep', 'tree', 'validate', 'view']
+    ['backends', 'behaviours', 'calibrate', 'check', 'compare', 'export', 'grade', 'lint', 'maze', 'palette',
+     'replay', 'run', 'schema', 'serve', 'sweep', 'tree', 'validate', 'view']
 """
 
 from __future__ import annotations
 
 from thymio_bt.cli.app import POSITIVE, main
 from thymio_bt.cli.calibration import calibrate_command
+from thymio_bt.cli.checking import check
 from thymio_bt.cli.comparing import compare
 from thymio_bt.cli.grading import grade
 from thymio_bt.cli.inspection import backends_command, behaviours, schema, tree, validate
@@ -41,6 +42,7 @@ __all__ = [
     "backends_command",
     "behaviours",
     "calibrate_command",
+    "check",
     "compare",
     "export",
     "grade",

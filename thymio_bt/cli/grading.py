@@ -34,7 +34,21 @@ from thymio_bt.run.interrupts import Interrupts
 @path_option("--out", help="Write the results JSON here (the contract of docs/grading.md).")
 @path_option("--csv", "csv_file", help="Write a gradebook CSV here: a row per student, a column per criterion.")
 @path_option("--junit", help="Write JUnit XML here: a testsuite per student, a testcase per criterion.")
+@path_option(
+    "--gradescope",
+    help="Write Gradescope's autograder results.json here (one submission; hidden variants' tests after the due date).",
+)
 @path_option("--html", help="Write a static site into this folder: the class page and a page per student.")
+@path_option(
+    "--update",
+    help="Regrade SUBMISSIONS into these results, keeping the others; written to --out (else this file).",
+)
+@click.option(
+    "--for-students",
+    is_flag=True,
+    help="Write the --html pages for the students: nothing of a hidden variant's maze, path, start or commands.",
+)
+@path_option("--secret", help="The course's secret, for generated worlds with a secret seed (else THYMIO_BT_SECRET).")
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Processes (default: all cores).")
 @click.option("--dask", default=None, metavar="ADDRESS", help="Grade on a Dask cluster (needs thymio-bt[dask]).")
 @click.option(
@@ -50,7 +64,11 @@ def grade(
     out: Path | None,
     csv_file: Path | None,
     junit: Path | None,
+    gradescope: Path | None,
     html: Path | None,
+    update: Path | None,
+    for_students: bool,
+    secret: Path | None,
     workers: int | None,
     dask: str | None,
     fail_under: float | None,
@@ -60,17 +78,34 @@ def grade(
 
     from thymio_bt.cli.sweeps import dask_executor
     from thymio_bt.grade.grader import grade as run_grade
-    from thymio_bt.grade.reports import gradebook_csv, junit_xml, summary_table
+    from thymio_bt.grade.reports import gradebook_csv, gradescope_json, junit_xml, summary_table
+    from thymio_bt.grade.worlds import course_secret
 
     try:
         outputs = {
             name: Output(path, option)
-            for name, path, option in (("out", out, "--out"), ("csv", csv_file, "--csv"), ("junit", junit, "--junit"))
+            for name, path, option in (
+                ("out", out, "--out"),
+                ("csv", csv_file, "--csv"),
+                ("junit", junit, "--junit"),
+                ("gradescope", gradescope, "--gradescope"),
+            )
             if path is not None
         }
+        previous = _previous(update) if update is not None else None
+        if update is not None and out is None:
+            outputs["out"] = Output(update, "--update")
+        if gradescope is not None and len(submissions) != 1:
+            count = len(submissions)
+            raise UserError(f"--gradescope grades one submission, got {count} (hint: Gradescope runs one at a time)")
         site = _site_folder(html) if html is not None else None
         workers_or_dask(workers, dask)
-        worlds = _worlds_folder(out, html)
+        if for_students and html is None:
+            raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
+        worlds = _worlds_folder(out or update, html)
+        relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
+        # pages for students hold the public worlds' mazes (their commands name them), never a hidden one's
+        hidden = (_worlds_folder(out or update, None) or _temporary()) if for_students else None
         with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
             results = run_grade(
                 assignment,
@@ -81,17 +116,33 @@ def grade(
                 progress=progress,
                 stop=lambda: interrupts.signal is not None,
                 started=progress.start,
+                secret=course_secret(secret),
+                relative_to=relative_to,
+                hidden_worlds=hidden,
             )
+        if previous is not None:
+            from thymio_bt.grade.grader import update as updated
+
+            results = updated(previous, results)
         if "out" in outputs:
             outputs["out"].write_text(json_text(results))
         if "csv" in outputs:
             outputs["csv"].write_text(gradebook_csv(results))
         if "junit" in outputs:
             outputs["junit"].write_text(junit_xml(results))
+        if "gradescope" in outputs:
+            if len(results["students"]) != 1:
+                count = len(results["students"])
+                raise UserError(
+                    f"--gradescope: grades one submission, got {count} (hint: Gradescope runs one at a time)"
+                )
+            outputs["gradescope"].write_text(json_text(gradescope_json(results)))
         if site is not None:
+            from thymio_bt.grade.redact import for_students as redacted
             from thymio_bt.grade.site import write_site
 
-            write_site(results, site)
+            pages = write_site(redacted(results) if for_students else results, site)
+            click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
     except UserError as exc:
         fail(exc)
     click.echo(summary_table(results), err=any(o.is_stdout for o in outputs.values()))
@@ -102,6 +153,19 @@ def grade(
     sys.exit(1 if below or any(s["status"] == "error" for s in students) else 0)
 
 
+def _previous(path: Path) -> dict[str, Any]:
+    """The results ``--update`` regrades into."""
+    import json
+
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise UserError(f"--update {path}: cannot read results from it: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("students"), list):
+        raise UserError(f"--update {path}: not the results.json of thymio-bt grade (hint: give grade's --out file)")
+    return data
+
+
 def _site_folder(path: Path) -> Path:
     """The ``--html`` folder: made if missing, refused if it is a file."""
     if path.exists() and not path.is_dir():
@@ -110,6 +174,13 @@ def _site_folder(path: Path) -> Path:
         raise UserError(f"--html {path}: the folder {path.parent} does not exist (hint: mkdir -p {path.parent})")
     path.mkdir(exist_ok=True)
     return path
+
+
+def _temporary() -> Path:
+    """A new temporary folder (the hidden worlds' mazes, when the results are not written)."""
+    import tempfile
+
+    return Path(tempfile.mkdtemp(prefix="thymio-bt-hidden-worlds-"))
 
 
 def _worlds_folder(out: Path | None, html: Path | None) -> Path | None:

@@ -87,12 +87,10 @@ def _check_assignment(path: Path) -> str:
     """Validate an assignment file of ``thymio-bt grade``, its variants' worlds made."""
     import tempfile
 
-    from thymio_bt.grade.assignment import load_assignment
-    from thymio_bt.grade.worlds import make_worlds
+    from thymio_bt.grade.worlds import load_worlds
 
-    assignment = load_assignment(path)
     with tempfile.TemporaryDirectory() as folder:
-        make_worlds(assignment, path, Path(folder))
+        assignment, _ = load_worlds(path, Path(folder))
     runs = sum(len(v.seed_list) for v in assignment.variants)
     return (
         f"assignment: {len(assignment.variants)} variants ({runs} runs a submission), "

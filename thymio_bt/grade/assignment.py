@@ -24,10 +24,11 @@ Example::
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from thymio_bt.data import ASSIGNMENTS
 from thymio_bt.errors import Problem, UserError, did_you_mean
@@ -37,6 +38,10 @@ from thymio_bt.maze.model import Angle, Length, Point, Spawn, parsed_quantity
 
 #: seconds, written with a unit or not (``60s``, ``2min``)
 Duration = Annotated[float, parsed_quantity("time")]
+#: metres per second (``10cm/s``)
+Speed = Annotated[float, parsed_quantity("speed")]
+#: MiB, written with a unit or not (``512MiB``, ``1GiB``, ``512MB``)
+Memory = Annotated[float, parsed_quantity("memory")]
 
 EXAMPLE = """\
 name: stop_at_wall
@@ -58,7 +63,11 @@ class Generate(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     kind: Literal["perfect", "path", "contest"] = Field(description="the kind of maze")
-    seed: int = Field(0, ge=0, le=2**31, description="the generator's seed")
+    seed: Annotated[int, Field(ge=0, le=2**31)] | Literal["secret"] = Field(
+        0,
+        description="the generator's seed, or `secret`: drawn from the course's secret (the "
+        "THYMIO_BT_SECRET environment variable or grade --secret FILE), in no file a student has",
+    )
     cols: int = Field(6, ge=2, le=32, description="perfect: columns of cells")
     rows: int = Field(6, ge=2, le=32, description="perfect: rows of cells")
     length: int = Field(8, ge=3, le=64, description="path: cells along the corridor")
@@ -88,6 +97,11 @@ class Variant(BaseModel):
     mirror: bool = Field(False, description="mirror the maze left-right (left turns become right turns)")
     start: str | Spawn | None = Field(
         None, description="a spawn name of the maze or [x, y, yaw]; the mission's own if absent"
+    )
+    visibility: Literal["public", "hidden"] = Field(
+        "public",
+        description="public: students may see and run it (thymio-bt check); hidden: its maze, path, start "
+        "and reproducing command never reach a student-facing output",
     )
     robot: Literal["course", "enki", "real"] = Field("course", description="the robot profile")
     seeds: int | list[int] = Field(1, description="how many noise seeds (0, 1, ...) or the list of seeds")
@@ -155,6 +169,35 @@ class DeadEndCheck(GapCheck):
         description="a side wall at most this far from base_link; by default 3/4 of the maze's grid "
         "pitch (0.15 m on the course's 0.2 m grid)",
     )
+    after: str | None = Field(
+        None,
+        min_length=1,
+        description="the stop counts only once this node (a type or a path glob) has ended; by default "
+        "only once the route has taken the variant's turns",
+    )
+
+    @model_validator(mode="after")
+    def _one_moment(self) -> DeadEndCheck:
+        """A dead end is judged where the run ends (or at the delete); ``after`` is the phase it
+        must come in, not another moment."""
+        if self.at is None:
+            raise ValueError("a dead end is judged `at: end` or `at: delete`")
+        return self
+
+
+class SpeedCheck(BaseModel):
+    """A phase's cruise speed: the median speed while driving at least half the phase's top speed
+    (speeding up, slowing down to a wall and turning on the spot are not cruising)."""
+
+    model_config = ConfigDict(extra="forbid")
+    speed: Speed = Field(gt=0, le=2, description="the cruise speed wanted")
+    tolerance: Speed = Field(0.02, gt=0, le=2, description="how far off still counts")
+    after: str | None = Field(
+        None, min_length=1, description="the phase starts at this: delete, spawn, or a node (type or path glob) ended"
+    )
+    before: str | None = Field(
+        None, min_length=1, description="the phase ends at this: delete, spawn, or a node (type or path glob) ended"
+    )
 
 
 class RespawnCheck(BaseModel):
@@ -180,6 +223,7 @@ CHECKS = (
     "leaves_maze",
     "min_clearance",
     "no_reverse",
+    "speed",
 )
 
 
@@ -191,7 +235,12 @@ class Criterion(BaseModel):
     name: str = Field(min_length=1, max_length=120, description="what the student sees")
     points: float = Field(gt=0, le=1000, description="what passing it earns")
     variants: list[str] | None = Field(None, description="the variants it judges (all when absent)")
-    pass_rate: float = Field(1.0, gt=0, le=1, description="the share of its runs that must pass")
+    pass_rate: float = Field(1.0, gt=0, le=1, description="the share of a variant's runs that must pass")
+    credit: Literal["shared", "all"] = Field(
+        "shared",
+        description="shared: the points are shared over its variants, each passed variant earns its share; "
+        "all: every variant must pass for any point",
+    )
     finishes: Literal[True] | None = Field(None, description="the tree ends by itself before the time limit")
     no_collision: Literal[True] | None = Field(None, description="no contact with a wall")
     max_time: Duration | None = Field(None, gt=0, le=36000, description="the tree ends within this")
@@ -204,6 +253,7 @@ class Criterion(BaseModel):
     leaves_maze: Literal[True] | None = Field(None, description="base_link ends outside the maze's walls")
     min_clearance: Length | None = Field(None, gt=0, le=1, description="never closer to a wall than this")
     no_reverse: Literal[True] | None = Field(None, description="never drives backwards")
+    speed: SpeedCheck | None = Field(None, description="a phase's cruise speed")
 
     @model_validator(mode="after")
     def _one_check(self) -> Criterion:
@@ -245,7 +295,9 @@ class Limits(BaseModel):
     model_config = ConfigDict(extra="forbid")
     cpu: Duration = Field(20.0, gt=0, le=3600, description="CPU seconds per run")
     wall: Duration | None = Field(None, gt=0, le=36000, description="wall-clock seconds per run (3 x cpu + 5 s)")
-    memory: int = Field(1024, ge=64, le=65536, description="MiB of address space a submission's process may add")
+    memory: Memory = Field(
+        1024, ge=64, le=65536, description="address space a submission's process may add (MiB, or 512MiB, 2GiB)"
+    )
 
 
 class Assignment(BaseModel):
@@ -312,52 +364,109 @@ def resolve_assignment(ref: str | Path) -> Path:
     )
 
 
+@dataclass
+class Reading:
+    """An assignment file read as far as it goes: the assignment (None when its schema fails), the
+    variants that are valid on their own (with their index) and every problem found."""
+
+    file: str
+    data: Any
+    assignment: Assignment | None
+    variants: list[tuple[int, Variant]]
+    problems: list[Problem]
+
+
 def load_assignment(path: str | Path) -> Assignment:
     """Read and check an assignment file (or a shipped one, by name); a :class:`UserError` with
     file:line for every problem."""
+    reading = read_assignment(path)
+    if reading.problems or reading.assignment is None:
+        raise UserError(reading.problems)
+    return reading.assignment
+
+
+def read_assignment(path: str | Path) -> Reading:
+    """Read an assignment file and find every problem in one go: the schema's, and, in the parts
+    that are valid on their own, the variants', criteria's and palette's (the worlds' are
+    :func:`~thymio_bt.grade.worlds.load_worlds`')."""
     path = resolve_assignment(path)
     file = str(path)
     data = load_yaml(path, "assignment")
-    assignment = validate(Assignment, data, file)
-    problems = []
-    names = [v.name for v in assignment.variants]
-    for i, variant in enumerate(assignment.variants):
+    problems: list[Problem] = []
+    try:
+        assignment: Assignment | None = validate(Assignment, data, file)
+    except UserError as exc:
+        assignment, problems = None, list(exc.problems)
+    raw = data if isinstance(data, dict) else {}
+    if assignment is not None:
+        variants = list(enumerate(assignment.variants))
+        criteria = list(enumerate(assignment.criteria))
+        names: list[Any] = [v.name for v in assignment.variants]
+    else:
+        variants = _valid_alone(Variant, raw.get("variants"))
+        criteria = _valid_alone(Criterion, raw.get("criteria"))
+        listed = raw.get("variants")
+        names = [v.get("name") if isinstance(v, dict) else None for v in (listed if isinstance(listed, list) else [])]
+    for i, variant in variants:
         if names.index(variant.name) != i:
             line, col = _mark(data, ["variants", i, "name"])
             problems.append(Problem(f"variant '{variant.name}' is defined twice", file, line, col))
-    for i, criterion in enumerate(assignment.criteria):
-        for j, name in enumerate(criterion.variants or []):
-            if name not in names:
-                line, col = _mark(data, ["criteria", i, "variants", j])
-                problems.append(
-                    Problem(
-                        f"criterion '{criterion.name}' names no variant '{name}'",
-                        file,
-                        line,
-                        col,
-                        hint=did_you_mean(name, names),
-                    )
-                )
-        applies = [v for v in assignment.variants if criterion.applies_to(v)]
-        for check, missing, hint in (
-            (
-                "goal",
-                lambda v: v.goal is None and not _maze_may_have_goal(v),
-                "a `goal: {centre: [x, y], radius: 5cm}`",
-            ),
-            (
-                "turns",
-                lambda v: v.turns is None and not _generated_path(v),
-                "`turns: LLR...` (or the criterion its own)",
-            ),
-        ):
-            if getattr(criterion, check) is True and any(missing(v) for v in applies):
-                line, col = _mark(data, ["criteria", i, check])
-                message = f"criterion '{criterion.name}' wants the variant's {check}, and a variant gives none"
-                problems.append(Problem(message, file, line, col, hint=f"give the variants {hint}"))
-    if problems:
-        raise UserError(problems)
-    return assignment
+    for i, criterion in criteria:
+        problems += _criterion_problems(data, file, i, criterion, names, [v for _, v in variants])
+    problems += _palette_problems(data, file)
+    return Reading(file, data, assignment, variants, problems)
+
+
+def _valid_alone(model: type[BaseModel], items: Any) -> list[tuple[int, Any]]:
+    """The items of a list that are valid ``model`` s on their own, with their index."""
+    out = []
+    for i, item in enumerate(items if isinstance(items, list) else []):
+        try:
+            out.append((i, model.model_validate(item)))
+        except ValidationError:
+            continue
+    return out
+
+
+def _criterion_problems(
+    data: Any, file: str, i: int, criterion: Criterion, names: list[Any], variants: list[Variant]
+) -> list[Problem]:
+    """A criterion's problems: the variants it names exist and give what it compares with."""
+    problems = []
+    for j, name in enumerate(criterion.variants or []):
+        if name not in names:
+            line, col = _mark(data, ["criteria", i, "variants", j])
+            message = f"criterion '{criterion.name}' names no variant '{name}'"
+            problems.append(Problem(message, file, line, col, hint=did_you_mean(name, [str(n) for n in names])))
+    applies = [v for v in variants if criterion.applies_to(v)]
+    for check, missing, hint in (
+        ("goal", lambda v: v.goal is None and not _maze_may_have_goal(v), "a `goal: {centre: [x, y], radius: 5cm}`"),
+        ("turns", lambda v: v.turns is None and not _generated_path(v), "`turns: LLR...` (or the criterion its own)"),
+    ):
+        if getattr(criterion, check) is True and any(missing(v) for v in applies):
+            line, col = _mark(data, ["criteria", i, check])
+            message = f"criterion '{criterion.name}' wants the variant's {check}, and a variant gives none"
+            problems.append(Problem(message, file, line, col, hint=f"give the variants {hint}"))
+    return problems
+
+
+def _palette_problems(data: Any, file: str) -> list[Problem]:
+    """The palette's node names must be node types (a misspelt ``forbid`` would forbid nothing)."""
+    from thymio_bt.mission.registry import default_registry
+
+    palette = data.get("palette") if isinstance(data, dict) else None
+    if not isinstance(palette, dict):
+        return []
+    known = list(default_registry())
+    problems = []
+    for key in ("forbid", "allow"):
+        for j, name in enumerate(palette.get(key) or []):
+            if isinstance(name, str) and name not in known:
+                line, col = _mark(data, ["palette", key, j])
+                message = f"palette {key}: '{name}' is no node type, so it {key}s nothing"
+                hint = did_you_mean(name, known) + "; `thymio-bt behaviours` lists them"
+                problems.append(Problem(message, file, line, col, f"palette.{key}.{j}", hint))
+    return problems
 
 
 def _maze_may_have_goal(variant: Variant) -> bool:

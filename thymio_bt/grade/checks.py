@@ -28,19 +28,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from fnmatch import fnmatchcase
-from typing import Any
+from dataclasses import dataclass
 
 from thymio_bt.grade.assignment import Criterion, GoalDisc
-from thymio_bt.maze import Maze
+from thymio_bt.grade.facts import RunFacts, cruise_speed, turns_taken
 from thymio_bt.mission.expect import stop_problem
-from thymio_bt.robot.interface import Pose
-from thymio_bt.robot.model import RobotModel
 
-#: a quarter heading is a turn of the route once the robot has driven this far (m) holding it: a look
-#: to the side and back, turning on the spot, is not a turn taken
-TURN_TRAVEL = 0.02
 #: at a dead end a side wall is at most this many grid pitches from base_link (3/4: the cell's half
 #: and room for a robot off its centre line; an open side's ray reaches the next cell's far wall,
 #: 1.5 pitches away, or further)
@@ -57,57 +50,6 @@ class Judgement:
     feedback: str | None = None
     moment: dict[str, float] | None = None
     path: str | None = None
-
-
-@dataclass
-class RunFacts:
-    """A finished run as the checks see it: its result, the maze it ran in (and its grid pitch), the
-    robot, and what the variant expects (``goal``, ``turns``)."""
-
-    result: Any
-    maze: Maze
-    model: RobotModel
-    time_limit: float
-    goal: GoalDisc | None = None
-    turns: str | None = None
-    #: the maze's grid pitch (m): what "a side wall close by" means at a dead end
-    cell: float = 0.2
-    cache: dict[str, Any] = field(default_factory=dict)
-
-    def sample(self, t: float | None = None) -> tuple[float, float, float, float] | None:
-        """The trajectory's true (t, x, y, yaw) at ``t``: the last sample at or before it, the first
-        when none is; the end when ``t`` is None; None without a trajectory."""
-        trajectory = self.result.trajectory
-        if not trajectory:
-            return None
-        if t is None:
-            return trajectory[-1]
-        return max((s for s in trajectory if s[0] <= t + 1e-9), default=trajectory[0], key=lambda s: s[0])
-
-    def moment(self, t: float | None = None) -> dict[str, float] | None:
-        """The true position at ``t`` (the end when None), as results show a failing moment."""
-        sample = self.sample(t)
-        return (
-            None if sample is None else {"t": round(sample[0], 3), "x": round(sample[1], 4), "y": round(sample[2], 4)}
-        )
-
-    def pose_at(self, t: float | None) -> Pose | None:
-        """The true pose at ``t`` (the end when None)."""
-        sample = self.sample(t)
-        return None if sample is None else Pose(*sample[1:4])
-
-    def first(self, kind: str) -> dict[str, Any] | None:
-        """The first event of ``kind``."""
-        return next((e for e in self.result.events if e["kind"] == kind), None)
-
-    def node_before(self, t: float, event: dict[str, Any] | None = None) -> str | None:
-        """The path of the last node that ended at or before ``t`` (before ``event``, when given):
-        the one that brought the robot there."""
-        events = self.result.events
-        if event is not None:
-            events = events[: next((i for i, e in enumerate(events) if e is event), len(events))]
-        ended = [e for e in events if e["kind"] == "behaviour_end" and e["t"] <= t + 1e-9]
-        return ended[-1]["path"] if ended else None
 
 
 def judge(criterion: Criterion, facts: RunFacts) -> Judgement:
@@ -176,41 +118,65 @@ def _goal(criterion: Criterion, facts: RunFacts) -> Judgement:
 def _gap(criterion: Criterion, facts: RunFacts) -> Judgement:
     spec = criterion.gap or criterion.dead_end
     assert spec is not None
-    blame = None
-    if spec.after is not None:
-        ended = next(
-            (
-                e
-                for e in facts.result.events
-                if e["kind"] == "behaviour_end" and (e["name"] == spec.after or fnmatchcase(e["path"], spec.after))
-            ),
-            None,
-        )
+    event = None
+    if criterion.gap is not None and spec.after is not None:
+        ended = facts.ended(spec.after)
         if ended is None:
             return Judgement(False, f"no {spec.after} ended, so the gap after it cannot be measured", facts.moment())
         t: float | None = ended["t"]
         blame = ended["path"]
-    elif spec.at == "delete":
+    elif spec.at == "delete" and facts.first("delete_entity") is not None:
         event = facts.first("delete_entity")
-        if event is None:
-            return Judgement(
-                False, "the robot was never deleted, so its stop before the delete cannot be measured", facts.moment()
-            )
+        assert event is not None
         t = event["t"]
-        blame = facts.node_before(t, event)
+        blame = facts.node_that_drove(t, event)
+    elif spec.at == "delete":  # a run that never deleted the robot: its stop is where it first stopped
+        t = facts.first_stop()
+        blame = facts.node_that_drove(t)
     else:
         t = None
-        blame = facts.node_before(math.inf)
+        blame = facts.node_that_drove(None)
     pose = facts.pose_at(t)
     if pose is None:
         return Judgement(False, "no robot to measure", None)
     side = None
     if criterion.dead_end is not None:
+        early = _before_its_phase(criterion, facts)
+        if early is not None:
+            return Judgement(False, early, facts.moment(t), blame)
         side = criterion.dead_end.side or DEAD_END_SIDE * facts.cell
     problem = stop_problem(facts.maze, facts.model, pose, spec.distance, spec.tolerance, side)
     if problem is not None:
         return Judgement(False, problem, facts.moment(t), blame)
     return Judgement(True)
+
+
+def _before_its_phase(criterion: Criterion, facts: RunFacts) -> str | None:
+    """Why a dead-end stop does not count yet: the node it must come after never ended, or the
+    route has not taken the variant's turns (a stop at part 1's wall is no dead end of part 2)."""
+    spec = criterion.dead_end
+    assert spec is not None
+    if spec.after is not None:
+        return (
+            None if facts.ended(spec.after) else f"the run ended before any {spec.after} ended, so not at the dead end"
+        )
+    wanted = facts.turns
+    if not wanted:
+        return None
+    made = len(turns_taken(facts))
+    if made >= len(wanted):
+        return None
+    turns = "turn" if len(wanted) == 1 else "turns"
+    return f"ended before the dead end: took {made or 'none'} of the {len(wanted)} {turns} on the way there"
+
+
+def count(n: int, noun: str) -> str:
+    """``n`` things in words: 'no turn', '1 turn', '3 turns'.
+
+    >>> count(0, "turn"), count(1, "turn"), count(3, "left turn")
+    ('no turn', '1 turn', '3 left turns')
+    """
+    return f"no {noun}" if n == 0 else f"{n} {noun}{'s' * (n != 1)}"
 
 
 def _order(criterion: Criterion, facts: RunFacts) -> Judgement:
@@ -220,6 +186,14 @@ def _order(criterion: Criterion, facts: RunFacts) -> Judgement:
     for kind in kinds:
         times = [e["t"] for e in events if e["kind"] == kind]
         if not times:
+            run = facts.result
+            if run.status != "SUCCESS" and run.reason:  # the tree ended first: that is the cause
+                return Judgement(
+                    False,
+                    f"the tree {_ended(run.status)} before any {_said(kind)}: {run.reason}",
+                    facts.moment(),
+                    run.failed_path,
+                )
             return Judgement(False, f"no {_said(kind)} happened", facts.moment())
         if previous is not None and times[0] <= previous[1]:
             return Judgement(
@@ -230,6 +204,11 @@ def _order(criterion: Criterion, facts: RunFacts) -> Judgement:
             )
         previous = (kind, times[0])
     return Judgement(True)
+
+
+def _ended(status: str) -> str:
+    """'failed', 'timed out', 'ended FAILURE'."""
+    return {"FAILURE": "failed", "TIMEOUT": "timed out"}.get(status, f"ended {status}")
 
 
 def _said(kind: str) -> str:
@@ -262,34 +241,6 @@ def _respawn(criterion: Criterion, facts: RunFacts) -> Judgement:
     )
 
 
-def turns_taken(facts: RunFacts) -> list[tuple[str, float]]:
-    """The quarter turns of the robot's route (L or R, and when the robot reached each heading), from
-    its true poses; a respawn starts the count afresh, and a heading counts once the robot has driven
-    :data:`TURN_TRAVEL` holding it (looking to a side and back is no turn)."""
-    if "turns" in facts.cache:
-        return facts.cache["turns"]
-    spawns = [e["t"] for e in facts.result.events if e["kind"] == "spawn_entity"]
-    out: list[tuple[str, float]] = []
-    quarter = math.pi / 2
-    segment_start: float | None = None
-    for t, x, y, yaw in facts.result.trajectory:
-        if segment_start is None or any(segment_start < s <= t for s in spawns):
-            segment_start, base, heading, stable, candidate, since, origin = t, yaw, yaw, 0, 0, t, (x, y)
-            continue
-        heading += math.remainder(yaw - heading, math.tau)  # unwrapped
-        steps = (heading - base) / quarter
-        q = round(steps)
-        if abs(steps - q) > 1 / 3:  # between two quarter headings: no decision
-            continue
-        if q != candidate:
-            candidate, since, origin = q, t, (x, y)
-        elif q != stable and math.hypot(x - origin[0], y - origin[1]) >= TURN_TRAVEL - 1e-9:
-            out += [("L" if q > stable else "R", since)] * abs(q - stable)
-            stable = q
-    facts.cache["turns"] = out
-    return out
-
-
 def _turns(criterion: Criterion, facts: RunFacts) -> Judgement:
     wanted = facts.turns if criterion.turns is True else criterion.turns
     if wanted is None:
@@ -300,19 +251,73 @@ def _turns(criterion: Criterion, facts: RunFacts) -> Judgement:
         return Judgement(True)
     i = next((i for i, (a, b) in enumerate(zip(made, wanted, strict=False)) if a != b), min(len(made), len(wanted)))
     when = taken[i][1] if i < len(taken) else None
-    what = {"L": "left", "R": "right"}
-    if i < len(made) and i < len(wanted):
-        detail = f"turn {i + 1} went {what[made[i]]}, wanted {what[wanted[i]]}"
-    elif len(made) < len(wanted):
-        detail = f"stopped turning after {len(made)} turn{'s' * (len(made) != 1)}"
-    else:
-        detail = f"made {len(made) - len(wanted)} turn(s) too many"
+    return Judgement(False, turns_said(made, wanted), facts.moment(when), facts.node_before(when) if when else None)
+
+
+def turns_said(made: str, wanted: str) -> str:
+    """What went wrong with the turns, as a person says it.
+
+    >>> turns_said("", "LLLL")
+    'took no turn, wanted 4 left turns'
+    >>> turns_said("LL", "LLLL")
+    'took 2 left turns, then no more: wanted 4 left turns'
+    >>> turns_said("LLRL", "LLLL")
+    'turn 3 went right instead of left (took left, left, right, left; wanted 4 left turns)'
+    >>> turns_said("LLLLL", "LLLL")
+    'took 5 left turns, one too many: wanted 4 left turns'
+    """
+    i = next((i for i, (a, b) in enumerate(zip(made, wanted, strict=False)) if a != b), None)
+    if i is not None:
+        return (
+            f"turn {i + 1} went {_WAY[made[i]]} instead of {_WAY[wanted[i]]} "
+            f"(took {', '.join(_WAY[k] for k in made)}; wanted {_turns_in_words(wanted)})"
+        )
+    if not made:
+        return f"took no turn, wanted {_turns_in_words(wanted)}"
+    if len(made) < len(wanted):
+        return f"took {_turns_in_words(made)}, then no more: wanted {_turns_in_words(wanted)}"
+    extra = len(made) - len(wanted)
+    return f"took {_turns_in_words(made)}, {'one' if extra == 1 else extra} too many: wanted {_turns_in_words(wanted)}"
+
+
+_WAY = {"L": "left", "R": "right"}
+
+
+def _turns_in_words(turns: str) -> str:
+    """'4 left turns', '1 right turn', '3 turns (left, right, left)', 'no turn'."""
+    if len(set(turns)) == 1:
+        return count(len(turns), f"{_WAY[turns[0]]} turn")
+    if not turns:
+        return "no turn"
+    return f"{len(turns)} turns ({', '.join(_WAY[k] for k in turns)})"
+
+
+def _speed(criterion: Criterion, facts: RunFacts) -> Judgement:
+    spec = criterion.speed
+    assert spec is not None
+    start = 0.0 if spec.after is None else facts.marker(spec.after)
+    end = math.inf if spec.before is None else facts.marker(spec.before)
+    if start is None:
+        return Judgement(False, f"no {_said(spec.after or '')} happened, so the speed after it cannot be measured")
+    phase = _phase_said(spec.after, spec.before)
+    cruise = cruise_speed(facts, start, math.inf if end is None else end)
+    if cruise is None:
+        return Judgement(False, f"never drove {phase}", facts.moment(start), facts.node_before(math.inf))
+    speed, t = cruise
+    if abs(speed - spec.speed) <= spec.tolerance + 1e-9:
+        return Judgement(True)
     return Judgement(
         False,
-        f"turned {made or 'never'}, wanted {wanted}: {detail}",
-        facts.moment(when),
-        facts.node_before(when) if when else None,
+        f"drove at {100 * speed:.1f} cm/s {phase}, wanted {100 * spec.speed:g} +- {100 * spec.tolerance:g} cm/s",
+        facts.moment(t),
+        facts.node_running(t),
     )
+
+
+def _phase_said(after: str | None, before: str | None) -> str:
+    """'before the delete', 'after the spawn and before the delete', 'over the run'."""
+    parts = [f"after the {_said(after)}" if after else "", f"before the {_said(before)}" if before else ""]
+    return " and ".join(p for p in parts if p) or "over the run"
 
 
 def _leaves_maze(criterion: Criterion, facts: RunFacts) -> Judgement:
@@ -368,4 +373,5 @@ CHECK_FUNCTIONS: dict[str, Callable[[Criterion, RunFacts], Judgement]] = {
     "leaves_maze": _leaves_maze,
     "min_clearance": _min_clearance,
     "no_reverse": _no_reverse,
+    "speed": _speed,
 }

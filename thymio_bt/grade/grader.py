@@ -9,13 +9,14 @@ Example::
 
     >>> results = grade("assignments/course_part1_2.yaml", ["examples/class/ada", "examples/class/chen"])
     >>> [(s["name"], s["status"], s["score"], s["max"]) for s in results["students"]]
-    [('ada', 'graded', 10.0, 10.0), ('chen', 'graded', 1.0, 10.0)]
+    [('ada', 'graded', 11.0, 11.0), ('chen', 'graded', 2.0, 11.0)]
     >>> [p["message"] for p in results["students"][1]["palette"]], results["summary"]["runs"]
     (['WallFollow is not allowed in this assignment'], 24)
 """
 
 from __future__ import annotations
 
+import os
 import shlex
 import tempfile
 import time
@@ -25,12 +26,14 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.grade.assignment import Assignment, load_assignment, resolve_assignment
+from thymio_bt.grade.assignment import Assignment, Criterion, resolve_assignment
 from thymio_bt.grade.isolation import ForkPool, Limits
 from thymio_bt.grade.palette import Finding, check_palette
+from thymio_bt.grade.redact import feedback_line
+from thymio_bt.grade.similarity import similar_groups, tree_shape
 from thymio_bt.grade.student import StudentTask, died_message, grade_runs
 from thymio_bt.grade.submissions import Submission, find_submissions
-from thymio_bt.grade.worlds import World, make_worlds
+from thymio_bt.grade.worlds import World, load_worlds
 
 #: called with (student, message) as each run ends, in the grader's process
 Progress = Callable[[str, dict[str, Any]], None]
@@ -58,17 +61,26 @@ def grade(
     progress: Progress | None = None,
     stop: Callable[[], bool] = lambda: False,
     started: Callable[[dict[str, int]], None] | None = None,
+    secret: str | None = None,
+    select: Callable[[list[World]], list[World]] | None = None,
+    relative_to: Path | None = None,
+    hidden_worlds: Path | None = None,
 ) -> dict[str, Any]:
     """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
     with ``imap_unordered`` (:class:`~thymio_bt.run.distributed.DaskExecutor`) to run the
     students on a cluster instead of ``workers`` local processes. ``started`` is told how many
-    runs each student will make, once the submissions are read; ``progress`` hears each run end."""
+    runs each student will make, once the submissions are read; ``progress`` hears each run end.
+    ``secret``: the course's, for generated worlds with a secret seed; ``select``: the worlds to run
+    (all when None); ``relative_to``: the folder the results go to, which the commands reproducing
+    runs are relative to (the current one when None); ``hidden_worlds``: where the hidden
+    variants' mazes go instead of ``worlds`` (out of a site students see)."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
-    assignment = load_assignment(path)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
-    made = make_worlds(assignment, path, folder)
+    assignment, made = load_worlds(path, folder, secret, hidden_worlds)
+    if select is not None:
+        made = select(made)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
     by_name = {e.submission.name: e for e in entries}
@@ -95,7 +107,7 @@ def grade(
                 heard(task, message)
             if stop():
                 break
-    return results(assignment, path, made, entries, time.perf_counter() - began)
+    return results(assignment, path, made, entries, time.perf_counter() - began, relative_to)
 
 
 def _warm() -> None:
@@ -117,7 +129,7 @@ def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
 
 def _limits(assignment: Assignment) -> Limits:
     limits = assignment.limits
-    return Limits(cpu=limits.cpu, memory_mib=limits.memory, wall=limits.wall or 3 * limits.cpu + 5)
+    return Limits(cpu=limits.cpu, memory_mib=round(limits.memory), wall=limits.wall or 3 * limits.cpu + 5)
 
 
 def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -> Entry:
@@ -152,11 +164,17 @@ def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -
 
 
 def results(
-    assignment: Assignment, path: Path, worlds: list[World], entries: list[Entry], wall: float
+    assignment: Assignment,
+    path: Path,
+    worlds: list[World],
+    entries: list[Entry],
+    wall: float,
+    relative_to: Path | None = None,
+    hidden_worlds: Path | None = None,
 ) -> dict[str, Any]:
     """The results.json data."""
-    students = [_student(assignment, worlds, e) for e in entries]
-    graded = [s for s in students if s["status"] == "graded"]
+    commands = Commands(assignment, path, relative_to)
+    students = [_student(assignment, worlds, e, commands) for e in entries]
     return {
         "assignment": {
             "name": assignment.name,
@@ -169,6 +187,7 @@ def results(
                     "points": c.points,
                     "variants": c.variants or [w.name for w in worlds],
                     "pass_rate": c.pass_rate,
+                    "credit": c.credit,
                     "check": c.check,
                 }
                 for c in assignment.criteria
@@ -182,34 +201,61 @@ def results(
                     "robot": w.robot,
                     "seeds": w.seeds,
                     "noise": w.settings.get("noise.wheel", "0") != "0",
+                    "visibility": w.visibility,
                 }
                 for w in worlds
             ],
         },
         "students": students,
-        "summary": {
-            "students": len(students),
-            **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error")},
-            "runs": sum(len(s["runs"]) for s in students),
-            "wall_time": round(wall, 3),
-            "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
-            "criteria": [
-                {
-                    "name": c.name,
-                    "pass_rate": round(
-                        sum(sc["passed"] for s in graded for sc in s["criteria"] if sc["name"] == c.name) / len(graded),
-                        3,
-                    )
-                    if graded
-                    else None,
-                }
-                for c in assignment.criteria
-            ],
-        },
+        "summary": summary(students, [c.name for c in assignment.criteria], wall),
+        "similar": similar_groups(students),
     }
 
 
-def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[str, Any]:
+def summary(students: list[dict[str, Any]], criteria: list[str], wall: float) -> dict[str, Any]:
+    """results.json's ``summary`` of ``students``: counts, runs, the mean score, each criterion's
+    pass rate over the graded students."""
+    graded = [s for s in students if s["status"] == "graded"]
+    return {
+        "students": len(students),
+        **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error")},
+        "runs": sum(len(s["runs"]) for s in students),
+        "wall_time": round(wall, 3),
+        "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
+        "criteria": [
+            {
+                "name": name,
+                "pass_rate": round(
+                    sum(sc["passed"] for s in graded for sc in s["criteria"] if sc["name"] == name) / len(graded), 3
+                )
+                if graded
+                else None,
+            }
+            for name in criteria
+        ],
+    }
+
+
+def update(old: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
+    """``old`` results with the students of ``new`` (a regrade of some of them) in their place, the
+    others kept; the summary and the similar groups made again over everyone."""
+    if old.get("assignment", {}).get("name") != new["assignment"]["name"]:
+        raise UserError(
+            f"--update: those results are of assignment '{old.get('assignment', {}).get('name')}', "
+            f"not '{new['assignment']['name']}' (hint: give the results of the same assignment)"
+        )
+    regraded = {s["name"]: s for s in new["students"]}
+    students = [regraded.pop(s["name"], s) for s in old.get("students", [])] + list(regraded.values())
+    wall = old.get("summary", {}).get("wall_time", 0.0) + new["summary"]["wall_time"]
+    criteria = [c["name"] for c in new["assignment"]["criteria"]]
+    return new | {
+        "students": students,
+        "summary": summary(students, criteria, wall),
+        "similar": similar_groups(students),
+    }
+
+
+def _student(assignment: Assignment, worlds: list[World], entry: Entry, commands: Commands) -> dict[str, Any]:
     """One student's entry of results.json."""
     submission = entry.submission
     runs = sorted(entry.runs, key=lambda r: r["index"])
@@ -219,11 +265,8 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
         entry.messages.append(f"only {len(runs)} of {task.runs} runs were made (the grade was stopped)")
     world_of = {w.name: w for w in worlds}
     for run in runs:
-        world = world_of[run["variant"]]
-        args = ["thymio-bt", "run", str(submission.file), *world.run_arguments(), "--seed", str(run["seed"])]
-        if assignment.time_limit is not None:
-            args += ["--set", f"time_limit={assignment.time_limit:g}"]
-        run["reproduce"] = shlex.join(args)
+        run["reproduce"] = commands.run(str(submission.file), world_of[run["variant"]], run["seed"])
+        run["check"] = commands.check(str(submission.file), run["variant"], run["seed"])
     criteria: list[dict[str, Any]] = (
         [_criterion(c, runs) for c in assignment.criteria]
         if entry.status == "graded"
@@ -235,49 +278,103 @@ def _student(assignment: Assignment, worlds: list[World], entry: Entry) -> dict[
                 "passed": False,
                 "runs": 0,
                 "passed_runs": 0,
+                "variants": [],
                 "feedback": f"not graded: the submission is {entry.status} (see its messages)",
                 "where": None,
             }
             for c in assignment.criteria
         ]
     )
-    earned = sum(c["earned"] for c in criteria) - sum(f.points for f in entry.findings)
+    earned = sum(c["earned"] for c in criteria)
+    score = round(max(0.0, earned - sum(f.points for f in entry.findings)), 3) if entry.status == "graded" else 0.0
     return {
         "name": submission.name,
         "file": str(submission.file) if submission.file else None,
         "status": entry.status,
-        "score": round(max(0.0, earned), 3) if entry.status == "graded" else 0.0,
+        "score": score,
         "max": assignment.max_points,
+        "penalty": round(score - earned, 3) if entry.status == "graded" else 0.0,
         "messages": entry.messages,
         "criteria": criteria,
         "palette": [f.to_json() for f in entry.findings],
         "coverage": _coverage(entry.plan, runs),
+        "shape": tree_shape(entry.plan) if entry.plan is not None else None,
         "runs": [{k: v for k, v in r.items() if k not in ("kind", "node_stats")} for r in runs],
     }
 
 
-def _criterion(criterion: Any, runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """A criterion's line for one student: passed when enough of its runs passed it."""
+@dataclass
+class Commands:
+    """The commands a results file gives to run a submission again: ``thymio-bt run`` to watch a
+    run, ``thymio-bt check`` to judge it as the grader did; files named relative to the results'
+    folder (a shipped maze or assignment by its name), never by the grader's absolute paths."""
+
+    assignment: Assignment
+    path: Path
+    relative_to: Path | None = None
+
+    def _ref(self, file: str | Path) -> str:
+        return os.path.relpath(Path(file).resolve(), (self.relative_to or Path.cwd()).resolve())
+
+    def run(self, file: str, world: World, seed: int) -> str:
+        """The ``thymio-bt run`` command of one run."""
+        args = ["thymio-bt", "run", self._ref(file), *world.run_arguments(self.relative_to), "--seed", str(seed)]
+        if self.assignment.time_limit is not None:
+            args += ["--set", f"time_limit={self.assignment.time_limit:g}"]
+        return shlex.join(args)
+
+    def check(self, file: str, variant: str, seed: int) -> str:
+        """The ``thymio-bt check`` command that runs and judges one run as the grader did."""
+        from thymio_bt.data import ASSIGNMENTS
+
+        shipped = ASSIGNMENTS / self.path.name
+        assignment = (
+            self.path.stem if shipped.is_file() and shipped.resolve() == self.path.resolve() else self._ref(self.path)
+        )
+        return shlex.join(
+            ["thymio-bt", "check", assignment, self._ref(file), "--variant", variant, "--seed", str(seed)]
+        )
+
+
+def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, Any]:
+    """A criterion's line for one student. A variant passes when at least ``pass_rate`` of its
+    runs passed; shared credit gives each passed variant its share of the points, ``credit: all``
+    the points only when every variant passed."""
     judged = [(r, r["criteria"][criterion.name]) for r in runs if criterion.name in r["criteria"]]
-    passed_runs = sum(j["passed"] for _, j in judged)
-    passed = bool(judged) and passed_runs >= criterion.pass_rate * len(judged) - 1e-9
+    names = list(dict.fromkeys(r["variant"] for r, _ in judged))
+    variants = []
+    for name in names:
+        mine = [j for r, j in judged if r["variant"] == name]
+        passed_runs = sum(j["passed"] for j in mine)
+        variants.append(
+            {
+                "name": name,
+                "runs": len(mine),
+                "passed_runs": passed_runs,
+                "passed": passed_runs >= criterion.pass_rate * len(mine) - 1e-9,
+                "feedback": next((j["feedback"] for j in mine if not j["passed"]), None),
+            }
+        )
+    passed = bool(variants) and all(v["passed"] for v in variants)
+    counts = criterion.credit == "shared" or passed
+    for v in variants:
+        v["earned"] = round(criterion.points / len(variants), 3) if v["passed"] and counts else 0.0
+    earned = criterion.points if passed else round(sum(v["earned"] for v in variants), 3)
     failed = [(r, j) for r, j in judged if not j["passed"]]
     feedback = None
     where = None
     if failed:
         run, first = failed[0]
-        feedback = (
-            f"{first['feedback']} (variant {run['variant']}, seed {run['seed']}, robot {run['robot']}; "
-            f"failed {len(failed)} of {len(judged)} runs)"
-        )
+        feedback = feedback_line(run, first["feedback"], len(failed), len(judged))
         where = first["where"] or run.get("where")
     return {
         "name": criterion.name,
         "points": criterion.points,
-        "earned": criterion.points if passed else 0.0,
+        "earned": earned,
         "passed": passed,
         "runs": len(judged),
-        "passed_runs": passed_runs,
+        "passed_runs": sum(j["passed"] for _, j in judged),
+        "variants": variants,
         "feedback": feedback,
         "where": where,
     }

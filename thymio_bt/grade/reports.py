@@ -4,15 +4,19 @@ and classroom autograders read), and the summary table printed at the end.
 
 Example::
 
-    >>> results = {"assignment": {"name": "a", "max": 3.0, "criteria": [{"name": "stops", "points": 3.0}]},
-    ...     "students": [{"name": "ada", "file": "ada/m.yaml", "status": "graded", "score": 3.0, "max": 3.0,
-    ...                   "messages": [], "criteria": [{"name": "stops", "points": 3.0, "earned": 3.0,
-    ...                   "passed": True, "runs": 2, "passed_runs": 2, "feedback": None, "where": None}]}]}
+    >>> results = {"assignment": {"name": "a", "max": 3.0, "criteria": [
+    ...     {"name": "stops", "points": 3.0, "variants": ["course", "hidden"]}]},
+    ...     "students": [{"name": "ada", "file": "ada/m.yaml", "status": "graded", "score": 0.5, "max": 3.0,
+    ...                   "penalty": -1.0, "messages": [], "palette": [{"rule": "forbid", "node": "WallFollow",
+    ...                   "where": "ada/m.yaml:7", "message": "WallFollow is not allowed", "points": 1.0}],
+    ...                   "criteria": [{"name": "stops", "points": 3.0, "earned": 1.5, "passed": False,
+    ...                   "runs": 2, "passed_runs": 1, "feedback": "stopped 7.0 cm from the wall", "where": None,
+    ...                   "variants": [{"name": "course", "earned": 1.5}, {"name": "hidden", "earned": 0.0}]}]}]}
     >>> print(gradebook_csv(results), end="")
-    student,status,score,max,stops
-    ada,graded,3,3,3
+    student,status,score,max,stops,penalty,palette,stops @ course,stops @ hidden
+    ada,graded,0.5,3,1.5,-1,WallFollow is not allowed (at ada/m.yaml:7; -1),1.5,0
     >>> print(junit_xml(results).splitlines()[1])
-    <testsuites name="a" tests="1" failures="0" errors="0">
+    <testsuites name="a" tests="2" failures="2" errors="0">
 """
 
 from __future__ import annotations
@@ -24,18 +28,34 @@ from typing import Any
 
 
 def gradebook_csv(results: dict[str, Any]) -> str:
-    """One row per student: status, score, max, then the points earned on each criterion."""
-    names = [c["name"] for c in results["assignment"]["criteria"]]
+    """One row per student: status, score, max, the points earned on each criterion, the palette's
+    penalty (negative: the columns sum to the score) and its findings, then each criterion's points
+    per variant (``NAME @ VARIANT``)."""
+    criteria = results["assignment"]["criteria"]
+    names = [c["name"] for c in criteria]
+    per_variant = [(c["name"], v) for c in criteria for v in c.get("variants", [])]
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["student", "status", "score", "max", *names])
+    writer.writerow(
+        ["student", "status", "score", "max", *names, "penalty", "palette", *(f"{n} @ {v}" for n, v in per_variant)]
+    )
     for student in results["students"]:
         earned = {c["name"]: c["earned"] for c in student["criteria"]}
+        by_variant = {(c["name"], v["name"]): v["earned"] for c in student["criteria"] for v in c.get("variants", [])}
+        findings = "; ".join(f"{_finding(f)}" for f in student.get("palette", []))
         writer.writerow(
             [_cell(student["name"]), student["status"], f"{student['score']:g}", f"{student['max']:g}"]
             + [f"{earned.get(n, 0.0):g}" for n in names]
+            + [f"{student.get('penalty', 0.0):g}", _cell(findings)]
+            + [f"{by_variant.get(key, 0.0):g}" for key in per_variant]
         )
     return out.getvalue()
+
+
+def _finding(finding: dict[str, Any]) -> str:
+    """A palette finding in one line: 'WallFollow is not allowed in this assignment (at m.yaml:13; -4)'."""
+    at = f"at {finding['where']}; " if finding.get("where") else ""
+    return f"{finding['message']} ({at}-{finding['points']:g})"
 
 
 def _cell(text: str) -> str:
@@ -44,30 +64,13 @@ def _cell(text: str) -> str:
 
 
 def junit_xml(results: dict[str, Any]) -> str:
-    """JUnit XML: a testsuite per student, a testcase per criterion (failed: its feedback);
-    an invalid submission's or a grader error's testcases are errors."""
-    students = results["students"]
-    criteria_count = sum(len(s["criteria"]) for s in students)
-    failures = sum(not c["passed"] for s in students if s["status"] == "graded" for c in s["criteria"])
-    errors = sum(len(s["criteria"]) for s in students if s["status"] != "graded")
-    root = ET.Element(
-        "testsuites",
-        name=results["assignment"]["name"],
-        tests=str(criteria_count),
-        failures=str(failures),
-        errors=str(errors),
-    )
-    for student in students:
+    """JUnit XML: a testsuite per student, a testcase per criterion (failed: its feedback) and one
+    for the palette (failed: each rule broken and what it cost); an invalid submission's or a grader
+    error's criteria are errors."""
+    root = ET.Element("testsuites", name=results["assignment"]["name"])
+    for student in results["students"]:
         cases = student["criteria"]
-        suite = ET.SubElement(
-            root,
-            "testsuite",
-            name=student["name"],
-            tests=str(len(cases)),
-            failures=str(sum(not c["passed"] for c in cases) if student["status"] == "graded" else 0),
-            errors=str(len(cases) if student["status"] != "graded" else 0),
-            skipped="0",
-        )
+        suite = ET.SubElement(root, "testsuite", name=student["name"], skipped="0")
         props = ET.SubElement(suite, "properties")
         for key in ("status", "score", "max", "file"):
             ET.SubElement(props, "property", name=key, value=str(student[key]))
@@ -85,8 +88,41 @@ def junit_xml(results: dict[str, Any]) -> str:
                 message = criterion["feedback"] or "failed"
                 failure = ET.SubElement(case, "failure", message=message, type="criterion")
                 failure.text = message + (f"\nat {criterion['where']}" if criterion["where"] else "")
+        _palette_case(suite, results, student)
     ET.indent(root)
+    _count_cases(root)
     return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _palette_case(suite: ET.Element, results: dict[str, Any], student: dict[str, Any]) -> None:
+    """The palette as a testcase of its own: failed with each finding and the points it cost."""
+    findings = student.get("palette", [])
+    case = ET.SubElement(
+        suite, "testcase", classname=f"{results['assignment']['name']}.{student['name']}", name="palette"
+    )
+    if findings:
+        lost = sum(f["points"] for f in findings)
+        failure = ET.SubElement(
+            case, "failure", message=f"{len(findings)} palette rule(s) broken, -{lost:g} points", type="palette"
+        )
+        failure.text = "\n".join(_finding(f) for f in findings)
+
+
+def _count_cases(root: ET.Element) -> None:
+    """The counts of each testsuite and of the whole, from the testcases written."""
+    totals = {"tests": 0, "failures": 0, "errors": 0}
+    for suite in root.iter("testsuite"):
+        cases = suite.findall("testcase")
+        counts = {
+            "tests": len(cases),
+            "failures": sum(c.find("failure") is not None for c in cases),
+            "errors": sum(c.find("error") is not None for c in cases),
+        }
+        for key, value in counts.items():
+            suite.set(key, str(value))
+            totals[key] += value
+    for key, value in totals.items():
+        root.set(key, str(value))
 
 
 def summary_table(results: dict[str, Any]) -> str:
@@ -106,3 +142,64 @@ def summary_table(results: dict[str, Any]) -> str:
             mark = "  <- most missed" if c is hardest and c["pass_rate"] < 1 else ""
             lines.append(f"  {100 * c['pass_rate']:5.1f} %  {c['name']}{mark}")
     return "\n".join(lines)
+
+
+def gradescope_json(results: dict[str, Any]) -> dict[str, Any]:
+    """Gradescope's autograder results for the one student of ``results``: the score, and a test
+    per criterion and visibility (its public variants' share ``visible``, its hidden ones'
+    ``after_due_date``), each with the words students see (:func:`~.redact.for_students`), and a
+    ``palette`` test for the penalty.
+
+    >>> results = {"assignment": {"name": "a", "variants": [{"name": "course", "visibility": "public"},
+    ...     {"name": "box", "visibility": "hidden"}]},
+    ...     "students": [{"name": "ada", "status": "graded", "score": 1.0, "max": 2.0, "messages": [],
+    ...     "penalty": 0.0, "palette": [], "runs": [], "criteria": [{"name": "stops", "points": 2.0,
+    ...     "earned": 1.0, "passed": False, "feedback": "...", "where": "m.yaml:10", "variants": [
+    ...         {"name": "course", "passed": True, "earned": 1.0, "feedback": None},
+    ...         {"name": "box", "passed": False, "earned": 0.0, "feedback": "stopped 7.0 cm from the wall"}]}]}]}
+    >>> out = gradescope_json(results)
+    >>> out["score"], [(t["name"], t["score"], t["max_score"], t["visibility"]) for t in out["tests"]]
+    (1.0, [('stops', 1.0, 1.0, 'visible'), ('stops (hidden worlds)', 0.0, 1.0, 'after_due_date')])
+    >>> out["tests"][1]["output"]
+    'hidden world 1: stopped 7.0 cm from the wall (at m.yaml:10)'
+    """
+    from thymio_bt.grade.redact import for_students
+
+    seen = for_students(results)
+    (student,) = seen["students"]
+    hidden = {v["name"] for v in seen["assignment"]["variants"] if v.get("visibility") == "hidden"}
+    tests: list[dict[str, Any]] = []
+    for criterion in student["criteria"]:
+        variants = criterion.get("variants") or []
+        if not variants:  # not graded: the whole criterion, and why
+            tests.append(
+                _test(criterion["name"], criterion["earned"], criterion["points"], criterion.get("feedback"), "visible")
+            )
+            continue
+        share = criterion["points"] / len(variants)
+        where = f" (at {criterion['where']})" if criterion.get("where") else ""
+        for label, visibility, mine in (
+            ("", "visible", [v for v in variants if v["name"] not in hidden]),
+            (" (hidden worlds)", "after_due_date", [v for v in variants if v["name"] in hidden]),
+        ):
+            if mine:
+                said = "\n".join(f"{v['name']}: {v['feedback']}{where}" for v in mine if not v["passed"])
+                earned = sum(v["earned"] for v in mine)
+                tests.append(_test(criterion["name"] + label, earned, share * len(mine), said or None, visibility))
+    if student.get("palette"):
+        findings = "\n".join(_finding(f) for f in student["palette"])
+        tests.append(_test("palette", student.get("penalty", 0.0), 0.0, findings, "visible"))
+    output = "\n".join(student["messages"]) if student["status"] != "graded" else ""
+    return {"score": student["score"], "output": output or f"{student['score']:g} / {student['max']:g}", "tests": tests}
+
+
+def _test(name: str, score: float, most: float, failed: str | None, visibility: str) -> dict[str, Any]:
+    """One Gradescope test: failed (with what went wrong) when ``failed`` says something."""
+    return {
+        "name": name,
+        "score": round(score, 3),
+        "max_score": round(most, 3),
+        "status": "failed" if failed else "passed",
+        "output": failed or "",
+        "visibility": visibility,
+    }

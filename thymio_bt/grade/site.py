@@ -174,6 +174,27 @@ def _table(students: list[dict[str, Any]], stems: list[str], maximum: Any) -> st
     )
 
 
+def _similar(results: dict[str, Any], students: list[dict[str, Any]], stems: list[str]) -> str:
+    """The groups of students whose trees are the same up to names and values (the TA's to look at)."""
+    groups = [as_list(g) for g in as_list(results.get("similar"))]
+    if not groups:
+        return ""
+    page = {str(s.get("name")): stem for s, stem in zip(students, stems, strict=True)}
+    items = "".join(
+        "<li>"
+        + ", ".join(
+            f'<a href="{esc(quote(f"{STUDENTS}/{page[str(n)]}.html"))}">{esc(n)}</a>' if str(n) in page else esc(n)
+            for n in group
+        )
+        + "</li>"
+        for group in groups
+    )
+    return (
+        '<h2>Similar trees</h2><p class="muted">The same tree up to node names, comments, formatting and '
+        f'parameter values: worth a look, not a verdict.</p><ul id="similar">{items}</ul>'
+    )
+
+
 def class_page(results: dict[str, Any], students: list[dict[str, Any]], stems: list[str]) -> str:
     """The class page (``index.html``) linking to the student pages named ``stems``."""
     assignment = as_dict(results.get("assignment"))
@@ -182,10 +203,12 @@ def class_page(results: dict[str, Any], students: list[dict[str, Any]], stems: l
     body = (
         f"<h1>{esc(title)}</h1>"
         f'<p class="sub">assignment <code>{esc(assignment.get("name"))}</code> '
-        f"from <code>{esc(assignment.get('file'))}</code>, out of {fmt(assignment.get('max'))} points</p>"
+        + (f"from <code>{esc(assignment.get('file'))}</code>, " if assignment.get("file") else "")
+        + f"out of {fmt(assignment.get('max'))} points</p>"
         + _summary(results, students)
         + _bars(stats, most_missed(stats))
         + _table(students, stems, assignment.get("max"))
+        + _similar(results, students, stems)
     )
     return shell(f"{title} — class results", body)
 
@@ -202,7 +225,8 @@ def _folder(path: Path) -> None:
 
 def write_site(results: dict[str, Any], out_dir: Path) -> list[Path]:
     """Write the class page and one page per student of ``results`` (results.json's content) into
-    ``out_dir``, made if missing; each file whole or not at all. The paths, the class page first."""
+    ``out_dir``, made if missing; each file whole or not at all, and no page of an earlier grade
+    left. The paths, the class page first."""
     out_dir = Path(out_dir)
     _folder(out_dir)
     _folder(out_dir / STUDENTS)
@@ -216,4 +240,7 @@ def write_site(results: dict[str, Any], out_dir: Path) -> list[Path]:
         written.append(path)
     index = out_dir / "index.html"  # last: it links only pages that exist
     Output(index, OPTION, stdout_ok=False).write_text(class_page(results, students, stems))
+    for stale in (out_dir / STUDENTS).glob("*.html"):  # a page of an earlier grade, linked from nowhere
+        if stale not in written:
+            stale.unlink()
     return [index, *written]

@@ -104,6 +104,7 @@ tr.cov-mixed td.node { border-left: 4px solid var(--warn); }
 tr.cov-running td.node { border-left: 4px solid var(--run); }
 tr.cov-never td { color: var(--never); font-style: italic; background: #fafbfc; }
 tr.cov-never td.node { border-left: 4px dashed var(--never); }
+.guide { font-family: ui-monospace, monospace; color: #9fb3c8; white-space: pre; }
 .dot { display: inline-block; width: 9px; height: 9px; border-radius: 50%; margin-right: 6px; }
 .cov-ok .dot { background: var(--ok); } .cov-bad .dot { background: var(--bad); }
 .cov-mixed .dot { background: var(--warn); } .cov-running .dot { background: var(--run); }

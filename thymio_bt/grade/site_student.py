@@ -90,7 +90,7 @@ def _criteria(student: dict[str, Any]) -> str:
             f'<tr class="criterion {verdict}"><td>{esc(c.get("name"))}</td>'
             f'<td class="num">{fmt(c.get("earned"))} / {fmt(c.get("points"))}</td>'
             f'<td>{pass_badge(c.get("passed"))}</td><td class="num">{runs}</td>'
-            f"<td>{esc(feedback)}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
+            f"<td>{esc(feedback)}{_per_variant(c)}</td><td class=where>{where_code(c.get('where'))}</td></tr>"
         )
     if not rows:
         return '<h2>Criteria</h2><p class="muted">No criterion was judged.</p>'
@@ -99,6 +99,19 @@ def _criteria(student: dict[str, Any]) -> str:
         '<th>Result</th><th class="num">Runs passed</th><th>Feedback</th><th>Where</th></tr></thead>'
         f"<tbody>{''.join(rows)}</tbody></table>"
     )
+
+
+def _per_variant(criterion: dict[str, Any]) -> str:
+    """A criterion's points in each variant, and what went wrong there (shared credit)."""
+    variants = [as_dict(v) for v in as_list(criterion.get("variants"))]
+    if len(variants) < 2 or criterion.get("passed") is True:
+        return ""
+    items = "".join(
+        f"<li>{esc(v.get('name'))}: {fmt(v.get('earned'))} points"
+        f"{': ' + esc(v.get('feedback')) if v.get('feedback') else ''}</li>"
+        for v in variants
+    )
+    return f'<ul class="per-variant">{items}</ul>'
 
 
 def _palette(student: dict[str, Any]) -> str:
@@ -129,7 +142,7 @@ def _pictures(results: dict[str, Any], student: dict[str, Any], mazes: dict[str,
     for variant in variants:
         name = str(variant.get("name"))
         mine = [r for r in runs if str(r.get("variant")) == name]
-        if not mine:
+        if not mine or variant.get("visibility") == "hidden":  # a hidden world is not drawn
             continue
         maze = mazes.get(name)
         svg, marks = trajectory_svg(maze if isinstance(maze, Maze) else None, variant, mine)
@@ -166,7 +179,7 @@ def _failed_runs(student: dict[str, Any]) -> str:
         return f'<h2>Runs</h2><p class="muted">All {len(runs)} runs ended in SUCCESS and met every criterion.</p>'
     rows = []
     for r in failed:
-        status = " ".join(str(v) for v in (r.get("status"), r.get("code")) if v)
+        status = " ".join(dict.fromkeys(str(v) for v in (r.get("status"), r.get("code")) if v))  # "TIMEOUT" once
         missed = ", ".join(run_missed(r)) or "–"
         node = ""
         if r.get("failed_path"):
@@ -176,9 +189,13 @@ def _failed_runs(student: dict[str, Any]) -> str:
             f'<tr class="run fail"><td>{esc(r.get("variant"))}</td><td class="num">{esc(r.get("seed"))}</td>'
             f"<td>{esc(status)}{reason}{node}</td><td>{esc(missed)}</td>"
             f'<td class="num">{fmt(r.get("sim_time"), 1)} s</td><td class="num">{fmt(r.get("collisions"))}</td></tr>'
-            f'<tr class="reproduce"><td colspan="6" title="replay this run">'
-            f'<code class="cmd">{esc(r.get("reproduce"))}</code></td></tr>'
         )
+        for key, title in (("reproduce", "replay this run"), ("check", "run it and judge it as the grader did")):
+            if r.get(key):  # not for a hidden world's run on a student's page
+                rows.append(
+                    f'<tr class="reproduce"><td colspan="6" title="{title}">'
+                    f'<code class="cmd">{esc(r.get(key))}</code></td></tr>'
+                )
     return (
         f"<h2>Runs that went wrong ({len(failed)} of {len(runs)})</h2>"
         '<table id="failed-runs"><thead><tr><th>Variant</th><th class="num">Seed</th><th>Ended</th>'
@@ -197,16 +214,43 @@ def outcome(node: dict[str, Any], never: set[str]) -> str:
     return "ok" if success else "bad" if failure else "running"
 
 
+def tree_guides(depths: list[int]) -> list[str]:
+    """The lines that draw a tree of nodes listed depth first (their ``depths``): each node's
+    branch, and its ancestors' lines going on to their later siblings.
+
+    >>> print("\\n".join(g + name for g, name in zip(tree_guides([0, 1, 2, 2, 1]), "root a a1 a2 b".split())))
+    root
+    ├─ a
+    │  ├─ a1
+    │  └─ a2
+    └─ b
+    """
+
+    def last(i: int) -> bool:  # no later sibling: the next node as shallow comes up first, or none
+        return next((d for d in depths[i + 1 :] if d <= depths[i]), -1) < depths[i]
+
+    guides, open_lines = [], [False] * (max(depths, default=0) + 1)
+    for i, depth in enumerate(depths):
+        if depth == 0:
+            guides.append("")
+            continue
+        line = "".join("│  " if open_lines[k] else "   " for k in range(1, depth))
+        guides.append(line + ("└─ " if last(i) else "├─ "))
+        open_lines[depth] = not last(i)
+    return guides
+
+
 def _coverage(student: dict[str, Any]) -> str:
     coverage = as_dict(student.get("coverage"))
     nodes = [as_dict(n) for n in as_list(coverage.get("nodes"))]
     if not nodes:
         return ""
     never = {str(p) for p in as_list(coverage.get("never_ticked"))}
+    depths = [min(max(int(num(n.get("depth")) or str(n.get("path", "")).count("/")), 0), 30) for n in nodes]
+    guides = tree_guides(depths)
     rows = []
-    for node in nodes:
+    for node, guide in zip(nodes, guides, strict=True):
         kind = outcome(node, never)
-        depth = min(max(int(num(node.get("depth")) or str(node.get("path", "")).count("/")), 0), 30)
         what = node.get("behaviour") or node.get("kind")
         what = "" if what == node.get("name") else what
         ended = ", ".join(
@@ -218,7 +262,7 @@ def _coverage(student: dict[str, Any]) -> str:
         label = ' <span class="badge never">never ticked</span>' if kind == "never" else ""
         rows.append(
             f'<tr class="tree-node cov-{kind}" title="{esc(node.get("path"))}: {OUTCOMES[kind]}">'
-            f'<td class="node" style="padding-left:{10 + 18 * depth}px"><span class="dot"></span>'
+            f'<td class="node"><span class="guide" aria-hidden="true">{guide}</span><span class="dot"></span>'
             f'{esc(node.get("name"))} <span class="kind">{esc(what)}</span>{label}{ended_html}</td>'
             + "".join(f'<td class="num">{fmt(node.get(k))}</td>' for k in ("ticks", "success", "failure", "running"))
             + f"<td class=where>{where_code(node.get('where'))}</td></tr>"

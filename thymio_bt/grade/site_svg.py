@@ -2,8 +2,8 @@
 
 Inline SVG drawn from the numbers of results.json (a run's ``trajectory`` of ``[t, x, y, yaw]``,
 its criteria's ``moment``, its ``final_pose``) and the variant's maze file. The view is cropped to
-where the robot went (plus a margin), so a small part of a big maze stays readable; a jump between
-two samples faster than any Thymio drives (a respawn) is drawn dashed, not as a path through walls.
+where the robot went (plus a margin), so a small part of a big maze stays readable; a respawn (a
+spawn event of the run) is drawn as a dashed jump, not as a path through walls.
 
 Example (no maze file: the path alone):
 
@@ -12,8 +12,8 @@ Example (no maze file: the path alone):
 >>> svg, marks = trajectory_svg(None, {"name": "course"}, [run])
 >>> svg.startswith("<svg"), svg.count("<polyline"), [(m.number, m.text) for m in marks]
 (True, 1, [(1, 'at the end: ended FAILURE: TIMEOUT')])
->>> split_jumps([(0, 0, 0), (0.1, 0.01, 0), (0.2, 0.5, 0.3), (0.3, 0.51, 0.3)])
-[[(0, 0), (0.01, 0)], [(0.5, 0.3), (0.51, 0.3)]]
+>>> split_jumps([(0, 0, 0), (0.5, 0.05, 0), (1.0, 0.5, 0.3), (1.5, 0.51, 0.3)], spawns=[0.9])
+[[(0, 0), (0.05, 0)], [(0.5, 0.3), (0.51, 0.3)]]
 """
 
 from __future__ import annotations
@@ -75,14 +75,22 @@ def samples(run: dict[str, Any]) -> list[tuple[float, float, float]]:
     return out
 
 
-def split_jumps(points: Sequence[tuple[float, float, float]]) -> list[list[Point]]:
-    """The path cut where the robot moved faster than :data:`JUMP_SPEED` (a respawn): the pieces."""
+def split_jumps(
+    points: Sequence[tuple[float, float, float]], spawns: Sequence[float] | None = None
+) -> list[list[Point]]:
+    """The path cut at each respawn: where a ``spawns`` time (the run's spawn events) falls between
+    two samples; for results without them, where the robot moved faster than :data:`JUMP_SPEED`.
+    The pieces."""
     pieces: list[list[Point]] = []
     for i, (t, x, y) in enumerate(points):
         if i:
             t0, x0, y0 = points[i - 1]
-            step = math.hypot(x - x0, y - y0)
-            if step > 0.02 and step > JUMP_SPEED * max(t - t0, 0.0):
+            if spawns is not None:
+                jumped = any(t0 < s <= t for s in spawns)
+            else:
+                step = math.hypot(x - x0, y - y0)
+                jumped = step > 0.02 and step > JUMP_SPEED * max(t - t0, 0.0)
+            if jumped:
                 pieces.append([])
         if not pieces:
             pieces.append([])
@@ -261,7 +269,10 @@ def trajectory_svg(maze: Maze | None, variant: dict[str, Any], runs: list[dict[s
     student's runs of the variant; the path is the first one that carries a trajectory."""
     traced = next((r for r in runs if samples(r)), None)
     points = samples(traced) if traced is not None else []
-    pieces = split_jumps(points)
+    spawns = traced.get("spawns") if traced is not None else None
+    pieces = split_jumps(
+        points, [t for t in as_list(spawns) if isinstance(t, (int, float))] if spawns is not None else None
+    )
     start = start_pose(variant.get("start"), maze) or (
         (points[0][1], points[0][2], _yaw(traced, 0)) if traced is not None and points else None
     )

@@ -118,6 +118,7 @@ def run_message(
         "sim_time": round(result.sim_time, 3),
         "final_pose": result.final_pose,
         "collisions": result.collisions,
+        "spawns": [e["t"] for e in result.events if e["kind"] == "spawn_entity"],  # the path's jumps
         "criteria": judged,
         "node_stats": _rows(result.node_stats),
     }

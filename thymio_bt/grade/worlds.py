@@ -53,15 +53,18 @@ class World:
     extra: dict[str, Any] = field(default_factory=dict)
     #: the maze's grid pitch (m): a generated maze's, else the course's
     cell: float = 0.2
+    #: ``public`` or ``hidden`` (never shown to students)
+    visibility: str = "public"
 
     @classmethod
-    def of(cls, variant: Variant, base: Path, folder: Path) -> World:
-        """``variant`` (its maze file relative to ``base``; a made maze written into ``folder``)."""
+    def of(cls, variant: Variant, base: Path, folder: Path, secret: str | None = None) -> World:
+        """``variant`` (its maze file relative to ``base``; a made maze written into ``folder``;
+        ``secret``: the course's secret, for a generated maze whose seed is ``secret``)."""
         turns = variant.turns
         maze: Maze | None = None
         maze_file: Path | None = None
         if variant.generate is not None:
-            maze, made_turns = _generated(variant)
+            maze, made_turns = _generated(variant, secret)
             turns = turns or made_turns
         elif variant.maze is not None:
             maze_file = Path(os.path.normpath(resolve_maze(variant.maze, base, "the assignment file")))
@@ -72,7 +75,9 @@ class World:
             x0, _, x1, _ = maze.bounds()
             maze = mirrored(maze, (x0 + x1) / 2)
             turns = turns and turns.translate(str.maketrans("LR", "RL"))
-        if maze is not None and (maze_file is None or variant.mirror):
+        # a maze that is not shipped by name is written beside the results too: the commands that
+        # reproduce a run name it there, never by the grader's own path
+        if maze is not None and (maze_file is None or variant.mirror or not _named(maze_file)):
             folder.mkdir(parents=True, exist_ok=True)
             maze_file = folder / f"{variant.name}.yaml"
             Output(maze_file, "worlds").write_text(yaml.safe_dump(maze.to_yaml_dict(), sort_keys=False))
@@ -96,11 +101,14 @@ class World:
             turns,
             variant.robot,
             cell=_pitch(variant),
+            visibility=variant.visibility,
         )
 
-    def run_arguments(self) -> list[str]:
-        """The ``thymio-bt run`` arguments that put a mission in this world (all but the seed)."""
-        out = ["--maze", str(self.maze_file)] if self.maze_file else []
+    def run_arguments(self, relative_to: Path | None = None) -> list[str]:
+        """The ``thymio-bt run`` arguments that put a mission in this world (all but the seed): a
+        shipped maze by its name, another by its path relative to ``relative_to`` (the folder of
+        the results; the current one when None), never by the grader's absolute path."""
+        out = ["--maze", maze_ref(self.maze_file, relative_to)] if self.maze_file else []
         out += ["--start", self.start] if self.start else []
         for key, value in sorted(self.settings.items()):
             out += ["--set", f"{key}={value}"]
@@ -139,11 +147,16 @@ def _check_start(name: str, maze: Maze, start: str, robot: str) -> None:
             pose = Pose(*parse_pose(start))
         except UnitError:
             raise UserError(
-                Problem(f"variant '{name}': its maze has no spawn '{start}'", hint=did_you_mean(start, maze.spawns))
+                Problem(
+                    f"variant '{name}': its maze has no spawn '{start}'",
+                    path="start",
+                    hint=did_you_mean(start, maze.spawns),
+                )
             ) from None
     problem = placement_problem(maze, robot_model(robot), pose)
     if problem:
-        raise UserError(Problem(f"variant '{name}': impossible start {start}: {problem}", hint="pick a free pose"))
+        message = f"variant '{name}': impossible start {start}: {problem}"
+        raise UserError(Problem(message, path="start", hint="pick a free pose"))
 
 
 def _pitch(variant: Variant) -> float:
@@ -158,10 +171,79 @@ def _pitch(variant: Variant) -> float:
     return spec.cell
 
 
-def _generated(variant: Variant) -> tuple[Maze, str | None]:
+def _named(path: Path) -> bool:
+    """Whether ``path`` is a shipped maze, which commands name by its name."""
+    from thymio_bt.data import MAZES
+
+    shipped = MAZES / path.name
+    return path.suffix in (".yaml", ".yml", ".txt") and shipped.is_file() and path.resolve() == shipped.resolve()
+
+
+def maze_ref(path: Path, relative_to: Path | None = None) -> str:
+    """How a command names the maze file ``path``: a shipped maze by its name, another by its path
+    relative to ``relative_to`` (the current folder when None).
+
+    >>> from thymio_bt.data import MAZES
+    >>> maze_ref(MAZES / "two_parts_maze.yaml"), maze_ref(Path("/r/worlds/w.yaml"), Path("/r"))
+    ('two_parts_maze', 'worlds/w.yaml')
+    """
+    if _named(path):
+        return path.stem
+    return os.path.relpath(path.resolve(), (relative_to or Path.cwd()).resolve())
+
+
+#: the environment variable that holds a course's secret (``grade --secret FILE`` instead)
+SECRET_VARIABLE = "THYMIO_BT_SECRET"
+
+
+def course_secret(file: Path | None = None) -> str | None:
+    """The course's secret: the file's first line (``--secret FILE``), else the environment
+    variable :data:`SECRET_VARIABLE`; None when neither is given."""
+    if file is not None:
+        try:
+            text = file.read_text().strip().splitlines()
+        except OSError as exc:
+            raise UserError(f"--secret {file}: cannot read it: {exc.strerror or exc}") from None
+        if not text or not text[0].strip():
+            raise UserError(f"--secret {file}: the file is empty (hint: write the course's secret on its first line)")
+        return text[0].strip()
+    return os.environ.get(SECRET_VARIABLE) or None
+
+
+def secret_seed(secret: str, variant: str) -> int:
+    """A generated maze's seed drawn from the course's ``secret`` and the variant's name: the same
+    for the same secret, unguessable without it.
+
+    >>> secret_seed("course secret", "hidden_1") == secret_seed("course secret", "hidden_1")
+    True
+    >>> secret_seed("course secret", "hidden_1") != secret_seed("another", "hidden_1")
+    True
+    """
+    import hashlib
+
+    digest = hashlib.sha256(f"{secret}\0{variant}".encode()).digest()
+    return int.from_bytes(digest[:4], "big") % 2**31
+
+
+def _generated(variant: Variant, secret: str | None = None) -> tuple[Maze, str | None]:
     """The variant's generated maze, and its turns when it is a corridor."""
     spec = variant.generate
     assert spec is not None
+    if spec.seed == "secret":
+        if not secret:
+            raise UserError(
+                Problem(
+                    f"variant '{variant.name}': its maze's seed is secret, and no secret was given",
+                    path="generate",
+                    hint=f"set {SECRET_VARIABLE} or give grade --secret FILE",
+                )
+            )
+        drawn = variant.model_copy(
+            update={"generate": spec.model_copy(update={"seed": secret_seed(secret, variant.name)})}
+        )
+        maze, turns = _generated(drawn)
+        return maze.model_copy(update={"name": variant.name}), turns  # its name keeps the seed secret
+    assert isinstance(spec.seed, int)
     if spec.kind == "perfect":
         return perfect_maze(spec.cols, spec.rows, spec.seed, cell=spec.cell), None
     if spec.kind == "contest":
@@ -182,27 +264,62 @@ def variant_mission(
     mission_path: str | Path, variant: Variant, run_plugins: bool = True, base: Path | None = None
 ) -> Mission:
     """The mission at ``mission_path`` in ``variant``'s world (a made maze goes to a temporary
-    folder; ``base``: the folder the variant's maze file is relative to, the current one if None)."""
+    folder; ``base``: the folder the variant's maze file is relative to, the current one if None; a
+    secret seed from :data:`SECRET_VARIABLE`)."""
     import tempfile
 
     folder = Path(tempfile.mkdtemp(prefix="thymio-bt-world-"))
-    return World.of(variant, base or Path("."), folder).mission(mission_path, run_plugins)
+    return World.of(variant, base or Path("."), folder, course_secret()).mission(mission_path, run_plugins)
 
 
 def make_worlds(assignment: Assignment, path: Path, folder: Path) -> list[World]:
-    """Every variant's world (made mazes written into ``folder``); a variant that cannot be made
-    is a :class:`UserError` at its place in the assignment file ``path``."""
-    from thymio_bt.inputs.validation import locate
+    """Every variant's world (made mazes written into ``folder``); the variants that cannot be made
+    are one :class:`UserError`, each problem at its variant's place in the assignment file ``path``."""
     from thymio_bt.inputs.yamlio import load_yaml
 
-    worlds = []
-    for i, variant in enumerate(assignment.variants):
-        try:
-            worlds.append(World.of(variant, path.parent, folder))
-        except UserError as exc:
-            key = "start" if variant.start is not None else "maze"
-            line, column = locate(load_yaml(path, "assignment"), ["variants", i, key])
-            raise UserError(
-                [Problem(p.message, str(path), line, column, f"variants.{i}", p.hint) for p in exc.problems]
-            ) from None
+    worlds, problems = _worlds(list(enumerate(assignment.variants)), load_yaml(path, "assignment"), path, folder)
+    if problems:
+        raise UserError(problems)
     return worlds
+
+
+def load_worlds(
+    path: str | Path, folder: Path, secret: str | None = None, hidden_folder: Path | None = None
+) -> tuple[Assignment, list[World]]:
+    """Read the assignment at ``path`` and make its worlds in ``folder`` (the hidden variants' in
+    ``hidden_folder``, when given; ``secret``: the course's, for secret seeds): every problem of the
+    file, its schema, variants, criteria, palette, mazes and starts, found and reported at once."""
+    from thymio_bt.grade.assignment import read_assignment
+
+    reading = read_assignment(path)
+    worlds, problems = _worlds(reading.variants, reading.data, Path(reading.file), folder, secret, hidden_folder)
+    problems = reading.problems + problems
+    if problems or reading.assignment is None:
+        raise UserError(problems)
+    return reading.assignment, worlds
+
+
+def _worlds(
+    variants: list[tuple[int, Variant]],
+    data: Any,
+    path: Path,
+    folder: Path,
+    secret: str | None = None,
+    hidden_folder: Path | None = None,
+) -> tuple[list[World], list[Problem]]:
+    """The worlds of ``variants`` (each with its index in the file; made mazes into ``folder``, a
+    hidden variant's into ``hidden_folder`` when given) and the problems of those that cannot be
+    made."""
+    from thymio_bt.inputs.validation import locate
+
+    worlds, problems = [], []
+    for i, variant in variants:
+        try:
+            made_in = hidden_folder if variant.visibility == "hidden" and hidden_folder is not None else folder
+            worlds.append(World.of(variant, path.parent, made_in, secret))
+        except UserError as exc:
+            for problem in exc.problems:
+                key = "start" if problem.path == "start" else "generate" if variant.generate is not None else "maze"
+                line, column = locate(data, ["variants", i, key])
+                problems.append(Problem(problem.message, str(path), line, column, f"variants.{i}.{key}", problem.hint))
+    return worlds, problems

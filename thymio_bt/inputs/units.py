@@ -51,10 +51,17 @@ UNITS: dict[str, tuple[float, str]] = {
     "deg/s": (math.pi / 180.0, "angular_speed"),
     "hz": (1.0, "frequency"),
     "Hz": (1.0, "frequency"),
+    "KiB": (1 / 1024, "memory"),
+    "MiB": (1.0, "memory"),
+    "GiB": (1024.0, "memory"),
+    "kB": (1e3 / 2**20, "memory"),
+    "MB": (1e6 / 2**20, "memory"),
+    "GB": (1e9 / 2**20, "memory"),
 }
 
 #: The SI unit printed for each kind.
 SI_UNIT = {"length": "m", "angle": "rad", "time": "s", "speed": "m/s", "angular_speed": "rad/s", "frequency": "Hz"}
+SI_UNIT["memory"] = "MiB"  # not SI: what limits are given in
 
 _TOKEN = re.compile(
     r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
@@ -72,6 +79,7 @@ EXAMPLES = {
     "speed": "10cm/s or 0.1 m/s",
     "angular_speed": "90deg/s or 1.5 rad/s",
     "frequency": "10 Hz",
+    "memory": "512MiB or 2GiB",
 }
 
 #: A proximity threshold as a real Thymio's reading ("3400 raw"), converted to the distance at which
