@@ -81,6 +81,9 @@ _RAW = re.compile(r"\s*(\d+(?:\.\d*)?)\s*raw\s*")
 #: Deepest nesting of parentheses accepted (a guard against pathological input, not a style rule).
 MAX_NESTING = 50
 
+#: the largest angle written without a unit (rad) taken as it is: one turn, TurnAngle's own bound
+FULL_TURN = 2 * math.pi
+
 
 class UnitError(ValueError):
     """A value that does not parse; the message says what was expected, ``hint`` how to fix it."""
@@ -281,16 +284,41 @@ def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> t
         )
     x, y, yaw = (parse_value(p, resolve) for p in parts)
     for name, q, kind in (("X", x, "length"), ("Y", y, "length"), ("YAW", yaw, "angle")):
-        if q.kind not in (None, kind):
-            raise UnitError(f"{name} must be {'a length' if kind == 'length' else 'an angle'}, got '{text}'")
+        error = check_kind(q, kind)
+        if error:
+            raise UnitError(f"{name} of '{text}': {error}", error.hint)
     return x.value, y.value, yaw.value
 
 
-def check_kind(quantity: Quantity, expected: str | None) -> str | None:
-    """An error message when a value's unit does not fit the parameter, else None."""
-    if expected is None or quantity.kind is None or quantity.kind == expected:
+def check_kind(quantity: Quantity, expected: str | None) -> UnitError | None:
+    """The problem (message and hint) when a value does not fit a parameter of kind ``expected``,
+    else None: a unit of another kind, or an angle written without a unit past a full turn.
+
+    A bare number is in the parameter's SI unit, radians for an angle; one past a full turn was
+    surely meant in degrees (a yaw of 90 would be 116.6 degrees), wherever an angle is read: a
+    node's parameter, every pose's yaw, a maze's spawn, an assignment's start.
+
+    >>> print(check_kind(Quantity(90.0), "angle"))
+    90 rad is more than a full turn (an angle without a unit is in radians)
+    >>> check_kind(Quantity(90.0), "angle").hint
+    'did you mean 90deg? a bare number is in rad; write an angle: 90deg, pi/2 or 1.57 rad'
+    >>> check_kind(Quantity(math.pi / 2), "angle") is None and check_kind(Quantity(7.0, "angle"), "angle") is None
+    True
+    """
+    if expected is None or quantity.kind == expected:
         return None
-    return f"expected {_named(expected)} (in {SI_UNIT.get(expected, '?')}), got {_named(quantity.kind)}"
+    if quantity.kind is None:
+        if expected == "angle" and abs(quantity.value) > FULL_TURN:
+            guess = f"did you mean {quantity.value:g}deg? " if abs(quantity.value) <= 360 else ""
+            return UnitError(
+                f"{quantity.value:g} rad is more than a full turn (an angle without a unit is in radians)",
+                f"{guess}a bare number is in rad; {kind_hint(expected)}",
+            )
+        return None
+    return UnitError(
+        f"expected {_named(expected)} (in {SI_UNIT.get(expected, '?')}), got {_named(quantity.kind)}",
+        kind_hint(expected),
+    )
 
 
 def kind_hint(kind: str | None) -> str:

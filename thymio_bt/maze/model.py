@@ -57,7 +57,7 @@ def parsed_quantity(kind: str) -> BeforeValidator:
             raise _problem(str(exc), exc.hint or kind_hint(kind)) from None
         error = check_kind(quantity, kind)
         if error:
-            raise _problem(error, kind_hint(kind))
+            raise _problem(str(error), error.hint)
         return quantity.value
 
     return BeforeValidator(parse)

@@ -23,7 +23,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from thymio_bt.errors import Problem, did_you_mean, type_name
-from thymio_bt.inputs.units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
+from thymio_bt.inputs.units import Quantity, UnitError, check_kind, parse_pose, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
@@ -135,7 +135,7 @@ class Checker:
             return None
         error = check_kind(q, kind)
         if error:
-            self.problem(error, where, path, kind_hint(kind))
+            self.problem(str(error), where, path, error.hint)
             return None
         return q.value
 

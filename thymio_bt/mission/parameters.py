@@ -325,7 +325,10 @@ class ParameterReader(Checker):
             raw = raw.split(",")
         if isinstance(raw, list) and (len(args) == len(raw) or (len(args) == 2 and args[1] is Ellipsis)):
             kinds = [args[0]] * len(raw) if args[1:] == (Ellipsis,) else list(args)
-            out = [self.convert(kind, [], item, scope, where, path) for kind, item in zip(kinds, raw, strict=True)]
+            out = [
+                self.convert(kind, [], item, scope, self.where_item(raw, i, where), path)
+                for i, (kind, item) in enumerate(zip(kinds, raw, strict=True))
+            ]
             return _INVALID if any(v is _INVALID for v in out) else tuple(out)
         return raw
 
