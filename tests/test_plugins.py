@@ -266,3 +266,23 @@ def test_a_plugin_that_failed_to_import_fails_again_in_the_same_process(tmp_path
     for _ in range(2):
         with pytest.raises(UserError, match="ValueError: late"):
             load_mission(mission)
+
+
+def test_a_plugin_whose_parameter_is_called_name_is_refused_at_its_plugins_line(tmp_path):
+    """``name:`` labels a node, so a parameter called ``name`` could never be set: say so at once."""
+    (tmp_path / "named.py").write_text(
+        "from pydantic import Field\n"
+        "from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour\n"
+        "class GreetParams(BehaviourParams):\n"
+        "    name: str = Field('thymio')\n"
+        "class Greet(RobotBehaviour):\n"
+        "    Params = GreetParams\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [named.py]\ntree:\n  Greet: {name: hello}\n")
+    with pytest.raises(UserError) as err:
+        load_mission(mission)
+    problem = err.value.problems[0]
+    assert (problem.line, problem.column) == (3, 11)  # the plugin's place in plugins:
+    assert "node 'Greet' has a parameter called 'name'" in problem.message
+    assert "'name:' is the node's label" in problem.message

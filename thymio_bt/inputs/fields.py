@@ -64,6 +64,24 @@ class SensorRange:
     of the mission's robot (the field's own ``le``, for the JSON Schema, is the widest robot's)."""
 
 
+@dataclass(frozen=True, slots=True)
+class CalledName:
+    """Metadata of a text field that other tools call ``name`` (Gazebo's services name the entity so):
+    in a mission ``name:`` labels the node, so one given without this field is refused, pointing here."""
+
+
+def called_name(model: Any) -> str | None:
+    """The field of a parameter model that other tools call ``name`` (:data:`EntityName`), if any.
+
+    >>> from pydantic import BaseModel
+    >>> class P(BaseModel):
+    ...     entity: EntityName = "thymio"
+    >>> called_name(P), called_name(BaseModel)
+    ('entity', None)
+    """
+    return next((k for k, f in model.model_fields.items() if any(isinstance(m, CalledName) for m in f.metadata)), None)
+
+
 def within_sensor_range(field: Any) -> bool:
     """Whether a pydantic field is a :data:`SensedLength`.
 
@@ -89,6 +107,8 @@ PerSecond = Annotated[float, Unit("1/s")]
 #: an angular-speed gain per metre of error
 PerSecondPerMetre = Annotated[float, Unit("rad/s/m")]
 Point = tuple[Length, Length]
+#: the name of an entity of the world (the robot: ``thymio``), what Gazebo's services call ``name``
+EntityName = Annotated[str, CalledName()]
 
 
 def _pose_text(value: Any) -> Any:

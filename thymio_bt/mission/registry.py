@@ -59,6 +59,11 @@ class Registry:
         if not is_node(cls):
             raise TypeError(f"{cls!r} is not a RobotBehaviour or ControlNode subclass")
         name = cls.yaml_name or cls.__name__
+        if "name" in cls.Params.model_fields:
+            raise ValueError(
+                f"node '{name}' has a parameter called 'name', which a mission can never set: 'name:' is the "
+                "node's label in the tree; call it what it names (e.g. entity, as DeleteEntity does)"
+            )
         existing = self._classes.get(name)
         if existing is not None and existing is not cls:
             raise ValueError(f"two nodes are named '{name}': {existing.__module__} and {cls.__module__}")
