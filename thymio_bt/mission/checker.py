@@ -124,7 +124,7 @@ class Checker:
             raise UnitError(f"parameter '${name}' is {raw!r}, not a number")
 
         try:
-            q = parse_value(value, resolve)
+            q = parse_value(value, resolve, kind)
         except UnitError as exc:
             self.problem(
                 str(exc),
