@@ -285,7 +285,9 @@ def _model(model: ET.Element, used: Mapping[str, tuple[str, set[str]]], registry
         for name, field in fields.items():
             unit = unit_of(field)
             text = (field.description or "") + (f" [{unit}]" if unit else "")
-            default = {} if field.is_required() else {"default": _port_value(field.default)}
+            # an optional port without a value (None) has no default: Groot2 would write its text, "None"
+            given = not field.is_required() and field.default is not None
+            default = {"default": _port_value(field.default)} if given else {}
             port = ET.SubElement(entry, "input_port", {"name": name, **default})
             port.text = text
         for name in sorted(ports - set(fields)):
