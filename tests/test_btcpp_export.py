@@ -175,3 +175,27 @@ def test_a_tree_that_keeps_the_palettes_defaults_loads(tmp_path):
         load_mission(path)
         loaded.append(ident)
     assert {"MapWalls", "AtTarget", "PlanMove", "WallMapped", "InRegion"} <= set(loaded)  # their cols, rows, rect
+
+
+def test_an_export_names_a_shipped_maze_by_its_name_and_another_by_its_relative_path(tmp_path, monkeypatch):
+    """A shipped maze's path depends on where thymio-bt is installed (site-packages): an export written
+    anywhere names it as a mission does, ``two_parts_maze``, and runs from any folder."""
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+    from thymio_bt.mission.loader import load_mission
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "deep" / "out.xml"
+    out.parent.mkdir()
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(main, ["tree", str(root / "missions" / "maze_part1_2.yaml"), "--btcpp", str(out)])
+    assert result.exit_code == 0, result.output
+    assert 'maze="two_parts_maze"' in out.read_text()
+    assert load_mission(out).maze.name == load_mission(root / "missions" / "maze_part1_2.yaml").maze.name
+    own = tmp_path / "mine.yaml"
+    own.write_text((root / "mazes" / "arena.yaml").read_text())
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: mine.yaml\nstart: centre\ntree: Stop\n")
+    assert CliRunner().invoke(main, ["tree", str(mission), "--btcpp", str(out)]).exit_code == 0
+    assert 'maze="../mine.yaml"' in out.read_text() and load_mission(out).maze.name == "arena"
