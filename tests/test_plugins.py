@@ -190,7 +190,7 @@ def test_validate_and_tree_read_plugins_without_running_their_code(tmp_path, com
     assert "MarkIt" in result.output or command[0] == "validate"
     assert not (tmp_path / "IMPORTED").exists()
     if command == ["validate"]:
-        assert "1 plugin node not checked: --plugins imports them" in result.output
+        assert "not checked: the parameters of 1 plugin node, MarkIt (line 5)" in result.output
 
 
 def test_validate_plugins_imports_them_and_checks_their_parameters(tmp_path):
@@ -286,3 +286,30 @@ def test_a_plugin_whose_parameter_is_called_name_is_refused_at_its_plugins_line(
     assert (problem.line, problem.column) == (3, 11)  # the plugin's place in plugins:
     assert "node 'Greet' has a parameter called 'name'" in problem.message
     assert "'name:' is the node's label" in problem.message
+
+
+def test_validate_says_a_plugin_nodes_misspelt_parameter_was_not_checked_and_how_to_check_it(tmp_path):
+    """'ok' alone read as 'run accepts it', and run then failed on the misspelt parameter."""
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    example = Path(__file__).resolve().parents[1] / "examples"
+    (tmp_path / "spin_until_clear.py").write_text((example / "spin_until_clear.py").read_text())
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        (example / "spin_until_clear.yaml")
+        .read_text()
+        .replace("{rate: 90deg/s}", "{rat: 90deg/s}")
+        .replace("../mazes/arena.yaml", "arena")
+    )
+    result = CliRunner().invoke(main, ["validate", str(mission)])
+    assert result.exit_code == 0, result.output
+    said = result.output.splitlines()
+    assert said[0].startswith(f"ok: {mission} (3 nodes, maze arena); not checked: the parameters of 1 plugin node")
+    assert "SpinUntilClear (line 11)" in said[0]
+    command = f"thymio-bt validate --plugins {mission}"
+    assert said[1] == f"  check them with: {command} (it imports the plugins: runs their code)"
+    result = CliRunner().invoke(main, ["validate", "--plugins", str(mission)])
+    assert result.exit_code == 2 and "SpinUntilClear has no parameter 'rat'" in result.output
+    assert "did you mean 'rate'?" in result.output
