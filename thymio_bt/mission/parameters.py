@@ -27,12 +27,12 @@ from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails
 
-from thymio_bt.errors import did_you_mean
 from thymio_bt.inputs.fields import (
     SpawnName,
     Unit,
     called_name,
     field_metadata,
+    key_hint,
     metadata,
     unit_of,
     within_sensor_range,
@@ -203,7 +203,7 @@ class ParameterReader(Checker):
                 f"{reading.kind} has no parameter '{key}'",
                 self.where_key(reading.body, key, reading.file),
                 f"{reading.path}.{key}",
-                did_you_mean(str(key), reading.fields),
+                key_hint(str(key), reading.model),
             )
             reading.unknown = True
             return
