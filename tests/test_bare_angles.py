@@ -88,3 +88,12 @@ def test_an_assignment_start_and_respawn_get_the_same_rule(tmp_path: Path, varia
 def test_the_shipped_assignments_still_load() -> None:
     for path in sorted((ROOT / "assignments").glob("*.yaml")):
         assert load_assignment(path).name == path.stem
+
+
+def test_the_start_of_serve_ros2_gets_the_same_rule_and_hint() -> None:
+    from thymio_bt.cli.serving import start_pose
+    from thymio_bt.maze import load_maze, resolve_maze
+
+    with pytest.raises(UserError, match="90 rad is more than a full turn") as info:
+        start_pose(load_maze(resolve_maze("arena")), "0.2,0.1,90")
+    assert MEANT in str(info.value)
