@@ -156,8 +156,11 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> tupl
     # 'ok' must not read as 'run will accept it': a misspelt parameter of a plugin node is only found
     # once its plugin is imported, so say which nodes were not checked and the command that checks them
     shown = ", ".join(f"{n.behaviour} (line {n.where[1]})" for n in unchecked[:5]) + ", ..." * (len(unchecked) > 5)
+    # a plugin whose source says its parameters' names had them checked, not their values
+    names_read = all(spec.registry[n.behaviour].Params.model_config.get("extra") == "forbid" for n in unchecked)
+    what = "parameter values" if names_read else "parameters"
     return summary, (
-        f"not checked: the parameters of {len(unchecked)} plugin node{'s' * (len(unchecked) != 1)}, {shown}: "
+        f"not checked: the {what} of {len(unchecked)} plugin node{'s' * (len(unchecked) != 1)}, {shown}: "
         f"their plugins were read, not run\n  check them with: thymio-bt validate --plugins {path} "
         "(it imports the plugins: runs their code)"
     )

@@ -152,22 +152,28 @@ class Registry:
 
     def _declare_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
         """Stand-ins for the nodes of plugin ``ref``, found by reading its source, not running it."""
-        from thymio_bt.mission.unrun_plugins import plugin_node_names, stand_in
+        from thymio_bt.behaviours.base import BehaviourParams
+        from thymio_bt.mission.unrun_plugins import plugin_nodes, stand_in
 
         target, _, attr = ref.partition(":")
-        if attr:
-            names = [attr]
-        else:
+        nodes: dict[str, list[str] | None] = {attr: None}
+        if not attr:
             path = self._plugin_file(target, base_dir, where) if target.endswith(".py") else _source(ref, where)
+            classes = list(self._classes.values())
+            models = {c.Params.__name__: list(c.Params.model_fields) for c in classes}
             try:
-                names = plugin_node_names(path, known={cls.__name__ for cls in self._classes.values()})
+                nodes = plugin_nodes(
+                    path,
+                    {**models, "BehaviourParams": list(BehaviourParams.model_fields)},
+                    {c.__name__: c.Params.__name__ for c in classes},
+                )
             except SyntaxError as exc:
                 raise UserError(
                     Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0, exc.offset or 0)
                 ) from None
-        for name in names:
+        for name, params in nodes.items():
             if name not in self._classes:
-                self._classes[name] = stand_in(name)
+                self._classes[name] = stand_in(name, params)
 
 
 def _import_file(path: Path) -> ModuleType:
