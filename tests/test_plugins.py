@@ -361,3 +361,22 @@ def test_parameter_names_are_followed_through_the_files_own_bases_and_the_built_
         ("Follow has no parameter 'sid'", "did you mean 'side'?"),
     ]
     assert plugin_nodes(plugin, {"BehaviourParams": ["timeout"]})["Spin"] == ["rate", "speed", "timeout"]
+
+
+def test_a_hostile_plugins_cycles_and_diamonds_of_params_are_read_once(tmp_path):
+    from thymio_bt.mission.unrun_plugins import plugin_nodes
+
+    chain = "".join(f"class P{i}(P{i + 1}, P{i + 1}, P{i + 1}):\n    f{i}: int = 0\n" for i in range(200))
+    plugin = tmp_path / "p.py"
+    plugin.write_text(
+        "class A(B):\n    a: int = 0\nclass B(A):\n    b: int = 0\n"
+        f"{chain}class P200(BehaviourParams):\n    last: int = 0\n"
+        "class Loop(RobotBehaviour):\n    Params = A\nclass Deep(RobotBehaviour):\n    Params = P0\n"
+    )
+    found = plugin_nodes(plugin, {"BehaviourParams": ["timeout"]})  # 3**200 paths if not read once each
+    assert found["Loop"] is None and found["Deep"] is not None and len(found["Deep"]) == 202
+    plugin.write_text(
+        "".join(f"class Q{i}(Q{i + 1}):\n    f: int = 0\n" for i in range(5000))
+        + "class Q5000(BehaviourParams):\n    pass\nclass Deeper(RobotBehaviour):\n    Params = Q0\n"
+    )
+    assert plugin_nodes(plugin, {"BehaviourParams": ["timeout"]}) == {"Deeper": None}  # past Python's stack

@@ -44,9 +44,6 @@ from thymio_bt.inputs.reading import read_text
 #: base classes that make a plugin class a node
 NODE_BASES = ("RobotBehaviour", "ConditionBehaviour", "ControlNode")
 
-#: how many parameter models deep a plugin's model is followed through the file's own classes
-_MAX_BASES = 20
-
 
 class UncheckedParams(BaseModel):
     """Any parameters: a plugin that was not imported cannot say which it takes."""
@@ -64,13 +61,17 @@ def plugin_nodes(
     tree = _parse(path)
     nodes = {"RobotBehaviour": "BehaviourParams", "ConditionBehaviour": "BehaviourParams", **(known_nodes or {})}
     models = {c.name: c for c in ast.walk(tree) if isinstance(c, ast.ClassDef)}
+    memo: dict[str, set[str] | None] = {}
     found: dict[str, list[str] | None] = {}
     for name, cls in _node_classes(tree, nodes):
         params = _assigned_name(cls, "Params")
         if params is None:  # inherited: from the first base that is a node class
             params = next((nodes[b] for b in map(_base_name, cls.bases) if b in nodes), "")
         nodes[cls.name] = params
-        fields = _fields(params, models, known_params, 0) if params else None
+        try:
+            fields = _fields(params, models, known_params, memo) if params else None
+        except RecursionError:  # models deriving from models thousands deep: not followed
+            fields = None
         found[name] = sorted(fields) if fields is not None else None
     return found
 
@@ -97,16 +98,23 @@ def _node_classes(tree: ast.Module, known: Collection[str]) -> list[tuple[str, a
 
 
 def _fields(
-    name: str, models: Mapping[str, ast.ClassDef], known: Mapping[str, Collection[str]], depth: int
+    name: str,
+    models: Mapping[str, ast.ClassDef],
+    known: Mapping[str, Collection[str]],
+    memo: dict[str, set[str] | None],
 ) -> set[str] | None:
     """The field names of the parameter model ``name``: a known model's, or a class of the file's own
     fields and its bases'; None when something cannot be followed (a base neither known nor the
-    file's, a ``model_config`` that may take extra keys, an alias: the YAML keys are then others)."""
+    file's, a ``model_config`` that may take extra keys, an alias: the YAML keys are then others).
+    ``memo``: the models followed so far, each once (a hostile file's cycles and diamonds included)."""
+    if name in memo:
+        return memo[name]
+    memo[name] = None  # while it is followed: a cycle back to it cannot be followed
     cls = models.get(name)
     if cls is None:
-        return set(known[name]) if name in known else None
-    configured = any(isinstance(t, ast.Name) and t.id == "model_config" for s in cls.body for t in _assigned(s))
-    if configured or depth > _MAX_BASES:
+        memo[name] = set(known[name]) if name in known else None
+        return memo[name]
+    if any(isinstance(t, ast.Name) and t.id == "model_config" for s in cls.body for t in _assigned(s)):
         return None
     if any(isinstance(k, ast.keyword) and k.arg and "alias" in k.arg for k in ast.walk(cls)):
         return None
@@ -118,10 +126,11 @@ def _fields(
         and "ClassVar" not in ast.unparse(s.annotation)
     }
     for base in map(_base_name, cls.bases):
-        inherited = set() if base == "BaseModel" else _fields(base, models, known, depth + 1)
+        inherited = set() if base == "BaseModel" else _fields(base, models, known, memo)
         if inherited is None:
             return None
         own |= inherited
+    memo[name] = own
     return own
 
 
