@@ -53,6 +53,13 @@ def test_the_start_option_and_a_set_parameter_get_the_same_rule(tmp_path: Path) 
     assert CliRunner().invoke(main, ["validate", str(path), "--set", "turn=1.2"]).exit_code == 0
 
 
+def test_only_a_whole_number_is_guessed_as_degrees(tmp_path: Path) -> None:
+    with pytest.raises(UserError) as info:
+        load_mission(_mission(tmp_path, "4*pi"))
+    (problem,) = info.value.problems
+    assert "12.5664 rad is more than a full turn" in problem.message and "did you mean" not in problem.hint
+
+
 def test_a_pose_written_as_text_in_python_gets_the_same_rule() -> None:
     with pytest.raises(UnitError, match="YAW of '0.5, 0.3, 90': 90 rad is more than a full turn") as info:
         parse_pose("0.5, 0.3, 90")

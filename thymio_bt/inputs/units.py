@@ -312,7 +312,8 @@ def check_kind(quantity: Quantity, expected: str | None) -> UnitError | None:
         return None
     if quantity.kind is None:
         if expected == "angle" and abs(quantity.value) > FULL_TURN:
-            guess = f"did you mean {quantity.value:g}deg? " if abs(quantity.value) <= 360 else ""
+            meant = quantity.value.is_integer() and abs(quantity.value) <= 360  # 90, not 4*pi
+            guess = f"did you mean {quantity.value:g}deg? " if meant else ""
             return UnitError(
                 f"{quantity.value:g} rad is more than a full turn (an angle without a unit is in radians)",
                 f"{guess}a bare number is in rad; {kind_hint(expected)}",
