@@ -10,7 +10,7 @@ import math
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
+from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour
 from thymio_bt.inputs.fields import AngularSpeed
 
 
@@ -27,7 +27,9 @@ class SpinUntilClear(RobotBehaviour):
     moves = True
 
     def step(self) -> Status:
-        scan = self.robot.proximity()
+        scan = self.robot.proximity()  # None while the robot does not exist (deleted, not yet spawned)
+        if scan is None:
+            return self.fail(FailureCode.NO_ROBOT, "the robot does not exist")
         front = [v for k, v in scan.items() if k.startswith("front")]
         if all(math.isinf(v) for v in front):
             return Status.SUCCESS

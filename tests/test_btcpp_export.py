@@ -148,3 +148,54 @@ def test_the_palette_command_writes_the_leaves_groot2_imports(tmp_path):
     text = out.read_text()
     assert text.startswith('<root BTCPP_format="4">') and '<Action ID="MoveUntilWall">' in text
     assert '<Condition ID="WallAhead">' in text and "Sequence" not in text  # Groot2 has its own built-ins
+
+
+def test_a_tree_that_keeps_the_palettes_defaults_loads(tmp_path):
+    """Each leaf with every port as the palette gives it (its default, or blank as Groot2 leaves a
+    port without one): an optional port without a value has no default, never the text 'None'."""
+    from thymio_bt.mission.btcpp import palette_xml
+    from thymio_bt.mission.loader import load_mission
+    from thymio_bt.mission.registry import default_registry
+
+    registry = default_registry()
+    model = ET.fromstring(palette_xml()).find("TreeNodesModel")
+    assert model is not None and 'default="None"' not in palette_xml()
+    loaded = []
+    for entry in model:
+        ident, ports = entry.get("ID"), list(entry.iter("input_port"))
+        fields = registry[ident.removeprefix("Thymio") if ident not in registry else ident].Params.model_fields
+        if any(fields[p.get("name")].is_required() for p in ports):
+            continue  # a port the user must set
+        attrs = " ".join(f'{p.get("name")}="{p.get("default", "")}"' for p in ports)
+        path = tmp_path / f"{ident}.xml"
+        path.write_text(
+            '<root BTCPP_format="4" main_tree_to_execute="T"><ThymioMission maze="micromouse_4x4" start="start"/>'
+            f'<BehaviorTree ID="T"><{ident} {attrs}/></BehaviorTree></root>'
+        )
+        load_mission(path)
+        loaded.append(ident)
+    assert {"MapWalls", "AtTarget", "PlanMove", "WallMapped", "InRegion"} <= set(loaded)  # their cols, rows, rect
+
+
+def test_an_export_names_a_shipped_maze_by_its_name_and_another_by_its_relative_path(tmp_path, monkeypatch):
+    """A shipped maze's path depends on where thymio-bt is installed (site-packages): an export written
+    anywhere names it as a mission does, ``two_parts_maze``, and runs from any folder."""
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+    from thymio_bt.mission.loader import load_mission
+
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "deep" / "out.xml"
+    out.parent.mkdir()
+    monkeypatch.chdir(tmp_path)
+    result = CliRunner().invoke(main, ["tree", str(root / "missions" / "maze_part1_2.yaml"), "--btcpp", str(out)])
+    assert result.exit_code == 0, result.output
+    assert 'maze="two_parts_maze"' in out.read_text()
+    assert load_mission(out).maze.name == load_mission(root / "missions" / "maze_part1_2.yaml").maze.name
+    own = tmp_path / "mine.yaml"
+    own.write_text((root / "mazes" / "arena.yaml").read_text())
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: mine.yaml\nstart: centre\ntree: Stop\n")
+    assert CliRunner().invoke(main, ["tree", str(mission), "--btcpp", str(out)]).exit_code == 0
+    assert 'maze="../mine.yaml"' in out.read_text() and load_mission(out).maze.name == "arena"

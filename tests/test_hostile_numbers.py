@@ -87,11 +87,20 @@ def test_option_numbers_are_finite_and_in_range(option):
     assert result.exit_code == 2 and f"Invalid value for '{option[0]}'" in result.output
 
 
-@pytest.mark.parametrize("start", ["0.5,0.3,1e300", "0.6,0.6,-1e20", "[0.6, 0.6, 1e300]"])
-def test_an_absurd_yaw_is_refused(tmp_path, start):
+@pytest.mark.parametrize(
+    ("start", "said"),
+    [
+        ("0.5,0.3,1e300", "more than a full turn"),  # a bare number: radians, at most one turn
+        ("0.6,0.6,-1e20", "more than a full turn"),
+        ("[0.6, 0.6, 1e300]", "more than a full turn"),
+        ("[0.6, 0.6, 1e5 deg]", "more than ten turns"),  # with its unit: up to ten turns
+        ("0.6,0.6,1e300rad", "more than ten turns"),
+    ],
+)
+def test_an_absurd_yaw_is_refused(tmp_path, start, said):
     path = tmp_path / "m.yaml"
     path.write_text(f"maze: arena\nstart: {start}\ntree: Stop\n")
-    with pytest.raises(UserError, match="is more than ten turns"):
+    with pytest.raises(UserError, match=said):
         load_mission(path)
 
 

@@ -183,14 +183,14 @@ def test_validate_and_tree_read_plugins_without_running_their_code(tmp_path, com
     (tmp_path / "marker.py").write_text(MARKER_PLUGIN)
     mission = tmp_path / "m.yaml"
     mission.write_text(
-        "maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {x: 1}}]\n"
+        "maze: arena\nstart: centre\nplugins: [marker.py]\ntree:\n  sequence: [Stop, {MarkIt: {timeout: x}}]\n"
     )
     result = CliRunner().invoke(main, [command[0], str(mission), *command[1:]])
     assert result.exit_code == 0, result.output
     assert "MarkIt" in result.output or command[0] == "validate"
     assert not (tmp_path / "IMPORTED").exists()
     if command == ["validate"]:
-        assert "1 plugin node not checked: --plugins imports them" in result.output
+        assert "not checked: the parameter values of 1 plugin node, MarkIt (line 5)" in result.output
 
 
 def test_validate_plugins_imports_them_and_checks_their_parameters(tmp_path):
@@ -266,3 +266,117 @@ def test_a_plugin_that_failed_to_import_fails_again_in_the_same_process(tmp_path
     for _ in range(2):
         with pytest.raises(UserError, match="ValueError: late"):
             load_mission(mission)
+
+
+def test_a_plugin_whose_parameter_is_called_name_is_refused_at_its_plugins_line(tmp_path):
+    """``name:`` labels a node, so a parameter called ``name`` could never be set: say so at once."""
+    (tmp_path / "named.py").write_text(
+        "from pydantic import Field\n"
+        "from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour\n"
+        "class GreetParams(BehaviourParams):\n"
+        "    name: str = Field('thymio')\n"
+        "class Greet(RobotBehaviour):\n"
+        "    Params = GreetParams\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [named.py]\ntree:\n  Greet: {name: hello}\n")
+    with pytest.raises(UserError) as err:
+        load_mission(mission)
+    problem = err.value.problems[0]
+    assert (problem.line, problem.column) == (3, 11)  # the plugin's place in plugins:
+    assert "node 'Greet' has a parameter called 'name'" in problem.message
+    assert "'name:' is the node's label" in problem.message
+
+
+def test_validate_finds_a_plugin_nodes_misspelt_parameter_and_says_what_it_did_not_check(tmp_path):
+    """'ok' read as 'run accepts it', and run then failed on the misspelt parameter: the names a
+    plugin's Params declares are read from its source (never run); its values are said unchecked."""
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    example = Path(__file__).resolve().parents[1] / "examples"
+    ran = "\nimport pathlib\npathlib.Path(__file__).with_name('RAN').touch()\n"  # if the plugin's code runs
+    (tmp_path / "spin_until_clear.py").write_text((example / "spin_until_clear.py").read_text() + ran)
+    text = (example / "spin_until_clear.yaml").read_text().replace("../mazes/arena.yaml", "arena")
+    mission = tmp_path / "m.yaml"
+    mission.write_text(text.replace("{rate: 90deg/s}", "{rat: 90deg/s}"))
+    result = CliRunner().invoke(main, ["validate", str(mission)])
+    assert result.exit_code == 2, result.output
+    assert f"{mission}:11:24: SpinUntilClear has no parameter 'rat'" in result.output
+    assert "did you mean 'rate'?" in result.output
+    mission.write_text(text.replace("{rate: 90deg/s}", "{rate: 9 m}"))  # a value: only the import checks it
+    result = CliRunner().invoke(main, ["validate", str(mission)])
+    assert result.exit_code == 0, result.output
+    said = result.output.splitlines()
+    assert said[0].startswith(f"ok: {mission} (3 nodes, maze arena); not checked: the parameter values of 1 plugin")
+    assert "SpinUntilClear (line 11)" in said[0]
+    command = f"thymio-bt validate --plugins {mission}"
+    assert said[1] == f"  check them with: {command} (it imports the plugins: runs their code)"
+    assert not (tmp_path / "RAN").exists()
+    result = CliRunner().invoke(main, ["validate", "--plugins", str(mission)])
+    assert result.exit_code == 2 and "expected an angular speed (in rad/s), got a length" in result.output
+
+
+UNFOLLOWABLE = [
+    "class P(BehaviourParams):\n    model_config = ConfigDict(extra='allow')\n    rate: float = 1\n",
+    "class P(SomeoneElsesParams):\n    rate: float = 1\n",
+    "class P(BehaviourParams):\n    rate: float = Field(1, alias='speed')\n",
+    "P = make_params()\n",
+]
+
+
+@pytest.mark.parametrize("params", UNFOLLOWABLE, ids=["extra", "unknown base", "alias", "not a class"])
+def test_a_plugin_whose_parameters_cannot_be_read_from_its_source_is_left_unchecked(tmp_path, params):
+    from thymio_bt.mission.unrun_plugins import plugin_nodes
+
+    plugin = tmp_path / "p.py"
+    plugin.write_text(params + "class Spin(RobotBehaviour):\n    Params = P\n")
+    assert plugin_nodes(plugin, {"BehaviourParams": ["timeout"]}) == {"Spin": None}
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [p.py]\ntree:\n  Spin: {anything: 1}\n")
+    assert load_mission(mission, run_plugins=False).tree.behaviour == "Spin"
+
+
+def test_parameter_names_are_followed_through_the_files_own_bases_and_the_built_ins(tmp_path):
+    from thymio_bt.mission.unrun_plugins import plugin_nodes
+
+    plugin = tmp_path / "p.py"
+    plugin.write_text(
+        "class Base(BehaviourParams):\n    speed: Speed = 0.1\n"
+        "class P(Base):\n    rate: float = 1\n    LIMIT: ClassVar[int] = 3\n"
+        "class Spin(RobotBehaviour):\n    Params = P\n"
+        "class FastSpin(Spin):\n    yaml_name = 'Fast'\n"
+        "class Follow(WallFollow):\n    pass\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text(
+        "maze: arena\nstart: centre\nplugins: [p.py]\n"
+        "tree:\n  sequence: [{Fast: {rat: 1}}, {Follow: {sid: left}}, {Spin: {speed: 1, rate: 2, timeout: 3}}]\n"
+    )
+    with pytest.raises(UserError) as err:
+        load_mission(mission, run_plugins=False)
+    assert [(p.message, p.hint) for p in err.value.problems] == [
+        ("Fast has no parameter 'rat'", "did you mean 'rate'?"),
+        ("Follow has no parameter 'sid'", "did you mean 'side'?"),
+    ]
+    assert plugin_nodes(plugin, {"BehaviourParams": ["timeout"]})["Spin"] == ["rate", "speed", "timeout"]
+
+
+def test_a_hostile_plugins_cycles_and_diamonds_of_params_are_read_once(tmp_path):
+    from thymio_bt.mission.unrun_plugins import plugin_nodes
+
+    chain = "".join(f"class P{i}(P{i + 1}, P{i + 1}, P{i + 1}):\n    f{i}: int = 0\n" for i in range(200))
+    plugin = tmp_path / "p.py"
+    plugin.write_text(
+        "class A(B):\n    a: int = 0\nclass B(A):\n    b: int = 0\n"
+        f"{chain}class P200(BehaviourParams):\n    last: int = 0\n"
+        "class Loop(RobotBehaviour):\n    Params = A\nclass Deep(RobotBehaviour):\n    Params = P0\n"
+    )
+    found = plugin_nodes(plugin, {"BehaviourParams": ["timeout"]})  # 3**200 paths if not read once each
+    assert found["Loop"] is None and found["Deep"] is not None and len(found["Deep"]) == 202
+    plugin.write_text(
+        "".join(f"class Q{i}(Q{i + 1}):\n    f: int = 0\n" for i in range(5000))
+        + "class Q5000(BehaviourParams):\n    pass\nclass Deeper(RobotBehaviour):\n    Params = Q0\n"
+    )
+    assert plugin_nodes(plugin, {"BehaviourParams": ["timeout"]}) == {"Deeper": None}  # past Python's stack

@@ -166,3 +166,20 @@ def test_run_tree_takes_plugins_relative_to_the_test_file_or_as_classes(pytester
         "        run_tree('BackOff', world('arena'), plugins=['plugins/missing.py'])\n"
     )
     pytester.runpytest_subprocess("-p", "no:cacheprovider", "students").assert_outcomes(passed=3)
+
+
+def test_a_bad_parameter_is_a_user_error_located_at_the_tests_own_line(thymio):
+    """Not at the temporary mission file run_tree writes, which the test's author never sees."""
+    from thymio_bt.errors import UserError
+    from thymio_bt.testing import run_tree
+
+    with pytest.raises(UserError) as err:
+        run_tree({"sequence": [{"MoveUntilWall": {"distanse": "5cm"}}]}, world("corridor"))  # this line
+    line = test_a_bad_parameter_is_a_user_error_located_at_the_tests_own_line.__code__.co_firstlineno + 6
+    (problem,) = err.value.problems
+    assert (problem.file, problem.line) == (__file__, line)
+    assert str(err.value).startswith(f"{__file__}:{line}:1: MoveUntilWall has no parameter 'distanse'")
+    assert problem.path == "tree.sequence[0].MoveUntilWall.distanse" and problem.hint == "did you mean 'distance'?"
+    with pytest.raises(UserError) as err:
+        thymio.run_tree({"TurnAngle": {"angle": 90}}, thymio.world("corridor"))  # the fixture's too
+    assert err.value.problems[0].line == line + 7 and err.value.problems[0].file == __file__

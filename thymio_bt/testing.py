@@ -38,6 +38,7 @@ from __future__ import annotations
 import sys
 import tempfile
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -149,31 +150,60 @@ def run_tree(
     your test), ``"package.module:Class"``, or the class itself. ``substitute`` maps node-path
     globs to scripted stubs (see :func:`run_mission_file`); ``settings`` are more mission keys:
     ``parameters``, ``subtrees``, ``noise``, ``tick_hz``.
+
+    A tree or parameter that the mission loader refuses raises :class:`~thymio_bt.errors.UserError`,
+    its problems located at the line of your test that called ``run_tree`` (the node's path says
+    where in the tree), as ``pytest`` shows it:
+
+    >>> try:
+    ...     run_tree({"MoveUntilWall": {"distanse": "5cm"}}, world("corridor"))
+    ... except UserError as exc:
+    ...     print(exc.problems[0].message, "|", exc.problems[0].path, "|", exc.problems[0].hint)
+    MoveUntilWall has no parameter 'distanse' | tree.MoveUntilWall.distanse | did you mean 'distance'?
     """
     from thymio_bt.mission import load_mission
 
     if isinstance(tree, str):
         tree = yaml.safe_load(tree)
-    registry, refs = _plugins(plugins, _caller_folder())
+    caller = _caller()
+    registry, refs = _plugins(plugins, caller.file if caller.line == 0 else caller.file.parent)
     with tempfile.TemporaryDirectory(prefix="thymio-bt-test-") as tmp:
         maze_file = Path(tmp) / "maze.yaml"
         maze_file.write_text(yaml.safe_dump(maze.to_yaml_dict(), sort_keys=False))
         mission_file = Path(tmp) / "mission.yaml"
         mission_file.write_text(mission_text(tree, maze_file.name, start, seconds, plugins=refs or None, **settings))
-        mission = load_mission(mission_file, registry=registry)
+        try:
+            mission = load_mission(mission_file, registry=registry)
+        except UserError as exc:  # the temporary files mean nothing to the test's author: point at the call
+            here = Path(tmp).resolve()
+            raise UserError(
+                replace(p, file=str(caller.file), line=caller.line, column=0)
+                if caller.line and here in Path(p.file).resolve().parents
+                else p
+                for p in exc.problems
+            ) from None
     return Run(mission, seed, substitutions=substitute, node_stats=True).run()
 
 
-def _caller_folder() -> Path:
-    """The folder of the nearest calling file outside thymio-bt (a test), or the working folder."""
+@dataclass(frozen=True)
+class _Call:
+    """Where a helper was called from: the file (a test) and the line of the call."""
+
+    file: Path
+    line: int
+
+
+def _caller() -> _Call:
+    """The nearest calling file outside thymio-bt (a test) and the line of its call; the working
+    folder (line 0) when there is none (an interactive session)."""
     package = Path(__file__).resolve().parent
     frame = sys._getframe(1)
     while frame is not None:
         file = Path(frame.f_code.co_filename)
         if not file.name.startswith("<") and package not in file.resolve().parents:
-            return file.resolve().parent
+            return _Call(file.resolve(), frame.f_lineno)
         frame = frame.f_back  # type: ignore[assignment]
-    return Path.cwd()
+    return _Call(Path.cwd(), 0)
 
 
 def _plugins(plugins: Sequence[Plugin], folder: Path) -> tuple[Registry | None, list[str]]:

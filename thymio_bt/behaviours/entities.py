@@ -6,14 +6,14 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
-from thymio_bt.inputs.fields import Duration, Pose2D
+from thymio_bt.inputs.fields import Duration, EntityName, Pose2D
 from thymio_bt.robot.interface import ROBOT_ENTITY, Pose, Request, RequestState
 
 
 class DeleteEntityParams(BehaviourParams):
     """Remove an entity from the world."""
 
-    entity: str = Field(ROBOT_ENTITY, description="the entity's name")
+    entity: EntityName = Field(ROBOT_ENTITY, description="the entity's name")
     timeout: Duration = Field(5.0, gt=0, le=3600, description="time limit in simulated seconds")
 
 
@@ -21,6 +21,8 @@ class DeleteEntity(RobotBehaviour):
     """Ask the backend to delete ``entity``; RUNNING until it is gone, FAILURE with its reason.
 
     Emits a ``delete_entity`` event with the robot's pose and proximity just before deletion.
+    The entity is ``entity:`` (what Gazebo's services call ``name``); ``name:`` labels the node, as
+    on every node, and is refused without ``entity:`` beside it.
 
     Example (YAML)::
 
@@ -51,7 +53,7 @@ class DeleteEntity(RobotBehaviour):
 class SpawnEntityParams(BehaviourParams):
     """Put a fresh robot at a pose."""
 
-    entity: str = Field(ROBOT_ENTITY, description="the entity's name")
+    entity: EntityName = Field(ROBOT_ENTITY, description="the entity's name")
     pose: Pose2D = Field(
         description="x, y (m) and yaw (rad) of base_link, e.g. [0.5, 0.3, pi/2] or a named spawn of the maze"
     )

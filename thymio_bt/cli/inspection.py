@@ -62,7 +62,8 @@ def validate(files: tuple[Path, ...], sets: tuple[str, ...], robot: str | None, 
             overrides = parse_overrides(sets)
             if robot is not None:
                 overrides[ROBOT_OPTION] = robot  # as run's --robot: its problems said at --robot
-            click.echo(f"ok: {path} ({_check_file(path, overrides, plugins)})")
+            summary, note = _check_file(path, overrides, plugins)
+            click.echo(f"ok: {path} ({summary})" + (f"; {note}" if note else ""))
         except UserError as exc:
             bad += 1
             for problem in exc.problems:
@@ -70,16 +71,17 @@ def validate(files: tuple[Path, ...], sets: tuple[str, ...], robot: str | None, 
     sys.exit(2 if bad else 0)
 
 
-def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) -> str:
-    """Validate one mission or maze file (a maze has ``walls:`` or ``grid:`` and no ``tree:``); what it holds."""
+def _check_file(path: Path, overrides: dict[str, str], plugins: bool = False) -> tuple[str, str]:
+    """Validate one mission or maze file (a maze has ``walls:`` or ``grid:`` and no ``tree:``); what it
+    holds, and what was not checked ("" when everything was)."""
     from thymio_bt.inputs.yamlio import load_yaml
 
     micromouse = path.suffix.lower() == ".txt"  # a micromouse contest maze
     data = None if path.suffix.lower() == ".xml" or micromouse else load_yaml(path)  # .xml: a BT.CPP mission
     if micromouse or isinstance(data, dict) and "tree" not in data and ("walls" in data or "grid" in data):
-        return _check_maze(path, data)
+        return _check_maze(path, data), ""
     if isinstance(data, dict) and "tree" not in data and "criteria" in data:
-        return _check_assignment(path)
+        return _check_assignment(path), ""
     return _check_mission(path, overrides, plugins)
 
 
@@ -137,17 +139,29 @@ def _spawn_problems(path: Path, maze: Maze, marks: dict[str, tuple[int, int]]) -
     return problems
 
 
-def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> str:
+def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> tuple[str, str]:
     """Validate the mission file ``path``; its node count and maze, and the plugin nodes left unchecked."""
     from thymio_bt.mission import load_mission
 
     spec = load_mission(path, overrides, run_plugins=plugins)  # checks the start pose against the maze too
     nodes = sum(1 for _ in spec.tree.walk())
-    unchecked = sum(
-        1 for n in spec.tree.walk() if n.behaviour and getattr(spec.registry[n.behaviour], "unrun_plugin", False)
+    unchecked = [
+        n for n in spec.tree.walk() if n.behaviour and getattr(spec.registry[n.behaviour], "unrun_plugin", False)
+    ]
+    summary = f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
+    if not unchecked:
+        return summary, ""
+    # 'ok' must not read as 'run will accept it': a misspelt parameter of a plugin node is only found
+    # once its plugin is imported, so say which nodes were not checked and the command that checks them
+    shown = ", ".join(f"{n.behaviour} (line {n.where[1]})" for n in unchecked[:5]) + ", ..." * (len(unchecked) > 5)
+    # a plugin whose source says its parameters' names had them checked, not their values
+    names_read = all(spec.registry[n.behaviour].Params.model_config.get("extra") == "forbid" for n in unchecked)
+    what = "parameter values" if names_read else "parameters"
+    return summary, (
+        f"not checked: the {what} of {len(unchecked)} plugin node{'s' * (len(unchecked) != 1)}, {shown}: "
+        f"their plugins were read, not run\n  check them with: thymio-bt validate --plugins {path} "
+        "(it imports the plugins: runs their code)"
     )
-    note = f"; {unchecked} plugin node{'s' * (unchecked != 1)} not checked: --plugins imports them" if unchecked else ""
-    return f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}{note}"
 
 
 @main.command()

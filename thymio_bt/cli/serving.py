@@ -121,4 +121,4 @@ def start_pose(world: Maze, start: str | None) -> Pose:
     try:
         return Pose(*parse_pose(start))
     except UnitError as exc:
-        raise UserError(f"--start {start}: {exc} (hint: e.g. --start 0.5,0.3,pi/2)") from None
+        raise UserError(f"--start {start}: {exc} (hint: {exc.hint or 'e.g. --start 0.5,0.3,pi/2'})") from None

@@ -29,6 +29,7 @@ from typing import Annotated, Any
 
 from pydantic import BeforeValidator
 
+from thymio_bt.errors import did_you_mean
 from thymio_bt.inputs.units import UnitError, parse_pose
 
 #: kinds of the SI units that parameters are declared in (others, like 1/s, are plain numbers)
@@ -64,6 +65,48 @@ class SensorRange:
     of the mission's robot (the field's own ``le``, for the JSON Schema, is the widest robot's)."""
 
 
+@dataclass(frozen=True, slots=True)
+class CalledName:
+    """Metadata of a text field that other tools call ``name`` (Gazebo's services name the entity so):
+    in a mission ``name:`` labels the node, so one given without this field is refused, pointing here."""
+
+
+def called_name(model: Any) -> str | None:
+    """The field of a parameter model that other tools call ``name`` (:data:`EntityName`), if any.
+
+    >>> from pydantic import BaseModel
+    >>> class P(BaseModel):
+    ...     entity: EntityName = "thymio"
+    >>> called_name(P), called_name(BaseModel)
+    ('entity', None)
+    """
+    return next((k for k, f in model.model_fields.items() if any(isinstance(m, CalledName) for m in f.metadata)), None)
+
+
+def key_hint(key: str, model: Any, allowed: Any = None) -> str:
+    """The hint for an unknown key of ``model``'s parameters: the field that takes it as a value
+    (``forever`` in ``repeat: {forever: true}`` is ``times: forever``), else the nearest of ``allowed``
+    (default: the model's fields).
+
+    >>> from typing import Literal
+    >>> from pydantic import create_model
+    >>> P = create_model("P", times=(int | Literal["forever"], 1))
+    >>> key_hint("forever", P), key_hint("tims", P)
+    ("did you mean 'times: forever'? forever is a value of times, not a key", "did you mean 'times'?")
+    """
+    for name, field in model.model_fields.items():
+        if key in _words(field.annotation):
+            return f"did you mean '{name}: {key}'? {key} is a value of {name}, not a key"
+    return did_you_mean(str(key), model.model_fields if allowed is None else allowed)
+
+
+def _words(annotation: Any) -> set[str]:
+    """The strings a type takes as literal values (``Literal["left", "right"]``, inside unions too)."""
+    if typing.get_origin(annotation) is typing.Literal:
+        return {a for a in typing.get_args(annotation) if isinstance(a, str)}
+    return {w for a in typing.get_args(annotation) for w in _words(a)}
+
+
 def within_sensor_range(field: Any) -> bool:
     """Whether a pydantic field is a :data:`SensedLength`.
 
@@ -89,6 +132,8 @@ PerSecond = Annotated[float, Unit("1/s")]
 #: an angular-speed gain per metre of error
 PerSecondPerMetre = Annotated[float, Unit("rad/s/m")]
 Point = tuple[Length, Length]
+#: the name of an entity of the world (the robot: ``thymio``), what Gazebo's services call ``name``
+EntityName = Annotated[str, CalledName()]
 
 
 def _pose_text(value: Any) -> Any:

@@ -25,6 +25,7 @@ Example::
 
 from __future__ import annotations
 
+import difflib
 import math
 import re
 from collections.abc import Callable, Mapping
@@ -66,7 +67,7 @@ SI_UNIT["memory"] = "MiB"  # not SI: what limits are given in
 _TOKEN = re.compile(
     r"\s*(?:(?P<num>\d+\.?\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?)"
     r"|(?P<ref>\$[A-Za-z_][A-Za-z0-9_]*)"
-    r"|(?P<unit>(?:cm|mm|m|rad|deg)/s|[A-Za-z_°][A-Za-z0-9_]*)"
+    r"|(?P<unit>(?:cm|mm|m|rad|deg)/(?!pi\b)[A-Za-z]+|[A-Za-z_°][A-Za-z0-9_]*)"  # cm/sec: one unit, misspelt
     r"|(?P<op>[-+*/()]))"
 )
 
@@ -88,6 +89,9 @@ _RAW = re.compile(r"\s*(\d+(?:\.\d*)?)\s*raw\s*")
 
 #: Deepest nesting of parentheses accepted (a guard against pathological input, not a style rule).
 MAX_NESTING = 50
+
+#: the largest angle written without a unit (rad) taken as it is: one turn, TurnAngle's own bound
+FULL_TURN = 2 * math.pi
 
 
 class UnitError(ValueError):
@@ -127,12 +131,13 @@ class _Parser:
     2·side − 0.1 m); adding quantities of different kinds, or multiplying two, is an error.
     """
 
-    def __init__(self, text: str, resolve: Callable[[str], Quantity] | None) -> None:
+    def __init__(self, text: str, resolve: Callable[[str], Quantity] | None, kind: str | None = None) -> None:
         self.text = text
         self.toks = _tokens(text)
         self.i = 0
         self.depth = 0
         self.resolve = resolve
+        self.kind = kind
 
     def peek(self) -> tuple[str, str] | None:
         """The next token, None at the end."""
@@ -211,9 +216,7 @@ class _Parser:
                 "raw readings are not proportional to distance: write one reading alone, e.g. 3400 raw",
             )
         if tok[1] not in UNITS:
-            raise UnitError(
-                f"unknown unit '{tok[1]}' in '{self.text}'", did_you_mean(tok[1], [u for u in UNITS if u != "hz"])
-            )
+            raise UnitError(f"unknown unit '{tok[1]}' in '{self.text}'", unit_hint(tok[1], self.kind))
         if kind is not None:
             raise UnitError(f"'{tok[1]}' follows a value that already has a unit in '{self.text}'")
         factor, unit_kind = UNITS[tok[1]]
@@ -247,10 +250,13 @@ class _Parser:
         raise UnitError(f"expected a number in '{self.text}', found '{text}'")
 
 
-def parse_value(text: str | int | float, resolve: Callable[[str], Quantity] | None = None) -> Quantity:
+def parse_value(
+    text: str | int | float, resolve: Callable[[str], Quantity] | None = None, kind: str | None = None
+) -> Quantity:
     """Parse a number with an optional unit into SI; raise :class:`UnitError` (a ``ValueError``).
 
     ``resolve`` gives the value of a ``$name``; it may raise ``KeyError`` or :class:`UnitError`.
+    ``kind``, the kind the value is wanted in, only makes the hints of a misspelt unit its own.
     """
     if isinstance(text, bool):
         raise UnitError(f"expected a number, found {text!r}")
@@ -261,7 +267,7 @@ def parse_value(text: str | int | float, resolve: Callable[[str], Quantity] | No
     raw = _RAW.fullmatch(str(text))
     if raw:
         return _raw_reading(float(raw.group(1)))
-    quantity = _Parser(str(text), resolve).parse()
+    quantity = _Parser(str(text), resolve, kind).parse()
     if not math.isfinite(quantity.value):
         raise UnitError(f"'{text}' is not a finite number")
     return quantity
@@ -287,18 +293,83 @@ def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> t
             f"expected X,Y,YAW (three comma-separated values), got '{text}'",
             "e.g. 0.5,0.3,pi/2 (metres and radians) or 50cm,30cm,90deg; or the name of a spawn of the maze",
         )
-    x, y, yaw = (parse_value(p, resolve) for p in parts)
+    x, y, yaw = (parse_value(p, resolve, kind) for p, kind in zip(parts, ("length", "length", "angle"), strict=True))
     for name, q, kind in (("X", x, "length"), ("Y", y, "length"), ("YAW", yaw, "angle")):
-        if q.kind not in (None, kind):
-            raise UnitError(f"{name} must be {'a length' if kind == 'length' else 'an angle'}, got '{text}'")
+        error = check_kind(q, kind)
+        if error:
+            raise UnitError(f"{name} of '{text}': {error}", error.hint)
     return x.value, y.value, yaw.value
 
 
-def check_kind(quantity: Quantity, expected: str | None) -> str | None:
-    """An error message when a value's unit does not fit the parameter, else None."""
-    if expected is None or quantity.kind is None or quantity.kind == expected:
+def check_kind(quantity: Quantity, expected: str | None) -> UnitError | None:
+    """The problem (message and hint) when a value does not fit a parameter of kind ``expected``,
+    else None: a unit of another kind, or an angle written without a unit past a full turn.
+
+    A bare number is in the parameter's SI unit, radians for an angle; one past a full turn was
+    surely meant in degrees (a yaw of 90 would be 116.6 degrees), wherever an angle is read: a
+    node's parameter, every pose's yaw, a maze's spawn, an assignment's start.
+
+    >>> print(check_kind(Quantity(90.0), "angle"))
+    90 rad is more than a full turn (an angle without a unit is in radians)
+    >>> check_kind(Quantity(90.0), "angle").hint
+    'did you mean 90deg? a bare number is in rad; write an angle: 90deg, pi/2 or 1.57 rad'
+    >>> check_kind(Quantity(math.pi / 2), "angle") is None and check_kind(Quantity(7.0, "angle"), "angle") is None
+    True
+    """
+    if expected is None or quantity.kind == expected:
         return None
-    return f"expected {_named(expected)} (in {SI_UNIT.get(expected, '?')}), got {_named(quantity.kind)}"
+    if quantity.kind is None:
+        if expected == "angle" and abs(quantity.value) > FULL_TURN:
+            meant = quantity.value.is_integer() and abs(quantity.value) <= 360  # 90, not 4*pi
+            guess = f"did you mean {quantity.value:g}deg? " if meant else ""
+            return UnitError(
+                f"{quantity.value:g} rad is more than a full turn (an angle without a unit is in radians)",
+                f"{guess}a bare number is in rad; {kind_hint(expected)}",
+            )
+        return None
+    return UnitError(
+        f"expected {_named(expected)} (in {SI_UNIT.get(expected, '?')}), got {_named(quantity.kind)}",
+        kind_hint(expected),
+    )
+
+
+#: units written out as words, singular: what a unit of that name is written here
+_WORDS = {
+    "degree": "deg",
+    "radian": "rad",
+    "metre": "m",
+    "meter": "m",
+    "centimetre": "cm",
+    "centimeter": "cm",
+    "millimetre": "mm",
+    "millimeter": "mm",
+    "second": "s",
+    "sec": "s",
+    "millisecond": "ms",
+    "minute": "min",
+}
+
+
+def unit_hint(unknown: str, kind: str | None = None) -> str:
+    """The hint for an unknown unit: the unit of the value's own ``kind`` it is closest to (or that
+    its word names) first, then any unit.
+
+    >>> unit_hint("degrees", "angle"), unit_hint("degrees")
+    ("did you mean 'deg'? write an angle: 90deg, pi/2 or 1.57 rad", "did you mean 'deg'?")
+    >>> unit_hint("seconds", "angle")
+    "'seconds' is a time: write an angle: 90deg, pi/2 or 1.57 rad"
+    >>> unit_hint("cm/sec", "speed"), unit_hint("metres", "length")
+    ("did you mean 'cm/s'? write a speed: 10cm/s or 0.1 m/s", "did you mean 'm'? write a length: 5cm, 0.05 m or 50mm")
+    """
+    word = _WORDS.get(unknown.lower().removesuffix("s")) or _WORDS.get(unknown.lower())
+    own = [u for u, (_, k) in UNITS.items() if k == kind]
+    if word is not None and kind is not None and UNITS[word][1] != kind:
+        return f"'{unknown}' is {_named(UNITS[word][1])}: {kind_hint(kind)}"
+    close = [word] if word else difflib.get_close_matches(unknown, own, n=1, cutoff=0.5)
+    if close:
+        return f"did you mean '{close[0]}'?" + (f" {kind_hint(kind)}" if kind in EXAMPLES else "")
+    listed = did_you_mean(unknown, [u for u in UNITS if u != "hz"])
+    return f"{listed}; {kind_hint(kind)}" if kind in EXAMPLES else listed
 
 
 def kind_hint(kind: str | None) -> str:

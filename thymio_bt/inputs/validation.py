@@ -85,7 +85,10 @@ def problems_from(
 ) -> list[Problem]:
     """One :class:`Problem` per pydantic error, with place, path and hint."""
     problems = []
-    for err in exc.errors(include_url=False):
+    errors = exc.errors(include_url=False)
+    for err in errors:
+        if _other_branch(err, errors, data):
+            continue
         loc = [step for step in err["loc"] if not (isinstance(step, str) and step.startswith("function-"))]
         path = prefix + ".".join(str(s) for s in loc)
         kind = err["type"]
@@ -116,6 +119,28 @@ def problems_from(
             line, col = locate(data, loc)
         problems.append(Problem(message, filename, line, col, path, hint))
     return problems
+
+
+def _other_branch(err: Any, errors: Sequence[Any], data: Any) -> bool:
+    """Whether ``err`` is a union's branch that the value is not even the type of (``str`` for
+    ``start: [0.2, 0.1, 90]`` of a ``str | Spawn``) while another branch says what is wrong inside
+    the value: then only that one is worth reading."""
+    loc = err["loc"]
+    if not (loc and isinstance(loc[-1], str) and err["type"].endswith("_type")):
+        return False
+    parent, step = tuple(loc[:-1]), loc[-1]
+    node = data
+    for key in parent:
+        try:
+            node = node[key]
+        except (KeyError, IndexError, TypeError):
+            return False
+    if isinstance(node, dict) and step in node:
+        return False  # a real key of the data, not a branch's tag
+    return any(
+        len(o["loc"]) > len(loc) and tuple(o["loc"][: len(parent)]) == parent and o["loc"][len(parent)] != step
+        for o in errors
+    )
 
 
 def validate(model: type[M], data: Any, filename: str, prefix: str = "", context: Any = None) -> M:

@@ -17,6 +17,7 @@ Example::
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from thymio_bt.data import MAZES
@@ -56,6 +57,26 @@ def load_maze(path: str | Path) -> Maze:
         header = validate(GridMazeFile, data, str(path))  # units and types, before the art is read
         return maze_from_grid_file(header, data.value_marks["grid"], str(path))
     return validate(Maze, data, str(path))
+
+
+def maze_reference(path: str | Path, folder: Path | None = None) -> str:
+    """How an output (an export, a hint) names the maze file ``path``: a shipped maze by its name,
+    which finds it wherever thymio-bt is installed; another by its path, relative to ``folder`` (the
+    output's) when given.
+
+    >>> maze_reference(MAZES / "two_parts_maze.yaml", Path("/somewhere/else"))
+    'two_parts_maze'
+    >>> maze_reference("/home/ada/my_maze.yaml", Path("/home/ada/out"))
+    '../my_maze.yaml'
+    """
+    resolved = Path(path).resolve()
+    if resolved.parent == MAZES.resolve():
+        try:
+            if resolve_maze(resolved.stem).resolve() == resolved:  # not hidden by a ./mazes of that name
+                return resolved.stem
+        except UserError:
+            pass
+    return os.path.relpath(path, folder) if folder is not None else os.path.normpath(path)
 
 
 def resolve_maze(ref: str, relative_to: Path | None = None, owner: str = "the mission file") -> Path:

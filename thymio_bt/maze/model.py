@@ -52,12 +52,12 @@ def parsed_quantity(kind: str) -> BeforeValidator:
         if isinstance(value, bool) or not isinstance(value, (int, float, str)):
             raise _problem(f"expected a number, got {type_name(value)}", kind_hint(kind))
         try:
-            quantity = parse_value(value, (info.context or {}).get("resolve"))
+            quantity = parse_value(value, (info.context or {}).get("resolve"), kind)
         except UnitError as exc:
             raise _problem(str(exc), exc.hint or kind_hint(kind)) from None
         error = check_kind(quantity, kind)
         if error:
-            raise _problem(error, kind_hint(kind))
+            raise _problem(str(error), error.hint)
         return quantity.value
 
     return BeforeValidator(parse)

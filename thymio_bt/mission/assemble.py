@@ -336,6 +336,15 @@ class Assembler(SettingsReader):
                 )
                 continue
             self.check_keys(body, ("parameters", "tree", "description"), file, f"subtrees.{name}", "a subtree")
+            declared = body.get("parameters")
+            if isinstance(declared, MarkedDict) and "name" in declared:
+                self.problem(
+                    f"subtree '{name}' has a parameter called 'name', which no use can set: 'name:' is the "
+                    "label of the node where the subtree is used",
+                    self.where_key(declared, "name", file),
+                    f"subtrees.{name}.parameters.name",
+                    "call it what it names (e.g. entity or target)",
+                )
             self.subtrees[name] = Subtree(name, body, (file, *body.mark))
 
     def _maze(self, data: MarkedDict, path: Path, override: str | Path | None) -> tuple[Maze | None, Path | None]:

@@ -46,6 +46,7 @@ from thymio_bt.behaviours.base import ConditionBehaviour
 from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
+from thymio_bt.maze.files import maze_reference
 from thymio_bt.mission.plan import Mission, NodePlan
 from thymio_bt.mission.registry import Registry, default_registry
 
@@ -285,7 +286,9 @@ def _model(model: ET.Element, used: Mapping[str, tuple[str, set[str]]], registry
         for name, field in fields.items():
             unit = unit_of(field)
             text = (field.description or "") + (f" [{unit}]" if unit else "")
-            default = {} if field.is_required() else {"default": _port_value(field.default)}
+            # an optional port without a value (None) has no default: Groot2 would write its text, "None"
+            given = not field.is_required() and field.default is not None
+            default = {"default": _port_value(field.default)} if given else {}
             port = ET.SubElement(entry, "input_port", {"name": name, **default})
             port.text = text
         for name in sorted(ports - set(fields)):
@@ -304,12 +307,13 @@ def _category(cls: Any) -> str:
 
 
 def mission_settings(mission: Mission, folder: Path) -> dict[str, str]:
-    """A mission's settings as ``<ThymioMission>`` attributes (the maze's path relative to ``folder``)."""
+    """A mission's settings as ``<ThymioMission>`` attributes (a shipped maze by its name, another by
+    its path relative to ``folder``)."""
     pose = mission.start
     settings = {
         "name": mission.name,
         "description": mission.description,
-        "maze": os.path.relpath(mission.maze_file, folder) if mission.maze_file else mission.maze.name,
+        "maze": maze_reference(mission.maze_file, folder) if mission.maze_file else mission.maze.name,
         "start": f"{pose.x!r}, {pose.y!r}, {pose.yaw!r}",
         "tick_hz": repr(mission.tick_hz),
         "time_limit": repr(mission.time_limit),

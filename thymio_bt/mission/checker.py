@@ -23,7 +23,8 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from thymio_bt.errors import Problem, did_you_mean, type_name
-from thymio_bt.inputs.units import Quantity, UnitError, check_kind, kind_hint, parse_pose, parse_value
+from thymio_bt.inputs.fields import key_hint
+from thymio_bt.inputs.units import Quantity, UnitError, check_kind, parse_pose, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
@@ -89,8 +90,11 @@ class Checker:
             return (where[0], *items.marks[index])
         return where
 
-    def check_keys(self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str, what: str) -> None:
-        """A problem for each key of ``data`` not in ``allowed`` (``what``: 'the mission', 'a subtree'...)."""
+    def check_keys(
+        self, data: MarkedDict, allowed: typing.Iterable[str], file: str, path: str, what: str, model: Any = None
+    ) -> None:
+        """A problem for each key of ``data`` not in ``allowed`` (``what``: 'the mission', 'a subtree'...);
+        ``model``: the parameter model whose values a key may be meant as (``times: forever``)."""
         allowed = list(allowed)
         for key in data:
             if key not in allowed:
@@ -98,7 +102,7 @@ class Checker:
                     f"unknown key '{key}' in {what}",
                     self.where_key(data, key, file),
                     path,
-                    did_you_mean(str(key), allowed),
+                    key_hint(str(key), model, allowed) if model is not None else did_you_mean(str(key), allowed),
                 )
 
     def quantity(self, value: Any, scope: Scope, where: Where, path: str, kind: str | None) -> float | None:
@@ -124,7 +128,7 @@ class Checker:
             raise UnitError(f"parameter '${name}' is {raw!r}, not a number")
 
         try:
-            q = parse_value(value, resolve)
+            q = parse_value(value, resolve, kind)
         except UnitError as exc:
             self.problem(
                 str(exc),
@@ -135,7 +139,7 @@ class Checker:
             return None
         error = check_kind(q, kind)
         if error:
-            self.problem(error, where, path, kind_hint(kind))
+            self.problem(str(error), where, path, error.hint)
             return None
         return q.value
 

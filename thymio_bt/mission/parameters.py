@@ -27,8 +27,16 @@ from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails
 
-from thymio_bt.errors import did_you_mean
-from thymio_bt.inputs.fields import SpawnName, Unit, field_metadata, metadata, unit_of, within_sensor_range
+from thymio_bt.inputs.fields import (
+    SpawnName,
+    Unit,
+    called_name,
+    field_metadata,
+    key_hint,
+    metadata,
+    unit_of,
+    within_sensor_range,
+)
 from thymio_bt.inputs.units import Quantity, UnitError, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.maze import Maze
@@ -123,6 +131,7 @@ class ParameterReader(Checker):
         ``allow_refs``), with every problem reported at its place; (None, refs) when there is one."""
         reading = _Reading(kind, model, body, where, path)
         before = len(self.problems)
+        self._name_meant_as_field(reading)
         for key in keys:
             self._read_key(reading, key, scope, allow_refs)
         self._sensed(reading)
@@ -130,6 +139,23 @@ class ParameterReader(Checker):
         if params is None or len(self.problems) > before:
             return None, reading.refs
         return params, reading.refs
+
+    def _name_meant_as_field(self, reading: _Reading) -> None:
+        """``DeleteEntity: {name: my_robot}``: Gazebo's services call the entity ``name``, but here
+        ``name:`` labels the node; given without the field other tools call so, it is refused there."""
+        field = called_name(reading.model)
+        if field is None or "name" not in reading.body or field in reading.body:
+            return
+        label = reading.body["name"]
+        default = reading.fields[field].default
+        self.problem(
+            f"{reading.kind}: 'name' is the node's label in the tree, not the {field} it acts on "
+            f"(that is '{field}', {default!r} when not given)",
+            self.where_key(reading.body, "name", reading.file),
+            f"{reading.path}.name",
+            f"write {reading.kind}: {{{field}: {label}}}; to label the node too, give both: "
+            f"{{name: {label}, {field}: {default}}}",
+        )
 
     def _sensed(self, reading: _Reading) -> None:
         """A sensed length past the range of the mission's robot is a problem at its value (and not
@@ -177,7 +203,7 @@ class ParameterReader(Checker):
                 f"{reading.kind} has no parameter '{key}'",
                 self.where_key(reading.body, key, reading.file),
                 f"{reading.path}.{key}",
-                did_you_mean(str(key), reading.fields),
+                key_hint(str(key), reading.model),
             )
             reading.unknown = True
             return
@@ -325,7 +351,10 @@ class ParameterReader(Checker):
             raw = raw.split(",")
         if isinstance(raw, list) and (len(args) == len(raw) or (len(args) == 2 and args[1] is Ellipsis)):
             kinds = [args[0]] * len(raw) if args[1:] == (Ellipsis,) else list(args)
-            out = [self.convert(kind, [], item, scope, where, path) for kind, item in zip(kinds, raw, strict=True)]
+            out = [
+                self.convert(kind, [], item, scope, self.where_item(raw, i, where), path)
+                for i, (kind, item) in enumerate(zip(kinds, raw, strict=True))
+            ]
             return _INVALID if any(v is _INVALID for v in out) else tuple(out)
         return raw
 

@@ -210,7 +210,7 @@ class TreePlanner(ParameterReader):
             self.problem(f"{kind} needs a mapping with {', '.join(cls.keys())}", at.body_where, at.path, cls.example)
             return None
         if long_form:
-            self.check_keys(body, ("name", *cls.keys()), at.file, at.path, f"a {kind}")
+            self.check_keys(body, ("name", *cls.keys()), at.file, at.path, f"a {kind}", cls.Params)
         fields = cls.Params.model_fields
         params, _ = self._params(
             kind,

@@ -59,6 +59,11 @@ class Registry:
         if not is_node(cls):
             raise TypeError(f"{cls!r} is not a RobotBehaviour or ControlNode subclass")
         name = cls.yaml_name or cls.__name__
+        if "name" in cls.Params.model_fields:
+            raise ValueError(
+                f"node '{name}' has a parameter called 'name', which a mission can never set: 'name:' is the "
+                "node's label in the tree; call it what it names (e.g. entity, as DeleteEntity does)"
+            )
         existing = self._classes.get(name)
         if existing is not None and existing is not cls:
             raise ValueError(f"two nodes are named '{name}': {existing.__module__} and {cls.__module__}")
@@ -147,22 +152,28 @@ class Registry:
 
     def _declare_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
         """Stand-ins for the nodes of plugin ``ref``, found by reading its source, not running it."""
-        from thymio_bt.mission.unrun_plugins import plugin_node_names, stand_in
+        from thymio_bt.behaviours.base import BehaviourParams
+        from thymio_bt.mission.unrun_plugins import plugin_nodes, stand_in
 
         target, _, attr = ref.partition(":")
-        if attr:
-            names = [attr]
-        else:
+        nodes: dict[str, list[str] | None] = {attr: None}
+        if not attr:
             path = self._plugin_file(target, base_dir, where) if target.endswith(".py") else _source(ref, where)
+            classes = list(self._classes.values())
+            models = {c.Params.__name__: list(c.Params.model_fields) for c in classes}
             try:
-                names = plugin_node_names(path, known={cls.__name__ for cls in self._classes.values()})
+                nodes = plugin_nodes(
+                    path,
+                    {**models, "BehaviourParams": list(BehaviourParams.model_fields)},
+                    {c.__name__: c.Params.__name__ for c in classes},
+                )
             except SyntaxError as exc:
                 raise UserError(
                     Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0, exc.offset or 0)
                 ) from None
-        for name in names:
+        for name, params in nodes.items():
             if name not in self._classes:
-                self._classes[name] = stand_in(name)
+                self._classes[name] = stand_in(name, params)
 
 
 def _import_file(path: Path) -> ModuleType:

@@ -25,7 +25,7 @@ from typing import Any
 from pydantic import ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
-from thymio_bt.inputs.units import Quantity, check_kind, kind_hint, resolver_from
+from thymio_bt.inputs.units import Quantity, check_kind, resolver_from
 from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.checker import Checker, Scope, Where
@@ -130,7 +130,7 @@ class SettingsReader(Checker):
         if isinstance(old, Quantity) and isinstance(new, Quantity):
             error = check_kind(new, old.kind)
             if error:
-                self.problem(f"{name}: {error}", _OVERRIDE, name, kind_hint(old.kind))
+                self.problem(f"{name}: {error}", _OVERRIDE, name, error.hint)
                 return
             new = SetValue(new.value, new.kind or old.kind, name=name, text=text)
         params[name] = new

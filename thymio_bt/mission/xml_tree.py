@@ -280,7 +280,8 @@ class TreeReader:
             )
             return {**ports, **nodes}
         keys = _key_params(kind) if not children else frozenset()
-        values = {k: self._value(k, v, element, scope, k in keys) for k, v in attrs.items()}
+        # a port left empty is not given (Groot2 writes a port left blank in its editor as an empty text)
+        values = {k: self._value(k, v, element, scope, k in keys) for k, v in attrs.items() if v.strip()}
         if kind == "parallel":
             success = attrs.get("success_count", "-1").strip()
             values.pop("success_count", None), values.pop("failure_count", None)

@@ -43,6 +43,7 @@ from thymio_bt.backends.ros2.topics import TopicMap
 from thymio_bt.backends.ros2.world import maze_problem
 from thymio_bt.errors import UserError
 from thymio_bt.maze import Maze
+from thymio_bt.maze.files import maze_reference
 from thymio_bt.robot.interface import (
     ROBOT_ENTITY,
     SENSOR_NAMES,
@@ -445,5 +446,5 @@ def create_ros2(mission: Mission, seed: int, options: Ros2Options) -> Ros2Robot:
         options.latency,
         options.clock,
         xml,
-        maze_file=os.path.normpath(mission.maze_file) if mission.maze_file else mission.maze.name,
+        maze_file=maze_reference(mission.maze_file) if mission.maze_file else mission.maze.name,
     )
