@@ -368,7 +368,10 @@ def unit_hint(unknown: str, kind: str | None = None) -> str:
     close = [word] if word else difflib.get_close_matches(unknown, own, n=1, cutoff=0.5)
     if close:
         return f"did you mean '{close[0]}'?" + (f" {kind_hint(kind)}" if kind in EXAMPLES else "")
-    listed = did_you_mean(unknown, [u for u in UNITS if u != "hz"])
+    # memory sizes are units of an assignment's limits only: not offered for a robot's quantities
+    listed = did_you_mean(
+        unknown, [u for u, (_, k) in UNITS.items() if u != "hz" and (k != "memory") == (kind != "memory")]
+    )
     return f"{listed}; {kind_hint(kind)}" if kind in EXAMPLES else listed
 
 
