@@ -184,12 +184,13 @@ class Run:
                 self._record()
                 if realtime:
                     self._pace(realtime, wall_start)
-        except Interrupted as exc:  # a second signal: the tick (a plugin's endless loop) never ended
+        except Interrupted as exc:  # a second signal, or the grace ran out: the tick never ended
             return self._forced_ending(exc)
         return Ending(EndKind.TIMEOUT, "TIMEOUT")
 
     def _forced_ending(self, exc: Interrupted) -> Ending:
-        """The ending of a run whose tick a second signal broke into: the node whose code was running
+        """The ending of a run whose tick was broken into (a second signal, or none within the grace
+        period of :mod:`~thymio_bt.run.interrupts`): the node whose code was running
         (and its ancestors) marked RUNNING, so that stopping the tree halts it like any running node."""
         stuck = _running_node(exc)
         where = None
@@ -199,7 +200,7 @@ class Run:
                 node.status = Status.RUNNING  # it was inside its tick: it had not ended
                 node = node.parent
             where = node_path(stuck)
-        reason = f"'{where}' never ended its tick; a second signal stopped it" if where else "a tick never ended"
+        reason = f"'{where}' never ended its tick; {exc.how}" if where else f"a tick never ended; {exc.how}"
         return Ending(EndKind.INTERRUPTED, "INTERRUPTED", reason, failed_path=where, forced=True)
 
     def _tick_tree(self) -> None:
