@@ -383,3 +383,58 @@ def test_one_signal_ends_a_sweep_whose_workers_are_stuck(tmp_path):
     assert workers and not [pid for pid in workers if alive(pid)]
     data = json.loads((tmp_path / "s.json").read_text())
     assert (data["interrupted"], data["runs"]) == ("SIGTERM", 0) and "Traceback" not in err
+
+
+#: ``serve ros2`` whose 50th step never ends (its publishing blocks on a lock no one releases)
+SERVE_STUCK = """\
+import sys, threading
+from pathlib import Path
+from thymio_bt.backends.ros2.serve import GazeboStandIn
+from thymio_bt.cli import main
+MARKER = Path(sys.argv[1])
+publish = GazeboStandIn._publish
+def stuck_at_step_50(self, steps):
+    if steps == 50:
+        MARKER.write_text("stuck")
+        lock = threading.Lock()
+        lock.acquire()
+        lock.acquire()
+    publish(self, steps)
+GazeboStandIn._publish = stuck_at_step_50
+sys.argv = ["thymio-bt", "serve", "ros2", "--quiet"]
+main()
+"""
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_one_signal_ends_a_serve_whose_step_is_stuck(tmp_path, sig, code):
+    import _require
+
+    ros2 = Path(os.environ.get("THYMIO_BT_ROS2_ENV", ROOT / ".venv-ros2"))
+    if not (ros2 / "bin" / "python").exists():
+        _require.missing(f"a ROS 2 environment in {ros2} (make it: scripts/ros2-env.sh {ros2})")
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("ROS_", "RMW_", "THYMIO_BT_INTERRUPT"))}
+    env |= {
+        "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST",
+        "ROS_DOMAIN_ID": str(215 + os.getpid() % 17),
+    }  # test_ros2 takes 1-101
+    env["PYTHONPATH"] = str(ROOT)  # this checkout's thymio_bt, whichever the ROS 2 environment has
+    marker = tmp_path / "stuck.txt"
+    proc = subprocess.Popen(
+        [str(ros2 / "bin" / "python"), "-c", SERVE_STUCK, str(marker)],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
+    wait_for(marker, timeout=60)
+    sent = time.monotonic()
+    proc.send_signal(sig)
+    out, err = proc.communicate(timeout=30)
+    took = time.monotonic() - sent
+    assert proc.returncode == code, err
+    name = signal.Signals(sig).name
+    assert f"stopped: a step of the simulation never ended; stopped 2 s after the signal ({name})" in err
+    assert "Traceback" not in err
+    assert took < 15  # a sanity bound only: the grace period is 2 s
