@@ -438,3 +438,49 @@ def test_one_signal_ends_a_serve_whose_step_is_stuck(tmp_path, sig, code):
     assert f"stopped: a step of the simulation never ended; stopped 2 s after the signal ({name})" in err
     assert "Traceback" not in err
     assert took < 15  # a sanity bound only: the grace period is 2 s
+
+
+def test_a_signal_ends_a_slowly_paced_run_at_once_not_by_breaking_in():
+    """``--realtime 0.01`` waits 10 s after each tick: a signal in that wait ends the run there, as at
+    any tick, without the grace period's break-in (which would blame a tick that had ended)."""
+    import threading
+
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.interrupts import Interrupts
+    from thymio_bt.run.runner import Run
+
+    run = Run(load_mission("square"))
+    threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT)).start()  # in the first tick's wait
+    with Interrupts(grace=0.2) as interrupts:
+        result = run.run(realtime=0.01, interrupts=interrupts)
+    assert (result.code, result.ticks, result.reason) == ("INTERRUPTED", 2, "interrupted by SIGINT at 0.1 s")
+
+
+def test_a_sweep_broken_into_while_it_waits_for_a_result_keeps_the_results_so_far():
+    """An executor that cannot wait briefly (Dask's as_completed): the grace period breaks into its
+    wait, and the sweep ends with the runs it has, as when it stops between results."""
+    from thymio_bt.run.interrupts import Interrupts
+    from thymio_bt.run.sweep import run_job, sweep
+
+    class Blocking:
+        def imap_unordered(self, fn, jobs):
+            jobs = list(jobs)
+            yield run_job(jobs[0])
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(30)  # waits for the next result
+            yield from map(fn, jobs[1:])
+
+    with Interrupts(grace=0.1) as interrupts:
+        result = sweep("square", runs=3, executor=Blocking(), interrupts=interrupts)
+    assert (result.runs, result.requested, result.interrupted) == (1, 3, "SIGTERM")
+    assert [r["seed"] for r in result.results] == [0]
+
+
+def test_an_interrupts_not_entered_does_not_read_the_grace_setting(monkeypatch):
+    """A run outside a command (a plugin's pytest, a sweep's worker) never handles a signal: a wrong
+    setting is for the command to say, not a reason for every run to fail."""
+    from thymio_bt.mission import load_mission
+    from thymio_bt.run.runner import Run
+
+    monkeypatch.setenv("THYMIO_BT_INTERRUPT_GRACE", "soon")
+    assert Run(load_mission("square")).run().status == "SUCCESS"

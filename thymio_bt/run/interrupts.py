@@ -111,10 +111,12 @@ class Interrupts:
 
     Reading :attr:`signal` (or :attr:`name`, :attr:`exit_code`) in the main thread tells the handler that
     the main thread is not stuck: the tick it was in has ended, so nothing is broken into. ``grace``
-    defaults to :func:`grace_setting`."""
+    defaults to :func:`grace_setting`, read when entered (a :class:`UserError` there when it is wrong)."""
 
     def __init__(self, grace: float | None = None) -> None:
-        self.grace = grace_setting() if grace is None else grace
+        self._grace_given = grace
+        #: the grace period (s); until entered, the default's (the environment is read when entered)
+        self.grace = GRACE if grace is None else grace
         self._signal: int | None = None
         self._previous: dict[int, Any] = {}
         self._main: int | None = None  # the main thread's id, once the handlers are ours
@@ -174,6 +176,8 @@ class Interrupts:
                 _break_in(self._main, self._signal)
 
     def __enter__(self) -> Interrupts:
+        if self._grace_given is None:
+            self.grace = grace_setting()
         if threading.current_thread() is threading.main_thread():
             self._main = threading.get_ident()
             for sig in SIGNALS:

@@ -30,7 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from thymio_bt.robot.noise import REALISTIC
-from thymio_bt.run.interrupts import Interrupts
+from thymio_bt.run.interrupts import Interrupted, Interrupts
 
 if TYPE_CHECKING:
     from thymio_bt.mission import Mission
@@ -333,6 +333,8 @@ def sweep(
                 break
     except WorkerDied as exc:
         stopped = str(exc)
+    except Interrupted:
+        pass  # broken into while it waited for a result (an executor that cannot wait briefly): they stand
     results.sort(key=lambda r: r["seed"])
     command = (
         str(mission),
