@@ -484,3 +484,18 @@ def test_an_interrupts_not_entered_does_not_read_the_grace_setting(monkeypatch):
 
     monkeypatch.setenv("THYMIO_BT_INTERRUPT_GRACE", "soon")
     assert Run(load_mission("square")).run().status == "SUCCESS"
+
+
+def test_a_second_signal_breaks_in_once_the_grace_period_adds_no_other():
+    from thymio_bt.run.interrupts import Interrupted, Interrupts
+
+    with Interrupts(grace=0.3):
+        os.kill(os.getpid(), signal.SIGINT)
+        with pytest.raises(Interrupted) as raised:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(30)  # the second signal ends it
+        assert raised.value.grace is None
+        try:
+            time.sleep(0.8)  # past the grace period of the first signal: its watchdog stands down
+        except Interrupted:
+            pytest.fail("the grace period broke in again after a second signal had")

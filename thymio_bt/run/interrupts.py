@@ -129,9 +129,7 @@ class Interrupts:
     def signal(self) -> int | None:
         """The first signal's number, or None; read in the main thread, it disarms the watchdog."""
         if self._heard is not None and threading.get_ident() == self._main:
-            heard, self._heard = self._heard, None
-            with contextlib.suppress(RuntimeError):  # released already (a race with the handler)
-                heard.release()  # wakes the watchdog: it ends without breaking in
+            self._disarm()
         return self._signal
 
     @property
@@ -153,8 +151,16 @@ class Interrupts:
         late, self._late = self._late, False
         if late and self._closing:
             return  # the watchdog's signal, as the command leaves the handled stretch: too late
-        # asked twice, or not heard in time: stop now, whatever is running (a stuck tick)
+        # asked twice, or not heard in time: stop now, whatever is running (a stuck tick), once
+        self._disarm()
         raise Interrupted(self._signal, self.grace if late else None)  # the first signal decides the code
+
+    def _disarm(self) -> None:
+        """Tell the watchdog not to break in (it ends at once)."""
+        heard, self._heard = self._heard, None
+        if heard is not None:
+            with contextlib.suppress(RuntimeError):  # released already (the handler ran in between)
+                heard.release()
 
     def _arm(self) -> None:
         """Start the watchdog: it breaks in unless the main thread reads :attr:`signal` within the grace.
@@ -176,6 +182,7 @@ class Interrupts:
                 _break_in(self._main, self._signal)
 
     def __enter__(self) -> Interrupts:
+        self._closing = False
         if self._grace_given is None:
             self.grace = grace_setting()
         if threading.current_thread() is threading.main_thread():
