@@ -39,6 +39,12 @@ def children(pid: int) -> list[int]:
     return [int(p) for p in found]
 
 
+def cpu_seconds(pid: int) -> float:
+    """The CPU time (user and system) process ``pid`` has used."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(") ", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
@@ -74,7 +80,12 @@ def test_sweep_stops_within_a_second_keeps_results_and_leaves_no_worker(tmp_path
     while len(workers := children(proc.pid)) < 2:
         assert time.monotonic() < deadline, "no workers started"
         time.sleep(0.05)
-    time.sleep(1.5)
+    # a run takes ~0.1 s of CPU, a chunk 4 runs: a worker that used 1.5 s has sent results, however
+    # loaded the machine (a fixed wait saw none at a load of 11 on 2 cores)
+    while max(cpu_seconds(pid) for pid in workers) < 1.5:
+        assert time.monotonic() < deadline + 60, "the workers never got to work"
+        time.sleep(0.05)
+    time.sleep(0.5)  # for the parent to take them in
     sent = time.monotonic()
     proc.send_signal(sig)
     out, err = proc.communicate(timeout=10)
