@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NoReturn
 
 import click
 
@@ -26,6 +26,7 @@ from thymio_bt.errors import UserError
 if TYPE_CHECKING:
     from thymio_bt.maze import Maze
     from thymio_bt.robot.interface import Pose
+    from thymio_bt.run.interrupts import Interrupted
 
 
 @main.group()
@@ -57,15 +58,16 @@ def serve_ros2(maze_ref: str, start: str | None, speedup: float, robot: str, qui
 
     A node written for the course (cmd_vel, odom, the /thymio_*_sensor scans, /spawn_entity,
     /delete_entity) runs against it unchanged; so does 'thymio-bt run MISSION --backend ros2'.
-    Ctrl-C stops it.
+    Ctrl-C or SIGTERM stops it (exit 0); a step stuck 2 s after the signal is broken into (exit 130/143).
     """
     from thymio_bt.maze.files import load_maze, resolve_maze
     from thymio_bt.robot.interface import Pose
     from thymio_bt.robot.model import robot_model
     from thymio_bt.robot.placement import placement_problem
-    from thymio_bt.run.interrupts import Interrupts
+    from thymio_bt.run.interrupts import Interrupted, Interrupts
 
     try:
+        interrupts = Interrupts()  # first: a bad THYMIO_BT_INTERRUPT_GRACE is said before ROS starts
         model = robot_model(robot)
         world = load_maze(resolve_maze(maze_ref))
         pose = start_pose(world, start)
@@ -92,13 +94,28 @@ def serve_ros2(maze_ref: str, start: str | None, speedup: float, robot: str, qui
         if not quiet and sys.stderr.isatty():
             click.echo(f"\r  {sim_time:8.0f} s simulated, {achieved:5.2f}x real time", err=True, nl=False)
 
+    broken: Interrupted | None = None
     try:
-        with Interrupts() as interrupts:
+        with interrupts:
             stand_in.run(stop=lambda: interrupts.signal is not None, on_second=progress)
+    except Interrupted as exc:  # a step that never ended, broken into: stop anyway, say so
+        broken = exc
     finally:
         stand_in.close()
+    if broken is not None:
+        _broken_into(broken)
     if not quiet:
         click.echo("\nstopped", err=True)
+
+
+def _broken_into(exc: Interrupted) -> NoReturn:
+    """A step of the stand-in never ended after the signal and was broken into: exit with the signal's
+    code (130, 143), even if a thread stuck with it would keep the process alive."""
+    from thymio_bt.run.leftovers import end_despite_threads
+
+    click.echo(f"\nstopped: a step of the simulation never ended; {exc.how} ({exc.name})", err=True)
+    end_despite_threads(exc.exit_code)
+    sys.exit(exc.exit_code)
 
 
 def start_pose(world: Maze, start: str | None) -> Pose:

@@ -48,6 +48,9 @@ TickHook = Callable[["Run"], None]
 #: is rounded to 1 µm, so a report never says 0 clearance with 0 collisions (:meth:`Run._contact`)
 CONTACT = 1e-6
 
+#: the longest wait (s) of ``--realtime`` pacing before it looks for a signal again
+PACE_SLICE = 0.1
+
 
 class StopRun(Exception):
     """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
@@ -183,13 +186,14 @@ class Run:
                 seen_collisions = self._emit_collisions(seen_collisions)
                 self._record()
                 if realtime:
-                    self._pace(realtime, wall_start)
-        except Interrupted as exc:  # a second signal: the tick (a plugin's endless loop) never ended
+                    self._pace(realtime, wall_start, interrupts)
+        except Interrupted as exc:  # a second signal, or the grace ran out: the tick never ended
             return self._forced_ending(exc)
         return Ending(EndKind.TIMEOUT, "TIMEOUT")
 
     def _forced_ending(self, exc: Interrupted) -> Ending:
-        """The ending of a run whose tick a second signal broke into: the node whose code was running
+        """The ending of a run whose tick was broken into (a second signal, or none within the grace
+        period of :mod:`~thymio_bt.run.interrupts`): the node whose code was running
         (and its ancestors) marked RUNNING, so that stopping the tree halts it like any running node."""
         stuck = _running_node(exc)
         where = None
@@ -199,7 +203,7 @@ class Run:
                 node.status = Status.RUNNING  # it was inside its tick: it had not ended
                 node = node.parent
             where = node_path(stuck)
-        reason = f"'{where}' never ended its tick; a second signal stopped it" if where else "a tick never ended"
+        reason = f"'{where}' never ended its tick; {exc.how}" if where else f"a tick never ended; {exc.how}"
         return Ending(EndKind.INTERRUPTED, "INTERRUPTED", reason, failed_path=where, forced=True)
 
     def _tick_tree(self) -> None:
@@ -261,11 +265,13 @@ class Run:
             x, y = self.trajectory[-1][1:3] if self.trajectory else (0.0, 0.0)
         backend.collisions.append(Collision(backend.time(), x, y))
 
-    def _pace(self, realtime: float, wall_start: float) -> None:
-        """Wait until the wall clock catches up with simulated time / ``realtime`` (``--realtime``)."""
-        lag = self.backend.time() / realtime - (time.perf_counter() - wall_start)
-        if lag > 0:
-            time.sleep(lag)  # realtime: pacing asked for with --realtime
+    def _pace(self, realtime: float, wall_start: float, interrupts: Interrupts) -> None:
+        """Wait until the wall clock catches up with simulated time / ``realtime`` (``--realtime``), or
+        a signal comes: a slow pace (a tick lasting seconds) still ends at once, not broken into."""
+        while (lag := self.backend.time() / realtime - (time.perf_counter() - wall_start)) > 0:
+            if interrupts.signal:
+                return
+            time.sleep(min(lag, PACE_SLICE))  # realtime: pacing asked for with --realtime
 
     def _end_of_run(self, ending: Ending, interrupts: Interrupts) -> Verdict:
         """The report's status, reason, code and failing node; a run cut short has its running

@@ -23,13 +23,14 @@ import shlex
 import signal
 import statistics
 from collections.abc import Callable, Iterable, Iterator
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from thymio_bt.robot.noise import REALISTIC
-from thymio_bt.run.interrupts import Interrupts
+from thymio_bt.run.interrupts import Interrupted, Interrupts
 
 if TYPE_CHECKING:
     from thymio_bt.mission import Mission
@@ -54,6 +55,10 @@ class Job:
 #: a worker's missions, by :attr:`Job.key` (or, for a job made without one, by what it names)
 _CACHE: dict[str | tuple[Any, ...], Mission] = {}
 
+#: the signals a run of :func:`run_job` honours at its next tick: the sweep's own, when its runs are run
+#: in its process (one worker), so that a signal ends the run at hand, not after it (or breaks in)
+_HONOURED: ContextVar[Interrupts | None] = ContextVar("honoured", default=None)
+
 
 def content_key(sources: Iterable[Path], *settings: Any) -> str:
     """A digest of the files' contents and the settings (not their paths)."""
@@ -76,7 +81,7 @@ def run_job(job: Job) -> dict[str, Any]:
     if mission is None:
         mission = _CACHE[key] = load_mission(job.mission, dict(job.overrides), maze=job.maze, start=job.start)
     try:
-        result = Run(mission, job.seed, node_stats=job.coverage).run()
+        result = Run(mission, job.seed, node_stats=job.coverage).run(interrupts=_HONOURED.get())
     except Exception as exc:  # that run fails, the sweep goes on and reports it
         return {
             "seed": job.seed,
@@ -126,7 +131,9 @@ class LocalPool:
 
     With ``interrupts`` (see :mod:`thymio_bt.run.interrupts`), a SIGINT/SIGTERM ends the iteration within
     a tenth of a second: the workers (which ignore both signals themselves) are terminated and joined,
-    so none is left behind, and the results already yielded stand."""
+    so none is left behind, a run stuck in one with them, and the results already yielded stand. With
+    one worker the runs are run in this process: the run at hand ends at its next tick (or, stuck,
+    when the grace period of :mod:`~thymio_bt.run.interrupts` is over), code ``INTERRUPTED``."""
 
     def __init__(self, workers: int | None = None, interrupts: Interrupts | None = None) -> None:
         self.workers = workers or os.cpu_count() or 1
@@ -140,7 +147,12 @@ class LocalPool:
             for job in jobs:
                 if self.interrupts.signal:
                     return
-                yield fn(job)
+                honoured = _HONOURED.set(self.interrupts)  # the run ends at its next tick after a signal
+                try:
+                    summary = fn(job)
+                finally:
+                    _HONOURED.reset(honoured)
+                yield summary
             return
         size = max(1, min(4, len(jobs) // (self.workers * 8)))  # small: an interrupt loses little
         chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
@@ -321,6 +333,8 @@ def sweep(
                 break
     except WorkerDied as exc:
         stopped = str(exc)
+    except Interrupted:
+        pass  # broken into while it waited for a result (an executor that cannot wait briefly): they stand
     results.sort(key=lambda r: r["seed"])
     command = (
         str(mission),
