@@ -57,6 +57,7 @@ LENGTH = ("cm", 100.0)
 )
 @path_option("--json", "json_path", help="Write the phase table and the divergence as JSON.")
 @path_option("--plot", help="Overlay the two paths and their front readings (PNG).")
+@path_option("--html", help="Write both runs as one HTML page to scrub through, the first divergence marked.")
 def compare(
     runs: tuple[Path, ...],
     backends: str | None,
@@ -65,6 +66,7 @@ def compare(
     tolerance: str | None,
     json_path: Path | None,
     plot: Path | None,
+    html: Path | None,
 ) -> None:
     """Compare two runs of one mission: A B (two run logs), or MISSION --backends A,B."""
     from thymio_bt.run.comparison import Tolerances, compare
@@ -75,6 +77,7 @@ def compare(
         plot_out = Output(plot, "--plot") if plot is not None else None
         if plot is not None and plot.suffix.lower() != ".png":
             raise UserError(f"--plot {plot}: the plot is a PNG (hint: --plot compare.png)")
+        page = Output(html, "--html", stdout_ok=False) if html is not None else None
         names, (a, b) = _runs(runs, backends, seed, sets)
         result = compare(a, b, tolerances)
         _print(result, names)
@@ -83,6 +86,12 @@ def compare(
         if plot_out is not None:
             with plot_out.staged() as staged:
                 plot_comparison(a, b, result, names, staged)
+        if page is not None:
+            from thymio_bt.cli.viewing import page_divergence
+            from thymio_bt.viz.page import write_page
+
+            written = write_page([a, b], page.path, page_divergence(result.divergence), list(names))
+            click.echo(f"wrote {written}", err=True)
     except UserError as exc:
         fail(exc)
     sys.exit(0 if result.agree else 1)

@@ -19,8 +19,9 @@ Example::
 from __future__ import annotations
 
 import sys
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn, cast
+from typing import TYPE_CHECKING, Any, NoReturn, cast
 
 import click
 
@@ -32,6 +33,23 @@ from thymio_bt.outputs import STDOUT, Output, check_writable
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
     from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+    from thymio_bt.run.whatif import WhatIf
+
+
+@dataclass(frozen=True)
+class Drawn:
+    """What a replay draws besides its summary: the ``pictures``, the ``page`` (``--html``), the
+    window's speed-up (``--view``; None: no window) and the pictures' ``speedup`` as given."""
+
+    pictures: Pictures
+    page: Output | None
+    window: float | None
+    speedup: float | None
+
+    @property
+    def wanted(self) -> bool:
+        """Whether anything is drawn: then the replayed run's ticks are kept."""
+        return self.pictures.wanted or self.page is not None or self.window is not None
 
 
 @main.command()
@@ -56,6 +74,11 @@ if TYPE_CHECKING:
 )
 @path_option("--report", help="What if: write the run report, with its counterfactual section (JSON).")
 @path_option("--log", "log_out", help="What if: write the replayed run's log.")
+@path_option(
+    "--html",
+    help="Write the run as one HTML page to scrub through; what if: the recorded and the re-ticked run, "
+    "their divergence marked.",
+)
 def replay(
     log: Path,
     plot: Path | None,
@@ -69,6 +92,7 @@ def replay(
     continue_in: str | None,
     report: Path | None,
     log_out: Path | None,
+    html: Path | None,
 ) -> None:
     """Redraw a run from its --log FILE.jsonl without re-running it; with --mission or --set, re-tick
     a changed tree against it (what if)."""
@@ -81,16 +105,24 @@ def replay(
 
             require_display("without a display, draw the log to files: --plot run.png, --gif run.gif (or .mp4)")
         pictures.check()
+        page = Output(html, "--html", stdout_ok=False) if html is not None else None
+        drawn = Drawn(pictures, page, (1.0 if speedup is None else speedup) if view else None, speedup)
         if mission is not None or sets or continue_in or report is not None or log_out is not None:
-            _what_if(log, mission, sets, continue_in is not None, report, log_out, pictures, speedup)
+            _what_if(log, mission, sets, continue_in is not None, report, log_out, drawn)
         recording = read_log(log, partial)
         damage_note(log, recording)
         _replay_summary(recording)
-        if not (pictures.wanted or view):
+        if not (pictures.wanted or view or page):
             click.echo(
-                "nothing to draw (hint: --view, --plot FILE.png, --plot-signals FILE.png or --gif FILE.gif)", err=True
+                "nothing to draw (hint: --view, --html FILE.html, --plot FILE.png, --plot-signals FILE.png "
+                "or --gif FILE.gif)",
+                err=True,
             )
         pictures.draw(recording, 4.0 if speedup is None else speedup, quiet=False)
+        if page is not None:
+            from thymio_bt.viz.page import write_page
+
+            click.echo(f"wrote {write_page([recording], page.path)}", err=True)
         if view:
             from thymio_bt.viz.window import replay as replay_in_window
 
@@ -106,11 +138,11 @@ def _what_if(
     continue_sim: bool,
     report: Path | None,
     log_out: Path | None,
-    pictures: Pictures,
-    speedup: float | None,
+    drawn: Drawn,
 ) -> NoReturn:
     """``replay LOG --mission CHANGED.yaml``: re-tick the changed tree against the log, say where it
-    decided differently, write the report, log and pictures asked for, exit as ``run`` does."""
+    decided differently, write the report, log, pictures and page asked for, show the re-ticked run
+    in the window (``--view``), exit as ``run`` does."""
     from thymio_bt.cli.comparing import read_whole
     from thymio_bt.logs.recording import Recorder
     from thymio_bt.mission import load_mission
@@ -123,7 +155,7 @@ def _what_if(
     if mission is None and not recording.mission:
         raise UserError(f"{log} does not name its mission (hint: --mission FILE.yaml)")
     spec = load_mission(mission if mission is not None else recording.mission, parse_overrides(sets))
-    recorder = Recorder(log_path=log_out, keep=pictures.wanted, statuses=True)
+    recorder = Recorder(log_path=log_out, keep=drawn.wanted, statuses=True)
     replayed = what_if(recording, spec, continue_sim=continue_sim, on_tick=recorder)
     result = replayed.result
     err = STDOUT in (str(report), str(log_out))
@@ -141,8 +173,35 @@ def _what_if(
     click.echo(f"  replayed ticks: {out['replayed_ticks']}, simulated ticks: {out['simulated_ticks']}", err=err)
     if report_out is not None:
         report_out.write_text(json_text(replayed.report()))
-    pictures.draw(recorder.finish(result), 4.0 if speedup is None else speedup, quiet=False)
+    replayed_run = recorder.finish(result)
+    drawn.pictures.draw(replayed_run, 4.0 if drawn.speedup is None else drawn.speedup, quiet=False)
+    if drawn.page is not None:
+        from thymio_bt.viz.page import write_runs
+
+        runs, divergence = what_if_page(recording, replayed_run, replayed)
+        click.echo(f"wrote {write_runs(runs, drawn.page.path, divergence)}", err=True)
+    if drawn.window is not None:
+        from thymio_bt.viz.window import replay as replay_in_window
+
+        replay_in_window(replayed_run, drawn.window)
     sys.exit(0 if result.status == "SUCCESS" else 1)
+
+
+def what_if_page(
+    recorded: Recording, replayed_run: Recording, replayed: WhatIf
+) -> tuple[list[dict[str, Any]], dict[str, Any] | None]:
+    """The page of a what-if replay: the recorded run and the re-ticked one as two runs (the second
+    with ``simulated_from``, the time its first simulated tick, where ``--continue sim`` took over),
+    and the tick where the tree first commanded differently as their divergence."""
+    from thymio_bt.viz.page_data import page_data
+
+    new = page_data(replayed_run, "what if")
+    simulated = replayed.simulated_ticks
+    if simulated and len(replayed_run.samples) >= simulated:
+        new["simulated_from"] = replayed_run.samples[-simulated]["t"]
+    found = replayed.divergence
+    divergence = None if found is None else {"time": found.time, "tick": found.tick, "reason": found.text}
+    return [page_data(recorded, "recorded"), new], divergence
 
 
 def _replay_summary(recording: Recording) -> None:

@@ -74,6 +74,11 @@ T = TypeVar("T")
     help="Sweep every combination of these settings, e.g. --matrix robot=course,enki,real.",
 )
 @coverage_options("Count each node's ticks and results over the runs: the tree's coverage.")
+@path_option(
+    "--html",
+    metavar="DIR",
+    help="Write the page of each failed run into DIR (MISSION_seedN.html): the run made again, recorded.",
+)
 def sweep(
     mission: Path,
     runs: int,
@@ -87,6 +92,7 @@ def sweep(
     matrix: tuple[str, ...],
     coverage: bool,
     coverage_tree: Path | None,
+    html: Path | None,
 ) -> None:
     """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
     from thymio_bt.cli.running import CoverageRequest
@@ -100,6 +106,10 @@ def sweep(
             if matrix:
                 raise UserError("--coverage is for one sweep, not a --matrix (hint: sweep one cell with --set)")
             covered = CoverageRequest.checked(coverage_tree)
+        if html is not None:
+            if matrix:
+                raise UserError("--html is for one sweep, not a --matrix (hint: sweep one cell with --set)")
+            _page_folder(html)
         with dask_executor(dask) as executor:
             request = _Request(mission, runs, seed_start, sets, maze, start, executor, workers)
             request.check(matrix)  # before the progress bar says anything
@@ -118,10 +128,12 @@ def sweep(
             covered.done(_conditions(request), result.coverage)
         if sweep_out is not None:
             sweep_out.write_text(json_text(data))
+        err = sweep_out is not None and sweep_out.is_stdout
+        _sweep_table(data, err=err)
+        if html is not None and not interrupts.signal:
+            _failed_pages(request, data, html)
     except UserError as exc:
         fail(exc)
-    err = sweep_out is not None and sweep_out.is_stdout
-    _sweep_table(data, err=err)
     if covered is not None and covered.text:
         click.echo(covered.text, err=err)
     if interrupts.signal:
@@ -339,6 +351,45 @@ def _said(exc: BaseException) -> str:
     except Exception:
         text = ""
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+
+
+def _page_folder(folder: Path) -> None:
+    """Make the folder of the failed runs' pages (``sweep --html DIR``) before the sweep, or say why not."""
+    if folder.exists() and not folder.is_dir():
+        raise UserError(f"--html {folder}: not a folder (hint: --html pages/, a folder for one page per failed run)")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"--html {folder}: cannot make the folder: {exc.strerror or exc}") from None
+
+
+def _failed_pages(request: _Request, data: dict[str, Any], folder: Path) -> None:
+    """``sweep --html DIR``: each failed run of the sweep made again (same mission, settings and seed:
+    the same run, bit for bit), recorded, and its page written to ``DIR/MISSION_seedN.html``."""
+    from thymio_bt.grade.site import safe_name
+    from thymio_bt.logs.recording import Recorder
+    from thymio_bt.mission import load_mission
+    from thymio_bt.robot.noise import REALISTIC
+    from thymio_bt.run.runner import Run
+    from thymio_bt.viz.page import write_page
+
+    failed = [r for r in data["results"] if r["status"] != "SUCCESS"]
+    if not failed:
+        click.echo(f"no failed run: no page written in {folder}", err=True)
+        return
+    settings = {**REALISTIC.settings(), **parse_overrides(request.sets)}
+    spec = load_mission(request.mission, settings, request.maze_ref, request.start)
+    for summary in failed:
+        seed = summary["seed"]
+        recorder = Recorder(statuses=True)
+        try:
+            recording = recorder.finish(Run(spec, seed).run(on_tick=recorder))
+        except Exception as exc:  # a run that broke breaks again: its page cannot be made
+            click.echo(f"  seed {seed}: no page, the run raised {_said(exc)}", err=True)
+            continue
+        name = f"{safe_name(spec.name)}_seed{seed}.html"  # a mission's name is its author's: kept inside DIR
+        page = write_page([recording], folder / name, labels=[f"{spec.name} seed {seed}"])
+        click.echo(f"  seed {seed}: page {page}", err=True)
 
 
 def _sweep_table(data: dict[str, Any], err: bool = False) -> None:

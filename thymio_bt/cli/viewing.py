@@ -26,6 +26,7 @@ from thymio_bt.outputs import check_writable
 
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
+    from thymio_bt.run.divergence import Divergence
 
 
 def page_path(logs: tuple[Path, ...]) -> Path:
@@ -42,7 +43,11 @@ def divergence_json(a: Recording, b: Recording) -> dict[str, Any] | None:
     """The two runs' first divergence as the page wants it (time, tick, reason), or None."""
     from thymio_bt.run.divergence import first_divergence
 
-    found = first_divergence(a, b)
+    return page_divergence(first_divergence(a, b))
+
+
+def page_divergence(found: Divergence | None) -> dict[str, Any] | None:
+    """A divergence (``view``'s, ``compare``'s with its tolerances) as the page marks it, or None."""
     return None if found is None else {"time": found.time, "tick": found.tick, "reason": found.reason}
 
 

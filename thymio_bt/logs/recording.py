@@ -40,6 +40,7 @@ if TYPE_CHECKING:
 
     from thymio_bt.logs import LogWriter
     from thymio_bt.logs.records import LogEnd, TickRecord
+    from thymio_bt.robot.model import RobotModel
     from thymio_bt.run.runner import Run, RunResult
 
 
@@ -99,6 +100,7 @@ class Recorder:
             tree=tree_nodes(run.root),
             backend=backend_name(run.backend, mission.backend),
             latency=run.backend.latency,
+            robot=robot_shape(run.backend.model),
         )
         self._header = dict(header)
         if self._path is not None:
@@ -186,6 +188,18 @@ class Recorder:
                 writer.close()
         except OSError:
             pass
+
+
+def robot_shape(model: RobotModel) -> dict[str, Any]:
+    """The robot model that ran, as the log header keeps it for the run's page: its ``name``, its
+    ``hull`` outline and its ``sensors`` (``[name, x, y, yaw]``, base_link metres and radians), and
+    the sensors' ``range`` (m)."""
+    return {
+        "name": model.name,
+        "hull": [[x, y] for x, y in model.hull],
+        "sensors": [[s.name, s.x, s.y, s.yaw] for s in model.sensors],
+        "range": model.range_max,
+    }
 
 
 def backend_name(backend: object, default: str) -> str:

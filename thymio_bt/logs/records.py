@@ -59,6 +59,8 @@ class LogHeader(_Header, total=False):
     backend: str
     #: the backend's latency in seconds (:attr:`thymio_bt.robot.interface.Robot.latency`)
     latency: float
+    #: the robot model that ran: name, outline, sensors and range (:func:`thymio_bt.logs.recording.robot_shape`)
+    robot: dict[str, Any]
 
 
 class TickRecord(TypedDict, total=False):

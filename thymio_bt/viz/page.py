@@ -84,6 +84,12 @@ def write_page(
 ) -> Path:
     """Write the page of one or two ``recordings`` to ``path`` (whole or not at all); the path."""
     labels = labels or [""] * len(recordings)
+    return write_runs([page_data(r, label) for r, label in zip(recordings, labels, strict=True)], path, divergence)
+
+
+def write_runs(runs: list[dict[str, Any]], path: Path | str, divergence: dict[str, Any] | None = None) -> Path:
+    """Write the page of ``runs`` (:func:`~thymio_bt.viz.page_data.page_data`, perhaps with more said,
+    such as where a what-if run was simulated) to ``path``, whole or not at all; the path."""
     out = Output(path, "--html", stdout_ok=False)
-    out.write_text(page_html([page_data(r, label) for r, label in zip(recordings, labels, strict=True)], divergence))
+    out.write_text(page_html(runs, divergence))
     return out.path

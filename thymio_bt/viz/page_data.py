@@ -20,17 +20,20 @@ Example (a log's statuses, their changes, and the statuses at tick index 2 read 
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_right
 from itertools import accumulate
 from typing import Any
 
-from thymio_bt.logs.recording import Recording
+from thymio_bt.logs.recording import Recording, robot_shape
 from thymio_bt.robot.model import COURSE
 
 #: decimals the page keeps: poses to 0.1 mm (the DOM contract's 4 decimals), signals to 0.1 mm/s
 DECIMALS = 4
 #: the speeds of a tick whose log has none (a rosbag2 log's tick without /odom: no robot then)
 NO_SPEED = (None, None)
+#: the run's end as the page keeps it: its verdict, and where the robot was when the run ended
+END_FIELDS = ("status", "reason", "code", "failed_path", "sim_time", "collisions", "final_pose")
 #: event fields the page shows; the rest (poses, whole proximity scans) the ticks already hold
 EVENT_FIELDS = ("t", "kind", "name", "path", "status", "decision", "reason", "entity", "code")
 
@@ -116,13 +119,53 @@ def _maze(recording: Recording) -> dict[str, Any]:
     }
 
 
-def _robot() -> dict[str, Any]:
-    """The course Thymio's outline and sensors (base_link frame), as the pictures draw it."""
-    return {
-        "hull": [_r(v) for corner in COURSE.hull for v in corner],
-        "sensors": [[s.name, _r(s.x), _r(s.y), _r(s.yaw)] for s in COURSE.sensors],
-        "range": COURSE.range_max,
-    }
+def robot_data(recording: Recording) -> dict[str, Any]:
+    """The robot that ran as the page draws it: its name, outline and sensors (base_link frame) and
+    range, from the log header (:func:`~thymio_bt.logs.recording.robot_shape`); a log without them
+    (written before logs named their robot) or with them unreadable gets the course Thymio's, with
+    ``assumed`` saying why.
+
+    >>> from thymio_bt.maze import Maze
+    >>> robot_data(Recording(maze=Maze()))["assumed"]
+    'the log does not say which robot ran: drawn as the course Thymio'
+    >>> robot_data(Recording(maze=Maze(), header={"robot": {"name": "x", "hull": "<svg>"}}))["name"]
+    'course'
+    """
+    shape = recording.header.get("robot")
+    try:
+        if not isinstance(shape, dict):
+            raise ValueError("not given")
+        hull = [_number(v) for corner in shape["hull"] for v in _pair(corner)]
+        sensors = [[str(row[0]), *(_number(v) for v in row[1:4])] for row in shape["sensors"] if len(row) == 4]
+        reach = _number(shape["range"])
+        if len(hull) < 6 or not sensors or reach <= 0:
+            raise ValueError("too small")
+        return {"name": str(shape["name"]), "hull": hull, "sensors": sensors, "range": reach}
+    except (KeyError, TypeError, ValueError):
+        said = "does not say which robot ran" if shape is None else "names its robot unreadably"
+        course = robot_shape(COURSE)
+        return {
+            "name": course["name"],
+            "hull": [_r(v) for corner in course["hull"] for v in corner],
+            "sensors": [[n, _r(x), _r(y), _r(yaw)] for n, x, y, yaw in course["sensors"]],
+            "range": course["range"],
+            "assumed": f"the log {said}: drawn as the course Thymio",
+        }
+
+
+def _number(value: Any) -> float:
+    """A finite number from a log, as the page keeps it; a ValueError or TypeError for anything else."""
+    number = float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else math.nan
+    if not math.isfinite(number):
+        raise ValueError(value)
+    return round(number, DECIMALS)
+
+
+def _pair(corner: Any) -> tuple[Any, Any]:
+    """An outline's corner ``[x, y]`` from a log (a TypeError for anything else)."""
+    if not isinstance(corner, list) or len(corner) != 2:
+        raise TypeError(corner)
+    return corner[0], corner[1]
 
 
 def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
@@ -130,16 +173,17 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
     samples = recording.samples
     tree = tree_paths(recording)
     poses = [s.get("pose") for s in samples]  # every field read with get: a log of another format may lack one
-    prox_names = [s.name for s in COURSE.sensors]
+    robot = robot_data(recording)
+    prox_names = [row[0] for row in robot["sensors"]]
     end = recording.end
     return {
         "label": label or recording.mission,
         "mission": recording.mission,
         "seed": recording.header.get("seed"),
         "tick_hz": recording.header.get("tick_hz"),
-        "end": {k: end.get(k) for k in ("status", "reason", "code", "failed_path", "sim_time", "collisions")},
+        "end": {k: end.get(k) for k in END_FIELDS},
         "maze": _maze(recording),
-        "robot": _robot(),
+        "robot": robot,
         "tree": tree,
         "t": [s["t"] for s in samples],
         "tick": [s.get("tick", i) for i, s in enumerate(samples)],

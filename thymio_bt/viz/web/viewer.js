@@ -167,6 +167,11 @@
   }
 
   const runs = DATA.runs.map((d, i) => new Run(d, i));
+
+  /** Whether a what-if run went on in the simulator (replay --continue sim): from run.d.simulated_from on. */
+  function simulated(run) {
+    return run.d.simulated_from !== undefined && run.d.simulated_from !== null;
+  }
   const single = runs.length === 1;
 
   /* ------------------------------------------------------------------ state */
@@ -206,8 +211,14 @@
       (single ? "" : run.letter + ": ") +
       (end.status || "live") +
       (end.code ? " [" + end.code + "]" : "") +
-      (run.d.seed !== null && run.d.seed !== undefined ? " · seed " + run.d.seed : "");
+      (run.d.seed !== null && run.d.seed !== undefined ? " · seed " + run.d.seed : "") +
+      (simulated(run) ? " · simulated from " + run.d.simulated_from + " s" : "");
     titleBox.appendChild(verdict);
+    const robot = run.d.robot;
+    const model = el("span", { class: "robot-model", "data-run": String(run.index), "data-robot": robot.name });
+    model.textContent = (single ? "" : run.letter + ": ") + "robot " + robot.name + (robot.assumed ? " (" + robot.assumed + ")" : "");
+    if (robot.assumed) model.setAttribute("data-assumed", "true");
+    titleBox.appendChild(model);
   }
   const announce = el("p", { id: "announce", role: "status", "aria-live": "polite" });
   header.appendChild(announce);
@@ -600,6 +611,19 @@
     runs.forEach((run, k) => {
       const y = 4 + 18 * k;
       const open = new Map();
+      if (simulated(run) && run.n) {
+        const x = xOf(run.d.simulated_from);
+        const band = sv("rect", {
+          class: "simulated",
+          "data-run": String(run.index),
+          "data-simulated-from": String(run.d.simulated_from),
+          x,
+          y: y - 3,
+          width: Math.max(xOf(run.d.t[run.n - 1]) - x, 1.5),
+          height: 18,
+        });
+        ev.appendChild(titled(band, (single ? "" : run.letter + ": ") + "simulated from t = " + run.d.simulated_from + " s (--continue sim), not the recording"));
+      }
       for (const e of run.events) {
         if (e.kind === "behaviour_start") open.set(e.path, e.t);
         else if (e.kind === "behaviour_end") {
@@ -1027,6 +1051,9 @@
     say("The runs first diverge at t = " + DATA.divergence.time + " s (tick " + DATA.divergence.tick + "): " + DATA.divergence.reason + ".");
   } else if (!single) {
     say("The two runs do not diverge.");
+  }
+  for (const run of runs.filter(simulated)) {
+    say(announce.textContent + " " + run.letter + " is simulated from t = " + run.d.simulated_from + " s (--continue sim).");
   }
   if (!fromHash()) seek(span()[0], false);
   window.addEventListener("hashchange", fromHash);
