@@ -252,3 +252,15 @@ def test_continue_sim_simulates_the_robot_the_log_was_made_with(tmp_path):
 
     what_if(logged, load_mission(MISSION, {"final_stop": "6cm"}), continue_sim=True, on_tick=look)
     assert seen[0] == (None, 0.2) and seen[-1] == ("enki", 0.0)  # the simulator's Enki, on time
+
+
+def test_a_log_of_another_robot_is_re_ticked_as_that_robot(tmp_path):
+    # a log made with --robot enki, replayed against the mission file (the course robot): the tree is
+    # re-ticked, and simulated on, as the robot the log header names, not as the mission's
+    record({"robot": "enki"}, log=tmp_path / "enki.jsonl")
+    logged = read_log(tmp_path / "enki.jsonl")
+    assert logged.header["robot"]["name"] == "enki"
+    models = set()
+    replayed = what_if(logged, load_mission(MISSION), on_tick=lambda run: models.add(run.backend.model.name))
+    assert models == {"enki"}
+    assert replayed.divergence is None

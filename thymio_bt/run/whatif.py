@@ -133,7 +133,8 @@ def what_if(
                 hint=f"replay with --set tick_hz={rate:g}",
             )
         )
-    mission = dataclasses.replace(mission, maze=recording.maze)  # the maze the recorded run was in
+    # the maze the recorded run was in, and the robot it ran (the log header names it)
+    mission = dataclasses.replace(mission, maze=recording.maze, robot=_robot_name(mission, recording))
     robot = RecordedRobot(recording, _model(mission, recording))
     seed = recording.header.get("seed")
     run = Run(mission, seed if isinstance(seed, int) and 0 <= seed < 2**63 else mission.seed, backend=robot)
@@ -150,6 +151,14 @@ def what_if(
 
     result = run.run(on_tick=hooks)
     return WhatIf(result, watch.divergence, watch.replayed, watch.simulated, watch.notes, tolerance)
+
+
+def _robot_name(mission: Mission, recording: Recording) -> str:
+    """The built-in robot the log says ran (its header's ``robot``), else the mission's: the changed
+    tree is re-ticked, and simulated on with ``--continue sim``, as that robot."""
+    ran = recording.header.get("robot")
+    name = ran.get("name") if isinstance(ran, dict) else None
+    return name if isinstance(name, str) and name in ROBOTS else mission.robot
 
 
 def _model(mission: Mission, recording: Recording) -> Any:
