@@ -185,3 +185,18 @@ def unit_of(field: Any) -> str:
     """The unit of a pydantic field for docs: ``m``, ``m, m, rad`` for a pose, ``""`` without one."""
     units = units_in(field.annotation, field_metadata(field))
     return units[0] if len(set(units)) == 1 else ", ".join(units)
+
+
+__all__ = [
+    "Angle",
+    "AngularSpeed",
+    "Duration",
+    "EntityName",
+    "Length",
+    "PerSecond",
+    "PerSecondPerMetre",
+    "Point",
+    "SensedLength",
+    "Speed",
+    "Unit",
+]

@@ -269,3 +269,21 @@ class Backend(Robot, Entities):
 
     def close(self) -> None:
         """Release the robot (stop its motors); called however a run ends. Nothing to do by default."""
+
+
+__all__ = [
+    "ROBOT_ENTITY",
+    "SENSOR_NAMES",
+    "Backend",
+    "Collision",
+    "Entities",
+    "Pose",
+    "Request",
+    "RequestState",
+    "Robot",
+    "RobotLost",
+    "Scan",
+    "Twist",
+    "new_pose",
+    "wrap_angle",
+]
