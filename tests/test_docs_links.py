@@ -13,6 +13,7 @@ PAGES = sorted(
         part.startswith(".") or part in ("node_modules", "build") or part.endswith(".egg-info")
         for part in p.relative_to(ROOT).parts
     )
+    and p.relative_to(ROOT).parts[0] != "site"  # the docs site mkdocs builds (gitignored)
 )
 LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)")
 

@@ -1,18 +1,18 @@
-"""What the README says of Windows, macOS and WSL, and --view's display check on each (#36)."""
+"""What docs/platforms.md (once the README) says of Windows, macOS and WSL, and --view's display check on each (#36)."""
 
 import re
 from pathlib import Path
 
 from thymio_bt.viz.display import display_problem
 
-README = Path(__file__).resolve().parents[1] / "README.md"
+PLATFORMS = Path(__file__).resolve().parents[1] / "docs" / "platforms.md"
 
 
-def test_the_readme_has_a_section_on_windows_macos_and_wsl_before_how_it_is_built():
-    text = README.read_text()
+def test_the_platforms_page_ends_with_a_section_on_windows_macos_and_wsl():
+    text = PLATFORMS.read_text()
     headings = re.findall(r"^## (.+)$", text, re.M)
-    assert headings.index("Windows, macOS and WSL") == headings.index("How it is built") - 1
-    section = " ".join(text.split("## Windows, macOS and WSL")[1].split("## How it is built")[0].split())
+    assert headings[-1] == "Windows, macOS and WSL"
+    section = " ".join(text.split("## Windows, macOS and WSL")[1].split())
     for said in ("Only Linux has been tried", "--view", "no display", "Playground", "ROS 2", "WSLg"):
         assert said in section, said
 

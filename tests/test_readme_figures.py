@@ -1,5 +1,6 @@
-"""The README's figures are what the code prints: the quick start's output, the mission table, the
-size of the broken-input corpus. A change that moves one fails here, and the README is updated with it."""
+"""The figures of the README and docs/missions.md are what the code prints: the README's quick start
+output, the missions page's mission table and the size of the broken-input corpus. A change that moves
+one fails here, and the page is updated with it."""
 
 import re
 from pathlib import Path
@@ -14,10 +15,11 @@ from thymio_bt.run.runner import Run
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
+MISSIONS = (ROOT / "docs" / "missions.md").read_text()
 
 
 def mission_row(name: str) -> str:
-    return next(line for line in README.splitlines() if line.startswith(f"| `missions/{name}.yaml`"))
+    return next(line for line in MISSIONS.splitlines() if line.startswith(f"| `missions/{name}.yaml`"))
 
 
 @pytest.fixture(scope="module")
@@ -57,4 +59,4 @@ def test_the_mission_table_figures(runs):
 
 def test_the_broken_corpus_count():
     count = len(list((ROOT / "tests/broken").glob("*.yaml"))) + len(list((ROOT / "tests/broken/mazes").glob("*.yaml")))
-    assert f"{count} broken missions and mazes" in README.replace("\n", " ")
+    assert f"{count} broken missions and mazes" in MISSIONS.replace("\n", " ")

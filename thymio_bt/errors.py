@@ -105,3 +105,6 @@ def optional_module(name: str, needed_by: str, hint: str) -> ModuleType:
         raise UserError(
             Problem(f"{needed_by} needs {name.partition('.')[0]}, which is not installed ({exc})", hint=hint)
         ) from None
+
+
+__all__ = ["Problem", "UserError", "did_you_mean", "optional_module", "type_name"]

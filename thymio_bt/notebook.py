@@ -139,3 +139,6 @@ def compare(a: NotebookRun, b: NotebookRun) -> Comparison:
     found = first_divergence(a.recording, b.recording)
     divergence = None if found is None else {"time": found.time, "tick": found.tick, "reason": found.reason}
     return Comparison(a, b, divergence)
+
+
+__all__ = ["Comparison", "NotebookRun", "compare", "run"]

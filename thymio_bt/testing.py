@@ -260,3 +260,6 @@ def clear_blackboard() -> Iterator[None]:
     py_trees.blackboard.Blackboard.clear()
     yield
     py_trees.blackboard.Blackboard.clear()
+
+
+__all__ = ["PRESETS", "Plugin", "clear_blackboard", "mission_text", "run_mission_file", "run_tree", "world"]

@@ -439,3 +439,14 @@ def current_pose(robot: Robot) -> Pose:
     pose = robot.pose()
     assert pose is not None
     return pose
+
+
+__all__ = [
+    "BehaviourParams",
+    "ConditionBehaviour",
+    "Context",
+    "FailureCode",
+    "Reading",
+    "RobotBehaviour",
+    "current_pose",
+]

@@ -121,19 +121,26 @@ def within_sensor_range(field: Any) -> bool:
 
 
 Length = Annotated[float, Unit("m")]
-#: a length a proximity sensor must be able to read (a stop distance, a wall-ahead threshold)
+"""A length in metres, written ``5cm``, ``0.05 m`` or ``0.05``."""
 SensedLength = Annotated[float, Unit("m"), SensorRange()]
+"""A length a proximity sensor must be able to read (a stop distance, a wall-ahead threshold):
+refused when a mission's robot cannot see that far."""
 Angle = Annotated[float, Unit("rad")]
+"""An angle in radians, written ``90deg``, ``pi/2`` or ``1.57``."""
 Speed = Annotated[float, Unit("m/s")]
+"""A speed in metres per second, written ``10cm/s`` or ``0.1``."""
 AngularSpeed = Annotated[float, Unit("rad/s")]
+"""A turn rate in radians per second, written ``90deg/s`` or ``1.57``."""
 Duration = Annotated[float, Unit("s")]
-#: a rate or gain per second (e.g. a heading correction)
+"""A duration in (simulated) seconds, written ``2s``, ``500ms`` or ``2``."""
 PerSecond = Annotated[float, Unit("1/s")]
-#: an angular-speed gain per metre of error
+"""A rate or gain per second (e.g. a heading correction)."""
 PerSecondPerMetre = Annotated[float, Unit("rad/s/m")]
+"""An angular-speed gain per metre of error."""
 Point = tuple[Length, Length]
-#: the name of an entity of the world (the robot: ``thymio``), what Gazebo's services call ``name``
+"""A point ``[x, y]`` in world metres."""
 EntityName = Annotated[str, CalledName()]
+"""The name of an entity of the world (the robot: ``thymio``), what Gazebo's services call ``name``."""
 
 
 def _pose_text(value: Any) -> Any:
@@ -185,3 +192,18 @@ def unit_of(field: Any) -> str:
     """The unit of a pydantic field for docs: ``m``, ``m, m, rad`` for a pose, ``""`` without one."""
     units = units_in(field.annotation, field_metadata(field))
     return units[0] if len(set(units)) == 1 else ", ".join(units)
+
+
+__all__ = [
+    "Angle",
+    "AngularSpeed",
+    "Duration",
+    "EntityName",
+    "Length",
+    "PerSecond",
+    "PerSecondPerMetre",
+    "Point",
+    "SensedLength",
+    "Speed",
+    "Unit",
+]

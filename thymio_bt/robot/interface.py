@@ -1,9 +1,10 @@
 """The abstract robot: what behaviours may use, and what a backend must provide.
 
 Behaviours talk to the robot only through these interfaces, so the same mission can drive the
-pymunk simulation (:mod:`thymio_bt.backends.sim`) or, later, a real Thymio. Units are metres, seconds and
-radians; the pose is the course's ``base_link`` in the world frame (0.0243 m ahead of the wheel
-axle the robot turns about).
+pymunk simulation (:mod:`thymio_bt.backends.sim`), a real Thymio (``aseba``, ``tdm``), the Aseba
+Playground or a ROS 2 robot (:mod:`thymio_bt.backends`). Units are metres, seconds and radians;
+the pose is the course's ``base_link`` in the world frame (0.0243 m ahead of the wheel axle the
+robot turns about).
 
 A behaviour drives and senses through the :class:`Robot` it is given (``robot.drive(0.1, 0.0)``
 holds a command like cmd_vel; ``robot.proximity()["front_center"]`` is a range in metres, inf when
@@ -269,3 +270,21 @@ class Backend(Robot, Entities):
 
     def close(self) -> None:
         """Release the robot (stop its motors); called however a run ends. Nothing to do by default."""
+
+
+__all__ = [
+    "ROBOT_ENTITY",
+    "SENSOR_NAMES",
+    "Backend",
+    "Collision",
+    "Entities",
+    "Pose",
+    "Request",
+    "RequestState",
+    "Robot",
+    "RobotLost",
+    "Scan",
+    "Twist",
+    "new_pose",
+    "wrap_angle",
+]
