@@ -16,10 +16,11 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import shlex
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -58,12 +59,15 @@ def grade(
     progress: Progress | None = None,
     stop: Callable[[], bool] = lambda: False,
     started: Callable[[dict[str, int]], None] | None = None,
+    sandbox: str = "plugins",
 ) -> dict[str, Any]:
     """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
     with ``imap_unordered`` (:class:`~thymio_bt.run.distributed.DaskExecutor`) to run the
     students on a cluster instead of ``workers`` local processes. ``started`` is told how many
-    runs each student will make, once the submissions are read; ``progress`` hears each run end."""
+    runs each student will make, once the submissions are read; ``progress`` hears each run end.
+    ``sandbox``: whose trees tick in a confined process of their own (:mod:`.sandbox`): those of
+    submissions with plugins (``plugins``), or every one (``always``: slower, for measurements)."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
     assignment = load_assignment(path)
@@ -71,6 +75,8 @@ def grade(
     made = make_worlds(assignment, path, folder)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
+    for each in tasks:
+        each.sandboxed = each.sandboxed or (sandbox == "always" and each.run_plugins)
     by_name = {e.submission.name: e for e in entries}
     if started is not None:
         started({t.name: t.runs for t in tasks})
@@ -84,9 +90,10 @@ def grade(
 
     if executor is None:
         _warm()
-        ForkPool[StudentTask](workers, _limits(assignment), progress=heard, stop=stop).run(
-            tasks, grade_runs, lambda t: t.runs
-        )
+        with _zygote(any(t.sandboxed for t in tasks)):
+            ForkPool[StudentTask](workers, _limits(assignment), progress=heard, stop=stop).run(
+                tasks, grade_runs, lambda t: t.runs
+            )
     else:
         for name, messages in executor.imap_unordered(graded_remotely, tasks):
             task = by_name[name].task
@@ -111,8 +118,23 @@ def _warm() -> None:
 def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
     """One student's runs on a cluster's worker (still in a child process under the limits)."""
     limits = task.limits or Limits()
-    ((_, messages),) = ForkPool[StudentTask](1, limits).run([task], grade_runs, lambda t: t.runs)
+    with _zygote(task.sandboxed):
+        ((_, messages),) = ForkPool[StudentTask](1, limits).run([task], grade_runs, lambda t: t.runs)
     return task.name, messages
+
+
+@contextlib.contextmanager
+def _zygote(needed: bool) -> Iterator[None]:
+    """The process that starts submissions' confined processes, while the workers run (if needed)."""
+    from thymio_bt.grade.reaping import set_subreaper
+    from thymio_bt.grade.sandboxes import ZYGOTE
+
+    if not needed:
+        yield
+        return
+    set_subreaper()  # what a worker's submission leaves behind stays beneath the grader
+    with ZYGOTE:
+        yield
 
 
 def _limits(assignment: Assignment) -> Limits:
@@ -147,8 +169,19 @@ def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -
         run_plugins=assignment.palette.plugins,
         limits=_limits(assignment),
         time_limit=assignment.time_limit,
+        sandboxed=assignment.palette.plugins and _has_plugins(mission),
+        home=str(submission.folder) if submission.folder else None,
     )
     return entry
+
+
+def _has_plugins(mission: Any) -> bool:
+    """Whether a mission (read without running its plugins) names any plugin: its tree's code is then
+    the student's, run in a confined process of its own."""
+    from thymio_bt.mission.unrun_plugins import UncheckedParams
+
+    stand_ins = any(getattr(cls, "Params", None) is UncheckedParams for _, cls in mission.registry.items())
+    return stand_ins or any(p.suffix == ".py" for p in mission.sources)
 
 
 def results(
