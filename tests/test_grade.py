@@ -379,7 +379,10 @@ def test_ctrl_c_stops_the_grade_at_once_keeps_what_was_done_and_leaves_no_child(
     assert not _children(process.pid) and "Traceback" not in err
     results = json.loads(out.read_text())
     statuses = {s["status"] for s in results["students"]}
-    assert "error" in statuses  # those not finished say so...
+    assert "interrupted" in statuses  # those not finished say so...
+    assert len(results["students"]) == 30  # every student is in the results
+    interrupted = [s for s in results["students"] if s["status"] == "interrupted"]
+    assert all(s["messages"][-1].startswith("interrupted after ") for s in interrupted)
     assert all(s["score"] == 10 for s in results["students"] if s["status"] == "graded")  # ...the others stand
 
 

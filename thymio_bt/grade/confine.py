@@ -6,10 +6,10 @@ imported what it needs and before it reads the submission.
 - **network** (Landlock ABI 4+): no TCP connection, no TCP port bound;
 - **signals** (Landlock ABI 6+): it cannot signal processes outside its own Landlock domain, nor
   reach their abstract UNIX sockets (ptrace of other processes is denied by Landlock from ABI 1);
-- **processes**: a user id of its own when the grader runs as root (so ``RLIMIT_NPROC`` holds, and
-  the grader kills every process of that user when the run ends), else ``RLIMIT_NPROC`` over the
-  user's processes now; no capability, ``no_new_privs``; memory (``RLIMIT_AS``), CPU and file
-  size limits.
+- **processes**: at most :data:`NPROC_MARGIN` more processes: ``RLIMIT_NPROC`` over the user's
+  processes now, or, as root (whom ``RLIMIT_NPROC`` does not bind), a ``pids`` cgroup of its own
+  (:mod:`.reaping`); every one it starts is killed when its run ends; no capability,
+  ``no_new_privs``; memory (``RLIMIT_AS``), CPU and file size limits.
 
 Landlock is three system calls (``landlock_create_ruleset``, ``landlock_add_rule``,
 ``landlock_restrict_self``), here through ctypes; a kernel without it, or another OS, leaves what it
@@ -33,6 +33,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from thymio_bt.grade.reaping import pids_cgroups
+
 #: what a submission's process may be confined in, in the order the summary names them
 AREAS = ("files", "network", "signals", "processes")
 #: the Landlock ABI each area needs
@@ -49,10 +51,8 @@ _EXECUTE, _WRITE_FILE, _READ_FILE, _READ_DIR = 1, 1 << 1, 1 << 2, 1 << 3
 _NET_BIND_TCP, _NET_CONNECT_TCP = 1, 2
 _SCOPE_ABSTRACT_UNIX, _SCOPE_SIGNAL = 1, 2
 _PR_SET_NO_NEW_PRIVS, _PR_CAPBSET_DROP, _PR_CAP_AMBIENT, _PR_CAP_AMBIENT_CLEAR_ALL = 38, 24, 47, 4
-#: how many processes (and threads) a submission may add to its user's, when it has no user id of its own
+#: how many processes (and threads) a submission may start
 NPROC_MARGIN = 32
-#: the first user id given to submissions' processes when the grader runs as root (one each)
-UID_BASE = 1_500_000_000
 
 
 class _RulesetAttr(ctypes.Structure):
@@ -97,7 +97,7 @@ def landlock_abi() -> int:
 
 
 def plan() -> Confinement:
-    """What a submission's process will be confined in on this machine."""
+    """What a submission's process will be confined in on this machine (as this user)."""
     if not sys.platform.startswith("linux"):
         why = f"not Linux ({sys.platform}): no Landlock"
         return Confinement([], {area: why for area in AREAS})
@@ -105,7 +105,9 @@ def plan() -> Confinement:
     result = Confinement()
     for area in AREAS:
         need = _NEEDS.get(area, 0)
-        if abi >= need:
+        if area == "processes" and os.geteuid() == 0 and not pids_cgroups():
+            result.missing[area] = "forks unbounded: root, whom RLIMIT_NPROC does not bind, and no pids cgroup"
+        elif abi >= need:
             result.held.append(area)
         elif abi == 0:
             result.missing[area] = "no Landlock in this kernel (Linux 5.13+ with landlock in lsm=)"
@@ -114,18 +116,14 @@ def plan() -> Confinement:
     return result
 
 
-def confine(readable: Sequence[Path], writable: Path, memory: int, cpu: int, uid: int | None = None) -> Confinement:
+def confine(readable: Sequence[Path], writable: Path, memory: int, cpu: int) -> Confinement:
     """Confine this process for good (see the module's list): ``readable`` folders and files,
-    ``writable`` the only folder it writes; ``memory`` bytes of address space, ``cpu`` seconds;
-    ``uid`` the user id of its own (only as root). What held, as :func:`plan` said."""
+    ``writable`` the only folder it writes; ``memory`` bytes of address space, ``cpu`` seconds.
+    What held, as :func:`plan` said."""
     held = plan()
     if not sys.platform.startswith("linux"):
         return held
-    _limits(memory, cpu, own_user=uid is not None)
-    if uid is not None:
-        os.setgroups([])
-        os.setresgid(uid, uid, uid)
-        os.setresuid(uid, uid, uid)
+    _limits(memory, cpu)
     _drop_capabilities()
     libc = ctypes.CDLL(None, use_errno=True)
     if libc.prctl(_PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0:
@@ -136,14 +134,14 @@ def confine(readable: Sequence[Path], writable: Path, memory: int, cpu: int, uid
     return held
 
 
-def _limits(memory: int, cpu: int, own_user: bool) -> None:
+def _limits(memory: int, cpu: int) -> None:
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 5))
     resource.setrlimit(resource.RLIMIT_FSIZE, (64 << 20, 64 << 20))
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-    # with a user of its own only its processes count; else every process of the grader's user does
-    nproc = NPROC_MARGIN if own_user else _tasks_of(os.getuid()) + NPROC_MARGIN
-    resource.setrlimit(resource.RLIMIT_NPROC, (nproc, nproc))
+    if os.getuid() != 0:  # every process of the user counts (root is not bound: a pids cgroup is)
+        nproc = _tasks_of(os.getuid()) + NPROC_MARGIN
+        resource.setrlimit(resource.RLIMIT_NPROC, (nproc, nproc))
 
 
 def _tasks_of(uid: int) -> int:

@@ -102,6 +102,11 @@ def grade(
                 heard(task, message)
             if stop():
                 break
+    if stop():  # a signal: the students whose runs were not all made say so
+        for entry in entries:
+            if entry.task is not None and len(entry.runs) < entry.task.runs and entry.status == "graded":
+                entry.status = "interrupted"
+                entry.messages.append(f"interrupted after {len(entry.runs)} of {entry.task.runs} runs")
     return results(assignment, path, made, entries, time.perf_counter() - began)
 
 
@@ -175,6 +180,17 @@ def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -
     return entry
 
 
+def _confinement(assignment: Assignment, entries: list[Entry]) -> str:
+    """What held around the students' code, for the summary (see :mod:`.confine`)."""
+    from thymio_bt.grade.confine import plan
+
+    if not assignment.palette.plugins:
+        return "nothing to confine: the assignment allows no plugins (a YAML tree runs no student code)"
+    if not any(e.task is not None and e.task.sandboxed for e in entries):
+        return "nothing to confine: no submission brings plugins"
+    return plan().summary()
+
+
 def _has_plugins(mission: Any) -> bool:
     """Whether a mission (read without running its plugins) names any plugin: its tree's code is then
     the student's, run in a confined process of its own."""
@@ -222,9 +238,10 @@ def results(
         "students": students,
         "summary": {
             "students": len(students),
-            **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error")},
+            **{s: sum(t["status"] == s for t in students) for s in ("graded", "invalid", "error", "interrupted")},
             "runs": sum(len(s["runs"]) for s in students),
             "wall_time": round(wall, 3),
+            "confinement": _confinement(assignment, entries),
             "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
             "criteria": [
                 {

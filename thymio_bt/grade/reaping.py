@@ -1,6 +1,7 @@
 """Every process a submission started ends with its run: found in ``/proc`` by parentage (the
 processes that start submissions are child subreapers, so a ``setsid`` or a double fork stays
-beneath them) and, when the submission has a user id of its own, by that user; then killed.
+beneath them) and, as root, in the submission's ``pids`` cgroup (which also bounds how many it may
+start: ``RLIMIT_NPROC`` does not bind root); then killed.
 
 Example (a process that forks a sleeper)::
 
@@ -20,8 +21,10 @@ import ctypes
 import os
 import signal
 import sys
+import tempfile
 import time
 from collections.abc import Iterable
+from pathlib import Path
 
 _PR_SET_CHILD_SUBREAPER = 36
 
@@ -34,7 +37,7 @@ def set_subreaper() -> bool:
 
 
 def _table() -> dict[int, tuple[int, int]]:
-    """Every process: pid -> (parent pid, real user id)."""
+    """Every live process: pid -> (parent pid, owner's user id)."""
     found = {}
     for name in os.listdir("/proc"):
         if not name.isdigit():
@@ -64,16 +67,17 @@ def descendants(pid: int, table: dict[int, tuple[int, int]] | None = None) -> li
     return sorted(out)
 
 
-def kill_tree(pid: int, uid: int | None = None) -> int:
-    """SIGKILL ``pid``, its descendants and (with ``uid``) every process of that user, until none
-    is left; how many were killed. Each round stops them first, so a fork bomb cannot outrun it."""
+def kill_tree(pid: int, cgroup: Path | None = None, spare: bool = False) -> int:
+    """SIGKILL ``pid`` (unless ``spare``), its descendants and (with ``cgroup``) every process in
+    that cgroup, until none is left; how many were killed. Each round stops them first, so a fork
+    bomb cannot outrun it."""
     killed: set[int] = set()
     for _ in range(100):
         table = _table()
         targets = {p for p in [pid, *descendants(pid, table)] if p in table}
-        if uid is not None:
-            targets |= {p for p, (_, owner) in table.items() if owner == uid}
-        targets -= {os.getpid()}
+        if cgroup is not None:
+            targets |= {p for p in _members(cgroup) if p in table}
+        targets -= {os.getpid(), *([pid] if spare else [])}
         if not targets:
             break
         _signal(targets, signal.SIGSTOP)
@@ -95,6 +99,57 @@ def reap_orphans(parent: int, keep: set[int]) -> int:
             while os.waitpid(-1, os.WNOHANG)[0]:
                 pass
     return len(orphans)
+
+
+#: where a pids cgroup may be made (cgroup v1's pids hierarchy, or a v2 root that delegates pids)
+CGROUP_ROOTS = (Path("/sys/fs/cgroup/pids"), Path("/sys/fs/cgroup"))
+
+
+def pids_cgroups() -> Path | None:
+    """The folder new pids cgroups go in, if this process may make them (as root, usually)."""
+    for root in CGROUP_ROOTS:
+        if (root / "cgroup.procs").exists() and os.access(root, os.W_OK) and _has_pids(root):
+            return root
+    return None
+
+
+def _has_pids(root: Path) -> bool:
+    controllers = root / "cgroup.subtree_control"
+    if not controllers.exists():  # cgroup v1: a hierarchy of its own
+        return root.name == "pids"
+    return "pids" in controllers.read_text().split()
+
+
+def new_pids_cgroup(limit: int) -> Path | None:
+    """A new cgroup that holds at most ``limit`` processes (None where none can be made)."""
+    root = pids_cgroups()
+    if root is None:
+        return None
+    folder = Path(tempfile.mkdtemp(prefix="thymio-bt-", dir=root))
+    (folder / "pids.max").write_text(str(limit))
+    return folder
+
+
+def remove_cgroup(folder: Path | None) -> None:
+    """Remove a cgroup of :func:`new_pids_cgroup`, killing what is still in it (5 s at most)."""
+    for _ in range(500):
+        if folder is None:
+            return
+        try:
+            folder.rmdir()
+            return
+        except FileNotFoundError:
+            return
+        except OSError:
+            _signal(_members(folder), signal.SIGKILL)
+            time.sleep(0.01)
+
+
+def _members(cgroup: Path) -> list[int]:
+    try:
+        return [int(p) for p in (cgroup / "cgroup.procs").read_text().split()]
+    except (OSError, ValueError):
+        return []
 
 
 def _signal(pids: Iterable[int], sig: int) -> None:

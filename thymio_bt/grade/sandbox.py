@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.grade.confine import confine, python_paths
-from thymio_bt.grade.reaping import reap_orphans, set_subreaper
+from thymio_bt.grade.reaping import kill_tree, reap_orphans, set_subreaper
 from thymio_bt.grade.remote_robot import RemoteRobot
 from thymio_bt.grade.wire import Link, WireError
 
@@ -64,10 +64,19 @@ def zygote(fd: int) -> None:
                 os.close(passed)
             kids.add(pid)
     finally:
-        for kid in kids:
-            with contextlib.suppress(ProcessLookupError):
-                os.kill(kid, signal.SIGKILL)
+        _end_all(kids)
+
+
+def _end_all(kids: set[int]) -> None:
+    """Kill every process the zygote started and every orphan handed to it, until it has no child."""
+    for kid in kids:
+        kill_tree(kid)
+    for _ in range(1000):
         reap_orphans(os.getpid(), set())
+        try:
+            os.waitpid(-1, 0)
+        except ChildProcessError:
+            return
 
 
 def _reap(kids: set[int]) -> None:
@@ -101,19 +110,30 @@ def serve(fd: int) -> None:
     os.environ.clear()
     os.environ.update({"HOME": str(folder), "TMPDIR": str(folder), "PATH": "/usr/bin:/bin"})
     sys.argv = ["thymio-bt-submission"]
+    os.setsid()  # a group of its own: killpg(0) reaches none of the zygote's other processes
     set_subreaper()
     try:
-        held = confine(python_paths(), folder, _mapped() + orders["memory"], orders["cpu"], orders.get("uid"))
+        if orders.get("cgroup"):  # as root: a pids cgroup of its own, joined while it may
+            Path(orders["cgroup"], "cgroup.procs").write_text(str(os.getpid()))
+        held = confine(python_paths(), folder, _mapped() + orders["memory"], orders["cpu"])
     except Exception as exc:  # the grader says so in the summary, and fails the runs
         link.send({"hello": os.getpid(), "error": f"confinement failed: {exc}"})
         return
     link.send({"hello": os.getpid(), "held": held.held, "missing": held.missing})
     missions: dict[str, Any] = {}
+    watch = _Watch(link)
     while True:
         message = link.receive(None)
         if "run" not in message:
             return
-        _run(link, message["run"], missions)
+        _reap_children()  # those the last run started, killed by the grader: zombies count as processes
+        _run(link, message["run"], missions, watch)
+
+
+def _reap_children() -> None:
+    with contextlib.suppress(ChildProcessError):
+        while os.waitpid(-1, os.WNOHANG)[0]:
+            pass
 
 
 def _mapped() -> int:
@@ -125,7 +145,7 @@ def _mapped() -> int:
         return 0
 
 
-def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any]) -> None:
+def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Watch) -> None:
     """One run: load (once per world) and build the tree, then answer each observation."""
     import py_trees
 
@@ -158,7 +178,6 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any]) -> None:
     stats.attach(root, mission.tree)
     link.send({"ready": True})
     sent, tip = 0, None
-    watch = _Watch(link)
     while True:
         observation = link.receive(None)
         if observation.get("end"):

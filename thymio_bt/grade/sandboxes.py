@@ -10,7 +10,8 @@ confinement held.
 Each submission works on a copy of its files in a private folder (its plugins cannot change the
 original, nor see the folder next door), with the world's spawns and goal in a maze file of its own
 (never the world's file: the walls of a hidden world stay with the grader). When the grader runs as
-root, the process gets a user id of its own, ``UID_BASE`` plus the worker's process id.
+root, the process joins a ``pids`` cgroup of its own (at most :data:`~.confine.NPROC_MARGIN`
+processes, each found there and killed when a run ends).
 """
 
 from __future__ import annotations
@@ -27,8 +28,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from thymio_bt.grade.confine import UID_BASE, Confinement
-from thymio_bt.grade.reaping import kill_tree
+from thymio_bt.grade.confine import NPROC_MARGIN, Confinement
+from thymio_bt.grade.reaping import kill_tree, new_pids_cgroup, remove_cgroup
 from thymio_bt.grade.wire import Link, WireError
 
 #: how long a new submission process may take to say hello (the zygote may still be importing)
@@ -102,7 +103,7 @@ class Sandbox:
 
     link: Link
     pid: int
-    uid: int | None
+    cgroup: Path | None
     folder: Path
     confinement: Confinement
     #: why it could not be confined (its runs fail with this), None when it was
@@ -114,23 +115,22 @@ class Sandbox:
         """A new process for the mission file ``mission``: a copy of ``home`` (a student's folder)
         or, without one, of the file and the sources beside or below it (its plugins)."""
         folder = Path(tempfile.mkdtemp(prefix="thymio-bt-submission-"))
-        uid = UID_BASE + os.getpid() if os.geteuid() == 0 else None
         _copy(mission, home, sources, folder / "submission")
-        if uid is not None:
-            _chown(folder, uid)
+        cgroup = new_pids_cgroup(NPROC_MARGIN) if os.geteuid() == 0 else None
         link = ZYGOTE.connect()
         try:
-            link.send({"folder": str(folder), "memory": memory, "cpu": cpu, "uid": uid})
+            link.send({"folder": str(folder), "memory": memory, "cpu": cpu, "cgroup": cgroup and str(cgroup)})
             hello = link.receive(time.monotonic() + HELLO_WAIT)
         except WireError:
             link.close()
             shutil.rmtree(folder, ignore_errors=True)
+            remove_cgroup(cgroup)
             raise
         pid = hello.get("hello")
         if not isinstance(pid, int) or pid <= 1:
             raise WireError("the sandbox did not say hello")
         confinement = Confinement(list(hello.get("held", [])), dict(hello.get("missing", {})))
-        return cls(link, pid, uid, folder, confinement, hello.get("error"))
+        return cls(link, pid, cgroup, folder, confinement, hello.get("error"))
 
     def copy_of(self, mission: Path, home: Path | None) -> Path:
         """Where the copy of the mission file is."""
@@ -150,17 +150,20 @@ class Sandbox:
             path = self.folder / "worlds" / f"maze_{len(self.mazes)}.yaml"
             path.parent.mkdir(exist_ok=True)
             path.write_text(json.dumps(blind))  # YAML reads JSON, floats exactly
-            if self.uid is not None:
-                _chown(path.parent, self.uid)
             self.mazes[maze.name] = str(path)
         return self.mazes[maze.name]
+
+    def end_run(self) -> None:
+        """Kill every process the submission started during a run (its own stays, for the next)."""
+        kill_tree(self.pid, self.cgroup, spare=True)
 
     def close(self) -> None:
         """End the process and everything it started; remove its folder."""
         with contextlib.suppress(OSError, WireError):
             self.link.send({"bye": True})
         self.link.close()
-        kill_tree(self.pid, self.uid)
+        kill_tree(self.pid, self.cgroup)
+        remove_cgroup(self.cgroup)
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
@@ -178,10 +181,3 @@ def _copy(mission: Path, home: Path | None, sources: list[Path], into: Path) -> 
             continue  # a shipped file (an included library, a maze): read from the package
         (into / relative).parent.mkdir(parents=True, exist_ok=True)
         shutil.copy2(source, into / relative, follow_symlinks=False)
-
-
-def _chown(folder: Path, uid: int) -> None:
-    os.chown(folder, uid, uid)
-    for root, dirs, files in os.walk(folder):
-        for name in dirs + files:
-            os.chown(os.path.join(root, name), uid, uid, follow_symlinks=False)

@@ -67,7 +67,7 @@ class StudentTask:
 
 def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
     """Run ``task``'s runs but the first ``skip``, sending a ``start`` then a ``run`` message each.
-    Once :data:`OVERRUNS` runs went over the wall-clock limit, the others fail at once."""
+    Once :data:`OVERRUNS` runs went over a time limit (wall-clock or CPU), the others fail at once."""
     missions: dict[str, Mission | str] = {}
     pictured: set[str] = set()
     overran: list[dict[str, Any]] = []
@@ -91,7 +91,7 @@ def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
                 message = _skipped(task, index, world, seed, overran)
             else:
                 message = run_message(task, index, world, seed, mission, picture, outside)
-                if message.get("code") == "LIMIT" and "wall-clock" in str(message.get("reason")):
+                if message.get("code") == "LIMIT" and "time limit" in str(message.get("reason")):
                     overran.append(message)
             send(message)
     finally:
@@ -234,7 +234,9 @@ def _outside_run(outside: _Outside, mission: Mission, seed: int, limits: Limits,
         ],
     }
     try:
-        return RemoteRun(mission, seed, sandbox, limits, spec).run()
+        result = RemoteRun(mission, seed, sandbox, limits, spec).run()
+        sandbox.end_run()  # what the run started ends with it
+        return result
     except SubmissionFault as exc:
         raise _Broken("EXCEPTION", str(exc)) from None
     except WireError as exc:
