@@ -341,3 +341,37 @@ def test_sigterm_ends_a_hostile_class_cleanly(tmp_path):
     assert students["sleeper"]["status"] == "interrupted"
     assert students["sleeper"]["messages"][-1].startswith("interrupted after ")
     assert _sandbox_processes() == []
+
+
+def test_the_command_names_the_confinement_and_prints_a_line_per_student(tmp_path):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    assignment, folders = _write_class(tmp_path, 1)
+    chosen = [str(f) for f in folders if f.name in ("good", "plugged")]
+    result = CliRunner().invoke(main, ["grade", str(assignment), *chosen, "--require-confinement"])
+    assert result.exit_code == 0, result.output
+    lines = result.output.splitlines()
+    progress = [line.split(": ", 1) for line in lines if line.startswith("graded ")]  # in the order they ended
+    assert [p[0] for p in progress] == ["graded 1/2", "graded 2/2"]
+    assert sorted(p[1] for p in progress) == ["good, 3 runs", "plugged, 3 runs"]
+    assert lines[-1] == "confined: files, network, signals, processes"
+
+
+def test_require_confinement_is_an_error_where_an_area_is_missing(tmp_path, monkeypatch):
+    from click.testing import CliRunner
+
+    import thymio_bt.grade.confine as confine
+    from thymio_bt.cli import main
+
+    old_kernel = confine.Confinement(["files", "processes"], {"signals": "Landlock ABI 4 < 6 (kernel older than 6.12)"})
+    monkeypatch.setattr(confine, "plan", lambda: old_kernel)
+    assignment, folders = _write_class(tmp_path, 1)
+    result = CliRunner().invoke(main, ["grade", str(assignment), str(folders[2]), "--require-confinement"])
+    assert result.exit_code == 2
+    assert result.output == (
+        "error: --require-confinement: confined: files, processes; not confined: signals (Landlock ABI 4 < 6 "
+        "(kernel older than 6.12)) (hint: grade on Linux 6.12 or later with Landlock enabled, or leave out "
+        "--require-confinement)\n"
+    )

@@ -90,8 +90,12 @@ def grade(
 
     if executor is None:
         _warm()
-        with _zygote(any(t.sandboxed for t in tasks)):
-            ForkPool[StudentTask](workers, _limits(assignment), progress=heard, stop=stop).run(
+        sandboxed = any(t.sandboxed for t in tasks)
+        # a confined student is two processes that take turns (the simulation, its tree): twice as
+        # many at once keep the cores busy while each waits for the other
+        parallel = 2 * workers if sandboxed else workers
+        with _zygote(sandboxed):
+            ForkPool[StudentTask](parallel, _limits(assignment), progress=heard, stop=stop).run(
                 tasks, grade_runs, lambda t: t.runs
             )
     else:
@@ -122,9 +126,12 @@ def _warm() -> None:
 
 def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
     """One student's runs on a cluster's worker (still in a child process under the limits)."""
+    from thymio_bt.grade.sandboxes import ZYGOTE
+
     limits = task.limits or Limits()
-    with _zygote(task.sandboxed):
-        ((_, messages),) = ForkPool[StudentTask](1, limits).run([task], grade_runs, lambda t: t.runs)
+    if task.sandboxed:  # one zygote for the worker's tasks, its threads' too
+        ZYGOTE.ensure()
+    ((_, messages),) = ForkPool[StudentTask](1, limits).run([task], grade_runs, lambda t: t.runs)
     return task.name, messages
 
 

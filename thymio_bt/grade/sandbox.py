@@ -201,36 +201,25 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Wat
 
 class _Watch:
     """Tells the grader which node a tick is in once it has taken :data:`SLOW` s (``{"slow": path}``):
-    the node a run that goes over its time limit is stopped in."""
+    the node a run that goes over its time limit is stopped in. A timer signal, armed for each tick
+    (a thread woken every tick would cost the tick loop its GIL)."""
 
     def __init__(self, link: Link) -> None:
-        import threading
-
         self.link = link
-        self.ticking = threading.Event()
-        self.done = threading.Event()
-        self.main = threading.get_ident()
-        threading.Thread(target=self._watch, daemon=True).start()
+        signal.signal(signal.SIGALRM, self._slow)
 
     def __enter__(self) -> None:
-        self.done.clear()
-        self.ticking.set()
+        signal.setitimer(signal.ITIMER_REAL, SLOW)
 
     def __exit__(self, *exc: object) -> None:
-        self.ticking.clear()
-        self.done.set()
+        signal.setitimer(signal.ITIMER_REAL, 0)
 
-    def _watch(self) -> None:
+    def _slow(self, _signum: int, frame: Any) -> None:
         from thymio_bt.behaviours.base import node_path
 
-        while True:
-            self.ticking.wait()
-            if self.done.wait(SLOW) or not self.ticking.is_set():
-                continue
-            node = _innermost_node(sys._current_frames().get(self.main))
-            with contextlib.suppress(Exception):
-                self.link.send({"slow": node_path(node) if node is not None else None})
-            self.done.wait()
+        node = _innermost_node(frame)
+        with contextlib.suppress(Exception):
+            self.link.send({"slow": node_path(node) if node is not None else None})
 
 
 def _innermost_node(frame: Any) -> Any:

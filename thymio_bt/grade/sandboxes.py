@@ -16,6 +16,7 @@ processes, each found there and killed when a run ends).
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import os
 import shutil
@@ -23,6 +24,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +44,16 @@ class Zygote:
     def __init__(self) -> None:
         self.control: socket.socket | None = None
         self.process: subprocess.Popen[bytes] | None = None
+        self._lock = threading.Lock()
+
+    def ensure(self) -> Zygote:
+        """Started, if it is not yet (for a process that grades many tasks, a Dask worker: it then
+        lives as long as that process)."""
+        with self._lock:
+            if self.control is None:
+                self.start()
+                atexit.register(self.close)
+        return self
 
     def start(self) -> Zygote:
         """Spawn it (fresh, not forked from this process)."""
