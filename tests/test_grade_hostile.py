@@ -8,6 +8,7 @@ reason), so a test reads what leaked, what was written or signalled, from the re
 from __future__ import annotations
 
 import hashlib
+import os
 import socket
 import sys
 import textwrap
@@ -142,6 +143,8 @@ ATTACKS = {
         """,
     },
     "hog": {"step": "x = bytearray(4 << 30)"},
+    # a named pipe in its folder (copying it would block the grader): graded as its tree earns
+    "piped": {"step": "pass"},
 }
 
 #: honest students: a YAML tree that earns everything, one that stops 8 cm away, and a plugin one
@@ -159,6 +162,7 @@ def _write_class(root: Path, port: int) -> tuple[Path, list[Path]]:
     (weak / "m.yaml").write_text(f"maze: two_parts_maze\nstart: part1\ntree:\n  sequence:\n    children:\n{STOP_8CM}")
     folders = [good, weak, _plugin(root, "plugged", "", "pass", port)]
     folders += [_plugin(root, name, a.get("top", ""), a["step"], port) for name, a in ATTACKS.items()]
+    os.mkfifo(root / "piped" / "pipe")
     return assignment, folders
 
 
@@ -188,19 +192,21 @@ def _hashes(root: Path) -> dict[str, str]:
     return {str(p): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
 
 
-def _sandbox_processes() -> list[int]:
-    """Processes of a submission or zygotes still alive (their command line is the zygote's)."""
+def _sandbox_processes(grader: int | None = None) -> list[int]:
+    """Processes of a submission or zygotes of the grade ``grader`` (this process by default: the grader
+    is a child subreaper, so whatever escaped stays beneath it) still alive, and its pids cgroups."""
+    from thymio_bt.grade.reaping import descendants
+
+    grader = grader or os.getpid()
     found = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit():
-            continue
+    for pid in descendants(grader):
         try:
-            cmdline = (entry / "cmdline").read_bytes()
+            cmdline = Path(f"/proc/{pid}/cmdline").read_bytes()
         except OSError:
             continue
         if b"thymio_bt.grade.sandbox" in cmdline:
-            found.append(int(entry.name))
-    return found
+            found.append(pid)
+    return found + [p for root in CGROUP_ROOTS for p in root.glob(f"thymio-bt-{grader}-*")]
 
 
 @pytest.fixture(scope="module")
@@ -262,7 +268,7 @@ def test_every_student_is_in_the_results_and_honest_grades_are_unchanged(graded)
 def test_a_submission_cannot_forge_its_judgement_nor_wipe_its_record(graded):
     # the forger patched the checks at import, the wiper cleared every event log and result it could
     # reach and faked its robot: both earn what their tree earns honestly (it stops 8 cm away)
-    for name in ("forger", "wiper"):
+    for name in ("forger", "wiper", "piped"):
         student = graded["results"][name]
         assert student["score"] == graded["results"]["plugged"]["score"] == 1
         assert _judged(student) == _judged(graded["results"]["plugged"])
@@ -296,8 +302,7 @@ def test_forks_are_bounded_and_nothing_outlives_the_grade(graded):
     forked = [int(r.split("RuntimeError: forked ")[1].split()[0]) for r in reasons]
     assert all(n < 64 for n in forked), reasons  # RLIMIT_NPROC, not 10000
     assert graded["results"]["escaper"]["score"] == 1  # its tree ends as it would; its processes do not
-    assert graded["left"] == []
-    assert [p for root in CGROUP_ROOTS for p in root.glob("thymio-bt-*")] == []  # no pids cgroup left
+    assert graded["left"] == []  # no process, no pids cgroup
 
 
 def test_time_and_memory_limits_fail_the_attackers_runs_with_a_reason(graded):
@@ -332,6 +337,7 @@ def test_sigterm_ends_a_hostile_class_cleanly(tmp_path):
     assert process.stderr is not None
     first = process.stderr.readline()
     assert first.startswith("graded 1/3: good, 3 runs"), first
+    grader = process.pid
     process.send_signal(signal.SIGTERM)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 143, err
@@ -340,7 +346,8 @@ def test_sigterm_ends_a_hostile_class_cleanly(tmp_path):
     assert students["good"]["status"] == "graded" and students["good"]["score"] == 3
     assert students["sleeper"]["status"] == "interrupted"
     assert students["sleeper"]["messages"][-1].startswith("interrupted after ")
-    assert _sandbox_processes() == []
+    # (the grader is gone: its leftovers would have gone to this process, or its cgroups stayed)
+    assert _sandbox_processes() == [] and _sandbox_processes(grader) == []
 
 
 def test_the_command_names_the_confinement_and_prints_a_line_per_student(tmp_path):

@@ -38,7 +38,9 @@ def set_subreaper() -> bool:
 
 def _table() -> dict[int, tuple[int, int]]:
     """Every live process: pid -> (parent pid, owner's user id)."""
-    found = {}
+    found: dict[int, tuple[int, int]] = {}
+    if not os.path.isdir("/proc"):  # not Linux: nothing can be found (nor is any confinement claimed)
+        return found
     for name in os.listdir("/proc"):
         if not name.isdigit():
             continue
@@ -120,12 +122,13 @@ def _has_pids(root: Path) -> bool:
     return "pids" in controllers.read_text().split()
 
 
-def new_pids_cgroup(limit: int) -> Path | None:
-    """A new cgroup that holds at most ``limit`` processes (None where none can be made)."""
+def new_pids_cgroup(limit: int, grade: int) -> Path | None:
+    """A new cgroup that holds at most ``limit`` processes (None where none can be made), named for
+    the ``grade`` (the grading process's id: ``thymio-bt-GRADE-...``)."""
     root = pids_cgroups()
     if root is None:
         return None
-    folder = Path(tempfile.mkdtemp(prefix="thymio-bt-", dir=root))
+    folder = Path(tempfile.mkdtemp(prefix=f"thymio-bt-{grade}-", dir=root))
     (folder / "pids.max").write_text(str(limit))
     return folder
 

@@ -128,7 +128,8 @@ class Sandbox:
         or, without one, of the file and the sources beside or below it (its plugins)."""
         folder = Path(tempfile.mkdtemp(prefix="thymio-bt-submission-"))
         _copy(mission, home, sources, folder / "submission")
-        cgroup = new_pids_cgroup(NPROC_MARGIN) if os.geteuid() == 0 else None
+        # (this runs in a worker of the grade: its parent is the grading process)
+        cgroup = new_pids_cgroup(NPROC_MARGIN, os.getppid()) if os.geteuid() == 0 else None
         link = ZYGOTE.connect()
         try:
             link.send({"folder": str(folder), "memory": memory, "cpu": cpu, "cgroup": cgroup and str(cgroup)})
@@ -179,10 +180,23 @@ class Sandbox:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
+def _special(folder: str, names: list[str]) -> list[str]:
+    """The entries of ``folder`` that are neither folders, files nor links (a FIFO would block the copy)."""
+    import stat
+
+    def kind(name: str) -> int:
+        try:
+            return os.lstat(os.path.join(folder, name)).st_mode
+        except OSError:
+            return 0
+
+    return [n for n in names if not (stat.S_ISDIR(kind(n)) or stat.S_ISREG(kind(n)) or stat.S_ISLNK(kind(n)))]
+
+
 def _copy(mission: Path, home: Path | None, sources: list[Path], into: Path) -> None:
     """The submission's files, links kept as links (their targets stay out of reach)."""
     if home is not None:
-        shutil.copytree(home, into, symlinks=True)
+        shutil.copytree(home, into, symlinks=True, ignore=_special)
         return
     parent = mission.parent.resolve()
     into.mkdir(parents=True)
