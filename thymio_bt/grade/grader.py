@@ -17,6 +17,7 @@ Example::
 from __future__ import annotations
 
 import contextlib
+import os
 import shlex
 import tempfile
 import time
@@ -138,15 +139,18 @@ def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
 @contextlib.contextmanager
 def _zygote(needed: bool) -> Iterator[None]:
     """The process that starts submissions' confined processes, while the workers run (if needed)."""
-    from thymio_bt.grade.reaping import set_subreaper
+    from thymio_bt.grade.reaping import remove_cgroups_of, set_subreaper
     from thymio_bt.grade.sandboxes import ZYGOTE
 
     if not needed:
         yield
         return
     set_subreaper()  # what a worker's submission leaves behind stays beneath the grader
-    with ZYGOTE:
-        yield
+    try:
+        with ZYGOTE:
+            yield
+    finally:  # the workers' cgroups, once the zygote has ended every process (a signal stops workers early)
+        remove_cgroups_of(os.getpid())
 
 
 def _limits(assignment: Assignment) -> Limits:

@@ -36,9 +36,9 @@ def set_subreaper() -> bool:
     return bool(ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0)
 
 
-def _table() -> dict[int, tuple[int, int]]:
-    """Every live process: pid -> (parent pid, owner's user id)."""
-    found: dict[int, tuple[int, int]] = {}
+def _table() -> dict[int, int]:
+    """Every live process: pid -> parent pid."""
+    found: dict[int, int] = {}
     if not os.path.isdir("/proc"):  # not Linux: nothing can be found (nor is any confinement claimed)
         return found
     for name in os.listdir("/proc"):
@@ -47,19 +47,29 @@ def _table() -> dict[int, tuple[int, int]]:
         try:
             with open(f"/proc/{name}/stat", "rb") as stat:
                 fields = stat.read().rsplit(b")", 1)[1].split()
-            uid = os.stat(f"/proc/{name}").st_uid
         except (OSError, IndexError):
             continue
         if fields[0] != b"Z":  # a zombie is already dead: its parent reaps it
-            found[int(name)] = (int(fields[1]), uid)
+            found[int(name)] = int(fields[1])
     return found
 
 
-def descendants(pid: int, table: dict[int, tuple[int, int]] | None = None) -> list[int]:
+def has_children(pid: int) -> bool:
+    """Whether ``pid`` has a child now (read from its threads' ``children`` lists, without a scan
+    of every process); True when that cannot be read."""
+    try:
+        return any(
+            Path(f"/proc/{pid}/task/{task}/children").read_text().strip() for task in os.listdir(f"/proc/{pid}/task")
+        )
+    except OSError:
+        return True
+
+
+def descendants(pid: int, table: dict[int, int] | None = None) -> list[int]:
     """The live descendants of ``pid`` (children, theirs...)."""
     table = _table() if table is None else table
     children: dict[int, list[int]] = {}
-    for child, (parent, _) in table.items():
+    for child, parent in table.items():
         children.setdefault(parent, []).append(child)
     out, todo = [], list(children.get(pid, []))
     while todo:
@@ -74,6 +84,8 @@ def kill_tree(pid: int, cgroup: Path | None = None, spare: bool = False) -> int:
     that cgroup, until none is left; how many were killed. Each round stops them first, so a fork
     bomb cannot outrun it."""
     killed: set[int] = set()
+    if spare and not has_children(pid) and (cgroup is None or _members(cgroup) == [pid]):
+        return 0  # the common case at a run's end: nothing was started
     for _ in range(100):
         table = _table()
         targets = {p for p in [pid, *descendants(pid, table)] if p in table}
@@ -93,7 +105,7 @@ def reap_orphans(parent: int, keep: set[int]) -> int:
     """Kill the children of ``parent`` (a subreaper) that are not in ``keep``, with their trees:
     orphans of a submission whose process already ended. Reaps them when ``parent`` is this process."""
     table = _table()
-    orphans = [p for p, (pp, _) in table.items() if pp == parent and p not in keep]
+    orphans = [p for p, pp in table.items() if pp == parent and p not in keep]
     for orphan in orphans:
         kill_tree(orphan)
     if parent == os.getpid():
@@ -146,6 +158,13 @@ def remove_cgroup(folder: Path | None) -> None:
         except OSError:
             _signal(_members(folder), signal.SIGKILL)
             time.sleep(0.01)
+
+
+def remove_cgroups_of(grade: int) -> None:
+    """Remove every pids cgroup of the grade ``grade`` (those of workers a signal ended early)."""
+    root = pids_cgroups()
+    for folder in root.glob(f"thymio-bt-{grade}-*") if root is not None else ():
+        remove_cgroup(folder)
 
 
 def _members(cgroup: Path) -> list[int]:

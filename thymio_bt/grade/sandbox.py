@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.grade.confine import confine, python_paths
-from thymio_bt.grade.reaping import kill_tree, reap_orphans, set_subreaper
+from thymio_bt.grade.reaping import has_children, kill_tree, reap_orphans, set_subreaper
 from thymio_bt.grade.remote_robot import RemoteRobot
 from thymio_bt.grade.wire import Link, WireError
 
@@ -43,8 +43,8 @@ def zygote(fd: int) -> None:
     try:
         while True:
             ready = select.select([control], [], [], 0.2)[0]
-            _reap(kids)
-            reap_orphans(os.getpid(), kids)
+            if _reap(kids) or has_children(os.getpid()) and len(kids) == 0:
+                reap_orphans(os.getpid(), kids)  # a submission's process ended: its orphans are ours
             if not ready:
                 continue
             data, fds, _, _ = socket.recv_fds(control, 16, 1)
@@ -79,11 +79,15 @@ def _end_all(kids: set[int]) -> None:
             return
 
 
-def _reap(kids: set[int]) -> None:
+def _reap(kids: set[int]) -> bool:
+    """Reap the submissions' processes that ended; whether one did."""
+    ended = False
     for kid in list(kids):
         with contextlib.suppress(ChildProcessError):
             if os.waitpid(kid, os.WNOHANG)[0]:
                 kids.discard(kid)
+                ended = True
+    return ended
 
 
 def _warm() -> None:
