@@ -58,6 +58,11 @@ from thymio_bt.run.interrupts import Interrupts
     metavar="SCORE",
     help="Exit 1 when a student scored less than this.",
 )
+@click.option(
+    "--require-confinement",
+    is_flag=True,
+    help="Exit 2 unless the OS confines plugins in files, network, signals and processes (Landlock ABI 6+).",
+)
 def grade(
     assignment: Path,
     submissions: tuple[Path, ...],
@@ -72,6 +77,7 @@ def grade(
     workers: int | None,
     dask: str | None,
     fail_under: float | None,
+    require_confinement: bool,
 ) -> None:
     """Grade SUBMISSIONS (mission files, or a folder per student) on ASSIGNMENT (a YAML file)."""
     import os
@@ -102,6 +108,8 @@ def grade(
         workers_or_dask(workers, dask)
         if for_students and html is None:
             raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
+        if require_confinement:
+            _check_confinement()
         worlds = _worlds_folder(out or update, html)
         relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
         # pages for students hold the public worlds' mazes (their commands name them), never a hidden one's
@@ -145,7 +153,9 @@ def grade(
             click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
     except UserError as exc:
         fail(exc)
-    click.echo(summary_table(results), err=any(o.is_stdout for o in outputs.values()))
+    to_stderr = any(o.is_stdout for o in outputs.values())
+    click.echo(summary_table(results), err=to_stderr)
+    click.echo(results["summary"]["confinement"], err=to_stderr)
     if interrupts.signal:
         sys.exit(interrupts.exit_code)
     students = results["students"]
@@ -164,6 +174,21 @@ def _previous(path: Path) -> dict[str, Any]:
     if not isinstance(data, dict) or not isinstance(data.get("students"), list):
         raise UserError(f"--update {path}: not the results.json of thymio-bt grade (hint: give grade's --out file)")
     return data
+
+
+def _check_confinement() -> None:
+    """``--require-confinement``: a user error when an area of the confinement is missing here."""
+    from thymio_bt.errors import Problem
+    from thymio_bt.grade.confine import plan
+
+    held = plan()
+    if held.missing:
+        raise UserError(
+            Problem(
+                f"--require-confinement: {held.summary()}",
+                hint="grade on Linux 6.12 or later with Landlock enabled, or leave out --require-confinement",
+            )
+        )
 
 
 def _site_folder(path: Path) -> Path:
@@ -192,8 +217,13 @@ def _worlds_folder(out: Path | None, html: Path | None) -> Path | None:
     return None
 
 
+#: the codes of runs a submission's code broke (limits, crashes, exceptions): counted in the progress lines
+_BROKEN = ("LIMIT", "CRASH", "EXCEPTION")
+
+
 class _Progress:
-    """Students done / total, runs per second and the time left, on one line of a terminal."""
+    """Students done / total, runs per second and the time left, on one line of a terminal; elsewhere
+    (a log) a line per student graded."""
 
     def __init__(self) -> None:
         self.enabled = sys.stderr.isatty()
@@ -201,6 +231,7 @@ class _Progress:
         self.runs = 0
         self.total_runs = 0
         self.done: dict[str, int] = {}
+        self.failed: dict[str, int] = {}
         self.wanted: dict[str, int] = {}
         self.began = time.perf_counter()
         self.shown = 0.0
@@ -221,8 +252,16 @@ class _Progress:
     def __call__(self, student: str, message: dict[str, Any]) -> None:
         self.runs += 1
         self.done[student] = self.done.get(student, 0) + 1
+        self.failed[student] = self.failed.get(student, 0) + (message.get("code") in _BROKEN)
         if self.done[student] == self.wanted.get(student):
             self.students += 1
+            if not self.enabled:  # a log (CI, a pipe): a line per student graded
+                broken = self.failed[student]
+                click.echo(
+                    f"graded {self.students}/{len(self.wanted)}: {student}, {self.done[student]} runs"
+                    + (f" ({broken} stopped or crashed)" if broken else ""),
+                    err=True,
+                )
         now = time.perf_counter()
         if not self.enabled or now - self.shown < 0.2 and self.runs < self.total_runs:
             return

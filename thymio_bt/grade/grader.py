@@ -16,11 +16,12 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shlex
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -65,6 +66,7 @@ def grade(
     select: Callable[[list[World]], list[World]] | None = None,
     relative_to: Path | None = None,
     hidden_worlds: Path | None = None,
+    sandbox: str = "plugins",
 ) -> dict[str, Any]:
     """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
@@ -74,7 +76,9 @@ def grade(
     ``secret``: the course's, for generated worlds with a secret seed; ``select``: the worlds to run
     (all when None); ``relative_to``: the folder the results go to, which the commands reproducing
     runs are relative to (the current one when None); ``hidden_worlds``: where the hidden
-    variants' mazes go instead of ``worlds`` (out of a site students see)."""
+    variants' mazes go instead of ``worlds`` (out of a site students see).
+    ``sandbox``: whose trees tick in a confined process of their own (:mod:`.sandbox`): those of
+    submissions with plugins (``plugins``), or every one (``always``: slower, for measurements)."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
@@ -83,6 +87,8 @@ def grade(
         made = select(made)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
+    for each in tasks:
+        each.sandboxed = each.sandboxed or (sandbox == "always" and each.run_plugins)
     by_name = {e.submission.name: e for e in entries}
     if started is not None:
         started({t.name: t.runs for t in tasks})
@@ -96,9 +102,14 @@ def grade(
 
     if executor is None:
         _warm()
-        ForkPool[StudentTask](workers, _limits(assignment), progress=heard, stop=stop).run(
-            tasks, grade_runs, lambda t: t.runs
-        )
+        sandboxed = any(t.sandboxed for t in tasks)
+        # a confined student is two processes that take turns (the simulation, its tree): twice as
+        # many at once keep the cores busy while each waits for the other
+        parallel = 2 * workers if sandboxed else workers
+        with _zygote(sandboxed):
+            ForkPool[StudentTask](parallel, _limits(assignment), progress=heard, stop=stop).run(
+                tasks, grade_runs, lambda t: t.runs
+            )
     else:
         for name, messages in executor.imap_unordered(graded_remotely, tasks):
             task = by_name[name].task
@@ -107,6 +118,11 @@ def grade(
                 heard(task, message)
             if stop():
                 break
+    if stop():  # a signal: the students whose runs were not all made say so
+        for entry in entries:
+            if entry.task is not None and len(entry.runs) < entry.task.runs and entry.status == "graded":
+                entry.status = "interrupted"
+                entry.messages.append(f"interrupted after {len(entry.runs)} of {entry.task.runs} runs")
     return results(assignment, path, made, entries, time.perf_counter() - began, relative_to)
 
 
@@ -122,9 +138,30 @@ def _warm() -> None:
 
 def graded_remotely(task: StudentTask) -> tuple[str, list[dict[str, Any]]]:
     """One student's runs on a cluster's worker (still in a child process under the limits)."""
+    from thymio_bt.grade.sandboxes import ZYGOTE
+
     limits = task.limits or Limits()
+    if task.sandboxed:  # one zygote for the worker's tasks, its threads' too
+        ZYGOTE.ensure()
     ((_, messages),) = ForkPool[StudentTask](1, limits).run([task], grade_runs, lambda t: t.runs)
     return task.name, messages
+
+
+@contextlib.contextmanager
+def _zygote(needed: bool) -> Iterator[None]:
+    """The process that starts submissions' confined processes, while the workers run (if needed)."""
+    from thymio_bt.grade.reaping import remove_cgroups_of, set_subreaper
+    from thymio_bt.grade.sandboxes import ZYGOTE
+
+    if not needed:
+        yield
+        return
+    set_subreaper()  # what a worker's submission leaves behind stays beneath the grader
+    try:
+        with ZYGOTE:
+            yield
+    finally:  # the workers' cgroups, once the zygote has ended every process (a signal stops workers early)
+        remove_cgroups_of(os.getpid())
 
 
 def _limits(assignment: Assignment) -> Limits:
@@ -159,8 +196,30 @@ def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -
         run_plugins=assignment.palette.plugins,
         limits=_limits(assignment),
         time_limit=assignment.time_limit,
+        sandboxed=assignment.palette.plugins and _has_plugins(mission),
+        home=str(submission.folder) if submission.folder else None,
     )
     return entry
+
+
+def _confinement(assignment: Assignment, entries: list[Entry]) -> str:
+    """What held around the students' code, for the summary (see :mod:`.confine`)."""
+    from thymio_bt.grade.confine import plan
+
+    if not assignment.palette.plugins:
+        return "nothing to confine: the assignment allows no plugins (a YAML tree runs no student code)"
+    if not any(e.task is not None and e.task.sandboxed for e in entries):
+        return "nothing to confine: no submission brings plugins"
+    return plan().summary()
+
+
+def _has_plugins(mission: Any) -> bool:
+    """Whether a mission (read without running its plugins) names any plugin: its tree's code is then
+    the student's, run in a confined process of its own."""
+    from thymio_bt.mission.unrun_plugins import UncheckedParams
+
+    stand_ins = any(getattr(cls, "Params", None) is UncheckedParams for _, cls in mission.registry.items())
+    return stand_ins or any(p.suffix == ".py" for p in mission.sources)
 
 
 def results(
@@ -207,7 +266,8 @@ def results(
             ],
         },
         "students": students,
-        "summary": summary(students, [c.name for c in assignment.criteria], wall),
+        "summary": summary(students, [c.name for c in assignment.criteria], wall)
+        | {"confinement": _confinement(assignment, entries)},
         "similar": similar_groups(students),
     }
 
@@ -218,7 +278,7 @@ def summary(students: list[dict[str, Any]], criteria: list[str], wall: float) ->
     graded = [s for s in students if s["status"] == "graded"]
     return {
         "students": len(students),
-        **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error")},
+        **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error", "interrupted")},
         "runs": sum(len(s["runs"]) for s in students),
         "wall_time": round(wall, 3),
         "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
@@ -250,7 +310,7 @@ def update(old: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
     criteria = [c["name"] for c in new["assignment"]["criteria"]]
     return new | {
         "students": students,
-        "summary": summary(students, criteria, wall),
+        "summary": summary(students, criteria, wall) | {"confinement": new["summary"].get("confinement")},
         "similar": similar_groups(students),
     }
 

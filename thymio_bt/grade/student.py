@@ -22,6 +22,7 @@ Example (in this process; the grader runs it in a child)::
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import UserError
@@ -49,6 +50,10 @@ class StudentTask:
     run_plugins: bool = True
     limits: Limits | None = None
     time_limit: float | None = None
+    #: run the tree in a confined process of its own (:mod:`.sandbox`): a submission with plugins
+    sandboxed: bool = False
+    #: the student's folder (copied for the confined process), None for a lone mission file
+    home: str | None = None
 
     @property
     def runs(self) -> int:
@@ -61,27 +66,84 @@ class StudentTask:
 
 
 def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
-    """Run ``task``'s runs but the first ``skip``, sending a ``start`` then a ``run`` message each."""
+    """Run ``task``'s runs but the first ``skip``, sending a ``start`` then a ``run`` message each.
+    Once :data:`OVERRUNS` runs went over a time limit (wall-clock or CPU), the others fail at once."""
     missions: dict[str, Mission | str] = {}
     pictured: set[str] = set()
-    for index, (world, seed) in enumerate(task.plan()):
-        if index < skip:
+    overran: list[dict[str, Any]] = []
+    outside = _Outside(task)
+    try:
+        for index, (world, seed) in enumerate(task.plan()):
+            if index < skip:
+                pictured.add(world.name)
+                continue
+            send({"kind": "start", "index": index})
+            if world.name not in missions:
+                try:
+                    plugins = task.run_plugins and not task.sandboxed
+                    missions[world.name] = world.mission(task.file, plugins, task.time_limit)
+                except UserError as exc:
+                    missions[world.name] = f"the mission cannot run in this world: {exc}"
+            mission = missions[world.name]
+            picture = world.name not in pictured
             pictured.add(world.name)
-            continue
-        send({"kind": "start", "index": index})
-        if world.name not in missions:
-            try:
-                missions[world.name] = world.mission(task.file, task.run_plugins, task.time_limit)
-            except UserError as exc:
-                missions[world.name] = f"the mission cannot run in this world: {exc}"
-        mission = missions[world.name]
-        picture = world.name not in pictured
-        pictured.add(world.name)
-        send(run_message(task, index, world, seed, mission, picture))
+            if len(overran) >= OVERRUNS:
+                message = _skipped(task, index, world, seed, overran)
+            else:
+                message = run_message(task, index, world, seed, mission, picture, outside)
+                if message.get("code") == "LIMIT" and "time limit" in str(message.get("reason")):
+                    overran.append(message)
+            send(message)
+    finally:
+        outside.close()
+
+
+#: how many runs of a student may go over the wall-clock limit before the rest are skipped
+OVERRUNS = 2
+
+
+def _skipped(task: StudentTask, index: int, world: World, seed: int, overran: list[dict[str, Any]]) -> dict[str, Any]:
+    """A run not made: the student's runs already went over the time limit :data:`OVERRUNS` times."""
+    criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
+    head = {"kind": "run", "index": index, "variant": world.name, "seed": seed, "robot": world.robot}
+    said = "; ".join(f"run {m['index'] + 1}: {m['reason']}" for m in overran)
+    return head | _broken("LIMIT", f"skipped: {len(overran)} runs went over the time limit ({said})", criteria)
+
+
+class _Outside:
+    """The confined process a sandboxed student's runs tick their tree in (one at a time: a run
+    that broke it, by a limit or a fault, is followed by a fresh one)."""
+
+    def __init__(self, task: StudentTask) -> None:
+        self.task = task
+        self.sandbox: Any = None
+
+    def get(self, mission: Mission) -> Any:
+        """The process, started if need be."""
+        from thymio_bt.grade.sandboxes import Sandbox
+
+        if self.sandbox is None:
+            limits = self.task.limits or Limits()
+            home = Path(self.task.home) if self.task.home else None
+            cpu = int(limits.cpu * self.task.runs + 30)
+            self.sandbox = Sandbox.open(Path(self.task.file), home, list(mission.sources), limits.memory_mib << 20, cpu)
+        return self.sandbox
+
+    def close(self) -> None:
+        """End the process (and all it started)."""
+        if self.sandbox is not None:
+            self.sandbox.close()
+            self.sandbox = None
 
 
 def run_message(
-    task: StudentTask, index: int, world: World, seed: int, mission: Mission | str, picture: bool
+    task: StudentTask,
+    index: int,
+    world: World,
+    seed: int,
+    mission: Mission | str,
+    picture: bool,
+    outside: _Outside | None = None,
 ) -> dict[str, Any]:
     """Run ``mission`` in ``world`` with ``seed`` and judge it: the ``run`` message."""
     from thymio_bt.robot.model import robot_model
@@ -93,9 +155,18 @@ def run_message(
         return head | _broken("WORLD_ERROR", mission, criteria)
     limits = task.limits or Limits()
     try:
-        result = run_limited(limits, lambda: Run(mission, seed, node_stats=True).run())
+        if task.sandboxed and outside is not None:
+            result = _outside_run(outside, mission, seed, limits, world)
+        else:
+            result = run_limited(limits, lambda: Run(mission, seed, node_stats=True).run())
     except RunLimit as exc:
+        if outside is not None:
+            outside.close()
         return head | _broken("LIMIT", str(exc), criteria)
+    except _Broken as exc:
+        if outside is not None:
+            outside.close()
+        return head | _broken(exc.code, exc.reason, criteria)
     except MemoryError:
         return head | _broken("LIMIT", f"the run used more than its memory ({limits.memory_mib} MiB)", criteria)
     except UserError as exc:
@@ -127,6 +198,51 @@ def run_message(
         samples = result.trajectory[::step] + result.trajectory[-1:]
         message["trajectory"] = [[round(v, 4) for v in sample] for sample in samples]
     return message
+
+
+class _Broken(Exception):
+    """A run the submission's process broke: its code and reason."""
+
+    def __init__(self, code: str, reason: str) -> None:
+        super().__init__(reason)
+        self.code, self.reason = code, reason
+
+
+def _outside_run(outside: _Outside, mission: Mission, seed: int, limits: Limits, world: World) -> Any:
+    """The run with its tree in the submission's confined process (:mod:`.remote_run`)."""
+    from thymio_bt.grade.remote_run import RemoteRun, SubmissionFault
+    from thymio_bt.grade.wire import WireError
+
+    try:
+        sandbox = outside.get(mission)
+    except (WireError, OSError) as exc:
+        raise _Broken("CRASH", f"the submission's process could not start: {exc}") from None
+    if sandbox.error:
+        raise _Broken("CRASH", sandbox.error)
+    home = Path(outside.task.home) if outside.task.home else None
+    spec = {
+        "mission": {
+            "path": str(sandbox.copy_of(Path(outside.task.file), home)),
+            "overrides": {**world.settings, "time_limit": f"{mission.time_limit:g}"},
+            "maze": sandbox.maze_file(mission.maze),
+            "start": world.start,
+        },
+        "period": 1.0 / mission.tick_hz,
+        "bounds": list(mission.maze.bounds()) if mission.maze.walls else None,
+        "goal": [
+            [min(a.start[0], a.end[0]), min(a.start[1], a.end[1]), max(a.start[0], a.end[0]), max(a.start[1], a.end[1])]
+            for a in mission.maze.goal
+        ],
+    }
+    try:
+        result = RemoteRun(mission, seed, sandbox, limits, spec).run()
+        sandbox.end_run()  # what the run started ends with it
+        return result
+    except SubmissionFault as exc:
+        raise _Broken("EXCEPTION", str(exc)) from None
+    except WireError as exc:
+        said = f"os._exit, a crash, or its memory limit of {limits.memory_mib} MiB"
+        raise _Broken("CRASH", f"{exc} during the run ({said})") from None
 
 
 def _rows(stats: dict[str, dict[str, float]] | None) -> dict[str, Any]:

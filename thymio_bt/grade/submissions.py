@@ -34,6 +34,8 @@ class Submission:
     name: str
     file: Path | None
     problem: str | None = None
+    #: the student's folder, for a folder submission (its plugins' process gets a copy of it)
+    folder: Path | None = None
 
 
 def find_submissions(paths: Sequence[str | Path], expected: str | None) -> list[Submission]:
@@ -65,10 +67,10 @@ def _in_folder(folder: Path, expected: str | None) -> Submission:
     if expected is not None:
         file = folder / expected
         if file.is_file():
-            return Submission(name, file)
+            return Submission(name, file, folder=folder)
     missions = sorted(p for p in folder.iterdir() if p.suffix.lower() in MISSION_SUFFIXES and p.is_file())
     if len(missions) == 1:
-        return Submission(name, missions[0])
+        return Submission(name, missions[0], folder=folder)
     wanted = f"no {expected}, nor any" if expected else "no"
     if not missions:
         return Submission(name, None, f"{wanted} mission file (.yaml or .xml) in {folder.name}")

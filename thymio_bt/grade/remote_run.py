@@ -1,0 +1,259 @@
+"""A run whose tree ticks in a submission's confined process (:mod:`.sandbox`) while the simulation,
+the clock, the ground truth and the record stay here, in the grader's worker.
+
+:class:`RemoteRun` is a :class:`~thymio_bt.run.runner.Run` whose tree is a stand-in: each tick it
+sends the robot's readings, odometry and clock, and takes back the drive command, the entity
+requests, the tree's status and events. What comes back is untrusted data: sizes are capped (by
+:mod:`.wire`), numbers must be finite, node paths must be the plan's, events of the entities and of
+collisions are the simulator's own (a submission's are dropped), and silence past the run's
+wall-clock limit fails the run naming the node that was running.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from typing import Any
+
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from thymio_bt.behaviours.base import snapshot
+from thymio_bt.grade.isolation import Limits, RunLimit
+from thymio_bt.grade.sandboxes import Sandbox
+from thymio_bt.grade.wire import Deadline, WireError
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Request, RequestState
+from thymio_bt.run.result import EndKind, RunResult, Verdict
+from thymio_bt.run.runner import Run
+
+#: events only the simulator says (a submission's of these kinds are dropped)
+OWN_EVENTS = frozenset({"delete_entity", "spawn_entity", "collision"})
+#: at most this many events, entity requests per tick, characters in a text from a submission
+MAX_EVENTS, MAX_REQUESTS, MAX_TEXT = 20_000, 8, 500
+#: at most this many drive commands a tick (each is applied, as a tree in the grader's process would)
+MAX_DRIVES = 16
+#: how often (ticks; seconds while it is silent) the submission's CPU time is read
+CPU_EVERY, CPU_POLL = 20, 0.25
+
+
+class SubmissionFault(Exception):
+    """The submission's process broke the run: its tree raised, or it sent what it must not."""
+
+
+class RemoteRun(Run):
+    """One run of ``mission`` (read here without running its plugins) against the submission's
+    process in ``sandbox``; ``spec`` tells that process which mission to load and how."""
+
+    def __init__(self, mission: Any, seed: int, sandbox: Sandbox, limits: Limits, spec: dict[str, Any]) -> None:
+        from thymio_bt.run.coverage import plan_paths
+
+        self.sandbox = sandbox
+        self.limits = limits
+        self.spec = spec
+        self.paths = {path for _, path, _ in plan_paths(mission.tree)}
+        self.deadline = math.inf
+        super().__init__(mission, seed)
+
+    def _build(self, substitutions: dict[str, Any] | None) -> Behaviour:
+        return _Remote(self)
+
+    def run(self, *args: Any, **kwargs: Any) -> RunResult:
+        """Have the submission's process load its tree, run, then take its node statistics."""
+        self.deadline = time.monotonic() + self.limits.wall
+        self.cpu_start = _cpu(self.sandbox.pid)
+        link = self.sandbox.link
+        link.send({"run": self.spec})
+        ready = self._receive()
+        if "error" in ready:
+            raise SubmissionFault(_text(ready["error"]))
+        result = super().run(*args, **kwargs)
+        link.send({"end": True, "t": self.backend.time()})
+        final = self._receive()
+        result.node_stats = self._stats(final.get("stats"))
+        result.events += self.root.events(final.get("ev"))  # type: ignore[attr-defined]
+        return result
+
+    def _receive(self) -> dict[str, Any]:
+        """The submission's next message; its wall-clock or CPU limit (read every
+        :data:`CPU_POLL` s while it is silent) is :class:`RunLimit`, naming the node it was in."""
+        while True:
+            try:
+                message = self.sandbox.link.receive(min(self.deadline, time.monotonic() + CPU_POLL))
+                if "slow" not in message:
+                    return message
+                slow = message["slow"]  # a tick is taking long: the node it is in
+                if isinstance(slow, str) and slow in self.paths and isinstance(self.root, _Remote):
+                    self.root.tip_path = slow
+            except Deadline:
+                if time.monotonic() >= self.deadline:
+                    self._limit(f"went over its wall-clock time limit of {self.limits.wall:g} s")
+                self.check_cpu()
+
+    def check_cpu(self) -> None:
+        """:class:`RunLimit` when the submission's process used more CPU than the run may."""
+        if _cpu(self.sandbox.pid) - self.cpu_start > self.limits.cpu:
+            self._limit(f"used more than its CPU time limit of {self.limits.cpu:g} s")
+
+    def _limit(self, what: str) -> None:
+        where = getattr(self.root, "tip_path", None)
+        raise RunLimit(f"the run {what}" + (f", in '{where}'" if where else ""))
+
+    def _stats(self, rows: Any) -> dict[str, Any]:
+        if not isinstance(rows, dict):
+            return {}
+        out = {}
+        for path, row in list(rows.items())[: len(self.paths)]:
+            if path in self.paths and isinstance(row, dict):
+                counts = {k: row.get(k) for k in ("ticks", "successes", "failures", "running_time", "running")}
+                if all(isinstance(v, int | float) and math.isfinite(v) and v >= 0 for v in counts.values()):
+                    ended = row.get("ended_by")
+                    ended_by = (
+                        {k: int(v) for k, v in ended.items() if k in self.paths and isinstance(v, int) and v >= 0}
+                        if isinstance(ended, dict)
+                        else {}
+                    )
+                    out[path] = {**counts, "ended_by": ended_by}
+        return out
+
+    def _end_of_run(self, ending: Any, interrupts: Any) -> Verdict:
+        remote: _Remote = self.root  # type: ignore[assignment]
+        if ending.kind is EndKind.FINISHED:
+            if remote.status is Status.FAILURE:
+                path, code, reason = remote.failure
+                return Verdict("FAILURE", reason, code, path)
+            return Verdict(remote.status.name)
+        said = self._cut_short_reason(ending, interrupts)
+        return Verdict(ending.kind.report_status, said, ending.code, ending.failed_path or remote.tip_path)
+
+
+class _Remote(Behaviour):
+    """The stand-in root: a tick is one exchange with the submission's process."""
+
+    def __init__(self, run: RemoteRun) -> None:
+        super().__init__(name=run.mission.tree.name)
+        self.run = run
+        self.tip_path: str | None = None
+        self.failure: tuple[str | None, str, str] = (None, "FAILED", "the tree failed")
+        self.pending: dict[int, tuple[Request, dict[str, Any]]] = {}
+        self.served: list[list[Any]] = []
+        self.count = 0
+        self.events_taken = 0
+
+    def update(self) -> Status:
+        run, backend = self.run, self.run.backend
+        self._serve()
+        self.count += 1
+        if self.count % CPU_EVERY == 0:
+            run.check_cpu()
+        pose, velocity, command = backend.pose(), backend.velocity(), backend.command()
+        scan = backend.proximity()
+        observation = {
+            "t": backend.time(),
+            "e": backend.exists(),
+            "p": None if pose is None else [pose.x, pose.y, pose.yaw],
+            "s": None if scan is None else [_finite_or_none(scan.get(n)) for n in SENSOR_NAMES],
+            "v": [velocity.linear, velocity.angular],
+            "c": [command.linear, command.angular],
+            "n": len(backend.collisions),
+            "r": self.served,
+        }
+        self.served = []
+        try:
+            run.sandbox.link.send(observation)
+        except WireError as exc:
+            raise SubmissionFault(str(exc)) from None
+        reply = run._receive()
+        return self._take(reply)
+
+    def _take(self, reply: dict[str, Any]) -> Status:
+        """Apply a reply (checked): the command, the requests, the events; the tree's status."""
+        run, backend = self.run, self.run.backend
+        if "x" in reply:
+            raise SubmissionFault(_text(reply["x"]))
+        for drive in _list(reply.get("d"))[:MAX_DRIVES]:
+            if not (isinstance(drive, list) and len(drive) == 2 and all(_finite(v) for v in drive)):
+                raise SubmissionFault("the submission's process sent a drive command that is not two numbers")
+            backend.drive(float(drive[0]), float(drive[1]))
+        for request in _list(reply.get("q"))[:MAX_REQUESTS]:
+            self._request(request)
+        run.events.extend(self.events(reply.get("ev")))
+        if "tip" in reply:
+            tip = reply["tip"]
+            self.tip_path = tip if isinstance(tip, str) and tip in run.paths else None
+        try:
+            status = Status[str(reply.get("st"))]
+        except KeyError:
+            raise SubmissionFault("the submission's process sent no status for its tree") from None
+        if status is Status.FAILURE:
+            failure = _list(reply.get("f")) + [None, None, None]
+            path = failure[0] if failure[0] in run.paths else None
+            self.failure = (path, _text(failure[1] or "FAILED")[:40], _text(failure[2] or "the tree failed"))
+        return Status.RUNNING if status is Status.INVALID else status
+
+    def _request(self, request: Any) -> None:
+        """An entity request from the tree: served by the simulator, answered in the next observation."""
+        backend = self.run.backend
+        if not (isinstance(request, list) and len(request) == 6 and isinstance(request[0], int)):
+            return
+        key, kind, entity, x, y, yaw = request
+        if not (isinstance(entity, str) and len(entity) <= 64 and all(_finite(v) for v in (x, y, yaw))):
+            return
+        if kind == "delete":
+            before = snapshot(backend)
+            self.pending[key] = (backend.request_delete(entity), {"entity": entity, **before})
+        elif kind == "spawn":
+            pose = Pose(float(x), float(y), float(yaw))
+            fields = {"entity": entity, "pose": {k: round(v, 6) for k, v in pose.as_dict().items()}}
+            self.pending[key] = (backend.request_spawn(entity, pose), fields)
+
+    def _serve(self) -> None:
+        """The requests the simulator served since the last tick: their answers, their events."""
+        for key, (request, fields) in list(self.pending.items()):
+            if request.state is RequestState.PENDING:
+                continue
+            del self.pending[key]
+            self.served.append([key, request.state.value, request.reason])
+            if request.state is RequestState.SUCCEEDED:
+                self.run.events.emit(self.run.backend.time(), f"{request.kind}_entity", **fields)
+
+    def events(self, events: Any) -> list[dict[str, Any]]:
+        """The submission's events that may be kept: checked, capped, none of the simulator's kinds."""
+        now = self.run.backend.time() + 1e-9
+        kept = []
+        for event in _list(events):
+            if self.events_taken >= MAX_EVENTS:
+                break
+            if not (isinstance(event, dict) and isinstance(event.get("kind"), str) and _finite(event.get("t"))):
+                continue
+            if event["kind"] in OWN_EVENTS or not 0 <= event["t"] <= now or len(repr(event)) > 4 * MAX_TEXT:
+                continue
+            kept.append(event)
+            self.events_taken += 1
+        return kept
+
+
+def _finite_or_none(value: Any) -> float | None:
+    return float(value) if _finite(value) else None
+
+
+def _finite(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _list(value: Any) -> list[Any]:
+    return value if isinstance(value, list) else []
+
+
+def _text(value: Any) -> str:
+    return str(value)[:MAX_TEXT]
+
+
+def _cpu(pid: int) -> float:
+    """The CPU seconds process ``pid`` used so far (0 when it cannot be read)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as stat:
+            fields = stat.read().rsplit(b")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return 0.0
