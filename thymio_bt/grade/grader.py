@@ -272,13 +272,17 @@ def results(
     }
 
 
+#: a student's ``status`` in results.json, each counted in its summary
+STATUSES = ("graded", "invalid", "error", "interrupted")
+
+
 def summary(students: list[dict[str, Any]], criteria: list[str], wall: float) -> dict[str, Any]:
     """results.json's ``summary`` of ``students``: counts, runs, the mean score, each criterion's
     pass rate over the graded students."""
     graded = [s for s in students if s["status"] == "graded"]
     return {
         "students": len(students),
-        **{status: sum(s["status"] == status for s in students) for status in ("graded", "invalid", "error", "interrupted")},
+        **{status: sum(s["status"] == status for s in students) for status in STATUSES},
         "runs": sum(len(s["runs"]) for s in students),
         "wall_time": round(wall, 3),
         "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
