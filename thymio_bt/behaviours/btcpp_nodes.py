@@ -32,6 +32,7 @@ from py_trees.common import Status
 
 from thymio_bt.behaviours.base import ConditionBehaviour
 from thymio_bt.behaviours.ticking import tick
+from thymio_bt.errors import ThymioBtError
 
 IDLE, RUNNING, SUCCESS, FAILURE = Status.INVALID, Status.RUNNING, Status.SUCCESS, Status.FAILURE
 
@@ -48,7 +49,7 @@ SKIPPED: Any = _Skipped()
 MAX_PASSES = 10_000
 
 
-class NeverYields(RuntimeError):
+class NeverYields(RuntimeError, ThymioBtError):
     """A tree that asks to be woken up again at every pass of a tick: BT.CPP's tickOnce() never returns."""
 
 

@@ -42,6 +42,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from itertools import pairwise
 
+from thymio_bt.errors import ThymioBtError
 from thymio_bt.maze import Maze
 from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.robot.interface import Backend, Pose
@@ -80,7 +81,7 @@ def arena() -> Maze:
     )
 
 
-class Stopped(Exception):
+class Stopped(ThymioBtError):
     """The calibration was stopped (``stopped()`` said so) during the measure named ``step``.
 
     >>> str(Stopped("2/3 proximity"))

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import TYPE_CHECKING
 
+from thymio_bt.errors import ThymioBtError
+
 if TYPE_CHECKING:
     from thymio_bt.robot.model import RobotModel
 
@@ -51,7 +53,7 @@ def wrap_angle(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-class RobotLost(Exception):
+class RobotLost(ThymioBtError):
     """Raised by a backend whose robot stopped answering: the run ends as FAILURE ``ROBOT_LOST``."""
 
 

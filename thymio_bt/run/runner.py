@@ -33,7 +33,7 @@ from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
 from thymio_bt.behaviours.base import describe, is_fault, node_path, snapshot
 from thymio_bt.behaviours.ticking import tick
-from thymio_bt.errors import Problem, UserError
+from thymio_bt.errors import Problem, ThymioBtError, UserError
 from thymio_bt.mission import Mission, build_tree
 from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
@@ -52,7 +52,7 @@ CONTACT = 1e-6
 PACE_SLICE = 0.1
 
 
-class StopRun(Exception):
+class StopRun(ThymioBtError):
     """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
     as a FAILURE with code STOPPED and the message as its reason, with its report and log intact."""
 

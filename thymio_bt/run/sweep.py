@@ -29,6 +29,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
+from thymio_bt.errors import ThymioBtError
 from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.interrupts import Interrupted, Interrupts
 
@@ -181,7 +182,7 @@ class LocalPool:
             pool.join()
 
 
-class WorkerDied(RuntimeError):
+class WorkerDied(RuntimeError, ThymioBtError):
     """A sweep worker process ended in the middle of its runs (killed, crashed, or ``os._exit``)."""
 
     def __init__(self, exitcode: int | None) -> None:
