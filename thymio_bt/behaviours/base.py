@@ -189,6 +189,9 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     needs_robot: ClassVar[bool] = True
     #: Whether it fails with COLLISION when the robot hits a wall while it runs.
     fails_on_collision: ClassVar[bool] = True
+    #: Whether a BT.CPP control node ticks it again once it completed (BT.CPP's SyncActionNode, as
+    #: every condition); otherwise it keeps its result until reset, as a StatefulActionNode.
+    bt_sync: ClassVar[bool] = False
 
     #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
     created = 0
@@ -391,11 +394,15 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             board.register_key(key, access=Access.READ)
         return board
 
+    def keeps_moving(self) -> bool:
+        """Whether the robot is left driving when this moving behaviour ends (a motion's ``keep_moving``)."""
+        return False
+
     def terminate(self, new_status: Status) -> None:
         """py_trees' hook when the node ends or is halted: stop a moving robot, log the end."""
         if self.status != Status.RUNNING and new_status == Status.INVALID:
             return  # a parent resetting a behaviour that already ended (or never started)
-        if self.moves and not getattr(self.params, "keep_moving", False) and self.robot.exists():
+        if self.moves and not self.keeps_moving() and self.robot.exists():
             self.robot.drive(0.0, 0.0)
         if not self.emits_events:
             return
@@ -424,6 +431,13 @@ class ConditionBehaviour(RobotBehaviour):
 
     emits_events = False
     fails_on_collision = False
+    bt_sync = True  # BT.CPP ticks a condition every time
+
+
+class UnrunPlugin(RobotBehaviour):
+    """The base of the stand-ins for plugin nodes whose code was not imported
+    (:func:`thymio_bt.mission.unrun_plugins.stand_in`): validate, tree and lint read their names and
+    parameters, and know nothing of what they do; they are never ticked."""
 
 
 def _safe_repr(value: Any) -> str:

@@ -126,6 +126,9 @@ class Robot(ABC):
     #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
     #: 0 for the simulation, whose behaviours see the world of this tick.
     latency: float = 0.0
+    #: whether :meth:`proximity_raw` can give a real Thymio's integer readings (a real robot, a
+    #: simulation of them): what a calibration samples
+    raw_readings: bool = False
 
     @abstractmethod
     def drive(self, linear: float, angular: float) -> None:
@@ -138,6 +141,11 @@ class Robot(ABC):
     @abstractmethod
     def proximity(self) -> Scan | None:
         """The latest proximity scan (refreshed at 10 Hz), or None while the robot does not exist."""
+
+    def proximity_raw(self) -> dict[str, int] | None:
+        """The latest readings as a real Thymio's integers, by sensor name; None while the robot does
+        not exist, or from a robot without them (``raw_readings`` false)."""
+        return None
 
     @abstractmethod
     def pose(self) -> Pose | None:

@@ -25,8 +25,9 @@ from py_trees.behaviour import Behaviour
 from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.base import RobotBehaviour, node_path
 from thymio_bt.behaviours.cellmap import CellMap
+from thymio_bt.behaviours.control import SimTimeout
 from thymio_bt.behaviours.mapping import MazeMapParams
 
 
@@ -159,19 +160,22 @@ def learnt_map(root: Behaviour) -> CellMap | None:
     return None
 
 
+def _failure(node: Behaviour) -> tuple[str, str] | None:
+    """The (code, reason) a node recorded when it failed: a robot behaviour's, or a time limit's."""
+    return node.failure if isinstance(node, (RobotBehaviour, SimTimeout)) else None
+
+
 def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
     """Follow FAILURE down from the root to the node that caused it: (path, code, reason)."""
     node = root
     while True:
         failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
-        if not failed or getattr(node, "failure", None):
+        if not failed or _failure(node):
             break
         # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)
-        explained = [
-            c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE for n in c.iterate())
-        ]
+        explained = [c for c in failed if any(_failure(n) and n.status == Status.FAILURE for n in c.iterate())]
         node = (explained or failed)[-1]
-    failure = getattr(node, "failure", None)
+    failure = _failure(node)
     if failure:
         code, reason = failure
         return node_path(node), code, reason
