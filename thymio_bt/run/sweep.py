@@ -72,7 +72,7 @@ def content_key(sources: Iterable[Path], *settings: Any) -> str:
 def run_job(job: Job) -> dict[str, Any]:
     """Run one job and summarise it (the function executors map); missions are loaded once per worker.
     With :attr:`Job.coverage`, the summary has the run's ``coverage`` JSON too."""
-    from thymio_bt.behaviours.base import describe
+    from thymio_bt.behaviours.base import FailureCode, describe
     from thymio_bt.mission import load_mission
     from thymio_bt.run.coverage import Coverage
     from thymio_bt.run.runner import Run
@@ -90,7 +90,7 @@ def run_job(job: Job) -> dict[str, Any]:
             "sim_time": 0.0,
             "final_pose": None,
             "reason": f"the run raised {describe(exc)}",
-            "code": "EXCEPTION",
+            "code": FailureCode.EXCEPTION,
             "failed_path": None,
             "collisions": 0,
             "first_stop_error": None,
