@@ -1,4 +1,5 @@
-"""User errors: problems a user can cause, reported as ``file:line:col: message (hint)``.
+"""User errors: problems a user can cause, reported as ``file:line:col: message (hint)``; and the
+root of every thymio-bt exception, :class:`ThymioBtError`.
 
 Every loader collects :class:`Problem` s and raises one :class:`UserError` holding all of them, so
 a student sees every mistake of a file at once. The CLI prints them and exits with code 2.
@@ -50,7 +51,14 @@ class Problem:
         return text
 
 
-class UserError(Exception):
+class ThymioBtError(Exception):
+    """The root of every exception thymio-bt raises (docs/architecture.md lists them): ``except
+    ThymioBtError`` catches them all, and each keeps its standard base (``UnitError`` is still a
+    ``ValueError``). Signals that end a command are ``KeyboardInterrupt`` s instead, out of reach
+    of ``except Exception``."""
+
+
+class UserError(ThymioBtError):
     """One or more problems the user can fix; never a bug of thymio-bt."""
 
     def __init__(self, problems: Iterable[Problem] | Problem | str):

@@ -13,7 +13,7 @@ A tree that fails says which node and why, and every node's statistics come with
 
 >>> result = run_tree({"sequence": [{"MoveDistance": {"distance": "2m"}}, "Stop"]}, world("corridor"))
 >>> result.status, result.code, result.failed_path, result.reason
-('FAILURE', 'COLLISION', 'sequence/MoveDistance', 'the robot hit a wall')
+('FAILURE', <FailureCode.COLLISION: 'COLLISION'>, 'sequence/MoveDistance', 'the robot hit a wall')
 >>> result.node_stats["sequence/MoveDistance"]
 {'ticks': 65, 'successes': 0, 'failures': 1, 'running_time': 6.4}
 

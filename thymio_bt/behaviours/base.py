@@ -54,11 +54,27 @@ _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
 RUNNING = Status.RUNNING
 
 
-class FailureCode(str, Enum):
-    """Why a behaviour failed, in the style of Nav2's error codes.
+class TextEnum(str, Enum):
+    """A ``str`` enum that reads as its text (Python 3.11's ``StrEnum``; 3.10 lacks it): it equals,
+    prints, formats and is written to JSON as the string it stands for, so a report or a message is
+    the same whether it holds the member or the text.
+
+    >>> f"[{FailureCode.TIMEOUT}]", str(FailureCode.TIMEOUT), FailureCode.TIMEOUT == "TIMEOUT"
+    ('[TIMEOUT]', 'TIMEOUT', True)
+    """
+
+    def __str__(self) -> str:
+        return str.__str__(self)
+
+    def __format__(self, spec: str) -> str:
+        return str.__format__(self, spec)
+
+
+class FailureCode(TextEnum):
+    """Why a behaviour, or a run, failed, in the style of Nav2's error codes.
 
     These are the built-in codes; a plugin behaviour may fail with a code of its own, any
-    UPPER_SNAKE_CASE string (``self.fail("LINE_LOST", "...")``): reports carry codes as strings.
+    UPPER_SNAKE_CASE string (``self.fail("LINE_LOST", "...")``): reports carry codes as their text.
     """
 
     TIMEOUT = "TIMEOUT"
@@ -76,6 +92,17 @@ class FailureCode(str, Enum):
     NO_PATH = "NO_PATH"
     #: the behaviour's code raised an exception (or called sys.exit): a bug, reported with its place
     EXCEPTION = "EXCEPTION"
+    # the run's own codes: a run cut short (thymio_bt.run.result.Ending), or judged when it ended
+    #: a real robot stopped answering (:class:`~thymio_bt.robot.interface.RobotLost`)
+    ROBOT_LOST = "ROBOT_LOST"
+    #: the backend raised: a bug of the backend (a plugin's, say)
+    BACKEND_ERROR = "BACKEND_ERROR"
+    #: a signal (Ctrl-C, SIGTERM) ended the run
+    INTERRUPTED = "INTERRUPTED"
+    #: a tick hook raised :class:`~thymio_bt.run.runner.StopRun` (the viewer was closed, say)
+    STOPPED = "STOPPED"
+    #: the tree succeeded but the mission's ``expect:`` criteria did not all hold
+    EXPECTATION = "EXPECTATION"
 
 
 def describe(exc: BaseException) -> str:
@@ -189,6 +216,9 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     needs_robot: ClassVar[bool] = True
     #: Whether it fails with COLLISION when the robot hits a wall while it runs.
     fails_on_collision: ClassVar[bool] = True
+    #: Whether a BT.CPP control node ticks it again once it completed (BT.CPP's SyncActionNode, as
+    #: every condition); otherwise it keeps its result until reset, as a StatefulActionNode.
+    bt_sync: ClassVar[bool] = False
 
     #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
     created = 0
@@ -210,7 +240,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self.params: Any = params
         self.ctx = ctx
         self.robot = ctx.robot
-        self.failure: tuple[str, str] | None = None
+        self.failure: tuple[FailureCode | str, str] | None = None
         #: fields added to the behaviour_end event: a dict, or a function giving one when the
         #: behaviour ends (a behaviour that updates them every tick saves rounding what nobody reads)
         self.extra: dict[str, Any] | Callable[[], dict[str, Any]] = {}
@@ -325,11 +355,10 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     def fail(self, code: FailureCode | str, reason: str) -> Status:
         """Record why the behaviour fails (a :class:`FailureCode` or a plugin's own UPPER_SNAKE_CASE
         code) and return FAILURE."""
-        text = code.value if isinstance(code, FailureCode) else code
-        if not _CODE.fullmatch(text):
-            raise ValueError(f"failure code {text!r} must be UPPER_SNAKE_CASE, e.g. LINE_LOST")
-        self.failure = (text, reason)
-        self.feedback_message = f"{text}: {reason}"
+        if not _CODE.fullmatch(code):
+            raise ValueError(f"failure code {str(code)!r} must be UPPER_SNAKE_CASE, e.g. LINE_LOST")
+        self.failure = (code, reason)
+        self.feedback_message = f"{code}: {reason}"
         return Status.FAILURE
 
     def initialise(self) -> None:
@@ -391,11 +420,15 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             board.register_key(key, access=Access.READ)
         return board
 
+    def keeps_moving(self) -> bool:
+        """Whether the robot is left driving when this moving behaviour ends (a motion's ``keep_moving``)."""
+        return False
+
     def terminate(self, new_status: Status) -> None:
         """py_trees' hook when the node ends or is halted: stop a moving robot, log the end."""
         if self.status != Status.RUNNING and new_status == Status.INVALID:
             return  # a parent resetting a behaviour that already ended (or never started)
-        if self.moves and not getattr(self.params, "keep_moving", False) and self.robot.exists():
+        if self.moves and not self.keeps_moving() and self.robot.exists():
             self.robot.drive(0.0, 0.0)
         if not self.emits_events:
             return
@@ -424,6 +457,13 @@ class ConditionBehaviour(RobotBehaviour):
 
     emits_events = False
     fails_on_collision = False
+    bt_sync = True  # BT.CPP ticks a condition every time
+
+
+class UnrunPlugin(RobotBehaviour):
+    """The base of the stand-ins for plugin nodes whose code was not imported
+    (:func:`thymio_bt.mission.unrun_plugins.stand_in`): validate, tree and lint read their names and
+    parameters, and know nothing of what they do; they are never ticked."""
 
 
 def _safe_repr(value: Any) -> str:

@@ -30,8 +30,9 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import ConditionBehaviour
+from thymio_bt.behaviours.base import RobotBehaviour
 from thymio_bt.behaviours.ticking import tick
+from thymio_bt.errors import ThymioBtError
 
 IDLE, RUNNING, SUCCESS, FAILURE = Status.INVALID, Status.RUNNING, Status.SUCCESS, Status.FAILURE
 
@@ -48,7 +49,7 @@ SKIPPED: Any = _Skipped()
 MAX_PASSES = 10_000
 
 
-class NeverYields(RuntimeError):
+class NeverYields(RuntimeError, ThymioBtError):
     """A tree that asks to be woken up again at every pass of a tick: BT.CPP's tickOnce() never returns."""
 
 
@@ -62,7 +63,7 @@ def execute(child: Behaviour) -> Any:
     (a WhileDoElse whose condition was skipped) is an error, as in BT.CPP."""
     if isinstance(child, BtNode):
         status = child.execute_tick()
-    elif child.status in COMPLETED and not (isinstance(child, ConditionBehaviour) or getattr(child, "bt_sync", False)):
+    elif child.status in COMPLETED and not (isinstance(child, RobotBehaviour) and child.bt_sync):
         return child.status
     else:
         tick(child)

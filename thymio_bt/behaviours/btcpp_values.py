@@ -19,6 +19,8 @@ import math
 import re
 from typing import Any
 
+from thymio_bt.errors import ThymioBtError
+
 #: numbers closer than this are equal (BT.CPP compares doubles within float's epsilon)
 EPSILON = 1.1920928955078125e-07
 INT64 = (-(2**63), 2**63 - 1)
@@ -26,7 +28,7 @@ INT64 = (-(2**63), 2**63 - 1)
 _LEADING_NUMBER = re.compile(r"\s*[-+]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|inf(?:inity)?|nan)", re.IGNORECASE)
 
 
-class ScriptError(ValueError):
+class ScriptError(ValueError, ThymioBtError):
     """A script that does not parse, or that fails as it runs (a missing entry, a wrong type)."""
 
 

@@ -14,6 +14,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from thymio_bt.behaviours.base import FailureCode
 from thymio_bt.behaviours.ticking import tick
 
 
@@ -29,7 +30,7 @@ class SimTimeout(py_trees.decorators.Decorator):
         <Status.RUNNING: 'RUNNING'>
         >>> clock[0] = 30.0
         >>> tick(limit); limit.status, limit.decorated.status, limit.failure[0]
-        (<Status.FAILURE: 'FAILURE'>, <Status.INVALID: 'INVALID'>, 'TIMEOUT')
+        (<Status.FAILURE: 'FAILURE'>, <Status.INVALID: 'INVALID'>, <FailureCode.TIMEOUT: 'TIMEOUT'>)
     """
 
     def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
@@ -37,7 +38,7 @@ class SimTimeout(py_trees.decorators.Decorator):
         self.duration = duration
         self.clock = clock
         self.finish_time = 0.0
-        self.failure: tuple[str, str] | None = None
+        self.failure: tuple[FailureCode, str] | None = None
 
     def initialise(self) -> None:
         """py_trees' start hook: the time limit runs from now."""
@@ -50,7 +51,7 @@ class SimTimeout(py_trees.decorators.Decorator):
         now = self.clock()
         if self.decorated.status == Status.RUNNING and now >= self.finish_time - 1e-9:
             self.decorated.stop(Status.INVALID)
-            self.failure = ("TIMEOUT", f"'{self.decorated.name}' did not finish within {self.duration:g} s")
+            self.failure = (FailureCode.TIMEOUT, f"'{self.decorated.name}' did not finish within {self.duration:g} s")
             self.feedback_message = f"TIMEOUT: {self.failure[1]}"
             return Status.FAILURE
         if self.decorated.status == Status.RUNNING:

@@ -83,6 +83,15 @@ def approach_speed(remaining: float, cruise: float, gain: float, minimum: float,
     return limit if limit < best else best
 
 
+class Motion(RobotBehaviour):
+    """The base of the motions whose parameters have ``keep_moving``: the robot is then left driving
+    when the motion ends (the next motion takes over without a stop)."""
+
+    def keeps_moving(self) -> bool:
+        """Its parameters' ``keep_moving``."""
+        return bool(self.params.keep_moving)
+
+
 class MoveUntilWallParams(BehaviourParams):
     """Drive forward until a proximity sensor reads ``distance``."""
 
@@ -111,7 +120,7 @@ class MoveUntilWallParams(BehaviourParams):
 WALL_READINGS = 4
 
 
-class MoveUntilWall(RobotBehaviour):
+class MoveUntilWall(Motion):
     """Cruise at ``speed``, slow down once the wall is in range, stop when the sensor reads ``distance``.
 
     It holds its start heading by odometry; with ``centre`` it also steers towards the middle of
@@ -246,7 +255,7 @@ class MoveDistanceParams(BehaviourParams):
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
-class MoveDistance(RobotBehaviour):
+class MoveDistance(Motion):
     """Drive ``distance`` forwards (or backwards) by odometry, holding the start heading.
 
     Example (YAML)::
@@ -322,7 +331,7 @@ class TurnAngleParams(BehaviourParams):
     keep_moving: bool = Field(False, description="do not stop the robot when done")
 
 
-class TurnAngle(RobotBehaviour):
+class TurnAngle(Motion):
     """Turn in place about the wheel axle by ``angle`` (left positive).
 
     ``mode: rear_sensors`` turns by odometry to within 10° and then squares the robot to the wall

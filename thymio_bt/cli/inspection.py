@@ -141,13 +141,12 @@ def _spawn_problems(path: Path, maze: Maze, marks: dict[str, tuple[int, int]]) -
 
 def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> tuple[str, str]:
     """Validate the mission file ``path``; its node count and maze, and the plugin nodes left unchecked."""
+    from thymio_bt.behaviours.base import UnrunPlugin
     from thymio_bt.mission import load_mission
 
     spec = load_mission(path, overrides, run_plugins=plugins)  # checks the start pose against the maze too
     nodes = sum(1 for _ in spec.tree.walk())
-    unchecked = [
-        n for n in spec.tree.walk() if n.behaviour and getattr(spec.registry[n.behaviour], "unrun_plugin", False)
-    ]
+    unchecked = [n for n in spec.tree.walk() if n.behaviour and issubclass(spec.registry[n.behaviour], UnrunPlugin)]
     summary = f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
     if not unchecked:
         return summary, ""

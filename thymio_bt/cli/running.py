@@ -468,10 +468,12 @@ def clearance_text(gap: float | None) -> str:
 
 def _summary(result: RunResult, err: bool = False) -> None:
     """The run's status, times, final pose and clearance; where and why it failed, on stderr."""
+    from thymio_bt.behaviours.base import FailureCode
+
     echo = partial(click.echo, err=err)
     colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow"}[result.status]
     shown = result.status
-    if result.code == "INTERRUPTED":  # a FAILURE by the report's contract, said as what it was
+    if result.code is FailureCode.INTERRUPTED:  # a FAILURE by the report's contract, said as what it was
         colour, shown = "yellow", f"{result.status} (INTERRUPTED)"
     rtf = result.real_time_factor
     echo(

@@ -32,7 +32,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from thymio_bt.errors import did_you_mean
+from thymio_bt.errors import ThymioBtError, did_you_mean
 
 #: unit -> (factor to SI, kind)
 UNITS: dict[str, tuple[float, str]] = {
@@ -94,7 +94,7 @@ MAX_NESTING = 50
 FULL_TURN = 2 * math.pi
 
 
-class UnitError(ValueError):
+class UnitError(ValueError, ThymioBtError):
     """A value that does not parse; the message says what was expected, ``hint`` how to fix it."""
 
     def __init__(self, message: str, hint: str = "") -> None:

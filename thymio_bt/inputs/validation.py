@@ -24,14 +24,14 @@ from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
-from thymio_bt.inputs.yamlio import Mark, MarkedDict, MarkedList
+from thymio_bt.inputs.yamlio import Mark, MarkedDict, MarkedList, mark_of
 
 M = TypeVar("M", bound=BaseModel)
 
 
 def locate(data: Any, loc: Sequence[Any]) -> Mark:
     """The mark of the deepest node of ``data`` along ``loc`` (keys and indexes)."""
-    mark: Mark = getattr(data, "mark", (0, 0))
+    mark: Mark = mark_of(data)
     node = data
     for step in loc:
         if isinstance(node, MarkedDict) and step in node:

@@ -78,6 +78,16 @@ def _mark(node: Node) -> Mark:
     return node.start_mark.line + 1, node.start_mark.column + 1
 
 
+def mark_of(data: Any, default: Mark = (0, 0)) -> Mark:
+    """Where ``data`` starts in its file: a marked mapping's or list's (line, column), else ``default``
+    (a plain value, or data built in code).
+
+    >>> mark_of(loads_yaml("[1, [2]]")[1]), mark_of(3, (1, 1))
+    ((1, 5), (1, 1))
+    """
+    return data.mark if isinstance(data, (MarkedDict, MarkedList)) else default
+
+
 class _Loader(yaml.SafeLoader):
     """SafeLoader that records marks, rejects duplicate keys and counts aliases."""
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from thymio_bt.data import MAZES
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.validation import validate
-from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
+from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
 from thymio_bt.maze.grid import GridMazeFile, maze_from_grid_file
 from thymio_bt.maze.model import Maze
 
@@ -43,7 +43,7 @@ def load_maze(path: str | Path) -> Maze:
         return read_micromouse(path)
     data = load_yaml(path, "maze")
     if not isinstance(data, MarkedDict):
-        line, col = getattr(data, "mark", (1, 1))
+        line, col = mark_of(data, (1, 1))
         raise UserError(
             Problem(
                 "a maze file must be a mapping with 'walls:' (or 'grid:')",

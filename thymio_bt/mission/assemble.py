@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
-from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
+from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
 from thymio_bt.maze import Maze, load_maze, resolve_maze
 from thymio_bt.mission.checker import Scope, Where
 from thymio_bt.mission.registry import Registry, default_registry
@@ -129,7 +129,7 @@ class Assembler(SettingsReader):
         """Put the mission ``data`` read from ``path`` together; problems are collected, not raised."""
         file = str(path)
         if not isinstance(data, MarkedDict):
-            line, column = getattr(data, "mark", (1, 1))
+            line, column = mark_of(data, (1, 1))
             raise UserError(
                 Problem(
                     "a mission file must be a mapping with at least 'maze:', 'start:' and 'tree:'",
@@ -262,7 +262,7 @@ class Assembler(SettingsReader):
         if not isinstance(included, MarkedDict):
             self.problem(
                 "an included file must be a mapping with 'subtrees:'",
-                (str(shown), *getattr(included, "mark", (1, 1))),
+                (str(shown), *mark_of(included, (1, 1))),
                 "",
                 "e.g. missions/lib/maze_legs.yaml",
             )

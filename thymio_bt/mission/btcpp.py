@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.behaviours import ControlNode
-from thymio_bt.behaviours.base import ConditionBehaviour
+from thymio_bt.behaviours.base import ConditionBehaviour, UnrunPlugin
 from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
@@ -346,7 +346,7 @@ def mission_plugins(mission: Mission, folder: Path) -> list[str]:
         module = cls.__module__
         if name in defaults or module.startswith(("thymio_bt.", "thymio_bt_plugin_")) or module == "builtins":
             continue
-        if not getattr(cls, "unrun_plugin", False):
+        if not issubclass(cls, UnrunPlugin):
             refs.append(f"{module}:{cls.__name__}")
     return refs
 

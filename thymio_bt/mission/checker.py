@@ -25,7 +25,7 @@ from typing import Any
 from thymio_bt.errors import Problem, did_you_mean, type_name
 from thymio_bt.inputs.fields import key_hint
 from thymio_bt.inputs.units import Quantity, UnitError, check_kind, parse_pose, parse_value
-from thymio_bt.inputs.yamlio import MarkedDict, MarkedList
+from thymio_bt.inputs.yamlio import MarkedDict, MarkedList, mark_of
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
 
@@ -72,7 +72,7 @@ class Checker:
         """The place of ``key`` in the mapping ``data`` (the mapping's own when it has no marks)."""
         if isinstance(data, MarkedDict) and key in data.marks:
             return (file, *data.marks[key])
-        return (file, *getattr(data, "mark", (0, 0)))
+        return (file, *mark_of(data))
 
     @staticmethod
     def where_value(data: Any, key: Any, file: str) -> Where:
@@ -81,7 +81,7 @@ class Checker:
             return (file, *data.value_marks[key])
         if isinstance(data, MarkedList) and isinstance(key, int) and key < len(data.marks):
             return (file, *data.marks[key])
-        return (file, *getattr(data, "mark", (0, 0)))
+        return (file, *mark_of(data))
 
     @staticmethod
     def where_item(items: Any, index: int, where: Where) -> Where:

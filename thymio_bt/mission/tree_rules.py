@@ -25,7 +25,7 @@ from collections.abc import Generator, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from thymio_bt.behaviours.base import ConditionBehaviour
+from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
 from thymio_bt.mission.plan import Mission, NodePlan
 
 SEQUENCES = ("sequence", "reactive_sequence", "bt_sequence", "bt_sequence_with_memory", "bt_reactive_sequence")
@@ -139,11 +139,11 @@ class TreeRules:
         """A leaf's nature: ``condition``, ``instant`` (an action done in one tick), ``long`` (runs over
         ticks) or ``unknown`` (a plugin not imported)."""
         cls = self._class(node)
-        if cls is None or getattr(cls, "unrun_plugin", False):
+        if cls is None or issubclass(cls, UnrunPlugin):
             return "unknown"
         if is_condition(cls):
             return "condition"
-        if getattr(cls, "bt_sync", False) or node.behaviour in INSTANT or node.behaviour in ALWAYS:
+        if (issubclass(cls, RobotBehaviour) and cls.bt_sync) or node.behaviour in INSTANT or node.behaviour in ALWAYS:
             return "instant"
         return "long"
 

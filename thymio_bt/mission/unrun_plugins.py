@@ -39,6 +39,7 @@ from py_trees.common import Status
 from pydantic import BaseModel, ConfigDict, create_model
 
 from thymio_bt.behaviours import RobotBehaviour
+from thymio_bt.behaviours.base import UnrunPlugin
 from thymio_bt.inputs.reading import read_text
 
 #: base classes that make a plugin class a node
@@ -154,7 +155,7 @@ def _assigned_name(cls: ast.ClassDef, attr: str) -> str | None:
     return None
 
 
-def stand_in(name: str, params: Sequence[str] | None = None) -> type[RobotBehaviour]:
+def stand_in(name: str, params: Sequence[str] | None = None) -> type[UnrunPlugin]:
     """A node class standing for the plugin node ``name`` (never ticked: validate and tree only);
     ``params``: its parameter names when the plugin's source says them (their values stay unchecked)."""
 
@@ -169,13 +170,12 @@ def stand_in(name: str, params: Sequence[str] | None = None) -> type[RobotBehavi
         checked = "its parameters' names are checked, not their values"
     return type(
         name,
-        (RobotBehaviour,),
+        (UnrunPlugin,),
         {
             "__doc__": f"{name}, from a plugin that was not imported ({checked}).",
             "yaml_name": name,
             "Params": model,
             "step": step,
-            "unrun_plugin": True,
         },
     )
 

@@ -42,6 +42,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from itertools import pairwise
 
+from thymio_bt.errors import ThymioBtError
 from thymio_bt.maze import Maze
 from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.robot.interface import Backend, Pose
@@ -80,7 +81,7 @@ def arena() -> Maze:
     )
 
 
-class Stopped(Exception):
+class Stopped(ThymioBtError):
     """The calibration was stopped (``stopped()`` said so) during the measure named ``step``.
 
     >>> str(Stopped("2/3 proximity"))
@@ -237,8 +238,7 @@ def calibrate(
 
     # 2. proximity, a slow approach
     measure("2/3 proximity", f"approaching the wall at {APPROACH_SPEED * 100:g} cm/s")
-    raw_of = getattr(backend, "proximity_raw", None)
-    if raw_of is None:
+    if not backend.raw_readings:
         raise ValueError(
             f"the backend {type(backend).__name__} gives no raw readings (a simulator with "
             f"sensor_model raw or cone, the aseba or playground backends do)"
@@ -247,7 +247,7 @@ def calibrate(
     for _ in range(round(2 * END / APPROACH_SPEED / period)):
         backend.drive(APPROACH_SPEED, 0.0)
         tick()
-        pose, raw = truth(), raw_of()
+        pose, raw = truth(), backend.proximity_raw()
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
         x, y = pose.x + sensor.x * c - sensor.y * s, pose.y + sensor.x * s + sensor.y * c
         distance = ray_distance(maze, x, y, pose.yaw + sensor.yaw)

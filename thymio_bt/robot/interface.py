@@ -29,6 +29,8 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import TYPE_CHECKING
 
+from thymio_bt.errors import ThymioBtError
+
 if TYPE_CHECKING:
     from thymio_bt.robot.model import RobotModel
 
@@ -52,7 +54,7 @@ def wrap_angle(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-class RobotLost(Exception):
+class RobotLost(ThymioBtError):
     """Raised by a backend whose robot stopped answering: the run ends as FAILURE ``ROBOT_LOST``."""
 
 
@@ -125,6 +127,9 @@ class Robot(ABC):
     #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
     #: 0 for the simulation, whose behaviours see the world of this tick.
     latency: float = 0.0
+    #: whether :meth:`proximity_raw` can give a real Thymio's integer readings (a real robot, a
+    #: simulation of them): what a calibration samples
+    raw_readings: bool = False
 
     @abstractmethod
     def drive(self, linear: float, angular: float) -> None:
@@ -137,6 +142,11 @@ class Robot(ABC):
     @abstractmethod
     def proximity(self) -> Scan | None:
         """The latest proximity scan (refreshed at 10 Hz), or None while the robot does not exist."""
+
+    def proximity_raw(self) -> dict[str, int] | None:
+        """The latest readings as a real Thymio's integers, by sensor name; None while the robot does
+        not exist, or from a robot without them (``raw_readings`` false)."""
+        return None
 
     @abstractmethod
     def pose(self) -> Pose | None:

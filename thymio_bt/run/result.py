@@ -9,7 +9,7 @@ Example:
 ...     py_trees.behaviours.Success("part 1"), py_trees.behaviours.Failure("part 2")])
 >>> root.tick_once()
 >>> failing_branch(root)
-('course/part 2', 'FAILED', 'failure')
+('course/part 2', <FailureCode.FAILED: 'FAILED'>, 'failure')
 >>> learnt_map(root) is None  # no mapping behaviour in this tree
 True
 """
@@ -25,8 +25,9 @@ from py_trees.behaviour import Behaviour
 from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.base import FailureCode, RobotBehaviour, node_path
 from thymio_bt.behaviours.cellmap import CellMap
+from thymio_bt.behaviours.control import SimTimeout
 from thymio_bt.behaviours.mapping import MazeMapParams
 
 
@@ -38,7 +39,8 @@ class RunResult:
     maze: str
     status: str
     reason: str | None
-    code: str | None
+    #: a :class:`FailureCode`, or a plugin behaviour's own code (a string)
+    code: FailureCode | str | None
     failed_path: str | None
     sim_time: float
     ticks: int
@@ -131,7 +133,7 @@ class Ending:
     a second signal broke into a tick (the robot is then stopped whatever the tree did)."""
 
     kind: EndKind
-    code: str | None = None
+    code: FailureCode | None = None
     reason: str | None = None
     failed_path: str | None = None
     forced: bool = False
@@ -143,7 +145,7 @@ class Verdict:
 
     status: str
     reason: str | None = None
-    code: str | None = None
+    code: FailureCode | str | None = None
     failed_path: str | None = None
 
 
@@ -159,20 +161,23 @@ def learnt_map(root: Behaviour) -> CellMap | None:
     return None
 
 
-def failing_branch(root: Behaviour) -> tuple[str, str | None, str]:
+def _failure(node: Behaviour) -> tuple[FailureCode | str, str] | None:
+    """The (code, reason) a node recorded when it failed: a robot behaviour's, or a time limit's."""
+    return node.failure if isinstance(node, (RobotBehaviour, SimTimeout)) else None
+
+
+def failing_branch(root: Behaviour) -> tuple[str, FailureCode | str, str]:
     """Follow FAILURE down from the root to the node that caused it: (path, code, reason)."""
     node = root
     while True:
         failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
-        if not failed or getattr(node, "failure", None):
+        if not failed or _failure(node):
             break
         # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)
-        explained = [
-            c for c in failed if any(getattr(n, "failure", None) and n.status == Status.FAILURE for n in c.iterate())
-        ]
+        explained = [c for c in failed if any(_failure(n) and n.status == Status.FAILURE for n in c.iterate())]
         node = (explained or failed)[-1]
-    failure = getattr(node, "failure", None)
+    failure = _failure(node)
     if failure:
         code, reason = failure
         return node_path(node), code, reason
-    return node_path(node), "FAILED", node.feedback_message or f"'{node.name}' returned FAILURE"
+    return node_path(node), FailureCode.FAILED, node.feedback_message or f"'{node.name}' returned FAILURE"

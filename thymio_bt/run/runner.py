@@ -15,7 +15,7 @@ A run that the tree does not end is cut short, its running node named:
 
 >>> result = Run(load_mission("maze_part1_2", {"time_limit": "5"})).run()
 >>> result.status, result.code, result.reason, result.failed_path
-('TIMEOUT', 'TIMEOUT', 'time limit of 5 s reached', 'course/part 2/leg/approach/ChooseTurn')
+('TIMEOUT', <FailureCode.TIMEOUT: 'TIMEOUT'>, 'time limit of 5 s reached', 'course/part 2/leg/approach/ChooseTurn')
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ from py_trees.common import Status
 
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
-from thymio_bt.behaviours.base import describe, is_fault, node_path, snapshot
+from thymio_bt.behaviours.base import FailureCode, describe, is_fault, node_path, snapshot
 from thymio_bt.behaviours.ticking import tick
-from thymio_bt.errors import Problem, UserError
+from thymio_bt.errors import Problem, ThymioBtError, UserError
 from thymio_bt.mission import Mission, build_tree
 from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
@@ -52,7 +52,7 @@ CONTACT = 1e-6
 PACE_SLICE = 0.1
 
 
-class StopRun(Exception):
+class StopRun(ThymioBtError):
     """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
     as a FAILURE with code STOPPED and the message as its reason, with its report and log intact."""
 
@@ -87,15 +87,15 @@ class Run:
             )
         start = self.backend.request_spawn(self.backend.robot_name, mission.start)
         #: why the run cannot start (code, reason): a robot that is not there, a start it was refused
-        self.unstarted: tuple[str, str] | None = None
+        self.unstarted: tuple[FailureCode, str] | None = None
         #: the node an unstarted run names (one whose constructor raised), if any
         self.unstarted_path: str | None = None
         try:
             self.backend.advance(0.0)
         except RobotLost as exc:
-            self.unstarted = ("ROBOT_LOST", str(exc))
+            self.unstarted = (FailureCode.ROBOT_LOST, str(exc))
         if self.unstarted is None and start.state is RequestState.FAILED:
-            self.unstarted = ("ENTITY_ERROR", f"the robot could not be put at the start: {start.reason}")
+            self.unstarted = (FailureCode.ENTITY_ERROR, f"the robot could not be put at the start: {start.reason}")
         self.period = 1.0 / mission.tick_hz
         self.events = EventLog()
         self.ctx = Context(
@@ -136,7 +136,7 @@ class Run:
                 raise
             where = _building_node(exc)
             if self.unstarted is None:
-                self.unstarted = ("EXCEPTION", f"'{where}' raised {describe(exc)} when it was built")
+                self.unstarted = (FailureCode.EXCEPTION, f"'{where}' raised {describe(exc)} when it was built")
                 self.unstarted_path = where
             return py_trees.behaviours.Failure(name=self.mission.tree.name)
 
@@ -189,7 +189,7 @@ class Run:
                     self._pace(realtime, wall_start, interrupts)
         except Interrupted as exc:  # a second signal, or the grace ran out: the tick never ended
             return self._forced_ending(exc)
-        return Ending(EndKind.TIMEOUT, "TIMEOUT")
+        return Ending(EndKind.TIMEOUT, FailureCode.TIMEOUT)
 
     def _forced_ending(self, exc: Interrupted) -> Ending:
         """The ending of a run whose tick was broken into (a second signal, or none within the grace
@@ -204,7 +204,7 @@ class Run:
                 node = node.parent
             where = node_path(stuck)
         reason = f"'{where}' never ended its tick; {exc.how}" if where else f"a tick never ended; {exc.how}"
-        return Ending(EndKind.INTERRUPTED, "INTERRUPTED", reason, failed_path=where, forced=True)
+        return Ending(EndKind.INTERRUPTED, FailureCode.INTERRUPTED, reason, failed_path=where, forced=True)
 
     def _tick_tree(self) -> None:
         """One tick of the tree (its nodes count their own ticks when node statistics are kept)."""
@@ -220,11 +220,11 @@ class Run:
             try:
                 on_tick(self)
             except StopRun as stop:
-                return Ending(EndKind.STOPPED, "STOPPED", str(stop) or "stopped by a tick hook")
+                return Ending(EndKind.STOPPED, FailureCode.STOPPED, str(stop) or "stopped by a tick hook")
         if self.root.status in (Status.SUCCESS, Status.FAILURE):
             return Ending(EndKind.FINISHED)
         if interrupts.signal:
-            return Ending(EndKind.INTERRUPTED, "INTERRUPTED")
+            return Ending(EndKind.INTERRUPTED, FailureCode.INTERRUPTED)
         return self._advance()
 
     def _advance(self) -> Ending | None:
@@ -232,11 +232,11 @@ class Run:
         try:
             self.backend.advance(self.period)
         except RobotLost as exc:  # a real robot gone silent: its own code
-            return Ending(EndKind.CRASHED, "ROBOT_LOST", str(exc))
+            return Ending(EndKind.CRASHED, FailureCode.ROBOT_LOST, str(exc))
         except BaseException as exc:  # a backend's bug (a plugin's, say): end the run, say why
             if not is_fault(exc):
                 raise
-            return Ending(EndKind.CRASHED, "BACKEND_ERROR", f"the backend raised {describe(exc)}")
+            return Ending(EndKind.CRASHED, FailureCode.BACKEND_ERROR, f"the backend raised {describe(exc)}")
         return None
 
     def _emit_collisions(self, seen: int) -> int:
@@ -364,7 +364,7 @@ class Run:
         # the robot that ran (a calibrated profile, a backend's own), not only the one the mission names
         result.expectations = check(expect, result, self.mission.maze, self.backend.model)
         if result.status == "SUCCESS" and result.expectations:
-            result.status, result.code, result.failed_path = "FAILURE", "EXPECTATION", "expect"
+            result.status, result.code, result.failed_path = "FAILURE", FailureCode.EXPECTATION, "expect"
             result.reason = "; ".join(result.expectations)
 
     def _record(self) -> None:

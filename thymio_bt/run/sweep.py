@@ -29,6 +29,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
+from thymio_bt.errors import ThymioBtError
 from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.interrupts import Interrupted, Interrupts
 
@@ -71,7 +72,7 @@ def content_key(sources: Iterable[Path], *settings: Any) -> str:
 def run_job(job: Job) -> dict[str, Any]:
     """Run one job and summarise it (the function executors map); missions are loaded once per worker.
     With :attr:`Job.coverage`, the summary has the run's ``coverage`` JSON too."""
-    from thymio_bt.behaviours.base import describe
+    from thymio_bt.behaviours.base import FailureCode, describe
     from thymio_bt.mission import load_mission
     from thymio_bt.run.coverage import Coverage
     from thymio_bt.run.runner import Run
@@ -89,7 +90,7 @@ def run_job(job: Job) -> dict[str, Any]:
             "sim_time": 0.0,
             "final_pose": None,
             "reason": f"the run raised {describe(exc)}",
-            "code": "EXCEPTION",
+            "code": FailureCode.EXCEPTION,
             "failed_path": None,
             "collisions": 0,
             "first_stop_error": None,
@@ -181,7 +182,7 @@ class LocalPool:
             pool.join()
 
 
-class WorkerDied(RuntimeError):
+class WorkerDied(RuntimeError, ThymioBtError):
     """A sweep worker process ended in the middle of its runs (killed, crashed, or ``os._exit``)."""
 
     def __init__(self, exitcode: int | None) -> None:

@@ -18,7 +18,7 @@ Example (offscreen; ``replay(read_log("run.jsonl"), speedup=10)`` shows a log th
 >>> _ = os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # no window opens
 >>> run = Run(load_mission("square"))
 >>> view = live_hook(run, speedup=1000, hold=False)
->>> result = run.run(on_tick=view)  # result.code == "STOPPED" if the window was closed
+>>> result = run.run(on_tick=view)  # result.code is FailureCode.STOPPED if the window was closed
 >>> view.finish(result)
 >>> result.status, view.viewer.shown, view.viewer.outcome
 ('SUCCESS', 228, 'SUCCESS')

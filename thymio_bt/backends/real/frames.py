@@ -33,6 +33,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from thymio_bt.errors import ThymioBtError
+
 #: the longest payload an Aseba message has (bytes): ASEBA_MAX_EVENT_ARG_SIZE, 258 words, in Aseba's
 #: ``common/consts.h``; a longer one is not Aseba (garbage, or another protocol on the port)
 MAX_PAYLOAD = 2 * 258
@@ -49,7 +51,7 @@ VARIABLES, EXECUTION_STATE_CHANGED, NODE_PRESENT, DEVICE_INFO = 0x9005, 0x900A, 
 FIRST_ASEBA_ID = 0x8000
 
 
-class LinkError(ConnectionError):
+class LinkError(ConnectionError, ThymioBtError):
     """The peer sent what no Thymio sends: the link cannot be trusted any more."""
 
 

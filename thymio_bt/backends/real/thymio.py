@@ -54,7 +54,7 @@ from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
-from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist
+from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist, wrap_angle
 from thymio_bt.robot.model import COURSE, REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:
@@ -254,6 +254,8 @@ class ThymioRobot(Backend):
     ``placed``: the robot already stands where the first spawn puts it (no operator is asked then).
     """
 
+    raw_readings = True  # prox.horizontal's integers, as the robot reports them
+
     def __init__(
         self,
         node: Node,
@@ -346,10 +348,8 @@ class ThymioRobot(Backend):
 
     def pose(self) -> Pose | None:
         """Odometry's base_link pose (it drifts: there is no ground truth); None while absent."""
-        if not self._present:
-            return None
-        base = self.model.base_of(*self._axle)
-        return Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
+        base = self.model.base_of(*self._axle) if self._present else None
+        return None if base is None else Pose(base.x, base.y, wrap_angle(base.yaw))
 
     def true_pose(self) -> Pose | None:
         """There is no ground truth on a real robot: the odometry pose, the best estimate there is."""

@@ -46,7 +46,7 @@ from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
 from thymio_bt.maze import Maze
 from thymio_bt.robot.calibration import RawProximityModel, raw_scan_to_metres
-from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose
+from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose, wrap_angle
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
 from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
 
@@ -58,7 +58,7 @@ _WALLS, _ROBOTS = 0b01, 0b10
 
 def _pose_of(x: float, y: float, angle: float) -> Pose:
     """A body's pose, its angle wrapped to [-pi, pi)."""
-    return new_pose(x, y, (angle + math.pi) % (2.0 * math.pi) - math.pi)
+    return new_pose(x, y, wrap_angle(angle))
 
 
 def _raw_model(seed: int, model: RobotModel) -> RawProximityModel:
@@ -153,6 +153,8 @@ class _Body:
 
 class Simulation(Backend):
     """A 2D simulation of one Thymio in a maze; advance it with :meth:`advance`."""
+
+    raw_readings = True  # with sensor_model raw or cone (:meth:`proximity_raw` is None otherwise)
 
     def __init__(
         self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None, robot_name: str = ROBOT_ENTITY
@@ -406,7 +408,7 @@ class Simulation(Backend):
         odo, pose = self._odo_pose
         if odo is not self._odo or pose is None:
             base = self.model.base_of(*self._odo)
-            pose = Pose(base.x, base.y, (base.yaw + math.pi) % (2.0 * math.pi) - math.pi)
+            pose = Pose(base.x, base.y, wrap_angle(base.yaw))
             self._odo_pose = (self._odo, pose)
         return pose
 
