@@ -33,6 +33,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from thymio_bt.errors import ThymioBtError
 from thymio_bt.grade.reaping import pids_cgroups
 
 #: what a submission's process may be confined in, in the order the summary names them
@@ -64,7 +65,7 @@ class _PathBeneath(ctypes.Structure):
     _fields_ = (("allowed", ctypes.c_uint64), ("parent_fd", ctypes.c_int32))
 
 
-class ConfinementError(Exception):
+class ConfinementError(ThymioBtError):
     """A step of the confinement failed where :func:`plan` said it would hold."""
 
 

@@ -20,6 +20,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from thymio_bt.behaviours.base import snapshot
+from thymio_bt.errors import ThymioBtError
 from thymio_bt.grade.isolation import Limits, RunLimit
 from thymio_bt.grade.sandboxes import Sandbox
 from thymio_bt.grade.wire import Deadline, WireError
@@ -37,7 +38,7 @@ MAX_DRIVES = 16
 CPU_EVERY, CPU_POLL = 20, 0.25
 
 
-class SubmissionFault(Exception):
+class SubmissionFault(ThymioBtError):
     """The submission's process broke the run: its tree raised, or it sent what it must not."""
 
 

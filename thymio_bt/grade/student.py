@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from thymio_bt.errors import UserError
+from thymio_bt.errors import ThymioBtError, UserError
 from thymio_bt.grade.assignment import Criterion
 from thymio_bt.grade.checks import Judgement, RunFacts, judge
 from thymio_bt.grade.isolation import Limits, RunLimit, Send, run_limited
@@ -200,7 +200,7 @@ def run_message(
     return message
 
 
-class _Broken(Exception):
+class _Broken(ThymioBtError):
     """A run the submission's process broke: its code and reason."""
 
     def __init__(self, code: str, reason: str) -> None:

@@ -32,13 +32,15 @@ import threading
 import time
 from typing import Any
 
+from thymio_bt.errors import ThymioBtError
+
 #: the largest message either side may send (bytes): a tick's is ~200, a run's last (its node
 #: statistics) a few kB
 MAX_MESSAGE = 4 << 20
 _LENGTH = struct.Struct(">I")
 
 
-class WireError(Exception):
+class WireError(ThymioBtError):
     """The other side broke the protocol: closed, too slow, too big, or not JSON."""
 
 
