@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import shutil
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -15,6 +16,8 @@ from click.testing import CliRunner
 from test_grade_site import BROWSERS, Chromium, Page
 
 from thymio_bt.cli import main
+from thymio_bt.grade.confine import plan
+from thymio_bt.grade.grader import grade
 from thymio_bt.grade.site_replay import failing_moment, went_wrong
 from thymio_bt.grade.student import StudentTask, grade_runs
 from thymio_bt.grade.worlds import load_worlds
@@ -29,6 +32,8 @@ variants:
   - {name: course, maze: two_parts_maze, start: part1, seeds: 1, noise: off}
   - {name: secret_box, maze: ASSIGNMENTS/worlds/part12_long_part1.yaml, start: [0.18, 0.1, 0], visibility: hidden,
      noise: off}
+"""
+CRITERIA = """\
 criteria:
   - {name: part 1 stops 5 cm from the wall, points: 2, gap: {at: delete, distance: 5cm, tolerance: 5mm}}
 """
@@ -60,7 +65,7 @@ def _grade(tmp_path: Path, assignment: Path, *options: str) -> tuple[Path, dict[
 
 def _hidden(tmp_path: Path) -> Path:
     path = tmp_path / "hidden.yaml"
-    path.write_text(HIDDEN.replace("ASSIGNMENTS", str(PART12.parent)))
+    path.write_text((HIDDEN + CRITERIA).replace("ASSIGNMENTS", str(PART12.parent)))
     return path
 
 
@@ -140,3 +145,19 @@ def test_a_site_for_students_never_replays_a_hidden_variant(browser, tmp_path, m
     tab = browser.open(page.as_uri())
     assert tab.problems() == []
     tab.close()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or plan().missing != {}, reason="needs Landlock ABI 6+")
+def test_a_confined_submissions_replay_is_made_again_in_its_confined_process(tmp_path):
+    """A submission whose tree ticks in a confined process (every one, with ``sandbox="always"``) is
+    replayed from a run made again there: it ends where the graded run ended."""
+    assignment = tmp_path / "confined.yaml"
+    assignment.write_text(HIDDEN.split("  - {name: secret_box")[0] + CRITERIA + "palette: {plugins: true}\n")
+    (sub := tmp_path / "subs" / "dana").mkdir(parents=True)
+    (sub / "part1_2.yaml").write_text(DANA.read_text())
+    results = grade(assignment, [sub], workers=1, sandbox="always", replays="all")
+    assert results["summary"]["confinement"].startswith("confined")
+    first, *_ = results["students"][0]["runs"]
+    assert "replay" in first and went_wrong(first)
+    assert first["replay"]["end"]["final_pose"] == first["final_pose"]
+    assert first["replay"]["failing"] == round(failing_moment(first), 3)
