@@ -309,9 +309,11 @@ def test_student_pages_carry_nothing_of_a_hidden_world(tmp_path, monkeypatch):
     args = ["grade", str(assignment), str(sub), "--html", str(site), "--for-students", "--out", str(out)]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 0, result.output
-    assert f"wrote the site: {site / 'index.html'} (2 pages)" in result.output
-    text = "\n".join(p.read_text() for p in site.rglob("*") if p.is_file())
-    assert sorted(p.name for p in site.rglob("*")) == ["dana.html", "index.html", "students"]  # no worlds/
+    assert f"wrote the site: {site / 'index.html'} (3 pages)" in result.output
+    text = "\n".join(p.read_text() for p in site.rglob("*") if p.is_file() and p.parent.name != "replays")
+    names = ["dana.html", "dana_course_seed0.html", "index.html", "replays", "students"]
+    assert sorted(p.name for p in site.rglob("*")) == names  # no worlds/, no hidden world's replay
+    assert "secret_box" not in (site / "replays" / "dana_course_seed0.html").read_text()
     assert sorted(p.name for p in (tmp_path / "results_worlds").iterdir()) == [
         "secret_box.yaml",
         "secret_corridor.yaml",

@@ -127,11 +127,15 @@ def grade(
                 secret=course_secret(secret),
                 relative_to=relative_to,
                 hidden_worlds=hidden,
+                replays=None if html is None else "public" if for_students else "all",
             )
         if previous is not None:
             from thymio_bt.grade.grader import update as updated
 
             results = updated(previous, results)
+        from thymio_bt.grade.site_replay import take_replays
+
+        replays = take_replays(results)  # the site's, not results.json's
         if "out" in outputs:
             outputs["out"].write_text(json_text(results))
         if "csv" in outputs:
@@ -149,7 +153,7 @@ def grade(
             from thymio_bt.grade.redact import for_students as redacted
             from thymio_bt.grade.site import write_site
 
-            pages = write_site(redacted(results) if for_students else results, site)
+            pages = write_site(redacted(results) if for_students else results, site, replays, for_students)
             click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
     except UserError as exc:
         fail(exc)

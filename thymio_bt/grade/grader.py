@@ -67,6 +67,7 @@ def grade(
     relative_to: Path | None = None,
     hidden_worlds: Path | None = None,
     sandbox: str = "plugins",
+    replays: str | None = None,
 ) -> dict[str, Any]:
     """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
@@ -78,7 +79,9 @@ def grade(
     runs are relative to (the current one when None); ``hidden_worlds``: where the hidden
     variants' mazes go instead of ``worlds`` (out of a site students see).
     ``sandbox``: whose trees tick in a confined process of their own (:mod:`.sandbox`): those of
-    submissions with plugins (``plugins``), or every one (``always``: slower, for measurements)."""
+    submissions with plugins (``plugins``), or every one (``always``: slower, for measurements).
+    ``replays``: record the failed runs the site replays (:mod:`.site_replay`) of every variant
+    (``all``), of the public ones (``public``: a site for students), or none (None)."""
     began = time.perf_counter()
     path = resolve_assignment(assignment_file)
     folder = worlds or Path(tempfile.mkdtemp(prefix="thymio-bt-worlds-"))
@@ -89,6 +92,7 @@ def grade(
     tasks = [e.task for e in entries if e.task is not None]
     for each in tasks:
         each.sandboxed = each.sandboxed or (sandbox == "always" and each.run_plugins)
+        each.replays = [w.name for w in made if replays == "all" or (replays == "public" and w.visibility == "public")]
     by_name = {e.submission.name: e for e in entries}
     if started is not None:
         started({t.name: t.runs for t in tasks})

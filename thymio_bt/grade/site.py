@@ -22,29 +22,19 @@ Example:
 
 from __future__ import annotations
 
-import re
-import unicodedata
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
 from thymio_bt.errors import UserError
-from thymio_bt.grade.site_page import as_dict, as_list, esc, fmt, num, shell, status_badge
+from thymio_bt.grade.site_page import as_dict, as_list, esc, fmt, num, safe_name, shell, status_badge
+from thymio_bt.grade.site_replay import REPLAYS, write_replays
 from thymio_bt.grade.site_student import run_failed, student_page
 from thymio_bt.grade.site_svg import load_mazes
 from thymio_bt.outputs import Output
 
 OPTION = "--html"
 STUDENTS = "students"  # the folder of the student pages, inside DIR
-NAME_LENGTH = 60
-
-
-def safe_name(name: object) -> str:
-    """A file name stem from a student's name: ASCII letters, digits, ``.``, ``_``, ``-`` only, not
-    starting with a dot, at most :data:`NAME_LENGTH` characters; ``student`` if nothing is left."""
-    ascii_name = unicodedata.normalize("NFKD", str(name)).encode("ascii", "ignore").decode()
-    stem = re.sub(r"[^A-Za-z0-9._-]+", "_", ascii_name).strip("._-")[:NAME_LENGTH].rstrip("._-")
-    return stem or "student"
 
 
 def page_names(students: list[dict[str, Any]]) -> list[str]:
@@ -223,9 +213,15 @@ def _folder(path: Path) -> None:
         raise UserError(f"{OPTION} {path}: cannot make the folder: {exc.strerror or exc}") from None
 
 
-def write_site(results: dict[str, Any], out_dir: Path) -> list[Path]:
+def write_site(
+    results: dict[str, Any],
+    out_dir: Path,
+    replays: dict[tuple[str, int], dict[str, Any]] | None = None,
+    for_students: bool = False,
+) -> list[Path]:
     """Write the class page and one page per student of ``results`` (results.json's content) into
-    ``out_dir``, made if missing; each file whole or not at all, and no page of an earlier grade
+    ``out_dir``, made if missing, with the failed runs' ``replays`` (:mod:`.site_replay`; none of a
+    hidden variant ``for_students``); each file whole or not at all, and no page of an earlier grade
     left. The paths, the class page first."""
     out_dir = Path(out_dir)
     _folder(out_dir)
@@ -233,6 +229,10 @@ def write_site(results: dict[str, Any], out_dir: Path) -> list[Path]:
     students = [as_dict(s) for s in as_list(results.get("students"))]
     stems = page_names(students)
     mazes = load_mazes(as_dict(results.get("assignment")))
+    replayed: list[Path] = []
+    if replays:
+        _folder(out_dir / REPLAYS)
+        replayed = write_replays(results, replays, out_dir, stems, for_students)
     written = []
     for student, stem in zip(students, stems, strict=True):
         path = out_dir / STUDENTS / f"{stem}.html"
@@ -243,4 +243,7 @@ def write_site(results: dict[str, Any], out_dir: Path) -> list[Path]:
     for stale in (out_dir / STUDENTS).glob("*.html"):  # a page of an earlier grade, linked from nowhere
         if stale not in written:
             stale.unlink()
-    return [index, *written]
+    for stale in (out_dir / REPLAYS).glob("*.html"):  # an earlier grade's replay (a hidden one, perhaps)
+        if stale not in replayed:
+            stale.unlink()
+    return [index, *written, *replayed]

@@ -20,9 +20,13 @@ from __future__ import annotations
 
 import html
 import math
+import re
+import unicodedata
 from typing import Any
 
 # default-src 'none': no script, no fetch, no frame; only the inline style and data: icons
+#: the most characters of a file name stem made from a name
+NAME_LENGTH = 60
 CSP = "default-src 'none'; style-src 'unsafe-inline'; img-src data:"
 
 STATUS_LABELS = {"graded": "graded", "invalid": "invalid", "error": "error"}
@@ -176,3 +180,11 @@ def shell(title: str, body: str) -> str:
         "<footer>Made by <code>thymio-bt grade --html</code> from results.json; this page loads nothing "
         "from elsewhere.</footer>\n</main>\n</body>\n</html>\n"
     )
+
+
+def safe_name(name: object) -> str:
+    """A file name stem from a student's name: ASCII letters, digits, ``.``, ``_``, ``-`` only, not
+    starting with a dot, at most :data:`NAME_LENGTH` characters; ``student`` if nothing is left."""
+    ascii_name = unicodedata.normalize("NFKD", str(name)).encode("ascii", "ignore").decode()
+    stem = re.sub(r"[^A-Za-z0-9._-]+", "_", ascii_name).strip("._-")[:NAME_LENGTH].rstrip("._-")
+    return stem or "student"

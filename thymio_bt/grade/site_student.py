@@ -190,6 +190,11 @@ def _failed_runs(student: dict[str, Any]) -> str:
             f"<td>{esc(status)}{reason}{node}</td><td>{esc(missed)}</td>"
             f'<td class="num">{fmt(r.get("sim_time"), 1)} s</td><td class="num">{fmt(r.get("collisions"))}</td></tr>'
         )
+        if r.get("replay_page"):  # a page of the viewer, at the failing moment (not a hidden world's for students)
+            rows.append(
+                f'<tr class="replay"><td colspan="6"><a class="replay" href="{esc(r.get("replay_page"))}">'
+                "watch this run in the browser, from where it went wrong</a></td></tr>"
+            )
         for key, title in (("reproduce", "replay this run"), ("check", "run it and judge it as the grader did")):
             if r.get(key):  # not for a hidden world's run on a student's page
                 rows.append(

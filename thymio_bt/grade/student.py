@@ -21,7 +21,7 @@ Example (in this process; the grader runs it in a child)::
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,9 +30,11 @@ from thymio_bt.grade.assignment import Criterion
 from thymio_bt.grade.checks import Judgement, RunFacts, judge
 from thymio_bt.grade.isolation import Limits, RunLimit, Send, run_limited
 from thymio_bt.grade.palette import wheres
+from thymio_bt.grade.site_replay import replay_data, went_wrong
 from thymio_bt.grade.worlds import World
 
 if TYPE_CHECKING:
+    from thymio_bt.logs.recording import Recording
     from thymio_bt.mission import Mission
 
 #: the most trajectory samples a run sends (for its picture)
@@ -54,6 +56,8 @@ class StudentTask:
     sandboxed: bool = False
     #: the student's folder (copied for the confined process), None for a lone mission file
     home: str | None = None
+    #: the variants whose first failed run of each mistake is recorded for its replay (``grade --html``)
+    replays: list[str] = field(default_factory=list)
 
     @property
     def runs(self) -> int:
@@ -70,6 +74,7 @@ def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
     Once :data:`OVERRUNS` runs went over a time limit (wall-clock or CPU), the others fail at once."""
     missions: dict[str, Mission | str] = {}
     pictured: set[str] = set()
+    replayed: set[tuple[str, str]] = set()  # (variant, what went wrong) with a replay already
     overran: list[dict[str, Any]] = []
     outside = _Outside(task)
     try:
@@ -90,7 +95,7 @@ def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
             if len(overran) >= OVERRUNS:
                 message = _skipped(task, index, world, seed, overran)
             else:
-                message = run_message(task, index, world, seed, mission, picture, outside)
+                message = run_message(task, index, world, seed, mission, picture, outside, replayed)
                 if message.get("code") == "LIMIT" and "time limit" in str(message.get("reason")):
                     overran.append(message)
             send(message)
@@ -144,8 +149,11 @@ def run_message(
     mission: Mission | str,
     picture: bool,
     outside: _Outside | None = None,
+    replayed: set[tuple[str, str]] | None = None,
 ) -> dict[str, Any]:
-    """Run ``mission`` in ``world`` with ``seed`` and judge it: the ``run`` message."""
+    """Run ``mission`` in ``world`` with ``seed`` and judge it: the ``run`` message. A run of a world
+    of the task's ``replays`` that makes a mistake not yet in ``replayed`` carries its ``replay``
+    (:mod:`.site_replay`)."""
     from thymio_bt.robot.model import robot_model
     from thymio_bt.run.runner import Run
 
@@ -193,11 +201,41 @@ def run_message(
         "criteria": judged,
         "node_stats": _rows(result.node_stats),
     }
+    new = {(world.name, what) for what in went_wrong(message)} - (replayed or set())
+    if replayed is not None and world.name in task.replays and new:
+        recording = _recorded(task, mission, seed, world, outside, result)
+        if recording is not None:
+            message["replay"] = replay_data(recording, message)
+            replayed |= new
     if picture:
         step = max(1, len(result.trajectory) // PICTURE_SAMPLES + 1)
         samples = result.trajectory[::step] + result.trajectory[-1:]
         message["trajectory"] = [[round(v, 4) for v in sample] for sample in samples]
     return message
+
+
+def _recorded(
+    task: StudentTask, mission: Mission, seed: int, world: World, outside: _Outside | None, result: Any
+) -> Recording | None:
+    """The run made again the same way (a confined tree in its confined process), recorded for its
+    replay: runs are deterministic, so only the runs that get a page pay for a recording. None when
+    the run did not end as ``result`` did (a submission that is not deterministic) or broke."""
+    from thymio_bt.logs.recording import Recorder
+    from thymio_bt.run.runner import Run
+
+    limits = task.limits or Limits()
+    recorder = Recorder(statuses=True)
+    try:
+        if task.sandboxed and outside is not None:
+            again = _outside_run(outside, mission, seed, limits, world, recorder)
+        else:
+            again = run_limited(limits, lambda: Run(mission, seed, node_stats=True).run(on_tick=recorder))
+    except Exception:  # a limit, a crash: no replay (the graded run's message says what it did)
+        if outside is not None:
+            outside.close()
+        return None
+    ended = (again.status, again.code, again.sim_time, again.final_pose)
+    return recorder.finish(again) if ended == (result.status, result.code, result.sim_time, result.final_pose) else None
 
 
 class _Broken(ThymioBtError):
@@ -208,7 +246,9 @@ class _Broken(ThymioBtError):
         self.code, self.reason = code, reason
 
 
-def _outside_run(outside: _Outside, mission: Mission, seed: int, limits: Limits, world: World) -> Any:
+def _outside_run(
+    outside: _Outside, mission: Mission, seed: int, limits: Limits, world: World, recorder: Any = None
+) -> Any:
     """The run with its tree in the submission's confined process (:mod:`.remote_run`)."""
     from thymio_bt.grade.remote_run import RemoteRun, SubmissionFault
     from thymio_bt.grade.wire import WireError
@@ -235,7 +275,7 @@ def _outside_run(outside: _Outside, mission: Mission, seed: int, limits: Limits,
         ],
     }
     try:
-        result = RemoteRun(mission, seed, sandbox, limits, spec).run()
+        result = RemoteRun(mission, seed, sandbox, limits, spec).run(on_tick=recorder)
         sandbox.end_run()  # what the run started ends with it
         return result
     except SubmissionFault as exc:

@@ -641,7 +641,8 @@
           ev.appendChild(titled(rect, (single ? "" : run.letter + ": ") + e.name + " " + start + "–" + e.t + " s " + (e.status || "")));
         } else {
           const mark = sv("rect", { class: "mark " + e.kind, x: xOf(e.t) - 1.5, y: y - 2, width: 3, height: 16 });
-          ev.appendChild(titled(mark, (single ? "" : run.letter + ": ") + e.kind + " at " + e.t + " s"));
+          const said = e.kind === "verdict" ? "missed " + e.name + (e.reason ? ": " + e.reason : "") : e.kind;
+          ev.appendChild(titled(mark, (single ? "" : run.letter + ": ") + said + " at " + e.t + " s"));
         }
       }
       for (const [path, start] of open) {
