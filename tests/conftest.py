@@ -1,6 +1,7 @@
 """Our own suite clears py_trees' global blackboard around every test (the plugin does it only after
-tests that made thymio-bt behaviours), and skips the tests marked ``slow`` (real time over ~20 s:
-the Playground missions) unless asked: ``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets.
+tests that made thymio-bt behaviours), starts each test in an empty working folder of its own, and
+skips the tests marked ``slow`` (real time over ~20 s: the Playground missions) unless asked:
+``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets.
 Once the tests are over, a process that has not ended within :data:`EXIT_GRACE` s prints every
 thread's stack and exits 1: something a test started is holding it (a Dask client waiting on its
 loop once held CI's pytest after its last test until the job's time limit). A session started with
@@ -22,6 +23,14 @@ pytest_plugins = ["pytester"]
 @pytest.fixture(autouse=True)
 def _clean_blackboard():
     yield from clear_blackboard()
+
+
+@pytest.fixture(autouse=True)
+def _empty_working_folder(tmp_path_factory: pytest.TempPathFactory, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each test starts in an empty folder of its own, so that a path written relative to the checkout
+    (``missions/square.yaml``) fails wherever pytest starts, not only outside the repository: tests
+    name files from their ``ROOT``, and a test that means the working folder sets it itself."""
+    monkeypatch.chdir(tmp_path_factory.mktemp("cwd"))
 
 
 def pytest_configure(config):

@@ -5,6 +5,7 @@ The Playground runs in real time: these tests take about 40 s together.
 
 import math
 import time
+from pathlib import Path
 
 import _require
 import pytest
@@ -19,6 +20,8 @@ from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse
 from thymio_bt.mission import load_mission
 from thymio_bt.robot.interface import Pose
 from thymio_bt.run.runner import Run
+
+ROOT = Path(__file__).resolve().parents[1]
 
 CORRIDOR = maze_from_cells(
     parse_micromouse("""o---o---o---o---o---o
@@ -184,7 +187,7 @@ def test_maze_export_writes_a_playground_world_with_the_robot_at_a_spawn(tmp_pat
         [
             "maze",
             "export",
-            "mazes/two_parts_maze.yaml",
+            f"{ROOT}/mazes/two_parts_maze.yaml",
             "--playground",
             "--spawn",
             "part2",
@@ -198,6 +201,6 @@ def test_maze_export_writes_a_playground_world_with_the_robot_at_a_spawn(tmp_pat
     text = out.read_text()
     assert text.count("<wall ") == 21 and 'port="40123"' in text and 'angle="1.570796"' in text
     missing = CliRunner().invoke(
-        main, ["maze", "export", "mazes/two_parts_maze.yaml", "--playground", "--spawn", "nope"]
+        main, ["maze", "export", f"{ROOT}/mazes/two_parts_maze.yaml", "--playground", "--spawn", "nope"]
     )
     assert missing.exit_code == 2 and "nope" in missing.output

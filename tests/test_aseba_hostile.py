@@ -34,6 +34,8 @@ from thymio_bt.backends.playground.process import _GUARD, PlaygroundInterrupted
 from thymio_bt.backends.real.aseba import tcp_address
 from thymio_bt.errors import UserError
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def thymio_bt(*args: str, **settings) -> subprocess.CompletedProcess:
     return subprocess.run(
@@ -236,7 +238,16 @@ def test_a_signal_while_the_playground_starts_leaves_nothing_behind(moment, sign
     tmp = Path(tempfile.mkdtemp(prefix="tbt-", dir="/tmp"))  # short: the bus's socket path has a limit
     try:
         process = subprocess.Popen(
-            [sys.executable, "-m", "thymio_bt", "run", "missions/maze_part1_2.yaml", "--backend", "playground", "-q"],
+            [
+                sys.executable,
+                "-m",
+                "thymio_bt",
+                "run",
+                f"{ROOT}/missions/maze_part1_2.yaml",
+                "--backend",
+                "playground",
+                "-q",
+            ],
             stderr=subprocess.PIPE,
             text=True,
             env={**os.environ, "TMPDIR": str(tmp)},

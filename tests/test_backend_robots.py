@@ -4,6 +4,7 @@ model chosen (a name or a measured profile) is the one behaviours read as ``robo
 ``placed`` option, for a run with nobody to place the robot."""
 
 import math
+from pathlib import Path
 
 import _require
 import pytest
@@ -14,6 +15,8 @@ from thymio_bt.backends.real.aseba import AsebaNode
 from thymio_bt.mission import load_mission
 from thymio_bt.robot.interface import Pose, RequestState
 from thymio_bt.robot.model import ENKI, REAL
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 class StillNode(Node):
@@ -41,7 +44,7 @@ def _profile(tmp_path):
 def _aseba(monkeypatch, overrides, options=None):
     node = StillNode()
     monkeypatch.setattr(AsebaNode, "connect", classmethod(lambda cls, device="", timeout=5.0: node))
-    mission = load_mission("missions/square.yaml", overrides)
+    mission = load_mission(f"{ROOT}/missions/square.yaml", overrides)
     return backend_kind("aseba").create(mission, 0, options or {}), node
 
 
@@ -70,7 +73,7 @@ def test_the_tdm_backend_drives_real_by_default(monkeypatch):
         return ThymioRobot(StillNode(), **kwargs)
 
     monkeypatch.setattr(ThymioRobot, "connect", classmethod(connect))
-    backend = backend_kind("tdm").create(load_mission("missions/square.yaml"), 0, {"placed": "true"})
+    backend = backend_kind("tdm").create(load_mission(f"{ROOT}/missions/square.yaml"), 0, {"placed": "true"})
     assert backend.model is REAL and made["placed"] is True
 
 
@@ -91,10 +94,10 @@ def test_a_behaviour_reads_the_backends_model(monkeypatch):
 
 def test_robot_for_keeps_a_named_robot_and_replaces_the_course_on_other_robots():
     said = []
-    mission = load_mission("missions/square.yaml")
+    mission = load_mission(f"{ROOT}/missions/square.yaml")
     assert robot_for(mission, "sim", said.append).name == "course" and said == []
     assert robot_for(mission, "playground", said.append) is ENKI and "--backend playground" in said[0]
-    enki = load_mission("missions/square.yaml", {"robot": "enki"})
+    enki = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     assert robot_for(enki, "aseba", said.append) is ENKI and len(said) == 1
 
 

@@ -4,6 +4,7 @@ import math
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +14,8 @@ from thymio_bt.mission import load_mission
 from thymio_bt.robot.model import COURSE, ENKI, ROBOTS
 from thymio_bt.run.runner import Run
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def test_unknown_backend_names_the_nearest():
     with pytest.raises(UserError, match="no backend named 'simm'.*did you mean 'sim'"):
@@ -20,7 +23,7 @@ def test_unknown_backend_names_the_nearest():
 
 
 def test_backend_options_are_validated_with_a_hint():
-    mission = load_mission("missions/square.yaml")
+    mission = load_mission(f"{ROOT}/missions/square.yaml")
     with pytest.raises(UserError, match="has no option 'physics'.*did you mean 'physics_hz'"):
         backend_kind("sim").create(mission, 0, {"physics": "200"})
     with pytest.raises(UserError, match="option 'physics_hz'.*greater than or equal to 50"):
@@ -28,7 +31,7 @@ def test_backend_options_are_validated_with_a_hint():
 
 
 def test_sim_backend_takes_physics_rate_and_robot_model():
-    mission = load_mission("missions/square.yaml", {"robot": "enki"})
+    mission = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     sim = backend_kind("sim").create(mission, 0, {"physics_hz": "200"})
     assert sim.model is ENKI and sim.config.physics_hz == 200.0
 
@@ -71,13 +74,13 @@ def test_robot_models_differ_where_robots_do():
     assert ENKI.wheel_separation == 0.094 and ENKI.max_wheel_speed == 0.166
     assert ENKI.sensor("front_center").x == pytest.approx(0.0552)  # 7.95 cm ahead of Enki's axle
     for model in ROBOTS.values():
-        pose = model.base_of(*model.axle_of(load_mission("missions/square.yaml").start))
-        assert pose.x == pytest.approx(load_mission("missions/square.yaml").start.x, abs=1e-12)
+        pose = model.base_of(*model.axle_of(load_mission(f"{ROOT}/missions/square.yaml").start))
+        assert pose.x == pytest.approx(load_mission(f"{ROOT}/missions/square.yaml").start.x, abs=1e-12)
 
 
 def test_the_robot_model_changes_the_simulated_robot():
     def final_proximity(robot):
-        result = Run(load_mission("missions/maze_part1_2.yaml", {"robot": robot})).run()
+        result = Run(load_mission(f"{ROOT}/missions/maze_part1_2.yaml", {"robot": robot})).run()
         assert result.status == "SUCCESS"
         return result.final_proximity
 
@@ -103,7 +106,7 @@ def test_cli_backend_errors_exit_2_without_traceback():
         ["--robot", "nope"],
     ):
         done = subprocess.run(
-            [sys.executable, "-m", "thymio_bt.cli", "run", "missions/square.yaml", *args],
+            [sys.executable, "-m", "thymio_bt.cli", "run", f"{ROOT}/missions/square.yaml", *args],
             capture_output=True,
             text=True,
         )
@@ -159,7 +162,7 @@ def test_a_backend_that_raises_ends_the_run_failure_with_its_reason():
                 raise OSError("serial port vanished")
             super().advance(dt)
 
-    mission = load_mission("missions/square.yaml")
+    mission = load_mission(f"{ROOT}/missions/square.yaml")
     backend = Flaky(mission.maze)
     result = Run(mission, backend=backend).run()
     assert (result.status, result.code) == ("FAILURE", "BACKEND_ERROR")

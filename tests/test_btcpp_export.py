@@ -10,8 +10,10 @@ from pathlib import Path
 import pytest
 from _require import module
 
-MISSIONS = sorted(Path("missions").glob("*.yaml"))
-PLUGIN_MISSION = Path("examples/spin_until_clear.yaml")
+ROOT = Path(__file__).resolve().parents[1]
+
+MISSIONS = sorted((ROOT / "missions").glob("*.yaml"))
+PLUGIN_MISSION = ROOT / "examples/spin_until_clear.yaml"
 
 
 def _export(mission: Path, out: Path) -> str:
@@ -71,7 +73,7 @@ def test_a_do_while_condition_with_a_precondition_keeps_its_inverter(tmp_path):
 
     first = tmp_path / "bonus.xml"
     condition = '<IsDeadEnd name="IsDeadEnd" timeout="60.0" key="turn" _uid="18" />'
-    xml = _export(Path("missions/maze_bonus.yaml"), first)
+    xml = _export(ROOT / "missions/maze_bonus.yaml", first)
     assert condition in xml
     first.write_text(xml.replace(condition, condition.replace(' _uid="18"', ' _skipIf="false" _uid="18"')))
     again = mission_xml(load_mission(first), tmp_path / "again.xml")
@@ -130,7 +132,7 @@ def test_a_plugin_mission_exports_its_plugins_and_runs_back_to_the_identical_rep
 def test_a_do_while_loop_is_written_with_built_ins_and_read_back_as_one_repeat(tmp_path):
     from thymio_bt.mission.xml_reader import read_xml_mission
 
-    xml = _export(Path("missions/maze_bonus.yaml"), tmp_path / "bonus.xml")
+    xml = _export(ROOT / "missions/maze_bonus.yaml", tmp_path / "bonus.xml")
     assert '<Sequence name="bonus maze" _thymio="repeat" _uid="2">' in xml
     assert '<Script code="__until_2 := false" _uid="3" />' in xml and '<KeepRunningUntilFailure _uid="5">' in xml
     body = read_xml_mission(tmp_path / "bonus.xml")["tree"]["repeat"]

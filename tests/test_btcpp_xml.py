@@ -9,6 +9,8 @@ from pathlib import Path
 import pytest
 from _require import module
 
+ROOT = Path(__file__).resolve().parents[1]
+
 MISSION = """<root BTCPP_format="4" main_tree_to_execute="Main">
   <ThymioMission maze="{maze}" start="centre" time_limit="20"/>
   <BehaviorTree ID="Main">
@@ -28,7 +30,7 @@ MISSION = """<root BTCPP_format="4" main_tree_to_execute="Main">
 
 def _write(tmp_path, extra=""):
     path = tmp_path / "m.xml"
-    path.write_text(MISSION.format(maze=Path("mazes/arena.yaml").resolve(), extra=extra))
+    path.write_text(MISSION.format(maze=(ROOT / "mazes/arena.yaml").resolve(), extra=extra))
     return path
 
 
@@ -97,7 +99,7 @@ def test_a_groot2_tree_with_scripts_runs_and_exports_to_bt_cpp_and_back(tmp_path
 
     bt = module("behaviortreepy")
     path = tmp_path / "groot.xml"
-    path.write_text(SCRIPTED.format(maze=Path("mazes/arena.yaml").resolve()))
+    path.write_text(SCRIPTED.format(maze=(ROOT / "mazes/arena.yaml").resolve()))
     out = tmp_path / "out.xml"
     out.write_text(mission_xml(load_mission(path), out))
     text = out.read_text()
@@ -183,7 +185,7 @@ def _run_here(xml, folder):
     from thymio_bt.mission.build import build_tree
     from thymio_bt.mission.loader import load_mission
 
-    maze = Path("mazes/arena.yaml").resolve()
+    maze = (ROOT / "mazes/arena.yaml").resolve()
     path = folder / "scoped.xml"
     path.write_text(xml.replace("<BehaviorTree ", f'<ThymioMission maze="{maze}" start="centre"/><BehaviorTree ', 1))
     try:
@@ -391,7 +393,7 @@ def test_a_subtree_with_ports_runs_in_a_mission_once_per_use(tmp_path):
     from thymio_bt.run.runner import Run
 
     path = tmp_path / "legs.xml"
-    path.write_text(LEGS.format(maze=Path("mazes/arena.yaml").resolve()))
+    path.write_text(LEGS.format(maze=(ROOT / "mazes/arena.yaml").resolve()))
     out, back = read_xml_mission(path)["tree"]["bt_sequence"]["children"][1:3]
     assert out.subtree_use == back.subtree_use == "Leg" and out["bt_sequence"]["name"] == "out"
     first, second = (leg["bt_sequence"]["children"] for leg in (out, back))
@@ -405,7 +407,7 @@ def test_a_subtree_with_ports_runs_in_a_mission_once_per_use(tmp_path):
 
 def test_a_literal_port_a_node_writes_is_an_error_naming_both_places(tmp_path):
     path = tmp_path / "m.xml"
-    path.write_text(LEGS.format(maze=Path("mazes/arena.yaml").resolve()).replace('n="{legs}"/>', 'n="0"/>', 1))
+    path.write_text(LEGS.format(maze=(ROOT / "mazes/arena.yaml").resolve()).replace('n="{legs}"/>', 'n="0"/>', 1))
     done = subprocess.run(
         [sys.executable, "-m", "thymio_bt.cli", "validate", str(path)], capture_output=True, text=True
     )

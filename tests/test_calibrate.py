@@ -13,6 +13,7 @@ from pathlib import Path
 
 import _require
 import pytest
+from _waiting import wait_until
 
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
@@ -184,7 +185,7 @@ def test_a_signal_stops_calibrate_on_a_robot_within_a_second_writing_nothing(tmp
         [sys.executable, "-m", "thymio_bt", "calibrate", *args, "-o", str(out)], stderr=subprocess.PIPE, text=True
     )
     said = _started_calibrating(process)
-    time.sleep(0.5)  # realtime: the robot is driving
+    wait_until(lambda: robot.target("left") > 0, "the robot driving")
     assert robot.target("left") == robot.target("right") > 0
     sent = time.monotonic()
     process.send_signal(signum)

@@ -10,6 +10,8 @@ from click.testing import CliRunner
 from thymio_bt.cli import main
 from thymio_bt.robot.interface import SENSOR_NAMES
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def invoke(*args):
     return CliRunner().invoke(main, [str(a) for a in args])
@@ -17,7 +19,7 @@ def invoke(*args):
 
 def test_run_writes_the_report_of_the_contract_and_exits_0(tmp_path):
     out = tmp_path / "report.json"
-    result = invoke("run", "missions/square.yaml", "--report", out, "--quiet", "--seed", 3)
+    result = invoke("run", f"{ROOT}/missions/square.yaml", "--report", out, "--quiet", "--seed", 3)
     assert result.exit_code == 0 and result.output == ""
     report = json.loads(out.read_text())
     assert report["status"] == "SUCCESS" and report["reason"] is None and report["seed"] == 3
@@ -37,7 +39,7 @@ def test_run_writes_the_report_of_the_contract_and_exits_0(tmp_path):
 
 def test_a_run_that_hits_its_time_limit_exits_1_and_names_the_running_node(tmp_path):
     out = tmp_path / "report.json"
-    result = invoke("run", "missions/maze_part1_2.yaml", "--set", "time_limit=3", "--report", out)
+    result = invoke("run", f"{ROOT}/missions/maze_part1_2.yaml", "--set", "time_limit=3", "--report", out)
     assert result.exit_code == 1
     report = json.loads(out.read_text())
     assert report["status"] == "TIMEOUT" and "time limit" in report["reason"]
@@ -50,9 +52,9 @@ def test_maze_and_start_override_the_mission(tmp_path):
     out = tmp_path / "report.json"
     result = invoke(
         "run",
-        "missions/square.yaml",
+        f"{ROOT}/missions/square.yaml",
         "--maze",
-        "mazes/report_arena.yaml",
+        f"{ROOT}/mazes/report_arena.yaml",
         "--start=-0.3,-0.3,pi/2",
         "--report",
         out,
@@ -66,10 +68,18 @@ def test_maze_and_start_override_the_mission(tmp_path):
 
 
 def test_validate_checks_missions_and_maze_files():
-    result = invoke("validate", "missions/maze_part1_2.yaml", "mazes/two_parts_maze.yaml", "mazes/arena.yaml")
+    result = invoke(
+        "validate",
+        f"{ROOT}/missions/maze_part1_2.yaml",
+        f"{ROOT}/mazes/two_parts_maze.yaml",
+        f"{ROOT}/mazes/arena.yaml",
+    )
     assert result.exit_code == 0, result.output
-    assert "ok: mazes/two_parts_maze.yaml (maze: 21 walls, 0 obstacles, spawns part1, part2, bonus)" in result.output
-    assert "ok: missions/maze_part1_2.yaml (16 nodes, maze two_parts_maze)" in result.output
+    assert (
+        f"ok: {ROOT}/mazes/two_parts_maze.yaml (maze: 21 walls, 0 obstacles, spawns part1, part2, bonus)"
+        in result.output
+    )
+    assert f"ok: {ROOT}/missions/maze_part1_2.yaml (16 nodes, maze two_parts_maze)" in result.output
 
 
 def test_validate_reports_every_impossible_spawn_of_a_maze_with_its_line(tmp_path):
@@ -95,7 +105,9 @@ def test_validate_gives_the_line_of_an_impossible_start_pose(tmp_path):
 
 def test_colour_follows_no_color_and_the_color_option(monkeypatch):
     def status_line(*args, color=False):
-        return CliRunner().invoke(main, [*args, "run", "missions/square.yaml"], color=color).output.splitlines()[0]
+        return (
+            CliRunner().invoke(main, [*args, "run", f"{ROOT}/missions/square.yaml"], color=color).output.splitlines()[0]
+        )
 
     assert "\x1b[" in status_line(color=True)  # a terminal: coloured
     assert "\x1b[" not in status_line("--color", "never", color=True)
@@ -106,7 +118,7 @@ def test_colour_follows_no_color_and_the_color_option(monkeypatch):
 
 def test_replay_prints_the_summary_run_prints_not_a_python_dict(tmp_path):
     log = tmp_path / "run.jsonl"
-    ran = invoke("run", "missions/square.yaml", "--log", log)
+    ran = invoke("run", f"{ROOT}/missions/square.yaml", "--log", log)
     replayed = invoke("replay", log)
     assert replayed.exit_code == 0 and "{'x'" not in replayed.output
     pose_line = next(line for line in ran.output.splitlines() if "final pose" in line)
@@ -175,10 +187,10 @@ def test_a_failure_with_no_node_to_blame_prints_no_failed_at_line(capsys):
     assert "reason: [ROBOT_LOST] nothing answered" in out.err and "failed at" not in out.out + out.err
 
 
-@pytest.mark.parametrize("mission", sorted(p.name for p in Path("missions").glob("*.yaml")))
+@pytest.mark.parametrize("mission", sorted(p.name for p in (ROOT / "missions").glob("*.yaml")))
 def test_tree_draws_every_shipped_mission(mission):
     """Drawing builds the tree without a robot: no behaviour may need one to be built."""
-    result = CliRunner().invoke(main, ["tree", f"missions/{mission}"])
+    result = CliRunner().invoke(main, ["tree", f"{ROOT}/missions/{mission}"])
     assert result.exit_code == 0, result.output
     assert len(result.output.splitlines()) >= 2  # the root and its children
 
@@ -188,7 +200,7 @@ def test_tree_draws_every_shipped_mission(mission):
     [
         ["run", "square", "--report", "-", "--log", "-"],
         ["sweep", "square", "--runs", "2", "--workers", "2", "--dask", "tcp://127.0.0.1:1"],
-        ["grade", "course_bonus", "missions/maze_bonus.yaml", "--workers", "1", "--dask", "tcp://127.0.0.1:1"],
+        ["grade", "course_bonus", f"{ROOT}/missions/maze_bonus.yaml", "--workers", "1", "--dask", "tcp://127.0.0.1:1"],
         ["tree", "square", "--svg", "--png"],
     ],
     ids=["report and log on stdout", "sweep workers and dask", "grade workers and dask", "two drawings"],

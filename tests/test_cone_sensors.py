@@ -2,6 +2,7 @@
 the readings Enki gives, its command delay and its motor noise, chosen by --robot enki."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +14,8 @@ from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI
 from thymio_bt.run.runner import Run
 from thymio_bt.testing import world
+
+ROOT = Path(__file__).resolve().parents[1]
 
 CONE = ConeResponse()
 WALL = world("""
@@ -99,11 +102,13 @@ def test_the_cone_and_a_single_ray_see_the_end_of_a_side_wall_at_different_place
 
 
 def test_enkis_profile_is_its_cones_its_command_delay_and_its_motor_noise():
-    mission = load_mission("missions/square.yaml", {"robot": "enki"})
+    mission = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     assert mission.sensor_model == "cone" and mission.noise.wheel == 0.027
-    quiet = load_mission("missions/square.yaml", {"robot": "enki", "noise.wheel": "0", "sensor_model": "metres"})
+    quiet = load_mission(
+        f"{ROOT}/missions/square.yaml", {"robot": "enki", "noise.wheel": "0", "sensor_model": "metres"}
+    )
     assert quiet.sensor_model == "metres" and quiet.noise.wheel == 0.0
-    assert load_mission("missions/square.yaml").sensor_model == "metres"  # the course's rays
+    assert load_mission(f"{ROOT}/missions/square.yaml").sensor_model == "metres"  # the course's rays
 
 
 def test_a_command_is_applied_one_physics_step_late_on_enki():
@@ -118,6 +123,6 @@ def test_a_command_is_applied_one_physics_step_late_on_enki():
 
 
 def test_enki_runs_are_deterministic():
-    mission = load_mission("missions/maze_bonus.yaml", {"robot": "enki"})
+    mission = load_mission(f"{ROOT}/missions/maze_bonus.yaml", {"robot": "enki"})
     a, b = Run(mission, 3).run(), Run(mission, 3).run()
     assert a.trajectory == b.trajectory and a.status == "SUCCESS"

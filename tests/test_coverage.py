@@ -4,6 +4,7 @@ reports keep the contract's keys and order and add "coverage" only when asked.""
 
 import json
 import textwrap
+from pathlib import Path
 
 import _require
 import pytest
@@ -15,6 +16,8 @@ from thymio_bt.run.coverage import Coverage, NodeTable, plan_paths
 from thymio_bt.run.runner import Run
 from thymio_bt.run.sweep import Job, LocalPool, run_job, sweep
 from thymio_bt.viz.terminal import coverage_dot, coverage_text
+
+ROOT = Path(__file__).resolve().parents[1]
 
 KEYS = ["path", "name", "kind", "behaviour", "where", "depth", "ticks", "success", "failure", "running", "ended_by"]
 
@@ -216,7 +219,7 @@ def test_coverage_tree_draws_an_svg_with_graphviz(tmp_path):
 
 def test_sweep_coverage_is_merged_over_the_runs_and_only_when_asked(tmp_path):
     out, plain = tmp_path / "s.json", tmp_path / "p.json"
-    args = ["sweep", "missions/square.yaml", "--runs", "3", "--workers", "2"]
+    args = ["sweep", f"{ROOT}/missions/square.yaml", "--runs", "3", "--workers", "2"]
     result = CliRunner().invoke(main, [*args, "--out", str(out), "--coverage"])
     assert result.exit_code == 0, result.output
     assert CliRunner().invoke(main, [*args, "--out", str(plain)]).exit_code == 0
@@ -230,12 +233,12 @@ def test_sweep_coverage_is_merged_over_the_runs_and_only_when_asked(tmp_path):
 
 
 def test_a_job_brings_its_coverage_back_only_when_asked():
-    assert "coverage" not in run_job(Job("missions/square.yaml", 0))
-    summary = run_job(Job("missions/square.yaml", 0, coverage=True))
+    assert "coverage" not in run_job(Job(f"{ROOT}/missions/square.yaml", 0))
+    summary = run_job(Job(f"{ROOT}/missions/square.yaml", 0, coverage=True))
     assert summary["coverage"]["runs"] == 1 and summary["coverage"]["nodes"][0]["path"] == "four sides"
-    result = sweep("missions/square.yaml", 2, executor=LocalPool(1), coverage=True)
+    result = sweep(f"{ROOT}/missions/square.yaml", 2, executor=LocalPool(1), coverage=True)
     assert result.coverage is not None and result.coverage["runs"] == 2
-    assert sweep("missions/square.yaml", 1, executor=LocalPool(1)).coverage is None
+    assert sweep(f"{ROOT}/missions/square.yaml", 1, executor=LocalPool(1)).coverage is None
 
 
 def test_the_coverage_tree_says_true_and_false_for_conditions_and_marks_nodes_never_run(tmp_path):
@@ -252,13 +255,15 @@ def test_the_coverage_tree_says_true_and_false_for_conditions_and_marks_nodes_ne
 def test_tree_shows_the_coverage_a_report_holds_and_refuses_another_tree_s(tmp_path):
     report, dot = tmp_path / "r.json", tmp_path / "c.dot"
     assert CliRunner().invoke(main, ["run", "square", "-q", "--coverage", "--report", str(report)]).exit_code == 0
-    shown = CliRunner().invoke(main, ["tree", "missions/square.yaml", "--coverage", str(report), "-o", str(dot)])
+    shown = CliRunner().invoke(
+        main, ["tree", f"{ROOT}/missions/square.yaml", "--coverage", str(report), "-o", str(dot)]
+    )
     assert shown.exit_code == 0, shown.output
     assert shown.output.startswith("tree coverage over 1 run: 4 of 4 nodes ticked\n-^- four sides")
     assert dot.read_text().startswith("digraph coverage {") and "ended it x4" in dot.read_text()
-    other = CliRunner().invoke(main, ["tree", "missions/maze_part1_2.yaml", "--coverage", str(report)])
+    other = CliRunner().invoke(main, ["tree", f"{ROOT}/missions/maze_part1_2.yaml", "--coverage", str(report)])
     assert other.exit_code == 2 and "its coverage is of another tree" in other.output
     plain = tmp_path / "plain.json"
     assert CliRunner().invoke(main, ["run", "square", "-q", "--report", str(plain)]).exit_code == 0
-    none = CliRunner().invoke(main, ["tree", "missions/square.yaml", "--coverage", str(plain)])
+    none = CliRunner().invoke(main, ["tree", f"{ROOT}/missions/square.yaml", "--coverage", str(plain)])
     assert none.exit_code == 2 and "holds no tree coverage" in none.output and "--coverage --report" in none.output

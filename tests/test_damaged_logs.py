@@ -11,11 +11,13 @@ from click.testing import CliRunner
 
 from thymio_bt.cli import main
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 @pytest.fixture(scope="module")
 def good_log(tmp_path_factory):
     path = tmp_path_factory.mktemp("log") / "ok.jsonl"
-    assert CliRunner().invoke(main, ["run", "missions/square.yaml", "-q", "--log", str(path)]).exit_code == 0
+    assert CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "-q", "--log", str(path)]).exit_code == 0
     return path.read_text().splitlines()
 
 
@@ -201,7 +203,7 @@ def _zip_bomb(log: Path, out: Path, declared: int | None) -> Path:
 )
 def test_an_mcap_zip_bomb_is_refused_before_it_is_unpacked(tmp_path, declared, message):
     log = tmp_path / "run.mcap"
-    assert CliRunner().invoke(main, ["run", "missions/square.yaml", "-q", "--log", str(log)]).exit_code == 0
+    assert CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "-q", "--log", str(log)]).exit_code == 0
     bomb = _zip_bomb(log, tmp_path / "bomb.mcap", declared)
     assert bomb.stat().st_size < 100_000
     rc, text, peak = _replay_in_a_child(bomb)

@@ -1,12 +1,16 @@
 """Sweeps on a Dask cluster started here (loopback only): the same results as the local pool, and
 workers that reload a mission whose file changed between two sweeps (the cache is keyed on content)."""
 
+from pathlib import Path
+
 import _require
 import pytest
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
 from thymio_bt.run.sweep import LocalPool, sweep
+
+ROOT = Path(__file__).resolve().parents[1]
 
 distributed = _require.module("distributed")
 
@@ -23,8 +27,8 @@ def test_a_dask_sweep_gives_the_local_pools_results(cluster):
     from thymio_bt.run.distributed import DaskExecutor
 
     with distributed.Client(cluster) as client:
-        on_dask = sweep("missions/maze_bonus.yaml", runs=6, executor=DaskExecutor(client))
-    local = sweep("missions/maze_bonus.yaml", runs=6, executor=LocalPool(1))
+        on_dask = sweep(f"{ROOT}/missions/maze_bonus.yaml", runs=6, executor=DaskExecutor(client))
+    local = sweep(f"{ROOT}/missions/maze_bonus.yaml", runs=6, executor=LocalPool(1))
     assert on_dask.results == [
         {**r, "wall_time": d["wall_time"]} for r, d in zip(local.results, on_dask.results, strict=True)
     ]
@@ -46,19 +50,21 @@ def test_workers_read_a_mission_again_when_its_file_changes(cluster, tmp_path):
 
 def test_the_cli_sweeps_on_a_dask_scheduler(cluster):
     result = CliRunner().invoke(
-        main, ["sweep", "missions/square.yaml", "--runs", "4", "--dask", cluster.scheduler_address]
+        main, ["sweep", f"{ROOT}/missions/square.yaml", "--runs", "4", "--dask", cluster.scheduler_address]
     )
     assert result.exit_code == 0 and "4/4 succeeded" in result.output
 
 
 def test_an_unreachable_scheduler_is_a_user_error():
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "2", "--dask", "tcp://127.0.0.1:9"])
+    result = CliRunner().invoke(
+        main, ["sweep", f"{ROOT}/missions/square.yaml", "--runs", "2", "--dask", "tcp://127.0.0.1:9"]
+    )
     assert result.exit_code == 2 and "cannot reach the scheduler" in result.output
 
 
 def test_the_cli_grades_on_a_dask_scheduler_as_it_does_locally(cluster, tmp_path):
     """Each student's runs on a worker, still in a child process under the limits: the same grades."""
-    subs = ["examples/class/ada", "examples/class/dana", "examples/class/eve"]
+    subs = [f"{ROOT}/examples/class/ada", f"{ROOT}/examples/class/dana", f"{ROOT}/examples/class/eve"]
     outs = {}
     for where, extra in (("dask", ["--dask", cluster.scheduler_address]), ("local", ["--workers", "1"])):
         outs[where] = tmp_path / f"{where}.json"

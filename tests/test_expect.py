@@ -2,6 +2,7 @@
 truth (goal region, no collision, time bound, front gaps by geometry); the failed ones are named."""
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +14,8 @@ from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.runner import Run
 from thymio_bt.run.sweep import sweep
+
+ROOT = Path(__file__).resolve().parents[1]
 
 MISSION = """\
 maze: two_parts_maze
@@ -68,13 +71,13 @@ def test_a_collision_fails_no_collision(tmp_path):
 
 
 def test_the_front_gap_is_measured_by_geometry():
-    maze = load_maze("mazes/two_parts_maze.yaml")
+    maze = load_maze(f"{ROOT}/mazes/two_parts_maze.yaml")
     assert front_gap(maze, COURSE, Pose(0.4893, 0.1, 0.0)) == pytest.approx(0.0500, abs=2e-4)
     behind = front_gap(maze, COURSE, Pose(0.4893, 0.1, math.pi))  # the west wall, far behind
     assert math.isfinite(behind) and behind > 0.3
 
 
-@pytest.mark.parametrize("maze_file", ["mazes/two_parts_maze.yaml", "mazes/maze_6x6.yaml"])
+@pytest.mark.parametrize("maze_file", [f"{ROOT}/mazes/two_parts_maze.yaml", f"{ROOT}/mazes/maze_6x6.yaml"])
 def test_a_ray_meets_the_nearest_face_of_every_wall_it_crosses(maze_file):
     """ray_distance skips the walls behind the ray; it finds what trying every face finds, bit for bit,
     along the axes (whose cosine or sine is a zero of either sign) and at any angle."""
@@ -111,7 +114,7 @@ def test_expectations_are_validated_with_units_and_places(tmp_path):
 
 
 def test_in_another_maze_only_place_free_criteria_hold(tmp_path):
-    mission = load_mission("missions/maze_bonus.yaml", maze="mazes/arena.yaml", start="0.6,0.6,0")
+    mission = load_mission(f"{ROOT}/missions/maze_bonus.yaml", maze=f"{ROOT}/mazes/arena.yaml", start="0.6,0.6,0")
     assert mission.expect.goal is None and mission.expect.no_collision
 
 
@@ -119,13 +122,17 @@ def test_the_wall_followers_expect_to_leave_any_maze():
     """leaves_maze holds in any maze: a wall follower whose odometry says it is out while it is
     still inside (Enki's robot once on a 0.25 m grid) does not report SUCCESS there."""
     for side in ("left", "right"):
-        mission = load_mission(f"missions/maze_6x6_{side}.yaml", maze="mazes/arena.yaml", start="0.6,0.6,0")
+        mission = load_mission(
+            f"{ROOT}/missions/maze_6x6_{side}.yaml", maze=f"{ROOT}/mazes/arena.yaml", start="0.6,0.6,0"
+        )
         assert mission.expect.goal is None and mission.expect.leaves_maze and mission.expect.no_collision
 
 
 def test_expectations_may_name_the_mission_s_parameters(tmp_path):
     """maze_bonus's dead end has its side walls within a cell: `side: $cell`, --set cell changes it."""
-    mission = load_mission("missions/maze_bonus.yaml", {"cell": "30cm"}, maze="mazes/arena.yaml", start="0.6,0.6,0")
+    mission = load_mission(
+        f"{ROOT}/missions/maze_bonus.yaml", {"cell": "30cm"}, maze=f"{ROOT}/mazes/arena.yaml", start="0.6,0.6,0"
+    )
     assert mission.expect.dead_end is not None and mission.expect.dead_end.side == pytest.approx(0.3)
     path = tmp_path / "m.yaml"
     path.write_text(
@@ -155,7 +162,7 @@ def test_a_sweep_counts_a_missed_expectation_as_a_failure(tmp_path):
 
 def test_the_course_missions_meet_their_expectations():
     for name in ("maze_part1_2", "maze_bonus", "course_full"):
-        result = Run(load_mission(f"missions/{name}.yaml")).run()
+        result = Run(load_mission(f"{ROOT}/missions/{name}.yaml")).run()
         assert result.status == "SUCCESS" and result.report()["expectations"]["met"], name
 
 

@@ -3,6 +3,7 @@ finiteness and range before anything runs, the same way whichever way it came in
 or over any obstacle is refused and a yaw is normalised or refused."""
 
 import math
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -11,7 +12,9 @@ from thymio_bt.cli import main
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
 
-SQUARE = "missions/square.yaml"
+ROOT = Path(__file__).resolve().parents[1]
+
+SQUARE = f"{ROOT}/missions/square.yaml"
 
 
 def invoke(*args):
@@ -38,7 +41,7 @@ def invoke(*args):
 )
 @pytest.mark.parametrize("command", ["run", "validate", "sweep"])
 def test_set_is_checked_like_the_file_before_anything_runs(command, setting, message):
-    mission = "missions/maze_part1_2.yaml" if setting.startswith("cruise") else SQUARE
+    mission = f"{ROOT}/missions/maze_part1_2.yaml" if setting.startswith("cruise") else SQUARE
     result = invoke(command, mission, "--set", setting, *(["--runs", "2"] if command == "sweep" else []))
     assert result.exit_code == 2 and message in result.output, result.output
     assert "Traceback" not in result.output and "SUCCESS" not in result.output

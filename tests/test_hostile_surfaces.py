@@ -130,7 +130,7 @@ def test_a_sweep_with_failed_runs_exits_1_and_names_them(tmp_path):
 
 
 def test_a_sweep_where_every_run_succeeded_exits_0():
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "2", "--workers", "1"])
+    result = CliRunner().invoke(main, ["sweep", f"{ROOT}/missions/square.yaml", "--runs", "2", "--workers", "1"])
     assert result.exit_code == 0 and "2/2 succeeded" in result.output
 
 
@@ -193,7 +193,7 @@ def test_a_refused_dask_address_leaves_nothing_running(listener, garbage):
     answer["bytes"] = garbage
     before = set(threading.enumerate())
     result = CliRunner().invoke(
-        main, ["sweep", "missions/square.yaml", "--runs", "1", "--dask", f"tcp://127.0.0.1:{port}"]
+        main, ["sweep", f"{ROOT}/missions/square.yaml", "--runs", "1", "--dask", f"tcp://127.0.0.1:{port}"]
     )
     assert result.exit_code == 2, result.output
     assert "no answer" in result.output if not garbage else "not as a Dask scheduler" in result.output
@@ -205,7 +205,7 @@ def test_a_refused_dask_address_leaves_nothing_running(listener, garbage):
 )
 def test_a_dask_address_without_a_port_is_a_message(address):
     _require.module("distributed")
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--runs", "1", "--dask", address])
+    result = CliRunner().invoke(main, ["sweep", f"{ROOT}/missions/square.yaml", "--runs", "1", "--dask", address])
     assert result.exit_code == 2 and result.exception is None or isinstance(result.exception, SystemExit)
     assert f"--dask {address}" in result.output
 
@@ -239,7 +239,7 @@ def test_the_groot2_server_survives_a_names_frame_that_is_not_utf8():
     "args", [["--backend", ""], ["--backend", "  "], ["--realtime", "1e-300"], ["--realtime", "1e-9"]]
 )
 def test_an_empty_backend_or_a_pacing_that_overflows_is_refused(args):
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "-q", *args])
+    result = CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "-q", *args])
     assert result.exit_code == 2 and not isinstance(result.exception, OverflowError), result.output
     assert args[0] in result.output
 

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from _waiting import ticks_logged, wait_until
 
 ROOT = Path(__file__).resolve().parents[1]
 CLI = [sys.executable, "-m", "thymio_bt"]
@@ -58,8 +59,7 @@ def alive(pid: int) -> bool:
 def test_run_ends_interrupted_with_report_and_log_end(tmp_path, sig, code):
     mission = str(ROOT / "missions/maze_6x6_left.yaml")
     proc = start(["run", mission, "--realtime", "4", "--report", "r.json", "--log", "r.jsonl"], tmp_path)
-    wait_for(tmp_path / "r.jsonl")
-    time.sleep(0.5)
+    wait_until(lambda: ticks_logged(tmp_path / "r.jsonl") >= 5, "5 ticks logged")
     proc.send_signal(sig)
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == code, err

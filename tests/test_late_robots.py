@@ -3,6 +3,7 @@ near reading right after nothing was in range does not stop MoveUntilWall, appro
 by the robot's latency, and the expected front gaps are measured on the true pose, not odometry."""
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -15,6 +16,8 @@ from thymio_bt.maze import load_maze
 from thymio_bt.mission.expect import Expect, check
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 from thymio_bt.robot.model import COURSE
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 class ScriptedRobot:
@@ -79,7 +82,7 @@ def test_approach_gains_are_capped_by_latency_only_on_late_robots():
 
 
 def test_expected_gaps_are_measured_on_the_true_pose_not_odometry():
-    maze = load_maze("mazes/two_parts_maze.yaml")
+    maze = load_maze(f"{ROOT}/mazes/two_parts_maze.yaml")
     truth = 0.595 - 0.05 - max(x for x, _ in COURSE.hull)  # base_link 5 cm from part 1's wall
     event = {
         "t": 4.0,

@@ -3,8 +3,11 @@ no command pays at start-up for libraries only some commands need."""
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize(
@@ -24,8 +27,8 @@ def test_imports_stay_in_their_layer(modules, absent):
 @pytest.mark.parametrize(
     "args",
     [
-        ["validate", "missions/maze_part1_2.yaml", "mazes/two_parts_maze.yaml"],
-        ["tree", "missions/maze_bonus.yaml", "-o", "{tmp}/t.dot"],
+        ["validate", f"{ROOT}/missions/maze_part1_2.yaml", f"{ROOT}/mazes/two_parts_maze.yaml"],
+        ["tree", f"{ROOT}/missions/maze_bonus.yaml", "-o", "{tmp}/t.dot"],
         ["schema"],
         ["behaviours", "parallel"],
         ["backends"],
@@ -50,9 +53,12 @@ def test_commands_that_run_nothing_load_no_physics_engine(args, tmp_path):
 def _import_graph():
     """thymio_bt's modules and what each imports (anywhere in the module, TYPE_CHECKING blocks aside)."""
     import ast
-    from pathlib import Path
 
-    files = {".".join(p.with_suffix("").parts).removesuffix(".__init__"): p for p in Path("thymio_bt").rglob("*.py")}
+    files = {
+        ".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in (ROOT / "thymio_bt").rglob("*.py")
+    }
+    assert files, "no module found"
     graph = {}
     for module, path in files.items():
         tree = ast.parse(path.read_text())
@@ -103,20 +109,21 @@ def test_only_the_simulator_imports_pymunk():
 
 
 def test_no_module_is_over_500_lines():
-    from pathlib import Path
 
-    long = {str(p): n for p in Path("thymio_bt").rglob("*.py") if (n := len(p.read_text().splitlines())) > 500}
+    long = {str(p): n for p in (ROOT / "thymio_bt").rglob("*.py") if (n := len(p.read_text().splitlines())) > 500}
     assert not long, long
 
 
 def test_the_architecture_page_names_every_package_and_root_module():
     """docs/architecture.md is drawn from the code: every package and root module has its row."""
-    from pathlib import Path
 
-    page = Path("docs/architecture.md").read_text()
-    rooms = [p.name + "/" for p in Path("thymio_bt").iterdir() if (p / "__init__.py").exists() and p.name != "data"]
-    rooms += [p.name for p in Path("thymio_bt").glob("*.py")]
-    modules = [p.stem for p in Path("thymio_bt").rglob("*.py") if not p.stem.startswith("__") and "data" not in p.parts]
+    page = (ROOT / "docs/architecture.md").read_text()
+    package = ROOT / "thymio_bt"
+    rooms = [p.name + "/" for p in package.iterdir() if (p / "__init__.py").exists() and p.name != "data"]
+    rooms += [p.name for p in package.glob("*.py")]
+    modules = [
+        p.stem for p in (ROOT / "thymio_bt").rglob("*.py") if not p.stem.startswith("__") and "data" not in p.parts
+    ]
     missing = [room for room in sorted(rooms) if f"`{room}`" not in page]
     missing += [module for module in sorted(set(modules)) if f"`{module}`" not in page and f"`{module}.py`" not in page]
     assert not missing, f"docs/architecture.md does not describe {missing}"

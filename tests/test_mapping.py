@@ -3,6 +3,7 @@ moving on small contest-style worlds (18 cm cells, 12 mm walls)."""
 
 import math
 from itertools import pairwise
+from pathlib import Path
 
 import pytest
 
@@ -13,6 +14,8 @@ from thymio_bt.mission import load_mission
 from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.runner import run_mission
 from thymio_bt.testing import run_tree
+
+ROOT = Path(__file__).resolve().parents[1]
 
 CELL = 0.18
 
@@ -129,7 +132,9 @@ def test_at_target_holds_only_in_the_target():
 def mission_in(tmp_path, cells, **settings):
     path = tmp_path / "maze.txt"
     path.write_text(to_text(cells))
-    return run_mission(load_mission("missions/micromouse.yaml", settings, maze=path), seed=settings and 3 or None)
+    return run_mission(
+        load_mission(f"{ROOT}/missions/micromouse.yaml", settings, maze=path), seed=settings and 3 or None
+    )
 
 
 @pytest.mark.parametrize("seed", [0, 1])
@@ -184,7 +189,7 @@ def test_the_mission_solves_a_16x16_contest_maze_with_noise_on_every_robot_model
 
 
 def test_the_report_map_has_the_distances_to_the_goal_and_the_shortest_known_path():
-    result = run_mission(load_mission("missions/micromouse.yaml"))
+    result = run_mission(load_mission(f"{ROOT}/missions/micromouse.yaml"))
     cells = result.maze_map
     assert cells["goal"] == [[0, 3]]  # the 4 x 4 example's G cell
     path = cells["path"]
@@ -204,6 +209,8 @@ def test_a_wall_ahead_is_believed_as_far_as_the_map_may_have_drifted(tmp_path, s
     cells = maze_from_cells(contest_maze(seed, size=size, loops=0.1), "wide", cell=0.25)
     path = tmp_path / "wide.yaml"
     path.write_text(yaml.safe_dump(cells.to_yaml_dict(), sort_keys=False))
-    mission = load_mission("missions/micromouse.yaml", {"cell": "0.25", "robot": "enki"}, maze=path, start="start")
+    mission = load_mission(
+        f"{ROOT}/missions/micromouse.yaml", {"cell": "0.25", "robot": "enki"}, maze=path, start="start"
+    )
     result = run_mission(mission, seed=0)
     assert result.status == "SUCCESS" and result.collisions == 0 and result.goal["reached"], result.reason

@@ -17,7 +17,9 @@ from thymio_bt.maze.micromouse import CELL, parse_micromouse, read_micromouse, t
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
 
-EXAMPLE = "mazes/micromouse_4x4.txt"
+ROOT = Path(__file__).resolve().parents[1]
+
+EXAMPLE = f"{ROOT}/mazes/micromouse_4x4.txt"
 
 
 def test_the_example_reads_in_the_issues_coordinates():

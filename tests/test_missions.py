@@ -12,13 +12,15 @@ from thymio_bt.mission import load_mission
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.runner import Run
 
+ROOT = Path(__file__).resolve().parents[1]
+
 AXLE_X = COURSE.axle_x
 
-MISSIONS = sorted(Path("missions").glob("*.yaml"))
+MISSIONS = sorted((ROOT / "missions").glob("*.yaml"))
 
 
 def run(name, **kwargs):
-    return Run(load_mission(f"missions/{name}.yaml", **kwargs)).run()
+    return Run(load_mission(f"{ROOT}/missions/{name}.yaml", **kwargs)).run()
 
 
 def ends(result, name):
@@ -93,7 +95,7 @@ def test_same_seed_gives_identical_reports():
 
 
 def test_bonus_in_the_mirrored_maze_makes_the_mirrored_turns(tmp_path):
-    maze = mirrored(load_maze("mazes/two_parts_maze.yaml"), axis_x=1.0)
+    maze = mirrored(load_maze(f"{ROOT}/mazes/two_parts_maze.yaml"), axis_x=1.0)
     (tmp_path / "mirror.yaml").write_text(yaml.safe_dump(maze.to_yaml_dict()))
     spawn = maze.spawns["bonus"]
     result = run("maze_bonus", maze=tmp_path / "mirror.yaml", start=f"{spawn.x},{spawn.y},{spawn.yaw}")
@@ -135,7 +137,7 @@ def test_bonus_with_noise_reaches_the_last_pocket(seed):
     """Lateral drift from odometry errors once made seed 25 turn left into a wall and stop there,
     'successfully'; MoveUntilWall's centring keeps the robot where ChooseTurn can see both sides."""
     noise = {"noise.range_sd": "0.001", "noise.wheel": "0.027", "noise.odometry": "0.01"}
-    result = Run(load_mission("missions/maze_bonus.yaml", noise), seed=seed).run()
+    result = Run(load_mission(f"{ROOT}/missions/maze_bonus.yaml", noise), seed=seed).run()
     assert result.status == "SUCCESS" and turn_letters(result) == "RRRLRLLLLLR"
     assert result.final_pose["x"] == pytest.approx(1.7, abs=0.01)
     assert result.final_pose["y"] == pytest.approx(0.311, abs=0.01)
@@ -144,10 +146,10 @@ def test_bonus_with_noise_reaches_the_last_pocket(seed):
 def test_the_final_tree_shows_each_node_as_the_run_ended():
     """Drawn when first read, yet as the run ended: a run cut by its time limit shows the node it
     cut RUNNING (stopping it afterwards made it INVALID), a finished run each node's last status."""
-    cut = Run(load_mission("missions/maze_part1_2.yaml", overrides={"time_limit": "2"}))
+    cut = Run(load_mission(f"{ROOT}/missions/maze_part1_2.yaml", overrides={"time_limit": "2"}))
     assert cut.final_tree == ""
     assert cut.run().status == "TIMEOUT" and cut.root.status.name == "INVALID"
     assert "--> part 1 [*] -- no wall in range" in cut.final_tree.splitlines()[1]
-    done = Run(load_mission("missions/maze_part1_2.yaml"))
+    done = Run(load_mission(f"{ROOT}/missions/maze_part1_2.yaml"))
     assert done.run().status == "SUCCESS"
     assert "--> part 1 [✓] -- stopped at 0.0501 m" in done.final_tree.splitlines()[1]

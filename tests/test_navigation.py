@@ -2,6 +2,7 @@
 
 import math
 from itertools import pairwise
+from pathlib import Path
 
 import pytest
 
@@ -10,7 +11,9 @@ from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
 from thymio_bt.testing import run_tree, world
 
-ARENA = load_maze("mazes/report_arena.yaml")
+ROOT = Path(__file__).resolve().parents[1]
+
+ARENA = load_maze(f"{ROOT}/mazes/report_arena.yaml")
 
 
 def events(result, kind, name=None):
@@ -49,7 +52,7 @@ def test_a_tolerance_tighter_than_the_controller_holds_fails_instead_of_spinning
 def test_speed_limits_are_respected():
     from thymio_bt.logs.recording import Recorder
 
-    mission = load_mission("missions/waypoints.yaml")
+    mission = load_mission(f"{ROOT}/missions/waypoints.yaml")
     recorder = Recorder()
     Run(mission).run(on_tick=recorder)
     assert max(abs(s["cmd"][0]) for s in recorder.samples) <= 0.05 + 1e-6
@@ -57,14 +60,14 @@ def test_speed_limits_are_respected():
 
 
 def test_waypoint_mission_reaches_every_waypoint_in_the_reports_time():
-    result = Run(load_mission("missions/waypoints.yaml")).run()
+    result = Run(load_mission(f"{ROOT}/missions/waypoints.yaml")).run()
     assert result.status == "SUCCESS" and result.collisions == 0
     assert len(events(result, "waypoint_reached")) == 5
     assert 60 < result.sim_time < 150  # ~4.2 m at <= 5 cm/s: the report's order of magnitude
 
 
 def test_the_block_is_bypassed_on_the_left_without_collision():
-    result = Run(load_mission("missions/waypoints_obstacles.yaml")).run()
+    result = Run(load_mission(f"{ROOT}/missions/waypoints_obstacles.yaml")).run()
     assert result.status == "SUCCESS"
     assert result.collisions == 0 and result.min_clearance > 0.005
     assert len(events(result, "waypoint_reached")) == 5
@@ -108,7 +111,7 @@ def test_corner_case_left_is_the_long_way_round(tmp_path):
     import yaml
 
     maze_file.write_text(yaml.safe_dump(maze.to_yaml_dict()))
-    mission = load_mission("missions/waypoints_obstacles.yaml", maze=maze_file, start="-0.5,0,0", overrides={})
+    mission = load_mission(f"{ROOT}/missions/waypoints_obstacles.yaml", maze=maze_file, start="-0.5,0,0", overrides={})
     mission.tree.children[0].children[1].params = (
         mission.tree.children[0].children[1].params.model_copy(update={"waypoints": [(0.5, 0.0)]})
     )

@@ -3,12 +3,15 @@ compared with thresholds), None in everything a run produces (report, RunResult,
 
 import json
 import math
+from pathlib import Path
 
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
 from thymio_bt.logs import read_log
 from thymio_bt.testing import run_tree, world
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def no_reading_values(obj):
@@ -39,7 +42,7 @@ def test_results_say_none_and_never_inf(tmp_path):
     values = list(no_reading_values(result.report())) + list(result.final_proximity.values())
     assert None in values and not any(isinstance(v, float) and math.isinf(v) for v in values)
     log = tmp_path / "r.jsonl"
-    assert CliRunner().invoke(main, ["run", "missions/square.yaml", "-q", "--log", str(log)]).exit_code == 0
+    assert CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "-q", "--log", str(log)]).exit_code == 0
     recording = read_log(log)
     from_log = list(no_reading_values(recording.samples)) + list(no_reading_values(recording.events))
     assert None in from_log and not any(isinstance(v, float) and math.isinf(v) for v in from_log)

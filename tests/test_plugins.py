@@ -8,9 +8,11 @@ from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def test_a_plugin_behaviour_runs_in_a_mission():
-    mission = load_mission("examples/spin_until_clear.yaml")
+    mission = load_mission(f"{ROOT}/examples/spin_until_clear.yaml")
     result = Run(mission).run()
     assert result.status == "SUCCESS"
     assert all(v is None for k, v in result.final_proximity.items() if k.startswith("front"))
@@ -18,10 +20,10 @@ def test_a_plugin_behaviour_runs_in_a_mission():
 
 
 def test_plugin_parameters_are_validated_like_builtins(tmp_path):
-    plugin = Path("examples/spin_until_clear.py").resolve()
+    plugin = (ROOT / "examples/spin_until_clear.py").resolve()
     mission = tmp_path / "m.yaml"
     mission.write_text(
-        f"maze: {Path('mazes/arena.yaml').resolve()}\nstart: centre\nplugins: [{plugin}]\n"
+        f"maze: {(ROOT / 'mazes/arena.yaml').resolve()}\nstart: centre\nplugins: [{plugin}]\n"
         "tree:\n  SpinUntilClear: {rate: 9 m}\n"
     )
     with pytest.raises(UserError) as err:
@@ -150,7 +152,7 @@ def test_a_missions_plugins_are_listed_documented_and_in_its_schema():
 
     from thymio_bt.cli import main
 
-    mission = ["--mission", "examples/spin_until_clear.yaml"]
+    mission = ["--mission", f"{ROOT}/examples/spin_until_clear.yaml"]
     assert "SpinUntilClear" in CliRunner().invoke(main, ["behaviours", *mission]).output
     assert "SpinUntilClear" not in CliRunner().invoke(main, ["behaviours"]).output
     doc = CliRunner().invoke(main, ["behaviours", "SpinUntilClear", *mission])

@@ -1,11 +1,15 @@
 """Missions against a real Thymio's raw readings: sensor_model: raw and thresholds in raw units."""
 
+from pathlib import Path
+
 import pytest
 
 from thymio_bt.errors import UserError
 from thymio_bt.inputs.units import UnitError, parse_value
 from thymio_bt.mission import load_mission
 from thymio_bt.run.runner import Run
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_a_raw_threshold_is_the_distance_at_which_the_table_gives_that_reading():
@@ -35,12 +39,12 @@ def test_the_course_mission_runs_unchanged_on_raw_readings_with_a_raw_threshold(
 
 
 def test_the_course_missions_also_succeed_in_raw_mode():
-    for path in ("missions/maze_part1_2.yaml", "missions/maze_bonus.yaml"):
+    for path in (f"{ROOT}/missions/maze_part1_2.yaml", f"{ROOT}/missions/maze_bonus.yaml"):
         result = Run(load_mission(path, {"sensor_model": "raw"})).run()
         assert result.status == "SUCCESS" and result.collisions == 0, path
 
 
 def test_sensor_model_must_be_known():
     with pytest.raises(UserError) as err:
-        load_mission("missions/square.yaml", {"sensor_model": "lidar"})
+        load_mission(f"{ROOT}/missions/square.yaml", {"sensor_model": "lidar"})
     assert "sensor_model must be one of rays, metres, raw, cone" in str(err.value)

@@ -3,6 +3,7 @@ ray at the refresh, each ray cast once and only if read, and a read-only mapping
 whatever was read first."""
 
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
@@ -13,6 +14,10 @@ from thymio_bt.maze import load_maze
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 
 #: a reading per sensor, distinct: front_left 0.01, front_center_left 0.02, ...
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
 VALUES = {name: 0.01 * (i + 1) for i, name in enumerate(SENSOR_NAMES)}
 
 
@@ -82,7 +87,7 @@ def test_two_scans_compare_by_their_readings():
 )
 def test_rays_cast_when_read_are_the_floats_of_the_rays_cast_together(pose):
     """Each sensor alone, in any order, reads what the seven rays cast in one fan read (bit for bit)."""
-    maze = load_maze("mazes/two_parts_maze.yaml")
+    maze = load_maze(f"{ROOT}/mazes/two_parts_maze.yaml")
     sim = Simulation(maze, spawn=pose)
     entity = sim._entities[sim.robot_name]
     x, y, angle = entity.read()

@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import types
+from pathlib import Path
 
 import _require
 import pytest
@@ -19,6 +20,8 @@ from thymio_bt.errors import UserError
 from thymio_bt.robot.calibration import metres_to_raw
 from thymio_bt.robot.interface import SENSOR_NAMES, Entities, Pose, RequestState, Robot
 from thymio_bt.robot.model import COURSE
+
+ROOT = Path(__file__).resolve().parents[1]
 
 AXLE_X = COURSE.axle_x
 SENSORS = tuple((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors)
@@ -533,7 +536,7 @@ def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it(
 
     node = IdealWheels()
     robot, _, clock, operator, said = make(node, spawn=None)
-    mission = load_mission("missions/square.yaml")
+    mission = load_mission(f"{ROOT}/missions/square.yaml")
     result = Run(mission, backend=robot).run()
     assert result.status == "SUCCESS"
     assert len(operator.prompts) == 1  # place the robot at the start
@@ -550,7 +553,7 @@ def test_a_crash_inside_the_run_still_stops_the_motors():
 
     node = IdealWheels()
     robot, *_ = make(node, spawn=None)
-    run = Run(load_mission("missions/square.yaml"), backend=robot)
+    run = Run(load_mission(f"{ROOT}/missions/square.yaml"), backend=robot)
 
     def interrupt(r):
         if r.ticks == 20:
@@ -569,7 +572,7 @@ def test_a_signal_stops_the_real_robot_and_ends_the_run_interrupted(sig):
 
     node = IdealWheels()
     robot, *_ = make(node, spawn=None)
-    run = Run(load_mission("missions/square.yaml"), backend=robot)
+    run = Run(load_mission(f"{ROOT}/missions/square.yaml"), backend=robot)
 
     def signal_at_tick_20(r):
         if r.ticks == 20:
@@ -592,7 +595,7 @@ def test_cli_backend_tdm_without_a_device_manager_is_a_user_error(monkeypatch):
         raise UserError("cannot reach the Thymio Device Manager (hint: start Thymio Suite)")
 
     monkeypatch.setattr(ThymioRobot, "connect", classmethod(refuse))
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--backend", "tdm"])
+    result = CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "--backend", "tdm"])
     assert result.exit_code == 2 and "Thymio Device Manager" in result.output and "Traceback" not in result.output
 
 
@@ -609,7 +612,7 @@ def test_the_tdm_backend_takes_the_robot_model_and_its_options(monkeypatch):
     monkeypatch.setattr(ThymioRobot, "connect", classmethod(connect))
     from thymio_bt.mission import load_mission
 
-    mission = load_mission("missions/square.yaml", {"robot": "enki"})
+    mission = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     backend_kind("tdm").create(mission, 0, {"host": "127.0.0.1", "port": "8596"}).close()
     assert seen["host"] == "127.0.0.1" and seen["port"] == 8596
     assert seen["config"].wheel_separation == ENKI.wheel_separation

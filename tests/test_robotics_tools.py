@@ -14,7 +14,9 @@ from pathlib import Path
 import pytest
 from _require import module
 
-MISSIONS = sorted(Path("missions").glob("*.yaml"))
+ROOT = Path(__file__).resolve().parents[1]
+
+MISSIONS = sorted((ROOT / "missions").glob("*.yaml"))
 
 
 def thymio_bt(*args, cwd=None):
@@ -29,10 +31,16 @@ def part1_2(tmp_path_factory):
     module("rosbags")
     folder = tmp_path_factory.mktemp("run")
     done = thymio_bt(
-        "run", "missions/maze_part1_2.yaml", "--log", folder / "run.mcap", "--report", folder / "report.json", "-q"
+        "run",
+        f"{ROOT}/missions/maze_part1_2.yaml",
+        "--log",
+        folder / "run.mcap",
+        "--report",
+        folder / "report.json",
+        "-q",
     )
     assert done.returncode == 0, done.stderr
-    done = thymio_bt("run", "missions/maze_part1_2.yaml", "--log", folder / "run.jsonl", "-q")
+    done = thymio_bt("run", f"{ROOT}/missions/maze_part1_2.yaml", "--log", folder / "run.jsonl", "-q")
     assert done.returncode == 0, done.stderr
     return folder, json.loads((folder / "report.json").read_text())
 
@@ -180,7 +188,7 @@ def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message,
     from thymio_bt.mission import load_mission
     from thymio_bt.mission.btcpp import mission_xml
 
-    text = mission_xml(load_mission("missions/maze_bonus.yaml"), tmp_path / "m.xml")
+    text = mission_xml(load_mission(f"{ROOT}/missions/maze_bonus.yaml"), tmp_path / "m.xml")
     old, new = change
     assert old in text
     broken = text.replace(old, new, 1)
@@ -227,7 +235,7 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
     msgpack = module("msgpack")
     btview = _require_program_in_venv("btview")
     port = _free_port_pair()
-    mission = Path("missions/maze_part1_2.yaml").resolve()
+    mission = (ROOT / "missions/maze_part1_2.yaml").resolve()
     xml = tmp_path / "tree.xml"
     thymio_bt("tree", mission, "--btcpp", xml)
     run = subprocess.Popen(
@@ -297,7 +305,7 @@ def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
     from thymio_bt.mission import load_mission
     from thymio_bt.mission.btcpp import mission_xml
 
-    xml = mission_xml(load_mission("missions/course_full.yaml"))
+    xml = mission_xml(load_mission(f"{ROOT}/missions/course_full.yaml"))
     assert re.findall(r'<BehaviorTree ID="([^"]+)"', xml) == [
         "MainTree",
         "respawn",
@@ -325,9 +333,9 @@ def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
 
 def test_the_page_says_what_the_export_does_with_subtrees(tmp_path):
     """docs/robotics_tools.md once said subtrees were "expanded in place": the export keeps them."""
-    page = " ".join(Path("docs/robotics_tools.md").read_text().split())
+    page = " ".join((ROOT / "docs/robotics_tools.md").read_text().split())
     assert "expanded in place" not in page and "Subtrees stay subtrees in the export" in page
-    done = thymio_bt("tree", "missions/maze_part1_2.yaml", "--btcpp", tmp_path / "t.xml")
+    done = thymio_bt("tree", f"{ROOT}/missions/maze_part1_2.yaml", "--btcpp", tmp_path / "t.xml")
     assert done.returncode == 0, done.stderr
     xml = (tmp_path / "t.xml").read_text()
     assert '<SubTree ID="to_dead_end"' in xml and '<BehaviorTree ID="to_dead_end">' in xml

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import _require
 import pytest
+from _waiting import ticks_logged, wait_until
 
 from thymio_bt.mission import load_mission
 from thymio_bt.mission.expect import front_gap
@@ -220,7 +221,7 @@ def test_a_robot_lost_mid_run_ends_it_failure_with_everything_written(bridge, tm
     mission.write_text("name: wait\nmaze: corridor.txt\nstart: start\ntime_limit: 60\ntree:\n  Wait: {seconds: 30}\n")
     b = bridge(mission)
     process = _run(b, mission, tmp_path, subprocess.DEVNULL, "--backend-opt", "placed=true")
-    time.sleep(4.0)
+    wait_until(lambda: ticks_logged(tmp_path / "run.jsonl") >= 3 or process.poll() is not None, "3 ticks logged")
     assert process.poll() is None, process.stderr.read().decode()
     b.socat.kill()
     killed = time.monotonic()

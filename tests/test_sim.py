@@ -2,6 +2,7 @@
 
 import itertools
 import math
+from pathlib import Path
 from types import MappingProxyType
 
 import pytest
@@ -12,7 +13,9 @@ from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 from thymio_bt.robot.model import COURSE as thymio_model
 from thymio_bt.testing import world
 
-COURSE = load_maze("mazes/two_parts_maze.yaml")
+ROOT = Path(__file__).resolve().parents[1]
+
+COURSE = load_maze(f"{ROOT}/mazes/two_parts_maze.yaml")
 
 
 def test_front_ray_reads_the_course_stop_distance():
@@ -193,7 +196,7 @@ def test_fast_clearance_equals_the_exact_polygon_distance_at_random_poses():
     import random
 
     rng = random.Random(7)
-    maze = load_maze("mazes/maze_6x6.yaml")
+    maze = load_maze(f"{ROOT}/mazes/maze_6x6.yaml")
     checked = 0
     while checked < 300:
         pose = Pose(rng.uniform(-0.8, 0.4), rng.uniform(-1.0, 0.2), rng.uniform(-math.pi, math.pi))
@@ -236,7 +239,7 @@ def test_rays_cast_when_read_give_the_readings_of_rays_cast_at_once(monkeypatch)
 
     def runs():
         out = []
-        for path in sorted(glob.glob("missions/*.yaml")):
+        for path in sorted(glob.glob(f"{ROOT}/missions/*.yaml")):
             result = Run(load_mission(path)).run()
             out.append((result.trajectory, result.events, result.final_proximity, result.min_clearance))
         return out
@@ -301,8 +304,10 @@ def test_the_fast_path_gives_the_same_run_as_pymunks_public_api(monkeypatch):
             hit = first_hit(self.space, x, y, cos, sin, self.rays[name], self.filter)
             return math.inf if hit is None else max(hit.alpha * self.reach, self.floor)
 
-    noisy = load_mission("missions/maze_part1_2.yaml", overrides={"noise.wheel": "0.027", "noise.range_sd": "0.001"})
-    quiet = load_mission("missions/maze_part1_2.yaml")
+    noisy = load_mission(
+        f"{ROOT}/missions/maze_part1_2.yaml", overrides={"noise.wheel": "0.027", "noise.range_sd": "0.001"}
+    )
+    quiet = load_mission(f"{ROOT}/missions/maze_part1_2.yaml")
 
     def runs():
         results = [Run(noisy, seed=seed).run() for seed in (0, 7)] + [Run(quiet).run()]

@@ -1,15 +1,18 @@
 """The clearance tracker's wall grid never leaves out a wall near the query point."""
 
 import random
+from pathlib import Path
 
 import pymunk
 
 from thymio_bt.backends.sim.walls import wall_grid
 from thymio_bt.maze import load_maze
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def test_the_grid_serves_every_wall_a_space_point_query_finds():
-    maze = load_maze("mazes/maze_6x6.yaml")
+    maze = load_maze(f"{ROOT}/mazes/maze_6x6.yaml")
     space = pymunk.Space()
     shapes = []
     for wall in maze.walls:
@@ -35,7 +38,7 @@ def test_placement_with_precomputed_shapes_gives_the_same_answers():
     from thymio_bt.robot.model import COURSE
     from thymio_bt.robot.placement import MazeShapes, placement_problem
 
-    maze = load_maze("mazes/two_parts_maze.yaml")
+    maze = load_maze(f"{ROOT}/mazes/two_parts_maze.yaml")
     shapes = MazeShapes.of(maze)
     xmin, ymin, xmax, ymax = maze.bounds()
     rng = random.Random(5)
@@ -56,7 +59,7 @@ def test_maze_shapes_are_the_mazes_corners_and_bounds_and_shared_only_bit_for_bi
     from thymio_bt.maze import Maze, Wall
     from thymio_bt.robot.placement import MazeShapes
 
-    for path in sorted(glob.glob("mazes/*.yaml")):
+    for path in sorted(glob.glob(f"{ROOT}/mazes/*.yaml")):
         maze = load_maze(path)
         shapes = MazeShapes.of(maze)
         assert shapes.polygons == tuple(tuple(s.corners()) for s in (*maze.walls, *maze.obstacles)), path

@@ -1,18 +1,32 @@
 """thymio-bt sweep: the DESIGN.md JSON contract, determinism, and the executor boundary."""
 
 import json
+from pathlib import Path
 
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
 from thymio_bt.run.sweep import LocalPool, run_job, sweep
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def test_sweep_json_contract_and_noise_on_by_default(tmp_path):
     out = tmp_path / "sweep.json"
     result = CliRunner().invoke(
         main,
-        ["sweep", "missions/square.yaml", "--runs", "6", "--seed-start", "10", "--out", str(out), "--workers", "2"],
+        [
+            "sweep",
+            f"{ROOT}/missions/square.yaml",
+            "--runs",
+            "6",
+            "--seed-start",
+            "10",
+            "--out",
+            str(out),
+            "--workers",
+            "2",
+        ],
     )
     assert result.exit_code == 0, result.output
     data = json.loads(out.read_text())
@@ -25,8 +39,8 @@ def test_sweep_json_contract_and_noise_on_by_default(tmp_path):
 
 
 def test_the_same_sweep_gives_the_same_results_serial_or_parallel():
-    serial = sweep("missions/square.yaml", 4, executor=LocalPool(1)).to_json()
-    parallel = sweep("missions/square.yaml", 4, executor=LocalPool(2)).to_json()
+    serial = sweep(f"{ROOT}/missions/square.yaml", 4, executor=LocalPool(1)).to_json()
+    parallel = sweep(f"{ROOT}/missions/square.yaml", 4, executor=LocalPool(2)).to_json()
     for data in (serial, parallel):
         data.pop("wall_time"), data.pop("aggregate_real_time_factor")
     assert serial == parallel
@@ -37,13 +51,13 @@ def test_any_pool_with_imap_unordered_can_run_a_sweep():
         def imap_unordered(self, fn, jobs):
             return iter([fn(job) for job in reversed(list(jobs))])
 
-    result = sweep("missions/square.yaml", 3, executor=Reversed())
+    result = sweep(f"{ROOT}/missions/square.yaml", 3, executor=Reversed())
     assert [r["seed"] for r in result.results] == [0, 1, 2]
 
 
 def test_noise_can_be_switched_off_with_set():
     result = sweep(
-        "missions/square.yaml",
+        f"{ROOT}/missions/square.yaml",
         2,
         overrides={"noise.wheel": "0", "noise.range_sd": "0", "noise.odometry": "0"},
         executor=LocalPool(1),
@@ -54,7 +68,7 @@ def test_noise_can_be_switched_off_with_set():
 def test_run_job_reports_the_first_stop_error():
     from thymio_bt.run.sweep import Job
 
-    summary = run_job(Job("missions/maze_part1_2.yaml", 0))
+    summary = run_job(Job(f"{ROOT}/missions/maze_part1_2.yaml", 0))
     assert summary["status"] == "SUCCESS"
     assert summary["first_stop_error"] < 0.001
 
@@ -71,7 +85,7 @@ def test_a_matrix_sweeps_every_combination_and_tabulates_it(tmp_path):
         main,
         [
             "sweep",
-            "missions/maze_bonus.yaml",
+            f"{ROOT}/missions/maze_bonus.yaml",
             "--runs",
             "3",
             "--workers",
@@ -102,9 +116,9 @@ def test_a_bad_matrix_axis_is_a_user_error():
 
     from thymio_bt.cli import main
 
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--matrix", "robot"])
+    result = CliRunner().invoke(main, ["sweep", f"{ROOT}/missions/square.yaml", "--matrix", "robot"])
     assert result.exit_code == 2 and "--matrix expects NAME=VALUE,VALUE" in result.output
-    result = CliRunner().invoke(main, ["sweep", "missions/square.yaml", "--matrix", "robot=course,marvin"])
+    result = CliRunner().invoke(main, ["sweep", f"{ROOT}/missions/square.yaml", "--matrix", "robot=course,marvin"])
     assert result.exit_code == 2 and "robot must be one of" in result.output
 
 

@@ -1,9 +1,13 @@
 """The testing helpers users get: worlds, run_tree, node substitution, per-node statistics, plugin."""
 
+from pathlib import Path
+
 import py_trees
 import pytest
 
 from thymio_bt.testing import PRESETS, run_mission_file, world
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.parametrize("preset", sorted(PRESETS))
@@ -36,14 +40,14 @@ def test_the_blackboard_was_cleared_after_the_previous_test():
 
 
 def test_substitution_replaces_nodes_by_path_pattern():
-    skipped = run_mission_file("missions/maze_part1_2.yaml", substitute={"course/part 2": "success"})
+    skipped = run_mission_file(f"{ROOT}/missions/maze_part1_2.yaml", substitute={"course/part 2": "success"})
     assert skipped.status == "SUCCESS" and skipped.sim_time < 6
     assert skipped.final_pose == pytest.approx({"x": 0.5, "y": 0.3, "yaw": 1.570796})
 
 
 def test_a_scripted_stub_runs_for_simulated_seconds_then_returns_its_status():
     result = run_mission_file(
-        "missions/maze_part1_2.yaml", substitute={"*/DeleteEntity": {"status": "success", "seconds": 2}}
+        f"{ROOT}/missions/maze_part1_2.yaml", substitute={"*/DeleteEntity": {"status": "success", "seconds": 2}}
     )
     # the real robot was never deleted, so the real spawn must refuse the taken name
     assert result.status == "FAILURE" and result.code == "ENTITY_ERROR"
@@ -53,7 +57,7 @@ def test_a_scripted_stub_runs_for_simulated_seconds_then_returns_its_status():
 
 def test_a_status_list_is_returned_one_per_tick():
     result = run_mission_file(
-        "missions/square.yaml", substitute={"four sides/side/TurnAngle": ["running", "running", "failure"]}
+        f"{ROOT}/missions/square.yaml", substitute={"four sides/side/TurnAngle": ["running", "running", "failure"]}
     )
     assert result.status == "FAILURE"
     assert result.node_stats["four sides/side/TurnAngle"]["ticks"] == 3
@@ -94,7 +98,7 @@ def test_a_substitution_that_matches_nothing_is_an_error_naming_it():
     from thymio_bt.errors import UserError
 
     with pytest.raises(UserError, match=r"substitution 'course/part2' matches no node .*did you mean 'course/part 2'"):
-        run_mission_file("missions/maze_part1_2.yaml", substitute={"course/part2": "success"})
+        run_mission_file(f"{ROOT}/missions/maze_part1_2.yaml", substitute={"course/part2": "success"})
 
 
 def test_a_misspelt_preset_world_suggests_the_nearest():

@@ -3,6 +3,7 @@
 import json
 import sys
 import time
+from pathlib import Path
 
 import _require
 import numpy as np
@@ -17,6 +18,8 @@ from thymio_bt.run.runner import Run
 from thymio_bt.testing import world
 from thymio_bt.viz import window
 from thymio_bt.viz.window import Frame, Viewer, live_hook, replay
+
+ROOT = Path(__file__).resolve().parents[1]
 
 FAST = 1e9  # a speed-up at which the pacing never waits
 
@@ -52,9 +55,9 @@ def _view_with_screenshot(run, tick, screenshot, stop=False):
 
 
 def test_a_live_view_draws_every_tick_and_leaves_the_run_unchanged(pg, tmp_path):
-    plain = Run(load_mission("missions/square.yaml")).run()
+    plain = Run(load_mission(f"{ROOT}/missions/square.yaml")).run()
     screenshot = tmp_path / "frame.png"
-    view, result = _view_with_screenshot(Run(load_mission("missions/square.yaml")), 60, screenshot)
+    view, result = _view_with_screenshot(Run(load_mission(f"{ROOT}/missions/square.yaml")), 60, screenshot)
     view.finish(result)
     assert view.viewer.frames == result.ticks + 1  # every tick, and the outcome
     assert result.final_pose == plain.final_pose and result.trajectory == plain.trajectory
@@ -93,7 +96,7 @@ def test_the_view_grows_when_the_robot_leaves_the_maze(pg):
 
 
 def test_replay_of_a_log_draws_its_frames(pg, tmp_path):
-    run = Run(load_mission("missions/square.yaml"))
+    run = Run(load_mission(f"{ROOT}/missions/square.yaml"))
     recorder = Recorder(log_path=tmp_path / "run.jsonl", keep=False)
     recorder.finish(run.run(on_tick=recorder))
     recording = read_log(tmp_path / "run.jsonl")
@@ -127,7 +130,7 @@ def test_plus_and_minus_change_the_speedup(pg):
 
 @pytest.mark.parametrize("close", ["q", "escape", "window"])
 def test_closing_the_window_stops_a_live_run(pg, close):
-    run = Run(load_mission("missions/square.yaml"))
+    run = Run(load_mission(f"{ROOT}/missions/square.yaml"))
     view = live_hook(run, FAST)
     if close == "window":
         pg.event.post(pg.event.Event(pg.QUIT))
@@ -140,7 +143,7 @@ def test_closing_the_window_stops_a_live_run(pg, close):
 
 
 def test_a_replay_closed_early_just_ends(pg, tmp_path):
-    run = Run(load_mission("missions/square.yaml"))
+    run = Run(load_mission(f"{ROOT}/missions/square.yaml"))
     recorder = Recorder()
     recording = recorder.finish(run.run(on_tick=recorder))
     pg.display.init()  # to queue the key before replay opens its window
@@ -165,7 +168,9 @@ def test_run_and_replay_with_view_run_offscreen(pg, tmp_path):
     from thymio_bt.cli import main
 
     log = tmp_path / "run.jsonl"
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view", "--speedup", "1e9", "--log", str(log)])
+    result = CliRunner().invoke(
+        main, ["run", f"{ROOT}/missions/square.yaml", "--view", "--speedup", "1e9", "--log", str(log)]
+    )
     assert result.exit_code == 0, result.output
     result = CliRunner().invoke(main, ["replay", str(log), "--view", "--speedup", "1e9"])
     assert result.exit_code == 0 and "nothing to draw" not in result.output
@@ -186,7 +191,18 @@ def test_closing_the_window_still_writes_the_report_and_the_log(pg, tmp_path, mo
     monkeypatch.setattr(Viewer, "show", close_at_the_fifth_frame)
     report, log = tmp_path / "report.json", tmp_path / "run.jsonl"
     result = CliRunner().invoke(
-        main, ["run", "missions/square.yaml", "--view", "--speedup", "1e9", "--report", str(report), "--log", str(log)]
+        main,
+        [
+            "run",
+            f"{ROOT}/missions/square.yaml",
+            "--view",
+            "--speedup",
+            "1e9",
+            "--report",
+            str(report),
+            "--log",
+            str(log),
+        ],
     )
     assert result.exit_code == 1 and "STOPPED" in result.output
     assert json.loads(report.read_text())["code"] == "STOPPED"
@@ -201,7 +217,7 @@ def test_view_without_pygame_is_a_user_error(monkeypatch):
     monkeypatch.setitem(sys.modules, "pygame", None)
     monkeypatch.delenv("SDL_VIDEODRIVER", raising=False)
     monkeypatch.setenv("DISPLAY", ":0")  # a display: pygame is what is missing
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--view"])
+    result = CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "--view"])
     assert result.exit_code == 2 and "pip install 'thymio-bt[viz]'" in result.output
     assert "in a checkout: pip install -e '.[viz]'" in result.output  # the PyPI form fails there
 
@@ -251,7 +267,7 @@ def test_view_refuses_sdl_falling_back_to_its_offscreen_driver(tmp_path):
 
 def test_a_mapping_mission_shows_its_map_live(pg, tmp_path):
     screenshot = tmp_path / "map.png"
-    view, _ = _view_with_screenshot(Run(load_mission("missions/micromouse.yaml")), 400, screenshot, stop=True)
+    view, _ = _view_with_screenshot(Run(load_mission(f"{ROOT}/missions/micromouse.yaml")), 400, screenshot, stop=True)
     view.viewer.close()
     assert view.cells is not None and view.cells.wall_segments()
     assert {window.MAP_WALL, window.MAP_VISITED} <= _colours(pg, screenshot)

@@ -22,7 +22,7 @@ def bonus_run(tmp_path_factory):
         main,
         [
             "run",
-            "missions/maze_bonus.yaml",
+            f"{ROOT}/missions/maze_bonus.yaml",
             "--report",
             str(out / "report.json"),
             "--log",
@@ -184,7 +184,9 @@ def test_tree_writes_dot_by_flag_or_suffix_and_to_standard_output(tmp_path, monk
 
 def test_tree_draws_svg_with_graphviz(tmp_path):
     _require.program("dot")
-    result = CliRunner().invoke(main, ["tree", "missions/maze_bonus.yaml", "--svg", "-o", str(tmp_path / "t.svg")])
+    result = CliRunner().invoke(
+        main, ["tree", f"{ROOT}/missions/maze_bonus.yaml", "--svg", "-o", str(tmp_path / "t.svg")]
+    )
     assert result.exit_code == 0, result.output
     assert "<svg" in (tmp_path / "t.svg").read_text() and "MoveUntilWall" in (tmp_path / "t.svg").read_text()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.svg"]  # no .dot or temporary left
@@ -192,20 +194,22 @@ def test_tree_draws_svg_with_graphviz(tmp_path):
 
 def test_tree_explains_missing_graphviz(tmp_path, monkeypatch):
     monkeypatch.setattr("shutil.which", lambda name: None)
-    result = CliRunner().invoke(main, ["tree", "missions/maze_bonus.yaml", "--png", "-o", str(tmp_path / "t.png")])
+    result = CliRunner().invoke(
+        main, ["tree", f"{ROOT}/missions/maze_bonus.yaml", "--png", "-o", str(tmp_path / "t.png")]
+    )
     assert result.exit_code == 2 and "needs Graphviz's 'dot' program" in result.output
     assert list(tmp_path.iterdir()) == []
 
 
 def test_live_tree_prints_statuses_as_they_change():
-    result = CliRunner().invoke(main, ["run", "missions/square.yaml", "--live-tree"])
+    result = CliRunner().invoke(main, ["run", f"{ROOT}/missions/square.yaml", "--live-tree"])
     assert result.exit_code == 0
     assert result.output.count("t = ") > 8
     assert "[✓]" in result.output and "[*]" in result.output
 
 
 def test_a_failed_run_prints_the_failing_branch():
-    result = CliRunner().invoke(main, ["run", "missions/maze_part1_2.yaml", "--set", "time_limit=10"])
+    result = CliRunner().invoke(main, ["run", f"{ROOT}/missions/maze_part1_2.yaml", "--set", "time_limit=10"])
     assert result.exit_code == 1
     assert "failed at: course/part 2" in result.output
     assert "TurnAngle [*]" in result.output and "[TIMEOUT]" in result.output

@@ -13,7 +13,9 @@ from thymio_bt.errors import UserError
 from thymio_bt.mission.planner import MAX_DEPTH, MAX_NODES
 from thymio_bt.mission.xml_tree import MAX_JSON_NESTING, MAX_SUBTREE_DEPTH, MAX_TEXT
 
-MAZE = Path("mazes/arena.yaml").resolve()
+ROOT = Path(__file__).resolve().parents[1]
+
+MAZE = (ROOT / "mazes/arena.yaml").resolve()
 #: the CPU time one hostile file may cost (wall time varies with the machine's load, CPU time less)
 BUDGET = 2.0
 
