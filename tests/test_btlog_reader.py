@@ -15,6 +15,14 @@ from thymio_bt.errors import UserError
 from thymio_bt.logs import read_log
 from thymio_bt.logs.btlog import MAGIC, NO_POSES, RECORD
 
+#: 30 subtrees, each using the next twice: 2**30 nodes if expanded blindly, 60 levels deep
+NESTED = "".join(
+    f'<BehaviorTree ID="T{i}"><Sequence _uid="1"><SubTree ID="T{i + 1}" _uid="2"/><SubTree ID="T{i + 1}" _uid="3"/>'
+    "</Sequence></BehaviorTree>"
+    for i in range(30)
+)
+LOOP = f'<root main_tree_to_execute="T0">{NESTED}<BehaviorTree ID="T30"><Stop _uid="1"/></BehaviorTree></root>'.encode()
+
 
 @pytest.fixture(scope="module")
 def logs(tmp_path_factory) -> tuple[Path, Path]:
@@ -69,6 +77,7 @@ def test_a_cut_btlog_is_read_up_to_its_last_whole_record(logs, tmp_path):
         (b"", "not a Groot2 log"),
         (MAGIC + b"\x01\xff\xff\x00\x00<root/>", "damaged Groot2 log head"),
         (MAGIC + b"\x01\x07\x00\x00\x00<root/>" + bytes(8), "has no <BehaviorTree>"),
+        (MAGIC + b"\x01" + len(LOOP).to_bytes(4, "little") + LOOP + bytes(8), "expands to more than 65535 nodes"),
     ],
 )
 def test_a_file_that_is_not_a_btlog_is_a_clear_error(tmp_path, content, message):

@@ -97,6 +97,8 @@ LETTER = {0: "-", 1: "R", 2: "S", 3: "F", 4: "-"}
 #: the tick rate a Groot2 log's record times are numbered at (thymio-bt's: it does not store one)
 TICK_HZ = 10
 RECORD = 9
+#: the most elements a log's tree may expand to: BT.CPP's uids are 16 bits
+MAX_NODES = 65535
 NO_POSES = "this .btlog holds node statuses only, no robot (add --poses LOG, a log of the same run with poses)"
 
 
@@ -195,10 +197,14 @@ def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
     if main is None:
         raise UserError(Problem("the Groot2 log's tree has no <BehaviorTree>", file, hint="write the log again"))
     nodes: list[dict[str, Any]] = []
+    visits: list[Element] = []
 
     def visit(element: Element, parent: int | None, prefix: str, scaffold: bool, depth: int) -> None:
         uid = element.attrs.get("_uid")
         name = element.attrs.get("name")
+        visits.append(element)  # a subtree used twice by a subtree used twice... doubles at each level
+        if len(visits) > MAX_NODES:
+            raise UserError(Problem(f"the Groot2 log's tree expands to more than {MAX_NODES} nodes", file))
         if depth > 64 or not (uid or "").isdigit():
             raise UserError(Problem(f"the Groot2 log's tree is damaged at <{element.tag}>", file, element.line))
         children = trees[element.attrs.get("ID")].children if element.tag == "SubTree" else element.children
