@@ -247,6 +247,8 @@ def export(log: Path, output: Path | None, btlog: Path | None, partial: bool) ->
                 f"{log} was written before logs carried their tree (hint: run the mission again "
                 f"with --log to export it)"
             )
+        if recording.samples and "cmd" not in recording.samples[0]:  # a .btlog: statuses, no robot
+            raise UserError(f"{log} holds node statuses only, no robot (hint: export the run's .jsonl or .mcap log)")
         for target in targets:
             _write_log(recording, target)
             click.echo(f"wrote {target}", err=True)

@@ -2,7 +2,8 @@
 
 ``view LOG`` writes ``LOG.html`` beside the log (``-o`` elsewhere); ``view A B`` puts two runs side
 by side, aligned by simulated time, with their first divergence (:mod:`thymio_bt.run.divergence`)
-marked. Any log format the project reads works (JSON lines, MCAP); docs/viewer.md tells the page.
+marked. Any log format the project reads works (JSON lines, MCAP, a .btlog with ``--poses`` for its
+robot); docs/viewer.md tells the page.
 
 Example::
 
@@ -55,10 +56,15 @@ def page_divergence(found: Divergence | None) -> dict[str, Any] | None:
 @click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path), metavar="LOG [LOG2]")
 @path_option("-o", "--out", help="The page to write (default: beside the first log, LOG.html).")
 @click.option("--partial", is_flag=True, help="Show a damaged log up to its first damaged line.")
-def view(logs: tuple[Path, ...], out: Path | None, partial: bool) -> None:
+@click.option(
+    "--poses",
+    type=click.Path(path_type=Path),
+    help="A log of the same run with poses (.jsonl, .mcap), for a .btlog LOG: its robot, the .btlog's tree.",
+)
+def view(logs: tuple[Path, ...], out: Path | None, partial: bool, poses: Path | None) -> None:
     """Write a run log (or two, side by side) as one HTML page: maze, robot, tree, blackboard and
     signals at any tick, with its first divergence for two runs."""
-    from thymio_bt.logs import read_log
+    from thymio_bt.logs import format_for, read_log
     from thymio_bt.viz.page import write_page
 
     try:
@@ -67,6 +73,12 @@ def view(logs: tuple[Path, ...], out: Path | None, partial: bool) -> None:
         target = out or page_path(logs)
         check_writable(target, "-o")
         recordings = [read_log(log, partial) for log in logs]
+        if poses is not None:
+            from thymio_bt.logs.btlog import with_poses
+
+            if len(logs) != 1 or format_for(logs[0], reading=True).name != "btlog":
+                raise UserError("--poses goes with one .btlog log (hint: view run.btlog --poses run.jsonl)")
+            recordings = [with_poses(recordings[0], read_log(poses, partial))]
         divergence = divergence_json(*recordings) if len(recordings) == 2 else None
         labels = [log.stem for log in logs] if len(logs) == 2 else None
         written = write_page(recordings, target, divergence, labels)

@@ -3,7 +3,7 @@
 ``thymio-bt run --log FILE`` picks the writer of FILE's format, ``replay`` and ``export`` the reader.
 Built in: JSON lines (``.jsonl``, thymio-bt's own) and rosbag2 with MCAP storage (``.mcap``, or a
 folder: what Foxglove, PlotJuggler and ``ros2 bag`` open; needs ``thymio-bt[rosbag]``), plus
-BT.CPP's Groot2 log (``.btlog``, written only). Plugins add formats through the
+BT.CPP's Groot2 log (``.btlog``: node statuses only, no robot). Plugins add formats through the
 ``thymio_bt.log_formats`` entry-point group, whose entries point to a :class:`LogFormat`.
 
 A :class:`LogWriter` gets ``header()``, then ``tick()`` per tick, ``end()`` and ``close()``;
@@ -14,10 +14,10 @@ Example:
 
 >>> [format_for(name).name for name in ("run.jsonl", "run.mcap", "run_bag", "run.btlog")]
 ['jsonl', 'rosbag2', 'rosbag2', 'btlog']
->>> format_for("run.btlog", reading=True)
+>>> format_for("run.txt", reading=True)
 Traceback (most recent call last):
 ...
-thymio_bt.errors.UserError: run.btlog: no log format reads '.btlog' files (hint: use .jsonl, .mcap)
+thymio_bt.errors.UserError: run.txt: no log format reads '.txt' files (hint: use .jsonl, .mcap, .btlog)
 """
 
 from __future__ import annotations
@@ -94,9 +94,10 @@ BUILTIN: tuple[LogFormat, ...] = (
     ),
     LogFormat(
         "btlog",
-        "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes)",
+        "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes, no robot)",
         (".btlog",),
         "thymio_bt.logs.btlog:BtlogWriter",
+        "thymio_bt.logs.btlog:read_btlog",
     ),
 )
 

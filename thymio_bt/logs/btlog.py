@@ -4,7 +4,8 @@ Little endian: ``BTCPP4-FileLogger2``, a protocol byte (1), the tree's BT.CPP XM
 the text, nodes with their ``_uid``), the start time (i64 µs), then one 9-byte record per status
 change: µs since the start (6 bytes), the node's uid (u16), its new status (u8: 0 IDLE, 1 RUNNING,
 2 SUCCESS, 3 FAILURE). Times are simulated, so the same run gives the same file; the start time is
-0 (1970 in Groot2's clock).
+0 (1970 in Groot2's clock). :func:`read_btlog` reads one back (``thymio-bt view run.btlog``), with
+:func:`with_poses` the robot from a log of the same run.
 
 Example:
 
@@ -29,10 +30,13 @@ from __future__ import annotations
 
 import struct
 from pathlib import Path
-from typing import IO
+from typing import IO, TYPE_CHECKING, Any
 
-from thymio_bt.errors import UserError
+from thymio_bt.errors import Problem, UserError
 from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+
+if TYPE_CHECKING:
+    from thymio_bt.logs.recording import Recording
 
 MAGIC = b"BTCPP4-FileLogger2"
 PROTOCOL = 1
@@ -86,3 +90,155 @@ class BtlogWriter:
         if self._file is not None:
             self._file.close()
             self._file = None
+
+
+#: BT.CPP's NodeStatus -> a log's status letter (4, SKIPPED, is shown as IDLE: the node did not run)
+LETTER = {0: "-", 1: "R", 2: "S", 3: "F", 4: "-"}
+#: the tick rate a Groot2 log's record times are numbered at (thymio-bt's: it does not store one)
+TICK_HZ = 10
+RECORD = 9
+#: the most elements a log's tree may expand to: BT.CPP's uids are 16 bits
+MAX_NODES = 65535
+NO_POSES = "this .btlog holds node statuses only, no robot (add --poses LOG, a log of the same run with poses)"
+
+
+def read_btlog(path: Path) -> Recording:
+    """Read a Groot2 log back: the tree from its XML (node paths as thymio-bt names them), and a sample
+    per record time, each with every node's status then (``nodes``) and no pose. A file cut mid-record
+    is read up to its last whole record (``header["damaged_at"]``: the byte where reading stopped).
+
+    >>> import tempfile
+    >>> from thymio_bt.logs.recording import Recorder
+    >>> from thymio_bt.mission import load_mission
+    >>> from thymio_bt.run.runner import Run
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     recorder = Recorder(log_path=f"{folder}/run.btlog")
+    ...     _ = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+    ...     recording = read_btlog(Path(f"{folder}/run.btlog"))
+    >>> first = recording.samples[0]
+    >>> first["t"], first["tick"], first["pose"], first["nodes"]["four sides/side/MoveDistance"]
+    (0.0, 1, None, 'R')
+    """
+    from thymio_bt.inputs.reading import read_bytes
+    from thymio_bt.logs.recording import Recording
+    from thymio_bt.maze import Maze
+
+    data = read_bytes(path, "log")
+    head = len(MAGIC) + 5
+    if not data.startswith(MAGIC) or len(data) < head:
+        raise UserError(
+            Problem(
+                "not a Groot2 log: it does not start with BTCPP4-FileLogger2",
+                str(path),
+                hint="a .btlog is written by thymio-bt run --log FILE.btlog or BT.CPP's FileLogger2",
+            )
+        )
+    protocol, xml_length = struct.unpack_from("<Bi", data, len(MAGIC))
+    if protocol != PROTOCOL or xml_length < 0 or head + xml_length + 8 > len(data):
+        raise UserError(
+            Problem(
+                f"damaged Groot2 log head (protocol {protocol}, tree of {xml_length} bytes)",
+                str(path),
+                hint="only the records may be cut: write the log again",
+            )
+        )
+    tree = btlog_tree(data[head : head + xml_length], str(path))
+    paths = {node["uid"]: node["path"] for node in tree}
+    statuses = dict.fromkeys(paths.values(), "-")
+    header: dict[str, Any] = {"mission": path.stem, "tick_hz": TICK_HZ, "tree": tree, "note": NO_POSES}
+    recording = Recording(maze=Maze(), mission=path.stem, header=header)
+    start = head + xml_length + 8
+    whole = start + (len(data) - start) // RECORD * RECORD
+    last_stamp = -1
+    for at in range(start, whole, RECORD):
+        stamp = int.from_bytes(data[at : at + 6], "little")
+        uid, status = struct.unpack_from("<HB", data, at + 6)
+        if status not in LETTER or stamp < last_stamp:
+            whole = at
+            break
+        if stamp != last_stamp:
+            t = round(stamp / 1e6, 6)
+            recording.samples.append({"t": t, "tick": round(t * TICK_HZ) + 1, "pose": None})
+            last_stamp = stamp
+        if uid in paths:
+            statuses[paths[uid]] = LETTER[status]
+        recording.samples[-1]["nodes"] = dict(statuses)
+    if whole != len(data):
+        header["damaged_at"] = whole
+    last = recording.samples[-1]["t"] if recording.samples else 0.0
+    recording.end = {"status": "INCOMPLETE" if whole != len(data) else "UNKNOWN", "sim_time": last, "final_pose": None}
+    return recording
+
+
+def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
+    """The tree of a Groot2 log's XML as a log header's ``tree`` (pre-order, BT.CPP's ``_uid``s): each
+    node's path is its ancestors' names and its own, as thymio-bt names a tree's nodes. An element
+    without a ``name`` is named for its tag, as BT.CPP does, but a do-while loop's scaffolding (the
+    unnamed elements inside a ``_thymio="repeat"``) is no node; a ``<SubTree>`` is the root of its
+    ``<BehaviorTree>``, whose nodes follow it; an element with BT.CPP's pre/post-conditions is under a
+    ``bt_conditions`` node of its name, as ``thymio-bt run mission.xml`` builds it."""
+    from thymio_bt.behaviours.btcpp_control import CONDITION_ATTRS
+    from thymio_bt.inputs.xmlparse import parse_xml
+    from thymio_bt.mission.xml_tree import Element
+
+    stack: list[Element] = []
+    roots: list[Element] = []
+
+    def start(tag: str, attrs: dict[str, str], line: int, column: int) -> None:
+        element = Element(tag, attrs, line, column)
+        (stack[-1].children if stack else roots).append(element)
+        stack.append(element)
+
+    parse_xml(xml, file, "log", start, lambda tag: stack.pop(), hint="the log's tree is damaged")
+    trees = {t.attrs.get("ID"): t for t in (roots[0].children if roots else []) if t.tag == "BehaviorTree"}
+    main = roots[0].attrs.get("main_tree_to_execute") if roots else None
+    if main not in trees:
+        main = next(iter(trees), None)
+    if main is None:
+        raise UserError(Problem("the Groot2 log's tree has no <BehaviorTree>", file, hint="write the log again"))
+    nodes: list[dict[str, Any]] = []
+    visits: list[Element] = []
+
+    def visit(element: Element, parent: int | None, prefix: str, scaffold: bool, depth: int) -> None:
+        uid = element.attrs.get("_uid")
+        name = element.attrs.get("name")
+        visits.append(element)  # a subtree used twice by a subtree used twice... doubles at each level
+        if len(visits) > MAX_NODES:
+            raise UserError(Problem(f"the Groot2 log's tree expands to more than {MAX_NODES} nodes", file))
+        if depth > 64 or not (uid or "").isdigit():
+            raise UserError(Problem(f"the Groot2 log's tree is damaged at <{element.tag}>", file, element.line))
+        children = trees[element.attrs.get("ID")].children if element.tag == "SubTree" else element.children
+        if element.tag == "SubTree" and element.attrs.get("ID") not in trees:
+            raise UserError(Problem(f"the Groot2 log's tree has no <BehaviorTree> {element.attrs.get('ID')}", file))
+        skipped = (name is None and scaffold) or element.tag == "SubTree"  # not a node of thymio-bt's tree
+        if skipped:
+            path, node = prefix, parent
+        else:
+            name = name or element.tag
+            if any(k in CONDITION_ATTRS for k in element.attrs):
+                prefix = f"{prefix}/{name}" if prefix else name
+            path, node = (f"{prefix}/{name}" if prefix else name), int(uid or 0)
+            nodes.append({"uid": node, "path": path, "name": name, "kind": element.tag, "parent": parent})
+        inner = element.attrs.get("_thymio") == "repeat" or (scaffold and skipped)
+        for child in children:
+            visit(child, node, path, inner, depth + 1)
+
+    for element in trees[main].children:
+        visit(element, None, "", False, 0)
+    return nodes
+
+
+def with_poses(statuses: Recording, poses: Recording) -> Recording:
+    """One run from two logs of it: the tree and its statuses from ``statuses`` (a Groot2 log's), the
+    robot, the maze, the signals and the events from ``poses`` (a log of the same run with poses),
+    aligned by simulated time: each tick of ``poses`` gets the statuses of the last record at or before it."""
+    from dataclasses import replace
+
+    idle = dict.fromkeys((n["path"] for n in statuses.header["tree"]), "-")
+    samples, at = [], -1
+    for sample in poses.samples:
+        while at + 1 < len(statuses.samples) and statuses.samples[at + 1]["t"] <= sample["t"] + 1e-9:
+            at += 1
+        samples.append({**sample, "nodes": statuses.samples[at]["nodes"] if at >= 0 else idle})
+    header = {**poses.header, "tree": statuses.header["tree"]}
+    return replace(poses, samples=samples, header=header)

@@ -181,6 +181,7 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
         "mission": recording.mission,
         "seed": recording.header.get("seed"),
         "tick_hz": recording.header.get("tick_hz"),
+        "note": recording.header.get("note"),
         "end": {k: end.get(k) for k in END_FIELDS},
         "maze": _maze(recording),
         "robot": robot,

@@ -1053,6 +1053,9 @@
   } else if (!single) {
     say("The two runs do not diverge.");
   }
+  for (const run of runs.filter((r) => r.d.note)) {
+    say((announce.textContent + " " + (single ? "" : run.letter + ": ") + "No robot: " + run.d.note + ".").trim());
+  }
   for (const run of runs.filter(simulated)) {
     say(announce.textContent + " " + run.letter + " is simulated from t = " + run.d.simulated_from + " s (--continue sim).");
   }
