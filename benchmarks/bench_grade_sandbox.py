@@ -56,37 +56,30 @@ def plugin_assignment(folder: Path) -> Path:
 
 
 def round_trip_us(n: int = 20000) -> float:
-    """µs per tick's round trip on the wire: a typical observation out, a reply back (two processes)."""
+    """µs per tick's round trip on the wire: a typical observation out, a reply back (two processes),
+    each written and read as the grader and a submission's process do (:mod:`thymio_bt.grade.wire`)."""
     import socket
 
-    from thymio_bt.grade.wire import Link
+    from thymio_bt.grade.wire import Link, observation_frame, read_observation, read_reply, reply_frame
 
-    observation = {
-        "t": 12.3,
-        "e": True,
-        "p": [0.4812, 0.1003, 0.0012],
-        "s": [0.071, 0.052, 0.049, 0.055, 0.073, None, None],
-        "v": [0.1, 0.0],
-        "c": [0.1, 0.0],
-        "n": 0,
-        "r": [],
-    }
-    reply = {"st": "RUNNING", "d": [[0.1, 0.002]], "q": [], "ev": []}
+    inf = float("inf")
+    observation = (12.3, True, True, True, 0.4812, 0.1003, 0.0012, 0.071, 0.052, 0.049, 0.055, 0.073, inf, inf)
+    observation += (0.1, 0.0, 0.1, 0.0, 0)
     ours, theirs = socket.socketpair()
     pid = os.fork()
     if pid == 0:
         ours.close()
         link = Link(theirs)
         for _ in range(n):
-            link.receive(None)
-            link.send(reply)
+            read_observation(link.receive_frame(None))
+            link.send_frame(reply_frame("RUNNING", [(0.1, 0.002)], {}))
         os._exit(0)
     theirs.close()
     link = Link(ours)
     began = time.perf_counter()
     for _ in range(n):
-        link.send(observation)
-        link.receive(None)
+        link.send_frame(observation_frame(observation, []))
+        read_reply(link.receive_frame(time.monotonic() + 5))
     elapsed = time.perf_counter() - began
     os.waitpid(pid, 0)
     return elapsed / n * 1e6

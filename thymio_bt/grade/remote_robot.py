@@ -4,39 +4,34 @@ and whose commands and entity requests go back with the tick's reply (:meth:`Rem
 as a real robot's controller talks to its robot. The simulation and its ground truth stay with the
 grader: nothing here can move the robot but a command.
 
-The observation (grader to submission) and the reply (submission to grader), JSON objects:
-
-- observation: ``t`` clock (s), ``e`` whether the robot exists, ``p`` odometry ``[x, y, yaw]``
-  or None, ``s`` the 7 proximity ranges (``SENSOR_NAMES`` order, None: nothing in range) or None,
-  ``v`` measured ``[linear, angular]``, ``c`` the command held ``[linear, angular]``, ``n``
-  collisions so far, ``r`` entity requests served since the last tick as
-  ``[id, "succeeded" | "failed", reason]``;
-- reply: ``st`` the root's status, ``d`` the drive commands given this tick (each
-  ``[linear, angular]``), ``q`` new entity requests ``[id, "delete" | "spawn", entity, x, y,
-  yaw]``, ``ev`` the events the tree emitted this tick, ``tip`` the running node's path when it
-  changed, ``f`` ``[path, code, reason]`` of a failure, ``x`` why the tick raised; while a tick
-  takes long, ``{"slow": path}`` says which node it is in.
+The observation (grader to submission) is a binary frame (:data:`~.wire.OBSERVATION`: the clock,
+whether the robot exists, odometry, the 7 proximity ranges, measured velocity, the command held,
+collisions so far) with the entity requests served since the last tick as ``[id, "succeeded" |
+"failed", reason]``. The reply (submission to grader, :func:`~.wire.reply_frame`): the root's
+status, the drive commands given this tick (each ``[linear, angular]``), and, when there are any,
+``q`` new entity requests ``[id, "delete" | "spawn", entity, x, y, yaw]``, ``ev`` the events the
+tree emitted this tick, ``tip`` the running node's path when it changed, ``f`` ``[path, code,
+reason]`` of a failure, ``x`` why the tick raised; while a tick takes long, ``{"slow": path}`` (JSON)
+says which node it is in.
 
 Example::
 
     >>> from thymio_bt.robot.model import robot_model
+    >>> inf = float("inf")
     >>> robot = RemoteRobot(robot_model("course"))
-    >>> robot.observe({"t": 0.1, "e": True, "p": [0.1, 0.2, 0.0], "s": [0.05] + [None] * 6,
-    ...                "v": [0.0, 0.0], "c": [0.0, 0.0], "n": 0, "r": []})
+    >>> robot.observe((0.1, True, True, True, 0.1, 0.2, 0.0, 0.05, *[inf] * 6, 0.0, 0.0, 0.0, 0.0, 0), [])
     >>> robot.time(), robot.pose().x, robot.proximity()["front_left"], robot.proximity()["rear_right"]
     (0.1, 0.1, 0.05, inf)
     >>> request = robot.request_delete("thymio"); robot.drive(0.1, 0.0)
     >>> robot.outbox()
-    ([[0.1, 0.0]], [[0, 'delete', 'thymio', 0.0, 0.0, 0.0]])
-    >>> robot.observe({"t": 0.2, "e": False, "p": None, "s": None, "v": [0, 0], "c": [0, 0], "n": 0,
-    ...                "r": [[0, "succeeded", None]]})
+    ([(0.1, 0.0)], [[0, 'delete', 'thymio', 0.0, 0.0, 0.0]])
+    >>> robot.observe((0.2, False, False, False, *[0.0] * 3, *[inf] * 7, *[0.0] * 4, 0), [[0, "succeeded", None]])
     >>> request.state.name, robot.exists(), robot.pose()
     ('SUCCEEDED', False, None)
 """
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 from thymio_bt.robot.interface import (
@@ -67,24 +62,18 @@ class RemoteRobot(Robot, Entities):
         self._requests: dict[int, Request] = {}
         self._new: list[list[Any]] = []
         self._next = 0
-        self._drives: list[list[float]] = []
+        self._drives: list[tuple[float, float]] = []
 
-    def observe(self, message: dict[str, Any]) -> None:
-        """Take in one tick's observation."""
-        self._time = float(message["t"])
-        self._exists = bool(message["e"])
-        pose = message["p"]
-        self._pose = None if pose is None else Pose(*map(float, pose))
-        scan = message["s"]
-        self._scan = (
-            None
-            if scan is None
-            else {n: math.inf if r is None else float(r) for n, r in zip(SENSOR_NAMES, scan, strict=False)}
-        )
-        self._velocity = Twist(*map(float, message["v"]))
-        self._command = Twist(*map(float, message["c"]))
-        self.collisions = int(message["n"])
-        for key, state, reason in message["r"]:
+    def observe(self, values: tuple[Any, ...], served: list[list[Any]]) -> None:
+        """Take in one tick's observation: the fields of :data:`~.wire.OBSERVATION` after its tag,
+        and the entity requests served."""
+        self._time, self._exists, has_pose, has_scan = values[:4]
+        self._pose = Pose(*values[4:7]) if has_pose else None
+        self._scan = dict(zip(SENSOR_NAMES, values[7:14], strict=True)) if has_scan else None
+        self._velocity = Twist(values[14], values[15])
+        self._command = Twist(values[16], values[17])
+        self.collisions = values[18]
+        for key, state, reason in served:
             request = self._requests.pop(int(key), None)
             if request is not None:
                 request.state = RequestState(state)
@@ -94,7 +83,7 @@ class RemoteRobot(Robot, Entities):
         """Take in the clock alone (the run's end)."""
         self._time = float(t)
 
-    def outbox(self) -> tuple[list[list[float]], list[list[Any]]]:
+    def outbox(self) -> tuple[list[tuple[float, float]], list[list[Any]]]:
         """The commands given since the last reply, each (a simulation with noisy wheels draws their
         error anew with every command), and the requests made; both emptied."""
         drives, self._drives = self._drives, []
@@ -104,7 +93,7 @@ class RemoteRobot(Robot, Entities):
     def drive(self, linear: float, angular: float) -> None:
         """Hold a velocity command (sent with the tick's reply)."""
         self._command = Twist(float(linear), float(angular))
-        self._drives.append([self._command.linear, self._command.angular])
+        self._drives.append((self._command.linear, self._command.angular))
 
     def exists(self) -> bool:
         """Whether the robot exists, as last observed."""

@@ -23,7 +23,7 @@ from thymio_bt.behaviours.base import snapshot
 from thymio_bt.errors import ThymioBtError
 from thymio_bt.grade.isolation import Limits, RunLimit
 from thymio_bt.grade.sandboxes import Sandbox
-from thymio_bt.grade.wire import Deadline, WireError
+from thymio_bt.grade.wire import MAX_DRIVES, Deadline, WireError, is_json, observation_frame, read_json, read_reply
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Request, RequestState
 from thymio_bt.run.result import EndKind, RunResult, Verdict
 from thymio_bt.run.runner import Run
@@ -32,8 +32,6 @@ from thymio_bt.run.runner import Run
 OWN_EVENTS = frozenset({"delete_entity", "spawn_entity", "collision"})
 #: at most this many events, entity requests per tick, characters in a text from a submission
 MAX_EVENTS, MAX_REQUESTS, MAX_TEXT = 20_000, 8, 500
-#: at most this many drive commands a tick (each is applied, as a tree in the grader's process would)
-MAX_DRIVES = 16
 #: how often (ticks; seconds while it is silent) the submission's CPU time is read
 CPU_EVERY, CPU_POLL = 20, 0.25
 
@@ -76,16 +74,28 @@ class RemoteRun(Run):
         return result
 
     def _receive(self) -> dict[str, Any]:
-        """The submission's next message; its wall-clock or CPU limit (read every
-        :data:`CPU_POLL` s while it is silent) is :class:`RunLimit`, naming the node it was in."""
+        """The submission's next JSON message (a tick's frame here: :class:`SubmissionFault`)."""
+        frame = self._receive_frame()
+        if not is_json(frame):
+            raise SubmissionFault("the submission's process sent a tick's reply out of turn")
+        return read_json(frame)
+
+    def _receive_frame(self) -> bytes:
+        """The submission's next message but its slow-tick notes; its wall-clock or CPU limit (read
+        every :data:`CPU_POLL` s while it is silent) is :class:`RunLimit`, naming the node it was in."""
         while True:
             try:
-                message = self.sandbox.link.receive(min(self.deadline, time.monotonic() + CPU_POLL))
+                frame = self.sandbox.link.receive_frame(min(self.deadline, time.monotonic() + CPU_POLL))
+                if not is_json(frame) or b'"slow"' not in frame:
+                    return frame
+                message = read_json(frame)
                 if "slow" not in message:
-                    return message
+                    return frame
                 slow = message["slow"]  # a tick is taking long: the node it is in
                 if isinstance(slow, str) and slow in self.paths and isinstance(self.root, _Remote):
                     self.root.tip_path = slow
+                if time.monotonic() >= self.deadline:  # (notes sent without end are no way out)
+                    raise Deadline("")
             except Deadline:
                 if time.monotonic() >= self.deadline:
                     self._limit(f"went over its wall-clock time limit of {self.limits.wall:g} s")
@@ -149,43 +159,51 @@ class _Remote(Behaviour):
             run.check_cpu()
         pose, velocity, command = backend.pose(), backend.velocity(), backend.command()
         scan = backend.proximity()
-        observation = {
-            "t": backend.time(),
-            "e": backend.exists(),
-            "p": None if pose is None else [pose.x, pose.y, pose.yaw],
-            "s": None if scan is None else [_finite_or_none(scan.get(n)) for n in SENSOR_NAMES],
-            "v": [velocity.linear, velocity.angular],
-            "c": [command.linear, command.angular],
-            "n": len(backend.collisions),
-            "r": self.served,
-        }
+        frame = observation_frame(
+            (
+                backend.time(),
+                backend.exists(),
+                pose is not None,
+                scan is not None,
+                *((pose.x, pose.y, pose.yaw) if pose is not None else _NO_POSE),
+                *([_finite_or_inf(scan.get(n)) for n in SENSOR_NAMES] if scan is not None else _NO_SCAN),
+                velocity.linear,
+                velocity.angular,
+                command.linear,
+                command.angular,
+                len(backend.collisions),
+            ),
+            self.served,
+        )
         self.served = []
         try:
-            run.sandbox.link.send(observation)
+            run.sandbox.link.send_frame(frame)
         except WireError as exc:
             raise SubmissionFault(str(exc)) from None
-        reply = run._receive()
-        return self._take(reply)
+        reply = run._receive_frame()  # (a process that ended: WireError, the run crashed)
+        try:
+            status, drives, rest = read_reply(reply)
+        except WireError as exc:
+            raise SubmissionFault(str(exc)) from None
+        return self._take(status, drives, rest)
 
-    def _take(self, reply: dict[str, Any]) -> Status:
-        """Apply a reply (checked): the command, the requests, the events; the tree's status."""
+    def _take(self, name: str, drives: list[tuple[float, float]], reply: dict[str, Any]) -> Status:
+        """Apply a reply (its drives finite, the rest checked here): the commands, the requests,
+        the events; the tree's status."""
         run, backend = self.run, self.run.backend
         if "x" in reply:
             raise SubmissionFault(_text(reply["x"]))
-        for drive in _list(reply.get("d"))[:MAX_DRIVES]:
-            if not (isinstance(drive, list) and len(drive) == 2 and all(_finite(v) for v in drive)):
-                raise SubmissionFault("the submission's process sent a drive command that is not two numbers")
-            backend.drive(float(drive[0]), float(drive[1]))
-        for request in _list(reply.get("q"))[:MAX_REQUESTS]:
-            self._request(request)
-        run.events.extend(self.events(reply.get("ev")))
+        for linear, angular in drives[:MAX_DRIVES]:
+            backend.drive(linear, angular)
+        if "q" in reply:
+            for request in _list(reply["q"])[:MAX_REQUESTS]:
+                self._request(request)
+        if "ev" in reply:
+            run.events.extend(self.events(reply["ev"]))
         if "tip" in reply:
             tip = reply["tip"]
             self.tip_path = tip if isinstance(tip, str) and tip in run.paths else None
-        try:
-            status = Status[str(reply.get("st"))]
-        except KeyError:
-            raise SubmissionFault("the submission's process sent no status for its tree") from None
+        status = Status[name]
         if status is Status.FAILURE:
             failure = _list(reply.get("f")) + [None, None, None]
             path = failure[0] if failure[0] in run.paths else None
@@ -234,8 +252,12 @@ class _Remote(Behaviour):
         return kept
 
 
-def _finite_or_none(value: Any) -> float | None:
-    return float(value) if _finite(value) else None
+def _finite_or_inf(value: Any) -> float:
+    """A range as the submission reads it (inf: nothing in range, or no number)."""
+    return float(value) if _finite(value) else math.inf
+
+
+_NO_POSE, _NO_SCAN = (0.0,) * 3, (math.inf,) * len(SENSOR_NAMES)
 
 
 def _finite(value: Any) -> bool:

@@ -13,7 +13,8 @@ kills them.
 
 Per run: ``{"run": {...}}`` (the mission file, its settings, a maze holding only the world's spawns
 and goal, the clock's period) is answered ``{"ready": ...}`` or ``{"error": ...}``; then each
-observation by a reply, until ``{"end": true}``, answered with the node statistics.
+observation by a reply (binary frames, :mod:`.wire`), until ``{"end": true}``, answered with the
+node statistics.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from typing import Any
 from thymio_bt.grade.confine import confine, python_paths
 from thymio_bt.grade.reaping import has_children, kill_tree, reap_orphans, set_subreaper
 from thymio_bt.grade.remote_robot import RemoteRobot
-from thymio_bt.grade.wire import Link, WireError
+from thymio_bt.grade.wire import MAX_DRIVES, Link, WireError, is_json, read_json, read_observation, reply_frame
 
 
 def zygote(fd: int) -> None:
@@ -183,21 +184,24 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Wat
     link.send({"ready": True})
     sent, tip = 0, None
     while True:
-        observation = link.receive(None)
-        if observation.get("end"):
-            robot.observe_time(observation["t"])  # the run's end: running behaviours end then
+        frame = link.receive_frame(None)
+        if is_json(frame):  # the run's end: running behaviours end then
+            robot.observe_time(read_json(frame)["t"])
             break
-        robot.observe(observation)
+        robot.observe(*read_observation(frame))
         with watch:
-            reply: dict[str, Any] = _tick(root)
-        drive, requests = robot.outbox()
-        reply |= {"d": drive, "q": requests, "ev": events[sent:]}
-        sent = len(events)
+            status, rest = _tick(root)
+        drives, requests = robot.outbox()
+        if requests:
+            rest["q"] = requests
+        if len(events) > sent:
+            rest["ev"] = events[sent:]
+            sent = len(events)
         running = root.tip()
-        path = node_path(running) if running is not None and root.status.name == "RUNNING" else None
+        path = node_path(running) if running is not None and status == "RUNNING" else None
         if path != tip:
-            reply["tip"] = tip = path
-        link.send(reply)
+            rest["tip"] = tip = path
+        link.send_frame(reply_frame(status, drives[:MAX_DRIVES], rest))
     with contextlib.suppress(Exception):
         root.stop(py_trees.common.Status.INVALID)
     link.send({"stats": stats.table.rows(), "ev": events[sent:]})
@@ -242,8 +246,8 @@ def _innermost_node(frame: Any) -> Any:
 SLOW = 0.5
 
 
-def _tick(root: Any) -> dict[str, Any]:
-    """One tick of the tree: its status, and where and why it failed."""
+def _tick(root: Any) -> tuple[str, dict[str, Any]]:
+    """One tick of the tree: its status, and where and why it failed (or why the tick raised)."""
     from thymio_bt.behaviours.base import describe, is_fault
     from thymio_bt.behaviours.ticking import tick
     from thymio_bt.run.result import failing_branch
@@ -253,11 +257,11 @@ def _tick(root: Any) -> dict[str, Any]:
     except BaseException as exc:
         if not is_fault(exc):
             raise
-        return {"x": f"the run raised {describe(exc)}"}
+        return "INVALID", {"x": f"the run raised {describe(exc)}"}
     status = root.status.name
     if status == "FAILURE":
-        return {"st": status, "f": list(failing_branch(root))}
-    return {"st": status}
+        return status, {"f": list(failing_branch(root))}
+    return status, {}
 
 
 if __name__ == "__main__":

@@ -1,11 +1,13 @@
 """The messages between the grader's side of a run and a submission's confined process: a 4-byte
-length, then that many bytes of JSON (an object). One message each way per tick.
+length, then that many bytes: a JSON object (the orders, a run's start and end, a slow tick), or a
+tick's frame (one each way per tick): a fixed binary part (:data:`OBSERVATION`, :data:`REPLY` and
+its drive commands) and, only when there is any, a JSON object for the rare rest (the entity
+requests, events, the running node, a failure). A binary frame costs a tenth of the JSON one to
+write and to read (``benchmarks/README.md``).
 
 What the other side sends is read as untrusted: a message over :data:`MAX_MESSAGE` bytes, one that
-is not a JSON object, or silence past a deadline is a :class:`WireError` (the run fails with it);
-nothing is evaluated. JSON keeps ``inf`` readings (``Infinity``) and is what the rest of the grader
-speaks; a tick's round trip (an observation out, a reply in) costs about 40 µs of encoding and
-system calls (``benchmarks/README.md``).
+is not a JSON object, a frame of the wrong size, a drive command that is not finite, or silence
+past a deadline is a :class:`WireError` (the run fails with it); nothing is evaluated.
 
 Example (both ends in this process)::
 
@@ -20,11 +22,23 @@ Example (both ends in this process)::
     Traceback (most recent call last):
     ...
     thymio_bt.grade.wire.WireError: the submission's process sent a message of 4294967295 bytes (at most 4194304)
+
+A tick's reply, written by the submission's process and read, checked, by the grader::
+
+    >>> read_reply(reply_frame("RUNNING", [(0.1, 0.0)], {}))
+    ('RUNNING', [(0.1, 0.0)], {})
+    >>> read_reply(reply_frame("FAILURE", [], {"f": ["root/Bad", "FAILED", "no wall"]}))
+    ('FAILURE', [], {'f': ['root/Bad', 'FAILED', 'no wall']})
+    >>> read_reply(reply_frame("RUNNING", [(float("nan"), 0.0)], {}))
+    Traceback (most recent call last):
+    ...
+    thymio_bt.grade.wire.WireError: the submission's process sent a drive command that is not two finite numbers
 """
 
 from __future__ import annotations
 
 import json
+import math
 import select
 import socket
 import struct
@@ -38,6 +52,19 @@ from thymio_bt.errors import ThymioBtError
 #: statistics) a few kB
 MAX_MESSAGE = 4 << 20
 _LENGTH = struct.Struct(">I")
+#: a tick's observation, grader to submission: tag ``O``, the clock, whether the robot exists,
+#: whether its odometry and its proximity ranges are known, the odometry ``x, y, yaw``, the 7 ranges
+#: (``SENSOR_NAMES`` order, inf: nothing in range), the measured and the commanded ``linear,
+#: angular``, the collisions so far; then the served entity requests as JSON, if any
+OBSERVATION = struct.Struct("<cd???3d7d4dQ")
+#: a tick's reply head, submission to grader: tag ``R``, the root's status (:data:`STATUSES`), how
+#: many drive commands (:data:`DRIVE` each) follow; then a JSON object of the rest, if any
+REPLY = struct.Struct("<cBH")
+DRIVE = struct.Struct("<2d")
+#: at most this many drive commands a tick (each is applied, as a tree in the grader's process would)
+MAX_DRIVES = 16
+STATUSES = ("INVALID", "RUNNING", "SUCCESS", "FAILURE")
+_STATUS_CODES = {name: code for code, name in enumerate(STATUSES)}
 
 
 class WireError(ThymioBtError):
@@ -58,7 +85,10 @@ class Link:
 
     def send(self, message: dict[str, Any]) -> None:
         """Send one JSON object (a closed peer: :class:`WireError`)."""
-        data = json.dumps(message, separators=(",", ":")).encode()
+        self.send_frame(_json(message))
+
+    def send_frame(self, data: bytes) -> None:
+        """Send one message as it is written (a tick's frame, or JSON)."""
         try:
             with self._sending:
                 self.sock.sendall(_LENGTH.pack(len(data)) + data)
@@ -68,18 +98,16 @@ class Link:
     def receive(self, deadline: float | None) -> dict[str, Any]:
         """The next JSON object, waiting at most until ``deadline`` (``time.monotonic()``; None:
         for ever)."""
+        return read_json(self.receive_frame(deadline))
+
+    def receive_frame(self, deadline: float | None) -> bytes:
+        """The next message as it was written (see :func:`is_json`), waiting at most until
+        ``deadline``."""
         head = self._take(_LENGTH.size, deadline)
         (size,) = _LENGTH.unpack(head)
         if size > MAX_MESSAGE:
             raise WireError(f"the submission's process sent a message of {size} bytes (at most {MAX_MESSAGE})")
-        body = self._take(size, deadline)
-        try:
-            message = json.loads(body)
-        except (ValueError, RecursionError):
-            raise WireError("the submission's process sent a message that is not JSON") from None
-        if not isinstance(message, dict):
-            raise WireError("the submission's process sent a message that is not a JSON object")
-        return message
+        return self._take(size, deadline)
 
     def _take(self, size: int, deadline: float | None) -> bytes:
         while len(self._buffer) < size:
@@ -101,3 +129,56 @@ class Link:
     def close(self) -> None:
         """Close this end."""
         self.sock.close()
+
+
+def _json(message: Any) -> bytes:
+    return json.dumps(message, separators=(",", ":")).encode()
+
+
+def is_json(frame: bytes) -> bool:
+    """Whether a message is a JSON object (else a tick's frame: they start with a letter tag)."""
+    return frame[:1] == b"{"
+
+
+def read_json(frame: bytes) -> dict[str, Any]:
+    """A message read as a JSON object (anything else: :class:`WireError`)."""
+    try:
+        message = json.loads(frame)
+    except (ValueError, RecursionError):
+        raise WireError("the submission's process sent a message that is not JSON") from None
+    if not isinstance(message, dict):
+        raise WireError("the submission's process sent a message that is not a JSON object")
+    return message
+
+
+def observation_frame(values: tuple[Any, ...], served: list[list[Any]]) -> bytes:
+    """A tick's observation: :data:`OBSERVATION`'s fields after its tag, and the served requests."""
+    return OBSERVATION.pack(b"O", *values) + (_json(served) if served else b"")
+
+
+def read_observation(frame: bytes) -> tuple[tuple[Any, ...], list[list[Any]]]:
+    """A tick's observation (from the grader): its fields after the tag, and the served requests."""
+    fixed = frame[: OBSERVATION.size]
+    rest = frame[OBSERVATION.size :]
+    return OBSERVATION.unpack(fixed)[1:], json.loads(rest) if rest else []
+
+
+def reply_frame(status: str, drives: list[tuple[float, float]], rest: dict[str, Any]) -> bytes:
+    """A tick's reply: the root's status, the drive commands given this tick, the rest (JSON)."""
+    head = REPLY.pack(b"R", _STATUS_CODES[status], len(drives))
+    return b"".join([head, *(DRIVE.pack(*drive) for drive in drives), _json(rest) if rest else b""])
+
+
+def read_reply(frame: bytes) -> tuple[str, list[tuple[float, float]], dict[str, Any]]:
+    """A tick's reply (untrusted): its status, drive commands (finite numbers) and the rest (a JSON
+    object, not checked further); a frame of another shape is a :class:`WireError`."""
+    if len(frame) < REPLY.size:
+        raise WireError("the submission's process sent a tick's reply that is too short")
+    tag, code, count = REPLY.unpack_from(frame)
+    end = REPLY.size + count * DRIVE.size
+    if tag != b"R" or code >= len(STATUSES) or len(frame) < end:
+        raise WireError("the submission's process sent a tick's reply of the wrong shape")
+    drives = list(DRIVE.iter_unpack(frame[REPLY.size : end]))
+    if not all(math.isfinite(a) and math.isfinite(b) for a, b in drives):
+        raise WireError("the submission's process sent a drive command that is not two finite numbers")
+    return STATUSES[code], drives, read_json(frame[end:]) if len(frame) > end else {}
