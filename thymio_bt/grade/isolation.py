@@ -36,6 +36,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Generic, TypeVar
 
+from thymio_bt.grade.reaping import mapped_bytes
+
 T = TypeVar("T")
 #: how a child sends the grader a message (a JSON object)
 Send = Callable[[dict[str, Any]], None]
@@ -227,7 +229,7 @@ def _child_setup(limits: Limits, runs: int) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # on top of what the process maps already (a Dask worker's threads and arenas map gigabytes
     # of address space they never touch): the limit is what the submission may add
-    memory = _mapped() + (limits.memory_mib << 20)
+    memory = mapped_bytes() + (limits.memory_mib << 20)
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
     cpu = int(limits.cpu * runs + 30)  # the kernel's backstop, should the timers not fire
     resource.setrlimit(resource.RLIMIT_CPU, (cpu, cpu + 5))
@@ -235,15 +237,6 @@ def _child_setup(limits: Limits, runs: int) -> None:
     devnull = os.open(os.devnull, os.O_RDWR)
     for fd in (0, 1, 2):
         os.dup2(devnull, fd)
-
-
-def _mapped() -> int:
-    """The bytes of address space this process maps now (its VmSize)."""
-    try:
-        with open("/proc/self/statm") as statm:
-            return int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0
 
 
 def _death(status: int, hung: bool, limits: Limits) -> str:

@@ -178,3 +178,13 @@ def _signal(pids: Iterable[int], sig: int) -> None:
     for pid in pids:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.kill(pid, sig)
+
+
+def mapped_bytes() -> int:
+    """The bytes of address space this process maps now (its VmSize): a memory limit is set on top
+    of it, so a process that has mapped its interpreter still has the limit's room to work in."""
+    try:
+        with open("/proc/self/statm") as statm:
+            return int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError):
+        return 0

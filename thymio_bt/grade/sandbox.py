@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.grade.confine import confine, python_paths
-from thymio_bt.grade.reaping import has_children, kill_tree, reap_orphans, set_subreaper
+from thymio_bt.grade.reaping import has_children, kill_tree, mapped_bytes, reap_orphans, set_subreaper
 from thymio_bt.grade.remote_robot import RemoteRobot
 from thymio_bt.grade.wire import MAX_DRIVES, Link, WireError, is_json, read_json, read_observation, reply_frame
 
@@ -120,7 +120,7 @@ def serve(fd: int) -> None:
     try:
         if orders.get("cgroup"):  # as root: a pids cgroup of its own, joined while it may
             Path(orders["cgroup"], "cgroup.procs").write_text(str(os.getpid()))
-        held = confine(python_paths(), folder, _mapped() + orders["memory"], orders["cpu"])
+        held = confine(python_paths(), folder, mapped_bytes() + orders["memory"], orders["cpu"])
     except Exception as exc:  # the grader says so in the summary, and fails the runs
         link.send({"hello": os.getpid(), "error": f"confinement failed: {exc}"})
         return
@@ -139,15 +139,6 @@ def _reap_children() -> None:
     with contextlib.suppress(ChildProcessError):
         while os.waitpid(-1, os.WNOHANG)[0]:
             pass
-
-
-def _mapped() -> int:
-    """The bytes of address space this process maps now (the memory limit is on top of it)."""
-    try:
-        with open("/proc/self/statm") as statm:
-            return int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-    except (OSError, ValueError, IndexError):
-        return 0
 
 
 def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Watch) -> None:
