@@ -178,18 +178,9 @@ def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
     ``<BehaviorTree>``, whose nodes follow it; an element with BT.CPP's pre/post-conditions is under a
     ``bt_conditions`` node of its name, as ``thymio-bt run mission.xml`` builds it."""
     from thymio_bt.behaviours.btcpp_control import CONDITION_ATTRS
-    from thymio_bt.inputs.xmlparse import parse_xml
-    from thymio_bt.mission.xml_tree import Element
+    from thymio_bt.mission.xml_tree import Element, element_roots
 
-    stack: list[Element] = []
-    roots: list[Element] = []
-
-    def start(tag: str, attrs: dict[str, str], line: int, column: int) -> None:
-        element = Element(tag, attrs, line, column)
-        (stack[-1].children if stack else roots).append(element)
-        stack.append(element)
-
-    parse_xml(xml, file, "log", start, lambda tag: stack.pop(), hint="the log's tree is damaged")
+    roots = element_roots(xml, file, "log", hint="the log's tree is damaged")
     trees = {t.attrs.get("ID"): t for t in (roots[0].children if roots else []) if t.tag == "BehaviorTree"}
     main = roots[0].attrs.get("main_tree_to_execute") if roots else None
     if main not in trees:

@@ -33,32 +33,17 @@ from typing import Any
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
-from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.btcpp import MISSION_TAG
-from thymio_bt.mission.xml_tree import Element, TreeReader, check_json, marked, port_value
+from thymio_bt.mission.xml_tree import Element, TreeReader, check_json, element_roots, marked, port_value
 
 
 def _parse(path: Path) -> Element:
     """The element tree of the XML file, with places, under :func:`~thymio_bt.inputs.xmlparse.parse_xml`'s
     guards (no DTD, no entities, bounded depth)."""
     file = str(path)
-    stack: list[Element] = []
-    roots: list[Element] = []
-
-    def start(tag: str, attrs: dict[str, str], line: int, column: int) -> None:
-        element = Element(tag, attrs, line, column)
-        (stack[-1].children if stack else roots).append(element)
-        stack.append(element)
-
-    parse_xml(
-        read_bytes(path, "mission"),
-        file,
-        "mission",
-        start,
-        lambda tag: stack.pop(),
-        hint="check that every <Node ...> is closed (<Node/> or </Node>)",
-    )
+    hint = "check that every <Node ...> is closed (<Node/> or </Node>)"
+    roots = element_roots(read_bytes(path, "mission"), file, "mission", hint)
     if not roots or roots[0].tag != "root":
         raise UserError(
             Problem(

@@ -26,6 +26,7 @@ from typing import Any
 
 from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MAX_NESTING, MarkedDict, MarkedList
 from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, RESERVED
 from thymio_bt.mission.planner import MAX_DEPTH, MAX_NODES
@@ -54,6 +55,26 @@ class Element:
     line: int
     column: int
     children: list[Element] = field(default_factory=list)
+
+
+def element_roots(data: bytes, file: str, what: str, hint: str) -> list[Element]:
+    """The top-level elements of ``data`` (the XML of ``file``, a ``what``) with their children and
+    places, under :func:`~thymio_bt.inputs.xmlparse.parse_xml`'s guards (no DTD, no entities,
+    bounded depth); ``hint`` goes with a syntax error.
+
+    >>> [(e.tag, [c.tag for c in e.children]) for e in element_roots(b"<root><A/><B/></root>", "t.xml", "test", "")]
+    [('root', ['A', 'B'])]
+    """
+    stack: list[Element] = []
+    roots: list[Element] = []
+
+    def start(tag: str, attrs: dict[str, str], line: int, column: int) -> None:
+        element = Element(tag, attrs, line, column)
+        (stack[-1].children if stack else roots).append(element)
+        stack.append(element)
+
+    parse_xml(data, file, what, start, lambda tag: stack.pop(), hint=hint)
+    return roots
 
 
 @dataclass(frozen=True)
