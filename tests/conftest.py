@@ -10,6 +10,7 @@ tests of what Ctrl-C does, in this process and in the commands they start, test 
 
 import faulthandler
 import os
+import shutil
 import signal
 import sys
 
@@ -18,6 +19,24 @@ import pytest
 from thymio_bt.testing import clear_blackboard
 
 pytest_plugins = ["pytester"]
+
+
+@pytest.fixture(scope="session")
+def browser(tmp_path_factory: pytest.TempPathFactory):
+    """One headless Chromium for every test that reads a page in a real browser (tests/_chromium.py)."""
+    from _chromium import BROWSERS, Chromium
+    from _require import missing
+
+    exe = next((path for name in BROWSERS if (path := shutil.which(name))), None)
+    if exe is None:
+        missing(f"a Chromium browser ({', '.join(BROWSERS)})")
+    assert exe is not None
+    chromium = Chromium(exe, tmp_path_factory.mktemp("chromium"))
+    try:
+        chromium.call("Browser.getVersion")
+        yield chromium
+    finally:
+        chromium.close()
 
 
 @pytest.fixture(autouse=True)

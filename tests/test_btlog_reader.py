@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_viewer import CONTRACT, WORDS, browser, expected, record  # noqa: F401  (browser: a fixture)
+from test_viewer import CONTRACT, expected, record
 
 from thymio_bt.errors import UserError
 from thymio_bt.logs import read_log

@@ -5,15 +5,13 @@ for students never replays a hidden variant. Checked on real gradings, in headle
 from __future__ import annotations
 
 import json
-import shutil
 import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
-from _require import missing
 from click.testing import CliRunner
-from test_grade_site import BROWSERS, Chromium, Page
+from test_grade_site import Page
 
 from thymio_bt.cli import main
 from thymio_bt.grade.confine import plan
@@ -37,19 +35,6 @@ CRITERIA = """\
 criteria:
   - {name: part 1 stops 5 cm from the wall, points: 2, gap: {at: delete, distance: 5cm, tolerance: 5mm}}
 """
-
-
-@pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    exe = next((path for name in BROWSERS if (path := shutil.which(name))), None)
-    if exe is None:
-        missing(f"a Chromium browser ({', '.join(BROWSERS)})")
-    assert exe is not None
-    chromium = Chromium(exe, tmp_path_factory.mktemp("chromium"))
-    try:
-        yield chromium
-    finally:
-        chromium.close()
 
 
 def _grade(tmp_path: Path, assignment: Path, *options: str) -> tuple[Path, dict[str, Any]]:

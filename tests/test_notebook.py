@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 from _require import module
-from test_viewer import CONTRACT, artefacts, browser, screenshot  # noqa: F401  # browser: a fixture
+from test_viewer import CONTRACT, artefacts, screenshot  # noqa: F401  # artefacts: a fixture
 
 ROOT = Path(__file__).resolve().parent.parent
 NOTEBOOK = ROOT / "examples" / "notebooks" / "part1.ipynb"

@@ -16,13 +16,12 @@ from typing import Any
 
 import pytest
 import test_view
-import test_viewer
 from test_viewer import CONTRACT, expected, js, record
 
 from thymio_bt.logs import read_log
 from thymio_bt.robot.model import COURSE, ENKI
 
-browser = test_viewer.browser  # the fixtures of the page's and the window's tests
+# the window's tests' fixture (the browser is conftest's)
 pg = test_view.pg
 
 #: the robot(s) the page draws: name, what it says, and each ray's start (its sensor's place)

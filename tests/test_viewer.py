@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 import subprocess
 import sys
 import time
@@ -17,8 +16,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from _require import missing
-from test_grade_site import BROWSERS, Chromium, Page, Tab
+from _chromium import Tab
+from test_grade_site import Page
 
 from thymio_bt.logs import read_log
 from thymio_bt.logs.recording import Recorder, Recording
@@ -48,20 +47,6 @@ def record(mission: str | Path, log: Path | None = None, seed: int | None = None
     """A run of ``mission`` recorded with its statuses (and written to ``log``)."""
     recorder = Recorder(log_path=log, statuses=True)
     return recorder.finish(Run(load_mission(mission, settings), seed=seed).run(on_tick=recorder))
-
-
-@pytest.fixture(scope="module")
-def browser(tmp_path_factory):
-    exe = next((path for name in BROWSERS if (path := shutil.which(name))), None)
-    if exe is None:
-        missing(f"a Chromium browser ({', '.join(BROWSERS)})")
-    assert exe is not None
-    chromium = Chromium(exe, tmp_path_factory.mktemp("chromium"))
-    try:
-        chromium.call("Browser.getVersion")
-        yield chromium
-    finally:
-        chromium.close()
 
 
 @pytest.fixture(scope="module")
