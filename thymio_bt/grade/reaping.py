@@ -97,7 +97,7 @@ def kill_tree(pid: int, cgroup: Path | None = None, spare: bool = False) -> int:
         _signal(targets, signal.SIGSTOP)
         _signal(targets, signal.SIGKILL)
         killed |= targets
-        time.sleep(0.005)  # the kernel ends them (and reparents their children) meanwhile
+        time.sleep(0.005)  # realtime: the kernel ends them (and reparents their children) meanwhile
     return len(killed)
 
 
@@ -157,7 +157,7 @@ def remove_cgroup(folder: Path | None) -> None:
             return
         except OSError:
             _signal(_members(folder), signal.SIGKILL)
-            time.sleep(0.01)
+            time.sleep(0.01)  # realtime: the kernel empties the cgroup; no run is ticking
 
 
 def remove_cgroups_of(grade: int) -> None:
