@@ -152,5 +152,8 @@ class FakeThymio:
         return word - 0x10000 if word >= 0x8000 else word
 
     def close(self) -> None:
-        """Stop listening (the connection, if any, ends with its thread)."""
+        """Stop listening and let the connection's thread read what the link sent before it hung up,
+        so what this robot recorded (targets, ``stopped_at``) is final once the link's process ended:
+        without the wait, a stop sent just before exiting could still sit unread in the socket."""
         self.server.close()
+        self.thread.join(timeout=10)
