@@ -241,6 +241,18 @@ def test_plugins_are_refused_where_the_assignment_forbids_them(tmp_path):
     assert "plugins are not allowed in this assignment (nodes.py)" in student["messages"][0]
 
 
+def test_a_module_plugin_is_refused_where_the_assignment_forbids_plugins(tmp_path):
+    """Before: only .py files counted as plugins, so `plugins: [nodes:Bad]` (a module the grader's
+    path may find, e.g. the folder `python -m` was started in) passed a no-plugin palette."""
+    _, folders = _plugin_class(tmp_path, {"modular": "pass"})
+    mission = folders[0] / "m.yaml"
+    mission.write_text(mission.read_text().replace("plugins: [nodes.py]", "plugins:\n  - nodes:Bad"))
+    student = _by_name(grade(PART12, folders[:1], workers=1))["modular"]
+    assert student["status"] == "invalid" and student["runs"] == []
+    assert student["messages"][0].startswith(f"{mission}:4")
+    assert "plugins are not allowed in this assignment (nodes:Bad)" in student["messages"][0]
+
+
 def test_the_command_writes_json_csv_and_valid_junit(tmp_path):
     subs = tmp_path / "subs"
     shutil.copytree(CLASS, subs)

@@ -88,9 +88,10 @@ def check_palette(mission: Mission, palette: Palette) -> list[Finding]:
     depth = max(depth_of.values())
     if palette.max_depth is not None and depth > palette.max_depth:
         add("max_depth", None, where(mission.tree), f"the tree is {depth} deep, at most {palette.max_depth} allowed")
-    if not palette.plugins:
-        for plugin in (p for p in mission.sources if p.suffix == ".py"):
-            add("plugins", None, str(plugin), f"plugins are not allowed in this assignment ({plugin.name})")
+    if not palette.plugins and mission.registry is not None:
+        for ref, (file, line, _) in mission.registry.plugins:  # files and modules alike: both run code
+            name = Path(ref).name if ref.endswith(".py") else ref
+            add("plugins", ref, f"{file}:{line}", f"plugins are not allowed in this assignment ({name})")
     if not palette.include_library:
         library = _library()
         for source in mission.sources[1:]:

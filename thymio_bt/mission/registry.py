@@ -51,6 +51,8 @@ class Registry:
         self._classes: dict[str, Node] = {}
         #: the .py plugin files loaded (a mission's sources, e.g. for a sweep's cache key)
         self.plugin_files: list[Path] = []
+        #: every plugin a mission named (``module:Class``, ``module`` or ``file.py``) and where, loaded or not
+        self.plugins: list[tuple[str, tuple[str, int, int]]] = []
         for cls in classes:
             self.register(cls)
 
@@ -74,6 +76,7 @@ class Registry:
         other = Registry()
         other._classes = dict(self._classes)
         other.plugin_files = list(self.plugin_files)
+        other.plugins = list(self.plugins)
         return other
 
     def __getitem__(self, name: str) -> Node:
@@ -104,6 +107,7 @@ class Registry:
     def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int], run: bool = True) -> None:
         """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours; with
         ``run=False``, register stand-ins for them without running any of the plugin's code."""
+        self.plugins.append((ref, where))
         if not run:
             self._declare_plugin(ref, base_dir, where)
             return
