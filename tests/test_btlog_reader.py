@@ -33,8 +33,12 @@ def logs(tmp_path_factory) -> tuple[Path, Path]:
     return folder / "run.btlog", folder / "run.jsonl"
 
 
+def thymio_bt(*args: str | Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "thymio_bt", *map(str, args)], capture_output=True, text=True)
+
+
 def view(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "thymio_bt", "view", *map(str, args)], capture_output=True, text=True)
+    return thymio_bt("view", *args)
 
 
 def test_the_btlog_statuses_are_the_jsonl_ones_at_every_tick(logs):
@@ -53,6 +57,17 @@ def test_the_btlog_statuses_are_the_jsonl_ones_at_every_tick(logs):
         last = max(i for i, t in enumerate(times) if t <= sample["t"]) if sample["t"] >= times[0] else None
         if last is not None:
             assert sample["nodes"] == statuses.samples[last]["nodes"], sample["t"]
+
+
+def test_replaying_a_btlog_says_how_the_run_ended_and_its_ticks_as_the_jsonl_does(logs):
+    """Before: "UNKNOWN after 32.7 s simulated, 23 ticks": the root's last status was not read, and
+    the records (one per time some status changed) were counted as ticks."""
+    btlog, jsonl = logs
+    said = {log.suffix: thymio_bt("replay", log).stdout.splitlines()[0] for log in (btlog, jsonl)}
+    records = read_log(btlog).end["records"]
+    assert said[".jsonl"].startswith("maze_part1_2: SUCCESS after ")
+    assert said[".btlog"] == said[".jsonl"].replace("maze_part1_2", "run") + f" ({records} status records)"
+    assert 10 < records < len(read_log(jsonl).samples)
 
 
 def test_a_cut_btlog_is_read_up_to_its_last_whole_record(logs, tmp_path):

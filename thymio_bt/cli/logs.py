@@ -209,8 +209,9 @@ def _replay_summary(recording: Recording) -> None:
     and where and why it did not succeed."""
     end = recording.end
     status = end.get("status") or "UNFINISHED"  # a damaged log read with --partial has no end
-    ticks = len(recording.samples)
-    click.echo(f"{recording.mission}: {status} after {end.get('sim_time', 0):.1f} s simulated, {ticks} ticks")
+    ticks = end.get("ticks", len(recording.samples))
+    records = f" ({end['records']} status records)" if "records" in end else ""
+    click.echo(f"{recording.mission}: {status} after {end.get('sim_time', 0):.1f} s simulated, {ticks} ticks{records}")
     click.echo(f"  final pose: {pose_text(end.get('final_pose'))}")
     if "collisions" in end:
         click.echo(f"  collisions: {end['collisions']}")

@@ -94,6 +94,8 @@ class BtlogWriter:
 
 #: BT.CPP's NodeStatus -> a log's status letter (4, SKIPPED, is shown as IDLE: the node did not run)
 LETTER = {0: "-", 1: "R", 2: "S", 3: "F", 4: "-"}
+#: the root's last status letter -> how the run ended (RUNNING or IDLE: the log does not say)
+ENDED = {"S": "SUCCESS", "F": "FAILURE"}
 #: the tick rate a Groot2 log's record times are numbered at (thymio-bt's: it does not store one)
 TICK_HZ = 10
 RECORD = 9
@@ -165,8 +167,15 @@ def read_btlog(path: Path) -> Recording:
         recording.samples[-1]["nodes"] = dict(statuses)
     if whole != len(data):
         header["damaged_at"] = whole
-    last = recording.samples[-1]["t"] if recording.samples else 0.0
-    recording.end = {"status": "INCOMPLETE" if whole != len(data) else "UNKNOWN", "sim_time": last, "final_pose": None}
+    last = recording.samples[-1] if recording.samples else {"t": 0.0, "tick": 0}
+    root = ENDED.get(statuses[tree[0]["path"]], "UNKNOWN") if tree else "UNKNOWN"
+    recording.end = {
+        "status": "INCOMPLETE" if whole != len(data) else root,
+        "sim_time": last["t"],
+        "final_pose": None,
+        "ticks": last["tick"],  # the tick of the last record: a .btlog stores status changes, not ticks
+        "records": (whole - start) // RECORD,
+    }
     return recording
 
 
