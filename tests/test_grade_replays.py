@@ -146,3 +146,9 @@ def test_a_confined_submissions_replay_is_made_again_in_its_confined_process(tmp
     assert "replay" in first and went_wrong(first)
     assert first["replay"]["end"]["final_pose"] == first["final_pose"]
     assert first["replay"]["failing"] == round(failing_moment(first), 3)
+    # the tree as it ticked in the confined process, node by node, as in a run ticked in the grader
+    # (before: one node, the grader's stand-in root, and no statuses of the submission's tree)
+    (here,) = grade(assignment, [sub], workers=1, replays="all")["students"][0]["runs"][:1]
+    assert len(first["replay"]["tree"]) == len(here["replay"]["tree"]) == 15
+    assert first["replay"]["tree"] == here["replay"]["tree"]
+    assert first["replay"]["status"] == here["replay"]["status"]

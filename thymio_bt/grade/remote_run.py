@@ -11,6 +11,7 @@ wall-clock limit fails the run naming the node that was running.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import time
@@ -19,11 +20,12 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import snapshot
+from thymio_bt.behaviours.base import node_path, snapshot
 from thymio_bt.errors import ThymioBtError
 from thymio_bt.grade.isolation import Limits, RunLimit
 from thymio_bt.grade.sandboxes import Sandbox
 from thymio_bt.grade.wire import MAX_DRIVES, Deadline, WireError, is_json, observation_frame, read_json, read_reply
+from thymio_bt.logs.records import STATUS_LETTER
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Request, RequestState
 from thymio_bt.run.result import EndKind, RunResult, Verdict
 from thymio_bt.run.runner import Run
@@ -32,6 +34,8 @@ from thymio_bt.run.runner import Run
 OWN_EVENTS = frozenset({"delete_entity", "spawn_entity", "collision"})
 #: at most this many events, entity requests per tick, characters in a text from a submission
 MAX_EVENTS, MAX_REQUESTS, MAX_TEXT = 20_000, 8, 500
+#: a status letter of the wire (as a log writes it) -> the status
+_STATUS_OF_LETTER = {letter: Status[name] for name, letter in STATUS_LETTER.items()}
 #: how often (ticks; seconds while it is silent) the submission's CPU time is read
 CPU_EVERY, CPU_POLL = 20, 0.25
 
@@ -53,9 +57,26 @@ class RemoteRun(Run):
         self.paths = {path for _, path, _ in plan_paths(mission.tree)}
         self.deadline = math.inf
         super().__init__(mission, seed)
+        self.shadow = self._shadow()
+        self.shadow_nodes = {node_path(node): node for node in self.shadow.iterate()}
 
     def _build(self, substitutions: dict[str, Any] | None) -> Behaviour:
         return _Remote(self)
+
+    def _shadow(self) -> Behaviour:
+        """The mission's tree built here with stand-ins for its plugins (none of its code runs here),
+        never ticked: the statuses the submission's process reports each tick are set on its nodes, so
+        that a recording of the run (the grade site's replays) shows the tree as it ticked there."""
+        from thymio_bt.mission import build_tree
+
+        try:
+            return build_tree(self.mission.tree, self.ctx, self.mission.registry)
+        except Exception:  # a tree the grader cannot build: the run fails in the submission's process
+            return self.root
+
+    def shown_tree(self) -> Behaviour:
+        """The tree a recording shows: the stand-in copy, with the statuses of the submission's tree."""
+        return self.shadow
 
     def run(self, *args: Any, **kwargs: Any) -> RunResult:
         """Have the submission's process load its tree, run, then take its node statistics."""
@@ -200,6 +221,8 @@ class _Remote(Behaviour):
                 self._request(request)
         if "ev" in reply:
             run.events.extend(self.events(reply["ev"]))
+        if "n" in reply and isinstance(reply["n"], dict):
+            self._statuses(reply["n"])
         if "tip" in reply:
             tip = reply["tip"]
             self.tip_path = tip if isinstance(tip, str) and tip in run.paths else None
@@ -209,6 +232,15 @@ class _Remote(Behaviour):
             path = failure[0] if failure[0] in run.paths else None
             self.failure = (path, _text(failure[1] or "FAILED")[:40], _text(failure[2] or "the tree failed"))
         return Status.RUNNING if status is Status.INVALID else status
+
+    def _statuses(self, changed: dict[Any, Any]) -> None:
+        """The node statuses that changed in the submission's tree this tick, set on the shadow tree's
+        nodes: only the plan's paths and the four statuses are taken, the rest is dropped."""
+        nodes = self.run.shadow_nodes
+        for path, letter in itertools.islice(changed.items(), len(nodes)):
+            node, status = nodes.get(path), _STATUS_OF_LETTER.get(letter) if isinstance(letter, str) else None
+            if node is not None and status is not None:
+                node.status = status
 
     def _request(self, request: Any) -> None:
         """An entity request from the tree: served by the simulator, answered in the next observation."""

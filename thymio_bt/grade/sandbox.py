@@ -174,6 +174,7 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Wat
     stats.attach(root, mission.tree)
     link.send({"ready": True})
     sent, tip = 0, None
+    shown = _Statuses(root)
     while True:
         frame = link.receive_frame(None)
         if is_json(frame):  # the run's end: running behaviours end then
@@ -192,10 +193,31 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Wat
         path = node_path(running) if running is not None and status == "RUNNING" else None
         if path != tip:
             rest["tip"] = tip = path
+        if changed := shown.changed():
+            rest["n"] = changed
         link.send_frame(reply_frame(status, drives[:MAX_DRIVES], rest))
     with contextlib.suppress(Exception):
         root.stop(py_trees.common.Status.INVALID)
     link.send({"stats": stats.table.rows(), "ev": events[sent:]})
+
+
+class _Statuses:
+    """What the grader's copy of the tree shows: each node's status, sent when it changed."""
+
+    def __init__(self, root: Any) -> None:
+        from thymio_bt.behaviours.base import node_path
+
+        self.nodes = [(node_path(node), node) for node in root.iterate()]
+        self.last: dict[str, str] = {}
+
+    def changed(self) -> dict[str, str]:
+        """The nodes whose status changed since the last call: path -> status letter (as logs write it)."""
+        from thymio_bt.logs.records import STATUS_LETTER
+
+        now = {path: STATUS_LETTER[node.status.name] for path, node in self.nodes}
+        changed = {path: letter for path, letter in now.items() if self.last.get(path) != letter}
+        self.last = now
+        return changed
 
 
 class _Watch:

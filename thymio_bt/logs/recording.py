@@ -97,7 +97,7 @@ class Recorder:
             seed=run.seed,
             start=mission.start.as_dict(),
             maze=mission.maze.to_yaml_dict(),
-            tree=tree_nodes(run.root),
+            tree=tree_nodes(run.shown_tree()),
             backend=backend_name(run.backend, mission.backend),
             latency=run.backend.latency,
             robot=robot_shape(run.backend.model),
@@ -128,13 +128,13 @@ class Recorder:
             "cmd": [float(cmd.linear), float(cmd.angular)],
             "vel": [float(vel.linear), float(vel.angular)],
             "prox": None if scan is None else {k: None if math.isinf(v) else float(v) for k, v in scan.items()},
-            "running": [n.name for n in _running_leaves(run.root)],
+            "running": [n.name for n in _running_leaves(run.shown_tree())],
         }
         odom = backend.pose()
         if odom is not None and odom != pose:  # odometry that is not the pose logged: what the tree read
             record["odom"] = odom.as_dict()
         if self._writer is not None or self.statuses:
-            record["nodes"] = {node_path(n): STATUS_LETTER[n.status.name] for n in run.root.iterate()}
+            record["nodes"] = {node_path(n): STATUS_LETTER[n.status.name] for n in run.shown_tree().iterate()}
             storage = py_trees.blackboard.Blackboard.storage
             changed = {k: jsonable(v) for k, v in storage.items() if self._blackboard.get(k, object()) != v}
             self._blackboard = dict(storage)

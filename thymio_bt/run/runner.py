@@ -126,6 +126,11 @@ class Run:
         self._final_tree: str | None = ""
         self.trajectory: list[tuple[float, float, float, float]] = []
 
+    def shown_tree(self) -> Behaviour:
+        """The tree a recording of this run shows (its nodes and their statuses after each tick): the
+        ticked tree itself, unless the tree ticks elsewhere (:class:`thymio_bt.grade.remote_run.RemoteRun`)."""
+        return self.root
+
     def _build(self, substitutions: dict[str, Any] | None) -> Behaviour:
         """The mission's tree; when a node's constructor (a plugin's) raises, a stand-in root that
         fails, and the run is unstarted: it ends at once, FAILURE with code EXCEPTION naming the node."""
