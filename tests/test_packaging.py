@@ -41,9 +41,11 @@ def run_in(folder: Path, *cmd: str) -> subprocess.CompletedProcess:
 
 
 def test_the_wheel_runs_a_shipped_mission_by_name_from_any_folder(installed, tmp_path):
-    done = run_in(tmp_path, str(installed / "thymio-bt"), "run", "maze_part1_2", "--report", "r.json")
+    thymio_bt = str(installed / "thymio-bt")
+    done = run_in(tmp_path, thymio_bt, "run", "maze_part1_2", "--report", "r.json", "--html", "r.html")
     assert done.returncode == 0, done.stderr
     assert "SUCCESS" in done.stdout and (tmp_path / "r.json").is_file()
+    assert "class Run" in (tmp_path / "r.html").read_text()  # the viewer's script parts are in the wheel
     imported = run_in(tmp_path, str(installed / "python"), "-c", "import thymio_bt; print(thymio_bt.__file__)")
     assert str(ROOT) not in imported.stdout  # the installed copy, not this checkout
 

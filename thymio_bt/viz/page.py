@@ -1,8 +1,9 @@
 """One self-contained HTML page per run (or two runs side by side): ``view LOG``, ``run --html``.
 
 The page is one file: the runs' data (:mod:`thymio_bt.viz.page_data`) as JSON in a
-``<script type="application/json">``, the viewer's own JavaScript and CSS (``viz/web/viewer.js`` and
-``viewer.css``, plain files of this package, read when a page is written) inline, and the maze, robot
+``<script type="application/json">``, the viewer's own JavaScript and CSS (the parts of
+``viz/web/viewer/`` in :data:`SCRIPT_PARTS` order, one script, and ``viz/web/viewer.css``: plain files
+of this package, read when a page is written) inline, and the maze, robot
 and signals drawn by the script as SVG. No network, no CDN: a Content-Security-Policy lets the page
 load nothing from outside, so it works from ``file://``, offline, in an iframe (Jupyter) and from the
 live server (:mod:`thymio_bt.viz.live`). docs/viewer.md gives the page's DOM contract.
@@ -35,9 +36,37 @@ from thymio_bt.viz.page_data import page_data
 POLICY = "default-src 'none'; script-src 'unsafe-inline'; style-src 'unsafe-inline'; img-src data:"
 
 
+#: the viewer's script, part by part (``viz/web/viewer/NAME.js``), in the order they run: each part
+#: declares what the later ones use, in one function scope the page wraps them in
+SCRIPT_PARTS = ("helpers", "runs", "maze", "trees", "timeline", "breakpoints", "moving", "live")
+#: what the viewer's script is, at the top of the page's script
+SCRIPT_HEAD = """/* thymio-bt's run viewer: one run (or two) of a mission, at any tick.
+ *
+ * Reads the JSON of <script id="run-data"> (thymio_bt/viz/page_data.py writes it) and draws the
+ * maze, the robot with its rays, the path, the tree with each node's status, the blackboard, the
+ * signals and the events as SVG and HTML. Plain JavaScript, no library, no request: the page works
+ * from file:// and offline. The DOM contract that outside checks read is in docs/viewer.md:
+ * [data-node][data-status] per tree node, [data-pose] on the robot, [data-time] (and data-tick) on
+ * the clock, data-divergence on <html>, and #t= / #tick= deep links.
+ */
+"use strict";
+"""
+
+
 def asset(name: str) -> str:
-    """The text of the viewer's file ``name`` (``viewer.js``, ``viewer.css``) shipped in this package."""
+    """The text of the viewer's file ``name`` (``viewer.css``, ``viewer/maze.js``...) shipped in this package."""
     return files("thymio_bt.viz").joinpath("web").joinpath(name).read_text(encoding="utf-8")
+
+
+def viewer_script() -> str:
+    """The viewer's script: its parts in order, in one function scope (nothing leaks to ``window``).
+
+    >>> script = viewer_script()
+    >>> script.count("(function () {"), script.rstrip().endswith("})();"), "class Run" in script
+    (1, True, True)
+    """
+    parts = "\n".join(asset(f"viewer/{name}.js") for name in SCRIPT_PARTS)
+    return f"{SCRIPT_HEAD}\n(function () {{\n{parts}}})();\n"
 
 
 def embedded_json(data: Any) -> str:
@@ -71,7 +100,7 @@ def page_html(
         '<noscript><p class="noscript">This page draws the run with JavaScript: allow scripts.</p></noscript>\n'
         '<div id="app" class="app"></div>\n'
         f'<script type="application/json" id="run-data">{embedded_json(data)}</script>\n'
-        f"<script>\n{asset('viewer.js')}</script>\n"
+        f"<script>\n{viewer_script()}</script>\n"
         "</body></html>\n"
     )
 
