@@ -171,3 +171,21 @@ def check_writable(path: Path, option: str) -> None:
         ) from None
     os.close(fd)
     os.unlink(probe)
+
+
+def make_folder(path: Path, option: str, example: str) -> None:
+    """Make the output folder ``path`` (and its parents) before any work, or refuse it with a
+    :class:`UserError` naming ``option``; ``example`` says what to give instead.
+
+    >>> import tempfile
+    >>> file = Path(tempfile.mkdtemp()) / "f"; _ = file.write_text("")
+    >>> make_folder(file, "--html", "pages/")
+    Traceback (most recent call last):
+    thymio_bt.errors.UserError: --html .../f: not a folder (hint: give a folder, e.g. pages/)
+    """
+    if path.exists() and not path.is_dir():
+        raise UserError(f"{option} {path}: not a folder (hint: give a folder, e.g. {example})")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UserError(f"{option} {path}: cannot make the folder: {exc.strerror or exc}") from None

@@ -38,7 +38,7 @@ from thymio_bt.cli.app import (
     workers_or_dask,
 )
 from thymio_bt.errors import UserError
-from thymio_bt.outputs import Output
+from thymio_bt.outputs import Output, make_folder
 from thymio_bt.run.interrupts import Interrupts
 
 if TYPE_CHECKING:
@@ -109,7 +109,7 @@ def sweep(
         if html is not None:
             if matrix:
                 raise UserError("--html is for one sweep, not a --matrix (hint: sweep one cell with --set)")
-            _page_folder(html)
+            make_folder(html, "--html", "pages/ (one page per failed run)")
         with dask_executor(dask) as executor:
             request = _Request(mission, runs, seed_start, sets, maze, start, executor, workers)
             request.check(matrix)  # before the progress bar says anything
@@ -351,16 +351,6 @@ def _said(exc: BaseException) -> str:
     except Exception:
         text = ""
     return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
-
-
-def _page_folder(folder: Path) -> None:
-    """Make the folder of the failed runs' pages (``sweep --html DIR``) before the sweep, or say why not."""
-    if folder.exists() and not folder.is_dir():
-        raise UserError(f"--html {folder}: not a folder (hint: --html pages/, a folder for one page per failed run)")
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UserError(f"--html {folder}: cannot make the folder: {exc.strerror or exc}") from None
 
 
 def _failed_pages(request: _Request, data: dict[str, Any], folder: Path) -> None:

@@ -26,12 +26,11 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote
 
-from thymio_bt.errors import UserError
 from thymio_bt.grade.site_page import as_dict, as_list, esc, fmt, num, safe_name, shell, status_badge
 from thymio_bt.grade.site_replay import REPLAYS, write_replays
 from thymio_bt.grade.site_student import run_failed, student_page
 from thymio_bt.grade.site_svg import load_mazes
-from thymio_bt.outputs import Output
+from thymio_bt.outputs import Output, make_folder
 
 OPTION = "--html"
 STUDENTS = "students"  # the folder of the student pages, inside DIR
@@ -203,16 +202,6 @@ def class_page(results: dict[str, Any], students: list[dict[str, Any]], stems: l
     return shell(f"{title} — class results", body)
 
 
-def _folder(path: Path) -> None:
-    """Make the folder ``path`` (and its parents), or say why not as a UserError."""
-    if path.exists() and not path.is_dir():
-        raise UserError(f"{OPTION} {path}: not a folder (hint: give a folder for the pages, e.g. grade-site)")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise UserError(f"{OPTION} {path}: cannot make the folder: {exc.strerror or exc}") from None
-
-
 def write_site(
     results: dict[str, Any],
     out_dir: Path,
@@ -224,14 +213,14 @@ def write_site(
     hidden variant ``for_students``); each file whole or not at all, and no page of an earlier grade
     left. The paths, the class page first."""
     out_dir = Path(out_dir)
-    _folder(out_dir)
-    _folder(out_dir / STUDENTS)
+    make_folder(out_dir, OPTION, "grade-site")
+    make_folder(out_dir / STUDENTS, OPTION, "grade-site")
     students = [as_dict(s) for s in as_list(results.get("students"))]
     stems = page_names(students)
     mazes = load_mazes(as_dict(results.get("assignment")))
     replayed: list[Path] = []
     if replays:
-        _folder(out_dir / REPLAYS)
+        make_folder(out_dir / REPLAYS, OPTION, "grade-site")
         replayed = write_replays(results, replays, out_dir, stems, for_students)
     written = []
     for student, stem in zip(students, stems, strict=True):
