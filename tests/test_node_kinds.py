@@ -73,6 +73,16 @@ def test_lint_reads_what_a_new_decorator_makes_of_its_child(tmp_path):
     assert finding.message == "'MoveDistance' never runs: 'veto' before it in sequence 'sequence' always fails"
 
 
+def test_thymio_bt_lint_with_plugins_knows_a_new_decorator(tmp_path):
+    from click.testing import CliRunner
+
+    from thymio_bt.cli import main
+
+    _mission(tmp_path, VETOED)
+    found = CliRunner().invoke(main, ["lint", str(tmp_path / "kinds.yaml"), "--plugins"])
+    assert found.exit_code == 1 and "[unreachable] 'MoveDistance' never runs" in found.output
+
+
 def test_lint_takes_a_new_inverter_for_one(tmp_path):
     """checked-once looks through inverters: a kind whose outcome swaps its child's is one."""
     tree = "  sequence:\n    - negate: {WallAhead: {distance: 8cm}}\n    - MoveDistance: {distance: 1m}\n"
