@@ -8,7 +8,9 @@ Schema and the terminal tree find them without any change to the package.
 
 import py_trees
 import pytest
+from py_trees.common import Status
 
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
 from thymio_bt.behaviours.control_node import SWAP, ControlNode, F, S
 from thymio_bt.mission.btcpp import mission_xml
 from thymio_bt.mission.loader import load_mission
@@ -48,6 +50,16 @@ class Negate(ControlNode):
     def build(cls, name, params, children, ctx):
         """py_trees' Inverter of the child."""
         return py_trees.decorators.Inverter(name=name, child=children[0])
+
+
+class Repeat(RobotBehaviour):
+    """A plugin's behaviour that happens to have the name of a BT.CPP built-in: succeed at once."""
+
+    Params = BehaviourParams
+
+    def step(self):
+        """Done."""
+        return Status.SUCCESS
 
 
 def _mission(tmp_path, tree: str):
@@ -139,3 +151,15 @@ def test_every_built_in_kind_declares_its_btcpp_node_once():
         if getattr(cls, "btcpp_id", "") and not getattr(cls, "btcpp_native", True)
     ]
     assert len(ours) == len(set(ours)) and "Fallback" in ours
+
+
+def test_a_node_named_as_any_bt_cpp_built_in_is_exported_apart_and_read_back_as_itself(tmp_path):
+    """BT.CPP's names come from its node kinds' classes: Repeat was missing from a hand-written list,
+    so a plugin's Repeat was written <Repeat> and read back as BT.CPP's Repeat."""
+    path = tmp_path / "named.yaml"
+    path.write_text(f"maze: arena\nstart: centre\nplugins: [{__name__}:Repeat]\ntree: {{sequence: [Repeat, Stop]}}\n")
+    xml = mission_xml(load_mission(path, run_plugins=True), tmp_path / "named.xml")
+    assert '<ThymioRepeat name="Repeat"' in xml
+    (tmp_path / "named.xml").write_text(xml)
+    again = load_mission(tmp_path / "named.xml", run_plugins=True)
+    assert [c.behaviour for c in again.tree.children] == ["Repeat", "Stop"]

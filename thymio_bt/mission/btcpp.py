@@ -54,29 +54,9 @@ from thymio_bt.mission.registry import Registry, control_kind, default_registry
 KIND_ATTR = "_thymio"
 #: the element that carries a mission's settings (maze, start, rates, noise); BT.CPP skips it
 MISSION_TAG = "ThymioMission"
-#: BT.CPP's own node IDs (besides those of its control nodes): a thymio-bt node of one of these names is exported as
-#: Thymio<name> so that it does not clash with the built-in
-RESERVED = frozenset(
-    {
-        "SetBlackboard",
-        "Sequence",
-        "Fallback",
-        "Delay",
-        "Timeout",
-        "Script",
-        "Sleep",
-        "AlwaysSuccess",
-        "AlwaysFailure",
-        "Precondition",
-        "RunOnce",
-        "SubTree",
-        "Switch2",
-        "WhileDoElse",
-        "IfThenElse",
-        "KeepRunningUntilFailure",
-        "UnsetBlackboard",
-    }
-)
+#: BT.CPP's own node IDs (every one thymio-bt runs as a ``bt_*`` kind, and SubTree): a thymio-bt
+#: node of one of these names is exported as Thymio<name> so that it does not clash with the built-in
+RESERVED = frozenset({*BTCPP_IDS, "SubTree"})
 #: a bt_* node kind -> its BT.CPP ID
 _BT_ID = {kind: ident for ident, kind in BTCPP_IDS.items()}
 
