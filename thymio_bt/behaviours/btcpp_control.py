@@ -24,7 +24,7 @@ from pydantic import Field, create_model
 from thymio_bt.behaviours import btcpp_decorators as bd
 from thymio_bt.behaviours import btcpp_nodes as bn
 from thymio_bt.behaviours import btcpp_scripted as bs
-from thymio_bt.behaviours.control_node import SAME, SWAP, ControlNode, ControlParams, F, S
+from thymio_bt.behaviours.control_node import SAME, ControlNode, ControlParams, F, S
 
 #: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
 _PRE = ("failure_if", "success_if", "skip_if", "while_true")
@@ -170,8 +170,19 @@ _COUNT = (int, -1, "how many; -1: all (Parallel) or for ever")
 _SEQUENCE = {"family": "sequence", "symbol": "{-}"}
 _SELECTOR = {"family": "selector", "symbol": "{o}"}
 _PARALLEL = {"family": "parallel", "symbol": "/_/"}
-#: a decorator that maps its child's result and starts it when it starts
+#: a decorator that returns its child's result (or none) and starts it when it starts
 _MAPS = {"halts": False, "passes_on": True}
+
+
+def _mapping(yaml: str, cls: type[bd._Mapped]) -> type:
+    """The kind of BT.CPP's decorator ``cls``, which maps its child's result: the ``outcome`` the
+    lint reads is the map its tick uses (a result mapped to RUNNING runs the child again)."""
+    letter = {Status.SUCCESS: S, Status.FAILURE: F}
+    outcome = {letter[got]: letter[to] for got, to in cls.outcome.items() if to in letter}
+    name = cls.__name__
+    return _kind(name, yaml, "decorator", _decorator(cls), f"BT.CPP's {name}.", {**_MAPS, "outcome": outcome})
+
+
 BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
     _kind(
         "Sequence",
@@ -227,38 +238,10 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
     ),
     _kind("IfThenElse", "bt_if_then_else", "composite", _composite(bn.IfThenElse), "BT.CPP's IfThenElse."),
     _kind("WhileDoElse", "bt_while_do_else", "composite", _composite(bn.WhileDoElse), "BT.CPP's WhileDoElse."),
-    _kind(
-        "Inverter",
-        "bt_inverter",
-        "decorator",
-        _decorator(bd.Inverter),
-        "BT.CPP's Inverter.",
-        {**_MAPS, "outcome": SWAP},
-    ),
-    _kind(
-        "ForceSuccess",
-        "bt_force_success",
-        "decorator",
-        _decorator(bd.ForceSuccess),
-        "BT.CPP's ForceSuccess.",
-        {**_MAPS, "outcome": {S: S, F: S}},
-    ),
-    _kind(
-        "ForceFailure",
-        "bt_force_failure",
-        "decorator",
-        _decorator(bd.ForceFailure),
-        "BT.CPP's ForceFailure.",
-        {**_MAPS, "outcome": {S: F, F: F}},
-    ),
-    _kind(
-        "KeepRunningUntilFailure",
-        "bt_keep_running_until_failure",
-        "decorator",
-        _decorator(bd.KeepRunningUntilFailure),
-        "BT.CPP's KeepRunningUntilFailure.",
-        {**_MAPS, "outcome": {F: F}},
-    ),
+    _mapping("bt_inverter", bd.Inverter),
+    _mapping("bt_force_success", bd.ForceSuccess),
+    _mapping("bt_force_failure", bd.ForceFailure),
+    _mapping("bt_keep_running_until_failure", bd.KeepRunningUntilFailure),
     _kind(
         "Repeat",
         "bt_repeat",
