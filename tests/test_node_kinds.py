@@ -62,6 +62,17 @@ class Repeat(RobotBehaviour):
         return Status.SUCCESS
 
 
+class Refuse(RobotBehaviour):
+    """A plugin's action that always fails at once, and says so to the lint."""
+
+    Params = BehaviourParams
+    always, instant = "F", True
+
+    def step(self):
+        """No."""
+        return Status.FAILURE
+
+
 def _mission(tmp_path, tree: str):
     """A mission with this module's decorators as plugins, loaded (their code run)."""
     path = tmp_path / "kinds.yaml"
@@ -93,6 +104,14 @@ def test_thymio_bt_lint_with_plugins_knows_a_new_decorator(tmp_path):
     _mission(tmp_path, VETOED)
     found = CliRunner().invoke(main, ["lint", str(tmp_path / "kinds.yaml"), "--plugins"])
     assert found.exit_code == 1 and "[unreachable] 'MoveDistance' never runs" in found.output
+
+
+def test_lint_reads_what_a_plugin_s_leaf_declares_it_always_ends_with(tmp_path):
+    path = tmp_path / "leaf.yaml"
+    tree = "{sequence: [Refuse, {MoveDistance: {distance: 10cm}}]}"
+    path.write_text(f"maze: arena\nstart: centre\nplugins: [{__name__}:Refuse]\ntree: {tree}\n")
+    [finding] = TreeRules(load_mission(path, run_plugins=True)).findings()
+    assert finding.message == "'MoveDistance' never runs: 'Refuse' before it in sequence 'sequence' always fails"
 
 
 def test_lint_takes_a_new_inverter_for_one(tmp_path):

@@ -29,18 +29,6 @@ from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunP
 from thymio_bt.behaviours.control_node import BOTH, SWAP, ControlNode, F, S
 from thymio_bt.mission.plan import Mission, NodePlan
 
-#: leaves that never return RUNNING although they are actions, not conditions
-INSTANT = ("Stop", "SetBlackboard", "PlanMove")
-#: leaves whose result is known: they cannot end otherwise (Stop fails only without a robot)
-ALWAYS = {
-    "bt_always_success": "S",
-    "bt_always_failure": "F",
-    "bt_script": "S",
-    "bt_set_blackboard": "S",
-    "bt_unset_blackboard": "S",
-    "SetBlackboard": "S",
-    "Stop": "S",
-}
 #: conditions that, inverted, say the way ahead is clear, with the distance (m) they vouch for
 CLEAR_AHEAD = {
     "WallAhead": lambda params: params.distance,
@@ -138,7 +126,7 @@ class TreeRules:
             return "unknown"
         if is_condition(cls):
             return "condition"
-        if (issubclass(cls, RobotBehaviour) and cls.bt_sync) or node.behaviour in INSTANT or node.behaviour in ALWAYS:
+        if issubclass(cls, RobotBehaviour) and (cls.bt_sync or cls.instant or cls.always):
             return "instant"
         return "long"
 
@@ -152,8 +140,9 @@ class TreeRules:
     def _ends(self, node: NodePlan) -> set[str]:
         """:meth:`outcomes`, worked out (conservatively: both when the kind is not known here)."""
         if node.kind == "behaviour":
-            known = ALWAYS.get(node.behaviour or "")
-            return {known} if known and self.nature(node) != "unknown" else set(BOTH)
+            cls = self._class(node)
+            known = cls.always if self.nature(node) != "unknown" else ""
+            return {known} if known else set(BOTH)
         return set(self.kind(node).ends(node.options, [self.outcomes(k) for k in node.children]))
 
     # --- the rules -----------------------------------------------------------------------------
