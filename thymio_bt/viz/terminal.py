@@ -195,8 +195,11 @@ def _quoted(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
 
 
-#: the children of a kind that are not ordinary children, by position: their role is written on the edge
-_ROLES = {"repeat": {1: "until"}, "guard": {1: "condition"}}
+def _role(kind: str, position: int, registry: Registry | None) -> str | None:
+    """The role of a decorator's child at ``position`` that is not its ``do`` (a repeat's ``until``, a
+    guard's ``condition``: its kind's ``node_keys``), written on the edge; None for an ordinary child."""
+    keys = () if kind == "behaviour" else _kind(kind, registry).node_keys
+    return keys[position - 1] if 0 < position <= len(keys) else None
 
 
 def _label(node: Mapping[str, Any]) -> str:
@@ -271,7 +274,7 @@ def _dot(
         if stack:
             parent, data = stack[-1]
             position = children[parent] = children.get(parent, -1) + 1
-            role = _ROLES.get(data["kind"], {}).get(position)
+            role = _role(data["kind"], position, registry)
             ended = data.get("ended_by", {}).get(node["path"])
             words = [w for w in (role, f"ended it x{ended}" if ended else None) if w]
             attributes = [f"label={_quoted(' / '.join(words))}"] if words else []
