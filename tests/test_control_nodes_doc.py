@@ -10,6 +10,13 @@ from thymio_bt.run.runner import Run
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "control_nodes.md"
 BLOCKS = re.findall(r"```yaml\n# result: (.*?)\n(.*?)```", DOC.read_text(), re.S)
+#: the plugins the examples use: (file name, Python source)
+PLUGINS = re.findall(r"```python\n# (\w+\.py)\n(.*?)```", DOC.read_text(), re.S)
+
+
+def test_the_page_has_a_decorator_of_one_s_own_that_a_mission_uses():
+    assert [name for name, _ in PLUGINS] == ["at_once.py"]
+    assert any("plugins: [at_once.py]" in body for _, body in BLOCKS)
 
 
 def test_the_page_has_an_example_of_each_control_node_it_explains():
@@ -22,6 +29,8 @@ def test_the_page_has_an_example_of_each_control_node_it_explains():
 def test_control_node_example(tmp_path, result, body):
     path = tmp_path / "example.yaml"
     path.write_text(body)
+    for name, source in PLUGINS:
+        (tmp_path / name).write_text(source)
     run = Run(load_mission(path)).run()
     status, *rest = result.split()
     assert run.status == status

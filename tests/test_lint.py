@@ -138,6 +138,25 @@ def test_a_repeat_forever_with_no_way_out(tmp_path):
     assert _found(tmp_path, tree) == []  # the condition, checked at every tick, can stop it
 
 
+@pytest.mark.parametrize("above", ["bt_force_success", "bt_force_failure", "bt_keep_running_until_failure", "bt_delay"])
+def test_bt_cpp_s_decorators_that_cannot_stop_their_child_are_no_way_out_of_a_repeat_forever(tmp_path, above):
+    """As their thymio-bt twins (force_success, delay...): they declare they never halt their child."""
+    body = "{delay_msec: 10, do: LOOP}" if above == "bt_delay" else "{do: LOOP}"
+    loop = "{repeat: {do: {force_success: {MoveDistance: {distance: 5cm}}}}}"
+    assert _found(tmp_path, f"{above}: {body.replace('LOOP', loop)}") == [(5, "forever")]
+    assert _found(tmp_path, f"bt_timeout: {{msec: 100, do: {loop}}}") == []  # a timeout stops it
+
+
+def test_a_reactive_selector_s_bt_parallel_with_an_unguarded_action_restarts_it_every_tick(tmp_path):
+    """BT.CPP's Parallel starts every child, as thymio-bt's parallel does: an action in any of them."""
+    tree = """
+    bt_reactive_fallback:
+      - bt_parallel: [{WallAhead: {}}, {MoveUntilWall: {distance: 5cm}}]
+      - TurnAngle: {angle: 90deg}
+    """
+    assert _found(tmp_path, tree) == [(6, "reactive-restart")]
+
+
 def test_unused_subtrees_and_parameters(tmp_path):
     extra = """\
     parameters: {speed: 10cm/s, spare: 3}

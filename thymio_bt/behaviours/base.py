@@ -219,6 +219,10 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     #: Whether a BT.CPP control node ticks it again once it completed (BT.CPP's SyncActionNode, as
     #: every condition); otherwise it keeps its result until reset, as a StatefulActionNode.
     bt_sync: ClassVar[bool] = False
+    #: For the lint: "S" (or "F") when it always ends so, in the tick it starts; and whether it ends
+    #: in that tick although it is an action (``Stop``, ``PlanMove``), not a condition
+    always: ClassVar[str] = ""
+    instant: ClassVar[bool] = False
 
     #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
     created = 0

@@ -14,7 +14,7 @@ Example::
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any, ClassVar, Literal
 
 from py_trees.behaviour import Behaviour
@@ -24,7 +24,7 @@ from pydantic import Field, create_model
 from thymio_bt.behaviours import btcpp_decorators as bd
 from thymio_bt.behaviours import btcpp_nodes as bn
 from thymio_bt.behaviours import btcpp_scripted as bs
-from thymio_bt.behaviours.control_node import ControlNode, ControlParams
+from thymio_bt.behaviours.control_node import SAME, ControlNode, ControlParams, F, S
 
 #: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
 _PRE = ("failure_if", "success_if", "skip_if", "while_true")
@@ -101,7 +101,7 @@ class Delay(bd.BtDecorator):
 class BtControl(ControlNode):
     """A BT.CPP built-in as a node kind: its BT.CPP ID and how it is built."""
 
-    btcpp_id: ClassVar[str] = ""
+    btcpp_native = True
     make: ClassVar[Callable[..., Behaviour]]
 
     @classmethod
@@ -110,8 +110,40 @@ class BtControl(ControlNode):
         return cls.make(name, children, params.model_dump(), ctx)
 
 
-def _kind(ident: str, yaml: str, category: str, make: Callable[..., Behaviour], doc: str, **ports: Any) -> type:
-    """A :class:`BtControl` subclass for BT.CPP's ``ident`` with its ``ports`` (name: (type, default))."""
+class _Loop(BtControl):
+    """``Repeat`` and ``RetryUntilSuccessful``: the child again after a SUCCESS (Repeat) or a FAILURE
+    (Retry), for ever when the count (``num_cycles``, ``num_attempts``) is -1."""
+
+    outcome, halts, passes_on = SAME, False, True
+    #: the port that counts, and the child's result that runs it again
+    count: ClassVar[str]
+    again: ClassVar[str]
+
+    @classmethod
+    def endless(cls, options: Mapping[str, Any], children: int) -> bool:
+        """A Repeat of -1 cycles."""
+        return cls.again == S and options.get(cls.count) == -1
+
+    @classmethod
+    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+        """The child's results, but the one that runs it again when it goes on for ever."""
+        child = children[0]
+        return child - {cls.again} if options.get(cls.count) == -1 else child
+
+
+def _kind(
+    ident: str,
+    yaml: str,
+    category: str,
+    make: Callable[..., Behaviour],
+    doc: str,
+    facts: Mapping[str, Any] | None = None,
+    base: type[BtControl] = BtControl,
+    /,
+    **ports: Any,
+) -> type:
+    """A subclass of ``base`` for BT.CPP's ``ident`` with its ``ports`` (name: (type, default)) and
+    its ``facts`` (:class:`ControlNode`'s class attributes: family, outcome, symbol...)."""
     fields: dict[str, Any] = {k: (t, Field(d, description=desc)) for k, (t, d, desc) in ports.items()}
     params = create_model(f"{ident}Params", __base__=ControlParams, **fields) if fields else ControlParams
     given = "".join(f"{k}: ..., " for k, (_, d, _) in ports.items() if d is ...)
@@ -120,7 +152,7 @@ def _kind(ident: str, yaml: str, category: str, make: Callable[..., Behaviour], 
     )
     attrs = {"__doc__": doc, "yaml_name": yaml, "category": category, "Params": params, "btcpp_id": ident}
     attrs.update(make=staticmethod(make), example=example, short_form=category == "decorator" and not ports)
-    return type(f"Bt{ident}", (BtControl,), attrs)
+    return type(f"Bt{ident}", (base,), {**attrs, **(facts or {})})
 
 
 def _composite(cls: type[bn.BtNode]) -> Callable[..., Behaviour]:
@@ -134,9 +166,31 @@ def _decorator(cls: type[bd.BtDecorator]) -> Callable[..., Behaviour]:
 
 
 _COUNT = (int, -1, "how many; -1: all (Parallel) or for ever")
+#: the facts of each family of BT.CPP's control nodes
+_SEQUENCE = {"family": "sequence", "symbol": "{-}"}
+_SELECTOR = {"family": "selector", "symbol": "{o}"}
+_PARALLEL = {"family": "parallel", "symbol": "/_/"}
+#: a decorator that returns its child's result (or none) and starts it when it starts
+_MAPS = {"halts": False, "passes_on": True}
+
+
+def _mapping(yaml: str, cls: type[bd._Mapped]) -> type:
+    """The kind of BT.CPP's decorator ``cls``, which maps its child's result: the ``outcome`` the
+    lint reads is the map its tick uses (a result mapped to RUNNING runs the child again)."""
+    letter = {Status.SUCCESS: S, Status.FAILURE: F}
+    outcome = {letter[got]: letter[to] for got, to in cls.outcome.items() if to in letter}
+    name = cls.__name__
+    return _kind(name, yaml, "decorator", _decorator(cls), f"BT.CPP's {name}.", {**_MAPS, "outcome": outcome})
+
+
 BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
     _kind(
-        "Sequence", "bt_sequence", "composite", _composite(bn.Sequence), "BT.CPP's Sequence: restarts after a failure."
+        "Sequence",
+        "bt_sequence",
+        "composite",
+        _composite(bn.Sequence),
+        "BT.CPP's Sequence: restarts after a failure.",
+        _SEQUENCE,
     ),
     _kind(
         "SequenceWithMemory",
@@ -144,6 +198,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         _composite(bn.SequenceWithMemory),
         "BT.CPP's SequenceWithMemory: after a failure, resumes at the failed child.",
+        _SEQUENCE,
     ),
     _kind(
         "ReactiveSequence",
@@ -151,14 +206,16 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         _composite(bn.ReactiveSequence),
         "BT.CPP's ReactiveSequence: every child from the first, every tick.",
+        {**_SEQUENCE, "reactive": True, "symbol": "[-]"},
     ),
-    _kind("Fallback", "bt_fallback", "composite", _composite(bn.Fallback), "BT.CPP's Fallback."),
+    _kind("Fallback", "bt_fallback", "composite", _composite(bn.Fallback), "BT.CPP's Fallback.", _SELECTOR),
     _kind(
         "ReactiveFallback",
         "bt_reactive_fallback",
         "composite",
         _composite(bn.ReactiveFallback),
         "BT.CPP's ReactiveFallback.",
+        {**_SELECTOR, "reactive": True, "symbol": "[o]"},
     ),
     _kind(
         "Parallel",
@@ -166,6 +223,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         lambda name, children, ports, ctx: bn.Parallel(name, children, ports["success_count"], ports["failure_count"]),
         "BT.CPP's Parallel: success_count successes succeed it, failure_count failures fail it.",
+        _PARALLEL,
         success_count=(int, -1, "successes that end it with SUCCESS (-1: all)"),
         failure_count=(int, 1, "failures that end it with FAILURE (-1: all)"),
     ),
@@ -175,26 +233,23 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         lambda name, children, ports, ctx: bn.ParallelAll(name, children, ports["max_failures"]),
         "BT.CPP's ParallelAll: every child to completion; FAILURE if max_failures failed.",
+        _PARALLEL,
         max_failures=(int, 1, "failures that make it fail (-1: all)"),
     ),
     _kind("IfThenElse", "bt_if_then_else", "composite", _composite(bn.IfThenElse), "BT.CPP's IfThenElse."),
     _kind("WhileDoElse", "bt_while_do_else", "composite", _composite(bn.WhileDoElse), "BT.CPP's WhileDoElse."),
-    _kind("Inverter", "bt_inverter", "decorator", _decorator(bd.Inverter), "BT.CPP's Inverter."),
-    _kind("ForceSuccess", "bt_force_success", "decorator", _decorator(bd.ForceSuccess), "BT.CPP's ForceSuccess."),
-    _kind("ForceFailure", "bt_force_failure", "decorator", _decorator(bd.ForceFailure), "BT.CPP's ForceFailure."),
-    _kind(
-        "KeepRunningUntilFailure",
-        "bt_keep_running_until_failure",
-        "decorator",
-        _decorator(bd.KeepRunningUntilFailure),
-        "BT.CPP's KeepRunningUntilFailure.",
-    ),
+    _mapping("bt_inverter", bd.Inverter),
+    _mapping("bt_force_success", bd.ForceSuccess),
+    _mapping("bt_force_failure", bd.ForceFailure),
+    _mapping("bt_keep_running_until_failure", bd.KeepRunningUntilFailure),
     _kind(
         "Repeat",
         "bt_repeat",
         "decorator",
         lambda name, children, ports, ctx: bd.Repeat(name, children[0], ports["num_cycles"]),
         "BT.CPP's Repeat: the child num_cycles times, going on within the tick after a child done at once.",
+        {"count": "num_cycles", "again": S},
+        _Loop,
         num_cycles=(int, ..., "how many successes (-1: for ever)"),
     ),
     _kind(
@@ -203,6 +258,8 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "decorator",
         lambda name, children, ports, ctx: bd.RetryUntilSuccessful(name, children[0], ports["num_attempts"]),
         "BT.CPP's RetryUntilSuccessful.",
+        {"count": "num_attempts", "again": F},
+        _Loop,
         num_attempts=(int, ..., "how many tries (-1: for ever)"),
     ),
     _kind(
@@ -211,6 +268,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "decorator",
         lambda name, children, ports, ctx: bd.RunOnce(name, children[0], ports["then_skip"]),
         "BT.CPP's RunOnce.",
+        {**_MAPS, "outcome": SAME, "once": True},
         then_skip=(bool, True, "after the first run: skipped (true) or the same status (false)"),
     ),
     _kind(
@@ -219,6 +277,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "decorator",
         lambda name, children, ports, ctx: Timeout(name, children[0], ports["msec"], ctx.now),
         "BT.CPP's Timeout, in milliseconds of simulated time.",
+        {"outcome": SAME, "fails_alone": True, "passes_on": True},
         msec=(int, ..., "milliseconds of simulated time"),
     ),
     _kind(
@@ -227,11 +286,12 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "decorator",
         lambda name, children, ports, ctx: Delay(name, children[0], ports["delay_msec"], ctx.now),
         "BT.CPP's Delay, in milliseconds of simulated time.",
+        {**_MAPS, "outcome": SAME},
         delay_msec=(int, ..., "milliseconds of simulated time"),
     ),
 )
 #: BT.CPP node ID -> its node kind here
-BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}  # type: ignore[attr-defined]
+BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}
 
 
 def _scripted(kind: str) -> Callable[..., Behaviour]:
@@ -285,5 +345,5 @@ BTCPP_SCRIPTED: tuple[type[ControlNode], ...] = (
         **{key: (bs.OptionalCode, None, f"BT.CPP's _{key}") for key in (*_PRE, *_POST)},
     ),
 )
-BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in BTCPP_SCRIPTED if c.btcpp_id != "conditions"})  # type: ignore[attr-defined]
+BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in BTCPP_SCRIPTED if c.btcpp_id != "conditions"})
 BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in bs.BTCPP_LEAVES})

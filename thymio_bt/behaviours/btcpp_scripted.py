@@ -117,6 +117,7 @@ class Script(BtLeaf):
     """BT.CPP's ``Script``: run ``code`` on the blackboard, SUCCESS."""
 
     Params = CodeParams
+    always = "S"
 
     def prepare(self) -> None:
         """Parse the script once."""
@@ -130,6 +131,8 @@ class Script(BtLeaf):
 
 class ScriptCondition(Script):
     """BT.CPP's ``ScriptCondition``: SUCCESS if ``code`` is true, else FAILURE."""
+
+    always = ""  # true or false
 
     def step(self) -> Status:
         """The script's truth; the feedback (a failure's reason) says which script and what it gave."""
@@ -150,6 +153,7 @@ class SetBlackboard(BtLeaf):
     """BT.CPP's ``SetBlackboard``: ``output_key`` gets ``value`` (``{key}``: a copy of that entry)."""
 
     Params = SetParams
+    always = "S"
 
     def step(self) -> Status:
         """Write the entry."""
@@ -168,6 +172,7 @@ class UnsetBlackboard(BtLeaf):
     """BT.CPP's ``UnsetBlackboard``: remove the entry ``key`` (SUCCESS even if there was none)."""
 
     Params = KeyParams
+    always = "S"
 
     def step(self) -> Status:
         """Remove the entry."""
@@ -178,6 +183,8 @@ class UnsetBlackboard(BtLeaf):
 class AlwaysSuccess(BtLeaf):
     """BT.CPP's ``AlwaysSuccess``."""
 
+    always = "S"
+
     def step(self) -> Status:
         """SUCCESS."""
         return Status.SUCCESS
@@ -185,6 +192,8 @@ class AlwaysSuccess(BtLeaf):
 
 class AlwaysFailure(BtLeaf):
     """BT.CPP's ``AlwaysFailure``."""
+
+    always = "F"
 
     def step(self) -> Status:
         """FAILURE."""

@@ -14,13 +14,15 @@ Written ``sequence: [A, B]`` or ``sequence: {name: legs, children: [A, B]}``.
 
 from __future__ import annotations
 
+import collections.abc
+from collections.abc import Mapping
 from typing import Any, ClassVar, Literal
 
 import py_trees
 from py_trees.common import ParallelPolicy
 from pydantic import Field, field_validator
 
-from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse
+from thymio_bt.behaviours.control_node import ControlNode, ControlParams, F, S, refuse
 
 
 class _Memory(ControlNode):
@@ -38,9 +40,10 @@ class _Memory(ControlNode):
         return cls.composite(name, memory=cls.memory, children=children)
 
     @classmethod
-    def reactive(cls, doc: str, children: str) -> type[_Memory]:
+    def without_memory(cls, btcpp_id: str, doc: str, children: str) -> type[_Memory]:
         """The kind ``reactive_<name>``: this one without memory (only ``memory`` differs, so it is a
-        call, not a class of its own). ``doc`` says what it does, ``children`` is an example list."""
+        call, not a class of its own), BT.CPP's ``btcpp_id``. ``doc`` says what it does, ``children``
+        is an example list."""
         name = f"reactive_{cls.yaml_name}"
         return type(
             f"Reactive{cls.__name__}",
@@ -51,6 +54,9 @@ class _Memory(ControlNode):
                 "yaml_name": name,
                 "example": f"e.g. '{name}: {children}'",
                 "memory": False,
+                "reactive": True,
+                "symbol": f"[{cls.symbol[1:-1]}]",
+                "btcpp_id": btcpp_id,
             },
         )
 
@@ -61,6 +67,7 @@ class Sequence(_Memory):
     yaml_name = "sequence"
     example = "e.g. 'sequence: [{MoveUntilWall: {}}, {TurnAngle: {angle: 90deg}}]'"
     composite = py_trees.composites.Sequence
+    family, symbol, btcpp_id = "sequence", "{-}", "Sequence"
 
 
 class Selector(_Memory):
@@ -69,13 +76,16 @@ class Selector(_Memory):
     yaml_name = "selector"
     example = "e.g. 'selector: [{WallAhead: {}}, {MoveDistance: {distance: 10cm}}]'"
     composite = py_trees.composites.Selector
+    family, symbol, btcpp_id = "selector", "{o}", "Fallback"
 
 
-ReactiveSequence = Sequence.reactive(
+ReactiveSequence = Sequence.without_memory(
+    "ReactiveSequence",
     "Like sequence, but start again from the first child every tick (conditions stay checked).",
     "[{WallAhead: {}}, {TurnAngle: {angle: 90deg}}]",
 )
-ReactiveSelector = Selector.reactive(
+ReactiveSelector = Selector.without_memory(
+    "ReactiveFallback",
     "Like selector, but re-try the higher-priority children every tick.",
     "[{ObstacleAhead: {}}, {GoToPose: {goal: [1, 0, 0]}}]",
 )
@@ -111,6 +121,37 @@ class Parallel(ControlNode):
     category = "composite"
     Params = ParallelParams
     example = "e.g. 'parallel: {policy: success_on_one, children: [...]}'"
+    family, symbol, btcpp_id = "parallel", "/_/", "Parallel"
+
+    @classmethod
+    def ends(cls, options: Mapping[str, Any], children: collections.abc.Sequence[frozenset[str]]) -> frozenset[str]:
+        """SUCCESS when every child (``success_on_one``: one) can succeed; FAILURE when one can fail."""
+        win = all if options.get("policy", "success_on_all") == "success_on_all" else any
+        return frozenset(
+            ({S} if win(S in got for got in children) else set())
+            | ({F} if any(F in got for got in children) else set())
+        )
+
+    @classmethod
+    def may_stop(
+        cls, options: Mapping[str, Any], children: collections.abc.Sequence[frozenset[str]], index: int
+    ) -> bool:
+        """When another child can fail, or (``success_on_one``) succeed."""
+        one = options.get("policy") == "success_on_one"
+        return any(F in got or (one and S in got) for i, got in enumerate(children) if i != index)
+
+    @classmethod
+    def to_btcpp(cls, params: Mapping[str, Any]) -> dict[str, Any]:
+        """BT.CPP's counts: one success (``success_on_one``) or all (-1), one failure."""
+        ports = {"success_count": 1 if params.get("policy") == "success_on_one" else -1, "failure_count": 1}
+        return ports if params.get("synchronise", True) else {**ports, "synchronise": False}
+
+    @classmethod
+    def from_btcpp(cls, ports: Mapping[str, Any]) -> dict[str, Any]:
+        """The policy from BT.CPP's ``success_count`` (1: success on one)."""
+        params = {k: v for k, v in ports.items() if k not in ("success_count", "failure_count")}
+        one = str(ports.get("success_count", -1)) == "1"
+        return {"policy": "success_on_one" if one else "success_on_all", **params}
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> py_trees.behaviour.Behaviour:

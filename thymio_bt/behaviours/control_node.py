@@ -6,6 +6,13 @@ from the same place (BehaviorTree.CPP's factory works the same way). A composite
 ``children``; a decorator takes one child under ``do`` and, for some, more nodes under other keys
 (``repeat``'s ``until``, ``guard``'s ``condition``).
 
+Every fact about a kind is declared once, on its class, and read there by every tool: its family
+(how the lint's rules reason about a sequence or a selector, and how a picture draws it), what it
+makes of its children's outcomes (:meth:`ControlNode.ends`), whether it may stop a running child
+(:meth:`ControlNode.may_stop`) or runs for ever (:meth:`ControlNode.endless`), its BT.CPP node and
+ports for an export and a read back, its symbol in the terminal tree. A new kind, from the package or
+a plugin, is one class: nothing else to write.
+
 Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for real ones)::
 
     >>> import py_trees
@@ -14,6 +21,9 @@ Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for 
     ...     yaml_name = "invert"
     ...     category = "decorator"
     ...     short_form = True
+    ...     outcome = SWAP                     # what the lint knows of it: the child's result swapped,
+    ...     halts = False                      # and it never stops its child by itself
+    ...     btcpp_id = "Inverter"              # what an export writes
     ...     @classmethod
     ...     def build(cls, name, params, children, ctx):
     ...         return py_trees.decorators.Inverter(name=name, child=children[0])
@@ -24,10 +34,14 @@ Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for 
     >>> tick(node)
     >>> node.status
     <Status.FAILURE: 'FAILURE'>
+    >>> sorted(Invert.ends({}, [frozenset({S})])), Invert.may_stop({}, [BOTH], 0), Invert.symbol
+    (['F'], False, '-^-')
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict
@@ -37,6 +51,17 @@ if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
     from thymio_bt.behaviours.base import Context
+
+
+#: what a node can end with: S (SUCCESS), F (FAILURE); a set of neither is a node that never ends
+S, F = "S", "F"
+BOTH = frozenset((S, F))
+#: the ``outcome`` of a decorator that returns what its child returns, and of one that swaps it
+SAME: Mapping[str, str] = MappingProxyType({S: S, F: F})
+SWAP: Mapping[str, str] = MappingProxyType({S: F, F: S})
+#: a composite's family: ``sequence`` goes on after a success, ``selector`` after a failure,
+#: ``parallel`` ticks every child; "" is any other kind (a decorator, BT.CPP's IfThenElse...)
+Family = Literal["sequence", "selector", "parallel", ""]
 
 
 class ControlParams(BaseModel):
@@ -62,6 +87,37 @@ class ControlNode:
     #: how to write it, for hints and docs
     example: ClassVar[str] = ""
 
+    # --- its facts, which the lint, the BT.CPP export and reader and the pictures read -------------
+    #: its family (see :data:`Family`)
+    family: ClassVar[Family] = ""
+    #: a sequence or selector that starts again from its first child every tick
+    reactive: ClassVar[bool] = False
+    #: how the terminal tree draws it (py_trees' symbols: ``{-}`` a sequence, ``[o]`` a reactive selector)
+    symbol: ClassVar[str] = "-^-"
+    #: a decorator's result once its child ended with S or F (a result missing: it runs the child
+    #: again); None when the lint knows nothing of it (it may end either way)
+    outcome: ClassVar[Mapping[str, str] | None] = None
+    #: whether it can fail by itself, whatever its child does (a timeout, when the time is up)
+    fails_alone: ClassVar[bool] = False
+    #: whether it may halt a running child by itself (a timeout: when the time is up); only False is trusted
+    halts: ClassVar[bool] = True
+    #: a decorator that starts its child when it starts (the lint follows a drive down through it)
+    passes_on: ClassVar[bool] = False
+    #: a decorator that returns its child's result, once it has one, without running the child again
+    once: ClassVar[bool] = False
+    #: the node key of a condition checked before the child at every tick: the child runs only while
+    #: it succeeds (``guard``'s ``condition``)
+    gate: ClassVar[str] = ""
+    #: the node key of a condition checked after each success of the child, which ends the loop
+    #: when it succeeds (``repeat``'s ``until``)
+    then: ClassVar[str] = ""
+    #: BT.CPP 4's node an export writes for it ("": none, the export writes ``yaml_name`` and declares it)
+    btcpp_id: ClassVar[str] = ""
+    #: its parameters' names as the ports of that BT.CPP node, where they differ
+    btcpp_ports: ClassVar[Mapping[str, str]] = MappingProxyType({})
+    #: whether it is BT.CPP's own node, tick for tick (``bt_*``): exported with BT.CPP's ports as they are
+    btcpp_native: ClassVar[bool] = False
+
     def __init_subclass__(cls, **kwargs: Any) -> None:
         """Name the subclass: its own ``yaml_name``, else its class name (never its parent's)."""
         super().__init_subclass__(**kwargs)
@@ -80,6 +136,51 @@ class ControlNode:
         """The py_trees node: ``children`` are the built ``do`` child then the ``node_keys`` ones in
         order (a composite: its children)."""
         raise NotImplementedError
+
+    @classmethod
+    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+        """What a node of this kind with parameters ``options`` can end with, when its children (in
+        the plan's order) can end with ``children``: a sequence or selector by its family, a
+        decorator by its ``outcome``, anything else either way."""
+        if cls.family in ("sequence", "selector"):
+            go_on, stop = (S, F) if cls.family == "sequence" else (F, S)
+            ends: set[str] = set()
+            for got in children:
+                ends |= got & {stop}
+                if go_on not in got:
+                    return frozenset(ends)
+            return frozenset(ends | {go_on})
+        if cls.outcome is not None and children:
+            ends = {cls.outcome[c] for c in children[0] if c in cls.outcome}
+            return frozenset(ends | {F}) if cls.fails_alone else frozenset(ends)
+        return BOTH
+
+    @classmethod
+    def may_stop(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]], index: int) -> bool:
+        """Whether a node of this kind may stop its child ``index`` while it runs (``children``: what
+        each child can end with): a reactive composite when an earlier child can end it, a plain one
+        never, another kind as ``halts`` says."""
+        if cls.family in ("sequence", "selector"):
+            preempt = F if cls.family == "sequence" else S
+            return cls.reactive and any(preempt in got for got in children[:index])
+        return cls.halts
+
+    @classmethod
+    def endless(cls, options: Mapping[str, Any], children: int) -> bool:
+        """Whether a node of this kind with parameters ``options`` and that many children loops for
+        ever over a child that never fails (a ``repeat: forever``)."""
+        return False
+
+    @classmethod
+    def to_btcpp(cls, params: Mapping[str, Any]) -> dict[str, Any]:
+        """Its parameters as the ports of its BT.CPP node (``btcpp_ports`` renamed)."""
+        return {cls.btcpp_ports.get(k, k): v for k, v in params.items()}
+
+    @classmethod
+    def from_btcpp(cls, ports: Mapping[str, Any]) -> dict[str, Any]:
+        """The ports of its BT.CPP node, read back as its parameters (:meth:`to_btcpp` undone)."""
+        names = {port: name for name, port in cls.btcpp_ports.items()}
+        return {names.get(k, k): v for k, v in ports.items()}
 
 
 def refuse(message: str, hint: str = "") -> PydanticCustomError:

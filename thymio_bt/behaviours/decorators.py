@@ -17,7 +17,7 @@ Written ``repeat: {times: 4, do: CHILD}``; those without parameters also as ``in
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Annotated, Any, ClassVar, Literal, get_args
 
 import py_trees
@@ -27,7 +27,7 @@ from py_trees.decorators import FailureIsSuccess, Inverter, SuccessIsFailure
 from pydantic import Field, field_validator
 
 from thymio_bt.behaviours.control import RepeatUntil, SimTimeout
-from thymio_bt.behaviours.control_node import ControlNode, ControlParams, refuse, whole
+from thymio_bt.behaviours.control_node import SAME, SWAP, ControlNode, ControlParams, F, S, refuse, whole
 from thymio_bt.inputs.fields import Duration
 
 _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"
@@ -121,6 +121,33 @@ class Repeat(ControlNode):
     node_keys = ("until",)
     exclusive = (("times", "until"),)
     example = _REPEAT_EXAMPLE
+    outcome, halts, passes_on, then = SAME, False, True, "until"
+    btcpp_id, btcpp_ports = "Repeat", {"times": "num_cycles"}
+
+    @classmethod
+    def endless(cls, options: Mapping[str, Any], children: int) -> bool:
+        """``times: forever`` (without ``until``)."""
+        return options.get("times") == "forever" and children == 1
+
+    @classmethod
+    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+        """A failure of the body ends it; a success, with ``until`` if the condition succeeds after
+        it, with ``times`` after the last one, never for ever."""
+        body = children[0]
+        if len(children) == 2:
+            return (body & {F}) | ({S} if S in body and S in children[1] else frozenset())
+        return body & {F} if cls.endless(options, len(children)) else body
+
+    @classmethod
+    def to_btcpp(cls, params: Mapping[str, Any]) -> dict[str, Any]:
+        """``num_cycles``, -1 for ever."""
+        return {"num_cycles": -1} if params.get("times") == "forever" else super().to_btcpp(params)
+
+    @classmethod
+    def from_btcpp(cls, ports: Mapping[str, Any]) -> dict[str, Any]:
+        """``times``, forever for -1."""
+        params = super().from_btcpp(ports)
+        return {**params, "times": "forever"} if params.get("times") == -1 else params
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -148,6 +175,8 @@ class Retry(ControlNode):
     yaml_name = "retry"
     Params = RetryParams
     example = _RETRY_EXAMPLE
+    outcome, halts, passes_on = SAME, False, True
+    btcpp_id, btcpp_ports = "RetryUntilSuccessful", {"times": "num_attempts"}
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -167,6 +196,7 @@ class Timeout(ControlNode):
     yaml_name = "timeout"
     Params = SecondsParams
     example = "e.g. 'timeout: {seconds: 30, do: {WallFollow: {}}}'"
+    outcome, fails_alone, halts, passes_on = SAME, True, True, True
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -180,6 +210,7 @@ class Delay(py_trees.decorators.Decorator, ControlNode):
     yaml_name = "delay"
     Params = SecondsParams
     example = "e.g. 'delay: {seconds: 2, do: {MoveDistance: {distance: 10cm}}}'"
+    outcome, halts, passes_on = SAME, False, True
 
     def __init__(self, name: str, child: Behaviour, seconds: float, clock: Any) -> None:
         super().__init__(name=name, child=child)
@@ -217,6 +248,7 @@ class _Outcome(ControlNode):
     decorator of the child, no parameters, so it may be written ``kind: CHILD``."""
 
     short_form = True
+    halts, passes_on = False, True
     #: the py_trees decorator that maps the child's status
     wraps: ClassVar[type[py_trees.decorators.Decorator]]
 
@@ -226,9 +258,18 @@ class _Outcome(ControlNode):
         return cls.wraps(name=name, child=children[0])
 
     @classmethod
-    def of(cls, yaml_name: str, wraps: type[py_trees.decorators.Decorator], doc: str, child: str) -> type[_Outcome]:
-        """The kind ``yaml_name`` (class ``ForceSuccess`` for ``force_success``): ``wraps`` of the child.
-        ``doc`` says what it does, ``child`` is an example of one."""
+    def of(
+        cls,
+        yaml_name: str,
+        wraps: type[py_trees.decorators.Decorator],
+        outcome: Mapping[str, str],
+        btcpp_id: str,
+        doc: str,
+        child: str,
+    ) -> type[_Outcome]:
+        """The kind ``yaml_name`` (class ``ForceSuccess`` for ``force_success``): ``wraps`` of the child,
+        whose results it maps by ``outcome``, BT.CPP's ``btcpp_id``. ``doc`` says what it does,
+        ``child`` is an example of one."""
         return type(
             yaml_name.title().replace("_", ""),
             (cls,),
@@ -238,15 +279,24 @@ class _Outcome(ControlNode):
                 "yaml_name": yaml_name,
                 "example": f"e.g. '{yaml_name}: {child}'",
                 "wraps": wraps,
+                "outcome": outcome,
+                "btcpp_id": btcpp_id,
             },
         )
 
 
-#: the kinds that only change how the child's result reads: name, py_trees decorator, what it does, a child
+#: the kinds that only change how the child's result reads: name, py_trees decorator, its outcome,
+#: BT.CPP's node, what it does, a child
 _OUTCOMES = (
-    ("invert", Inverter, "Swap SUCCESS and FAILURE of the child", "{WallAhead: {}}"),
-    ("force_success", FailureIsSuccess, "Report SUCCESS when the child fails", "{MoveDistance: {distance: 5cm}}"),
-    ("force_failure", SuccessIsFailure, "Report FAILURE when the child succeeds", "{WallAhead: {}}"),
+    ("invert", Inverter, SWAP, "Inverter", "Swap SUCCESS and FAILURE of the child", "{WallAhead: {}}"),
+    (
+        *("force_success", FailureIsSuccess, {S: S, F: S}, "ForceSuccess"),
+        *("Report SUCCESS when the child fails", "{MoveDistance: {distance: 5cm}}"),
+    ),
+    (
+        *("force_failure", SuccessIsFailure, {S: F, F: F}, "ForceFailure"),
+        *("Report FAILURE when the child succeeds", "{WallAhead: {}}"),
+    ),
 )
 Invert, ForceSuccess, ForceFailure = (_Outcome.of(*row) for row in _OUTCOMES)
 
@@ -267,6 +317,13 @@ class Until(ControlNode):
     yaml_name = "until"
     Params = UntilParams
     example = "e.g. 'until: {status: success, do: ...}'"
+    halts, passes_on = False, True
+
+    @classmethod
+    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+        """SUCCESS once the child ends with ``status``; never if it cannot."""
+        wanted = S if options.get("status") == "success" else F
+        return frozenset({S}) if wanted in children[0] else frozenset()
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -282,6 +339,19 @@ class Guard(ControlNode):
     node_keys = ("condition",)
     required_nodes = ("condition",)
     example = "e.g. 'guard: {condition: {WallAhead: {}}, do: ...}'"
+    gate = "condition"
+
+    @classmethod
+    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+        """FAILURE when the condition or the child fails; SUCCESS when the child succeeds under it."""
+        child, condition = children
+        failure = {F} if F in condition or F in child else set()
+        return frozenset(failure | ({S} if S in child and S in condition else set()))
+
+    @classmethod
+    def may_stop(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]], index: int) -> bool:
+        """It stops its child when the condition fails."""
+        return index == 0 and F in children[1]
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -313,6 +383,7 @@ class OneShot(ControlNode):
     Params = OneShotParams
     short_form = True
     example = "e.g. 'one_shot: {on: completion, do: ...}'"
+    outcome, halts, passes_on, once = SAME, False, True, True
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:

@@ -174,6 +174,7 @@ class PlanMove(OnGrid):
     """
 
     Params = PlanMoveParams
+    instant = True
 
     def prepare(self) -> None:
         """The map's key, and the keys of the move written."""

@@ -450,6 +450,7 @@ class Stop(RobotBehaviour):
 
     Params = StopParams
     moves = True
+    always, instant = "S", True  # it fails only without a robot
 
     def step(self) -> Status:
         """Stop the motors."""

@@ -400,6 +400,7 @@ class SetBlackboard(RobotBehaviour):
 
     Params = SetBlackboardParams
     needs_robot = False
+    always, instant = "S", True
     emits_events = False
     fails_on_collision = False
 

@@ -239,8 +239,10 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
                 f"--output {output}: cannot tell the format from '{output.suffix or 'no extension'}' "
                 f"(hint: end the name with .dot, .svg or .png, or add --dot/--svg/--png)"
             )
-    coverage, conditions = _coverage_of(report, mission, plugins) if report is not None else (None, set())
-    text = tree_text(mission, plugins) if coverage is None else coverage_text(coverage, conditions)
+    coverage, conditions, registry = (
+        _coverage_of(report, mission, plugins) if report is not None else (None, set(), None)
+    )
+    text = tree_text(mission, plugins) if coverage is None else coverage_text(coverage, conditions, registry)
     if fmt is None:
         click.echo(text)
         return
@@ -250,13 +252,14 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
         out = Output(output, "--output")
     if not out.is_stdout:
         click.echo(text)
-    export_tree(mission, out, fmt, plugins, coverage, conditions)
+    export_tree(mission, out, fmt, plugins, coverage, conditions, registry)
     if not out.is_stdout:
         click.echo(f"wrote {out}", err=True)
 
 
-def _coverage_of(report: Path, mission: Path, plugins: bool) -> tuple[dict[str, Any], set[str]]:
-    """The coverage ``report`` holds, checked to be of ``mission``'s tree, and the mission's condition names."""
+def _coverage_of(report: Path, mission: Path, plugins: bool) -> tuple[dict[str, Any], set[str], Any]:
+    """The coverage ``report`` holds, checked to be of ``mission``'s tree, the mission's condition
+    names and its node registry."""
     from thymio_bt.inputs.reading import read_text
     from thymio_bt.mission import load_mission
     from thymio_bt.mission.tree_rules import condition_names
@@ -283,7 +286,7 @@ def _coverage_of(report: Path, mission: Path, plugins: bool) -> tuple[dict[str, 
             f"{report}: its coverage is of another tree than {mission}'s ({differs}) "
             "(hint: run the mission as it is now with --coverage)"
         )
-    return coverage, condition_names(spec.registry)
+    return coverage, condition_names(spec.registry), spec.registry
 
 
 @main.command()

@@ -39,14 +39,19 @@ if TYPE_CHECKING:
     help="Also run MISSION once in each variant of this assignment (noise off; its plugins run) and report "
     "the conditions never true and the nodes never ticked.",
 )
-def lint(mission: Path, assignment: Path | None) -> None:
+@click.option(
+    "--plugins",
+    is_flag=True,
+    help="Import the mission's plugins, so that the rules know their nodes (runs their code).",
+)
+def lint(mission: Path, assignment: Path | None, plugins: bool) -> None:
     """Find what makes MISSION's tree not do what it seems to (unreachable nodes, reactive restarts,
     endless loops, a way ahead checked once before a longer drive, unused subtrees and parameters,
     values at the edge of their range)."""
     from thymio_bt.mission.lint import lint_mission
 
     try:
-        findings = lint_mission(mission)
+        findings = lint_mission(mission, run_plugins=plugins)
         if assignment is not None:
             findings += assignment_findings(mission, assignment)
     except UserError as exc:

@@ -229,7 +229,8 @@ def run(
             from thymio_bt.mission.tree_rules import condition_names
             from thymio_bt.run.coverage import Coverage
 
-            covered.done(condition_names(spec.registry), Coverage.of(spec.tree).add(result.node_stats).to_json())
+            counts = Coverage.of(spec.tree).add(result.node_stats).to_json()
+            covered.done(condition_names(spec.registry), counts, spec.registry)
         if report_out is not None:
             data = result.report()
             if covered is not None:
@@ -423,14 +424,14 @@ class CoverageRequest:
             )
         return cls(Output(tree, "--coverage-tree"), fmt)
 
-    def done(self, conditions: set[str], data: dict[str, Any]) -> None:
+    def done(self, conditions: set[str], data: dict[str, Any], registry: Any = None) -> None:
         """Keep the coverage JSON ``data`` and its text (``conditions``: the names of the nodes to show
-        as true and false); draw it to the file."""
+        as true and false; ``registry``: the mission's nodes); draw it to the file."""
         from thymio_bt.viz.terminal import coverage_dot, coverage_text, write_graph
 
-        self.data, self.text = data, coverage_text(data, conditions)
+        self.data, self.text = data, coverage_text(data, conditions, registry)
         if self.out is not None:
-            write_graph(coverage_dot(data, conditions), self.out, self.fmt, "--coverage-tree coverage.dot")
+            write_graph(coverage_dot(data, conditions, registry), self.out, self.fmt, "--coverage-tree coverage.dot")
 
 
 class _Progress:

@@ -48,66 +48,36 @@ from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.records import TreeNode
 from thymio_bt.maze.files import maze_reference
 from thymio_bt.mission.plan import Mission, NodePlan
-from thymio_bt.mission.registry import Registry, default_registry
+from thymio_bt.mission.registry import Registry, control_kind, default_registry
 
-#: thymio-bt kind -> BT.CPP built-in of the same semantics
-BUILTIN = {
-    "sequence": "Sequence",
-    "reactive_sequence": "ReactiveSequence",
-    "selector": "Fallback",
-    "reactive_selector": "ReactiveFallback",
-    "parallel": "Parallel",
-    "invert": "Inverter",
-    "force_success": "ForceSuccess",
-    "force_failure": "ForceFailure",
-    "retry": "RetryUntilSuccessful",
-    "repeat": "Repeat",
-}
 #: the attribute that marks an exported element as thymio-bt's node kind (BT.CPP skips ``_`` attributes)
 KIND_ATTR = "_thymio"
 #: the element that carries a mission's settings (maze, start, rates, noise); BT.CPP skips it
 MISSION_TAG = "ThymioMission"
-#: BT.CPP's own node IDs (besides BUILTIN's): a thymio-bt node of one of these names is exported as
-#: Thymio<name> so that it does not clash with the built-in
-RESERVED = frozenset(
-    {
-        "SetBlackboard",
-        "Sequence",
-        "Fallback",
-        "Delay",
-        "Timeout",
-        "Script",
-        "Sleep",
-        "AlwaysSuccess",
-        "AlwaysFailure",
-        "Precondition",
-        "RunOnce",
-        "SubTree",
-        "Switch2",
-        "WhileDoElse",
-        "IfThenElse",
-        "KeepRunningUntilFailure",
-        "UnsetBlackboard",
-    }
-)
-#: thymio-bt parameter -> BT.CPP port of a built-in
-_BUILTIN_PORTS = {("repeat", "times"): "num_cycles", ("retry", "times"): "num_attempts"}
-
-
+#: BT.CPP's own node IDs (every one thymio-bt runs as a ``bt_*`` kind, and SubTree): a thymio-bt
+#: node of one of these names is exported as Thymio<name> so that it does not clash with the built-in
+RESERVED = frozenset({*BTCPP_IDS, "SubTree"})
 #: a bt_* node kind -> its BT.CPP ID
 _BT_ID = {kind: ident for ident, kind in BTCPP_IDS.items()}
 
 
-def node_id(node: TreeNode, children: int) -> str:
-    """The BT.CPP node ID of a logged node."""
+def _do_while(cls: type[ControlNode] | None, children: int) -> bool:
+    """Whether a node of kind ``cls`` with that many children is a loop with a condition after its
+    body (``repeat`` with ``until``), which an export writes as :func:`repeat_until_elements`."""
+    return cls is not None and bool(cls.then) and children == 2
+
+
+def node_id(node: TreeNode, children: int, registry: Registry | None = None) -> str:
+    """The BT.CPP node ID of a logged node (its kind's ``btcpp_id`` for a composite or decorator)."""
     kind = node["kind"]
     if kind in _BT_ID:
         return _BT_ID[kind]
-    if kind == "repeat" and children == 2:
+    cls = control_kind(kind, registry)
+    if _do_while(cls, children):
         return "Sequence"  # the outer element of a do-while loop (repeat_until_elements)
     if kind in RESERVED:
         return "Thymio" + kind
-    return BUILTIN.get(kind, kind)
+    return (cls.btcpp_id if cls is not None else "") or kind
 
 
 def _port_value(value: Any) -> str:
@@ -121,20 +91,15 @@ def _port_value(value: Any) -> str:
     return str(value)
 
 
-def _ports(node: TreeNode, ident: str, params: Mapping[str, Any], children: int) -> dict[str, str]:
-    """A node's parameters as the ports of its BT.CPP element (a built-in's under BT.CPP's names)."""
-    kind = node["kind"]
-    if kind == "repeat" and children == 2:
+def _ports(kind: str, cls: type[ControlNode] | None, params: Mapping[str, Any], children: int) -> dict[str, str]:
+    """A node's parameters as the ports of its BT.CPP element (a composite's or decorator's as its
+    kind says, :meth:`~thymio_bt.behaviours.control_node.ControlNode.to_btcpp`)."""
+    if _do_while(cls, children):
         return {}  # a do-while loop: it ends by its condition, not a count
     if kind in _BT_ID:  # BT.CPP's own node: its ports, without the time limit every behaviour has
         return {k: _port_value(v) for k, v in params.items() if v is not None and k != "timeout"}
-    if kind == "parallel":
-        one = params.get("policy") == "success_on_one"
-        ports = {"success_count": "1" if one else "-1", "failure_count": "1"}
-        return ports if params.get("synchronise", True) else {**ports, "synchronise": "false"}
-    if kind == "repeat" and params.get("times") == "forever":
-        return {"num_cycles": "-1"}
-    return {_BUILTIN_PORTS.get((kind, k), k): _port_value(v) for k, v in params.items() if v is not None}
+    given = {k: v for k, v in params.items() if v is not None}
+    return {k: _port_value(v) for k, v in (cls.to_btcpp(given) if cls is not None else given).items()}
 
 
 def repeat_until_elements(parent: ET.Element, attrs: dict[str, str]) -> tuple[ET.Element, ET.Element]:
@@ -199,56 +164,90 @@ def btcpp_tree(
     lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
     ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
     tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node."""
-    params, subtrees = params or {}, subtrees or {}
     root = ET.Element("root", BTCPP_format="4", main_tree_to_execute=tree_id)
     if settings:
         ET.SubElement(root, MISSION_TAG, dict(settings))
-    tree = ET.SubElement(root, "BehaviorTree", ID=tree_id)
-    children = {n["uid"]: 0 for n in nodes}
+    writer = _TreeWriter(root, ET.SubElement(root, "BehaviorTree", ID=tree_id), registry, params or {}, subtrees or {})
     for n in nodes:
+        writer.children[n["uid"]] = 0
         if n["parent"] is not None:
-            children[n["parent"]] += 1
-    elements: dict[int, ET.Element] = {}
-    own: dict[int, ET.Element] = {}  # a node's uid -> its element (a do-while loop's outer one)
-    uses: dict[int, ET.Element] = {}  # a subtree instance root's uid -> its <SubTree> element
-    loops: set[int] = set()  # the do-while loops' uids (their body and condition go in elements[uid])
-    used: dict[str, tuple[str, set[str]]] = {}
-    conditions: dict[int, dict[str, str]] = {}  # a bt_conditions node's uid -> the attributes of its child
+            writer.children[n["parent"]] += 1
     for n in nodes:
-        parent = tree if n["parent"] is None else elements[n["parent"]]
-        if n["parent"] in loops and len(parent) == 1:  # the loop's condition, under its Inverter
-            parent = ET.SubElement(parent, "Inverter", _onFailure="")
-        if n["kind"] == "bt_conditions":  # BT.CPP's _skipIf=... attributes, on the node under it
-            names = {name: attr for attr, name in CONDITION_ATTRS.items()}
-            conditions[n["uid"]] = {names[k]: str(v) for k, v in params.get(n["uid"], {}).items() if v is not None}
-            elements[n["uid"]] = parent
-            continue
-        if n["uid"] in subtrees:
-            sid = subtrees[n["uid"]]
-            attrs = {"ID": sid, "name": n["name"], "_autoremap": "true"}
-            uses[n["uid"]] = ET.SubElement(parent, "SubTree", attrs)  # a YAML subtree shares the run's blackboard
-            parent = ET.SubElement(root, "BehaviorTree", ID=sid)
-        ident = node_id(n, children[n["uid"]])
-        ports = _ports(n, ident, params.get(n["uid"], {}), children[n["uid"]])
-        used.setdefault(ident, (n["kind"], set()))[1].update(ports)
-        marked = {KIND_ATTR: n["kind"]} if _is_control(registry, n["kind"]) else {}
-        scripts = conditions.get(n["parent"], {}) if n["parent"] is not None else {}
-        attrs = {"name": n["name"], **ports, **marked, **scripts}
-        if n["kind"] == "repeat" and children[n["uid"]] == 2:
-            own[n["uid"]], elements[n["uid"]] = repeat_until_elements(parent, attrs)
-            loops.add(n["uid"])
-        else:
-            own[n["uid"]] = elements[n["uid"]] = ET.SubElement(parent, ident, attrs)
+        writer.add(n)
     number = {element: i for i, element in enumerate(_btcpp_order(root, tree_id), 1)}
-    uids = {uid: number[element] for uid, element in own.items()}
-    for uid in loops:
-        _name_flag(own[uid], uids[uid])
+    uids = {uid: number[element] for uid, element in writer.own.items()}
+    for uid in writer.loops:
+        _name_flag(writer.own[uid], uids[uid])
     for element, i in number.items():
         element.set("_uid", str(i))
-    _model(ET.SubElement(root, "TreeNodesModel"), used, registry)
+    _model(ET.SubElement(root, "TreeNodesModel"), writer.used, registry)
     ET.indent(root)
-    wrappers = {uid: number[element] for uid, element in uses.items()}
+    wrappers = {uid: number[element] for uid, element in writer.uses.items()}
     return BtcppTree(ET.tostring(root, encoding="unicode") + "\n", uids, wrappers, len(number))
+
+
+class _TreeWriter:
+    """The elements of a tree being written, node by node in pre-order, under ``root``'s main tree ``tree``."""
+
+    def __init__(
+        self,
+        root: ET.Element,
+        tree: ET.Element,
+        registry: Registry,
+        params: Mapping[int, Mapping[str, Any]],
+        subtrees: Mapping[int, str],
+    ) -> None:
+        self.root, self.tree, self.registry, self.params, self.subtrees = root, tree, registry, params, subtrees
+        #: a node's uid -> how many children it has
+        self.children: dict[int, int] = {}
+        #: a node's uid -> the element its children go into
+        self.elements: dict[int, ET.Element] = {}
+        #: a node's uid -> its element (a do-while loop's outer one)
+        self.own: dict[int, ET.Element] = {}
+        #: a subtree instance root's uid -> its <SubTree> element
+        self.uses: dict[int, ET.Element] = {}
+        #: the do-while loops' uids (their body and condition go in elements[uid])
+        self.loops: set[int] = set()
+        #: each node ID used -> a node kind of it and the ports given to it
+        self.used: dict[str, tuple[str, set[str]]] = {}
+        #: a bt_conditions node's uid -> the attributes of its child
+        self.conditions: dict[int, dict[str, str]] = {}
+
+    def add(self, n: TreeNode) -> None:
+        """Write node ``n`` (its parent is written already)."""
+        uid, kind = n["uid"], n["kind"]
+        parent = self._parent(n)
+        if kind == "bt_conditions":  # BT.CPP's _skipIf=... attributes, on the node under it
+            names = {name: attr for attr, name in CONDITION_ATTRS.items()}
+            given = self.params.get(uid, {}).items()
+            self.conditions[uid] = {names[k]: str(v) for k, v in given if v is not None}
+            self.elements[uid] = parent
+            return
+        cls = control_kind(kind, self.registry)
+        ident = node_id(n, self.children[uid], self.registry)
+        ports = _ports(kind, cls, self.params.get(uid, {}), self.children[uid])
+        self.used.setdefault(ident, (kind, set()))[1].update(ports)
+        marked = {KIND_ATTR: kind} if cls is not None and not cls.btcpp_native else {}
+        scripts = self.conditions.get(n["parent"], {}) if n["parent"] is not None else {}
+        attrs = {"name": n["name"], **ports, **marked, **scripts}
+        if _do_while(cls, self.children[uid]):
+            self.own[uid], self.elements[uid] = repeat_until_elements(parent, attrs)
+            self.loops.add(uid)
+        else:
+            self.own[uid] = self.elements[uid] = ET.SubElement(parent, ident, attrs)
+
+    def _parent(self, n: TreeNode) -> ET.Element:
+        """The element ``n``'s element goes into: its parent's (under the Inverter of a do-while loop's
+        condition), or a new ``<BehaviorTree>`` for a subtree instance's root, used by a ``<SubTree>``."""
+        parent = self.tree if n["parent"] is None else self.elements[n["parent"]]
+        if n["parent"] in self.loops and len(parent) == 1:  # the loop's condition, under its Inverter
+            parent = ET.SubElement(parent, "Inverter", _onFailure="")
+        if n["uid"] in self.subtrees:
+            sid = self.subtrees[n["uid"]]
+            attrs = {"ID": sid, "name": n["name"], "_autoremap": "true"}
+            self.uses[n["uid"]] = ET.SubElement(parent, "SubTree", attrs)  # a YAML subtree shares the run's blackboard
+            parent = ET.SubElement(self.root, "BehaviorTree", ID=sid)
+        return parent
 
 
 def _btcpp_order(root: ET.Element, tree_id: str) -> list[ET.Element]:
@@ -264,21 +263,11 @@ def _btcpp_order(root: ET.Element, tree_id: str) -> list[ET.Element]:
     return order
 
 
-def _is_control(registry: Registry, kind: str) -> bool:
-    """Whether ``kind`` is a composite or decorator (its element is marked with :data:`KIND_ATTR`)."""
-    cls = registry.get(kind)
-    return isinstance(cls, type) and issubclass(cls, ControlNode) and kind not in _BT_ID
-
-
-#: BT.CPP's built-in node IDs an export uses besides BUILTIN's (no TreeNodesModel entry)
-_EXPORT_BUILTINS = frozenset({"Sequence", "Script", "ScriptCondition", "KeepRunningUntilFailure", "Inverter"})
-
-
 def _model(model: ET.Element, used: Mapping[str, tuple[str, set[str]]], registry: Registry) -> None:
     """The ``<TreeNodesModel>``: every node ID ``used`` that is not BT.CPP's, with its ports (a
     plugin that was not imported declares the ports the tree gives it)."""
     for ident, (kind, ports) in sorted(used.items()):
-        if ident in BUILTIN.values() or ident in _EXPORT_BUILTINS or ident in BTCPP_IDS:
+        if ident in BTCPP_IDS:  # BT.CPP's own: no TreeNodesModel entry
             continue
         cls = registry.get(kind)
         entry = ET.SubElement(model, _category(cls), ID=ident)
@@ -427,12 +416,15 @@ def yaml_hint(kind: str) -> str | None:
         >>> yaml_hint("IfThenElse"), yaml_hint("MoveUntilWal")
         ("IfThenElse is `bt_if_then_else` in YAML (BT.CPP's own IfThenElse)", None)
     """
-    from thymio_bt.behaviours.btcpp_control import BTCPP_IDS
-
-    ours = {ident: kind for kind, ident in BUILTIN.items()}.get(kind)
+    ours = next((name for name, cls in default_registry().items() if _exported_as(cls, kind)), None)
     bt = BTCPP_IDS.get(kind)
     if ours is not None:
         return f"{kind} is `{ours}` here (BT.CPP's own {kind}, tick for tick: `{bt}`)"
     if bt is not None:
         return f"{kind} is `{bt}` in YAML (BT.CPP's own {kind})"
     return None
+
+
+def _exported_as(cls: Any, ident: str) -> bool:
+    """Whether node class ``cls`` is thymio-bt's composite or decorator that an export writes as BT.CPP's ``ident``."""
+    return isinstance(cls, type) and issubclass(cls, ControlNode) and not cls.btcpp_native and cls.btcpp_id == ident

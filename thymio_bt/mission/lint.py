@@ -81,14 +81,15 @@ _REFERENCE = re.compile(r"\$([A-Za-z_]\w*)")
 EDGE = 0.05
 
 
-def lint_mission(path: str | Path) -> list[Finding]:
-    """The findings of the mission at ``path``, in file order; its plugins are read, not run. A file
-    that does not load raises its :class:`~thymio_bt.errors.UserError`."""
+def lint_mission(path: str | Path, run_plugins: bool = False) -> list[Finding]:
+    """The findings of the mission at ``path``, in file order; its plugins are read, not run, unless
+    ``run_plugins`` (then the rules know their composites and decorators). A file that does not load
+    raises its :class:`~thymio_bt.errors.UserError`."""
     from thymio_bt.inputs.yamlio import load_yaml
     from thymio_bt.mission.assemble import Assembler
     from thymio_bt.mission.loader import load_mission, resolve_mission
 
-    mission = load_mission(path, run_plugins=False)
+    mission = load_mission(path, run_plugins=run_plugins)
     source = resolve_mission(path)
     if source.suffix.lower() == ".xml":
         from thymio_bt.mission.xml_reader import read_xml_mission
@@ -96,7 +97,7 @@ def lint_mission(path: str | Path) -> list[Finding]:
         data = read_xml_mission(source)
     else:
         data = load_yaml(source)
-    assembler = Assembler(run_plugins=False)
+    assembler = Assembler(run_plugins=run_plugins)
     assembly = assembler.assemble(source, data)
     findings = [*TreeRules(mission).findings(), *_edges(mission.tree, robot_model(mission.robot).range_max)]
     findings += _unused(mission, assembly, assembler.included_parameters)

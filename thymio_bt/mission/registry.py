@@ -246,6 +246,17 @@ def _entry_point_classes() -> list[Any]:
 _DEFAULT: Registry | None = None
 
 
+def control_kind(name: str, registry: Registry | None = None) -> type[ControlNode] | None:
+    """The composite or decorator class called ``name`` in ``registry`` (default: the default
+    registry), whose facts the tools read; None for a behaviour or a name it lacks.
+
+    >>> control_kind("reactive_selector").symbol, control_kind("MoveUntilWall")
+    ('[o]', None)
+    """
+    cls = (registry or default_registry()).get(name)
+    return cls if isinstance(cls, type) and issubclass(cls, ControlNode) else None
+
+
 def default_registry() -> Registry:
     """The built-in behaviours plus those installed through the entry-point group."""
     global _DEFAULT

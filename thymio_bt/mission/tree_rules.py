@@ -21,30 +21,14 @@ Example::
 from __future__ import annotations
 
 import math
-from collections.abc import Generator, Iterator, Mapping
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
 from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
+from thymio_bt.behaviours.control_node import BOTH, SWAP, ControlNode, F, S
 from thymio_bt.mission.plan import Mission, NodePlan
 
-SEQUENCES = ("sequence", "reactive_sequence", "bt_sequence", "bt_sequence_with_memory", "bt_reactive_sequence")
-SELECTORS = ("selector", "reactive_selector", "bt_fallback", "bt_reactive_fallback")
-REACTIVE = ("reactive_sequence", "bt_reactive_sequence", "reactive_selector", "bt_reactive_fallback")
-#: leaves that never return RUNNING although they are actions, not conditions
-INSTANT = ("Stop", "SetBlackboard", "PlanMove")
-#: leaves whose result is known: they cannot end otherwise (Stop fails only without a robot)
-ALWAYS = {
-    "bt_always_success": "S",
-    "bt_always_failure": "F",
-    "bt_script": "S",
-    "bt_set_blackboard": "S",
-    "bt_unset_blackboard": "S",
-    "SetBlackboard": "S",
-    "Stop": "S",
-}
-#: the sequences that resume at a running child: the children before it are not checked again
-PLAIN_SEQUENCES = ("sequence", "bt_sequence", "bt_sequence_with_memory")
 #: conditions that, inverted, say the way ahead is clear, with the distance (m) they vouch for
 CLEAR_AHEAD = {
     "WallAhead": lambda params: params.distance,
@@ -57,21 +41,10 @@ FORWARD_DRIVES = {
     "GoToPose": lambda params: math.inf,
     "FollowWaypoints": lambda params: math.inf,
 }
-#: decorators that start their (first) child when they start
-PASS_ON = frozenset(
-    ("repeat", "retry", "timeout", "delay", "force_success", "force_failure", "one_shot", "until", "invert")
-    + ("bt_repeat", "bt_retry_until_successful", "bt_run_once", "bt_timeout", "bt_delay", "bt_inverter")
-    + ("bt_force_success", "bt_force_failure", "bt_keep_running_until_failure")
-)
-#: the control kinds that stop a child only as :meth:`TreeRules._way_out` says
-MODELLED = (
-    *SEQUENCES,
-    *SELECTORS,
-    *("parallel", "repeat", "retry", "delay", "invert", "force_success", "force_failure", "one_shot", "until"),
-    *("guard", "bt_repeat", "bt_inverter", "bt_run_once"),
-)
-S, F = "S", "F"
-BOTH = frozenset((S, F))
+
+
+class _Unknown(ControlNode):
+    """A control kind the registry lacks: it may end either way and stop its child (its facts' defaults)."""
 
 
 @dataclass(frozen=True)
@@ -135,6 +108,16 @@ class TreeRules:
         """The class of a behaviour node (None when the registry lacks it)."""
         return self.registry.get(node.behaviour) if node.behaviour and self.registry is not None else None
 
+    def kind(self, node: NodePlan) -> type[ControlNode]:
+        """The class of a composite or decorator node, whose facts the rules read."""
+        cls = self.registry.get(node.kind) if self.registry is not None else None
+        return cls if isinstance(cls, type) and issubclass(cls, ControlNode) else _Unknown
+
+    def _family(self, node: NodePlan, *families: str, reactive: bool | None = None) -> bool:
+        """Whether ``node`` is a composite of one of ``families`` (and, unless None, ``reactive`` or not)."""
+        cls = self.kind(node)
+        return cls.family in families and (reactive is None or cls.reactive == reactive)
+
     def nature(self, node: NodePlan) -> str:
         """A leaf's nature: ``condition``, ``instant`` (an action done in one tick), ``long`` (runs over
         ticks) or ``unknown`` (a plugin not imported)."""
@@ -143,7 +126,7 @@ class TreeRules:
             return "unknown"
         if is_condition(cls):
             return "condition"
-        if (issubclass(cls, RobotBehaviour) and cls.bt_sync) or node.behaviour in INSTANT or node.behaviour in ALWAYS:
+        if issubclass(cls, RobotBehaviour) and (cls.bt_sync or cls.instant or cls.always):
             return "instant"
         return "long"
 
@@ -156,88 +139,55 @@ class TreeRules:
 
     def _ends(self, node: NodePlan) -> set[str]:
         """:meth:`outcomes`, worked out (conservatively: both when the kind is not known here)."""
-        kind, kids, opts = node.kind, node.children, node.options
-        if kind == "behaviour":
-            known = ALWAYS.get(node.behaviour or "")
-            return {known} if known and self.nature(node) != "unknown" else set(BOTH)
-        child = self.outcomes(kids[0]) if kids else BOTH
-        if kind in SEQUENCES or kind in SELECTORS:
-            go_on, stop = (S, F) if kind in SEQUENCES else (F, S)
-            ends: set[str] = set()
-            for kid in kids:
-                got = self.outcomes(kid)
-                ends |= got & {stop}
-                if go_on not in got:
-                    return ends
-            return ends | {go_on}
-        if kind == "parallel":
-            every = [self.outcomes(k) for k in kids]
-            win = all if opts.get("policy", "success_on_all") == "success_on_all" else any
-            return ({S} if win(S in e for e in every) else set()) | ({F} if any(F in e for e in every) else set())
-        return self._decorated(kind, kids, opts, child)
-
-    def _decorated(self, kind: str, kids: list[NodePlan], opts: Mapping[str, Any], child: frozenset[str]) -> set[str]:
-        """:meth:`outcomes` of a decorator over a child that can end with ``child``."""
-        swap = {S: F, F: S}
-        forever = (kind == "repeat" and opts.get("times") == "forever") or (
-            kind == "bt_repeat" and opts.get("num_cycles") == -1
-        )
-        if kind == "repeat" and len(kids) == 2:  # repeat until: the body, then the condition
-            return set(child & {F}) | ({S} if S in child and S in self.outcomes(kids[1]) else set())
-        if forever or kind == "bt_keep_running_until_failure":
-            return set(child & {F})
-        if kind in ("invert", "bt_inverter"):
-            return {swap[c] for c in child}
-        if kind in ("force_success", "bt_force_success", "force_failure", "bt_force_failure"):
-            return ({S} if "success" in kind else {F}) if child else set()
-        if kind in ("timeout", "bt_timeout"):
-            return set(child) | {F}
-        if kind == "until":
-            return {S} if (S if opts.get("status") == "success" else F) in child else set()
-        if kind == "guard":
-            condition = self.outcomes(kids[1])
-            return ({F} if F in condition or F in child else set()) | ({S} if S in child and S in condition else set())
-        if kind == "bt_retry_until_successful" and opts.get("num_attempts") == -1:
-            return set(child & {S})
-        if kind in ("repeat", "retry", "delay", "one_shot", "bt_repeat", "bt_retry_until_successful", "bt_run_once"):
-            return set(child)
-        if kind == "bt_delay":
-            return set(child)
-        return set(BOTH)
+        if node.kind == "behaviour":
+            cls = self._class(node)
+            known = cls.always if self.nature(node) != "unknown" else ""
+            return {known} if known else set(BOTH)
+        return set(self.kind(node).ends(node.options, [self.outcomes(k) for k in node.children]))
 
     # --- the rules -----------------------------------------------------------------------------
 
     def _unreachable(self, node: NodePlan) -> Generator[Finding, None, set[int]]:
         """``unreachable``: the first child that cannot run in ``node``; returns the ids of the children
         that cannot run."""
-        kind, kids = node.kind, node.children
+        kids = node.children
         blocker: NodePlan | None = None
-        if kind in SEQUENCES or kind in SELECTORS:
-            go_on = S if kind in SEQUENCES else F
+        if self._family(node, "sequence", "selector"):
+            go_on = S if self._family(node, "sequence") else F
             blocker = next((k for k in kids[:-1] if go_on not in self.outcomes(k)), None)
             if blocker is not None:
                 after = kids[kids.index(blocker) + 1 :]
                 yield self._unreachable_finding(node, blocker, after[0], go_on, len(after))
                 return {id(k) for k in after}
-        elif kind == "repeat" and len(kids) == 2 and S not in self.outcomes(kids[0]):
+        elif (then := self._node_at(node, self.kind(node).then)) is not None and S not in self.outcomes(kids[0]):
             yield finding_at(
-                kids[1],
+                then,
                 "unreachable",
-                f"the until condition '{kids[1].name}' of '{node.name}' is never checked: "
+                f"the {self.kind(node).then} condition '{then.name}' of '{node.name}' is never checked: "
                 f"'{kids[0].name}' {self._why(kids[0], S)}",
                 "the condition is checked after each success of the loop's body",
             )
-            return {id(kids[1])}
-        elif kind == "guard" and S not in self.outcomes(kids[1]):
+            return {id(then)}
+        elif (gate := self._gate(node)) is not None and S not in self.outcomes(gate):
             yield finding_at(
                 kids[0],
                 "unreachable",
-                f"'{kids[0].name}' never runs: the condition '{kids[1].name}' of guard '{node.name}' "
-                f"{self._why(kids[1], S)}",
-                "a guard runs its child only while its condition succeeds",
+                f"'{kids[0].name}' never runs: the {self.kind(node).gate} '{gate.name}' of {node.kind} "
+                f"'{node.name}' {self._why(gate, S)}",
+                f"a {node.kind} runs its child only while its {self.kind(node).gate} succeeds",
             )
             return {id(kids[0])}
         return set()
+
+    def _node_at(self, node: NodePlan, key: str) -> NodePlan | None:
+        """The child of decorator ``node`` under its node key ``key`` ("", or not given: None)."""
+        keys = self.kind(node).node_keys
+        at = 1 + keys.index(key) if key in keys else 0
+        return node.children[at] if 0 < at < len(node.children) else None
+
+    def _gate(self, node: NodePlan) -> NodePlan | None:
+        """The condition that gates ``node``'s child (its kind's ``gate``: a guard's), None if none."""
+        return self._node_at(node, self.kind(node).gate)
 
     def _why(self, node: NodePlan, missing: str) -> str:
         """Why ``node`` never ends with ``missing``, in words."""
@@ -269,35 +219,35 @@ class TreeRules:
         (a ``one_shot`` returns its result without running its child again)."""
         if node.kind == "behaviour":
             return self.nature(node) == "long"
-        if node.kind in ("one_shot", "bt_run_once"):
+        if self.kind(node).once:
             return False
         return any(self.may_run(k) for k in node.children)
 
     def unguarded(self, node: NodePlan) -> bool:
         """Whether ``node``, ticked from the start, reaches a long action before any condition that
         could fail and stop it (a selector's first instant child ends or gates it too)."""
-        kind, kids = node.kind, node.children
-        if kind == "behaviour":
+        kids = node.children
+        if node.kind == "behaviour":
             return self.nature(node) == "long"
-        if kind == "guard":
-            return F not in self.outcomes(kids[1]) and self.unguarded(kids[0])
-        if kind == "parallel":
+        if (gate := self._gate(node)) is not None:
+            return F not in self.outcomes(gate) and self.unguarded(kids[0])
+        if self._family(node, "parallel"):
             return any(self.unguarded(k) for k in kids)
-        if kind in SEQUENCES or kind in SELECTORS:
+        if self._family(node, "sequence", "selector"):
             for kid in kids:
                 if self.may_run(kid):
                     return self.unguarded(kid)
-                if kind in SELECTORS or F in self.outcomes(kid):
+                if self._family(node, "selector") or F in self.outcomes(kid):
                     return False
             return False
         return bool(kids) and self.unguarded(kids[0])
 
     def _restart(self, node: NodePlan) -> Iterator[Finding]:
         """``reactive-restart``: the children of a reactive composite started again at every tick."""
-        if node.kind not in REACTIVE:
+        if not self._family(node, "sequence", "selector", reactive=True):
             return
         kids = node.children
-        sequence = "sequence" in node.kind
+        sequence = self._family(node, "sequence")
         for i, kid in enumerate(kids[:-1]):
             if not any(self.may_run(k) for k in kids[i + 1 :]):
                 break
@@ -324,10 +274,7 @@ class TreeRules:
 
     def _forever(self, node: NodePlan, above: tuple[NodePlan, ...]) -> Iterator[Finding]:
         """``forever``: a loop that never ends, with nothing above it that could stop it."""
-        opts = node.options
-        endless = (node.kind == "repeat" and opts.get("times") == "forever" and len(node.children) == 1) or (
-            node.kind == "bt_repeat" and opts.get("num_cycles") == -1
-        )
+        endless = self.kind(node).endless(node.options, len(node.children))
         if not endless or self.outcomes(node) or self._way_out(node, above):
             return
         yield finding_at(
@@ -344,7 +291,7 @@ class TreeRules:
         once, before the drive starts, and not while it drives (docs/control_nodes.md's classic
         mistake). A check before a turn, a decision (``SideOpen``, ``IsDeadEnd``), or a drive no
         longer than the clearance it vouches for is what it is meant to be, and not found."""
-        if node.kind not in PLAIN_SEQUENCES:
+        if not self._family(node, "sequence", reactive=False):
             return
         kids = node.children
         for i, kid in enumerate(kids[:-1]):
@@ -368,7 +315,7 @@ class TreeRules:
         """The condition under ``node`` that says the way ahead is clear (an odd number of inverters
         over a :data:`CLEAR_AHEAD` condition), with the distance it vouches for; None otherwise."""
         inverted = False
-        while node.kind in ("invert", "bt_inverter") and node.children:
+        while self.kind(node).outcome == SWAP and node.children:
             inverted, node = not inverted, node.children[0]
         how_far = CLEAR_AHEAD.get(node.behaviour or "")
         if how_far is None or not inverted or not self._known(node):
@@ -383,10 +330,10 @@ class TreeRules:
             how_far = FORWARD_DRIVES.get(node.behaviour or "")
             far = how_far(node.params) if how_far is not None and self._known(node) else 0.0
             return (node, far) if far > 0 else None
-        if kind in PLAIN_SEQUENCES or kind in ("selector", "bt_fallback"):
+        if self._family(node, "sequence", "selector", reactive=False):
             first = next((k for k in kids if self.may_run(k)), None)
             return self._first_drive(first) if first is not None else None
-        return self._first_drive(kids[0]) if kind in PASS_ON and kids else None
+        return self._first_drive(kids[0]) if self.kind(node).passes_on and kids else None
 
     def _known(self, node: NodePlan) -> bool:
         """Whether ``node``'s values are written (not read from the blackboard when it starts)."""
@@ -396,22 +343,9 @@ class TreeRules:
         """Whether an ancestor of ``node`` can stop it: a timeout, a guard whose condition can fail, a
         parallel whose other child can end it, a reactive composite's earlier child that can preempt."""
         for parent, via in zip(reversed(above), (node, *reversed(above))[: len(above)], strict=True):
-            kind, kids = parent.kind, parent.children
-            others = [k for k in kids if k is not via]
-            earlier = kids[: kids.index(via)]
-            if kind in ("timeout", "bt_timeout") or (
-                kind == "guard" and via is kids[0] and F in self.outcomes(kids[1])
-            ):
+            kids = [self.outcomes(k) for k in parent.children]
+            if self.kind(parent).may_stop(parent.options, kids, parent.children.index(via)):
                 return True
-            if kind == "parallel" and any(
-                F in self.outcomes(k) or (parent.options.get("policy") == "success_on_one" and S in self.outcomes(k))
-                for k in others
-            ):
-                return True
-            if kind in REACTIVE and any((F if "sequence" in kind else S) in self.outcomes(k) for k in earlier):
-                return True
-            if kind not in MODELLED:
-                return True  # a kind this lint does not model: it may stop its child
         return False
 
 

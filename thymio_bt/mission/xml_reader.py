@@ -4,7 +4,8 @@ data as a YAML mission, so the loader's passes check them with the same errors a
 The read pass for ``.xml`` files: the ``<BehaviorTree>`` named by ``main_tree_to_execute`` (or the
 only one) is the tree, ``<ThymioMission>`` holds the settings (``maze``, ``start``, ``tick_hz``,
 ``noise.wheel``...), ``<TreeNodesModel>`` gives only the defaults of subtrees' ports. BT.CPP's
-built-ins map back to thymio-bt's composites and decorators (:data:`thymio_bt.mission.btcpp.BUILTIN`),
+built-ins map back to thymio-bt's composites and decorators (each marked element by its kind's
+``btcpp_id``, :class:`~thymio_bt.behaviours.control_node.ControlNode`),
 ``{key}`` ports to ``bb:key``; each ``<SubTree>`` is a copy of its tree with a blackboard scope of its
 own, as in BT.CPP (:mod:`thymio_bt.mission.xml_tree`, :mod:`thymio_bt.mission.xml_scope`). Elements
 and their attributes carry the element's line and column. The file is parsed with expat, with no

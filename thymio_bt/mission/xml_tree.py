@@ -25,11 +25,13 @@ from functools import cache
 from typing import Any
 
 from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
+from thymio_bt.behaviours.control_node import ControlNode
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MAX_NESTING, MarkedDict, MarkedList
-from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, RESERVED
+from thymio_bt.mission.btcpp import KIND_ATTR, RESERVED
 from thymio_bt.mission.planner import MAX_DEPTH, MAX_NODES
+from thymio_bt.mission.registry import control_kind
 from thymio_bt.mission.xml_scope import Literal, Ports, Scope, pointer, rename_script, subtree_ports
 
 #: the deepest nesting of subtrees (a subtree using a subtree ... ): far beyond any mission
@@ -223,14 +225,12 @@ class TreeReader:
         attrs = {k: v for k, v in element.attrs.items() if not k.startswith("_")}
         conditioned = not CONDITION_ATTRS.keys().isdisjoint(element.attrs)
         size = sum(len(k) + len(v) for k, v in element.attrs.items())
-        mark = element.attrs.get(KIND_ATTR, "")
-        if BUILTIN.get(mark) != ident and not (mark == "repeat" and ident == "Sequence"):
-            mark = ""  # the mark of thymio-bt's node applies to the element the export writes for it only
+        mark, do_while = _mark(element)
         read = element
         if ident == "SubTree":
             kind = ""
-        elif mark == "repeat" and ident == "Sequence":
-            read, ident, kind = _repeat_until(element, self.file), "RepeatUntil", "repeat"
+        elif do_while:
+            read, ident, kind = _repeat_until(element, self.file), "RepeatUntil", mark
         elif mark:
             kind = mark
         else:
@@ -280,7 +280,8 @@ class TreeReader:
         """A node's body but its name, from its ports (``attrs``, keys renamed for ``scope``) and its
         child nodes: a composite's ``children``, a decorator's ``do`` (and ``condition``, ``until``),
         a behaviour's parameters."""
-        if ident == "RepeatUntil":
+        cls = control_kind(kind)
+        if ident == "RepeatUntil" and cls is not None:
             if len(children) != 2:
                 raise UserError(
                     Problem(
@@ -290,36 +291,27 @@ class TreeReader:
                         element.column,
                     )
                 )
-            return {"do": children[0], "until": children[1]}
+            return {"do": children[0], cls.then: children[1]}
         if kind.startswith("bt_"):  # BT.CPP's own node: its ports as written (the node's model reads them)
             ports = self._bt_ports(kind, attrs, element, scope)
-            category = _category(ident)
-            if category == "leaf":
+            if cls is None:  # a leaf
                 return ports
             nodes = (
-                {"do": children[0]} if category == "decorator" and children else {"children": _list(children, element)}
+                {"do": children[0]}
+                if cls.category == "decorator" and children
+                else {"children": _list(children, element)}
             )
             return {**ports, **nodes}
         keys = _key_params(kind) if not children else frozenset()
         # a port left empty is not given (Groot2 writes a port left blank in its editor as an empty text)
         values = {k: self._value(k, v, element, scope, k in keys) for k, v in attrs.items() if v.strip()}
-        if kind == "parallel":
-            success = attrs.get("success_count", "-1").strip()
-            values.pop("success_count", None), values.pop("failure_count", None)
-            policy = "success_on_one" if success == "1" else "success_on_all"
-            return {"policy": policy, **values, "children": _list(children, element)}
-        if kind in ("sequence", "reactive_sequence", "selector", "reactive_selector"):
-            return {**values, "children": _list(children, element)}
+        if cls is not None and cls.category == "composite":
+            return {**cls.from_btcpp(values), "children": _list(children, element)}
         if not children:  # a behaviour or condition
             return values
-        renamed = {"num_cycles": "times", "num_attempts": "times"}  # a decorator
-        body = {renamed.get(k, k): v for k, v in values.items()}
-        if body.get("times") == -1:
-            body["times"] = "forever"
-        extra = {"guard": "condition"}.get(kind)
-        body["do"] = children[0]
-        if extra and len(children) > 1:
-            body[extra] = children[1]
+        decorator = cls or ControlNode  # a kind the default registry lacks (a plugin's): a decorator
+        body = {**decorator.from_btcpp(values), "do": children[0]}  # and its other nodes
+        body.update(zip(decorator.node_keys, children[1:], strict=False))
         return body
 
     def _value(self, port: str, text: str, element: Element, scope: Scope, names_key: bool) -> Any:
@@ -439,16 +431,16 @@ def _chain(stack: tuple[tuple[str, Element], ...], word: str) -> str:
     return f" ({word} {' -> '.join(names)})"
 
 
-@cache
-def _category(ident: str) -> str:
-    """What BT.CPP's node ``ident`` is here: "decorator" (one child, under ``do``), "composite"
-    (``children``) or "leaf" (ports only)."""
-    from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL, BTCPP_SCRIPTED
-
-    for cls in (*BTCPP_CONTROL, *BTCPP_SCRIPTED):
-        if cls.btcpp_id == ident:  # type: ignore[attr-defined]
-            return cls.category
-    return "leaf"
+def _mark(element: Element) -> tuple[str, bool]:
+    """The node kind ``element``'s :data:`~thymio_bt.mission.btcpp.KIND_ATTR` names ("" when it names
+    none, or not the kind an export writes as this element), and whether the element is the
+    do-while loop an export writes for it (:func:`~thymio_bt.mission.btcpp.repeat_until_elements`)."""
+    mark = element.attrs.get(KIND_ATTR, "")
+    cls = control_kind(mark) if mark else None
+    if cls is None or cls.btcpp_native:
+        return "", False
+    do_while = bool(cls.then) and element.tag == "Sequence"
+    return (mark, do_while) if do_while or cls.btcpp_id == element.tag else ("", False)
 
 
 def _repeat_until(element: Element, file: str) -> Element:

@@ -37,7 +37,9 @@ from thymio_bt.errors import UserError
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
+    from thymio_bt.behaviours.control_node import ControlNode
     from thymio_bt.mission.plan import NodePlan
+    from thymio_bt.mission.registry import Registry
     from thymio_bt.outputs import Output
     from thymio_bt.run.runner import Run
 
@@ -90,16 +92,18 @@ def export_tree(
     run_plugins: bool = False,
     coverage: Mapping[str, Any] | None = None,
     conditions: Collection[str] = (),
+    registry: Registry | None = None,
 ) -> None:
     """Write the tree to ``out`` as Graphviz .dot text, or as .svg/.png drawn by Graphviz's ``dot``;
     with ``coverage`` (a coverage JSON of this mission), the tree drawn with its counts (``conditions``
-    as in :func:`coverage_dot`)."""
+    as in :func:`coverage_dot`, its kinds drawn as in ``registry``)."""
     if coverage is None:
         from thymio_bt.mission import load_mission
 
-        source = plan_dot(load_mission(mission_path, run_plugins=run_plugins).tree)
+        mission = load_mission(mission_path, run_plugins=run_plugins)
+        source = plan_dot(mission.tree, mission.registry)
     else:
-        source = coverage_dot(coverage, conditions)
+        source = coverage_dot(coverage, conditions, registry)
     write_graph(source, out, fmt, f"thymio-bt tree {mission_path} --dot -o {Path(str(out)).stem}.dot")
 
 
@@ -123,22 +127,18 @@ def write_graph(source: str, out: Output, fmt: str, instead: str) -> None:
         subprocess.run([program, f"-T{fmt}", "-o", str(tmp)], input=source.encode(), check=True)
 
 
-#: how each node kind is drawn in a terminal (py_trees' symbols: with memory in braces)
-_SYMBOLS = {"sequence": "{-}", "reactive_sequence": "[-]", "selector": "{o}", "reactive_selector": "[o]"}
+def _kind(kind: str, registry: Registry | None) -> type[ControlNode]:
+    """The class of a composite or decorator ``kind`` of ``registry``, whose ``symbol`` and ``family``
+    say how it is drawn (a kind it lacks: :class:`ControlNode`'s, a decorator's)."""
+    from thymio_bt.behaviours.control_node import ControlNode
+    from thymio_bt.mission.registry import control_kind
+
+    return control_kind(kind, registry) or ControlNode
 
 
-def _symbol(kind: str) -> str:
-    """The terminal symbol of a node ``kind`` (a BT.CPP kind by its family)."""
-    if kind in _SYMBOLS:
-        return _SYMBOLS[kind]
-    if kind == "behaviour":
-        return "-->"
-    if "parallel" in kind:
-        return "/_/"
-    if "sequence" in kind or "fallback" in kind:
-        family = "-" if "sequence" in kind else "o"
-        return f"[{family}]" if "reactive" in kind else f"{{{family}}}"
-    return "-^-"
+def _symbol(kind: str, registry: Registry | None = None) -> str:
+    """The terminal symbol of a node ``kind``: its class's (``-->`` a behaviour)."""
+    return "-->" if kind == "behaviour" else _kind(kind, registry).symbol
 
 
 def _counts(node: Mapping[str, Any], conditions: Collection[str]) -> str:
@@ -156,15 +156,18 @@ def _counts(node: Mapping[str, Any], conditions: Collection[str]) -> str:
     return text
 
 
-def coverage_text(coverage: Mapping[str, Any], conditions: Collection[str] = ()) -> str:
+def coverage_text(
+    coverage: Mapping[str, Any], conditions: Collection[str] = (), registry: Registry | None = None
+) -> str:
     """The tree with each node's coverage (``run --coverage``): ticks and results (``conditions``, the
     behaviour names of conditions, as true and false), the child that ended each composite, and
-    the nodes that never ran."""
+    the nodes that never ran (each kind drawn as its class in ``registry`` says: the default one
+    unless given)."""
     nodes = coverage["nodes"]
     runs = coverage["runs"]
     ticked = sum(1 for n in nodes if n["ticks"])
     lines = [f"tree coverage over {runs} run{'s' * (runs != 1)}: {ticked} of {len(nodes)} nodes ticked"]
-    left = ["    " * n["depth"] + f"{_symbol(n['kind'])} {n['name']}" for n in nodes]
+    left = ["    " * n["depth"] + f"{_symbol(n['kind'], registry)} {n['name']}" for n in nodes]
     width = min(max((len(text) for text in left), default=0), 60)
     for text, node in zip(left, nodes, strict=True):
         lines.append(f"{text.ljust(width)}   {_counts(node, conditions)}")
@@ -172,21 +175,19 @@ def coverage_text(coverage: Mapping[str, Any], conditions: Collection[str] = ())
 
 
 #: how each node family is drawn in a Graphviz picture (shape, fill when ticked), like py_trees' dot
+#: ("": any other composite or decorator)
 _DOT_LOOK = {
     "sequence": ("box", "#ff9900"),
     "selector": ("octagon", "#00ffff"),
     "parallel": ("parallelogram", "#ffd700"),
-    "decorator": ("ellipse", "#f8f8ff"),
+    "": ("ellipse", "#f8f8ff"),
     "behaviour": ("ellipse", "#d3d3d3"),
 }
 
 
-def _family(kind: str) -> str:
-    """A node kind's family for drawing: sequence, selector, parallel, decorator or behaviour."""
-    symbol = _symbol(kind)
-    return {"-->": "behaviour", "/_/": "parallel", "-^-": "decorator"}.get(
-        symbol, "sequence" if "-" in symbol else "selector"
-    )
+def _family(kind: str, registry: Registry | None) -> str:
+    """A node kind's family for drawing: its class's, or behaviour."""
+    return "behaviour" if kind == "behaviour" else _kind(kind, registry).family
 
 
 def _quoted(text: str) -> str:
@@ -194,8 +195,11 @@ def _quoted(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
 
 
-#: the children of a kind that are not ordinary children, by position: their role is written on the edge
-_ROLES = {"repeat": {1: "until"}, "guard": {1: "condition"}}
+def _role(kind: str, position: int, registry: Registry | None) -> str | None:
+    """The role of a decorator's child at ``position`` that is not its ``do`` (a repeat's ``until``, a
+    guard's ``condition``: its kind's ``node_keys``), written on the edge; None for an ordinary child."""
+    keys = () if kind == "behaviour" else _kind(kind, registry).node_keys
+    return keys[position - 1] if 0 < position <= len(keys) else None
 
 
 def _label(node: Mapping[str, Any]) -> str:
@@ -204,7 +208,7 @@ def _label(node: Mapping[str, Any]) -> str:
     return node["name"] if what == node["name"] else f"{node['name']}\n{what}"
 
 
-def plan_dot(plan: NodePlan) -> str:
+def plan_dot(plan: NodePlan, registry: Registry | None = None) -> str:
     """The mission's tree (``tree --dot/--svg/--png``) as Graphviz .dot text, drawn as
     :func:`coverage_dot` draws it without counts: a repeat's ``until`` and a guard's ``condition``
     on a dashed edge that says so, not as one more child.
@@ -222,10 +226,12 @@ def plan_dot(plan: NodePlan) -> str:
         {"path": path, "name": n.name, "kind": n.kind, "behaviour": n.behaviour, "depth": depth}
         for n, path, depth in plan_paths(plan)
     ]
-    return _dot("tree", nodes, None)
+    return _dot("tree", nodes, None, registry)
 
 
-def coverage_dot(coverage: Mapping[str, Any], conditions: Collection[str] = ()) -> str:
+def coverage_dot(
+    coverage: Mapping[str, Any], conditions: Collection[str] = (), registry: Registry | None = None
+) -> str:
     """The tree as Graphviz .dot text with each node's coverage: its counts under its name, the nodes
     that never ran dashed and grey, each edge labelled with how often that child ended its parent.
 
@@ -239,18 +245,21 @@ def coverage_dot(coverage: Mapping[str, Any], conditions: Collection[str] = ()) 
     n0 [label="s\\nsequence\\nnever ticked", shape=box, style=dashed, color=grey60, fontcolor=grey45];
     }
     """
-    return _dot("coverage", coverage["nodes"], conditions)
+    return _dot("coverage", coverage["nodes"], conditions, registry)
 
 
-def _dot(name: str, nodes: Sequence[Mapping[str, Any]], conditions: Collection[str] | None) -> str:
+def _dot(
+    name: str, nodes: Sequence[Mapping[str, Any]], conditions: Collection[str] | None, registry: Registry | None
+) -> str:
     """The .dot text of the tree ``nodes`` (pre-order, with depths), with their coverage counts
-    unless ``conditions`` is None (a tree without coverage: every node filled)."""
+    unless ``conditions`` is None (a tree without coverage: every node filled), each kind drawn as
+    its class in ``registry`` says."""
     lines = [f"digraph {name} {{", 'graph [ordering=out, fontname="sans"];', 'node [fontname="sans", fontsize=10];']
     lines.append('edge [fontname="sans", fontsize=9];')
     stack: list[tuple[int, Mapping[str, Any]]] = []  # the ancestors of the node being drawn
     children: dict[int, int] = {}  # how many children of each node are drawn so far
     for i, node in enumerate(nodes):
-        shape, fill = _DOT_LOOK[_family(node["kind"])]
+        shape, fill = _DOT_LOOK[_family(node["kind"], registry)]
         counts = "" if conditions is None else f"\n{_counts(node, conditions)}"
         label = _quoted(_label(node) + counts)
         if conditions is None or node["ticks"]:
@@ -265,7 +274,7 @@ def _dot(name: str, nodes: Sequence[Mapping[str, Any]], conditions: Collection[s
         if stack:
             parent, data = stack[-1]
             position = children[parent] = children.get(parent, -1) + 1
-            role = _ROLES.get(data["kind"], {}).get(position)
+            role = _role(data["kind"], position, registry)
             ended = data.get("ended_by", {}).get(node["path"])
             words = [w for w in (role, f"ended it x{ended}" if ended else None) if w]
             attributes = [f"label={_quoted(' / '.join(words))}"] if words else []
