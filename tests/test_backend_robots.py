@@ -145,5 +145,5 @@ def test_the_playground_without_a_robot_drives_enki(tmp_path):
     result = Run(mission, backend=backend).run()  # closes the backend (and the Playground) however it ends
     assert backend.model is ENKI
     assert result.status == "SUCCESS", result.reason
-    gap = front_gap(mission.maze, ENKI, Pose(**result.final_pose))
+    gap = front_gap(mission.maze, ENKI, result.final_pose)
     assert gap == pytest.approx(0.05, abs=0.01)

@@ -581,7 +581,7 @@ def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it(
     assert result.status == "SUCCESS"
     assert len(operator.prompts) == 1  # place the robot at the start
     start = mission.start
-    assert math.hypot(result.final_pose["x"] - start.x, result.final_pose["y"] - start.y) < 0.005
+    assert math.hypot(result.final_pose.x - start.x, result.final_pose.y - start.y) < 0.005
     assert node.closed and node.writes[-1] == (0, 0)  # motors stopped, robot released
     assert result.collisions == 0 and result.min_clearance is None
     assert sum(clock.sleeps) == pytest.approx(result.sim_time, abs=0.2)  # it ran in real time

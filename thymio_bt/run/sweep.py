@@ -75,7 +75,7 @@ def run_job(job: Job) -> dict[str, Any]:
     from thymio_bt.behaviours.base import FailureCode, describe
     from thymio_bt.mission import load_mission
     from thymio_bt.run.coverage import Coverage
-    from thymio_bt.run.runner import Run
+    from thymio_bt.run.runner import Run, RunStatus
 
     key: str | tuple[Any, ...] = job.key or (job.mission, job.overrides, job.maze, job.start)
     mission = _CACHE.get(key)
@@ -86,7 +86,7 @@ def run_job(job: Job) -> dict[str, Any]:
     except Exception as exc:  # that run fails, the sweep goes on and reports it
         return {
             "seed": job.seed,
-            "status": "FAILURE",
+            "status": RunStatus.FAILURE,
             "sim_time": 0.0,
             "final_pose": None,
             "reason": f"the run raised {describe(exc)}",
@@ -108,7 +108,7 @@ def run_job(job: Job) -> dict[str, Any]:
         "seed": job.seed,
         "status": result.status,
         "sim_time": round(result.sim_time, 6),
-        "final_pose": result.final_pose,
+        "final_pose": result.final_pose_json,
         "reason": result.reason,
         "code": result.code,
         "failed_path": result.failed_path,
