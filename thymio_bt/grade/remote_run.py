@@ -107,7 +107,7 @@ class RemoteRun(Run):
             self._limit(f"used more than its CPU time limit of {self.limits.cpu:g} s")
 
     def _limit(self, what: str) -> None:
-        where = getattr(self.root, "tip_path", None)
+        where = self.root.tip_path if isinstance(self.root, _Remote) else None
         raise RunLimit(f"the run {what}" + (f", in '{where}'" if where else ""))
 
     def _stats(self, rows: Any) -> dict[str, Any]:

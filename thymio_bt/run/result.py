@@ -186,7 +186,7 @@ def learnt_map(root: Behaviour) -> CellMap | None:
     """The maze map the tree's mapping behaviours keep on the blackboard, at the ``key`` of their
     parameters (:class:`~thymio_bt.behaviours.mapping.MazeMapParams`); None when none made one."""
     for node in root.iterate():
-        params = getattr(node, "params", None)
+        params = node.params if isinstance(node, RobotBehaviour) else None
         if isinstance(params, MazeMapParams) and Blackboard.exists(params.key):
             found = Blackboard.get(params.key)
             if isinstance(found, CellMap):
