@@ -44,9 +44,9 @@ class Phase:
     status: str | None
     cells: int | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> dict[str, str | float | None]:
         """As the report writes it (``cells`` only when there are some)."""
-        entry: dict[str, Any] = {
+        entry: dict[str, str | float | None] = {
             "name": self.name,
             "path": self.path,
             "start": self.start,
