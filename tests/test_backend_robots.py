@@ -143,7 +143,7 @@ def test_the_playground_without_a_robot_drives_enki(tmp_path):
     mission = load_mission(tmp_path / "m.yaml")
     backend = backend_kind("playground").create(mission, 0, {})
     result = Run(mission, backend=backend).run()  # closes the backend (and the Playground) however it ends
-    assert backend.model is ENKI
+    assert backend.model is ENKI and backend.speed_scale == 0.985  # its units cover 0.985 of Enki's
     assert result.status == "SUCCESS", result.reason
     gap = front_gap(mission.maze, ENKI, result.final_pose)
     assert gap == pytest.approx(0.05, abs=0.01)
