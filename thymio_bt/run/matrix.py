@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.run.sweep import SweepResult, sweep
+from thymio_bt.run.sweep import SweepResult, SweepRow, sweep
 
 if TYPE_CHECKING:
     from thymio_bt.robot.interface import Pose
@@ -92,7 +92,7 @@ def run_matrix(
     maze: str | None = None,
     start: str | None = None,
     executor: Any = None,
-    progress: Callable[[dict[str, Any]], None] | None = None,
+    progress: Callable[[SweepRow], None] | None = None,
     interrupts: Any = None,
 ) -> list[Cell]:
     """The sweep of ``mission`` in every combination of ``axes`` (a ``--set`` name → its values)."""
