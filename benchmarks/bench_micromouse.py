@@ -32,7 +32,7 @@ def one(job: tuple[str, str, int]) -> dict[str, Any]:
     settings = {f"noise.{k}": str(v) for k, v in REALISTIC.model_dump().items()}
     settings["robot"] = robot
     result = run_mission(load_mission(MISSION, settings, maze=maze), seed=seed)
-    phases = {p["name"]: p for p in result.phases}
+    phases = {p.name: p.as_dict() for p in result.phases}
     return {
         "maze": Path(maze).name,
         "robot": robot,
@@ -40,7 +40,7 @@ def one(job: tuple[str, str, int]) -> dict[str, Any]:
         "status": result.status,
         "code": result.code,
         "collisions": result.collisions,
-        "goal": bool(result.goal and result.goal["reached"]),
+        "goal": bool(result.goal and result.goal.reached),
         "search": phases.get("search", {}).get("duration"),
         "cells": phases.get("search", {}).get("cells"),
         "fast": phases.get("fast run", {}).get("duration"),

@@ -154,7 +154,7 @@ def test_a_mission_runs_on_the_playground_with_ground_truth_and_stops_it(tmp_pat
     result = run.run()
     assert result.status == "SUCCESS" and result.collisions == 0
     # the front gap by the true pose and the maze: base_link x + 0.0557 to the far wall's face at 0.894
-    gap = 0.9 - 0.006 - (result.final_pose["x"] + 0.0557)
+    gap = 0.9 - 0.006 - (result.final_pose.x + 0.0557)
     assert gap == pytest.approx(0.05, abs=0.015)
     assert result.min_clearance is not None and result.min_clearance > 0.005
     assert not folder.exists() and not listening(run.backend.playground.port)

@@ -56,9 +56,7 @@ def test_the_aseba_backend_drives_the_model_chosen_and_real_by_default(monkeypat
     backend, node = _aseba(monkeypatch, overrides)
     with backend:
         assert backend.model.name == expected
-        assert backend.config.wheel_separation == backend.model.wheel_separation
-        assert backend.config.metres_per_unit == backend.model.metres_per_unit
-        assert backend.config.table is backend.model.calibration
+        assert backend.speed_scale == 1.0  # every number from the model: no copies to disagree with it
     said = capsys.readouterr().err
     assert ("robot model 'real'" in said) == (robot in (None, "course"))
     if expected == "mine":
@@ -79,7 +77,7 @@ def test_the_tdm_backend_drives_real_by_default(monkeypatch):
 
 def test_a_thymio_robot_without_a_model_is_a_real_thymio():
     robot = ThymioRobot(StillNode(), spawn=Pose(0.1, 0.1, 0.0), clock=lambda: 0.0, sleep=lambda s: None)
-    assert robot.model is REAL and robot.config.table is REAL.calibration
+    assert robot.model is REAL
     assert robot.proximity()["front_center"] == pytest.approx(0.05)
 
 
@@ -145,7 +143,7 @@ def test_the_playground_without_a_robot_drives_enki(tmp_path):
     mission = load_mission(tmp_path / "m.yaml")
     backend = backend_kind("playground").create(mission, 0, {})
     result = Run(mission, backend=backend).run()  # closes the backend (and the Playground) however it ends
-    assert backend.model is ENKI
+    assert backend.model is ENKI and backend.speed_scale == 0.985  # its units cover 0.985 of Enki's
     assert result.status == "SUCCESS", result.reason
-    gap = front_gap(mission.maze, ENKI, Pose(**result.final_pose))
+    gap = front_gap(mission.maze, ENKI, result.final_pose)
     assert gap == pytest.approx(0.05, abs=0.01)

@@ -5,6 +5,7 @@ import math
 import pytest
 
 from thymio_bt.maze.generate import perfect_maze
+from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import COURSE
 from thymio_bt.testing import run_tree, world
 
@@ -24,7 +25,7 @@ def ends(result, name):
 
 
 def axle(pose):
-    return pose["x"] + AXLE_X * math.cos(pose["yaw"]), pose["y"] + AXLE_X * math.sin(pose["yaw"])
+    return pose.x + AXLE_X * math.cos(pose.yaw), pose.y + AXLE_X * math.sin(pose.yaw)
 
 
 @pytest.mark.parametrize("distance", [0.05, 0.015, 0.08])
@@ -41,7 +42,7 @@ def test_stopping_at_1_5_cm_then_turning_centres_the_axle_in_the_next_corridor()
     x, y = axle(result.final_pose)
     assert result.status == "SUCCESS"
     assert x == pytest.approx(0.5, abs=0.005)  # the centre line of the corridor going down
-    assert result.final_pose["yaw"] == pytest.approx(-math.pi / 2, abs=math.radians(0.5))
+    assert result.final_pose.yaw == pytest.approx(-math.pi / 2, abs=math.radians(0.5))
 
 
 def test_move_until_wall_fails_with_no_wall_when_nothing_comes_into_range():
@@ -83,7 +84,7 @@ def test_hitting_a_wall_fails_with_collision():
 def test_move_distance_within_two_millimetres(distance):
     start = [0.6, 0.6, 0.3]
     result = run_tree({"MoveDistance": {"distance": distance}}, world("arena"), start=start, seconds=20)
-    moved = math.hypot(result.final_pose["x"] - 0.6, result.final_pose["y"] - 0.6)
+    moved = math.hypot(result.final_pose.x - 0.6, result.final_pose.y - 0.6)
     assert result.status == "SUCCESS"
     assert moved == pytest.approx(abs(distance), abs=0.002)
     assert ends(result, "MoveDistance")[0]["distance"] == pytest.approx(distance, abs=0.002)
@@ -98,16 +99,16 @@ def test_turn_angle_within_half_a_degree_about_the_axle(angle):
     end = ends(result, "TurnAngle")[0]
     assert result.status == "SUCCESS"
     assert end["angle"] == pytest.approx(target, abs=math.radians(0.5))
-    error = (result.final_pose["yaw"] - (0.2 + target) + math.pi) % (2 * math.pi) - math.pi
+    error = (result.final_pose.yaw - (0.2 + target) + math.pi) % (2 * math.pi) - math.pi
     assert abs(error) < math.radians(0.5)
-    assert axle(result.final_pose) == pytest.approx(axle({"x": 0.6, "y": 0.6, "yaw": 0.2}), abs=1e-6)
+    assert axle(result.final_pose) == pytest.approx(axle(Pose(0.6, 0.6, 0.2)), abs=1e-6)
 
 
 def test_turn_with_snap_lands_on_the_grid_heading():
     result = run_tree(
         {"TurnAngle": {"angle": "90deg", "snap": "90deg"}}, world("arena"), start=[0.6, 0.6, 0.03], seconds=20
     )
-    assert result.final_pose["yaw"] == pytest.approx(math.pi / 2, abs=1e-3)
+    assert result.final_pose.yaw == pytest.approx(math.pi / 2, abs=1e-3)
 
 
 def test_turn_by_rear_sensors_squares_the_robot_to_the_wall_behind():
@@ -121,7 +122,7 @@ def test_turn_by_rear_sensors_squares_the_robot_to_the_wall_behind():
     assert result.status == "SUCCESS"
     scan = result.final_proximity
     assert scan["rear_left"] == pytest.approx(scan["rear_right"], abs=0.061 * math.tan(math.radians(0.2)) + 1e-6)
-    assert abs(abs(result.final_pose["yaw"]) - math.pi) < math.radians(0.3)
+    assert abs(abs(result.final_pose.yaw) - math.pi) < math.radians(0.3)
 
 
 def test_turn_by_rear_sensors_fails_without_a_wall_behind():
@@ -198,7 +199,7 @@ def test_look_around_stops_turning_short_of_a_side_wall_it_would_touch(offset):
     look = ends(result, "LookAround")[0]
     assert result.status == "SUCCESS" and result.collisions == 0, result.reason
     assert (look["decision"], look["looked"]) == ("dead_end", ["left", "right"])
-    assert abs(result.final_pose["yaw"]) < 0.01  # facing ahead again
+    assert abs(result.final_pose.yaw) < 0.01  # facing ahead again
 
 
 def test_look_around_halted_mid_turn_stops_the_robot():
@@ -210,7 +211,7 @@ def test_look_around_halted_mid_turn_stops_the_robot():
     halted = ends(result, "LookAround")[0]
     assert result.status == "SUCCESS" and halted["status"] == "INVALID"
     assert halted["pose"]["yaw"] > 0.1  # it was turning to look left
-    assert result.final_pose["yaw"] == pytest.approx(halted["pose"]["yaw"], abs=0.01)  # and turned no further
+    assert result.final_pose.yaw == pytest.approx(halted["pose"]["yaw"], abs=0.01)  # and turned no further
 
 
 def test_look_around_without_a_decision_says_so():
@@ -277,7 +278,7 @@ def test_spawn_fails_clearly_while_the_name_exists_and_after_delete_succeeds():
     )
     kinds = [e["kind"] for e in moved.events if e["kind"] in ("delete_entity", "spawn_entity")]
     assert moved.status == "SUCCESS" and kinds == ["delete_entity", "spawn_entity"]
-    assert moved.final_pose == pytest.approx({"x": 0.3, "y": 0.3, "yaw": round(math.pi / 2, 6)})
+    assert moved.final_pose == Pose(0.3, 0.3, round(math.pi / 2, 6))
 
 
 def test_stop_and_events_carry_pose_and_proximity():
@@ -305,7 +306,7 @@ def test_wall_follow_leaves_generated_perfect_mazes(side, seed):
     xmin, ymin, xmax, ymax = maze.bounds()
     assert result.status == "SUCCESS", result.reason
     assert result.collisions == 0
-    assert result.final_pose["y"] > ymax  # out through the gap in the top wall
+    assert result.final_pose.y > ymax  # out through the gap in the top wall
     follow = ends(result, "WallFollow")[0]
     assert "LL" in follow["turns"] or "RR" in follow["turns"] or len(follow["turns"]) > 3
 
@@ -325,7 +326,7 @@ def test_wall_follow_leaves_generated_mazes_on_other_robots_with_noise(robot, si
         noise={"wheel": 0.027, "odometry": 0.01, "range_sd": 0.001},
     )
     assert result.status == "SUCCESS", result.reason
-    assert result.collisions == 0 and result.final_pose["y"] > maze.bounds()[3]  # truly out, whatever the drift
+    assert result.collisions == 0 and result.final_pose.y > maze.bounds()[3]  # truly out, whatever the drift
 
 
 @pytest.mark.parametrize("side, seed", [("right", 25), ("right", 8), ("left", 22)])
@@ -335,7 +336,7 @@ def test_wall_follow_ends_truly_out_of_a_large_maze_on_enki(side, seed):
     maze = perfect_maze(7, 7, seed, cell=0.2)
     result = run_tree({"WallFollow": {"side": side}}, maze, seconds=900, robot="enki")
     assert result.status == "SUCCESS" and result.collisions == 0, result.reason
-    assert result.final_pose["y"] > maze.bounds()[3] + 0.005
+    assert result.final_pose.y > maze.bounds()[3] + 0.005
 
 
 def test_wall_follow_turns_around_in_dead_ends():
@@ -362,9 +363,9 @@ def test_move_until_wall_with_centre_steers_to_the_corridor_middle():
     off = run_tree({"MoveUntilWall": {"distance": "5cm"}}, world("corridor"), start=start, seconds=20)
     on = run_tree({"MoveUntilWall": {"distance": "5cm", "centre": True}}, world("corridor"), start=start, seconds=20)
     assert off.status == on.status == "SUCCESS"
-    assert abs(off.final_pose["y"] - 0.1) > 0.01  # heading held: it drifts across the corridor
-    assert abs(on.final_pose["y"] - 0.1) < 0.003  # centred within 3 mm over 0.5 m
-    assert abs(on.final_pose["yaw"]) < 0.02
+    assert abs(off.final_pose.y - 0.1) > 0.01  # heading held: it drifts across the corridor
+    assert abs(on.final_pose.y - 0.1) < 0.003  # centred within 3 mm over 0.5 m
+    assert abs(on.final_pose.yaw) < 0.02
     assert on.final_proximity["front_center"] == pytest.approx(0.05, abs=0.001)
 
 

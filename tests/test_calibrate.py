@@ -376,4 +376,4 @@ def test_calibrating_on_the_aseba_playground_matches_enki_and_the_profile_runs_t
     assert run.backend.model.name == model.name
     result = run.run()
     assert result.status == "SUCCESS", result.reason
-    assert front_gap(mission.maze, ENKI, Pose(**result.final_pose)) == pytest.approx(0.05, abs=0.01)
+    assert front_gap(mission.maze, ENKI, result.final_pose) == pytest.approx(0.05, abs=0.01)

@@ -40,7 +40,7 @@ def test_control_node_example(tmp_path, result, body):
         assert run.code == code.group(1)
     assert f"{run.sim_time:.1f} s" in result
     if x := re.search(r"x = ([\d.]+) m", result):
-        assert f"{run.final_pose['x']:.2f}" == x.group(1)
+        assert f"{run.final_pose.x:.2f}" == x.group(1)
     if yaw := re.search(r"yaw = ([-\d]+) deg", result):
-        assert round(run.final_pose["yaw"] * 180 / 3.141592653589793) == int(yaw.group(1))
+        assert round(run.final_pose.yaw * 180 / 3.141592653589793) == int(yaw.group(1))
     assert (run.collisions == 0) == ("COLLISION" not in result)

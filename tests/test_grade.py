@@ -17,6 +17,7 @@ from thymio_bt.errors import UserError
 from thymio_bt.grade.assignment import load_assignment
 from thymio_bt.grade.grader import grade
 from thymio_bt.maze.files import load_maze
+from thymio_bt.robot.interface import Pose
 
 ROOT = Path(__file__).resolve().parent.parent
 PART12 = ROOT / "assignments" / "course_part1_2.yaml"
@@ -496,7 +497,7 @@ def test_a_dead_end_is_judged_on_the_maze_s_own_grid(cell):
     stop = 3 * cell - 0.005 - 0.05 - (COURSE.sensors[2].x)  # front sensor 5 cm from the end wall's face
 
     def judged(x: float, y: float) -> tuple[bool, str | None]:
-        run = SimpleNamespace(events=[], trajectory=[(0.0, x, y, 0.0)], final_pose={"x": x, "y": y, "yaw": 0.0})
+        run = SimpleNamespace(events=[], trajectory=[(0.0, x, y, 0.0)], final_pose=Pose(x, y, 0.0))
         facts = RunFacts(run, maze, COURSE, time_limit=60.0, cell=cell)
         verdict = judge(Criterion(name="end", points=1, dead_end={"distance": "5cm", "tolerance": "5mm"}), facts)
         return verdict.passed, verdict.feedback

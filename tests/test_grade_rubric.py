@@ -20,7 +20,9 @@ from thymio_bt.grade.checks import RunFacts, judge, turns_said
 from thymio_bt.grade.grader import grade
 from thymio_bt.grade.reports import gradebook_csv, junit_xml
 from thymio_bt.maze.generate import path_maze
+from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import robot_model
+from thymio_bt.run.result import RunStatus
 
 ROOT = Path(__file__).resolve().parent.parent
 PART12 = ROOT / "assignments" / "course_part1_2.yaml"
@@ -185,11 +187,11 @@ def test_a_memory_limit_in_another_unit_says_which_are_taken(tmp_path):
 def _corridor_run(events: list[dict], trajectory: list[tuple[float, float, float, float]]) -> RunFacts:
     maze = path_maze([(0, 0), (1, 0), (2, 0)])  # a corridor closed at x = 0.6
     run = SimpleNamespace(
-        status="SUCCESS",
+        status=RunStatus.SUCCESS,
         reason=None,
         failed_path=None,
         sim_time=trajectory[-1][0],
-        final_pose=dict(zip(["x", "y", "yaw"], trajectory[-1][1:], strict=True)),
+        final_pose=Pose(*trajectory[-1][1:]),
         collisions=0,
         min_clearance=0.01,
         events=events,

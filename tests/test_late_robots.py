@@ -91,7 +91,7 @@ def test_expected_gaps_are_measured_on_the_true_pose_not_odometry():
         "pose": {"x": truth + 0.013, "y": 0.1, "yaw": 0.0},
     }  # odometry 1.3 cm too far
     result = SimpleNamespace(
-        final_pose={"x": truth, "y": 0.1, "yaw": 0.0},
+        final_pose=Pose(truth, 0.1, 0.0),
         collisions=0,
         sim_time=5.0,
         events=[event],

@@ -95,7 +95,7 @@ def test_plan_move_then_move_cells_drives_to_the_goal_cell_centre():
     }
     result = run_tree(tree, maze, seconds=20)
     assert result.status == "SUCCESS" and result.collisions == 0
-    axle_x = result.final_pose["x"] - 0.0243 * math.cos(result.final_pose["yaw"])
+    axle_x = result.final_pose.x - 0.0243 * math.cos(result.final_pose.yaw)
     assert axle_x == pytest.approx(1.5 * CELL, abs=0.002)  # one cell on: (1, 0)'s centre
 
 
@@ -140,18 +140,18 @@ def mission_in(tmp_path, cells, **settings):
 @pytest.mark.parametrize("seed", [0, 1])
 def test_the_mission_solves_generated_8x8_contest_mazes_and_reports_its_phases(tmp_path, seed):
     result = mission_in(tmp_path, contest_maze(seed, size=8))
-    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal["reached"]
-    phases = {p["name"]: p for p in result.phases}
+    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal.reached
+    phases = {p.name: p.as_dict() for p in result.phases}
     assert list(phases) == ["search", "return", "fast run"]
     assert phases["fast run"]["duration"] <= phases["search"]["duration"]
     assert phases["search"]["cells"] >= 4
-    assert result.goal["t"] == pytest.approx(phases["search"]["end"], abs=3.0)
+    assert result.goal.t == pytest.approx(phases["search"]["end"], abs=3.0)
 
 
 def test_the_mission_with_realistic_noise_reaches_the_goal(tmp_path):
     noise = REALISTIC.settings()
     result = mission_in(tmp_path, contest_maze(4, size=8), **noise)
-    assert result.status == "SUCCESS" and result.goal["reached"]
+    assert result.status == "SUCCESS" and result.goal.reached
 
 
 def test_move_cells_maps_the_side_walls_of_the_cells_it_drives_through():
@@ -183,8 +183,8 @@ def test_the_side_bias_is_a_median_that_a_few_wild_readings_do_not_move():
 def test_the_mission_solves_a_16x16_contest_maze_with_noise_on_every_robot_model(tmp_path, robot):
     noise = REALISTIC.settings()
     result = mission_in(tmp_path, contest_maze(12), robot=robot, **noise)
-    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal["reached"]
-    phases = {p["name"]: p for p in result.phases}
+    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal.reached
+    phases = {p.name: p.as_dict() for p in result.phases}
     assert phases["fast run"]["duration"] < phases["search"]["duration"]
 
 
@@ -213,4 +213,4 @@ def test_a_wall_ahead_is_believed_as_far_as_the_map_may_have_drifted(tmp_path, s
         f"{ROOT}/missions/micromouse.yaml", {"cell": "0.25", "robot": "enki"}, maze=path, start="start"
     )
     result = run_mission(mission, seed=0)
-    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal["reached"], result.reason
+    assert result.status == "SUCCESS" and result.collisions == 0 and result.goal.reached, result.reason

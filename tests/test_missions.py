@@ -9,6 +9,7 @@ import yaml
 from thymio_bt.maze import load_maze
 from thymio_bt.maze.generate import mirrored, path_maze, random_path, turns_along
 from thymio_bt.mission import load_mission
+from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.runner import Run
 
@@ -32,7 +33,7 @@ def turn_letters(result):
 
 
 def axle(pose):
-    return pose["x"] + AXLE_X * math.cos(pose["yaw"]), pose["y"] + AXLE_X * math.sin(pose["yaw"])
+    return pose.x + AXLE_X * math.cos(pose.yaw), pose.y + AXLE_X * math.sin(pose.yaw)
 
 
 @pytest.mark.parametrize("path", MISSIONS, ids=[p.stem for p in MISSIONS])
@@ -58,22 +59,22 @@ def test_part1_stops_5cm_from_the_wall_then_respawns_only_after_the_delete():
 
 def test_part2_ends_in_the_pocket_with_the_axle_centred_after_every_turn():
     result = run("maze_part1_2")
-    assert result.final_pose["x"] == pytest.approx(0.300, abs=0.005)
-    assert result.final_pose["y"] == pytest.approx(0.489, abs=0.005)
-    assert result.final_pose["yaw"] == pytest.approx(math.pi / 2, abs=math.radians(0.5))
+    assert result.final_pose.x == pytest.approx(0.300, abs=0.005)
+    assert result.final_pose.y == pytest.approx(0.489, abs=0.005)
+    assert result.final_pose.yaw == pytest.approx(math.pi / 2, abs=math.radians(0.5))
     assert result.final_proximity["front_center"] == pytest.approx(0.05, abs=0.001)
     turns = ends(result, "TurnAngle")
     assert turn_letters(result) == "LLLL"
     expected = [(0.5, 0.7), (0.1, 0.7), (0.1, 0.3), (0.3, 0.3)]  # mazes.md turn points
     for event, point in zip(turns, expected, strict=True):
-        assert axle(event["pose"]) == pytest.approx(point, abs=0.005)
+        assert axle(Pose(**event["pose"])) == pytest.approx(point, abs=0.005)
 
 
 def test_bonus_turns_rrrlrllllr_and_stops_in_the_last_pocket():
     result = run("maze_bonus")
     assert turn_letters(result) == "RRRLRLLLLLR"
-    assert result.final_pose["x"] == pytest.approx(1.7, abs=0.005)
-    assert result.final_pose["y"] == pytest.approx(0.3107, abs=0.005)
+    assert result.final_pose.x == pytest.approx(1.7, abs=0.005)
+    assert result.final_pose.y == pytest.approx(0.3107, abs=0.005)
     decisions = [e["decision"] for e in ends(result, "ChooseTurn")]
     assert decisions[-1] == "dead_end" and len(decisions) == 12
 
@@ -81,8 +82,8 @@ def test_bonus_turns_rrrlrllllr_and_stops_in_the_last_pocket():
 @pytest.mark.parametrize("side", ["left", "right"])
 def test_6x6_is_left_through_the_top_gap(side):
     result = run(f"maze_6x6_{side}")
-    assert result.final_pose["y"] > 0.205
-    assert -0.4 < result.final_pose["x"] < -0.2
+    assert result.final_pose.y > 0.205
+    assert -0.4 < result.final_pose.x < -0.2
 
 
 def test_same_seed_gives_identical_reports():
@@ -139,8 +140,8 @@ def test_bonus_with_noise_reaches_the_last_pocket(seed):
     noise = {"noise.range_sd": "0.001", "noise.wheel": "0.027", "noise.odometry": "0.01"}
     result = Run(load_mission(f"{ROOT}/missions/maze_bonus.yaml", noise), seed=seed).run()
     assert result.status == "SUCCESS" and turn_letters(result) == "RRRLRLLLLLR"
-    assert result.final_pose["x"] == pytest.approx(1.7, abs=0.01)
-    assert result.final_pose["y"] == pytest.approx(0.311, abs=0.01)
+    assert result.final_pose.x == pytest.approx(1.7, abs=0.01)
+    assert result.final_pose.y == pytest.approx(0.311, abs=0.01)
 
 
 def test_the_final_tree_shows_each_node_as_the_run_ended():

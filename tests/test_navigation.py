@@ -23,7 +23,7 @@ def events(result, kind, name=None):
 def test_go_to_pose_reaches_the_goal_within_its_tolerance():
     result = run_tree({"GoToPose": {"goal": [0.3, 0.2], "tolerance": "5mm"}}, ARENA, seconds=60)
     assert result.status == "SUCCESS"
-    assert math.dist((result.final_pose["x"], result.final_pose["y"]), (0.3, 0.2)) <= 0.005
+    assert math.dist((result.final_pose.x, result.final_pose.y), (0.3, 0.2)) <= 0.005
 
 
 def test_follow_waypoints_visits_every_waypoint_in_order():
@@ -82,14 +82,14 @@ def test_turn_until_clear_adds_the_angle_it_turned_to_the_counter():
     result = run_tree({"TurnUntilClear": {"direction": "left"}}, world("corridor"), start=[0.72, 0.1, 0], seconds=20)
     end = events(result, "behaviour_end", "TurnUntilClear")[0]
     assert result.status == "SUCCESS"
-    assert end["counter"] == pytest.approx(result.final_pose["yaw"], abs=1e-3) and end["counter"] > 0.3
+    assert end["counter"] == pytest.approx(result.final_pose.yaw, abs=1e-3) and end["counter"] > 0.3
 
 
 def test_turn_back_returns_the_counter_to_zero_or_fails_when_blocked():
     tree = {"sequence": [{"SetBlackboard": {"key": "avoid_turn", "value": 0.8}}, {"TurnBack": {}}]}
     free = run_tree(tree, ARENA, start=[0.0, 0.0, 0.8], seconds=20)
     assert free.status == "SUCCESS"
-    assert free.final_pose["yaw"] == pytest.approx(0.0, abs=0.02)
+    assert free.final_pose.yaw == pytest.approx(0.0, abs=0.02)
     blocked = run_tree(tree, world("corridor"), start=[0.72, 0.1, 0.8], seconds=20)
     assert blocked.status == "FAILURE"
     assert blocked.code == "BLOCKED" and blocked.failed_path.endswith("TurnBack")

@@ -59,7 +59,7 @@ def test_outside_maze_fails_inside_the_maze():
 def test_outside_maze_needs_base_link_beyond_the_margin(distance, margin, status):
     result = run_tree(drive_then(distance, {"OutsideMaze": {"margin": margin}}), world(OPEN_END), seconds=20)
     assert result.status == status, result.reason
-    assert result.final_pose["x"] == pytest.approx(0.1 + distance, abs=0.002)
+    assert result.final_pose.x == pytest.approx(0.1 + distance, abs=0.002)
 
 
 def test_outside_maze_ends_a_loop_once_out():
@@ -67,7 +67,7 @@ def test_outside_maze_ends_a_loop_once_out():
     result = run_tree(tree, world(OPEN_END), seconds=30)
     assert (result.status, result.collisions) == ("SUCCESS", 0)
     # 0.405 + 0.05 is first passed at x = 0.5: four 10 cm steps, not one more
-    assert result.final_pose["x"] == pytest.approx(0.5, abs=0.002)
+    assert result.final_pose.x == pytest.approx(0.5, abs=0.002)
     assert sum(1 for e in result.events if e["kind"] == "behaviour_end" and e["name"] == "MoveDistance") == 4
 
 
@@ -186,14 +186,14 @@ def assert_left_by_the_exit(result: RunResult, maze: Maze) -> None:
     assert x0 < out[0] < x1 and out[1] > top, f"left the maze at {out}, not through the gap"
     final = result.final_pose
     assert final is not None
-    assert x0 < final["x"] < x1 and top + 0.08 < final["y"] < top + 0.17
+    assert x0 < final.x < x1 and top + 0.08 < final.y < top + 0.17
 
 
 @pytest.mark.parametrize("hand", ["left", "right"])
 def test_the_course_maze_is_left_through_its_top_gap(hand):
     result = Run(load_mission(EXAMPLES[hand])).run()  # its expect: one cell above the gap, no collision
     assert (result.status, result.collisions, result.expectations) == ("SUCCESS", 0, [])
-    assert -0.4 < result.final_pose["x"] < -0.2 and 0.25 < result.final_pose["y"] < 0.4
+    assert -0.4 < result.final_pose.x < -0.2 and 0.25 < result.final_pose.y < 0.4
     assert "WallFollow" not in yaml.safe_dump(yaml.safe_load(EXAMPLES[hand].read_text())["tree"])
 
 

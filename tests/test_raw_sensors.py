@@ -35,7 +35,7 @@ def test_the_course_mission_runs_unchanged_on_raw_readings_with_a_raw_threshold(
     result = Run(load_mission(mission), seed=seed).run()
     assert result.status == "SUCCESS" and result.collisions == 0
     # the real wall distance (the ideal ray), not the noisy reading, is within 1.5 mm of 5 cm
-    assert result.final_pose["x"] == pytest.approx(0.4893, abs=0.0015)
+    assert result.final_pose.x == pytest.approx(0.4893, abs=0.0015)
 
 
 def test_the_course_missions_also_succeed_in_raw_mode():

@@ -42,12 +42,10 @@ def test_the_mission_table_figures(runs):
     stop = next(e for e in part.events if e["kind"] == "behaviour_end" and e["name"] == "MoveUntilWall")
     assert f"stops at {stop['range']:.3f} m" in mission_row("maze_part1_2")
     pose = part.final_pose
-    assert f"({pose['x']:.3f}, {pose['y']:.3f})" in mission_row("maze_part1_2")
+    assert f"({pose.x:.3f}, {pose.y:.3f})" in mission_row("maze_part1_2")
     bonus = runs["maze_bonus"]
     turns = " ".join(turns_decided(bonus.events))
-    assert f"turns {turns}, stops at ({bonus.final_pose['x']:.3f}, {bonus.final_pose['y']:.3f})" in mission_row(
-        "maze_bonus"
-    )
+    assert f"turns {turns}, stops at ({bonus.final_pose.x:.3f}, {bonus.final_pose.y:.3f})" in mission_row("maze_bonus")
     assert f"5 waypoints in {runs['waypoints'].sim_time:.1f} s" in mission_row("waypoints")
     obstacles = runs["waypoints_obstacles"]
     assert (

@@ -6,20 +6,21 @@ import signal
 import subprocess
 import sys
 import types
+from dataclasses import replace
 from pathlib import Path
 
 import _require
 import pytest
 from py_trees.common import Status
 
-from thymio_bt.backends.real import PLAYGROUND, PROX_INDEX, Node, RealConfig, TdmNode, ThymioRobot, import_tdmclient
+from thymio_bt.backends.real import PROX_INDEX, Node, TdmNode, ThymioRobot, import_tdmclient
 from thymio_bt.backends.real.thymio import TdmAddress
 from thymio_bt.behaviours import Context
 from thymio_bt.behaviours.motion import MoveUntilWall
 from thymio_bt.errors import UserError
 from thymio_bt.robot.calibration import metres_to_raw
 from thymio_bt.robot.interface import SENSOR_NAMES, Entities, Pose, RequestState, Robot
-from thymio_bt.robot.model import COURSE
+from thymio_bt.robot.model import COURSE, ENKI, REAL
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -81,14 +82,20 @@ class Operator:
         return self.answer
 
 
-def make(node=None, spawn=START, answer="", config=None, **fields):
-    """A backend on a fake node and clock; ``fields`` are :class:`RealConfig` fields."""
+def make(node=None, spawn=START, answer="", model=REAL, **fields):
+    """A backend on a fake node and clock; ``fields`` are fields of its robot ``model`` changed."""
     node = node or FakeNode()
     clock = FakeClock()
     operator = Operator(clock, answer)
     said: list[str] = []
     robot = ThymioRobot(
-        node, config or RealConfig(**fields), spawn=spawn, clock=clock, sleep=clock.sleep, ask=operator, say=said.append
+        node,
+        model=replace(model, **fields),
+        spawn=spawn,
+        clock=clock,
+        sleep=clock.sleep,
+        ask=operator,
+        say=said.append,
     )
     return robot, node, clock, operator, said
 
@@ -140,11 +147,44 @@ def test_the_speed_constant_is_a_parameter():
     assert node.writes[-1] == (500, 500)
 
 
-def test_the_playground_preset_uses_enkis_speed_and_sensor_curve():
-    robot, node, *_ = make(FakeNode(prox=[[0, 0, 3366, 0, 0, 0, 0]]), config=PLAYGROUND)
+def test_the_enki_model_drives_with_enkis_speed_and_sensor_curve():
+    robot, node, *_ = make(FakeNode(prox=[[0, 0, 3366, 0, 0, 0, 0]]), model=ENKI)
     robot.drive(0.1, 0.0)
     assert node.writes[-1] == (301, 301)  # 500 units = 16.6 cm/s
     assert robot.proximity()["front_center"] == pytest.approx(0.05)
+
+
+def test_every_number_comes_from_the_robot_model_with_no_copy():
+    """RealConfig copied four of the model's fields (units, limit, wheel base, sensor table) and
+    re-derived its kinematics: now the model is the one place, and a model's change reaches the robot."""
+    from thymio_bt.backends.real import thymio
+
+    assert not hasattr(thymio, "RealConfig") and not hasattr(thymio, "PLAYGROUND")
+    odd = {"metres_per_unit": 0.0003, "max_units": 400, "wheel_separation": 0.1, "calibration": ENKI.calibration}
+    robot, node, *_ = make(FakeNode(prox=[[0, 0, 3366, 0, 0, 0, 0]], wheels=[(100, 300)]), **odd)
+    assert not hasattr(robot, "config")
+    robot.drive(0.03, 0.0)
+    assert node.writes[-1] == (100, 100) == robot.model.motor_targets(0.03, 0.0)
+    robot.drive(1.0, 0.5)  # limited at 400 units, the turn radius kept
+    left, right = robot.model.wheel_speeds(1.0, 0.5)
+    assert node.writes[-1] == (round(400 * left / right), 400) == robot.model.motor_targets(1.0, 0.5)
+    assert robot.proximity()["front_center"] == pytest.approx(0.05)  # Enki's curve
+    robot.advance(0.1)
+    assert (robot.velocity().linear, robot.velocity().angular) == pytest.approx((0.06, 0.6))
+
+
+def test_a_speed_scale_stretches_the_units_but_not_the_model():
+    """The Playground's Thymio covers 0.985 of Enki's distance per unit: the backend scales its
+    units, and behaviours still read Enki's model."""
+    robot, node, *_ = make(FakeNode(wheels=[(500, 500)]), model=ENKI)
+    scaled = ThymioRobot(FakeNode(wheels=[(500, 500)]), spawn=START, model=ENKI, speed_scale=0.985)
+    scaled.drive(0.1, 0.0)
+    assert scaled.node.writes[-1] == (round(0.1 / (0.166 / 500 * 0.985)), 306)
+    robot.drive(0.2, 0.0)
+    scaled.drive(0.2, 0.0)
+    assert node.writes[-1] == scaled.node.writes[-1] == (500, 500)
+    assert scaled.velocity().linear == pytest.approx(0.985 * robot.velocity().linear) == 0.985 * 0.166
+    assert scaled.model is ENKI
 
 
 # --------------------------------------------------------------- proximity
@@ -541,7 +581,7 @@ def test_the_runner_drives_the_square_mission_on_the_real_backend_and_closes_it(
     assert result.status == "SUCCESS"
     assert len(operator.prompts) == 1  # place the robot at the start
     start = mission.start
-    assert math.hypot(result.final_pose["x"] - start.x, result.final_pose["y"] - start.y) < 0.005
+    assert math.hypot(result.final_pose.x - start.x, result.final_pose.y - start.y) < 0.005
     assert node.closed and node.writes[-1] == (0, 0)  # motors stopped, robot released
     assert result.collisions == 0 and result.min_clearance is None
     assert sum(clock.sleeps) == pytest.approx(result.sim_time, abs=0.2)  # it ran in real time
@@ -601,12 +641,11 @@ def test_cli_backend_tdm_without_a_device_manager_is_a_user_error(monkeypatch):
 
 def test_the_tdm_backend_takes_the_robot_model_and_its_options(monkeypatch):
     from thymio_bt.backends import backend_kind
-    from thymio_bt.robot.model import ENKI
 
     seen = {}
 
     def connect(cls, address, **kwargs):
-        seen.update(host=address.tdm_addr, port=address.tdm_port, config=kwargs["config"])
+        seen.update(host=address.tdm_addr, port=address.tdm_port, model=kwargs["model"])
         return make(FakeNode())[0]
 
     monkeypatch.setattr(ThymioRobot, "connect", classmethod(connect))
@@ -615,5 +654,4 @@ def test_the_tdm_backend_takes_the_robot_model_and_its_options(monkeypatch):
     mission = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     backend_kind("tdm").create(mission, 0, {"host": "127.0.0.1", "port": "8596"}).close()
     assert seen["host"] == "127.0.0.1" and seen["port"] == 8596
-    assert seen["config"].wheel_separation == ENKI.wheel_separation
-    assert seen["config"].metres_per_unit == ENKI.metres_per_unit and seen["config"].table is ENKI.calibration
+    assert seen["model"] is ENKI

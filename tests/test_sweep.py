@@ -73,6 +73,18 @@ def test_run_job_reports_the_first_stop_error():
     assert summary["first_stop_error"] < 0.001
 
 
+def test_a_sweep_row_holds_the_keys_its_type_declares_with_the_runs_enums():
+    """A row is a SweepRow (a TypedDict mypy checks), its status and code the run's enums until JSON."""
+    from thymio_bt.behaviours.base import FailureCode
+    from thymio_bt.run.result import RunStatus
+    from thymio_bt.run.sweep import Job, SweepRow
+
+    row = run_job(Job(f"{ROOT}/missions/maze_part1_2.yaml", 0, overrides=(("time_limit", "5"),), coverage=True))
+    assert list(row) == list(SweepRow.__annotations__) and SweepRow.__optional_keys__ == {"coverage"}
+    assert row["status"] is RunStatus.TIMEOUT and row["code"] is FailureCode.TIMEOUT
+    assert row["final_pose"] == {"x": 0.5, "y": 0.35, "yaw": 1.570796}
+
+
 def test_a_matrix_sweeps_every_combination_and_tabulates_it(tmp_path):
     import json
 

@@ -5,6 +5,7 @@ from pathlib import Path
 import py_trees
 import pytest
 
+from thymio_bt.robot.interface import Pose
 from thymio_bt.testing import PRESETS, run_mission_file, world
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -42,7 +43,7 @@ def test_the_blackboard_was_cleared_after_the_previous_test():
 def test_substitution_replaces_nodes_by_path_pattern():
     skipped = run_mission_file(f"{ROOT}/missions/maze_part1_2.yaml", substitute={"course/part 2": "success"})
     assert skipped.status == "SUCCESS" and skipped.sim_time < 6
-    assert skipped.final_pose == pytest.approx({"x": 0.5, "y": 0.3, "yaw": 1.570796})
+    assert skipped.final_pose == Pose(0.5, 0.3, 1.570796)
 
 
 def test_a_scripted_stub_runs_for_simulated_seconds_then_returns_its_status():
@@ -156,7 +157,7 @@ def test_run_tree_takes_plugins_relative_to_the_test_file_or_as_classes(pytester
         "from thymio_bt.testing import run_tree, world\n"
         "def test_a_relative_path(thymio):\n"
         "    result = thymio.run_tree('BackOff', world('arena'), plugins=['plugins/back_off.py'])\n"
-        "    assert result.status == 'SUCCESS' and result.final_pose['x'] < 0.66\n"
+        "    assert result.status == 'SUCCESS' and result.final_pose.x < 0.66\n"
         "def test_the_class_itself():\n"
         "    source = pathlib.Path(__file__).parent / 'plugins/back_off.py'\n"
         "    spec = importlib.util.spec_from_file_location('bo', source)\n"

@@ -125,7 +125,7 @@ def test_parameters_and_expressions():
         seconds=20,
         parameters={"side": "15cm"},
     )
-    assert result.final_pose["x"] == pytest.approx(0.5, abs=0.001)
+    assert result.final_pose.x == pytest.approx(0.5, abs=0.001)
 
 
 def test_delay_waits_in_simulated_time_then_runs_the_child():

@@ -88,7 +88,7 @@ def test_continue_sim_equals_a_fresh_run_of_the_changed_mission(tmp_path):
             theirs["cmd"],
             theirs["nodes"],
         )
-    assert replayed.result.final_pose == fresh.end["final_pose"]
+    assert replayed.result.final_pose_json == fresh.end["final_pose"]
 
 
 def test_the_report_has_its_counterfactual_section(tmp_path):

@@ -32,7 +32,7 @@ from typing import Any
 from thymio_bt.logs.recording import Recorder, Recording
 from thymio_bt.mission import load_mission
 from thymio_bt.run.divergence import first_divergence
-from thymio_bt.run.result import RunResult
+from thymio_bt.run.result import RunResult, RunStatus
 from thymio_bt.run.runner import Run
 from thymio_bt.viz.page import page_html, write_page
 from thymio_bt.viz.page_data import page_data
@@ -59,7 +59,7 @@ class NotebookRun:
     label: str = ""
 
     @property
-    def status(self) -> str:
+    def status(self) -> RunStatus:
         """SUCCESS, FAILURE or TIMEOUT."""
         return self.result.status
 

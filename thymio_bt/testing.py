@@ -13,7 +13,7 @@ A tree that fails says which node and why, and every node's statistics come with
 
 >>> result = run_tree({"sequence": [{"MoveDistance": {"distance": "2m"}}, "Stop"]}, world("corridor"))
 >>> result.status, result.code, result.failed_path, result.reason
-('FAILURE', <FailureCode.COLLISION: 'COLLISION'>, 'sequence/MoveDistance', 'the robot hit a wall')
+(<RunStatus.FAILURE: 'FAILURE'>, <FailureCode.COLLISION: 'COLLISION'>, 'sequence/MoveDistance', 'the robot hit a wall')
 >>> result.node_stats["sequence/MoveDistance"]
 {'ticks': 65, 'successes': 0, 'failures': 1, 'running_time': 6.4}
 
@@ -29,8 +29,8 @@ path is relative to the calling test's file) or ``"package.module:Class"``:
 ...         self.robot.drive(0.02, 0.0)
 ...         return Status.RUNNING
 >>> result = run_tree("Creep", world("arena"), seconds=2, plugins=[Creep])
->>> result.status, round(result.final_pose["x"], 2)  # from x = 0.7
-('TIMEOUT', 0.74)
+>>> result.status, round(result.final_pose.x, 2)  # from x = 0.7
+(<RunStatus.TIMEOUT: 'TIMEOUT'>, 0.74)
 """
 
 from __future__ import annotations
@@ -247,7 +247,7 @@ def run_mission_file(
 
     >>> result = run_mission_file("maze_part1_2", substitute={"course/part 2": "success"})
     >>> result.status, result.ticks, result.node_stats["course/part 2"]
-    ('SUCCESS', 46, {'ticks': 1, 'successes': 1, 'failures': 0, 'running_time': 0.0})
+    (<RunStatus.SUCCESS: 'SUCCESS'>, 46, {'ticks': 1, 'successes': 1, 'failures': 0, 'running_time': 0.0})
     """
     from thymio_bt.mission import load_mission
 

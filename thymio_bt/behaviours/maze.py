@@ -16,7 +16,7 @@ Example::
     ...     {"MoveUntilWall": {"distance": "1.5cm"}}, {"ChooseTurn": {}}]}}
     >>> result = run_tree(tree, world("L"), seconds=20)
     >>> result.status, [e["decision"] for e in result.events if e["kind"] == "behaviour_end" and "decision" in e]
-    ('SUCCESS', ['right'])
+    (<RunStatus.SUCCESS: 'SUCCESS'>, ['right'])
 """
 
 from __future__ import annotations

@@ -17,8 +17,8 @@ Example::
     ... +--+--+
     ... ''')
     >>> result = run_tree(tree, open_end, seconds=30)
-    >>> result.status, result.collisions, round(result.final_pose["x"], 2)
-    ('SUCCESS', 0, 0.5)
+    >>> result.status, result.collisions, round(result.final_pose.x, 2)
+    (<RunStatus.SUCCESS: 'SUCCESS'>, 0, 0.5)
 """
 
 from __future__ import annotations

@@ -18,7 +18,7 @@ Example::
     ... ''')
     >>> result = run_tree({"WallFollow": {"side": "left"}}, bend, seconds=60)
     >>> result.status, result.collisions, [e["turns"] for e in result.events if e["kind"] == "behaviour_end"]
-    ('SUCCESS', 0, ['R'])
+    (<RunStatus.SUCCESS: 'SUCCESS'>, 0, ['R'])
 """
 
 from __future__ import annotations

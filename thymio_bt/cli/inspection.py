@@ -102,11 +102,12 @@ def _check_assignment(path: Path) -> str:
 
 def _check_maze(path: Path, data: Any) -> str:
     """Validate the maze file ``path`` (``data``: its YAML, ``None`` for a micromouse maze), spawns included."""
+    from thymio_bt.inputs.yamlio import MarkedDict
     from thymio_bt.maze import load_maze
 
     maze = load_maze(path)
     spawns = data.get("spawns") if isinstance(data, dict) and "grid" not in data else None
-    problems = _spawn_problems(path, maze, getattr(spawns, "marks", {}))
+    problems = _spawn_problems(path, maze, spawns.marks if isinstance(spawns, MarkedDict) else {})
     if problems:
         raise UserError(problems)
     goal = f", goal {len(maze.goal)} cell{'s' * (len(maze.goal) != 1)}" if maze.goal else ""

@@ -146,6 +146,7 @@ def _what_if(
     from thymio_bt.cli.comparing import read_whole
     from thymio_bt.logs.recording import Recorder
     from thymio_bt.mission import load_mission
+    from thymio_bt.run.result import RunStatus
     from thymio_bt.run.whatif import COMMAND_TOLERANCE, what_if
 
     report_out = Output(report, "--report") if report is not None else None
@@ -184,7 +185,7 @@ def _what_if(
         from thymio_bt.viz.window import replay as replay_in_window
 
         replay_in_window(replayed_run, drawn.window)
-    sys.exit(0 if result.status == "SUCCESS" else 1)
+    sys.exit(0 if result.status is RunStatus.SUCCESS else 1)
 
 
 def what_if_page(

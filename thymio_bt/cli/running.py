@@ -381,11 +381,13 @@ def _conclude(
 ) -> NoReturn:
     """Print the summary (on stderr when ``err``: stdout carries the report or log) and the tree's
     ``coverage`` when there is one, show the window's last frame, and exit with the run's code."""
+    from thymio_bt.run.result import RunStatus
+
     if not quiet:
         _summary(result, err=err)
         if coverage:
             click.echo(coverage, err=err)
-        if result.status != "SUCCESS":
+        if result.status is not RunStatus.SUCCESS:
             from thymio_bt.viz.terminal import failing_tree
 
             click.echo(failing_tree(runner), err=True)
@@ -396,7 +398,7 @@ def _conclude(
         sys.exit(interrupts.exit_code)
     if window is not None:
         window.finish(result)  # with a display: stays open on the last frame until closed
-    code = 0 if result.status == "SUCCESS" else 1
+    code = 0 if result.status is RunStatus.SUCCESS else 1
     end_despite_threads(code)  # a plugin's thread left running must not keep the process alive
     sys.exit(code)
 
@@ -470,10 +472,11 @@ def clearance_text(gap: float | None) -> str:
 def _summary(result: RunResult, err: bool = False) -> None:
     """The run's status, times, final pose and clearance; where and why it failed, on stderr."""
     from thymio_bt.behaviours.base import FailureCode
+    from thymio_bt.run.result import RunStatus
 
     echo = partial(click.echo, err=err)
-    colour = {"SUCCESS": "green", "FAILURE": "red", "TIMEOUT": "yellow"}[result.status]
-    shown = result.status
+    colour = {RunStatus.SUCCESS: "green", RunStatus.FAILURE: "red", RunStatus.TIMEOUT: "yellow"}[result.status]
+    shown: str = result.status
     if result.code is FailureCode.INTERRUPTED:  # a FAILURE by the report's contract, said as what it was
         colour, shown = "yellow", f"{result.status} (INTERRUPTED)"
     rtf = result.real_time_factor
@@ -483,9 +486,9 @@ def _summary(result: RunResult, err: bool = False) -> None:
         + f" after {result.sim_time:.1f} s simulated, {result.ticks} ticks "
         f"({result.wall_time:.3f} s wall, {rtf:,.0f}x real time)"
     )
-    echo(f"  final pose: {pose_text(result.final_pose)}")
+    echo(f"  final pose: {pose_text(result.final_pose_json)}")
     echo(f"  collisions: {result.collisions}   min clearance: {clearance_text(result.min_clearance)}")
-    if result.status != "SUCCESS":
+    if result.status is not RunStatus.SUCCESS:
         # no node to blame when the run ended outside the tree (time limit, a lost robot, before a tick)
         if result.failed_path is not None:
             echo(f"  failed at: {result.failed_path}", err=True)

@@ -239,7 +239,7 @@ def _matrix(request: _Request, out: Output | None, specs: tuple[str, ...]) -> No
                     "runs": runs,
                     "seed_start": seed_start,
                     "axes": axes,
-                    "reference_final_pose": cells[0].reference,
+                    "reference_final_pose": None if cells[0].reference is None else cells[0].reference.as_dict(),
                     "cells": rows,
                 }
             )

@@ -12,8 +12,10 @@ Example::
     >>> from thymio_bt.robot.model import robot_model
     >>> from types import SimpleNamespace
     >>> maze = path_maze([(0, 0), (1, 0), (2, 0)])     # a corridor 0.6 m long, closed at x = 0.6
-    >>> run = SimpleNamespace(status="SUCCESS", reason=None, failed_path=None, sim_time=1.0,
-    ...     final_pose={"x": 0.469, "y": 0.1, "yaw": 0.0}, collisions=0, min_clearance=0.04, events=[],
+    >>> from thymio_bt.robot.interface import Pose
+    >>> from thymio_bt.run.result import RunStatus
+    >>> run = SimpleNamespace(status=RunStatus.SUCCESS, reason=None, failed_path=None, sim_time=1.0,
+    ...     final_pose=Pose(0.469, 0.1, 0.0), collisions=0, min_clearance=0.04, events=[],
     ...     trajectory=[(0.1 * i, 0.1 + 0.0369 * i, 0.1, 0.0) for i in range(11)], goal=None)
     >>> seen = RunFacts(run, maze, robot_model("course"), time_limit=60.0)
     >>> gap = Criterion(name="stop", points=1, gap={"at": "end", "distance": "5cm", "tolerance": "5mm"})
@@ -33,6 +35,7 @@ from dataclasses import dataclass
 from thymio_bt.grade.assignment import Criterion, GoalDisc
 from thymio_bt.grade.facts import RunFacts, cruise_speed, turns_taken
 from thymio_bt.mission.expect import stop_problem
+from thymio_bt.run.result import RunStatus
 
 #: at a dead end a side wall is at most this many grid pitches from base_link (3/4: the cell's half
 #: and room for a robot off its centre line; an open side's ray reaches the next cell's far wall,
@@ -59,9 +62,9 @@ def judge(criterion: Criterion, facts: RunFacts) -> Judgement:
 
 def _finishes(criterion: Criterion, facts: RunFacts) -> Judgement:
     run = facts.result
-    if run.status == "SUCCESS":
+    if run.status == RunStatus.SUCCESS:
         return Judgement(True)
-    if run.status == "TIMEOUT":
+    if run.status == RunStatus.TIMEOUT:
         return Judgement(
             False, f"did not end within the time limit ({facts.time_limit:g} s)", facts.moment(), run.failed_path
         )
@@ -86,9 +89,9 @@ def _no_collision(criterion: Criterion, facts: RunFacts) -> Judgement:
 def _max_time(criterion: Criterion, facts: RunFacts) -> Judgement:
     run, limit = facts.result, criterion.max_time
     assert limit is not None
-    if run.status != "TIMEOUT" and run.sim_time <= limit + 1e-9:
+    if run.status != RunStatus.TIMEOUT and run.sim_time <= limit + 1e-9:
         return Judgement(True)
-    took = "did not end" if run.status == "TIMEOUT" else f"took {run.sim_time:.1f} s"
+    took = "did not end" if run.status == RunStatus.TIMEOUT else f"took {run.sim_time:.1f} s"
     return Judgement(False, f"{took}, wanted at most {limit:g} s", facts.moment(), run.failed_path)
 
 
@@ -187,7 +190,7 @@ def _order(criterion: Criterion, facts: RunFacts) -> Judgement:
         times = [e["t"] for e in events if e["kind"] == kind]
         if not times:
             run = facts.result
-            if run.status != "SUCCESS" and run.reason:  # the tree ended first: that is the cause
+            if run.status != RunStatus.SUCCESS and run.reason:  # the tree ended first: that is the cause
                 return Judgement(
                     False,
                     f"the tree {_ended(run.status)} before any {_said(kind)}: {run.reason}",
@@ -206,9 +209,9 @@ def _order(criterion: Criterion, facts: RunFacts) -> Judgement:
     return Judgement(True)
 
 
-def _ended(status: str) -> str:
-    """'failed', 'timed out', 'ended FAILURE'."""
-    return {"FAILURE": "failed", "TIMEOUT": "timed out"}.get(status, f"ended {status}")
+def _ended(status: RunStatus) -> str:
+    """'failed' or 'timed out'."""
+    return "timed out" if status == RunStatus.TIMEOUT else "failed"
 
 
 def _said(kind: str) -> str:

@@ -28,12 +28,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from thymio_bt.grade.assignment import GoalDisc
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
+
+if TYPE_CHECKING:
+    from thymio_bt.run.result import RunResult
 
 #: a quarter heading is a turn of the route once the robot has driven this far (m) holding it: a look
 #: to the side and back, turning on the spot, is not a turn taken
@@ -51,7 +54,7 @@ class RunFacts:
     """A finished run as the checks see it: its result, the maze it ran in (and its grid pitch), the
     robot, and what the variant expects (``goal``, ``turns``)."""
 
-    result: Any
+    result: RunResult
     maze: Maze
     model: RobotModel
     time_limit: float

@@ -222,7 +222,7 @@ def _has_plugins(mission: Any) -> bool:
     the student's, run in a confined process of its own."""
     from thymio_bt.mission.unrun_plugins import UncheckedParams
 
-    stand_ins = any(getattr(cls, "Params", None) is UncheckedParams for _, cls in mission.registry.items())
+    stand_ins = any(cls.Params is UncheckedParams for _, cls in mission.registry.items())
     return stand_ins or any(p.suffix == ".py" for p in mission.sources)
 
 

@@ -20,14 +20,14 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import node_path, snapshot
+from thymio_bt.behaviours.base import FailureCode, node_path, snapshot
 from thymio_bt.errors import ThymioBtError
 from thymio_bt.grade.isolation import Limits, RunLimit
 from thymio_bt.grade.sandboxes import Sandbox
 from thymio_bt.grade.wire import MAX_DRIVES, Deadline, WireError, is_json, observation_frame, read_json, read_reply
 from thymio_bt.logs.records import STATUS_LETTER
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Request, RequestState
-from thymio_bt.run.result import EndKind, RunResult, Verdict
+from thymio_bt.run.result import EndKind, RunResult, RunStatus, Verdict
 from thymio_bt.run.runner import Run
 
 #: events only the simulator says (a submission's of these kinds are dropped)
@@ -128,7 +128,7 @@ class RemoteRun(Run):
             self._limit(f"used more than its CPU time limit of {self.limits.cpu:g} s")
 
     def _limit(self, what: str) -> None:
-        where = getattr(self.root, "tip_path", None)
+        where = self.root.tip_path if isinstance(self.root, _Remote) else None
         raise RunLimit(f"the run {what}" + (f", in '{where}'" if where else ""))
 
     def _stats(self, rows: Any) -> dict[str, Any]:
@@ -153,8 +153,8 @@ class RemoteRun(Run):
         if ending.kind is EndKind.FINISHED:
             if remote.status is Status.FAILURE:
                 path, code, reason = remote.failure
-                return Verdict("FAILURE", reason, code, path)
-            return Verdict(remote.status.name)
+                return Verdict(RunStatus.FAILURE, reason, code, path)
+            return Verdict(RunStatus.SUCCESS)
         said = self._cut_short_reason(ending, interrupts)
         return Verdict(ending.kind.report_status, said, ending.code, ending.failed_path or remote.tip_path)
 
@@ -166,7 +166,7 @@ class _Remote(Behaviour):
         super().__init__(name=run.mission.tree.name)
         self.run = run
         self.tip_path: str | None = None
-        self.failure: tuple[str | None, str, str] = (None, "FAILED", "the tree failed")
+        self.failure: tuple[str | None, FailureCode | str, str] = (None, FailureCode.FAILED, "the tree failed")
         self.pending: dict[int, tuple[Request, dict[str, Any]]] = {}
         self.served: list[list[Any]] = []
         self.count = 0

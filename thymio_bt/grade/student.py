@@ -16,7 +16,7 @@ Example (in this process; the grader runs it in a child)::
     >>> grade_runs(task, messages.append)
     >>> run = messages[-1]
     >>> run["variant"], run["status"], run["criteria"]["stops 5 cm from the wall"], len(run["trajectory"]) > 10
-    ('course', 'SUCCESS', {'passed': True, 'feedback': None, 'moment': None, 'where': None}, True)
+    ('course', <RunStatus.SUCCESS: 'SUCCESS'>, {'passed': True, 'feedback': None, 'moment': None, 'where': None}, True)
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from thymio_bt.behaviours.base import FailureCode
 from thymio_bt.errors import ThymioBtError, UserError
 from thymio_bt.grade.assignment import Criterion
 from thymio_bt.grade.checks import Judgement, RunFacts, judge
@@ -32,6 +33,7 @@ from thymio_bt.grade.isolation import Limits, RunLimit, Send, run_limited
 from thymio_bt.grade.palette import wheres
 from thymio_bt.grade.site_replay import replay_data, went_wrong
 from thymio_bt.grade.worlds import World
+from thymio_bt.run.result import RunResult, RunStatus
 
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
@@ -180,9 +182,9 @@ def run_message(
     except UserError as exc:
         return head | _broken("WORLD_ERROR", f"the mission cannot run in this world: {exc}", criteria)
     except SystemExit as exc:
-        return head | _broken("EXCEPTION", f"the submission called sys.exit({exc.code!r})", criteria)
+        return head | _broken(FailureCode.EXCEPTION, f"the submission called sys.exit({exc.code!r})", criteria)
     except Exception as exc:
-        return head | _broken("EXCEPTION", f"the run raised {type(exc).__name__}: {exc}", criteria)
+        return head | _broken(FailureCode.EXCEPTION, f"the run raised {type(exc).__name__}: {exc}", criteria)
     places = wheres(mission.tree)
     facts = RunFacts(
         result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns, world.cell
@@ -195,7 +197,7 @@ def run_message(
         "failed_path": result.failed_path,
         "where": places.get(result.failed_path or ""),
         "sim_time": round(result.sim_time, 3),
-        "final_pose": result.final_pose,
+        "final_pose": result.final_pose_json,
         "collisions": result.collisions,
         "spawns": [e["t"] for e in result.events if e["kind"] == "spawn_entity"],  # the path's jumps
         "criteria": judged,
@@ -215,7 +217,7 @@ def run_message(
 
 
 def _recorded(
-    task: StudentTask, mission: Mission, seed: int, world: World, outside: _Outside | None, result: Any
+    task: StudentTask, mission: Mission, seed: int, world: World, outside: _Outside | None, result: RunResult
 ) -> Recording | None:
     """The run made again the same way (a confined tree in its confined process), recorded for its
     replay: runs are deterministic, so only the runs that get a page pay for a recording. None when
@@ -241,7 +243,7 @@ def _recorded(
 class _Broken(ThymioBtError):
     """A run the submission's process broke: its code and reason."""
 
-    def __init__(self, code: str, reason: str) -> None:
+    def __init__(self, code: FailureCode | str, reason: str) -> None:
         super().__init__(reason)
         self.code, self.reason = code, reason
 
@@ -279,7 +281,7 @@ def _outside_run(
         sandbox.end_run()  # what the run started ends with it
         return result
     except SubmissionFault as exc:
-        raise _Broken("EXCEPTION", str(exc)) from None
+        raise _Broken(FailureCode.EXCEPTION, str(exc)) from None
     except WireError as exc:
         said = f"os._exit, a crash, or its memory limit of {limits.memory_mib} MiB"
         raise _Broken("CRASH", f"{exc} during the run ({said})") from None
@@ -301,11 +303,12 @@ def _judgement(judgement: Judgement, places: dict[str, str | None]) -> dict[str,
     }
 
 
-def _broken(code: str, reason: str, criteria: list[Criterion]) -> dict[str, Any]:
-    """A run that could not run or was stopped: every criterion fails with its reason."""
+def _broken(code: FailureCode | str, reason: str, criteria: list[Criterion]) -> dict[str, Any]:
+    """A run that could not run or was stopped: every criterion fails with its reason (``code``: the
+    run's :class:`FailureCode`, or the grader's own ``LIMIT``, ``CRASH``, ``WORLD_ERROR``)."""
     judged = {c.name: {"passed": False, "feedback": reason, "moment": None, "where": None} for c in criteria}
     return {
-        "status": "FAILURE",
+        "status": RunStatus.FAILURE,
         "code": code,
         "reason": reason,
         "failed_path": None,

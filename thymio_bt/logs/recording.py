@@ -17,7 +17,7 @@ Example (a log written, then read back as it was recorded):
 ...     recording = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
 ...     logged = read_log(f"{folder}/run.jsonl")
 >>> len(recording.samples), recording.end["status"], recording.final_pose
-(228, 'SUCCESS', {'x': 0.45, 'y': 0.45, 'yaw': 0.0})
+(228, <RunStatus.SUCCESS: 'SUCCESS'>, {'x': 0.45, 'y': 0.45, 'yaw': 0.0})
 >>> logged.samples == recording.samples, logged.end == recording.end
 (True, True)
 """
@@ -159,7 +159,7 @@ class Recorder:
             "code": result.code,
             "failed_path": result.failed_path,
             "sim_time": round(result.sim_time, 6),
-            "final_pose": result.final_pose,
+            "final_pose": result.final_pose_json,
             "collisions": result.collisions,
         }
         if self._writer is not None:

@@ -106,7 +106,7 @@ def tree_nodes(root: Behaviour) -> list[TreeNode]:
     for uid, node in enumerate(walk(root), 1):
         uids[id(node)] = uid
         parent = uids.get(id(node.parent)) if node.parent is not None else None
-        kind = getattr(node, "yaml_name", "") or getattr(node, "node_kind", "") or type(node).__name__
+        kind = getattr(node, "yaml_name", "") or type(node).__name__
         nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=kind, parent=parent))
     return nodes
 

@@ -29,7 +29,7 @@ Example::
     >>> mission, model = load_mission("maze_part1_2"), robot_model("course")
     >>> round(front_gap(mission.maze, model, mission.start), 4)        # at the start: 44 cm to the wall
     0.4393
-    >>> run = SimpleNamespace(final_pose={"x": 0.3, "y": 0.5, "yaw": 0.0}, collisions=1, sim_time=42.0,
+    >>> run = SimpleNamespace(final_pose=Pose(0.3, 0.5, 0.0), collisions=1, sim_time=42.0,
     ...                       events=[], trajectory=[])                 # a RunResult's fields
     >>> for failed in check(mission.expect, run, mission.maze, model):  # [] when all hold
     ...     print(failed)
@@ -106,12 +106,12 @@ class Expect(BaseModel):
 def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[str]:
     """The expectations ``result`` (a :class:`~thymio_bt.run.runner.RunResult`) does not meet."""
     failed = []
-    pose = result.final_pose
+    pose: Pose | None = result.final_pose
     if expect.goal is not None:
         if pose is None:
             failed.append("goal: no robot at the end")
         else:
-            off = math.dist((pose["x"], pose["y"]), expect.goal.centre)
+            off = math.dist((pose.x, pose.y), expect.goal.centre)
             if off > expect.goal.radius:
                 failed.append(
                     f"goal: ended {1000 * off:.1f} mm from ({expect.goal.centre[0]:g}, "
@@ -120,8 +120,8 @@ def check(expect: Expect, result: Any, maze: Maze, model: RobotModel) -> list[st
     if expect.leaves_maze:
         if pose is None:
             failed.append("leaves_maze: no robot at the end")
-        elif not maze.outside(pose["x"], pose["y"]):
-            failed.append(f"leaves_maze: ended inside the maze at ({pose['x']:.2f}, {pose['y']:.2f})")
+        elif not maze.outside(pose.x, pose.y):
+            failed.append(f"leaves_maze: ended inside the maze at ({pose.x:.2f}, {pose.y:.2f})")
     if expect.dead_end is not None:
         failed += _dead_end(expect.dead_end, pose, maze, model)
     if expect.no_collision and result.collisions:
@@ -159,12 +159,11 @@ def _true_pose_at(result: Any, event: dict) -> Pose:
     return Pose(*result.trajectory[before - 1][1:4])
 
 
-def _dead_end(spec: DeadEnd, pose: dict[str, float] | None, maze: Maze, model: RobotModel) -> list[str]:
+def _dead_end(spec: DeadEnd, pose: Pose | None, maze: Maze, model: RobotModel) -> list[str]:
     """Why the final ``pose`` (the true one) is not in a dead end as ``spec`` says, if it is not."""
     if pose is None:
         return ["dead_end: no robot at the end"]
-    at = Pose(pose["x"], pose["y"], pose["yaw"])
-    problem = stop_problem(maze, model, at, spec.distance, spec.tolerance, spec.side)
+    problem = stop_problem(maze, model, pose, spec.distance, spec.tolerance, spec.side)
     return [] if problem is None else [f"dead_end: {problem}"]
 
 

@@ -39,9 +39,7 @@ Node = type[RobotBehaviour] | type[ControlNode]
 
 def is_node(cls: Any) -> bool:
     """Whether ``cls`` can be registered: a robot behaviour or a composite/decorator kind."""
-    return (
-        inspect.isclass(cls) and issubclass(cls, (RobotBehaviour, ControlNode)) and bool(getattr(cls, "Params", None))
-    )
+    return inspect.isclass(cls) and issubclass(cls, (RobotBehaviour, ControlNode)) and bool(cls.Params)
 
 
 class Registry:

@@ -161,7 +161,7 @@ def _key_params(kind: str) -> frozenset[str]:
     from thymio_bt.mission.registry import default_registry
 
     cls = default_registry().get(kind)
-    fields = getattr(cls, "Params", None)
+    fields = None if cls is None else cls.Params
     if fields is None:
         return frozenset()
     return frozenset(

@@ -230,7 +230,7 @@ def calibrate(
 
     # 1. speed, straight at SPEED_UNITS
     measure("1/3 speed", "2 s straight")
-    speed_cmd = SPEED_UNITS * model.metres_per_unit
+    speed_cmd = model.wheel_speed_of(SPEED_UNITS)
     track = run_for(2.0, speed_cmd, 0.0)[5:]
     (t0, p0), (t1, p1) = track[0], track[-1]
     speed = math.hypot(p1.x - p0.x, p1.y - p0.y) / (t1 - t0)
@@ -260,7 +260,7 @@ def calibrate(
     # 3. wheel base, a spin after backing off
     measure("3/3 wheel base", "backing off 10 cm, then 3 s turning")
     run_for(2.0, -0.05, 0.0)
-    spin_wheel = SPIN_UNITS * model.metres_per_unit
+    spin_wheel = model.wheel_speed_of(SPIN_UNITS)
     track = run_for(3.0, 0.0, 2 * spin_wheel / model.wheel_separation)[5:]
     turned = sum(math.remainder(b.yaw - a.yaw, math.tau) for (_, a), (_, b) in pairwise(track))
     rate = turned / (track[-1][0] - track[0][0])

@@ -62,7 +62,8 @@ class RobotModel:
     - ``hull``: the collision outline in base_link, counter-clockwise.
     - ``sensors``: the seven horizontal proximity sensors in :data:`~thymio_bt.robot.interface.SENSOR_NAMES` order.
     - ``range_min`` / ``range_max``: what a proximity sensor can report, in metres.
-    - ``metres_per_unit`` / ``max_units``: Aseba motor units (``motor.left.target``) to wheel speed.
+    - ``metres_per_unit`` / ``max_units``: Aseba motor units (``motor.left.target``) to wheel speed
+      (:meth:`wheel_speed_of`, :meth:`motor_targets`); ``max_wheel_speed`` is ``max_units`` of them.
     - ``calibration``: raw ``prox.horizontal`` reading ↔ distance for this robot.
     - ``sensor_model``: how a simulator should make its readings by default (``rays``: one exact ray
       per sensor as in the course's Gazebo; ``raw``: rays through the calibration, noisy integers;
@@ -114,6 +115,37 @@ class RobotModel:
             return left, right
         scale = limit / fastest
         return self.wheel_speeds(linear * scale, angular * scale)
+
+    # ------------------------------------------------------------------ motor units
+    def wheel_speed_of(self, units: float, speed_scale: float = 1.0) -> float:
+        """The wheel speed (m/s) of ``units`` Aseba motor units (``motor.*.speed``), on a robot whose
+        wheels cover ``speed_scale`` times the model's distance per unit.
+
+        >>> COURSE.wheel_speed_of(250), ENKI.wheel_speed_of(500, speed_scale=0.5)
+        (0.1, 0.083)
+        """
+        return units * (self.metres_per_unit * speed_scale)
+
+    def motor_targets(self, linear: float, angular: float, speed_scale: float = 1.0) -> tuple[int, int]:
+        """The motor targets (``motor.*.target``, integer units) of a body velocity: its wheel speeds,
+        both scaled down when one would exceed ``max_units`` (the turn radius kept), rounded.
+        ``speed_scale`` as for :meth:`wheel_speed_of`.
+
+        The speeds are those of :meth:`limited_wheel_speeds`, but scaled as wheel speeds rather than as
+        a command: a real robot's targets stay what they have always been to the last unit (the two
+        roundings part at exact ties: 2 of 2.7 million commands tried).
+
+        >>> COURSE.motor_targets(0.1, 1.0), COURSE.motor_targets(0.0, 50.0)
+        ((133, 367), (-500, 500))
+        """
+        per_unit = self.metres_per_unit * speed_scale
+        left, right = self.wheel_speeds(linear, angular)
+        scale = min(1.0, self.max_units * per_unit / max(abs(left), abs(right), 1e-12))
+        top = self.max_units
+        return (
+            max(-top, min(top, round(left * scale / per_unit))),
+            max(-top, min(top, round(right * scale / per_unit))),
+        )
 
     # ------------------------------------------------------------------ frames
     def axle_of(self, pose: Pose) -> tuple[float, float, float]:

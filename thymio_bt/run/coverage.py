@@ -38,6 +38,7 @@ from py_trees.common import Status
 
 from thymio_bt.behaviours import ticking
 from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.btcpp_nodes import BtNode
 from thymio_bt.mission.plan import NodePlan
 
 SUCCESS, FAILURE, RUNNING = Status.SUCCESS, Status.FAILURE, Status.RUNNING
@@ -130,7 +131,7 @@ class Coverage:
         name were not ticked. Returns ``self``."""
         if table is None:
             return self
-        detail = getattr(table, "detail", {})
+        detail = table.detail if isinstance(table, NodeTable) else {}
         for node in self.nodes:
             row = table.get(node.path)
             if not row:
@@ -291,7 +292,7 @@ def _counting(cls: type) -> type:
     namespace["tick"] = tick
     # the direct tick the ticking module dispatches to for this class (its table is keyed by class)
     namespace["tick_direct"] = _counted(ticking._TICK[cls])
-    if hasattr(cls, "execute_tick"):
+    if issubclass(cls, BtNode):
         namespace["execute_tick"] = _counted(cls.execute_tick)  # BT.CPP nodes
     made = _COUNTING[cls] = type(cls.__name__, (cls,), namespace)
     _COUNTED.add(made)

@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from thymio_bt.run.sweep import Job
+from thymio_bt.run.sweep import Job, SweepRow
 
 
 class DaskExecutor:
@@ -27,7 +27,7 @@ class DaskExecutor:
     def __init__(self, client: Any) -> None:
         self.client = client
 
-    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+    def imap_unordered(self, fn: Callable[[Job], SweepRow], jobs: Iterable[Job]) -> Iterator[SweepRow]:
         """``fn(job)`` of every job, computed on the cluster, in the order they finish."""
         from distributed import as_completed
 

@@ -23,7 +23,7 @@ Example (a Ctrl-C before the first tick: the run ticks once, then ends):
 ...     os.kill(os.getpid(), signal.SIGINT)  # noted by the handler, not raised
 ...     result = Run(load_mission("maze_bonus")).run(interrupts=interrupts)
 >>> result.status, result.code, result.ticks, result.reason
-('FAILURE', <FailureCode.INTERRUPTED: 'INTERRUPTED'>, 1, 'interrupted by SIGINT at 0.0 s')
+(<RunStatus.FAILURE: 'FAILURE'>, <FailureCode.INTERRUPTED: 'INTERRUPTED'>, 1, 'interrupted by SIGINT at 0.0 s')
 >>> interrupts.name, interrupts.exit_code  # the CLI exits with that code
 ('SIGINT', 130)
 """

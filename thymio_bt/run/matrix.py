@@ -23,10 +23,13 @@ import statistics
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.run.sweep import SweepResult, sweep
+from thymio_bt.run.sweep import SweepResult, SweepRow, sweep
+
+if TYPE_CHECKING:
+    from thymio_bt.robot.interface import Pose
 
 
 @dataclass
@@ -36,7 +39,7 @@ class Cell:
     settings: dict[str, str]
     result: SweepResult
     #: the final pose of the mission's noise-free run on the course's robot, or None (no robot at the end)
-    reference: dict[str, float] | None
+    reference: Pose | None
 
     def errors(self) -> list[float]:
         """Each run's distance from the reference final pose (m); inf when it ended without a robot."""
@@ -45,7 +48,7 @@ class Cell:
         return [
             math.inf
             if r["final_pose"] is None
-            else math.hypot(r["final_pose"]["x"] - self.reference["x"], r["final_pose"]["y"] - self.reference["y"])
+            else math.hypot(r["final_pose"]["x"] - self.reference.x, r["final_pose"]["y"] - self.reference.y)
             for r in self.result.results
         ]
 
@@ -89,7 +92,7 @@ def run_matrix(
     maze: str | None = None,
     start: str | None = None,
     executor: Any = None,
-    progress: Callable[[dict[str, Any]], None] | None = None,
+    progress: Callable[[SweepRow], None] | None = None,
     interrupts: Any = None,
 ) -> list[Cell]:
     """The sweep of ``mission`` in every combination of ``axes`` (a ``--set`` name → its values)."""

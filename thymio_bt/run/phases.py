@@ -8,13 +8,14 @@ Example:
 >>> from thymio_bt.mission import load_mission
 >>> from thymio_bt.run.runner import run_mission
 >>> result = run_mission(load_mission("micromouse"))
->>> [(p["name"], p["duration"], p["cells"]) for p in result.phases]
+>>> [(p.name, p.duration, p.cells) for p in result.phases]
 [('search', 45.2, 11), ('return', 70.2, 14), ('fast run', 36.5, 9)]
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Any
 
 from thymio_bt.mission.plan import NodePlan
@@ -29,26 +30,42 @@ def subtree_uses(plan: NodePlan, parent: str = "") -> Iterator[tuple[str, NodePl
         yield from subtree_uses(child, path)
 
 
-def phases(plan: NodePlan, events: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """One entry per subtree use that ran: ``name``, ``path``, ``start``, ``end``,
-    ``duration`` (simulated s), ``status`` (of its last behaviour) and ``cells`` (how many different
-    maze cells its behaviours reported, for the mapping behaviours; else absent)."""
+@dataclass(frozen=True)
+class Phase:
+    """One subtree use that ran: its ``name`` and node ``path``, ``start``, ``end`` and ``duration``
+    (simulated s), the ``status`` of its last behaviour's event, and ``cells``: how many different
+    maze cells its behaviours reported (the mapping behaviours; else None)."""
+
+    name: str
+    path: str
+    start: float
+    end: float
+    duration: float
+    status: str | None
+    cells: int | None = None
+
+    def as_dict(self) -> dict[str, str | float | None]:
+        """As the report writes it (``cells`` only when there are some)."""
+        entry: dict[str, str | float | None] = {
+            "name": self.name,
+            "path": self.path,
+            "start": self.start,
+            "end": self.end,
+            "duration": self.duration,
+            "status": self.status,
+        }
+        return entry if self.cells is None else entry | {"cells": self.cells}
+
+
+def phases(plan: NodePlan, events: list[dict[str, Any]]) -> list[Phase]:
+    """One :class:`Phase` per subtree use that ran, from the run's events."""
     out = []
     for path, node in subtree_uses(plan):
         inside = [e for e in events if str(e.get("path", "")).startswith(path + "/")]
         if not inside:
             continue
         start, end = inside[0]["t"], inside[-1]["t"]
-        entry: dict[str, Any] = {
-            "name": node.name,
-            "path": path,
-            "start": start,
-            "end": end,
-            "duration": round(end - start, 6),
-            "status": inside[-1].get("status"),
-        }
         cells = {tuple(e["cell"]) for e in inside if isinstance(e.get("cell"), list)}
-        if cells:
-            entry["cells"] = len(cells)
-        out.append(entry)
+        status = inside[-1].get("status")
+        out.append(Phase(node.name, path, start, end, round(end - start, 6), status, len(cells) or None))
     return out

@@ -25,10 +25,37 @@ from py_trees.behaviour import Behaviour
 from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import FailureCode, RobotBehaviour, node_path
+from thymio_bt.behaviours.base import FailureCode, RobotBehaviour, TextEnum, node_path
 from thymio_bt.behaviours.cellmap import CellMap
 from thymio_bt.behaviours.control import SimTimeout
 from thymio_bt.behaviours.mapping import MazeMapParams
+from thymio_bt.robot.interface import Pose
+from thymio_bt.run.phases import Phase
+
+
+class RunStatus(TextEnum):
+    """How a run ended, the report's ``status``: a ``str`` enum, so it is written, compared and
+    printed as its text (``result.status == "SUCCESS"`` holds).
+
+    >>> RunStatus.SUCCESS == "SUCCESS", f"{RunStatus.TIMEOUT}", RunStatus("FAILURE")
+    (True, 'TIMEOUT', <RunStatus.FAILURE: 'FAILURE'>)
+    """
+
+    SUCCESS = "SUCCESS"
+    FAILURE = "FAILURE"
+    TIMEOUT = "TIMEOUT"
+
+
+@dataclass(frozen=True)
+class GoalReached:
+    """Whether base_link entered the maze's goal region during the run, and when (s; None if never)."""
+
+    reached: bool
+    t: float | None
+
+    def as_dict(self) -> dict[str, bool | float | None]:
+        """As the report writes it: ``{"reached": ..., "t": ...}``."""
+        return {"reached": self.reached, "t": self.t}
 
 
 @dataclass
@@ -37,7 +64,7 @@ class RunResult:
 
     mission: str
     maze: str
-    status: str
+    status: RunStatus
     reason: str | None
     #: a :class:`FailureCode`, or a plugin behaviour's own code (a string)
     code: FailureCode | str | None
@@ -46,7 +73,8 @@ class RunResult:
     ticks: int
     wall_time: float
     seed: int
-    final_pose: dict[str, float] | None
+    #: the robot's true pose at the end, to the µm and µrad the report writes (None: no robot)
+    final_pose: Pose | None
     final_proximity: dict[str, float | None] | None
     events: list[dict[str, Any]]
     collisions: int
@@ -57,9 +85,9 @@ class RunResult:
     #: the mission's ``expect:`` criteria that failed ([] all held); None when it declares none
     expectations: list[str] | None = None
     #: for a maze with a goal region: whether base_link entered it, and when (s); else None
-    goal: dict[str, Any] | None = None
+    goal: GoalReached | None = None
     #: each subtree use that ran: when, how long, cells seen (:mod:`thymio_bt.run.phases`)
-    phases: list[dict[str, Any]] = field(default_factory=list)
+    phases: list[Phase] = field(default_factory=list)
     #: the maze map the mapping behaviours learnt (:meth:`CellMap.summary`), if a run made one
     maze_map: dict[str, Any] | None = None
 
@@ -67,6 +95,11 @@ class RunResult:
     def real_time_factor(self) -> float:
         """Simulated seconds per wall-clock second (inf for a run too quick to time)."""
         return self.sim_time / self.wall_time if self.wall_time > 0 else math.inf
+
+    @property
+    def final_pose_json(self) -> dict[str, float] | None:
+        """:attr:`final_pose` as reports and logs write it: ``{x, y, yaw}``, or None."""
+        return None if self.final_pose is None else self.final_pose.as_dict()
 
     def report(self) -> dict[str, Any]:
         """The run report as JSON data: a contract (key order included) that ``--report`` writes as it is."""
@@ -87,14 +120,14 @@ class RunResult:
             "wall_time": round(self.wall_time, 6),
             "real_time_factor": round(self.real_time_factor, 1) if math.isfinite(self.real_time_factor) else None,
             "seed": self.seed,
-            "final_pose": self.final_pose,
+            "final_pose": self.final_pose_json,
             "final_proximity": self.final_proximity,
             "collisions": self.collisions,
             "min_clearance": None if self.min_clearance is None else round(self.min_clearance, 6),
             "events": self.events,
             **expectations,
-            **({} if self.goal is None else {"goal": self.goal}),
-            **({"phases": self.phases} if self.phases else {}),
+            **({} if self.goal is None else {"goal": self.goal.as_dict()}),
+            **({"phases": [phase.as_dict() for phase in self.phases]} if self.phases else {}),
             **({"map": self.maze_map} if self.maze_map else {}),
             "trajectory": [[round(v, 6) for v in sample] for sample in self.trajectory],
         }
@@ -116,14 +149,14 @@ class EndKind(Enum):
     CRASHED = "crashed"
 
     @property
-    def report_status(self) -> str:
+    def report_status(self) -> RunStatus:
         """The report's status of a run cut short this way: one of the report contract's three, so a
         stopped, crashed or interrupted run is a FAILURE (its ``code`` says which).
 
         >>> EndKind.TIMEOUT.report_status, EndKind.CRASHED.report_status, EndKind.INTERRUPTED.report_status
-        ('TIMEOUT', 'FAILURE', 'FAILURE')
+        (<RunStatus.TIMEOUT: 'TIMEOUT'>, <RunStatus.FAILURE: 'FAILURE'>, <RunStatus.FAILURE: 'FAILURE'>)
         """
-        return "TIMEOUT" if self is EndKind.TIMEOUT else "FAILURE"
+        return RunStatus.TIMEOUT if self is EndKind.TIMEOUT else RunStatus.FAILURE
 
 
 @dataclass(frozen=True)
@@ -143,7 +176,7 @@ class Ending:
 class Verdict:
     """The report's status, reason, code and failing node's path (all None but the status on SUCCESS)."""
 
-    status: str
+    status: RunStatus
     reason: str | None = None
     code: FailureCode | str | None = None
     failed_path: str | None = None
@@ -153,7 +186,7 @@ def learnt_map(root: Behaviour) -> CellMap | None:
     """The maze map the tree's mapping behaviours keep on the blackboard, at the ``key`` of their
     parameters (:class:`~thymio_bt.behaviours.mapping.MazeMapParams`); None when none made one."""
     for node in root.iterate():
-        params = getattr(node, "params", None)
+        params = node.params if isinstance(node, RobotBehaviour) else None
         if isinstance(params, MazeMapParams) and Blackboard.exists(params.key):
             found = Blackboard.get(params.key)
             if isinstance(found, CellMap):

@@ -6,16 +6,17 @@ Example:
 >>> from thymio_bt.mission import load_mission
 >>> result = Run(load_mission("maze_part1_2")).run()
 >>> result.status, round(result.sim_time, 1), result.ticks
-('SUCCESS', 32.8, 329)
+(<RunStatus.SUCCESS: 'SUCCESS'>, 32.8, 329)
 >>> report = result.report()
 >>> report["status"], report["expectations"]
-('SUCCESS', {'met': True, 'failed': []})
+(<RunStatus.SUCCESS: 'SUCCESS'>, {'met': True, 'failed': []})
 
 A run that the tree does not end is cut short, its running node named:
 
 >>> result = Run(load_mission("maze_part1_2", {"time_limit": "5"})).run()
 >>> result.status, result.code, result.reason, result.failed_path
-('TIMEOUT', <FailureCode.TIMEOUT: 'TIMEOUT'>, 'time limit of 5 s reached', 'course/part 2/leg/approach/ChooseTurn')
+(<RunStatus.TIMEOUT: 'TIMEOUT'>, <FailureCode.TIMEOUT: 'TIMEOUT'>, 'time limit of 5 s reached',
+ 'course/part 2/leg/approach/ChooseTurn')
 """
 
 from __future__ import annotations
@@ -35,12 +36,21 @@ from thymio_bt.behaviours.base import FailureCode, describe, is_fault, node_path
 from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import Problem, ThymioBtError, UserError
 from thymio_bt.mission import Mission, build_tree
-from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
+from thymio_bt.robot.interface import Backend, Collision, Pose, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
 from thymio_bt.run.coverage import NodeStats
 from thymio_bt.run.interrupts import Interrupted, Interrupts
 from thymio_bt.run.phases import phases
-from thymio_bt.run.result import Ending, EndKind, RunResult, Verdict, failing_branch, learnt_map
+from thymio_bt.run.result import (
+    Ending,
+    EndKind,
+    GoalReached,
+    RunResult,
+    RunStatus,
+    Verdict,
+    failing_branch,
+    learnt_map,
+)
 
 TickHook = Callable[["Run"], None]
 
@@ -285,8 +295,8 @@ class Run:
         if ending.kind is EndKind.FINISHED:
             if self.root.status is Status.FAILURE:
                 failed_path, code, reason = failing_branch(self.root)
-                return Verdict(Status.FAILURE.name, reason, code, failed_path)
-            return Verdict(self.root.status.name)
+                return Verdict(RunStatus.FAILURE, reason, code, failed_path)
+            return Verdict(RunStatus.SUCCESS)
         self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
         running = self.root.tip()
         verdict = Verdict(
@@ -336,7 +346,7 @@ class Run:
             ticks=self.ticks,
             wall_time=wall,
             seed=self.seed,
-            final_pose=None if true_pose is None else {k: round(v, 6) for k, v in true_pose.as_dict().items()},
+            final_pose=None if true_pose is None else Pose(*(round(v, 6) for v in true_pose.as_tuple())),
             final_proximity=final["proximity"],
             events=list(self.events),
             collisions=len(sim.collisions),
@@ -348,7 +358,7 @@ class Run:
         )
         if self.mission.maze.goal:
             reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
-            result.goal = {"reached": reached is not None, "t": reached}
+            result.goal = GoalReached(reached is not None, reached)
         if self.mission.expect is not None:
             self._check_expectations(result, places=not self.substituted)
         return result
@@ -368,8 +378,8 @@ class Run:
         expect = self.mission.expect if places else self.mission.expect.without_places()
         # the robot that ran (a calibrated profile, a backend's own), not only the one the mission names
         result.expectations = check(expect, result, self.mission.maze, self.backend.model)
-        if result.status == "SUCCESS" and result.expectations:
-            result.status, result.code, result.failed_path = "FAILURE", FailureCode.EXPECTATION, "expect"
+        if result.status is RunStatus.SUCCESS and result.expectations:
+            result.status, result.code, result.failed_path = RunStatus.FAILURE, FailureCode.EXPECTATION, "expect"
             result.reason = "; ".join(result.expectations)
 
     def _record(self) -> None:
@@ -414,6 +424,7 @@ __all__ = [
     "NodeStats",
     "Run",
     "RunResult",
+    "RunStatus",
     "StopRun",
     "TickHook",
     "Verdict",

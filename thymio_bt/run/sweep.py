@@ -27,7 +27,7 @@ from contextvars import ContextVar
 from dataclasses import dataclass, field
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any, Literal, Protocol, TypedDict
 
 from thymio_bt.errors import ThymioBtError
 from thymio_bt.robot.noise import REALISTIC
@@ -69,13 +69,37 @@ def content_key(sources: Iterable[Path], *settings: Any) -> str:
     return digest.hexdigest()
 
 
-def run_job(job: Job) -> dict[str, Any]:
+class _Row(TypedDict):
+    seed: int
+    #: a :class:`~thymio_bt.run.result.RunStatus`, as text once it went through JSON
+    status: str
+    sim_time: float
+    final_pose: dict[str, float] | None
+    reason: str | None
+    #: a :class:`~thymio_bt.behaviours.base.FailureCode`, or a plugin behaviour's own code
+    code: str | None
+    failed_path: str | None
+    collisions: int
+    #: how far from its distance the first MoveUntilWall stopped (m)
+    first_stop_error: float | None
+    wall_time: float
+
+
+class SweepRow(_Row, total=False):
+    """One run of a sweep, as :func:`run_job` summarises it for the sweep JSON's ``results``; a row
+    crosses processes (and a Dask cluster) as it is, a plain dict."""
+
+    #: the run's tree coverage (:meth:`thymio_bt.run.coverage.Coverage.to_json`), when asked for
+    coverage: dict[str, Any]
+
+
+def run_job(job: Job) -> SweepRow:
     """Run one job and summarise it (the function executors map); missions are loaded once per worker.
     With :attr:`Job.coverage`, the summary has the run's ``coverage`` JSON too."""
     from thymio_bt.behaviours.base import FailureCode, describe
     from thymio_bt.mission import load_mission
     from thymio_bt.run.coverage import Coverage
-    from thymio_bt.run.runner import Run
+    from thymio_bt.run.runner import Run, RunStatus
 
     key: str | tuple[Any, ...] = job.key or (job.mission, job.overrides, job.maze, job.start)
     mission = _CACHE.get(key)
@@ -86,7 +110,7 @@ def run_job(job: Job) -> dict[str, Any]:
     except Exception as exc:  # that run fails, the sweep goes on and reports it
         return {
             "seed": job.seed,
-            "status": "FAILURE",
+            "status": RunStatus.FAILURE,
             "sim_time": 0.0,
             "final_pose": None,
             "reason": f"the run raised {describe(exc)}",
@@ -104,25 +128,27 @@ def run_job(job: Job) -> dict[str, Any]:
         and e["status"] == "SUCCESS"
         and e.get("range") is not None
     ]
-    return {
+    row: SweepRow = {
         "seed": job.seed,
         "status": result.status,
         "sim_time": round(result.sim_time, 6),
-        "final_pose": result.final_pose,
+        "final_pose": result.final_pose_json,
         "reason": result.reason,
         "code": result.code,
         "failed_path": result.failed_path,
         "collisions": result.collisions,
         "first_stop_error": None if not stops else round(stops[0], 6),
         "wall_time": result.wall_time,
-        **({"coverage": Coverage.of(mission.tree).add(result.node_stats).to_json()} if job.coverage else {}),
     }
+    if job.coverage:
+        row["coverage"] = Coverage.of(mission.tree).add(result.node_stats).to_json()
+    return row
 
 
 class Executor(Protocol):
     """What a sweep needs from a pool: results of ``fn`` over ``jobs``, in any order."""
 
-    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+    def imap_unordered(self, fn: Callable[[Job], SweepRow], jobs: Iterable[Job]) -> Iterator[SweepRow]:
         """``fn(job)`` of every job, in any order."""
         ...
 
@@ -140,7 +166,7 @@ class LocalPool:
         self.workers = workers or os.cpu_count() or 1
         self.interrupts = interrupts or Interrupts()
 
-    def imap_unordered(self, fn: Callable[[Job], dict[str, Any]], jobs: Iterable[Job]) -> Iterator[dict[str, Any]]:
+    def imap_unordered(self, fn: Callable[[Job], SweepRow], jobs: Iterable[Job]) -> Iterator[SweepRow]:
         """``fn(job)`` of every job, computed by the workers in small chunks, in the order they finish;
         a worker that dies raises :class:`WorkerDied`."""
         jobs = list(jobs)
@@ -190,7 +216,7 @@ class WorkerDied(RuntimeError, ThymioBtError):
         super().__init__(f"a worker process died ({how})")
 
 
-def _map_chunk(fn: Callable[[Job], dict[str, Any]], jobs: list[Job]) -> list[dict[str, Any]]:
+def _map_chunk(fn: Callable[[Job], SweepRow], jobs: list[Job]) -> list[SweepRow]:
     return [fn(job) for job in jobs]
 
 
@@ -215,7 +241,7 @@ class SweepResult:
     successes: int
     seed_start: int
     noise: dict[str, float]
-    results: list[dict[str, Any]] = field(default_factory=list)
+    results: list[SweepRow] = field(default_factory=list)
     wall_time: float = 0.0
     #: runs asked for (``runs`` counts those completed: fewer when the sweep was interrupted)
     requested: int = 0
@@ -231,7 +257,7 @@ class SweepResult:
         return shlex.join(("thymio-bt", "run", *self.command, "--seed", str(seed)))
 
     @property
-    def faulted(self) -> list[dict[str, Any]]:
+    def faulted(self) -> list[SweepRow]:
         """The runs that broke (code in :data:`FAULTS`): their code raised, unlike a run that failed."""
         return [r for r in self.results if r["code"] in FAULTS]
 
@@ -240,10 +266,10 @@ class SweepResult:
         """The share of the completed runs that succeeded (0.0 when none completed)."""
         return self.successes / self.runs if self.runs else 0.0
 
-    def distribution(self, key: str) -> dict[str, float] | None:
+    def distribution(self, key: Literal["sim_time", "first_stop_error"]) -> dict[str, float] | None:
         """min, 5th percentile, median, 95th percentile, max and mean of the results' ``key``; None
         when no result has one."""
-        values = sorted(r[key] for r in self.results if r.get(key) is not None)
+        values = sorted(value for r in self.results if (value := r[key]) is not None)
         if not values:
             return None
         q = statistics.quantiles(values, n=20, method="inclusive") if len(values) > 1 else [values[0]] * 19
@@ -294,7 +320,7 @@ def sweep(
     maze: str | None = None,
     start: str | None = None,
     executor: Executor | None = None,
-    progress: Callable[[dict[str, Any]], None] | None = None,
+    progress: Callable[[SweepRow], None] | None = None,
     interrupts: Interrupts | None = None,
     coverage: bool = False,
 ) -> SweepResult:

@@ -18,7 +18,7 @@ Example (the mission's stop distance changed from 5 to 6 cm, replayed against a 
 >>> recording = recorder.finish(Run(load_mission("maze_part1_2")).run(on_tick=recorder))
 >>> same = what_if(recording, load_mission("maze_part1_2"))
 >>> same.divergence, same.result.status, same.replayed_ticks
-(None, 'SUCCESS', 329)
+(None, <RunStatus.SUCCESS: 'SUCCESS'>, 329)
 >>> changed = what_if(recording, load_mission("maze_part1_2", {"final_stop": "6cm"}))
 >>> changed.divergence.node, changed.divergence.time, changed.divergence.to_json()["tick"]
 ('course/part 1', 3.6, 37)

@@ -21,7 +21,7 @@ Example (offscreen; ``replay(read_log("run.jsonl"), speedup=10)`` shows a log th
 >>> result = run.run(on_tick=view)  # result.code is FailureCode.STOPPED if the window was closed
 >>> view.finish(result)
 >>> result.status, view.viewer.shown, view.viewer.outcome
-('SUCCESS', 228, 'SUCCESS')
+(<RunStatus.SUCCESS: 'SUCCESS'>, 228, <RunStatus.SUCCESS: 'SUCCESS'>)
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from thymio_bt.backends.playground.enki_fix import HINT, enki_fix
 from thymio_bt.backends.playground.process import Playground, free_port
 from thymio_bt.backends.playground.world import PlaygroundWorld, playground_world
 from thymio_bt.backends.real.aseba import AsebaNode
-from thymio_bt.backends.real.thymio import RealConfig, ThymioRobot
+from thymio_bt.backends.real.thymio import ThymioRobot
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose, RobotLost
 from thymio_bt.robot.model import ROBOTS, RobotModel
@@ -50,18 +50,19 @@ class PlaygroundRobot(ThymioRobot):
     def __init__(
         self,
         node: AsebaNode,
-        config: RealConfig,
         playground: Playground,
         enki: EnkiRobot,
         world: PlaygroundWorld,
         maze: Maze,
         model: RobotModel,
+        speed_scale: float,
         latency: float = 0.2,
     ) -> None:
         self.playground, self.enki, self.world, self.maze = playground, enki, world, maze
         self._contacts = ContactTracker(maze, model)
         self.latency = latency
-        super().__init__(node, config, say=lambda text: None, model=model)  # deleting needs nobody: it is parked
+        # deleting needs nobody: the robot is parked
+        super().__init__(node, say=lambda text: None, model=model, speed_scale=speed_scale)
 
     def true_pose(self) -> Pose | None:
         """The pose the simulation has (None once the Playground is gone)."""
@@ -147,5 +148,4 @@ def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -
     scale = options.speed_scale
     if scale is None:
         scale = SPEED_SCALE if ROBOTS.get(model.name) is model else 1.0  # a profile measured its own
-    config = RealConfig.of_model(model, scale)
-    return PlaygroundRobot(node, config, playground, enki, world, mission.maze, model, options.latency)
+    return PlaygroundRobot(node, playground, enki, world, mission.maze, model, scale, options.latency)

@@ -6,14 +6,6 @@ tdmclient and thymiodirect are imported only when a node connects, so this packa
 the optional extras.
 """
 
-from thymio_bt.backends.real.thymio import (
-    PLAYGROUND,
-    PROX_INDEX,
-    Node,
-    RealConfig,
-    TdmNode,
-    ThymioRobot,
-    import_tdmclient,
-)
+from thymio_bt.backends.real.thymio import PROX_INDEX, Node, TdmNode, ThymioRobot, import_tdmclient
 
-__all__ = ["PLAYGROUND", "PROX_INDEX", "Node", "RealConfig", "TdmNode", "ThymioRobot", "import_tdmclient"]
+__all__ = ["PROX_INDEX", "Node", "TdmNode", "ThymioRobot", "import_tdmclient"]

@@ -52,7 +52,6 @@ from thymio_bt.backends.real.thymio import (
     SPEED_VARIABLES,
     TARGET_VARIABLES,
     Node,
-    RealConfig,
     ThymioRobot,
 )
 from thymio_bt.errors import Problem, UserError, optional_module
@@ -478,6 +477,6 @@ def create_aseba(mission: Mission, seed: int, options: AsebaOptions) -> ThymioRo
 
     model = robot_for(mission, "aseba")
     node = AsebaNode.connect(options.device, options.timeout)
-    robot = ThymioRobot(node, config=RealConfig.of_model(model), model=model, placed=options.placed)
+    robot = ThymioRobot(node, model=model, placed=options.placed)
     robot.latency = options.latency
     return robot

@@ -53,9 +53,8 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import Problem, UserError, optional_module
-from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist, wrap_angle
-from thymio_bt.robot.model import COURSE, REAL, RobotModel, integrate_arc
+from thymio_bt.robot.model import REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:
     from thymio_bt.backends import TdmOptions
@@ -71,52 +70,6 @@ SPEED_VARIABLES = ("motor.left.speed", "motor.right.speed")
 TARGET_VARIABLES = ("motor.left.target", "motor.right.target")
 
 _INSTALL_HINT = "pip install 'thymio-bt[thymio]'"
-
-
-@dataclass(frozen=True, slots=True)
-class RealConfig:
-    """The real robot's constants; each one is a parameter because robots differ.
-
-    - ``metres_per_unit``: wheel speed per motor unit. Mobsya's Thymio API doc: "500 approximately
-      corresponds to a linear speed of 20 cm/s", i.e. 0.0004 m/s, which Webots' model also gives
-      (9.53 rad/s x 0.021 m at 500). The ROS driver's calibration gives 1/2930 (0.000341) instead.
-    - ``max_units``: the documented target range, ±500 (the firmware itself clamps at ±1000).
-    - ``wheel_separation``: 0.0935 m, the course's diff-drive plugin and the ros-aseba URDF (robots
-      measure 0.0915-0.095 m).
-    - ``table``: the proximity calibration (:data:`thymio_bt.robot.calibration.WEBOTS_THYMIO2`).
-    """
-
-    metres_per_unit: float = 0.20 / 500
-    max_units: int = 500
-    wheel_separation: float = COURSE.wheel_separation
-    table: CalibrationTable = WEBOTS_THYMIO2
-
-    @classmethod
-    def of_model(cls, model: RobotModel, speed_scale: float = 1.0) -> RealConfig:
-        """The constants of a robot model; ``speed_scale``: the robot's speed per unit over the model's.
-
-        >>> from thymio_bt.robot.model import ENKI
-        >>> config = RealConfig.of_model(ENKI)
-        >>> config.max_wheel_speed, config.wheel_separation, config.table is ENKI_THYMIO2
-        (0.166, 0.094, True)
-        """
-        return cls(
-            metres_per_unit=model.metres_per_unit * speed_scale,
-            max_units=model.max_units,
-            wheel_separation=model.wheel_separation,
-            table=model.calibration,
-        )
-
-    @property
-    def max_wheel_speed(self) -> float:
-        """The wheel-speed limit in m/s (``max_units`` motor units)."""
-        return self.max_units * self.metres_per_unit
-
-
-#: A simulated Thymio in Thymio Suite's Playground (Enki): 500 units are 16.6 cm/s, the wheels 9.4 cm
-#: apart (``DifferentialWheeled(9.4, 16.6, ...)``), and Enki's sensor curve (docs/sources.md, "Enki and
-#: the real robot").
-PLAYGROUND = RealConfig(metres_per_unit=0.166 / 500, wheel_separation=0.094, table=ENKI_THYMIO2)
 
 
 class Node(ABC):
@@ -249,8 +202,10 @@ class ThymioRobot(Backend):
     ``clock`` and ``sleep`` (wall-clock seconds, and waiting) and ``ask`` and ``say`` (the operator's
     console) are injectable so tests run without waiting or typing. ``spawn`` starts with the robot
     present at that pose; without it, the robot is absent until a spawn request is served.
-    ``model`` is what the robot is (:data:`~thymio_bt.robot.model.REAL` unless told: behaviours read
-    its sensor poses and geometry as ``robot.model``); ``config`` defaults to that model's numbers.
+    ``model`` is what the robot is (:data:`~thymio_bt.robot.model.REAL` unless told): its motor units,
+    speed limit, wheel separation and calibration table drive the robot, and behaviours read its
+    sensor poses and geometry as ``robot.model``. ``speed_scale``: the distance the robot's wheels
+    cover per motor unit over the model's (the Playground's Thymio: 0.985 of Enki's).
     ``placed``: the robot already stands where the first spawn puts it (no operator is asked then).
     """
 
@@ -259,7 +214,6 @@ class ThymioRobot(Backend):
     def __init__(
         self,
         node: Node,
-        config: RealConfig | None = None,
         spawn: Pose | None = None,
         robot_name: str = ROBOT_ENTITY,
         clock: Callable[[], float] = time.monotonic,
@@ -267,12 +221,13 @@ class ThymioRobot(Backend):
         ask: Callable[[str], str] = input,
         say: Callable[[str], None] = print,
         model: RobotModel = REAL,
+        speed_scale: float = 1.0,
         placed: bool = False,
     ) -> None:
         super().__init__()
         self.node = node
         self.model = model
-        self.config = config or RealConfig.of_model(model)
+        self.speed_scale = speed_scale
         self._placed = placed  # the first spawn needs nobody: the robot stands there already
         self._spawned = False  # whether a spawn has placed the robot (the next ones move it mid-run)
         self.robot_name = robot_name
@@ -324,15 +279,7 @@ class ThymioRobot(Backend):
 
     def motor_targets(self, linear: float, angular: float) -> tuple[int, int]:
         """Motor units for a body velocity: limited as in the simulator (turn radius kept), rounded."""
-        cfg = self.config
-        half = angular * cfg.wheel_separation / 2.0
-        left, right = linear - half, linear + half
-        scale = min(1.0, cfg.max_wheel_speed / max(abs(left), abs(right), 1e-12))
-
-        def units(speed: float) -> int:
-            return max(-cfg.max_units, min(cfg.max_units, round(speed * scale / cfg.metres_per_unit)))
-
-        return units(left), units(right)
+        return self.model.motor_targets(linear, angular, self.speed_scale)
 
     def exists(self) -> bool:
         """Whether the robot is present (placed and not deleted)."""
@@ -359,8 +306,7 @@ class ThymioRobot(Backend):
         """The measured wheel speeds as a body velocity (zero while absent)."""
         if not self._present:
             return Twist()
-        left, right = self._wheels
-        return Twist((left + right) / 2.0, (right - left) / self.config.wheel_separation)
+        return Twist(*self.model.body_velocity(*self._wheels))
 
     def command(self) -> Twist:
         """The held command."""
@@ -402,8 +348,7 @@ class ThymioRobot(Backend):
         now = self._read_wheels()
         travel = self.node.read_wheel_travel()
         if travel is not None and self._travel is not None:  # the node's own, finer integral
-            metres = self.config.metres_per_unit
-            self._integrate((travel[0] - self._travel[0]) * metres, (travel[1] - self._travel[1]) * metres, 1.0)
+            self._integrate(self._speed(travel[0] - self._travel[0]), self._speed(travel[1] - self._travel[1]), 1.0)
         else:
             left, right = (previous[0] + self._wheels[0]) / 2.0, (previous[1] + self._wheels[1]) / 2.0
             self._integrate(left, right, now - self._read_at)
@@ -414,20 +359,22 @@ class ThymioRobot(Backend):
     def _read_wheels(self) -> float:
         """Take the measured wheel speeds (m/s) and return the backend time they were read at."""
         left_u, right_u = self.node.read_wheel_speeds()
-        self._wheels = (left_u * self.config.metres_per_unit, right_u * self.config.metres_per_unit)
+        self._wheels = (self._speed(left_u), self._speed(right_u))
         return self.time()
+
+    def _speed(self, units: float) -> float:
+        """The wheel speed (m/s) of ``units`` motor units on this robot."""
+        return self.model.wheel_speed_of(units, self.speed_scale)
 
     def _read_prox(self) -> None:
         values = self.node.read_prox()
         if len(values) != len(SENSOR_NAMES):
             raise ValueError(f"prox.horizontal has {len(values)} values, a Thymio II has {len(SENSOR_NAMES)}")
         self._raw = {name: int(values[i]) for name, i in PROX_INDEX.items()}
-        self._scan = {name: self.config.table.to_metres(value) for name, value in self._raw.items()}
+        self._scan = {name: self.model.calibration.to_metres(value) for name, value in self._raw.items()}
 
     def _integrate(self, left: float, right: float, duration: float) -> None:
-        v = (left + right) / 2.0
-        w = (right - left) / self.config.wheel_separation
-        self._axle = integrate_arc(*self._axle, v, w, duration)
+        self._axle = integrate_arc(*self._axle, *self.model.body_velocity(left, right), duration)
 
     def _place(self, pose: Pose) -> None:
         """The robot now stands at ``pose``: reset odometry and the command, take fresh readings."""
@@ -494,7 +441,6 @@ def create_tdm(mission: Mission, seed: int, options: TdmOptions) -> ThymioRobot:
     model = robot_for(mission, "tdm")
     return ThymioRobot.connect(
         TdmAddress(options.host, options.port, options.password),
-        config=RealConfig.of_model(model),
         model=model,
         placed=options.placed,
     )
