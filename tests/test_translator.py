@@ -119,4 +119,4 @@ def test_a_gazebo_box_too_thick_for_a_wall_says_how_thick_a_wall_may_be(tmp_path
         import_world(world)
     (problem,) = info.value.problems
     assert problem.message == "box of 'slab' cannot be a wall: Input should be less than or equal to 1"
-    assert (problem.file, problem.line, problem.hint) == (str(world), 2, "allowed: > 0 and <= 1")
+    assert (problem.file, problem.line, problem.hint) == (str(world), 2, "allowed: > 0 and <= 1 m")

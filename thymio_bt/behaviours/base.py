@@ -47,7 +47,7 @@ import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, Field
 
-from thymio_bt.inputs.fields import Duration
+from thymio_bt.inputs.fields import IN_SI, Duration
 from thymio_bt.robot.interface import Entities, Pose, Robot
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
@@ -386,7 +386,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
                 return f"blackboard key '{key}' (for '{param}') has not been written yet"
             values[param] = self._reader.get(key)
         try:
-            self.params = type(self.declared).model_validate({**self.declared.model_dump(), **values})
+            self.params = type(self.declared).model_validate({**self.declared.model_dump(), **values}, context=IN_SI)
         except Exception as exc:  # pydantic ValidationError: a bad value on the blackboard
             return f"blackboard value for {', '.join(values)} is invalid: {exc}"
         return None

@@ -29,6 +29,7 @@ from pydantic_core import ErrorDetails
 
 from thymio_bt.errors import Problem
 from thymio_bt.inputs.fields import (
+    IN_SI,
     SpawnName,
     Unit,
     called_name,
@@ -243,7 +244,7 @@ class ParameterReader(Checker):
         reported now). A field left for the blackboard, or already reported, is not 'missing' again."""
         failed = {key for key in keys if key not in reading.values and key not in reading.refs}
         try:
-            return reading.model.model_validate(reading.values)
+            return reading.model.model_validate(reading.values, context=IN_SI)
         except ValidationError as exc:
             # the other values are still checked, so that every problem of the node is reported at once
             def settled(err: ErrorDetails) -> bool:
