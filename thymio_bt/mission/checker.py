@@ -206,6 +206,7 @@ class Checker:
                 "give a heading such as 90deg, pi/2 or -45deg",
             )
             return None
+        # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
         return Pose(pose.x, pose.y, math.remainder(pose.yaw, math.tau))
 
 
