@@ -120,3 +120,16 @@ def test_a_gazebo_box_too_thick_for_a_wall_says_how_thick_a_wall_may_be(tmp_path
     (problem,) = info.value.problems
     assert problem.message == "box of 'slab' cannot be a wall: Input should be less than or equal to 1"
     assert (problem.file, problem.line, problem.hint) == (str(world), 2, "allowed: > 0 and <= 1 m")
+
+
+def test_a_bad_blackboard_value_is_said_in_one_line_as_a_mission_value_would_be():
+    """Before: pydantic's own report, four lines with a web address, in the run's failure reason."""
+    from thymio_bt.testing import run_tree, world
+
+    tree = {"sequence": [{"SetBlackboard": {"key": "x", "value": 100}}, {"TurnAngle": {"angle": "bb:x"}}]}
+    result = run_tree(tree, world("corridor"), seconds=2)
+    assert result.status == "FAILURE"
+    assert result.reason == (
+        "blackboard value for angle is invalid: Input should be less than or equal to 6.283185307179586 "
+        "[at angle] (hint: allowed: >= -6.28319 and <= 6.28319 rad)"
+    )
