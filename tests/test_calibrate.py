@@ -90,7 +90,7 @@ def test_a_bad_profile_is_located(tmp_path):
         robot_model(str(path))
     text = str(info.value)
     assert f"{path}:1:1: 'base'" in text and "did you mean 'enki'?" in text
-    assert f"{path}:3:1: 'wheel_sep'" in text and "did you mean 'wheel_separation'?" in text
+    assert f"{path}:3:1: unknown key 'wheel_sep'" in text and "did you mean 'wheel_separation'?" in text
     mission = tmp_path / "m.yaml"
     mission.write_text("maze: two_parts_maze\nstart: part1\nrobot: missing.yaml\ntree:\n  Stop: {}\n")
     with pytest.raises(UserError, match="missing.yaml"):

@@ -79,7 +79,7 @@ def test_a_bad_topic_map_is_located(tmp_path):
     )
     assert result.returncode == 2
     assert f"{path}:2:1: unknown key 'sensor_typo'" in result.stderr and "did you mean 'sensor_type'?" in result.stderr
-    assert f"{path}:3:1:" in result.stderr and "no sensor named 'front_middle'" in result.stderr
+    assert f"{path}:3:10:" in result.stderr and "no sensor named 'front_middle'" in result.stderr  # at the value
     assert "Traceback" not in result.stderr
 
 

@@ -21,7 +21,7 @@ Example::
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import import_module
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -59,26 +59,19 @@ class BackendKind:
 
     def parse_options(self, raw: Mapping[str, Any], where: tuple[str, int, int] = ("--backend-opt", 0, 0)) -> Any:
         """Validate ``raw`` settings against :attr:`options`; :class:`UserError` says what is wrong."""
+        from thymio_bt.inputs.validation import Wording, problems_from
+
         try:
             return self.options.model_validate(dict(raw))
         except ValidationError as exc:
-            fields = self.options.model_fields
-            problems = []
-            for error in exc.errors():
-                key = ".".join(str(p) for p in error["loc"])
-                if error["type"] == "extra_forbidden":
-                    hint = did_you_mean(key, fields) if fields else f"backend '{self.name}' takes no options"
-                    problems.append(Problem(f"backend '{self.name}' has no option '{key}'", *where, key, hint))
-                else:
-                    about = fields[key].description if key in fields else None
-                    problems.append(
-                        Problem(
-                            f"backend '{self.name}' option '{key}': {error['msg']}",
-                            *where,
-                            key,
-                            f"{key}: {about}" if about else "",
-                        )
-                    )
+            wording = Wording(
+                unknown=f"backend '{self.name}' has no option '{{key}}'",
+                missing=f"backend '{self.name}' needs option '{{key}}'",
+                invalid=f"backend '{self.name}' option '{{path}}': {{msg}}",
+            )
+            problems = problems_from(exc, dict(raw), where[0], self.options, at=where[1:], wording=wording)
+            if not self.options.model_fields:
+                problems = [replace(p, hint=f"backend '{self.name}' takes no options") for p in problems]
             raise UserError(problems) from None
 
     def create(self, mission: Mission, seed: int, options: Mapping[str, Any] | None = None) -> Backend:

@@ -45,9 +45,9 @@ from typing import Any, ClassVar
 
 import py_trees
 from py_trees.common import Access, Status
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from thymio_bt.inputs.fields import Duration
+from thymio_bt.inputs.fields import IN_SI, Duration
 from thymio_bt.robot.interface import Entities, Pose, Robot
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
@@ -389,9 +389,15 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
             if not self._reader.exists(key):
                 return f"blackboard key '{key}' (for '{param}') has not been written yet"
             values[param] = self._reader.get(key)
+        model = type(self.declared)
         try:
-            self.params = type(self.declared).model_validate({**self.declared.model_dump(), **values})
-        except Exception as exc:  # pydantic ValidationError: a bad value on the blackboard
+            self.params = model.model_validate({**self.declared.model_dump(), **values}, context=IN_SI)
+        except ValidationError as exc:  # a bad value on the blackboard: said as a mission's would be
+            from thymio_bt.inputs.validation import problems_from
+
+            said = "; ".join(str(p) for p in problems_from(exc, values, "", model))
+            return f"blackboard value for {', '.join(values)} is invalid: {said}"
+        except Exception as exc:  # a plugin's validator that raised something else
             return f"blackboard value for {', '.join(values)} is invalid: {exc}"
         return None
 

@@ -32,16 +32,10 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from thymio_bt.data import ASSIGNMENTS
 from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.fields import Angle, Duration, Length, Memory, Point, Speed
 from thymio_bt.inputs.validation import locate, validate
 from thymio_bt.inputs.yamlio import load_yaml
-from thymio_bt.maze.model import Angle, Length, Point, Spawn, parsed_quantity
-
-#: seconds, written with a unit or not (``60s``, ``2min``)
-Duration = Annotated[float, parsed_quantity("time")]
-#: metres per second (``10cm/s``)
-Speed = Annotated[float, parsed_quantity("speed")]
-#: MiB, written with a unit or not (``512MiB``, ``1GiB``, ``512MB``)
-Memory = Annotated[float, parsed_quantity("memory")]
+from thymio_bt.maze.model import Spawn
 
 EXAMPLE = """\
 name: stop_at_wall

@@ -232,6 +232,7 @@ def _respawn(criterion: Criterion, facts: RunFacts) -> Judgement:
         return Judgement(False, "the robot was never spawned again", facts.moment())
     got = spawns[-1]["pose"]
     off = math.dist((got["x"], got["y"]), (want.x, want.y))
+    # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
     turn = abs(math.remainder(got["yaw"] - want.yaw, math.tau))
     if off <= spec.tolerance and turn <= spec.yaw_tolerance:
         return Judgement(True)

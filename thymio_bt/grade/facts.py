@@ -188,6 +188,7 @@ def turns_taken(facts: RunFacts) -> list[tuple[str, float]]:
         if segment_start is None or any(segment_start < s <= t for s in spawns):
             segment_start, base, heading, stable, candidate, since, origin = t, yaw, yaw, 0, 0, t, (x, y)
             continue
+        # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
         heading += math.remainder(yaw - heading, math.tau)  # unwrapped
         steps = (heading - base) / quarter
         q = round(steps)

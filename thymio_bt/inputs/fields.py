@@ -6,6 +6,11 @@ refuses a value of the wrong kind, ``thymio-bt behaviours`` prints the unit, and
 carries it. Composite shapes are built from them (``tuple[Length, Length]`` is a point,
 ``list[Point]`` a path), so a new parameter shape needs no change to the loader.
 
+The same types hold the numbers of the files pydantic reads alone (mazes, a mission's ``expect:``,
+assignments): there the :class:`Unit` parses ``20cm`` or ``pi/2`` itself and refuses a value of the
+wrong kind or a bare angle past a full turn, with a hint. Values already in SI (the mission loader's,
+the blackboard's) are validated with the context :data:`IN_SI` and taken as they are.
+
 Example::
 
     >>> from pydantic import BaseModel, Field
@@ -16,24 +21,60 @@ Example::
     ('m', 'm, m, rad')
     >>> MoveParams(goal="0.5, 0.3, pi/2").goal          # in Python too, a pose may be written as text
     (0.5, 0.3, 1.5707963267948966)
+    >>> MoveParams(distance="5cm", goal=(0, 0, 0)).distance     # and a number with its unit
+    0.05
     >>> Unit("rad/s").kind, Unit("1/s").kind              # the unit parser's kind, if the unit has one
     ('angular_speed', None)
 """
 
 from __future__ import annotations
 
+import functools
 import types
 import typing
 from dataclasses import dataclass
 from typing import Annotated, Any
 
-from pydantic import BeforeValidator
+from pydantic import BeforeValidator, GetCoreSchemaHandler, ValidationInfo
+from pydantic_core import PydanticCustomError, core_schema
 
-from thymio_bt.errors import did_you_mean
-from thymio_bt.inputs.units import UnitError, parse_pose
+from thymio_bt.errors import did_you_mean, type_name
+from thymio_bt.inputs.units import UnitError, kind_hint, parse_kind, parse_pose
 
-#: kinds of the SI units that parameters are declared in (others, like 1/s, are plain numbers)
-_KIND = {"m": "length", "rad": "angle", "s": "time", "m/s": "speed", "rad/s": "angular_speed", "Hz": "frequency"}
+#: kinds of the units that numbers are declared in (others, like 1/s, are plain numbers); MiB is no
+#: SI unit, but the one memory limits are given in
+_KIND = {
+    "m": "length",
+    "rad": "angle",
+    "s": "time",
+    "m/s": "speed",
+    "rad/s": "angular_speed",
+    "Hz": "frequency",
+    "MiB": "memory",
+}
+
+#: the validation context of values already in SI (converted by the mission loader, or computed and
+#: put on the blackboard): a :class:`Unit` takes them as they are, leaving pydantic's checks
+IN_SI = {"in_si": True}
+
+
+def hinted_error(message: str, hint: str) -> PydanticCustomError:
+    """A validation error with a hint, which :func:`thymio_bt.inputs.validation.problems_from` shows."""
+    return PydanticCustomError("value", "{message}", {"message": message, "hint": hint})
+
+
+def _written(kind: str, value: Any, info: ValidationInfo) -> Any:
+    """A number as written in a file, in the unit of ``kind`` (``20cm``, ``pi/2``, ``$name`` where the
+    context has a ``resolve``); a :func:`hinted_error` when it is no number of that kind."""
+    context = info.context or {}
+    if context.get("in_si"):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise hinted_error(f"expected a number, got {type_name(value)}", kind_hint(kind))
+    try:
+        return parse_kind(value, context.get("resolve"), kind)
+    except UnitError as exc:
+        raise hinted_error(str(exc), exc.hint or kind_hint(kind)) from None
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,6 +87,14 @@ class Unit:
     def kind(self) -> str | None:
         """The unit parser's kind (``length``, ``angle``...), None for a unit without one (``1/s``)."""
         return _KIND.get(self.symbol)
+
+    def __get_pydantic_core_schema__(self, source: Any, handler: GetCoreSchemaHandler) -> core_schema.CoreSchema:
+        """The number's validation: written with a unit of its kind, or already in SI (:data:`IN_SI`)."""
+        schema = handler(source)
+        kind = self.kind
+        if kind is None:
+            return schema
+        return core_schema.with_info_before_validator_function(functools.partial(_written, kind), schema)
 
     def __get_pydantic_json_schema__(self, core_schema: Any, handler: Any) -> dict[str, Any]:
         """The number's JSON Schema, with its ``unit`` (editors show it; ``thymio-bt schema`` writes it)."""
@@ -139,6 +188,8 @@ PerSecondPerMetre = Annotated[float, Unit("rad/s/m")]
 """An angular-speed gain per metre of error."""
 Point = tuple[Length, Length]
 """A point ``[x, y]`` in world metres."""
+Memory = Annotated[float, Unit("MiB")]
+"""An amount of memory in MiB, written ``512MiB``, ``1GiB``, ``512MB`` or ``512``."""
 EntityName = Annotated[str, CalledName()]
 """The name of an entity of the world (the robot: ``thymio``), what Gazebo's services call ``name``."""
 
@@ -200,6 +251,7 @@ __all__ = [
     "Duration",
     "EntityName",
     "Length",
+    "Memory",
     "PerSecond",
     "PerSecondPerMetre",
     "Point",

@@ -301,6 +301,24 @@ def parse_pose(text: str, resolve: Callable[[str], Quantity] | None = None) -> t
     return x.value, y.value, yaw.value
 
 
+def parse_kind(text: str | int | float, resolve: Callable[[str], Quantity] | None, kind: str | None) -> float:
+    """A value for a number of ``kind``, in its SI unit: :func:`parse_value`, then :func:`check_kind`
+    (how the mission loader and the unit types read every number).
+
+    >>> parse_kind("20cm", None, "length")
+    0.2
+    >>> parse_kind("2s", None, "length")
+    Traceback (most recent call last):
+    ...
+    thymio_bt.inputs.units.UnitError: expected a length (in m), got a time
+    """
+    quantity = parse_value(text, resolve, kind)
+    error = check_kind(quantity, kind)
+    if error:
+        raise error
+    return quantity.value
+
+
 def check_kind(quantity: Quantity, expected: str | None) -> UnitError | None:
     """The problem (message and hint) when a value does not fit a parameter of kind ``expected``,
     else None: a unit of another kind, or an angle written without a unit past a full turn.

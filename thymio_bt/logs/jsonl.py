@@ -22,7 +22,7 @@ Example (a log damaged at line 101: an error naming the line, or the 99 ticks be
 >>> read_jsonl(path)  # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
-thymio_bt.errors.UserError: .../run.jsonl:101:1: damaged log line: tick line: t: Field required (hint: ...)
+thymio_bt.errors.UserError: .../run.jsonl:101:1: damaged log line: tick line: missing key 't' (hint: ...)
 >>> partial = read_jsonl(path, partial=True)
 >>> len(partial.samples), partial.header["damaged_at"], partial.end["status"]
 (99, 101, 'INCOMPLETE')
@@ -40,7 +40,7 @@ from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError,
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_text
-from thymio_bt.inputs.validation import validate
+from thymio_bt.inputs.validation import Wording, problems_from, validate
 from thymio_bt.logs.recording import Recording
 from thymio_bt.logs.records import STATUS_LETTER, LogEnd, LogHeader, TickRecord
 from thymio_bt.maze import Maze
@@ -153,6 +153,8 @@ class _End(BaseModel):
 
 
 _LINES: dict[str, type[BaseModel]] = {"header": _Header, "tick": _Tick, "end": _End}
+#: how a line's first problem reads after "tick line: " (a log has no marks: its line number is the place)
+_LINE_WORDING = Wording(unknown="unknown key '{path}'", missing="missing key '{path}'", invalid="{path}: {msg}")
 
 
 def read_jsonl(path: Path, partial: bool = False) -> Recording:
@@ -234,9 +236,8 @@ def _line(line: str, first: bool) -> tuple[str, dict[str, Any]]:
     try:
         _LINES[kind].model_validate(obj)
     except ValidationError as exc:
-        err = exc.errors(include_url=False)[0]
-        where = ".".join(str(step) for step in err["loc"])
-        raise ValueError(f"{kind} line: {where}: {err['msg']}") from None
+        problem = problems_from(exc, obj, "", _LINES[kind], wording=_LINE_WORDING)[0]
+        raise ValueError(f"{kind} line: {problem.message}") from None
     return kind, obj
 
 

@@ -38,6 +38,7 @@ from pydantic import ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.reading import read_bytes
+from thymio_bt.inputs.validation import Wording, problems_from
 from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.maze.model import Maze, Spawn, Wall
 
@@ -237,7 +238,9 @@ def _box_wall(doc: _Doc, size_el: ET.Element, pose: _Pose, name: str) -> Wall:
             name=name,
         )
     except ValidationError as exc:
-        raise doc.error(f"box of '{name}' cannot be a wall: {exc.errors()[0]['msg']}", size_el) from None
+        wording = Wording(invalid=f"box of '{name}' cannot be a wall: {{msg}}")
+        at = doc.marks.get(size_el, (0, 0))
+        raise UserError(problems_from(exc, None, doc.file, Wall, at=at, wording=wording)) from None
 
 
 def _natural(name: str | None) -> list[Any]:
@@ -293,8 +296,19 @@ def import_world(
             else "walls are <link>s with a <collision><geometry><box>",
         )
     walls.sort(key=lambda w: _natural(w.name))
-    try:
-        checked = {k: v if isinstance(v, Spawn) else Spawn.model_validate(v) for k, v in (spawns or {}).items()}
-    except ValidationError as exc:
-        raise UserError(Problem(f"bad spawn: {exc.errors()[0]['msg']}", "<spawns>")) from None
-    return Maze(name=name or path.stem, description=description, source=path.name, walls=walls, spawns=checked)
+    return Maze(name=name or path.stem, description=description, source=path.name, walls=walls, spawns=_spawns(spawns))
+
+
+def _spawns(spawns: Mapping[str, Spawn | Mapping[str, Any] | tuple[Any, Any, Any]] | None) -> dict[str, Spawn]:
+    """The spawns given to :func:`import_world` (in Python, not a file), checked: a :class:`UserError`
+    names each bad one."""
+    checked, problems = {}, []
+    for key, value in (spawns or {}).items():
+        try:
+            checked[key] = value if isinstance(value, Spawn) else Spawn.model_validate(value)
+        except ValidationError as exc:
+            wording = Wording(invalid="bad spawn: {msg}")
+            problems += problems_from(exc, value, "<spawns>", Spawn, f"{key}.", at=(0, 0), wording=wording)
+    if problems:
+        raise UserError(problems)
+    return checked

@@ -164,7 +164,10 @@ def mirrored(maze: Maze, axis_x: float) -> Maze:
     ]
     spawns = {
         k: Spawn(
-            x=round(2 * axis_x - s.x, 9), y=s.y, yaw=math.atan2(math.sin(math.pi - s.yaw), math.cos(math.pi - s.yaw))
+            x=round(2 * axis_x - s.x, 9),
+            y=s.y,
+            # not wrap_angle: atan2(sin, cos) keeps pi where wrap_angle gives -pi (kept: the same bits as before)
+            yaw=math.atan2(math.sin(math.pi - s.yaw), math.cos(math.pi - s.yaw)),
         )
         for k, s in maze.spawns.items()
     }

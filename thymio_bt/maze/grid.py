@@ -27,7 +27,8 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field
 
 from thymio_bt.errors import Problem, UserError
-from thymio_bt.maze.model import Length, Maze, Point, Spawn, Wall
+from thymio_bt.inputs.fields import Length, Point
+from thymio_bt.maze.model import Maze, Spawn, Wall
 
 _HEADINGS = {">": 0.0, "^": math.pi / 2, "<": math.pi, "v": -math.pi / 2}
 

@@ -31,41 +31,11 @@ import math
 from collections.abc import Sequence
 from typing import Annotated, Any
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationInfo, model_validator
-from pydantic_core import PydanticCustomError
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from thymio_bt.errors import Problem, UserError, did_you_mean, type_name
-from thymio_bt.inputs.units import UnitError, check_kind, kind_hint, parse_value
+from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.inputs.fields import Angle, Length, Point, hinted_error
 from thymio_bt.robot.interface import Pose
-
-
-def _problem(message: str, hint: str) -> PydanticCustomError:
-    """A validation error whose hint :func:`thymio_bt.inputs.validation.problems_from` shows."""
-    return PydanticCustomError("maze", "{message}", {"message": message, "hint": hint})
-
-
-def parsed_quantity(kind: str) -> BeforeValidator:
-    """Accept a number or a text with units (``20cm``, ``pi/2``) of ``kind``; errors carry a hint.
-    A ``$name`` resolves where the validation context has a ``resolve`` (the mission's ``expect:``)."""
-
-    def parse(value: Any, info: ValidationInfo) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-            raise _problem(f"expected a number, got {type_name(value)}", kind_hint(kind))
-        try:
-            quantity = parse_value(value, (info.context or {}).get("resolve"), kind)
-        except UnitError as exc:
-            raise _problem(str(exc), exc.hint or kind_hint(kind)) from None
-        error = check_kind(quantity, kind)
-        if error:
-            raise _problem(str(error), error.hint)
-        return quantity.value
-
-    return BeforeValidator(parse)
-
-
-Length = Annotated[float, parsed_quantity("length")]
-Angle = Annotated[float, parsed_quantity("angle")]
-Point = tuple[Length, Length]
 
 
 class Wall(BaseModel):
@@ -80,7 +50,7 @@ class Wall(BaseModel):
     @model_validator(mode="after")
     def _not_degenerate(self) -> Wall:
         if self.start == self.end:
-            raise _problem(
+            raise hinted_error(
                 "a wall needs two different end points",
                 "a wall goes from one point to another, e.g. {from: [0, 0], to: [0.6, 0]}",
             )
@@ -140,7 +110,7 @@ class Obstacle(BaseModel):
                 for i in range(n)
             ]
             if not (all(t > 0 for t in turns) or all(t < 0 for t in turns)):
-                raise _problem(
+                raise hinted_error(
                     "the polygon must be convex with no repeated points",
                     "split a concave obstacle into several convex ones",
                 )

@@ -24,7 +24,7 @@ from typing import Any
 
 from thymio_bt.errors import Problem, did_you_mean, type_name
 from thymio_bt.inputs.fields import key_hint
-from thymio_bt.inputs.units import Quantity, UnitError, check_kind, parse_pose, parse_value
+from thymio_bt.inputs.units import Quantity, UnitError, parse_kind, parse_pose, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList, mark_of
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
@@ -128,7 +128,7 @@ class Checker:
             raise UnitError(f"parameter '${name}' is {raw!r}, not a number")
 
         try:
-            q = parse_value(value, resolve, kind)
+            return parse_kind(value, resolve, kind)
         except UnitError as exc:
             self.problem(
                 str(exc),
@@ -137,11 +137,6 @@ class Checker:
                 exc.hint or "numbers may carry a unit (5cm, 90deg, 0.1 m/s) and use + - * / ( ) pi and $parameters",
             )
             return None
-        error = check_kind(q, kind)
-        if error:
-            self.problem(str(error), where, path, error.hint)
-            return None
-        return q.value
 
     def parameter_value(self, value: Any, where: Where, path: str) -> Any:
         """A mission or subtree parameter default: a quantity when it parses, else the raw value."""
@@ -211,6 +206,7 @@ class Checker:
                 "give a heading such as 90deg, pi/2 or -45deg",
             )
             return None
+        # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
         return Pose(pose.x, pose.y, math.remainder(pose.yaw, math.tau))
 
 

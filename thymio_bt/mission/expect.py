@@ -44,18 +44,15 @@ import math
 from bisect import bisect_right
 from fnmatch import fnmatchcase
 from operator import itemgetter
-from typing import Annotated, Any
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from thymio_bt.inputs.fields import Duration, Length, Point
 from thymio_bt.maze import Maze
-from thymio_bt.maze.model import Length, Point, parsed_quantity
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import ray_distance
-
-#: seconds, written with a unit or not (``60s``, ``2min``)
-Duration = Annotated[float, parsed_quantity("time")]
 
 
 class GoalRegion(BaseModel):

@@ -27,7 +27,9 @@ from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails
 
+from thymio_bt.errors import Problem
 from thymio_bt.inputs.fields import (
+    IN_SI,
     SpawnName,
     Unit,
     called_name,
@@ -38,6 +40,7 @@ from thymio_bt.inputs.fields import (
     within_sensor_range,
 )
 from thymio_bt.inputs.units import Quantity, UnitError, parse_value
+from thymio_bt.inputs.validation import HintRule, Named, Wording, problems_from, range_hint
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.maze import Maze
 from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
@@ -241,42 +244,46 @@ class ParameterReader(Checker):
         reported now). A field left for the blackboard, or already reported, is not 'missing' again."""
         failed = {key for key in keys if key not in reading.values and key not in reading.refs}
         try:
-            return reading.model.model_validate(reading.values)
+            return reading.model.model_validate(reading.values, context=IN_SI)
         except ValidationError as exc:
             # the other values are still checked, so that every problem of the node is reported at once
-            errors = [
-                e
-                for e in exc.errors(include_url=False)
-                if not (
-                    e["type"] == "missing"
-                    and e["loc"]
-                    and (e["loc"][0] in reading.refs or e["loc"][0] in failed or reading.unknown)
+            def settled(err: ErrorDetails) -> bool:
+                """A 'missing' field left for the blackboard, or one already reported."""
+                key = err["loc"][0] if err["loc"] else None
+                return (
+                    err["type"] == "missing"
+                    and key is not None
+                    and (key in reading.refs or key in failed or reading.unknown)
                 )
-            ]
-            for err in errors:
-                self._validation_problem(reading, err, missing_hint)
-            if errors:
+
+            problems = problems_from(
+                exc,
+                reading.body,
+                reading.file,
+                reading.model,
+                f"{reading.path}.",
+                at=reading.where[1:],
+                wording=Wording(missing=f"{reading.kind} needs '{{key}}'"),
+                hint=_hint_rule(reading, missing_hint),
+                skip=settled,
+            )
+            for problem in problems:
+                self._validation_problem(reading, problem)
+            if problems:
                 return None
             return reading.model.model_construct(**{**{k: None for k in reading.refs}, **reading.values})
 
-    def _validation_problem(self, reading: _Reading, err: ErrorDetails, missing_hint: str) -> None:
-        """One pydantic error of a node's parameters, as a problem at the value's place."""
-        key = err["loc"][0] if err["loc"] else None
-        body = reading.body
-        where = self.where_value(body, key, reading.file) if key in body else reading.where
-        field_info = reading.fields.get(key) if isinstance(key, str) else None
-        message = err["msg"].removeprefix("Value error, ")
-        hint = _error_hint(err, field_info, reading.bare.get(key, body.get(key)) if isinstance(key, str) else None)
-        given = reading.set_values.get(key) if isinstance(key, str) else None
-        if given is not None:  # the value came from --set: say so there (once), with the file's hint
-            message = f"{given.name}={given.text}: {message} (where {reading.kind}.{key} uses it)"
-            where, hint = ("--set", 0, 0), _error_hint(err, field_info, given.bare)
+    def _validation_problem(self, reading: _Reading, problem: Problem) -> None:
+        """A problem pydantic found in a node's parameters: at the value's place, or at ``--set`` when
+        the value came from there (once, however many nodes use it)."""
+        key = problem.path[len(reading.path) + 1 :].partition(".")[0]
+        given = reading.set_values.get(key)
+        if given is not None:
+            message = f"{given.name}={given.text}: {problem.message} (where {reading.kind}.{key} uses it)"
             if any(p.file == "--set" and p.message == message for p in self.problems):
                 return  # another use of the same value: the same fix
-        if err["type"] == "missing":
-            message = f"{reading.kind} needs '{key}'"
-            hint = missing_hint or (field_info.description if field_info else "") or ""
-        self.problem(message, where, f"{reading.path}.{key}" if key else reading.path, hint)
+            problem = Problem(message, "--set", 0, 0, problem.path, problem.hint)
+        self.problems.append(problem)
 
     def argument(self, raw: Any, scope: Scope, where: Where, path: str, kind: str | None) -> Any:
         """A subtree argument: a quantity when it is numeric (in the caller's scope), else as written."""
@@ -390,6 +397,22 @@ def parse_value_kind(text: str | int | float) -> str | None:
         return None
 
 
+def _hint_rule(reading: _Reading, missing_hint: str) -> HintRule:
+    """The hints of a node's parameter errors: a missing one's (the node's own, else the field's
+    description), else :func:`_error_hint` of the value as written (or as ``--set`` gave it)."""
+
+    def hint(err: ErrorDetails, named: Named | None) -> str:
+        key = err["loc"][0] if err["loc"] else None
+        field_info = reading.fields.get(key) if isinstance(key, str) else None
+        if err["type"] == "missing":
+            return missing_hint or (field_info.description if field_info else "") or ""
+        given = reading.set_values.get(key) if isinstance(key, str) else None
+        written = reading.bare.get(key, reading.body.get(key)) if isinstance(key, str) else None
+        return _error_hint(err, field_info, given.bare if given is not None else written)
+
+    return hint
+
+
 def _error_hint(err: ErrorDetails, field_info: FieldInfo | None, raw: Any) -> str:
     """The hint for a pydantic error of a parameter written ``raw``: the validator's own, how to write
     a boolean, or the field's range (with the unit a bare number out of range probably meant)."""
@@ -400,7 +423,7 @@ def _error_hint(err: ErrorDetails, field_info: FieldInfo | None, raw: Any) -> st
         return "write true or false"
     if field_info is None:
         return hint
-    hint = _range_hint(field_info)
+    hint = range_hint(field_info)
     guess = _unit_guess(field_info, raw)
     if guess:
         return f"did you mean {guess}? a bare number is in {unit_of(field_info)}; {hint}"
@@ -430,15 +453,3 @@ def _unit_guess(field: Any, raw: Any) -> str | None:
         if all(test(float(raw) * factor, float(bound)) for bound, test in checks):
             return f"{raw:g}{unit}"
     return None
-
-
-def _range_hint(field: Any) -> str:
-    """'allowed: > 0 and <= 2 m', or the field's description when it has no bounds."""
-    bounds = []
-    for meta in field.metadata:
-        for attr, sym in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
-            value = getattr(meta, attr, None)
-            if value is not None:
-                bounds.append(f"{sym} {value:g}" if isinstance(value, (int, float)) else f"{sym} {value}")
-    unit = unit_of(field)
-    return f"allowed: {' and '.join(bounds)}{(' ' + unit) if unit else ''}" if bounds else (field.description or "")

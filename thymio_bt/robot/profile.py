@@ -82,6 +82,7 @@ def read_profile(path: str, models: tuple[tuple[str, RobotModel], ...]) -> Robot
     """The :class:`~thymio_bt.robot.model.RobotModel` a profile file describes, on the base it names
     among ``models`` ((name, model) pairs); a located :class:`UserError` when the file is missing or
     wrong. Use :func:`thymio_bt.robot.model.robot_model`, which passes the built-in models."""
+    from thymio_bt.inputs.validation import problems_from
     from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
 
     named = dict(models)
@@ -103,10 +104,7 @@ def read_profile(path: str, models: tuple[tuple[str, RobotModel], ...]) -> Robot
     try:
         profile = Profile.model_validate(dict(data))
     except ValidationError as exc:
-        for error in exc.errors():
-            key = str(error["loc"][0]) if error["loc"] else ""
-            hint = did_you_mean(key, Profile.model_fields) if error["type"] == "extra_forbidden" else ""
-            problems.append(Problem(f"'{key}': {error['msg']}", str(path), *marks.get(key, (1, 1)), hint=hint))
+        problems += problems_from(exc, data, str(path), Profile, at=(1, 1))
     if problems:
         raise UserError(problems)
     base = named[profile.base]

@@ -151,6 +151,7 @@ def phase_values(recording: Recording) -> dict[tuple[str, int], dict[str, Any]]:
         if event.get("angle") is not None and pose and path in started:
             before = _pose_at(recording, times, started[path])
             if before is not None:
+                # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
                 values["turned_deg"] = round(math.degrees(math.remainder(pose["yaw"] - before["yaw"], math.tau)), 4)
         prox = event.get("proximity")
         prox = prox if isinstance(prox, dict) else {}
@@ -180,6 +181,7 @@ def _difference(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
         vb = b.get(key)
         if isinstance(va, (int, float)) and isinstance(vb, (int, float)):
             d = vb - va
+            # not wrap_angle: these are degrees (and math.remainder is exact where wrap_angle rounds)
             diff[key] = round(math.remainder(d, 360.0) if key.endswith("_deg") else d, 6)
     if "x" in diff and "y" in diff:
         diff["position"] = round(math.hypot(diff["x"], diff["y"]), 6)

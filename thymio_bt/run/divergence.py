@@ -135,6 +135,7 @@ def _pose_difference(
     gap = math.hypot(pa["x"] - pb["x"], pa["y"] - pb["y"])
     if gap > distance:
         return f"poses {gap * 100:.1f} cm apart ({source})"
+    # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
     turn = abs(math.remainder(pa["yaw"] - pb["yaw"], math.tau))
     if turn > angle:
         return f"headings {math.degrees(turn):.1f} degrees apart ({source})"

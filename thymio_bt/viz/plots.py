@@ -255,6 +255,7 @@ def unwrapped(angles: list[float]) -> list[float]:
     previous = math.nan
     for angle in angles:
         if not math.isnan(angle) and not math.isnan(previous):
+            # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
             angle = previous + math.remainder(angle - previous, math.tau)
         out.append(angle)
         previous = angle

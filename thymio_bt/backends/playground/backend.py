@@ -77,6 +77,7 @@ class PlaygroundRobot(ThymioRobot):
         x_cm, y_cm, angle = self.enki.pose()
         x, y = self.world.from_enki(x_cm, y_cm)
         base = self.model.base_of(x, y, angle)
+        # not wrap_angle: atan2(sin, cos) keeps pi where wrap_angle gives -pi (kept: the same bits as before)
         return Pose(base.x, base.y, math.atan2(math.sin(angle), math.cos(angle)))
 
     def spawn_problem(self, name: str, pose: Pose) -> str | None:

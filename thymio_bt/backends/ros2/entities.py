@@ -118,6 +118,7 @@ class EntitySteps(Backend):
         if (
             seen is not None
             and seen.distance_to(request.pose) <= ADOPT_DISTANCE
+            # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
             and abs(math.remainder(seen.yaw - request.pose.yaw, math.tau)) <= ADOPT_ANGLE
         ):
             self._present = True  # the robot already stands there: adopt it

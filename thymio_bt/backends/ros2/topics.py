@@ -68,7 +68,8 @@ COURSE_TOPICS = TopicMap()
 def load_topics(path: str | Path) -> TopicMap:
     """A topic map from a YAML file: the course's layout with the file's keys replacing its own.
     ``sensors`` replaces the whole table (a robot may have fewer sensors)."""
-    from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
+    from thymio_bt.inputs.validation import problems_from
+    from thymio_bt.inputs.yamlio import load_yaml
 
     data = load_yaml(path, "include")
     if not isinstance(data, dict):
@@ -84,19 +85,4 @@ def load_topics(path: str | Path) -> TopicMap:
     try:
         return TopicMap.model_validate(dict(data))
     except ValidationError as exc:
-        problems = []
-        for error in exc.errors():
-            key = str(error["loc"][0]) if error["loc"] else ""
-            line, col = data.marks.get(key, (1, 1)) if isinstance(data, MarkedDict) else (1, 1)
-            if error["type"] == "extra_forbidden":
-                problems.append(
-                    Problem(f"unknown key '{key}'", str(path), line, col, hint=did_you_mean(key, TopicMap.model_fields))
-                )
-            else:
-                field = TopicMap.model_fields.get(key)
-                problems.append(
-                    Problem(
-                        f"'{key}': {error['msg']}", str(path), line, col, hint=field.description or "" if field else ""
-                    )
-                )
-        raise UserError(problems) from None
+        raise UserError(problems_from(exc, data, str(path), TopicMap, at=(1, 1))) from None
