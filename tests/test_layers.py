@@ -58,6 +58,8 @@ RUN_DOES_NOT_LOAD = (
     "thymio_bt.cli.grading",
     "thymio_bt.cli.inspection",
     "thymio_bt.grade",
+    "thymio_bt.mission.btcpp",
+    "xml.etree.ElementTree",
 )
 
 
