@@ -50,6 +50,46 @@ def test_commands_that_run_nothing_load_no_physics_engine(args, tmp_path):
     assert backends == "[]", f"{args}: loads backend modules {backends}"
 
 
+#: what ``thymio-bt run`` of a plain mission has no use for, made lazy so that its start-up does not pay
+#: for them (benchmarks/README.md, "Start-up of run"): other commands' modules and what they import
+RUN_DOES_NOT_LOAD = (
+    "asyncio",
+    "thymio_bt.cli.sweeps",
+    "thymio_bt.cli.grading",
+    "thymio_bt.cli.inspection",
+    "thymio_bt.grade",
+    "thymio_bt.mission.btcpp",
+    "xml.etree.ElementTree",
+)
+
+
+def test_run_loads_only_what_it_needs(tmp_path):
+    code = (
+        "import sys\nfrom thymio_bt.cli import main\n"
+        f"sys.argv = ['thymio-bt', 'run', {str(ROOT / 'missions/maze_part1_2.yaml')!r}, '--quiet']\n"
+        "try:\n    main()\nexcept SystemExit as exc:\n    assert not exc.code, exc.code\n"
+        f"print(sorted(m for m in {RUN_DOES_NOT_LOAD!r} if m in sys.modules), file=sys.stderr)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "[]"
+
+
+def test_every_command_is_found_where_the_group_looks_for_it():
+    """``main`` imports a command's module when the command is asked for (``app.COMMANDS``): each
+    module registers exactly the commands the table gives it."""
+    import importlib
+
+    from thymio_bt.cli.app import COMMANDS, main
+
+    for module in sorted(set(COMMANDS.values())):
+        importlib.import_module(f"thymio_bt.cli.{module}")
+    assert sorted(main.commands) == sorted(COMMANDS)
+    assert {name: cmd.callback.__module__ for name, cmd in main.commands.items()} == {
+        name: f"thymio_bt.cli.{module}" for name, module in COMMANDS.items()
+    }
+
+
 def _import_graph():
     """thymio_bt's modules and what each imports (anywhere in the module, TYPE_CHECKING blocks aside)."""
     import ast

@@ -13,6 +13,7 @@ Example::
 
 from __future__ import annotations
 
+import importlib
 import json
 import math
 import os
@@ -193,9 +194,43 @@ def viewer_options(command: F) -> F:
     )(command)
 
 
+#: the module of :mod:`thymio_bt.cli` that defines each command, imported when the command is asked
+#: for: a command pays at start-up for its own module only (``run`` for neither asyncio nor the grader)
+COMMANDS: dict[str, str] = {
+    "backends": "inspection",
+    "behaviours": "inspection",
+    "calibrate": "calibration",
+    "check": "checking",
+    "compare": "comparing",
+    "export": "logs",
+    "grade": "grading",
+    "lint": "linting",
+    "maze": "mazes",
+    "palette": "inspection",
+    "replay": "logs",
+    "run": "running",
+    "schema": "inspection",
+    "serve": "serving",
+    "sweep": "sweeps",
+    "tree": "inspection",
+    "validate": "inspection",
+    "view": "viewing",
+}
+
+
 class _Commands(click.Group):
-    """The command group; a Ctrl-C outside a run's own handling (or a second one) exits 130, quietly
-    (143 when a SIGTERM came first)."""
+    """The command group, its commands' modules imported on demand (:data:`COMMANDS`); a Ctrl-C outside
+    a run's own handling (or a second one) exits 130, quietly (143 when a SIGTERM came first)."""
+
+    def list_commands(self, ctx: click.Context) -> list[str]:
+        """Every command's name, its module not imported."""
+        return sorted({*self.commands, *COMMANDS})
+
+    def get_command(self, ctx: click.Context, cmd_name: str) -> click.Command | None:
+        """The command ``cmd_name``, its module imported first (it registers its commands on :func:`main`)."""
+        if cmd_name not in self.commands and cmd_name in COMMANDS:
+            importlib.import_module(f"thymio_bt.cli.{COMMANDS[cmd_name]}")
+        return super().get_command(ctx, cmd_name)
 
     def invoke(self, ctx: click.Context) -> Any:
         """Run the command; a KeyboardInterrupt prints ``interrupted`` and exits 130 (or the code of

@@ -30,7 +30,6 @@ from thymio_bt.errors import did_you_mean, type_name
 from thymio_bt.inputs.units import Quantity
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.assemble import Assembly, Subtree
-from thymio_bt.mission.btcpp import yaml_hint
 from thymio_bt.mission.checker import Scope, Where
 from thymio_bt.mission.parameters import ParameterReader, parse_value_kind
 from thymio_bt.mission.plan import NodePlan
@@ -110,6 +109,8 @@ class TreePlanner(ParameterReader):
             return self._behaviour(kind, body, at)
         if kind in self.subtrees:
             return self._use_subtree(kind, body, at)
+        from thymio_bt.mission.btcpp import yaml_hint  # the BT.CPP export, for a misspelt node only
+
         hint = yaml_hint(kind) or did_you_mean(kind, [*self.registry, *self.subtrees])
         self.problem(f"unknown node type '{kind}'", where, node_path, hint)
         return None
