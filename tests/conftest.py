@@ -1,7 +1,8 @@
 """Our own suite clears py_trees' global blackboard around every test (the plugin does it only after
 tests that made thymio-bt behaviours), starts each test in an empty working folder of its own, and
 skips the tests marked ``slow`` (real time over ~20 s: the Playground missions) unless asked:
-``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets.
+``--run-slow``, or ``THYMIO_BT_REQUIRE_ALL=1`` as CI sets, and runs the longest test files first
+(CI runs two files side by side: ``pytest -n 2``).
 Once the tests are over, a process that has not ended within :data:`EXIT_GRACE` s prints every
 thread's stack and exits 1: something a test started is holding it (a Dask client waiting on its
 loop once held CI's pytest after its last test until the job's time limit). A session started with
@@ -64,8 +65,35 @@ def pytest_addoption(parser):
     parser.addoption("--run-slow", action="store_true", help="also run the tests marked slow (real time)")
 
 
+#: the test files that take longest (docs/development.md: measured), longest first: they run first, so
+#: that with ``-n 2`` (a file whole in one worker) none starts last and keeps a worker busy alone
+LONGEST = (
+    "test_playground_missions.py",
+    "test_places.py",
+    "test_hostile_surfaces.py",
+    "test_ros2.py",
+    "test_interrupts.py",
+    "test_hostile_files.py",
+    "test_packaging.py",
+    "test_robotics_tools.py",
+    "test_whatif_backends.py",
+    "test_plugins_doc.py",
+    "test_grade.py",
+    "test_aseba_hostile.py",
+    "test_calibrate.py",
+    "test_ros2_verdicts.py",
+)
+
+
+def first_the_longest(name: str) -> int:
+    """Where a test file goes in the run: :data:`LONGEST` in its order, then the rest as collected."""
+    return LONGEST.index(name) if name in LONGEST else len(LONGEST)
+
+
 def pytest_collection_modifyitems(config, items):
-    """Skip the tests marked slow, unless asked or in CI."""
+    """The longest files first (a stable sort: every xdist worker collects the same order); skip the
+    tests marked slow, unless asked or in CI."""
+    items.sort(key=lambda item: first_the_longest(item.path.name))
     if config.getoption("--run-slow") or os.environ.get("THYMIO_BT_REQUIRE_ALL") == "1":
         return
     skip = pytest.mark.skip(reason="slow (real time): pytest --run-slow runs it, as CI does")

@@ -31,8 +31,8 @@ def test_the_readme_test_command_is_the_one_ci_runs():
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
     install = 'python3 -m venv .venv && .venv/bin/pip install -e ".[dev]"'
-    assert f"{install} && .venv/bin/python -m pytest\n" in readme
-    assert f"\n{install}\n" in ci and "\n.venv/bin/python -m pytest\n" in ci
+    assert f"{install} && .venv/bin/python -m pytest -n 2\n" in readme
+    assert f"\n{install}\n" in ci and "\n.venv/bin/python -m pytest -n 2\n" in ci
     run = "python3 -m venv .venv && .venv/bin/pip install . && .venv/bin/thymio-bt run missions/maze_part1_2.yaml"
     assert f"\n{run}\n" in readme
 

@@ -4,7 +4,8 @@ in ``.venv-ros2``: .ci/setup.d/30-ros2.sh; elsewhere set THYMIO_BT_ROS2_ENV=DIR)
 no ROS: the topic map, the conversions and the errors of a machine without ROS.
 
 Discovery stays on loopback (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST) and every test has its own
-ROS_DOMAIN_ID, so no test hears another's leftovers. About 60 s in all.
+ROS_DOMAIN_ID, so no test hears another's leftovers, nor a test running beside it in another pytest-xdist
+worker: each worker takes its domains from a band of its own (:func:`domain_band`). About 60 s in all.
 """
 
 from __future__ import annotations
@@ -36,10 +37,31 @@ from thymio_bt.run.runner import Run
 ROOT = Path(__file__).resolve().parent.parent
 MISSIONS = ROOT / "missions"
 SPEEDUP = 4.0
-_domains = itertools.count(1 + os.getpid() % 60)
+
+
+def domain_band(worker: str, pid: int) -> int:
+    """The first ROS_DOMAIN_ID of a pytest process: xdist worker ``gwN`` (``""``: no xdist, as worker 0)
+    gets 25 domains of its own within ROS 2's 1-101 (a process takes about 12), starting a few
+    further by its PID, so that a serve a killed run left behind is not heard either."""
+    band = int(worker.removeprefix("gw") or 0) % 4
+    return 1 + 25 * band + pid % 10
+
+
+_domains = itertools.count(domain_band(os.environ.get("PYTEST_XDIST_WORKER", ""), os.getpid()))
 
 
 # ------------------------------------------------------------------ without ROS
+def test_workers_side_by_side_never_share_a_ros_domain():
+    """Two xdist workers' domains (a process takes about 12) never meet, whatever their PIDs, and
+    stay in ROS 2's 1-101 (test_interrupts takes 215 on)."""
+    taken = [
+        {domain_band(f"gw{worker}", pid) + k for k in range(13)} for worker, pid in [(0, 9), (1, 0), (2, 9), (3, 5)]
+    ]
+    assert all(not (a & b) for i, a in enumerate(taken) for b in taken[i + 1 :])
+    assert min(map(min, taken)) >= 1 and max(map(max, taken)) <= 101
+    assert domain_band("", 1234) == domain_band("gw0", 1234)
+
+
 def test_conversions():
     for yaw in (-3.0, -1.2, 0.0, 0.4, math.pi / 2, 3.1):
         assert yaw_of(*quaternion_of(yaw)) == pytest.approx(yaw, abs=1e-12)
