@@ -80,55 +80,13 @@ def grade(
     require_confinement: bool,
 ) -> None:
     """Grade SUBMISSIONS (mission files, or a folder per student) on ASSIGNMENT (a YAML file)."""
-    import os
-
-    from thymio_bt.cli.sweeps import dask_executor
-    from thymio_bt.grade.grader import grade as run_grade
-    from thymio_bt.grade.reports import gradebook_csv, gradescope_json, junit_xml, summary_table
-    from thymio_bt.grade.worlds import course_secret
-
     try:
-        outputs = {
-            name: Output(path, option)
-            for name, path, option in (
-                ("out", out, "--out"),
-                ("csv", csv_file, "--csv"),
-                ("junit", junit, "--junit"),
-                ("gradescope", gradescope, "--gradescope"),
-            )
-            if path is not None
-        }
+        outputs = _outputs(out, csv_file, junit, gradescope)
         previous = _previous(update) if update is not None else None
         if update is not None and out is None:
             outputs["out"] = Output(update, "--update")
-        if gradescope is not None and len(submissions) != 1:
-            count = len(submissions)
-            raise UserError(f"--gradescope grades one submission, got {count} (hint: Gradescope runs one at a time)")
-        site = _site_folder(html) if html is not None else None
-        workers_or_dask(workers, dask)
-        if for_students and html is None:
-            raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
-        if require_confinement:
-            _check_confinement()
-        worlds = _worlds_folder(out or update, html)
-        relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
-        # pages for students hold the public worlds' mazes (their commands name them), never a hidden one's
-        hidden = (_worlds_folder(out or update, None) or _temporary()) if for_students else None
-        with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
-            results = run_grade(
-                assignment,
-                submissions,
-                workers=workers or os.cpu_count() or 1,
-                worlds=worlds,
-                executor=executor,
-                progress=progress,
-                stop=lambda: interrupts.signal is not None,
-                started=progress.start,
-                secret=course_secret(secret),
-                relative_to=relative_to,
-                hidden_worlds=hidden,
-                replays=None if html is None else "public" if for_students else "all",
-            )
+        site = _checked_options(submissions, gradescope, html, for_students, workers, dask, require_confinement)
+        results, interrupts = _graded(assignment, submissions, out or update, html, for_students, secret, workers, dask)
         if previous is not None:
             from thymio_bt.grade.grader import update as updated
 
@@ -136,27 +94,126 @@ def grade(
         from thymio_bt.grade.site_replay import take_replays
 
         replays = take_replays(results)  # the site's, not results.json's
-        if "out" in outputs:
-            outputs["out"].write_text(json_text(results))
-        if "csv" in outputs:
-            outputs["csv"].write_text(gradebook_csv(results))
-        if "junit" in outputs:
-            outputs["junit"].write_text(junit_xml(results))
-        if "gradescope" in outputs:
-            if len(results["students"]) != 1:
-                count = len(results["students"])
-                raise UserError(
-                    f"--gradescope: grades one submission, got {count} (hint: Gradescope runs one at a time)"
-                )
-            outputs["gradescope"].write_text(json_text(gradescope_json(results)))
+        _write_reports(outputs, results)
         if site is not None:
-            from thymio_bt.grade.redact import for_students as redacted
-            from thymio_bt.grade.site import write_site
-
-            pages = write_site(redacted(results) if for_students else results, site, replays, for_students)
-            click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
+            _write_site(results, site, replays, for_students)
     except UserError as exc:
         fail(exc)
+    _exit(results, outputs, interrupts, fail_under)
+
+
+def _outputs(out: Path | None, csv_file: Path | None, junit: Path | None, gradescope: Path | None) -> dict[str, Output]:
+    """The report files asked for, by report name, each checked writable (in the options' order)."""
+    named = (
+        ("out", out, "--out"),
+        ("csv", csv_file, "--csv"),
+        ("junit", junit, "--junit"),
+        ("gradescope", gradescope, "--gradescope"),
+    )
+    return {name: Output(path, option) for name, path, option in named if path is not None}
+
+
+def _checked_options(
+    submissions: tuple[Path, ...],
+    gradescope: Path | None,
+    html: Path | None,
+    for_students: bool,
+    workers: int | None,
+    dask: str | None,
+    require_confinement: bool,
+) -> Path | None:
+    """The options that must agree with each other, checked before anything runs; the ``--html``
+    folder (made), if asked for."""
+    if gradescope is not None and len(submissions) != 1:
+        count = len(submissions)
+        raise UserError(f"--gradescope grades one submission, got {count} (hint: Gradescope runs one at a time)")
+    site = _site_folder(html) if html is not None else None
+    workers_or_dask(workers, dask)
+    if for_students and html is None:
+        raise UserError("--for-students is about the --html pages (hint: add --html DIR)")
+    if require_confinement:
+        _check_confinement()
+    return site
+
+
+def _graded(
+    assignment: Path,
+    submissions: tuple[Path, ...],
+    results_file: Path | None,
+    html: Path | None,
+    for_students: bool,
+    secret: Path | None,
+    workers: int | None,
+    dask: str | None,
+) -> tuple[dict[str, Any], Interrupts]:
+    """The class graded (on a local pool or a Dask cluster, with progress on stderr), and the
+    interrupts that may have stopped it."""
+    import os
+
+    from thymio_bt.cli.sweeps import dask_executor
+    from thymio_bt.grade.grader import grade as run_grade
+    from thymio_bt.grade.worlds import course_secret
+
+    worlds = _worlds_folder(results_file, html)
+    relative_to = worlds.parent if worlds is not None else None  # the commands name files from there
+    # pages for students hold the public worlds' mazes (their commands name them), never a hidden one's
+    hidden = (_worlds_folder(results_file, None) or _temporary()) if for_students else None
+    with dask_executor(dask) as executor, Interrupts() as interrupts, _Progress() as progress:
+        results = run_grade(
+            assignment,
+            submissions,
+            workers=workers or os.cpu_count() or 1,
+            worlds=worlds,
+            executor=executor,
+            progress=progress,
+            stop=lambda: interrupts.signal is not None,
+            started=progress.start,
+            secret=course_secret(secret),
+            relative_to=relative_to,
+            hidden_worlds=hidden,
+            replays=None if html is None else "public" if for_students else "all",
+        )
+    return results, interrupts
+
+
+def _write_reports(outputs: dict[str, Output], results: dict[str, Any]) -> None:
+    """Each report asked for, written in this order: results JSON, gradebook CSV, JUnit, Gradescope."""
+    from thymio_bt.grade.reports import gradebook_csv, junit_xml
+
+    writers = {"out": json_text, "csv": gradebook_csv, "junit": junit_xml, "gradescope": _gradescope_text}
+    for name, text in writers.items():
+        if name in outputs:
+            outputs[name].write_text(text(results))
+
+
+def _gradescope_text(results: dict[str, Any]) -> str:
+    """Gradescope's results.json of the one student graded."""
+    from thymio_bt.grade.reports import gradescope_json
+
+    if len(results["students"]) != 1:
+        count = len(results["students"])
+        raise UserError(f"--gradescope: grades one submission, got {count} (hint: Gradescope runs one at a time)")
+    return json_text(gradescope_json(results))
+
+
+def _write_site(
+    results: dict[str, Any], site: Path, replays: dict[tuple[str, int], dict[str, Any]], for_students: bool
+) -> None:
+    """The ``--html`` site: the class page and a page per student (redacted for the students)."""
+    from thymio_bt.grade.redact import for_students as redacted
+    from thymio_bt.grade.site import write_site
+
+    pages = write_site(redacted(results) if for_students else results, site, replays, for_students)
+    click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
+
+
+def _exit(
+    results: dict[str, Any], outputs: dict[str, Output], interrupts: Interrupts, fail_under: float | None
+) -> None:
+    """The summary table, then the exit: the interrupt's code, 1 for a score under ``--fail-under``
+    or a submission the grader could not grade, else 0."""
+    from thymio_bt.grade.reports import summary_table
+
     to_stderr = any(o.is_stdout for o in outputs.values())
     click.echo(summary_table(results), err=to_stderr)
     click.echo(results["summary"]["confinement"], err=to_stderr)

@@ -51,7 +51,7 @@ from thymio_bt.outputs import STDOUT, Output, check_writable
 from thymio_bt.run.interrupts import Interrupts
 
 if TYPE_CHECKING:
-    from thymio_bt.logs.recording import Recorder
+    from thymio_bt.logs.recording import Recorder, Recording
     from thymio_bt.mission import Mission
     from thymio_bt.robot.interface import Backend
     from thymio_bt.run.runner import Run, RunResult
@@ -215,7 +215,6 @@ def run(
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))
         hooks.attach(
             runner,
-            recorder=pictures.wanted or log is not None or page is not None,
             log=log,
             keep=pictures.wanted or page is not None,
             statuses=page is not None,
@@ -232,21 +231,30 @@ def run(
             counts = Coverage.of(spec.tree).add(result.node_stats).to_json()
             covered.done(condition_names(spec.registry), counts, spec.registry)
         if report_out is not None:
-            data = result.report()
-            if covered is not None:
-                data["coverage"] = covered.data  # a key of its own, after the report's: only when asked
-            report_out.write_text(json_text(data))
+            report_out.write_text(json_text(_report(result, covered)))
         if hooks.recorder is not None:
-            recording = hooks.recorder.finish(result)
-            pictures.draw(recording, 4.0 if speedup is None else speedup, quiet)
-            if page is not None:
-                from thymio_bt.viz.page import write_page
-
-                write_page([recording], page.path)
+            _draw(hooks.recorder.finish(result), pictures, page, 4.0 if speedup is None else speedup, quiet)
     except UserError as exc:
         fail(exc)
     err = STDOUT in (str(report), str(log))
-    _conclude(runner, result, interrupts, hooks.window, quiet, err, covered.text if covered and not quiet else None)
+    _conclude(runner, result, interrupts, hooks.window, quiet, err, covered.text if covered else None)
+
+
+def _report(result: RunResult, covered: CoverageRequest | None) -> dict[str, Any]:
+    """The run report, with the tree's coverage when asked (a key of its own, after the report's)."""
+    data = result.report()
+    if covered is not None:
+        data["coverage"] = covered.data
+    return data
+
+
+def _draw(recording: Recording, pictures: Pictures, page: Output | None, speedup: float, quiet: bool) -> None:
+    """The pictures asked for (the animation at ``speedup``) and the ``--html`` page of the run."""
+    pictures.draw(recording, speedup, quiet)
+    if page is not None:
+        from thymio_bt.viz.page import write_page
+
+        write_page([recording], page.path)
 
 
 def _check_outputs(report: Path | None, pictures: Pictures, log: Path | None) -> Output | None:
@@ -310,7 +318,6 @@ class _Hooks:
     def attach(
         self,
         runner: Run,
-        recorder: bool,
         log: Path | None,
         keep: bool,
         live_tree: bool,
@@ -319,10 +326,10 @@ class _Hooks:
         statuses: bool = False,
         web: tuple[str, int] | None = None,
     ) -> None:
-        """Make the hooks asked for: a ``recorder`` (writing ``log``; keeping the samples if ``keep``,
-        with the tree's statuses if ``statuses``), a page served live at ``web`` (address, port),
+        """Make the hooks asked for: a recorder when there is a ``log`` to write or samples to ``keep``
+        (with the tree's statuses if ``statuses``), a page served live at ``web`` (address, port),
         the ``live_tree``, a window at speed-up ``view`` and a Groot2 server on port ``groot2``."""
-        if recorder:
+        if keep or log is not None:
             from thymio_bt.logs.recording import Recorder
 
             self.recorder = Recorder(log_path=log, keep=keep, statuses=statuses)

@@ -90,9 +90,10 @@ def grade(
         made = select(made)
     entries = [_read(s, assignment, made) for s in find_submissions(submissions, assignment.submission)]
     tasks = [e.task for e in entries if e.task is not None]
+    replayed = _replayed(made, replays)
     for each in tasks:
         each.sandboxed = each.sandboxed or (sandbox == "always" and each.run_plugins)
-        each.replays = [w.name for w in made if replays == "all" or (replays == "public" and w.visibility == "public")]
+        each.replays = list(replayed)
     by_name = {e.submission.name: e for e in entries}
     if started is not None:
         started({t.name: t.runs for t in tasks})
@@ -105,29 +106,57 @@ def grade(
             progress(task.name, message)
 
     if executor is None:
-        _warm()
-        sandboxed = any(t.sandboxed for t in tasks)
-        # a confined student is two processes that take turns (the simulation, its tree): twice as
-        # many at once keep the cores busy while each waits for the other
-        parallel = 2 * workers if sandboxed else workers
-        with _zygote(sandboxed):
-            ForkPool[StudentTask](parallel, _limits(assignment), progress=heard, stop=stop).run(
-                tasks, grade_runs, lambda t: t.runs
-            )
+        _run_here(tasks, workers, _limits(assignment), heard, stop)
     else:
-        for name, messages in executor.imap_unordered(graded_remotely, tasks):
-            task = by_name[name].task
-            assert task is not None
-            for message in messages:
-                heard(task, message)
-            if stop():
-                break
+        _run_on_cluster(executor, tasks, heard, stop)
     if stop():  # a signal: the students whose runs were not all made say so
-        for entry in entries:
-            if entry.task is not None and len(entry.runs) < entry.task.runs and entry.status == "graded":
-                entry.status = "interrupted"
-                entry.messages.append(f"interrupted after {len(entry.runs)} of {entry.task.runs} runs")
+        _interrupted(entries)
     return results(assignment, path, made, entries, time.perf_counter() - began, relative_to)
+
+
+def _replayed(worlds: list[World], replays: str | None) -> list[str]:
+    """The variants whose failed runs are recorded for the site's replays (see :func:`grade`)."""
+    return [w.name for w in worlds if replays == "all" or (replays == "public" and w.visibility == "public")]
+
+
+def _run_here(
+    tasks: list[StudentTask],
+    workers: int,
+    limits: Limits,
+    heard: Callable[[StudentTask, dict[str, Any]], None],
+    stop: Callable[[], bool],
+) -> None:
+    """The students' runs in ``workers`` child processes of this machine, forked warm."""
+    _warm()
+    sandboxed = any(t.sandboxed for t in tasks)
+    # a confined student is two processes that take turns (the simulation, its tree): twice as
+    # many at once keep the cores busy while each waits for the other
+    parallel = 2 * workers if sandboxed else workers
+    with _zygote(sandboxed):
+        ForkPool[StudentTask](parallel, limits, progress=heard, stop=stop).run(tasks, grade_runs, lambda t: t.runs)
+
+
+def _run_on_cluster(
+    executor: Any,
+    tasks: list[StudentTask],
+    heard: Callable[[StudentTask, dict[str, Any]], None],
+    stop: Callable[[], bool],
+) -> None:
+    """The students' runs on a cluster (``executor``), each student's messages heard as it ends."""
+    by_name = {t.name: t for t in tasks}
+    for name, messages in executor.imap_unordered(graded_remotely, tasks):
+        for message in messages:
+            heard(by_name[name], message)
+        if stop():
+            break
+
+
+def _interrupted(entries: list[Entry]) -> None:
+    """After a signal: the students graded whose runs were not all made are ``interrupted``."""
+    for entry in entries:
+        if entry.task is not None and len(entry.runs) < entry.task.runs and entry.status == "graded":
+            entry.status = "interrupted"
+            entry.messages.append(f"interrupted after {len(entry.runs)} of {entry.task.runs} runs")
 
 
 def _warm() -> None:
@@ -409,32 +438,13 @@ def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, An
     runs passed; shared credit gives each passed variant its share of the points, ``credit: all``
     the points only when every variant passed."""
     judged = [(r, r["criteria"][criterion.name]) for r in runs if criterion.name in r["criteria"]]
-    names = list(dict.fromkeys(r["variant"] for r, _ in judged))
-    variants = []
-    for name in names:
-        mine = [j for r, j in judged if r["variant"] == name]
-        passed_runs = sum(j["passed"] for j in mine)
-        variants.append(
-            {
-                "name": name,
-                "runs": len(mine),
-                "passed_runs": passed_runs,
-                "passed": passed_runs >= criterion.pass_rate * len(mine) - 1e-9,
-                "feedback": next((j["feedback"] for j in mine if not j["passed"]), None),
-            }
-        )
+    variants = _variants(criterion, judged)
     passed = bool(variants) and all(v["passed"] for v in variants)
     counts = criterion.credit == "shared" or passed
     for v in variants:
         v["earned"] = round(criterion.points / len(variants), 3) if v["passed"] and counts else 0.0
     earned = criterion.points if passed else round(sum(v["earned"] for v in variants), 3)
-    failed = [(r, j) for r, j in judged if not j["passed"]]
-    feedback = None
-    where = None
-    if failed:
-        run, first = failed[0]
-        feedback = feedback_line(run, first["feedback"], len(failed), len(judged))
-        where = first["where"] or run.get("where")
+    feedback, where = _first_failure(judged)
     return {
         "name": criterion.name,
         "points": criterion.points,
@@ -446,6 +456,29 @@ def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, An
         "feedback": feedback,
         "where": where,
     }
+
+
+def _variants(criterion: Criterion, judged: list[tuple[dict[str, Any], dict[str, Any]]]) -> list[dict[str, Any]]:
+    """A criterion's line for each variant of the (run, judgement) pairs, in the order they ran."""
+    variants = []
+    for name in dict.fromkeys(r["variant"] for r, _ in judged):
+        mine = [j for r, j in judged if r["variant"] == name]
+        passed_runs = sum(j["passed"] for j in mine)
+        passed = passed_runs >= criterion.pass_rate * len(mine) - 1e-9
+        feedback = next((j["feedback"] for j in mine if not j["passed"]), None)
+        variants.append(
+            {"name": name, "runs": len(mine), "passed_runs": passed_runs, "passed": passed, "feedback": feedback}
+        )
+    return variants
+
+
+def _first_failure(judged: list[tuple[dict[str, Any], dict[str, Any]]]) -> tuple[str | None, Any]:
+    """The feedback line and the place in the tree of a criterion's first failed run; None, None if none failed."""
+    failed = [(r, j) for r, j in judged if not j["passed"]]
+    if not failed:
+        return None, None
+    run, first = failed[0]
+    return feedback_line(run, first["feedback"], len(failed), len(judged)), first["where"] or run.get("where")
 
 
 def _coverage(plan: Any, runs: list[dict[str, Any]]) -> dict[str, Any] | None:

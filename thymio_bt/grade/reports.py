@@ -168,29 +168,34 @@ def gradescope_json(results: dict[str, Any]) -> dict[str, Any]:
     seen = for_students(results)
     (student,) = seen["students"]
     hidden = {v["name"] for v in seen["assignment"]["variants"] if v.get("visibility") == "hidden"}
-    tests: list[dict[str, Any]] = []
-    for criterion in student["criteria"]:
-        variants = criterion.get("variants") or []
-        if not variants:  # not graded: the whole criterion, and why
-            tests.append(
-                _test(criterion["name"], criterion["earned"], criterion["points"], criterion.get("feedback"), "visible")
-            )
-            continue
-        share = criterion["points"] / len(variants)
-        where = f" (at {criterion['where']})" if criterion.get("where") else ""
-        for label, visibility, mine in (
-            ("", "visible", [v for v in variants if v["name"] not in hidden]),
-            (" (hidden worlds)", "after_due_date", [v for v in variants if v["name"] in hidden]),
-        ):
-            if mine:
-                said = "\n".join(f"{v['name']}: {v['feedback']}{where}" for v in mine if not v["passed"])
-                earned = sum(v["earned"] for v in mine)
-                tests.append(_test(criterion["name"] + label, earned, share * len(mine), said or None, visibility))
+    tests = [test for criterion in student["criteria"] for test in _criterion_tests(criterion, hidden)]
     if student.get("palette"):
         findings = "\n".join(_finding(f) for f in student["palette"])
         tests.append(_test("palette", student.get("penalty", 0.0), 0.0, findings, "visible"))
     output = "\n".join(student["messages"]) if student["status"] != "graded" else ""
     return {"score": student["score"], "output": output or f"{student['score']:g} / {student['max']:g}", "tests": tests}
+
+
+def _criterion_tests(criterion: dict[str, Any], hidden: set[str]) -> list[dict[str, Any]]:
+    """A criterion's Gradescope tests: one for its public variants, one for its ``hidden`` ones
+    (those it has); one for the whole criterion, saying why, when it was not graded."""
+    variants = criterion.get("variants") or []
+    if not variants:  # not graded: the whole criterion, and why
+        return [
+            _test(criterion["name"], criterion["earned"], criterion["points"], criterion.get("feedback"), "visible")
+        ]
+    share = criterion["points"] / len(variants)
+    where = f" (at {criterion['where']})" if criterion.get("where") else ""
+    tests = []
+    for label, visibility, mine in (
+        ("", "visible", [v for v in variants if v["name"] not in hidden]),
+        (" (hidden worlds)", "after_due_date", [v for v in variants if v["name"] in hidden]),
+    ):
+        if mine:
+            said = "\n".join(f"{v['name']}: {v['feedback']}{where}" for v in mine if not v["passed"])
+            earned = sum(v["earned"] for v in mine)
+            tests.append(_test(criterion["name"] + label, earned, share * len(mine), said or None, visibility))
+    return tests
 
 
 def _test(name: str, score: float, most: float, failed: str | None, visibility: str) -> dict[str, Any]:

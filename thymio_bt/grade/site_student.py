@@ -135,39 +135,47 @@ def _pictures(results: dict[str, Any], student: dict[str, Any], mazes: dict[str,
     runs = [as_dict(r) for r in as_list(student.get("runs"))]
     if not runs:
         return ""
-    variants = [as_dict(v) for v in as_list(as_dict(results.get("assignment")).get("variants"))]
-    known = {str(v.get("name")) for v in variants}
-    variants += [{"name": n} for n in dict.fromkeys(str(r.get("variant")) for r in runs) if n not in known]
     figures = []
-    for variant in variants:
+    for variant in _variants_run(results, runs):
         name = str(variant.get("name"))
         mine = [r for r in runs if str(r.get("variant")) == name]
-        if not mine or variant.get("visibility") == "hidden":  # a hidden world is not drawn
-            continue
-        maze = mazes.get(name)
-        svg, marks = trajectory_svg(maze if isinstance(maze, Maze) else None, variant, mine)
-        failed = sum(run_failed(r) for r in mine)
-        traced = next((r for r in mine if as_list(r.get("trajectory"))), None)
-        caption = f"variant {name}: {failed} of {len(mine)} runs went wrong"
-        if traced is not None:
-            caption += f"; the path drawn is seed {traced.get('seed')}'s"
-        notes = "".join(
-            f'<li style="color:{m.colour}"><span style="color:#1f2933">{esc(m.text)} '
-            f'<span class="muted">({esc(m.seed_text)})</span></span></li>'
-            for m in marks
-        )
-        other = any(not m.traced for m in marks)
-        problem = f'<p class="note warn">{esc(maze)}</p>' if isinstance(maze, str) else ""
-        figures.append(
-            f'<figure class="variant" data-variant="{esc(name)}">{svg}<figcaption>{esc(caption)}'
-            '<div class="legend"><span><span class="sw" style="background:#2b6cb0"></span>path</span>'
-            '<span><span class="sw" style="background:#2f855a"></span>start</span>'
-            '<span><span class="sw" style="background:#1f2933"></span>end</span>'
-            '<span><span class="sw" style="background:#c53030"></span>went wrong (numbered below)</span>'
-            f"{_OTHER_SEED if other else ''}</div>"
-            f"{f'<ol class=messages>{notes}</ol>' if notes else ''}{problem}</figcaption></figure>"
-        )
+        if mine and variant.get("visibility") != "hidden":  # a hidden world is not drawn
+            figures.append(_figure(name, variant, mine, mazes.get(name)))
     return f'<h2>Where the robot went</h2><div class="figs">{"".join(figures)}</div>'
+
+
+def _variants_run(results: dict[str, Any], runs: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The assignment's variants, then any other variant the runs name (results from elsewhere)."""
+    variants = [as_dict(v) for v in as_list(as_dict(results.get("assignment")).get("variants"))]
+    known = {str(v.get("name")) for v in variants}
+    return variants + [{"name": n} for n in dict.fromkeys(str(r.get("variant")) for r in runs) if n not in known]
+
+
+def _figure(name: str, variant: dict[str, Any], mine: list[dict[str, Any]], maze: Maze | str | None) -> str:
+    """One variant's figure: its maze with the paths of the student's runs in it (``mine``), what
+    went wrong numbered below, and the maze's problem when it could not be read (``maze`` a str)."""
+    svg, marks = trajectory_svg(maze if isinstance(maze, Maze) else None, variant, mine)
+    failed = sum(run_failed(r) for r in mine)
+    traced = next((r for r in mine if as_list(r.get("trajectory"))), None)
+    caption = f"variant {name}: {failed} of {len(mine)} runs went wrong"
+    if traced is not None:
+        caption += f"; the path drawn is seed {traced.get('seed')}'s"
+    notes = "".join(
+        f'<li style="color:{m.colour}"><span style="color:#1f2933">{esc(m.text)} '
+        f'<span class="muted">({esc(m.seed_text)})</span></span></li>'
+        for m in marks
+    )
+    other = any(not m.traced for m in marks)
+    problem = f'<p class="note warn">{esc(maze)}</p>' if isinstance(maze, str) else ""
+    return (
+        f'<figure class="variant" data-variant="{esc(name)}">{svg}<figcaption>{esc(caption)}'
+        '<div class="legend"><span><span class="sw" style="background:#2b6cb0"></span>path</span>'
+        '<span><span class="sw" style="background:#2f855a"></span>start</span>'
+        '<span><span class="sw" style="background:#1f2933"></span>end</span>'
+        '<span><span class="sw" style="background:#c53030"></span>went wrong (numbered below)</span>'
+        f"{_OTHER_SEED if other else ''}</div>"
+        f"{f'<ol class=messages>{notes}</ol>' if notes else ''}{problem}</figcaption></figure>"
+    )
 
 
 def _failed_runs(student: dict[str, Any]) -> str:

@@ -269,41 +269,13 @@ def trajectory_svg(maze: Maze | None, variant: dict[str, Any], runs: list[dict[s
     student's runs of the variant; the path is the first one that carries a trajectory."""
     traced = next((r for r in runs if samples(r)), None)
     points = samples(traced) if traced is not None else []
-    spawns = traced.get("spawns") if traced is not None else None
-    pieces = split_jumps(
-        points, [t for t in as_list(spawns) if isinstance(t, (int, float))] if spawns is not None else None
-    )
-    start = start_pose(variant.get("start"), maze) or (
-        (points[0][1], points[0][2], _yaw(traced, 0)) if traced is not None and points else None
-    )
+    pieces = _pieces(traced, points)
+    start = start_pose(variant.get("start"), maze) or _first_pose(traced, points)
     marks = collect_marks(runs, traced)
     seen = [(x, y) for piece in pieces for x, y in piece]
     seen += [(m.x, m.y) for m in marks] + ([start[:2]] if start else [])
     view = _View(_view_box(maze, seen))
-    name = str(variant.get("name") or "variant")
-    parts = [
-        f'<svg xmlns="http://www.w3.org/2000/svg" class="trajectory" role="img" width="{view.width:.0f}" '
-        f'height="{view.height:.0f}" viewBox="0 0 {view.width:.1f} {view.height:.1f}" '
-        f'aria-label="{esc(f"the path of the robot in variant {name}")}">',
-        f"<title>{esc(f'variant {name}')}</title>",
-        f'<rect width="{view.width:.1f}" height="{view.height:.1f}" fill="#fbfcfd"/>',
-    ]
-    if maze is not None:
-        parts.append('<g class="walls" fill="#334e68">')
-        for shape in maze.shapes():
-            parts.append(f'<polygon points="{" ".join(view(x, y) for x, y in shape.corners())}"/>')
-        parts.append("</g>")
-    for before, after in zip(pieces, pieces[1:], strict=False):
-        (x1, y1), (x2, y2) = view.xy(*before[-1]), view.xy(*after[0])
-        parts.append(
-            f'<line class="jump" x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}" stroke="#9aa5b1" '
-            f'stroke-width="1.5" stroke-dasharray="4 4"><title>respawned</title></line>'
-        )
-    for piece in pieces:
-        parts.append(
-            f'<polyline class="path" points="{" ".join(view(x, y) for x, y in piece)}" fill="none" '
-            f'stroke="#2b6cb0" stroke-width="2.2" stroke-linejoin="round" stroke-linecap="round"/>'
-        )
+    parts = [_head(view, str(variant.get("name") or "variant")), _walls(view, maze), _paths(view, pieces)]
     if start is not None:
         parts.append(_pose_mark(view, start, "#2f855a", "start pose"))
     if traced is not None:
@@ -316,3 +288,54 @@ def trajectory_svg(maze: Maze | None, variant: dict[str, Any], runs: list[dict[s
     parts.append(_scale_bar(view))
     parts.append("</svg>")
     return "".join(parts), marks
+
+
+def _pieces(traced: dict[str, Any] | None, points: list[tuple[float, float, float]]) -> list[list[Point]]:
+    """The drawn run's path, split where it jumped (a respawn: at its ``spawns`` times when it has them)."""
+    spawns = traced.get("spawns") if traced is not None else None
+    return split_jumps(
+        points, [t for t in as_list(spawns) if isinstance(t, (int, float))] if spawns is not None else None
+    )
+
+
+def _first_pose(
+    traced: dict[str, Any] | None, points: list[tuple[float, float, float]]
+) -> tuple[float, float, float | None] | None:
+    """The drawn run's first pose, for a variant whose start is not known."""
+    return (points[0][1], points[0][2], _yaw(traced, 0)) if traced is not None and points else None
+
+
+def _head(view: _View, name: str) -> str:
+    """The picture's ``<svg>`` element opened, its title and its background."""
+    return (
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="trajectory" role="img" width="{view.width:.0f}" '
+        f'height="{view.height:.0f}" viewBox="0 0 {view.width:.1f} {view.height:.1f}" '
+        f'aria-label="{esc(f"the path of the robot in variant {name}")}">'
+        f"<title>{esc(f'variant {name}')}</title>"
+        f'<rect width="{view.width:.1f}" height="{view.height:.1f}" fill="#fbfcfd"/>'
+    )
+
+
+def _walls(view: _View, maze: Maze | None) -> str:
+    """The maze's walls and obstacles as polygons ("" without a maze)."""
+    if maze is None:
+        return ""
+    polygons = "".join(f'<polygon points="{" ".join(view(x, y) for x, y in s.corners())}"/>' for s in maze.shapes())
+    return f'<g class="walls" fill="#334e68">{polygons}</g>'
+
+
+def _paths(view: _View, pieces: list[list[Point]]) -> str:
+    """The path's pieces as lines, and a dashed line for each jump between them (a respawn)."""
+    jumps = []
+    for before, after in zip(pieces, pieces[1:], strict=False):
+        (x1, y1), (x2, y2) = view.xy(*before[-1]), view.xy(*after[0])
+        jumps.append(
+            f'<line class="jump" x1="{x1:.1f}" y1="{y1:.1f}" x2="{x2:.1f}" y2="{y2:.1f}" stroke="#9aa5b1" '
+            f'stroke-width="1.5" stroke-dasharray="4 4"><title>respawned</title></line>'
+        )
+    lines = [
+        f'<polyline class="path" points="{" ".join(view(x, y) for x, y in piece)}" fill="none" '
+        f'stroke="#2b6cb0" stroke-width="2.2" stroke-linejoin="round" stroke-linecap="round"/>'
+        for piece in pieces
+    ]
+    return "".join(jumps + lines)

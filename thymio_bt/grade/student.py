@@ -156,41 +156,76 @@ def run_message(
     """Run ``mission`` in ``world`` with ``seed`` and judge it: the ``run`` message. A run of a world
     of the task's ``replays`` that makes a mistake not yet in ``replayed`` carries its ``replay``
     (:mod:`.site_replay`)."""
-    from thymio_bt.robot.model import robot_model
-    from thymio_bt.run.runner import Run
-
     head: dict[str, Any] = {"kind": "run", "index": index, "variant": world.name, "seed": seed, "robot": world.robot}
     criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
     if isinstance(mission, str):
         return head | _broken("WORLD_ERROR", mission, criteria)
-    limits = task.limits or Limits()
     try:
-        if task.sandboxed and outside is not None:
-            result = _outside_run(outside, mission, seed, limits, world)
-        else:
-            result = run_limited(limits, lambda: Run(mission, seed, node_stats=True).run())
-    except RunLimit as exc:
-        if outside is not None:
-            outside.close()
-        return head | _broken("LIMIT", str(exc), criteria)
+        result = _graded_run(task, mission, seed, world, outside)
     except _Broken as exc:
-        if outside is not None:
-            outside.close()
         return head | _broken(exc.code, exc.reason, criteria)
+    message = head | _judged(mission, world, result, criteria)
+    new = {(world.name, what) for what in went_wrong(message)} - (replayed or set())
+    if replayed is not None and world.name in task.replays and new:
+        recording = _recorded(task, mission, seed, world, outside, result)
+        if recording is not None:
+            message["replay"] = replay_data(recording, message)
+            replayed |= new
+    if picture:
+        message["trajectory"] = _picture(result.trajectory)
+    return message
+
+
+def _run(
+    task: StudentTask, mission: Mission, seed: int, world: World, outside: _Outside | None, recorder: Any = None
+) -> Any:
+    """The run, within the task's limits: its tree in the submission's confined process when the task
+    is sandboxed, else here."""
+    from thymio_bt.run.runner import Run
+
+    limits = task.limits or Limits()
+    if task.sandboxed and outside is not None:
+        return _outside_run(outside, mission, seed, limits, world, recorder)
+    return run_limited(limits, lambda: Run(mission, seed, node_stats=True).run(on_tick=recorder))
+
+
+def _graded_run(task: StudentTask, mission: Mission, seed: int, world: World, outside: _Outside | None) -> Any:
+    """The graded run's result; a run that broke (a limit, a crash, an exception, a world it cannot
+    run in) raises :class:`_Broken` with its code and reason."""
+    try:
+        return _run(task, mission, seed, world, outside)
+    except RunLimit as exc:
+        _close(outside)
+        raise _Broken("LIMIT", str(exc)) from None
+    except _Broken:
+        _close(outside)
+        raise
     except MemoryError:
-        return head | _broken("LIMIT", f"the run used more than its memory ({limits.memory_mib} MiB)", criteria)
+        memory = (task.limits or Limits()).memory_mib
+        raise _Broken("LIMIT", f"the run used more than its memory ({memory} MiB)") from None
     except UserError as exc:
-        return head | _broken("WORLD_ERROR", f"the mission cannot run in this world: {exc}", criteria)
+        raise _Broken("WORLD_ERROR", f"the mission cannot run in this world: {exc}") from None
     except SystemExit as exc:
-        return head | _broken(FailureCode.EXCEPTION, f"the submission called sys.exit({exc.code!r})", criteria)
+        raise _Broken(FailureCode.EXCEPTION, f"the submission called sys.exit({exc.code!r})") from None
     except Exception as exc:
-        return head | _broken(FailureCode.EXCEPTION, f"the run raised {type(exc).__name__}: {exc}", criteria)
+        raise _Broken(FailureCode.EXCEPTION, f"the run raised {type(exc).__name__}: {exc}") from None
+
+
+def _close(outside: _Outside | None) -> None:
+    """End the submission's confined process, if any (after a run that broke it)."""
+    if outside is not None:
+        outside.close()
+
+
+def _judged(mission: Mission, world: World, result: Any, criteria: list[Criterion]) -> dict[str, Any]:
+    """The run message's outcome of a run that ended: how it ended, and each criterion's judgement."""
+    from thymio_bt.robot.model import robot_model
+
     places = wheres(mission.tree)
     facts = RunFacts(
         result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns, world.cell
     )
-    judged = {c.name: _judgement(judge(c, facts), places) for c in criteria}
-    message = head | {
+    return {
         "status": result.status,
         "code": result.code,
         "reason": result.reason,
@@ -200,20 +235,16 @@ def run_message(
         "final_pose": result.final_pose_json,
         "collisions": result.collisions,
         "spawns": [e["t"] for e in result.events if e["kind"] == "spawn_entity"],  # the path's jumps
-        "criteria": judged,
+        "criteria": {c.name: _judgement(judge(c, facts), places) for c in criteria},
         "node_stats": _rows(result.node_stats),
     }
-    new = {(world.name, what) for what in went_wrong(message)} - (replayed or set())
-    if replayed is not None and world.name in task.replays and new:
-        recording = _recorded(task, mission, seed, world, outside, result)
-        if recording is not None:
-            message["replay"] = replay_data(recording, message)
-            replayed |= new
-    if picture:
-        step = max(1, len(result.trajectory) // PICTURE_SAMPLES + 1)
-        samples = result.trajectory[::step] + result.trajectory[-1:]
-        message["trajectory"] = [[round(v, 4) for v in sample] for sample in samples]
-    return message
+
+
+def _picture(trajectory: list[tuple[float, float, float, float]]) -> list[list[float]]:
+    """At most :data:`PICTURE_SAMPLES` of the trajectory's samples and its last, to 4 decimals."""
+    step = max(1, len(trajectory) // PICTURE_SAMPLES + 1)
+    samples = trajectory[::step] + trajectory[-1:]
+    return [[round(v, 4) for v in sample] for sample in samples]
 
 
 def _recorded(
@@ -223,18 +254,12 @@ def _recorded(
     replay: runs are deterministic, so only the runs that get a page pay for a recording. None when
     the run did not end as ``result`` did (a submission that is not deterministic) or broke."""
     from thymio_bt.logs.recording import Recorder
-    from thymio_bt.run.runner import Run
 
-    limits = task.limits or Limits()
     recorder = Recorder(statuses=True)
     try:
-        if task.sandboxed and outside is not None:
-            again = _outside_run(outside, mission, seed, limits, world, recorder)
-        else:
-            again = run_limited(limits, lambda: Run(mission, seed, node_stats=True).run(on_tick=recorder))
+        again = _run(task, mission, seed, world, outside, recorder)
     except Exception:  # a limit, a crash: no replay (the graded run's message says what it did)
-        if outside is not None:
-            outside.close()
+        _close(outside)
         return None
     ended = (again.status, again.code, again.sim_time, again.final_pose)
     return recorder.finish(again) if ended == (result.status, result.code, result.sim_time, result.final_pose) else None

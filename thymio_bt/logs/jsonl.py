@@ -171,52 +171,70 @@ def read_jsonl(path: Path, partial: bool = False) -> Recording:
     for number, line in enumerate(lines, 1):
         try:
             kind, obj = _line(line, number == 1)
-            if kind == "tick":
-                if obj["t"] < last_t:
-                    raise ValueError(f"tick line: t: {obj['t']} is before the previous tick's {last_t}")
-                last_t = obj["t"]
+            last_t = _tick_time(kind, obj, last_t)
         except ValueError as exc:
-            if number == 1:
-                raise UserError(
-                    Problem(
-                        f"not a thymio-bt log: {exc}",
-                        str(path),
-                        1,
-                        1,
-                        hint="logs are written by thymio-bt run --log FILE.jsonl",
-                    )
-                ) from None
-            if number == len(lines) and "invalid JSON" in str(exc):
-                break  # the run crashed mid-line: keep what came before
-            if partial:
+            if _damaged(path, exc, number, len(lines), partial):
                 assert recording is not None
                 recording.header["damaged_at"] = number
-                break
-            raise UserError(
-                Problem(
-                    f"damaged log line: {exc}",
-                    str(path),
-                    number,
-                    1,
-                    hint=f"replay the {_ticks(number - 2)} before it with --partial",
-                )
-            ) from None
-        if kind == "header":
-            header = {k: v for k, v in obj.items() if k != "kind"}
-            recording = Recording(
-                maze=validate(Maze, obj["maze"], str(path)), mission=obj.get("mission", ""), header=header
-            )
-        elif kind == "tick":
-            assert recording is not None
-            recording.samples.append({k: v for k, v in obj.items() if k != "kind"})
-        elif kind == "end":
-            assert recording is not None
-            recording.events = obj.get("events", [])
-            recording.end = {k: v for k, v in obj.items() if k not in ("kind", "events")}
+            break
+        recording = _added(recording, kind, obj, path)
     assert recording is not None
     if not recording.end:
         last = recording.samples[-1] if recording.samples else {"pose": None, "t": 0.0}
         recording.end = {"status": "INCOMPLETE", "final_pose": last["pose"], "sim_time": last["t"]}
+    return recording
+
+
+def _tick_time(kind: str, obj: dict[str, Any], last_t: float) -> float:
+    """The time of the last tick read, once this line is; ValueError for a tick before the previous one."""
+    if kind != "tick":
+        return last_t
+    if obj["t"] < last_t:
+        raise ValueError(f"tick line: t: {obj['t']} is before the previous tick's {last_t}")
+    return obj["t"]
+
+
+def _damaged(path: Path, exc: ValueError, number: int, count: int, partial: bool) -> bool:
+    """Where the reading stops at line ``number`` (of ``count``), which ``exc`` says is wrong: a
+    UserError, unless the run crashed mid-line (the last line's JSON cut short: False) or the log
+    is read ``partial`` (True: the recording says where it is damaged)."""
+    if number == 1:
+        raise UserError(
+            Problem(
+                f"not a thymio-bt log: {exc}",
+                str(path),
+                1,
+                1,
+                hint="logs are written by thymio-bt run --log FILE.jsonl",
+            )
+        ) from None
+    if number == count and "invalid JSON" in str(exc):
+        return False  # the run crashed mid-line: keep what came before
+    if partial:
+        return True
+    raise UserError(
+        Problem(
+            f"damaged log line: {exc}",
+            str(path),
+            number,
+            1,
+            hint=f"replay the {_ticks(number - 2)} before it with --partial",
+        )
+    ) from None
+
+
+def _added(recording: Recording | None, kind: str, obj: dict[str, Any], path: Path) -> Recording:
+    """The recording with one more line read: a header starts it, a tick adds a sample, the end
+    line its events and ending."""
+    if kind == "header":
+        header = {k: v for k, v in obj.items() if k != "kind"}
+        return Recording(maze=validate(Maze, obj["maze"], str(path)), mission=obj.get("mission", ""), header=header)
+    assert recording is not None
+    if kind == "tick":
+        recording.samples.append({k: v for k, v in obj.items() if k != "kind"})
+    else:
+        recording.events = obj.get("events", [])
+        recording.end = {k: v for k, v in obj.items() if k not in ("kind", "events")}
     return recording
 
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import math
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -215,40 +216,14 @@ def read_rosbag(path: Path) -> Recording:
     from thymio_bt.maze import Maze
 
     check_bag(path)
-    header: dict[str, Any] = {}
-    ticks: dict[int, dict[str, Any]] = {}
-    events: list[dict[str, Any]] = []
-    end: dict[str, Any] = {}
-    by_topic = {f"/thymio_{prefix}_sensor": name for name, prefix in _PREFIX.items()}
+    bag = _BagContents()
     try:
         with AnyReader(
             [path], default_typestore=rosbags.typesys.get_typestore(rosbags.typesys.Stores.ROS2_HUMBLE)
         ) as reader:
             for connection, stamp, raw in reader.messages():
                 # rosbags returns object: message classes are made at run time from the bag's typestore
-                msg: Any = reader.deserialize(raw, connection.msgtype)
-                sample = ticks.setdefault(stamp, {"t": round(stamp / 1e9, 6), "pose": None, "prox": {}})
-                topic = connection.topic
-                if topic == "/thymio_bt/header":
-                    header = json.loads(msg.data)
-                elif topic == "/cmd_vel":
-                    sample["cmd"] = [msg.linear.x, msg.angular.z]
-                elif topic == "/odom":
-                    p, o = msg.pose.pose.position, msg.pose.pose.orientation
-                    sample["pose"] = {"x": p.x, "y": p.y, "yaw": round(2.0 * math.atan2(o.z, o.w), 6)}
-                    sample["vel"] = [msg.twist.twist.linear.x, msg.twist.twist.angular.z]
-                elif topic in by_topic:
-                    value = float(msg.ranges[0])
-                    sample["prox"][by_topic[topic]] = None if math.isinf(value) else round(value, 6)
-                elif topic == "/behavior_tree/status":
-                    status = json.loads(msg.data)
-                    sample.update(tick=status["tick"], nodes=status["nodes"], running=status["running"])
-                elif topic == "/behavior_tree/events":
-                    event = json.loads(msg.data)
-                    if event.get("kind") == "end":
-                        end = {k: v for k, v in event.items() if k not in ("t", "kind")}
-                    else:
-                        events.append(event)
+                bag.add(connection.topic, stamp, reader.deserialize(raw, connection.msgtype))
     except UserError:
         raise
     except Exception as exc:  # rosbags' own errors: a damaged or foreign bag
@@ -259,6 +234,20 @@ def read_rosbag(path: Path) -> Recording:
                 hint="bags are written by thymio-bt run --log FILE.mcap",
             )
         ) from None
+    header = _checked_header(bag.header, path)
+    header["exact"] = False  # float32 scans, a quaternion's yaw, 6 decimals: not the tree's numbers
+    return Recording(
+        maze=validate(Maze, header["maze"], str(path)),
+        mission=header.get("mission", ""),
+        samples=bag.samples(),
+        events=bag.events,
+        end=bag.end,
+        header=header,
+    )
+
+
+def _checked_header(header: Any, path: Path) -> dict[str, Any]:
+    """The bag's log header; a user error when it has none, or not one with a maze."""
     if not header:
         raise UserError(Problem("not a thymio-bt bag: no /thymio_bt/header message", str(path)))
     if not isinstance(header, dict) or not isinstance(header.get("maze"), dict):
@@ -269,15 +258,70 @@ def read_rosbag(path: Path) -> Recording:
                 hint="bags are written by thymio-bt run --log FILE.mcap",
             )
         )
-    samples = [s for _, s in sorted(ticks.items()) if "tick" in s]
-    for s in samples:
-        s["prox"] = s["prox"] or None
-    header["exact"] = False  # float32 scans, a quaternion's yaw, 6 decimals: not the tree's numbers
-    return Recording(
-        maze=validate(Maze, header["maze"], str(path)),
-        mission=header.get("mission", ""),
-        samples=samples,
-        events=events,
-        end=end,
-        header=header,
-    )
+    return header
+
+
+#: the sensor each proximity topic is of
+_SENSOR_OF = {f"/thymio_{prefix}_sensor": name for name, prefix in _PREFIX.items()}
+
+
+class _BagContents:
+    """A run as :func:`read_rosbag` gathers it from a bag's messages: each topic's into its place,
+    the samples by time stamp."""
+
+    def __init__(self) -> None:
+        self.header: Any = {}
+        self.ticks: dict[int, dict[str, Any]] = {}
+        self.events: list[dict[str, Any]] = []
+        self.end: dict[str, Any] = {}
+
+    def add(self, topic: str, stamp: int, msg: Any) -> None:
+        """One message (``Any``: rosbags makes message classes at run time from the bag's typestore)."""
+        sample = self.ticks.setdefault(stamp, {"t": round(stamp / 1e9, 6), "pose": None, "prox": {}})
+        read = _READ.get(topic)
+        if read is not None:
+            read(self, topic, sample, msg)
+
+    def samples(self) -> list[dict[str, Any]]:
+        """The samples of the ticks, in time order (a tick without a reading: its ``prox`` None)."""
+        samples = [s for _, s in sorted(self.ticks.items()) if "tick" in s]
+        for s in samples:
+            s["prox"] = s["prox"] or None
+        return samples
+
+    def _header(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
+        self.header = json.loads(msg.data)
+
+    def _cmd_vel(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
+        sample["cmd"] = [msg.linear.x, msg.angular.z]
+
+    def _odom(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
+        p, o = msg.pose.pose.position, msg.pose.pose.orientation
+        sample["pose"] = {"x": p.x, "y": p.y, "yaw": round(2.0 * math.atan2(o.z, o.w), 6)}
+        sample["vel"] = [msg.twist.twist.linear.x, msg.twist.twist.angular.z]
+
+    def _range(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
+        value = float(msg.ranges[0])
+        sample["prox"][_SENSOR_OF[topic]] = None if math.isinf(value) else round(value, 6)
+
+    def _status(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
+        status = json.loads(msg.data)
+        sample.update(tick=status["tick"], nodes=status["nodes"], running=status["running"])
+
+    def _event(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
+        event = json.loads(msg.data)
+        if event.get("kind") == "end":
+            self.end = {k: v for k, v in event.items() if k not in ("t", "kind")}
+        else:
+            self.events.append(event)
+
+
+#: how each topic's message is read into the run
+_READ: dict[str, Callable[[_BagContents, str, dict[str, Any], Any], None]] = {
+    "/thymio_bt/header": _BagContents._header,
+    "/cmd_vel": _BagContents._cmd_vel,
+    "/odom": _BagContents._odom,
+    **dict.fromkeys(_SENSOR_OF, _BagContents._range),
+    "/behavior_tree/status": _BagContents._status,
+    "/behavior_tree/events": _BagContents._event,
+}

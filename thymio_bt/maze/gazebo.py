@@ -247,6 +247,45 @@ def _natural(name: str | None) -> list[Any]:
     return [int(t) if t.isdigit() else t.lower() for t in re.split(r"(\d+)", name or "")]
 
 
+def _states(worlds: list[ET.Element]) -> dict[str, _State]:
+    """The models' states of the worlds' ``<state>`` blocks, by model name (later blocks win, as on load)."""
+    state: dict[str, _State] = {}
+    for st in (s for w in worlds for s in w.findall("state")):
+        for m in st.findall("model"):
+            state.setdefault(m.get("name", ""), _State()).merge(m)
+    return state
+
+
+def _chosen(doc: _Doc, models: list[ET.Element], model: str | None) -> list[ET.Element]:
+    """The models to import: the one named ``model`` (a user error if none is), else every model
+    with a box collision."""
+    if model is None:
+        return [m for m in models if _has_box(m)]
+    chosen = [m for m in models if m.get("name") == model]
+    if not chosen:
+        names = [m.get("name", "") for m in models]
+        raise UserError(
+            Problem(
+                f"no model named '{model}' in the world",
+                doc.file,
+                hint=did_you_mean(model, names) if names else "the world has no <model>",
+            )
+        )
+    return chosen
+
+
+def _no_walls(doc: _Doc, worlds: list[ET.Element], model: str | None) -> UserError:
+    """The error of a world (or ``model``) without box walls, with a hint for ``<include>``d models."""
+    includes = doc.root.find(".//include") is not None
+    return doc.error(
+        f"no box walls found in {'model ' + repr(model) if model else 'the world'}",
+        worlds[0] if worlds else doc.root,
+        hint="<include>d models are not followed: paste their <model> into the world"
+        if includes
+        else "walls are <link>s with a <collision><geometry><box>",
+    )
+
+
 def import_world(
     path: str | Path,
     model: str | None = None,
@@ -265,36 +304,14 @@ def import_world(
     doc = _parse(path)
     worlds = doc.root.findall("world")
     models = [m for w in worlds for m in w.findall("model")] + doc.root.findall("model")
-    state: dict[str, _State] = {}
-    for st in (s for w in worlds for s in w.findall("state")):  # later blocks win, as on load
-        for m in st.findall("model"):
-            state.setdefault(m.get("name", ""), _State()).merge(m)
-    names = [m.get("name", "") for m in models]
-    if model is not None:
-        chosen = [m for m in models if m.get("name") == model]
-        if not chosen:
-            raise UserError(
-                Problem(
-                    f"no model named '{model}' in the world",
-                    doc.file,
-                    hint=did_you_mean(model, names) if names else "the world has no <model>",
-                )
-            )
-    else:
-        chosen = [m for m in models if _has_box(m)]
+    state = _states(worlds)
+    chosen = _chosen(doc, models, model)
     walls: list[Wall] = []
     for m in chosen:
         prefix = f"{m.get('name')}::" if len(chosen) > 1 else ""
         walls += _walls(doc, m, _Pose(), state.get(m.get("name", "")), prefix)
     if not walls:
-        includes = doc.root.find(".//include") is not None
-        raise doc.error(
-            f"no box walls found in {'model ' + repr(model) if model else 'the world'}",
-            worlds[0] if worlds else doc.root,
-            hint="<include>d models are not followed: paste their <model> into the world"
-            if includes
-            else "walls are <link>s with a <collision><geometry><box>",
-        )
+        raise _no_walls(doc, worlds, model)
     walls.sort(key=lambda w: _natural(w.name))
     return Maze(name=name or path.stem, description=description, source=path.name, walls=walls, spawns=_spawns(spawns))
 

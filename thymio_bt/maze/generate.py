@@ -62,6 +62,40 @@ def _walls_from_open(
     return walls
 
 
+def _carve(
+    rng: random.Random,
+    cols: int,
+    rows: int,
+    stack: list[Cell],
+    seen: set[Cell],
+    passages: set[frozenset[Cell]],
+    block: frozenset[Cell] = frozenset(),
+) -> None:
+    """A recursive backtracker from the last cell of ``stack``: a passage to a random unseen
+    neighbour, and on from there; back when there is none. Entering a cell of ``block`` opens it
+    once: the whole block counts as seen, and the carving goes on from the cell it came from."""
+    while stack:
+        here = stack[-1]
+        options = _unseen_neighbours(here, cols, rows, seen)
+        if not options:
+            stack.pop()
+            continue
+        nxt = rng.choice(options)
+        passages.add(frozenset({here, nxt}))
+        if nxt in block:
+            seen |= block
+        else:
+            seen.add(nxt)
+            stack.append(nxt)
+
+
+def _unseen_neighbours(cell: Cell, cols: int, rows: int, seen: set[Cell]) -> list[Cell]:
+    """The cells beside ``cell`` on the grid that are not in ``seen``, in :data:`_STEPS` order."""
+    c, r = cell
+    near = [(c + dc, r + dr) for dc, dr in _STEPS]
+    return [(x, y) for x, y in near if 0 <= x < cols and 0 <= y < rows and (x, y) not in seen]
+
+
 def perfect_maze(
     cols: int,
     rows: int,
@@ -74,21 +108,7 @@ def perfect_maze(
     """A random perfect maze with one exit gap in the top wall (above ``exit_cell``)."""
     rng = random.Random(seed)
     passages: set[frozenset[Cell]] = set()
-    seen, stack = {start}, [start]
-    while stack:
-        c, r = stack[-1]
-        options = [
-            (c + dc, r + dr)
-            for dc, dr in _STEPS
-            if 0 <= c + dc < cols and 0 <= r + dr < rows and (c + dc, r + dr) not in seen
-        ]
-        if not options:
-            stack.pop()
-            continue
-        nxt = rng.choice(options)
-        passages.add(frozenset({(c, r), nxt}))
-        seen.add(nxt)
-        stack.append(nxt)
+    _carve(rng, cols, rows, [start], {start}, passages)
     exit_cell = exit_cell or (rng.randrange(cols), rows - 1)
     gap = frozenset({exit_cell, (exit_cell[0], rows)})
     walls = _walls_from_open(cols, rows, passages, cell, thickness, gaps={gap})
@@ -174,58 +194,28 @@ def mirrored(maze: Maze, axis_x: float) -> Maze:
     return Maze(name=f"{maze.name}_mirrored", walls=walls, spawns=spawns, description=f"{maze.name} mirrored")
 
 
-def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> CellWalls:
-    """A maze of the micromouse contest kind, as cells and walls (:mod:`.micromouse` makes the geometry).
-
-    The start is the bottom-left cell, open only to the north; the goal is the 2 x 2 block at the
-    centre, open inside, with one entrance; the rest is a random perfect maze (recursive
-    backtracker) in which a fraction ``loops`` of the inner walls is then removed, so that wall
-    following is defeated by loops and a map and a plan are needed.
-    """
-    from thymio_bt.maze.micromouse import CellWalls
-
-    rng = random.Random(seed)
+def _goal_block(size: int) -> tuple[frozenset[Cell], set[frozenset[Cell]]]:
+    """The 2 x 2 goal block at the centre of a ``size`` maze, and the passages that open it inside."""
     half = size // 2
-    goal = {(half - 1, half - 1), (half, half - 1), (half - 1, half), (half, half)}
-    passages: set[frozenset[Cell]] = {
-        frozenset(p)
-        for p in (
-            ((half - 1, half - 1), (half, half - 1)),
-            ((half - 1, half), (half, half)),
-            ((half - 1, half - 1), (half - 1, half)),
-            ((half, half - 1), (half, half)),
-        )
-    }
-    start = (0, 0)
-    passages.add(frozenset({start, (0, 1)}))
-    seen, stack = {start, (0, 1)}, [(0, 1)]
-    while stack:
-        c, r = stack[-1]
-        options = [
-            (c + dc, r + dr)
-            for dc, dr in _STEPS
-            if 0 <= c + dc < size and 0 <= r + dr < size and (c + dc, r + dr) not in seen and (c + dc, r + dr) != start
-        ]
-        if not options:
-            stack.pop()
-            continue
-        nxt = rng.choice(options)
-        if nxt in goal:  # the goal block is entered once, then counts as visited
-            seen |= goal
-        else:
-            seen.add(nxt)
-            stack.append(nxt)
-        passages.add(frozenset({(c, r), nxt}))
-    inner = [
+    sw, se, nw, ne = (half - 1, half - 1), (half, half - 1), (half - 1, half), (half, half)
+    inside = {frozenset(pair) for pair in ((sw, se), (nw, ne), (sw, nw), (se, ne))}
+    return frozenset({sw, se, nw, ne}), inside
+
+
+def _inner_edges(size: int) -> list[frozenset[Cell]]:
+    """Every pair of neighbouring cells of a ``size`` maze, column by column, row by row, east then north."""
+    return [
         frozenset({(c, r), (c + dc, r + dr)})
         for c in range(size)
         for r in range(size)
         for dc, dr in ((1, 0), (0, 1))
         if c + dc < size and r + dr < size
     ]
-    walls = [pair for pair in inner if pair not in passages and not (pair & goal) and start not in pair]
-    for pair in rng.sample(walls, int(len(walls) * loops)):
-        passages.add(pair)
+
+
+def _closed_edges(size: int, passages: set[frozenset[Cell]]) -> tuple[set[Cell], set[Cell]]:
+    """The cell edges that are walls, as :class:`~.micromouse.CellWalls` holds them: each (c, r) of
+    ``horizontal`` the lower edge of cell (c, r), of ``vertical`` its left edge; the boundary closed."""
     horizontal = {
         (c, r)
         for c in range(size)
@@ -238,4 +228,25 @@ def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> CellWalls:
         for r in range(size)
         if c in (0, size) or frozenset({(c - 1, r), (c, r)}) not in passages
     }
+    return horizontal, vertical
+
+
+def contest_maze(seed: int, size: int = 16, loops: float = 0.1) -> CellWalls:
+    """A maze of the micromouse contest kind, as cells and walls (:mod:`.micromouse` makes the geometry).
+
+    The start is the bottom-left cell, open only to the north; the goal is the 2 x 2 block at the
+    centre, open inside, with one entrance; the rest is a random perfect maze (recursive
+    backtracker) in which a fraction ``loops`` of the inner walls is then removed, so that wall
+    following is defeated by loops and a map and a plan are needed.
+    """
+    from thymio_bt.maze.micromouse import CellWalls
+
+    rng = random.Random(seed)
+    goal, passages = _goal_block(size)
+    start = (0, 0)
+    passages.add(frozenset({start, (0, 1)}))
+    _carve(rng, size, size, [(0, 1)], {start, (0, 1)}, passages, goal)
+    walls = [pair for pair in _inner_edges(size) if pair not in passages and not (pair & goal) and start not in pair]
+    passages.update(rng.sample(walls, int(len(walls) * loops)))  # the loops
+    horizontal, vertical = _closed_edges(size, passages)
     return CellWalls(size, size, frozenset(horizontal), frozenset(vertical), start, frozenset(goal))

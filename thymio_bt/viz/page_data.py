@@ -170,9 +170,8 @@ def _pair(corner: Any) -> tuple[Any, Any]:
 
 def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
     """The data of one run's page (see the module docstring): JSON-ready, compact."""
-    samples = recording.samples
+    samples = recording.samples  # every field read with get: a log of another format may lack one
     tree = tree_paths(recording)
-    poses = [s.get("pose") for s in samples]  # every field read with get: a log of another format may lack one
     robot = robot_data(recording)
     prox_names = [row[0] for row in robot["sensors"]]
     end = recording.end
@@ -188,16 +187,27 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
         "tree": tree,
         "t": [s["t"] for s in samples],
         "tick": [s.get("tick", i) for i, s in enumerate(samples)],
-        "x": [None if p is None else _r(p["x"]) for p in poses],
-        "y": [None if p is None else _r(p["y"]) for p in poses],
-        "yaw": [None if p is None else _r(p["yaw"]) for p in poses],
-        "cmd": [[_r((s.get("cmd") or NO_SPEED)[k]) for s in samples] for k in (0, 1)],
-        "vel": [[_r((s.get("vel") or NO_SPEED)[k]) for s in samples] for k in (0, 1)],
-        "prox": {
-            "names": prox_names,
-            "values": [[_r((s.get("prox") or {}).get(name)) for s in samples] for name in prox_names],
-        },
+        **_pose_columns(samples),
+        "cmd": _speed_columns(samples, "cmd"),
+        "vel": _speed_columns(samples, "vel"),
+        "prox": {"names": prox_names, "values": _prox_columns(samples, prox_names)},
         "status": status_changes(samples, [row[0] for row in tree]),
         "bb": blackboard_changes(samples),
         "events": event_rows(recording.events),
     }
+
+
+def _pose_columns(samples: list[dict[str, Any]]) -> dict[str, list[float | None]]:
+    """The true pose as the columns ``x``, ``y`` and ``yaw`` (None where there was no robot)."""
+    poses = [s.get("pose") for s in samples]
+    return {axis: [None if p is None else _r(p[axis]) for p in poses] for axis in ("x", "y", "yaw")}
+
+
+def _speed_columns(samples: list[dict[str, Any]], key: str) -> list[list[float | None]]:
+    """A speed (``cmd`` or ``vel``) as two columns, linear and angular (0 where a sample has none)."""
+    return [[_r((s.get(key) or NO_SPEED)[k]) for s in samples] for k in (0, 1)]
+
+
+def _prox_columns(samples: list[dict[str, Any]], names: list[str]) -> list[list[float | None]]:
+    """A column of each proximity sensor's range in ``names`` (None where it saw nothing or was not read)."""
+    return [[_r((s.get("prox") or {}).get(name)) for s in samples] for name in names]

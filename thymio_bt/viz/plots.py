@@ -25,6 +25,7 @@ Example:
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -181,59 +182,95 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
             lw=1.4,
             label="trajectory (base_link)" if i == 0 else None,
         )
-    labelled: set[str] = set()
-    turns: list[tuple[float, float]] = []  # where an outline after a turn is drawn: one per place
+    marks = _EventMarks(ax)
     for event in recording.events:
-        kind = event["kind"]
-        pose = event.get("pose")
-        if kind in KEY_EVENTS and pose:
-            colour, label = KEY_EVENTS[kind]
-        elif kind == "behaviour_end" and event.get("name") == "TurnAngle" and event.get("status") == "SUCCESS" and pose:
-            colour, label = "tab:orange", "after a turn"
-            if any(math.dist(place, (pose["x"], pose["y"])) < ROBOT_SPAN for place in turns):
-                # turned where an outline is drawn already (a cell-by-cell run turns in each cell
-                # up to four times): a dot, not outlines piled up
-                ax.plot(pose["x"], pose["y"], ".", color=colour, ms=4)
-                continue
-            turns.append((pose["x"], pose["y"]))
-        elif kind == "collision":
-            ax.plot(
-                event["x"],
-                event["y"],
-                "x",
-                color="red",
-                ms=9,
-                mew=2,
-                label=None if "collision" in labelled else "collision",
-            )
-            labelled.add("collision")
-            continue
-        elif kind == "waypoint_reached" and "target" in event:
-            x, y = event["target"]
-            ax.plot(x, y, "*", color="tab:green", ms=11, label=None if "waypoint" in labelled else "waypoint reached")
-            ax.annotate(str(event["index"] + 1), (x, y), textcoords="offset points", xytext=(6, 6), fontsize=9)
-            labelled.add("waypoint")
-            continue
-        else:
-            continue
-        _draw_robot(ax, pose, colour, None if label in labelled else label, alpha=0.7)
-        labelled.add(label)
-    last = next((s for s in reversed(recording.samples) if s["pose"]), None)
-    if last is not None:
-        _draw_robot(ax, last["pose"], "black", "end")
-        for start, end, hit in rays(last["pose"], last["prox"] or {}):
-            ax.plot(
-                [start[0], end[0]],
-                [start[1], end[1]],
-                color="tab:red" if hit else "0.6",
-                lw=1.0,
-                ls="-" if hit else ":",
-            )
+        marks.draw(event)
+    _draw_end(ax, recording)
     status = recording.end.get("status", "")
     ax.set_title(title or f"{recording.mission}: {status}, {recording.end.get('sim_time', 0):.1f} s simulated")
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     fig.tight_layout()
     return _save(fig, plt, path)
+
+
+class _EventMarks:
+    """Draws a run's events on its maze, each kind its own mark, each label once in the legend."""
+
+    def __init__(self, ax: Any) -> None:
+        self.ax = ax
+        self.labelled: set[str] = set()
+        self.turns: list[tuple[float, float]] = []  # where an outline after a turn is drawn: one per place
+
+    def draw(self, event: dict[str, Any]) -> None:
+        """The mark of ``event``, if its kind has one."""
+        mark = _MARKS.get(event["kind"])
+        if mark is not None:
+            mark(self, event)
+
+    def _label(self, key: str, label: str) -> str | None:
+        """``label`` the first time a mark of ``key`` is drawn, then None (one legend entry)."""
+        first = key not in self.labelled
+        self.labelled.add(key)
+        return label if first else None
+
+    def _outline(self, pose: dict[str, float], colour: str, label: str) -> None:
+        _draw_robot(self.ax, pose, colour, self._label(label, label), alpha=0.7)
+
+    def key_event(self, event: dict[str, Any]) -> None:
+        """The robot's outline where it was deleted or spawned."""
+        pose = event.get("pose")
+        if pose:
+            colour, label = KEY_EVENTS[event["kind"]]
+            self._outline(pose, colour, label)
+
+    def turn(self, event: dict[str, Any]) -> None:
+        """The robot's outline after a turn that succeeded; a dot where an outline is drawn already
+        (a cell-by-cell run turns in each cell up to four times): not outlines piled up."""
+        pose = event.get("pose")
+        if event.get("name") != "TurnAngle" or event.get("status") != "SUCCESS" or not pose:
+            return
+        if any(math.dist(place, (pose["x"], pose["y"])) < ROBOT_SPAN for place in self.turns):
+            self.ax.plot(pose["x"], pose["y"], ".", color="tab:orange", ms=4)
+            return
+        self.turns.append((pose["x"], pose["y"]))
+        self._outline(pose, "tab:orange", "after a turn")
+
+    def collision(self, event: dict[str, Any]) -> None:
+        """A red cross where the robot hit something."""
+        self.ax.plot(event["x"], event["y"], "x", color="red", ms=9, mew=2, label=self._label("collision", "collision"))
+
+    def waypoint(self, event: dict[str, Any]) -> None:
+        """A star at a waypoint reached, numbered from 1."""
+        if "target" not in event:
+            return
+        x, y = event["target"]
+        self.ax.plot(x, y, "*", color="tab:green", ms=11, label=self._label("waypoint", "waypoint reached"))
+        self.ax.annotate(str(event["index"] + 1), (x, y), textcoords="offset points", xytext=(6, 6), fontsize=9)
+
+
+#: the mark of each event kind drawn on the maze
+_MARKS: dict[str, Callable[[_EventMarks, dict[str, Any]], None]] = {
+    **dict.fromkeys(KEY_EVENTS, _EventMarks.key_event),
+    "behaviour_end": _EventMarks.turn,
+    "collision": _EventMarks.collision,
+    "waypoint_reached": _EventMarks.waypoint,
+}
+
+
+def _draw_end(ax: Any, recording: Recording) -> None:
+    """The robot's outline at its last pose, with its rays then (red where they hit)."""
+    last = next((s for s in reversed(recording.samples) if s["pose"]), None)
+    if last is None:
+        return
+    _draw_robot(ax, last["pose"], "black", "end")
+    for start, end, hit in rays(last["pose"], last["prox"] or {}):
+        ax.plot(
+            [start[0], end[0]],
+            [start[1], end[1]],
+            color="tab:red" if hit else "0.6",
+            lw=1.0,
+            ls="-" if hit else ":",
+        )
 
 
 def _save(fig: Any, plt: Any, path: str | Path) -> Path:

@@ -145,63 +145,81 @@ class ClearanceTracker:
         # or a hair above it, would otherwise take the exact path at every refresh
         if record <= RESOLUTION or not near.within(record - RESOLUTION):  # (a touch is the last record)
             return record
-        tables = self.tables
-        ax, ay = bx + self.axle_x * cos, by + self.axle_x * sin
-        best = math.inf
-        candidates: list[tuple[float, TrackedWall]] = []  # (a lower bound of its gap, wall)
-        radius, extents, supports, atan2 = tables.reach + record, tables.extent, tables.support, math.atan2
-        walls, distance = self.walls, self._distance
-        for index in self.grid.near(ax, ay, radius):
-            wall = walls[index]
-            frame = wall[1]
-            if frame is None:  # an obstacle polygon: Chipmunk's distance, then exact
-                d = distance(wall[0], (ax, ay))[0]
-                if d - tables.reach < record - 1e-6:
-                    candidates.append((d - tables.reach, wall))
-                continue
-            cx, cy, ux, uy, hl, ht = frame
-            dx, dy = ax - cx, ay - cy
-            along, across = dx * ux + dy * uy, dy * ux - dx * uy
-            out_along = (along if along >= 0.0 else -along) - hl  # beyond an end (> 0)
-            out_across = (across if across >= 0.0 else -across) - ht  # beyond a long face (> 0)
-            if out_along >= radius or out_across >= radius:
-                continue  # the box is farther than the hull reaches
-            if out_across > 0.0 and out_along < 0.0:
-                # beside a long face, which is out_across away: towards it (the body frame's lx, ly)
-                wx, wy = (uy, -ux) if across > 0.0 else (-uy, ux)
-                lx, ly = wx * cos + wy * sin, wy * cos - wx * sin
-                step = round(atan2(ly, lx) / EXTENT_STEP) % EXTENT_STEPS
-                extent = -math.inf
-                for sx, sy in supports[step]:  # the first farthest along it
-                    toward = sx * lx + sy * ly
-                    if toward > extent:
-                        extent, vx, vy = toward, sx, sy
-                # the support point, along the wall from its centre: on the face, the gap is exact
-                px, py = ax + vx * cos - vy * sin - cx, ay + vx * sin + vy * cos - cy
-                if -hl <= px * ux + py * uy <= hl:
-                    if out_across - extent < best:
-                        best = out_across - extent
-                    continue
-                bound = out_across - extents[step]
-            elif out_along > 0.0 or out_across > 0.0:  # nearest the box's end or a corner
-                qx = out_along if out_along > 0.0 else 0.0
-                qy = out_across if out_across > 0.0 else 0.0
-                d = math.hypot(qx, qy)
-                # the direction from the axle to the box's nearest point, in the body frame
-                nx = -(ux * (qx if along >= 0.0 else -qx) - uy * (qy if across >= 0.0 else -qy)) / d
-                ny = -(uy * (qx if along >= 0.0 else -qx) + ux * (qy if across >= 0.0 else -qy)) / d
-                bound = (
-                    d - extents[round(atan2(nx * -sin + ny * cos, nx * cos + ny * sin) / EXTENT_STEP) % EXTENT_STEPS]
-                )
-            else:
-                bound = -math.inf  # the axle inside the box
-            if bound < record - 1e-6:
-                candidates.append((bound, wall))
+        best, candidates = self._measure_near(record, bx + self.axle_x * cos, by + self.axle_x * sin, cos, sin)
         exact = [wall for bound, wall in candidates if bound < best]  # others cannot beat the faces
         if exact:
             gap = self.exact(exact, robot, bx, by, cos, sin)
             best = gap if gap < best else best
         return best
+
+    def _measure_near(
+        self, record: float, ax: float, ay: float, cos: float, sin: float
+    ) -> tuple[float, list[tuple[float, TrackedWall]]]:
+        """Steps 2 and 3 for the walls near the axle at (ax, ay): the smallest exact gap to a long
+        face, and the walls whose lower bound could still beat ``record``, with that bound."""
+        best = math.inf
+        candidates: list[tuple[float, TrackedWall]] = []  # (a lower bound of its gap, wall)
+        reach = self.tables.reach
+        radius = reach + record
+        walls, distance = self.walls, self._distance
+        for index in self.grid.near(ax, ay, radius):
+            wall = walls[index]
+            frame = wall[1]
+            if frame is None:  # an obstacle polygon: Chipmunk's distance, then exact
+                bound = distance(wall[0], (ax, ay))[0] - reach
+            else:
+                cx, cy, ux, uy, hl, ht = frame
+                dx, dy = ax - cx, ay - cy
+                along, across = dx * ux + dy * uy, dy * ux - dx * uy
+                out_along = (along if along >= 0.0 else -along) - hl  # beyond an end (> 0)
+                out_across = (across if across >= 0.0 else -across) - ht  # beyond a long face (> 0)
+                if out_along >= radius or out_across >= radius:
+                    continue  # the box is farther than the hull reaches
+                if out_across > 0.0 and out_along < 0.0:  # beside a long face, which is out_across away
+                    gap, bound = self._face(frame, across, out_across, ax, ay, cos, sin)
+                    best = gap if gap < best else best
+                elif out_along > 0.0 or out_across > 0.0:  # nearest the box's end or a corner
+                    bound = self._corner(frame, along, across, out_along, out_across, cos, sin)
+                else:
+                    bound = -math.inf  # the axle inside the box
+            if bound < record - 1e-6:
+                candidates.append((bound, wall))
+        return best, candidates
+
+    def _face(
+        self, frame: WallFrame, across: float, out_across: float, ax: float, ay: float, cos: float, sin: float
+    ) -> tuple[float, float]:
+        """The gap to a long face beside the axle, ``out_across`` away: (the exact gap, infinity)
+        when the hull's support point towards it lies on the face, else (infinity, a lower bound)."""
+        cx, cy, ux, uy, hl, _ = frame
+        wx, wy = (uy, -ux) if across > 0.0 else (-uy, ux)  # towards the face
+        lx, ly = wx * cos + wy * sin, wy * cos - wx * sin  # the same in the body frame
+        step = round(math.atan2(ly, lx) / EXTENT_STEP) % EXTENT_STEPS
+        extent = -math.inf
+        for sx, sy in self.tables.support[step]:  # the first farthest along it
+            toward = sx * lx + sy * ly
+            if toward > extent:
+                extent, vx, vy = toward, sx, sy
+        # the support point, along the wall from its centre: on the face, the gap is exact
+        px, py = ax + vx * cos - vy * sin - cx, ay + vx * sin + vy * cos - cy
+        if -hl <= px * ux + py * uy <= hl:
+            return out_across - extent, math.inf
+        return math.inf, out_across - self.tables.extent[step]
+
+    def _corner(
+        self, frame: WallFrame, along: float, across: float, out_along: float, out_across: float, cos: float, sin: float
+    ) -> float:
+        """A lower bound of the gap to a box whose nearest point to the axle is an end or a corner,
+        ``out_along`` beyond its end and ``out_across`` beyond its face (the larger one > 0)."""
+        _, _, ux, uy, _, _ = frame
+        qx = out_along if out_along > 0.0 else 0.0
+        qy = out_across if out_across > 0.0 else 0.0
+        d = math.hypot(qx, qy)
+        # the direction from the axle to the box's nearest point, in the body frame
+        nx = -(ux * (qx if along >= 0.0 else -qx) - uy * (qy if across >= 0.0 else -qy)) / d
+        ny = -(uy * (qx if along >= 0.0 else -qx) + ux * (qy if across >= 0.0 else -qy)) / d
+        step = round(math.atan2(nx * -sin + ny * cos, nx * cos + ny * sin) / EXTENT_STEP) % EXTENT_STEPS
+        return d - self.tables.extent[step]
 
     def exact(
         self, walls: list[TrackedWall], robot: pymunk.Shape, bx: float, by: float, cos: float, sin: float

@@ -167,26 +167,7 @@ class Simulation(Backend):
             self.model.max_wheel_speed if self.config.max_wheel_speed is None else self.config.max_wheel_speed
         )
         self.robot_name = robot_name
-        self.space = pymunk.Space()
-        self.space.collision_slop = 0.0002
-        self.space.iterations = 10
-        self._shapes = MazeShapes.of(maze)  # walls, then obstacles: polygons and boxes
-        tracked = []
-        walled = len(maze.walls)
-        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):  # obstacles first
-            corners = self._shapes.polygons[index]
-            shape = pymunk.Poly(self.space.static_body, corners)
-            shape.collision_type = _WALL_TYPE
-            shape.filter = pymunk.ShapeFilter(categories=_WALLS)
-            shape.friction = 1.0
-            self.space.add(shape)
-            tracked.append((shape, maze.walls[index] if index < walled else None, corners, self._shapes.boxes[index]))
-        self.bounds = self._shapes.bounds
-        self._clearance = ClearanceTracker(self.model, tracked, self.bounds)
-        self._dt = 1.0 / self.config.physics_hz
-        self._step = stepper(self.space)
-        self._ray = RayCaster(self.space)
-        self._steps = 0
+        self._build_space(maze)
         self._noise = NoiseSource(self.config.noise, self.config.seed)
         self._drifts = bool(self.config.noise.odometry)  # odometry drifts from the true pose
         if not self._drifts:
@@ -220,6 +201,39 @@ class Simulation(Backend):
         self._odo = (0.0, 0.0, 0.0)  # dead-reckoned axle x, y and yaw (drift model only)
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)  # (_odo, its pose)
         self._contacts = 0
+        self._build_sensors()
+        self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
+        if spawn is not None:
+            problem = self.spawn_problem(robot_name, spawn)
+            if problem:
+                raise ValueError(problem)
+            self._add_robot(robot_name, spawn)
+
+    def _build_space(self, maze: Maze) -> None:
+        """The physics: walls and obstacles (obstacles first) as static shapes, a clearance tracker over them."""
+        self.space = pymunk.Space()
+        self.space.collision_slop = 0.0002
+        self.space.iterations = 10
+        self._shapes = MazeShapes.of(maze)  # walls, then obstacles: polygons and boxes
+        tracked = []
+        walled = len(maze.walls)
+        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):  # obstacles first
+            corners = self._shapes.polygons[index]
+            shape = pymunk.Poly(self.space.static_body, corners)
+            shape.collision_type = _WALL_TYPE
+            shape.filter = pymunk.ShapeFilter(categories=_WALLS)
+            shape.friction = 1.0
+            self.space.add(shape)
+            tracked.append((shape, maze.walls[index] if index < walled else None, corners, self._shapes.boxes[index]))
+        self.bounds = self._shapes.bounds
+        self._clearance = ClearanceTracker(self.model, tracked, self.bounds)
+        self._dt = 1.0 / self.config.physics_hz
+        self._step = stepper(self.space)
+        self._ray = RayCaster(self.space)
+        self._steps = 0
+
+    def _build_sensors(self) -> None:
+        """The proximity sensors: their rays, noise-free metres cast when read (walls only), Enki's cones."""
         self._sensor_every = max(1, round(self.config.physics_hz / self.model.sensor_rate_hz))
         reach = self._range_max = self.model.range_max
         self._range_min = self.model.range_min
@@ -227,7 +241,6 @@ class Simulation(Backend):
         self._rays = [
             (s.x, s.y, s.x + reach * math.cos(s.yaw), s.y + reach * math.sin(s.yaw)) for s in self.model.sensors
         ]
-        #: noise-free metres, cast when read (walls only: see _refresh_sensors)
         self._reader = RayReader(
             self.space,
             dict(zip(self._ray_names, self._rays, strict=True)),
@@ -236,12 +249,6 @@ class Simulation(Backend):
             pymunk.ShapeFilter(mask=_WALLS),
         )
         self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
-        self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
-        if spawn is not None:
-            problem = self.spawn_problem(robot_name, spawn)
-            if problem:
-                raise ValueError(problem)
-            self._add_robot(robot_name, spawn)
 
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
