@@ -12,7 +12,7 @@ import thymio_bt
 from thymio_bt.backends.sim import Simulation
 from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
 from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle
-from thymio_bt.mission.unrun_plugins import stand_in
+from thymio_bt.plan.unrun_plugins import stand_in
 from thymio_bt.robot.calibrate import START, arena, calibrate
 from thymio_bt.robot.interface import Robot
 from thymio_bt.robot.model import COURSE

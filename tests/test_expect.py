@@ -146,8 +146,8 @@ def test_expectations_may_name_the_mission_s_parameters(tmp_path):
 
 
 def test_the_schema_knows_every_expectation():
+    from thymio_bt.analysis.schema import mission_schema
     from thymio_bt.mission.expect import Expect
-    from thymio_bt.mission.schema import mission_schema
 
     assert set(mission_schema()["properties"]["expect"]["properties"]) == set(Expect.model_fields)
 

@@ -18,7 +18,7 @@ Example::
     ...         self.robot.drive(0.01, 0.0)
     ...         return Status.RUNNING
     >>> from thymio_bt.backends.sim import Simulation
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> from thymio_bt.testing import world
     >>> sim = Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0))
     >>> ctx = Context(robot=sim, entities=sim)
@@ -99,7 +99,7 @@ class FailureCode(TextEnum):
     BACKEND_ERROR = "BACKEND_ERROR"
     #: a signal (Ctrl-C, SIGTERM) ended the run
     INTERRUPTED = "INTERRUPTED"
-    #: a tick hook raised :class:`~thymio_bt.run.runner.StopRun` (the viewer was closed, say)
+    #: a tick hook raised :class:`~thymio_bt.errors.StopRun` (the viewer was closed, say)
     STOPPED = "STOPPED"
     #: the tree succeeded but the mission's ``expect:`` criteria did not all hold
     EXPECTATION = "EXPECTATION"
@@ -275,7 +275,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
 
     def tick_direct(self) -> None:
         """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list, nor a
-        generator: the same initialise → update → stop sequence (see :mod:`.ticking`)."""
+        generator: the same initialise → update → stop sequence (see :mod:`.flow.ticking`)."""
         try:
             if self.status is not RUNNING:
                 self.initialise()
@@ -462,7 +462,7 @@ class ConditionBehaviour(RobotBehaviour):
 
 class UnrunPlugin(RobotBehaviour):
     """The base of the stand-ins for plugin nodes whose code was not imported
-    (:func:`thymio_bt.mission.unrun_plugins.stand_in`): validate, tree and lint read their names and
+    (:func:`thymio_bt.plan.unrun_plugins.stand_in`): validate, tree and lint read their names and
     parameters, and know nothing of what they do; they are never ticked."""
 
 

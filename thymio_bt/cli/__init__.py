@@ -8,7 +8,7 @@ family of commands has its module, imported here so that ``main`` has them all:
 :mod:`~thymio_bt.cli.comparing` (``compare``),
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
-``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
+``maze export``), :mod:`~thymio_bt.cli.calibrating` (``calibrate``), :mod:`~thymio_bt.cli.grading`
 (``grade``), :mod:`~thymio_bt.cli.linting` (``lint``), :mod:`~thymio_bt.cli.serving` (``serve ros2``),
 :mod:`~thymio_bt.cli.viewing` (``view``) and :mod:`~thymio_bt.cli.checking` (``check``).
 
@@ -22,7 +22,7 @@ Example::
 from __future__ import annotations
 
 from thymio_bt.cli.app import POSITIVE, main
-from thymio_bt.cli.calibration import calibrate_command
+from thymio_bt.cli.calibrating import calibrate_command
 from thymio_bt.cli.checking import check
 from thymio_bt.cli.comparing import compare
 from thymio_bt.cli.grading import grade

@@ -51,11 +51,11 @@ from thymio_bt.outputs import STDOUT, Output, check_writable
 from thymio_bt.run.interrupts import Interrupts
 
 if TYPE_CHECKING:
+    from thymio_bt.btcpp.groot2 import Groot2Server
     from thymio_bt.logs.recording import Recorder
     from thymio_bt.mission import Mission
     from thymio_bt.robot.interface import Backend
     from thymio_bt.run.runner import Run, RunResult
-    from thymio_bt.viz.groot2 import Groot2Server
     from thymio_bt.viz.live import LiveServer
     from thymio_bt.viz.window import LiveView
 
@@ -226,7 +226,7 @@ def run(
         )
         result, interrupts = hooks.watch(runner, realtime)
         if covered is not None:
-            from thymio_bt.mission.tree_rules import condition_names
+            from thymio_bt.analysis.tree_rules import condition_names
             from thymio_bt.run.coverage import Coverage
 
             covered.done(condition_names(spec.registry), Coverage.of(spec.tree).add(result.node_stats).to_json())
@@ -337,7 +337,7 @@ class _Hooks:
             self.window = live_hook(runner, view)
             self.extra.append(self.window)
         if groot2 is not None:
-            from thymio_bt.viz.groot2 import Groot2Server
+            from thymio_bt.btcpp.groot2 import Groot2Server
 
             self.monitor = Groot2Server(groot2)
             self.extra.append(self.monitor)

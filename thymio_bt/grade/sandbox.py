@@ -95,7 +95,7 @@ def _warm() -> None:
     """Import what every run needs, before any connection: each forked process starts warm."""
     import py_trees  # noqa: F401
 
-    from thymio_bt.behaviours.ticking import tick  # noqa: F401
+    from thymio_bt.behaviours.flow.ticking import tick  # noqa: F401
     from thymio_bt.mission import build_tree, load_mission  # noqa: F401
     from thymio_bt.run.coverage import NodeStats  # noqa: F401
     from thymio_bt.run.result import failing_branch  # noqa: F401
@@ -240,7 +240,7 @@ SLOW = 0.5
 def _tick(root: Any) -> tuple[str, dict[str, Any]]:
     """One tick of the tree: its status, and where and why it failed (or why the tick raised)."""
     from thymio_bt.behaviours.base import describe, is_fault
-    from thymio_bt.behaviours.ticking import tick
+    from thymio_bt.behaviours.flow.ticking import tick
     from thymio_bt.run.result import failing_branch
 
     try:

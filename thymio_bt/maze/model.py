@@ -35,8 +35,8 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationIn
 from pydantic_core import PydanticCustomError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean, type_name
+from thymio_bt.geometry import Pose
 from thymio_bt.inputs.units import UnitError, check_kind, kind_hint, parse_value
-from thymio_bt.robot.interface import Pose
 
 
 def _problem(message: str, hint: str) -> PydanticCustomError:
@@ -175,7 +175,7 @@ class Spawn(BaseModel):
         return value
 
     def pose(self) -> Pose:
-        """The spawn as a :class:`~thymio_bt.robot.interface.Pose`."""
+        """The spawn as a :class:`~thymio_bt.geometry.Pose`."""
         return Pose(self.x, self.y, self.yaw)
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Any
 
-from thymio_bt.mission.plan import NodePlan
+from thymio_bt.plan.model import NodePlan
 
 
 def subtree_uses(plan: NodePlan, parent: str = "") -> Iterator[tuple[str, NodePlan]]:

@@ -32,8 +32,8 @@ from py_trees.common import Status
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
 from thymio_bt.behaviours.base import FailureCode, describe, is_fault, node_path, snapshot
-from thymio_bt.behaviours.ticking import tick
-from thymio_bt.errors import Problem, ThymioBtError, UserError
+from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.errors import Problem, StopRun, UserError
 from thymio_bt.mission import Mission, build_tree
 from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
@@ -50,11 +50,6 @@ CONTACT = 1e-6
 
 #: the longest wait (s) of ``--realtime`` pacing before it looks for a signal again
 PACE_SLICE = 0.1
-
-
-class StopRun(ThymioBtError):
-    """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
-    as a FAILURE with code STOPPED and the message as its reason, with its report and log intact."""
 
 
 class Run:

@@ -37,8 +37,8 @@ from thymio_bt.errors import UserError
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
-    from thymio_bt.mission.plan import NodePlan
     from thymio_bt.outputs import Output
+    from thymio_bt.plan.model import NodePlan
     from thymio_bt.run.runner import Run
 
 

@@ -9,7 +9,7 @@ What the backend does with them:
 
 - ``drive(v, ω)``: wheel speeds as the diff-drive plugin computes them, both scaled down together
   when one exceeds the limit (the turn radius is kept), converted to motor units and written at once;
-- ``proximity()``: the 7 readings converted to metres through :mod:`thymio_bt.robot.calibration`
+- ``proximity()``: the 7 readings converted to metres through :mod:`thymio_bt.sensor_tables`
   (0, nothing seen, is ``math.inf``), refreshed at every :meth:`ThymioRobot.advance`;
 - ``pose()``: odometry, integrated from the measured wheel speeds (``motor.*.speed``) at every
   :meth:`ThymioRobot.advance`; it drifts, and there is no ground truth;
@@ -53,9 +53,9 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import Problem, UserError, optional_module
-from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist, wrap_angle
 from thymio_bt.robot.model import COURSE, REAL, RobotModel, integrate_arc
+from thymio_bt.sensor_tables import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 
 if TYPE_CHECKING:
     from thymio_bt.backends import TdmOptions
@@ -83,7 +83,7 @@ class RealConfig:
     - ``max_units``: the documented target range, ±500 (the firmware itself clamps at ±1000).
     - ``wheel_separation``: 0.0935 m, the course's diff-drive plugin and the ros-aseba URDF (robots
       measure 0.0915-0.095 m).
-    - ``table``: the proximity calibration (:data:`thymio_bt.robot.calibration.WEBOTS_THYMIO2`).
+    - ``table``: the proximity calibration (:data:`thymio_bt.sensor_tables.WEBOTS_THYMIO2`).
     """
 
     metres_per_unit: float = 0.20 / 500

@@ -43,12 +43,12 @@ from typing import Any
 
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.behaviours.base import ConditionBehaviour, UnrunPlugin
-from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
+from thymio_bt.btcpp.runtime.control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.inputs.fields import unit_of
-from thymio_bt.logs.records import TreeNode
+from thymio_bt.logs.entries import TreeNode
 from thymio_bt.maze.files import maze_reference
-from thymio_bt.mission.plan import Mission, NodePlan
-from thymio_bt.mission.registry import Registry, default_registry
+from thymio_bt.plan.model import Mission, NodePlan
+from thymio_bt.plan.registry import Registry, default_registry
 
 #: thymio-bt kind -> BT.CPP built-in of the same semantics
 BUILTIN = {
@@ -195,7 +195,7 @@ def btcpp_tree(
     settings: Mapping[str, str] | None = None,
     subtrees: Mapping[int, str] | None = None,
 ) -> BtcppTree:
-    """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
+    """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.entries.tree_nodes`
     lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
     ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
     tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node."""
@@ -427,7 +427,7 @@ def yaml_hint(kind: str) -> str | None:
         >>> yaml_hint("IfThenElse"), yaml_hint("MoveUntilWal")
         ("IfThenElse is `bt_if_then_else` in YAML (BT.CPP's own IfThenElse)", None)
     """
-    from thymio_bt.behaviours.btcpp_control import BTCPP_IDS
+    from thymio_bt.btcpp.runtime.control import BTCPP_IDS
 
     ours = {ident: kind for kind, ident in BUILTIN.items()}.get(kind)
     bt = BTCPP_IDS.get(kind)

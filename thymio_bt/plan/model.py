@@ -25,6 +25,10 @@ from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.noise import NoiseConfig
 
+MAX_DEPTH = 64
+#: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
+MAX_NODES = 20_000
+
 
 @dataclass
 class NodePlan:
@@ -68,7 +72,7 @@ class Mission:
     seed: int
     noise: NoiseConfig
     parameters: dict[str, Any]
-    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.robot.calibration)
+    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.sensor_tables)
     sensor_model: str
     tree: NodePlan
     registry: Any = None

@@ -6,7 +6,7 @@ from the same place (BehaviorTree.CPP's factory works the same way). A composite
 ``children``; a decorator takes one child under ``do`` and, for some, more nodes under other keys
 (``repeat``'s ``until``, ``guard``'s ``condition``).
 
-Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for real ones)::
+Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.flow.decorators` for real ones)::
 
     >>> import py_trees
     >>> class Invert(ControlNode):
@@ -20,7 +20,7 @@ Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for 
     >>> Invert.keys()
     ('do',)
     >>> node = Invert.build("not", Invert.Params(), [py_trees.behaviours.Success("ok")], None)
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> tick(node)
     >>> node.status
     <Status.FAILURE: 'FAILURE'>

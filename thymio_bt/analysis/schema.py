@@ -20,7 +20,7 @@ from typing import Any
 
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.inputs.fields import unit_of
-from thymio_bt.mission.registry import Registry, default_registry
+from thymio_bt.plan.registry import Registry, default_registry
 from thymio_bt.robot.model import ROBOTS
 from thymio_bt.robot.noise import NoiseConfig
 

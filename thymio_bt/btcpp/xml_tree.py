@@ -1,10 +1,10 @@
 """The tree of a BehaviorTree.CPP 4 XML mission, read into the YAML form (``{Type: body}`` nodes):
 BT.CPP's elements as nodes, each ``<SubTree>`` replaced by a copy of its ``<BehaviorTree>`` whose
-blackboard keys are renamed for that instance (:mod:`thymio_bt.mission.xml_scope`).
+blackboard keys are renamed for that instance (:mod:`thymio_bt.btcpp.xml_scope`).
 
 Hostile files are bounded: subtrees nest :data:`MAX_SUBTREE_DEPTH` deep at most, the expanded tree
-holds at most :data:`~thymio_bt.mission.planner.MAX_NODES` nodes, nests at most
-:data:`~thymio_bt.mission.planner.MAX_DEPTH` levels and holds at most :data:`MAX_TEXT` characters of
+holds at most :data:`~thymio_bt.plan.model.MAX_NODES` nodes, nests at most
+:data:`~thymio_bt.plan.model.MAX_DEPTH` levels and holds at most :data:`MAX_TEXT` characters of
 attributes (a subtree used twice by a subtree used twice... doubles at each level), and a port's JSON
 nests :data:`MAX_JSON_NESTING` deep at most; past any of them the file is a located error.
 
@@ -24,13 +24,13 @@ from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
 
-from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
+from thymio_bt.btcpp.export import BUILTIN, KIND_ATTR, RESERVED
+from thymio_bt.btcpp.runtime.control import BTCPP_IDS, CONDITION_ATTRS
+from thymio_bt.btcpp.xml_scope import Literal, Ports, Scope, pointer, rename_script, subtree_ports
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MAX_NESTING, MarkedDict, MarkedList
-from thymio_bt.mission.btcpp import BUILTIN, KIND_ATTR, RESERVED
-from thymio_bt.mission.planner import MAX_DEPTH, MAX_NODES
-from thymio_bt.mission.xml_scope import Literal, Ports, Scope, pointer, rename_script, subtree_ports
+from thymio_bt.plan.model import MAX_DEPTH, MAX_NODES
 
 #: the deepest nesting of subtrees (a subtree using a subtree ... ): far beyond any mission
 MAX_SUBTREE_DEPTH = 64
@@ -156,7 +156,7 @@ def marked(mapping: dict[str, Any], element: Element) -> MarkedDict:
 @cache
 def _key_params(kind: str) -> frozenset[str]:
     """The parameters of thymio-bt's leaf ``kind`` that name a blackboard entry (``key``, ...)."""
-    from thymio_bt.mission.registry import default_registry
+    from thymio_bt.plan.registry import default_registry
 
     cls = default_registry().get(kind)
     fields = getattr(cls, "Params", None)
@@ -269,7 +269,7 @@ class TreeReader:
         return node
 
     def _script(self, text: str, scope: Scope, where: tuple[str, int, int]) -> str:
-        """:func:`~thymio_bt.mission.xml_scope.rename_script`, counting the characters it adds."""
+        """:func:`~thymio_bt.btcpp.xml_scope.rename_script`, counting the characters it adds."""
         renamed = rename_script(text, scope, where)
         self.text += len(renamed) - len(text)
         return renamed
@@ -443,7 +443,7 @@ def _chain(stack: tuple[tuple[str, Element], ...], word: str) -> str:
 def _category(ident: str) -> str:
     """What BT.CPP's node ``ident`` is here: "decorator" (one child, under ``do``), "composite"
     (``children``) or "leaf" (ports only)."""
-    from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL, BTCPP_SCRIPTED
+    from thymio_bt.btcpp.runtime.control import BTCPP_CONTROL, BTCPP_SCRIPTED
 
     for cls in (*BTCPP_CONTROL, *BTCPP_SCRIPTED):
         if cls.btcpp_id == ident:  # type: ignore[attr-defined]
@@ -452,7 +452,7 @@ def _category(ident: str) -> str:
 
 
 def _repeat_until(element: Element, file: str) -> Element:
-    """The do-while loop an export writes (:func:`~thymio_bt.mission.btcpp.repeat_until_elements`)
+    """The do-while loop an export writes (:func:`~thymio_bt.btcpp.export.repeat_until_elements`)
     as one ``RepeatUntil`` element of two children: the body, then the condition."""
     try:
         script, fallback = element.children
