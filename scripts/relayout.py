@@ -63,6 +63,8 @@ MOVES: dict[str, str] = {
     "mission.plan": "plan.model",
     "mission.registry": "plan.registry",
     "mission.unrun_plugins": "plan.unrun_plugins",
+    # the verdict on a run beside the run (what a mission expects is a mission's data: NAMES)
+    "mission.expect": "run.verdict",
     # names that misled
     "mission.checker": "mission.pass_base",
     "logs.records": "logs.entries",
@@ -75,6 +77,7 @@ NAMES: dict[tuple[str, str], str] = {
     ("run.runner", "StopRun"): "errors",
     ("mission.planner", "MAX_DEPTH"): "plan.model",
     ("mission.planner", "MAX_NODES"): "plan.model",
+    **{("mission.expect", name): "plan.expect" for name in ("Expect", "GoalRegion", "GapExpectation", "DeadEnd", "Duration")},
 }
 
 #: new package -> the docstring of its __init__.py
@@ -126,15 +129,15 @@ def move_files() -> list[str]:
 def _patterns() -> list[tuple[re.Pattern[str], str]]:
     """Regexes for the old names (longest first, so that a name is never rewritten by a prefix of it)."""
     rules = []
+    for (module, name), new in NAMES.items():  # before the modules: a moved name of a moved module
+        old_name = re.compile(rf"(?<![\w.])thymio_bt\.{re.escape(module)}\.{name}(?!\w)")
+        rules.append((old_name, f"thymio_bt.{new}.{name}"))
     for old, new in sorted(MOVES.items(), key=lambda kv: -len(kv[0])):
         dotted, path = old, old.replace(".", "/")
         new_path = new.replace(".", "/")
         rules.append((re.compile(rf"(?<![\w.])thymio_bt\.{re.escape(dotted)}(?!\w)"), f"thymio_bt.{new}"))
         rules.append((re.compile(rf"(?<![\w/])thymio_bt/{re.escape(path)}\.py"), f"thymio_bt/{new_path}.py"))
         rules.append((re.compile(rf"(?<![\w/.]){re.escape(path)}\.py"), f"{new_path}.py"))
-    for (module, name), new in NAMES.items():
-        old_name = re.compile(rf"(?<![\w.])thymio_bt\.{re.escape(module)}\.{name}(?!\w)")
-        rules.append((old_name, f"thymio_bt.{new}.{name}"))
     return rules
 
 

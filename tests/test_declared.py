@@ -24,7 +24,7 @@ SOURCES = {p.relative_to(PACKAGE).as_posix(): p.read_text(encoding="utf-8") for 
 def test_the_angle_wrap_is_written_once():
     inlined = re.compile(r"%\s*\(\s*2(\.0)?\s*\*\s*math\.pi\s*\)|while\s+[\w.]+\s*[<>]=?\s*-?math\.pi")
     places = [path for path, text in SOURCES.items() for _ in inlined.finditer(text)]
-    assert places == ["robot/interface.py"]  # wrap_angle itself
+    assert places == ["geometry.py"]  # wrap_angle itself
 
 
 @pytest.mark.parametrize("name", ["proximity_raw", "unrun_plugin", "bt_sync", "keep_moving", "failure", "mark"])
