@@ -77,7 +77,10 @@ NAMES: dict[tuple[str, str], str] = {
     ("run.runner", "StopRun"): "errors",
     ("mission.planner", "MAX_DEPTH"): "plan.model",
     ("mission.planner", "MAX_NODES"): "plan.model",
-    **{("mission.expect", name): "plan.expect" for name in ("Expect", "GoalRegion", "GapExpectation", "DeadEnd", "Duration")},
+    **{
+        ("mission.expect", name): "plan.expect"
+        for name in ("Expect", "GoalRegion", "GapExpectation", "DeadEnd", "Duration")
+    },
 }
 
 #: new package -> the docstring of its __init__.py

@@ -17,11 +17,11 @@ from _waiting import wait_until
 
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.calibrate import Stopped, calibrate, noise_floor, table_rows
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI, robot_model
 from thymio_bt.run.runner import Run
+from thymio_bt.run.verdict import front_gap
 from thymio_bt.sensor_tables import CalibrationTable
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"

@@ -36,7 +36,7 @@ MOVED: dict[str, str] = {
         "matrix": "run.matrix",
         "distributed": "run.distributed",
         "recording": "logs.recording",
-        "expect": "mission.expect",
+        "expect": "run.verdict",
         "docs": "analysis.node_docs",
         "pid": "robot.pid",
         "groot2": "btcpp.groot2",
@@ -76,6 +76,7 @@ MOVED: dict[str, str] = {
         "logs.records": "logs.entries",
         "robot.calibration": "sensor_tables",
         "cli.calibration": "cli.calibrating",
+        "mission.expect": "run.verdict",
     }.items()
 }
 

@@ -111,7 +111,7 @@ def control_schema(cls: type[ControlNode], node_ref: dict[str, Any]) -> dict[str
     return {**long_form, "description": _summary(cls)}
 
 
-#: ``expect:`` (thymio_bt.mission.expect): what counts as success besides the tree's status
+#: ``expect:`` (thymio_bt.plan.expect): what counts as success besides the tree's status
 _EXPECT = {
     "type": "object",
     "additionalProperties": False,

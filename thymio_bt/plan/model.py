@@ -87,5 +87,5 @@ class Mission:
     sources: tuple[Path, ...] = ()
     #: each included file and where it was included (file, line, column)
     included_at: dict[Path, tuple[str, int, int]] = field(default_factory=dict)
-    #: what counts as success besides the tree's status (:mod:`thymio_bt.mission.expect`), or None
+    #: what counts as success besides the tree's status (:mod:`thymio_bt.plan.expect`), or None
     expect: Any = None

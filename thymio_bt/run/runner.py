@@ -353,7 +353,7 @@ class Run:
     def _check_expectations(self, result: RunResult, places: bool) -> None:
         """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
         With nodes substituted (a test of part of a mission), where it ends is not checked."""
-        from thymio_bt.mission.expect import check
+        from thymio_bt.run.verdict import check
 
         expect = self.mission.expect if places else self.mission.expect.without_places()
         # the robot that ran (a calibrated profile, a backend's own), not only the one the mission names
