@@ -92,6 +92,8 @@ def new_name(name: str) -> str | None:
     >>> new_name("thymio_bt.mission") is None, new_name("thymio_bt.behaviours.base") is None
     (True, True)
     """
+    if not name.startswith("thymio_bt."):
+        return None
     parts = name.split(".")
     for end in range(len(parts), 1, -1):
         new = MOVED.get(".".join(parts[:end]))
