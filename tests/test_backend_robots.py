@@ -132,8 +132,8 @@ def test_the_playground_without_a_robot_drives_enki(tmp_path):
     _require.program("dbus-daemon")
     _require.module("thymiodirect")
     _require.module("jeepney")
-    from thymio_bt.mission.expect import front_gap
     from thymio_bt.run.runner import Run
+    from thymio_bt.run.verdict import front_gap
 
     (tmp_path / "corridor.txt").write_text("o---o---o---o---o---o\n| S                 |\no---o---o---o---o---o\n")
     (tmp_path / "m.yaml").write_text(

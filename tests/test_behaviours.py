@@ -509,7 +509,7 @@ def test_repeat_and_retry_feedback_reads_like_words():
     """issue 46 item 7: a repeat's feedback is "iteration 2 of 3", not "[status: 1 success from 3]"."""
     from py_trees.behaviours import Failure, Running, Success
 
-    from thymio_bt.behaviours.decorators import Repeat, RepeatParams, Retry, RetryParams
+    from thymio_bt.behaviours.flow.decorators import Repeat, RepeatParams, Retry, RetryParams
 
     def feedback(node, ticks: int) -> str:
         for _ in range(ticks):

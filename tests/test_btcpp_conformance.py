@@ -18,9 +18,9 @@ from _require import module
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours import btcpp_decorators as bd
-from thymio_bt.behaviours import btcpp_nodes as bn
-from thymio_bt.behaviours.ticking import tick
+from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.btcpp.runtime import decorators as bd
+from thymio_bt.btcpp.runtime import nodes as bn
 
 TICKS = 15
 TREES = 8000
@@ -94,7 +94,7 @@ SCRIPTED_TREES = 3000
 
 def build_scripted(node, calls, log, ctx):
     """thymio-bt's tree for a generated tree with scripts and pre/post-conditions."""
-    from thymio_bt.behaviours import btcpp_scripted as bs
+    from thymio_bt.btcpp.runtime import scripted as bs
 
     ident = node[0]
     if ident in ("Script", "ScriptCondition"):
@@ -123,7 +123,7 @@ def build_scripted(node, calls, log, ctx):
         if isinstance(built, bd.BtDecorator):
             built.decorated = children[0]
     if len(node) > 3:
-        from thymio_bt.behaviours.btcpp_control import CONDITION_ATTRS
+        from thymio_bt.btcpp.runtime.control import CONDITION_ATTRS
 
         scripts = {CONDITION_ATTRS[k]: bs.parse(v) for k, v in node[3].items()}
         built = bs.Conditioned(built.name, built, scripts)
@@ -136,7 +136,7 @@ def run_scripted_here(node, ticks):
 
     from py_trees.blackboard import Blackboard
 
-    from thymio_bt.behaviours import btcpp_scripted as bs
+    from thymio_bt.btcpp.runtime import scripted as bs
 
     Blackboard.storage.clear()
     ctx = SimpleNamespace(robot=SimpleNamespace(exists=lambda: False), now=lambda: 0.0, collision_count=lambda: 0)

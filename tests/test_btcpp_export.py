@@ -17,7 +17,7 @@ PLUGIN_MISSION = ROOT / "examples/spin_until_clear.yaml"
 
 
 def _export(mission: Path, out: Path) -> str:
-    from thymio_bt.mission.btcpp import mission_xml
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.mission.loader import load_mission
 
     text = mission_xml(load_mission(mission, run_plugins=False), out)
@@ -68,7 +68,7 @@ def test_every_export_loads_and_runs_in_behaviortree_cpp_with_stub_leaves(missio
 def test_a_do_while_condition_with_a_precondition_keeps_its_inverter(tmp_path):
     """A loop's condition that carries BT.CPP's ``_skipIf`` (a bt_conditions node here) is still
     written under the loop's Inverter, so the export reads back as the same loop."""
-    from thymio_bt.mission.btcpp import mission_xml
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.mission.loader import load_mission
 
     first = tmp_path / "bonus.xml"
@@ -130,7 +130,7 @@ def test_a_plugin_mission_exports_its_plugins_and_runs_back_to_the_identical_rep
 
 
 def test_a_do_while_loop_is_written_with_built_ins_and_read_back_as_one_repeat(tmp_path):
-    from thymio_bt.mission.xml_reader import read_xml_mission
+    from thymio_bt.btcpp.xml_reader import read_xml_mission
 
     xml = _export(ROOT / "missions/maze_bonus.yaml", tmp_path / "bonus.xml")
     assert '<Sequence name="bonus maze" _thymio="repeat" _uid="2">' in xml
@@ -155,9 +155,9 @@ def test_the_palette_command_writes_the_leaves_groot2_imports(tmp_path):
 def test_a_tree_that_keeps_the_palettes_defaults_loads(tmp_path):
     """Each leaf with every port as the palette gives it (its default, or blank as Groot2 leaves a
     port without one): an optional port without a value has no default, never the text 'None'."""
-    from thymio_bt.mission.btcpp import palette_xml
+    from thymio_bt.btcpp.export import palette_xml
     from thymio_bt.mission.loader import load_mission
-    from thymio_bt.mission.registry import default_registry
+    from thymio_bt.plan.registry import default_registry
 
     registry = default_registry()
     model = ET.fromstring(palette_xml()).find("TreeNodesModel")

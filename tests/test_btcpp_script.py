@@ -7,8 +7,8 @@ from xml.sax.saxutils import quoteattr
 import pytest
 from _require import module
 
-from thymio_bt.behaviours.btcpp_script import ScriptError, parse
-from thymio_bt.behaviours.btcpp_values import text, truth
+from thymio_bt.btcpp.runtime.script import ScriptError, parse
+from thymio_bt.btcpp.runtime.values import text, truth
 
 PRELUDE = "s := 'w'; n := 4; f := 2.5; "
 

@@ -35,7 +35,7 @@ def _write(tmp_path, extra=""):
 
 
 def test_bt_cpp_built_ins_are_read_as_bt_cpp_nodes(tmp_path):
-    from thymio_bt.mission.xml_reader import read_xml_mission
+    from thymio_bt.btcpp.xml_reader import read_xml_mission
 
     tree = read_xml_mission(_write(tmp_path))["tree"]
     children = tree["bt_sequence"]["children"]
@@ -93,7 +93,7 @@ def test_a_groot2_tree_with_scripts_runs_and_exports_to_bt_cpp_and_back(tmp_path
     from _require import module
     from test_btcpp_export import _stub_tree
 
-    from thymio_bt.mission.btcpp import mission_xml
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.mission.loader import load_mission
     from thymio_bt.run.runner import Run
 
@@ -113,7 +113,7 @@ def test_a_groot2_tree_with_scripts_runs_and_exports_to_bt_cpp_and_back(tmp_path
 
 
 def test_a_bt_cpp_name_in_yaml_gets_the_hint_of_its_thymio_bt_node():
-    from thymio_bt.mission.btcpp import yaml_hint
+    from thymio_bt.btcpp.export import yaml_hint
 
     assert yaml_hint("Fallback") == "Fallback is `selector` here (BT.CPP's own Fallback, tick for tick: `bt_fallback`)"
     assert yaml_hint("Sequence").startswith("Sequence is `sequence` here")
@@ -180,7 +180,7 @@ def _run_here(xml, folder):
     from py_trees.blackboard import Blackboard
 
     from thymio_bt.behaviours.base import FailureCode
-    from thymio_bt.behaviours.ticking import tick
+    from thymio_bt.behaviours.flow.ticking import tick
     from thymio_bt.errors import UserError
     from thymio_bt.mission.build import build_tree
     from thymio_bt.mission.loader import load_mission
@@ -388,8 +388,8 @@ LEGS = """<root BTCPP_format="4" main_tree_to_execute="Main">
 
 
 def test_a_subtree_with_ports_runs_in_a_mission_once_per_use(tmp_path):
+    from thymio_bt.btcpp.xml_reader import read_xml_mission
     from thymio_bt.mission.loader import load_mission
-    from thymio_bt.mission.xml_reader import read_xml_mission
     from thymio_bt.run.runner import Run
 
     path = tmp_path / "legs.xml"
@@ -426,8 +426,8 @@ def test_a_literal_port_a_node_writes_is_an_error_naming_both_places(tmp_path):
     ],
 )
 def test_subtree_ports_bt_cpp_refuses_are_refused_here(subtree, model, message, tmp_path):
+    from thymio_bt.btcpp.xml_reader import read_xml_mission
     from thymio_bt.errors import UserError
-    from thymio_bt.mission.xml_reader import read_xml_mission
 
     xml = _document(
         subtree, '<BehaviorTree ID="S"><AlwaysSuccess/></BehaviorTree>', f'<SubTree ID="S">{model}</SubTree>'

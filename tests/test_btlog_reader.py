@@ -11,9 +11,9 @@ from pathlib import Path
 import pytest
 from test_viewer import CONTRACT, expected, record
 
+from thymio_bt.btcpp.btlog import MAGIC, NO_POSES, RECORD
 from thymio_bt.errors import UserError
 from thymio_bt.logs import read_log
-from thymio_bt.logs.btlog import MAGIC, NO_POSES, RECORD
 
 #: 30 subtrees, each using the next twice: 2**30 nodes if expanded blindly, 60 levels deep
 NESTED = "".join(

@@ -17,12 +17,12 @@ from _waiting import wait_until
 
 from thymio_bt.errors import UserError
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.calibrate import Stopped, calibrate, noise_floor, table_rows
-from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI, robot_model
 from thymio_bt.run.runner import Run
+from thymio_bt.run.verdict import front_gap
+from thymio_bt.sensor_tables import CalibrationTable
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 
@@ -143,7 +143,7 @@ class _Drives:
 
 @pytest.mark.parametrize("ticks, step", [(3, "1/3 speed"), (40, "2/3 proximity")])
 def test_calibrate_stops_at_the_tick_it_is_asked_to_with_the_motors_stopped(ticks, step):
-    from thymio_bt.cli.calibration import _corridor
+    from thymio_bt.cli.calibrating import _corridor
 
     spec, device = _corridor("enki", "sim", ())
     device.request_spawn(device.robot_name, spec.start)

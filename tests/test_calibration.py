@@ -8,8 +8,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from thymio_bt.robot import calibration
-from thymio_bt.robot.calibration import (
+from thymio_bt import sensor_tables as calibration
+from thymio_bt.robot.interface import SENSOR_NAMES
+from thymio_bt.sensor_tables import (
     ENKI_THYMIO2,
     WEBOTS_THYMIO2,
     CalibrationTable,
@@ -18,7 +19,6 @@ from thymio_bt.robot.calibration import (
     raw_scan_to_metres,
     raw_to_metres,
 )
-from thymio_bt.robot.interface import SENSOR_NAMES
 
 TABLE = WEBOTS_THYMIO2
 #: The table as usually quoted: Webots' rows at 1..9 cm.

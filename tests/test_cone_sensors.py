@@ -9,10 +9,10 @@ import pytest
 from thymio_bt.backends.sim import SimConfig, Simulation
 from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
 from thymio_bt.mission import load_mission
-from thymio_bt.robot.calibration import ENKI_THYMIO2
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI
 from thymio_bt.run.runner import Run
+from thymio_bt.sensor_tables import ENKI_THYMIO2
 from thymio_bt.testing import world
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -77,7 +77,7 @@ def test_contact_is_a_gap_at_or_below_a_micrometre(tmp_path, gap, collisions):
 
 
 def test_the_summary_never_prints_a_gap_that_is_not_contact_as_zero(tmp_path):
-    from thymio_bt.cli.running import clearance_text
+    from thymio_bt.cli.app import clearance_text
 
     assert clearance_text(None) == "n/a"
     assert clearance_text(0.0154) == "0.0154 m"

@@ -16,7 +16,7 @@ import thymio_bt
 from thymio_bt.backends.sim import Simulation
 from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
 from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle
-from thymio_bt.mission.unrun_plugins import stand_in
+from thymio_bt.plan.unrun_plugins import stand_in
 from thymio_bt.robot.calibrate import START, arena, calibrate
 from thymio_bt.robot.interface import Robot
 from thymio_bt.robot.model import COURSE
@@ -28,7 +28,7 @@ SOURCES = {p.relative_to(PACKAGE).as_posix(): p.read_text(encoding="utf-8") for 
 def test_the_angle_wrap_is_written_once():
     inlined = re.compile(r"%\s*\(\s*2(\.0)?\s*\*\s*math\.pi\s*\)|while\s+[\w.]+\s*[<>]=?\s*-?math\.pi")
     places = [path for path, text in SOURCES.items() for _ in inlined.finditer(text)]
-    assert places == ["robot/interface.py"]  # wrap_angle itself
+    assert places == ["geometry.py"]  # wrap_angle itself
 
 
 #: (module, attribute) probed -> why it cannot be declared
@@ -36,19 +36,19 @@ FOREIGN = {
     ("backends.real.aseba", "failed"): "thymiodirect's connection objects",
     ("backends.real.aseba", "var_received"): "thymiodirect's remote node",
     ("backends.ros2.messages", "range"): "a ROS message of either sensor type",
-    ("behaviours.ticking", "tick_direct"): "the fast-tick protocol any node class may offer, a plugin's too",
+    ("behaviours.flow.ticking", "tick_direct"): "the fast-tick protocol any node class may offer, a plugin's too",
     ("cli.app", "exit_code"): "click's exceptions",
     ("inputs.validation", "__args__"): "typing's annotations",
     ("inputs.yamlio", "anchor"): "PyYAML's events",
     ("logs.recording", "children"): "py_trees' nodes and plugins' duck-typed ones",
-    ("logs.records", "children"): "py_trees' nodes and plugins' duck-typed ones",
+    ("logs.entries", "children"): "py_trees' nodes and plugins' duck-typed ones",
     ("run.result", "children"): "py_trees' nodes and plugins' duck-typed ones",
     ("run.whatif", "children"): "py_trees' nodes and plugins' duck-typed ones",
-    ("logs.records", "yaml_name"): "a tree also holds py_trees' own nodes, which have no kind name",
-    ("mission.tree_rules", "yaml_name"): "any class, py_trees' own included",
+    ("logs.entries", "yaml_name"): "a tree also holds py_trees' own nodes, which have no kind name",
+    ("analysis.tree_rules", "yaml_name"): "any class, py_trees' own included",
     ("run.whatif", "yaml_name"): "a tree also holds py_trees' own nodes, which have no kind name",
-    ("mission.node_docs", "__name__"): "typing's annotations",
-    ("mission.node_docs", "UnionType"): "the types module of the running Python",
+    ("analysis.node_docs", "__name__"): "typing's annotations",
+    ("analysis.node_docs", "UnionType"): "the types module of the running Python",
     ("run.coverage", "condition"): "py_trees' EternalGuard keeps its condition as a function",
     ("run.coverage", "__closure__"): "that function, a plugin's or a lambda",
     ("run.coverage", "current_child"): "py_trees' composites, and plugins' duck-typed ones",

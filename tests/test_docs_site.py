@@ -39,6 +39,7 @@ def test_every_page_is_in_the_navigation():
         "thymio_bt.notebook",
         "thymio_bt.errors",
         "thymio_bt.robot.interface",
+        "thymio_bt.geometry",
         "thymio_bt.behaviours.base",
         "thymio_bt.inputs.fields",
         "thymio_bt.mission",

@@ -50,10 +50,10 @@ def test_every_exception_of_the_package_derives_from_the_root():
     ("module", "name", "base"),
     [
         ("thymio_bt.inputs.units", "UnitError", ValueError),
-        ("thymio_bt.behaviours.btcpp_values", "ScriptError", ValueError),
+        ("thymio_bt.btcpp.runtime.values", "ScriptError", ValueError),
         ("thymio_bt.backends.real.frames", "LinkError", ConnectionError),
         ("thymio_bt.run.sweep", "WorkerDied", RuntimeError),
-        ("thymio_bt.behaviours.btcpp_nodes", "NeverYields", RuntimeError),
+        ("thymio_bt.btcpp.runtime.nodes", "NeverYields", RuntimeError),
     ],
 )
 def test_exceptions_keep_their_standard_base(module, name, base):

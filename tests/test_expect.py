@@ -9,11 +9,11 @@ import pytest
 from thymio_bt.errors import UserError
 from thymio_bt.maze import load_maze
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.runner import Run
 from thymio_bt.run.sweep import sweep
+from thymio_bt.run.verdict import front_gap
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -146,8 +146,8 @@ def test_expectations_may_name_the_mission_s_parameters(tmp_path):
 
 
 def test_the_schema_knows_every_expectation():
-    from thymio_bt.mission.expect import Expect
-    from thymio_bt.mission.schema import mission_schema
+    from thymio_bt.analysis.schema import mission_schema
+    from thymio_bt.plan.expect import Expect
 
     assert set(mission_schema()["properties"]["expect"]["properties"]) == set(Expect.model_fields)
 

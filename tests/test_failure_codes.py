@@ -6,8 +6,9 @@ from __future__ import annotations
 import json
 
 from thymio_bt.behaviours import FailureCode
+from thymio_bt.errors import StopRun
 from thymio_bt.mission import load_mission
-from thymio_bt.run.runner import Run, StopRun
+from thymio_bt.run.runner import Run
 from thymio_bt.testing import run_tree, world
 
 

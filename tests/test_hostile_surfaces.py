@@ -212,7 +212,7 @@ def test_a_dask_address_without_a_port_is_a_message(address):
 
 def test_the_groot2_server_survives_a_names_frame_that_is_not_utf8():
     zmq = _require.module("zmq")
-    from thymio_bt.viz.groot2 import PROTOCOL, Groot2Server
+    from thymio_bt.btcpp.groot2 import PROTOCOL, Groot2Server
 
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))

@@ -10,12 +10,13 @@ import pytest
 from py_trees.common import Status
 
 from thymio_bt.behaviours import Context, MoveUntilWall
+from thymio_bt.behaviours.flow.ticking import tick
 from thymio_bt.behaviours.motion import DAMPED_GAIN_DELAY, late_gain
-from thymio_bt.behaviours.ticking import tick
 from thymio_bt.maze import load_maze
-from thymio_bt.mission.expect import Expect, check
+from thymio_bt.plan.expect import Expect
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 from thymio_bt.robot.model import COURSE
+from thymio_bt.run.verdict import check
 
 ROOT = Path(__file__).resolve().parents[1]
 

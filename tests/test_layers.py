@@ -1,8 +1,12 @@
-"""DESIGN.md's layers: the mission language and the behaviours never load the physics engine, and
-no command pays at start-up for libraries only some commands need."""
+"""The layers: docs/architecture.md's rooms import only the rooms below them (every import, those
+inside functions too), no two modules import each other, the mission language and the behaviours
+never load the physics engine, and no command pays at start-up for libraries only some commands need."""
 
+import ast
+import re
 import subprocess
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -58,7 +62,7 @@ RUN_DOES_NOT_LOAD = (
     "thymio_bt.cli.grading",
     "thymio_bt.cli.inspection",
     "thymio_bt.grade",
-    "thymio_bt.mission.btcpp",
+    "thymio_bt.btcpp.export",
     "xml.etree.ElementTree",
 )
 
@@ -90,13 +94,21 @@ def test_every_command_is_found_where_the_group_looks_for_it():
     }
 
 
-def _import_graph():
-    """thymio_bt's modules and what each imports (anywhere in the module, TYPE_CHECKING blocks aside)."""
-    import ast
+@dataclass(frozen=True)
+class Import:
+    """One ``import`` of a module: the module (or package) it names, and where it is written."""
 
+    name: str
+    file: str
+    line: int
+
+
+def _import_graph(root: Path = ROOT) -> tuple[dict[str, Path], dict[str, list[Import]]]:
+    """thymio_bt's modules under ``root`` and what each imports, anywhere in the module (inside
+    functions too), ``if TYPE_CHECKING:`` blocks aside: they never run."""
     files = {
-        ".".join(p.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__"): p
-        for p in (ROOT / "thymio_bt").rglob("*.py")
+        ".".join(p.relative_to(root).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in (root / "thymio_bt").rglob("*.py")
     }
     assert files, "no module found"
     graph = {}
@@ -109,42 +121,157 @@ def _import_graph():
             for n in ast.walk(node)
         }
         package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
-        imported = set()
+        where = str(path.relative_to(root))
+        imported = []
         for node in ast.walk(tree):
             if id(node) in hidden:
                 continue
             if isinstance(node, ast.Import):
-                imported |= {a.name for a in node.names}
+                imported += [Import(a.name, where, node.lineno) for a in node.names]
             elif isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:
                     base = ".".join(package[: len(package) - node.level + 1] + ([base] if base else []))
-                imported |= {f"{base}.{a.name}" if f"{base}.{a.name}" in files else base for a in node.names}
+                imported += [
+                    Import(f"{base}.{a.name}" if f"{base}.{a.name}" in files else base, where, node.lineno)
+                    for a in node.names
+                ]
         graph[module] = imported
     return files, graph
 
 
-def test_no_import_cycle_among_the_package_modules():
-    files, graph = _import_graph()
-    edges = {m: {d for d in deps if d in files and d != m} for m, deps in graph.items()}
+def _cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    """A circle in ``edges`` (node -> the nodes it depends on), as the path round it; None if none."""
     state: dict[str, int] = {}
 
-    def visit(module, trail):
-        state[module] = 1
-        for dep in sorted(edges[module]):
-            assert state.get(dep) != 1, "import cycle: " + " -> ".join([*trail, module, dep])
-            if dep not in state:
-                visit(dep, [*trail, module])
-        state[module] = 2
+    def visit(node: str, trail: list[str]) -> list[str] | None:
+        state[node] = 1
+        for dep in sorted(edges.get(node, ())):
+            if state.get(dep) == 1:
+                return [*trail, node, dep]
+            if dep not in state and (found := visit(dep, [*trail, node])):
+                return found
+        state[node] = 2
+        return None
 
-    for module in sorted(edges):
-        if module not in state:
-            visit(module, [])
+    for node in sorted(edges):
+        if node not in state and (found := visit(node, [])):
+            return found
+    return None
+
+
+def test_no_import_cycle_among_the_package_modules():
+    files, graph = _import_graph()
+    edges = {m: {i.name for i in deps if i.name in files and i.name != m} for m, deps in graph.items()}
+    cycle = _cycle(edges)
+    assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
+
+
+def rooms(page: str) -> list[str]:
+    """The rooms of the architecture page's table, top down, as module names: `cli/` is
+    ``thymio_bt.cli``, `btcpp/runtime/` ``thymio_bt.btcpp.runtime``, `errors.py` ``thymio_bt.errors``,
+    `__init__.py` ``thymio_bt``."""
+    table = page.split("| room |", 1)[1].split("\n\n", 1)[0]
+    names = []
+    for row in table.splitlines()[2:]:
+        for cell in re.findall(r"`([\w/.]+)`", row.split("|")[1]):
+            dotted = cell.removesuffix("/").removesuffix(".py").replace("/", ".")
+            names.append("thymio_bt" if dotted == "__init__" else f"thymio_bt.{dotted}")
+    return names
+
+
+def room_of(module: str, order: list[str]) -> str | None:
+    """The room a module is in: the longest room name it is, or is inside of."""
+    inside = [r for r in order if module == r or (r != "thymio_bt" and module.startswith(r + "."))]
+    return max(inside, key=len) if inside else None
+
+
+def layer_violations(files: dict[str, Path], graph: dict[str, list[Import]], order: list[str]) -> list[str]:
+    """Every import of a room above the importer's (``file:line: ...``), every module in no room, and
+    a circle between rooms if there is one. A room may import itself and every room below it."""
+    rank = {room: i for i, room in enumerate(order)}
+    found = [f"{files[m]}: {m} is in no room of the table" for m in sorted(files) if room_of(m, order) is None]
+    edges: dict[str, set[str]] = {}
+    for module, imports in sorted(graph.items()):
+        mine = room_of(module, order)
+        for imp in imports:
+            if not imp.name.startswith("thymio_bt.") or mine is None:
+                continue
+            theirs = room_of(imp.name, order)
+            if theirs is None or theirs == mine:
+                continue
+            edges.setdefault(mine, set()).add(theirs)
+            if rank[theirs] < rank[mine]:
+                found.append(f"{imp.file}:{imp.line}: {module} imports {imp.name} ({theirs} is above {mine})")
+    found = list(dict.fromkeys(found))  # one line per import statement, not per name it imports
+    if cycle := _cycle(edges):
+        found.append("a circle between rooms: " + " -> ".join(cycle))
+    return found
+
+
+def test_each_room_imports_only_the_rooms_below_it():
+    """docs/architecture.md's order holds: no import of a room above (inside functions too), no circle."""
+    files, graph = _import_graph()
+    order = rooms((ROOT / "docs/architecture.md").read_text())
+    assert len(order) == len(set(order)) > 10, order
+    assert layer_violations(files, graph, order) == []
+
+
+def _plant(root: Path, files: dict[str, str]) -> None:
+    for name, text in files.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_text(text)
+
+
+def test_an_upward_import_inside_a_function_is_reported_with_its_place(tmp_path: Path):
+    """A synthetic package: ``low`` below ``high``; low imports high in a function (reported, at its
+    line), under TYPE_CHECKING (exempt), and high imports low (downward: fine)."""
+    _plant(
+        tmp_path,
+        {
+            "thymio_bt/__init__.py": "",
+            "thymio_bt/high/__init__.py": "from thymio_bt.low import a\n",
+            "thymio_bt/high/b.py": "X = 1\n",
+            "thymio_bt/low/__init__.py": "",
+            "thymio_bt/low/a.py": (
+                "from typing import TYPE_CHECKING\n"
+                "if TYPE_CHECKING:\n    from thymio_bt.high.b import X\n\n"
+                "def f():\n    from thymio_bt.high.b import X\n    return X\n"
+            ),
+        },
+    )
+    files, graph = _import_graph(tmp_path)
+    found = layer_violations(files, graph, ["thymio_bt.high", "thymio_bt.low", "thymio_bt"])
+    assert (
+        found[0]
+        == "thymio_bt/low/a.py:6: thymio_bt.low.a imports thymio_bt.high.b (thymio_bt.high is above thymio_bt.low)"
+    )
+    assert found[1:] == ["a circle between rooms: thymio_bt.high -> thymio_bt.low -> thymio_bt.high"]
+    assert layer_violations(files, graph, ["thymio_bt.low", "thymio_bt.high", "thymio_bt"])[:1] == [
+        "thymio_bt/high/__init__.py:1: thymio_bt.high imports thymio_bt.low.a (thymio_bt.low is above thymio_bt.high)"
+    ]
+
+
+def test_an_upward_import_planted_in_a_copy_of_the_package_is_reported(tmp_path: Path):
+    """The real package copied, and the bottom module (geometry) made to import a command in a function."""
+    for path in (ROOT / "thymio_bt").rglob("*.py"):
+        _plant(tmp_path, {str(path.relative_to(ROOT)): path.read_text()})
+    planted = tmp_path / "thymio_bt/geometry.py"
+    lines = planted.read_text().splitlines()
+    planted.write_text("\n".join([*lines, "", "", "def _planted():", "    from thymio_bt.cli import main", ""]))
+    files, graph = _import_graph(tmp_path)
+    order = rooms((ROOT / "docs/architecture.md").read_text())
+    found = layer_violations(files, graph, order)
+    assert found[0] == (
+        f"thymio_bt/geometry.py:{len(lines) + 4}: thymio_bt.geometry imports thymio_bt.cli "
+        "(thymio_bt.cli is above thymio_bt.geometry)"
+    )
+    assert found[1].startswith("a circle between rooms: ") and len(found) == 2
 
 
 def test_only_the_simulator_imports_pymunk():
     _, graph = _import_graph()
-    users = sorted(m for m, deps in graph.items() if any(d == "pymunk" or d.startswith("pymunk.") for d in deps))
+    users = sorted(m for m, deps in graph.items() if any(i.name.split(".")[0] == "pymunk" for i in deps))
     assert users and all(m.startswith("thymio_bt.backends.sim.") for m in users), users
 
 

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from thymio_bt.analysis.lint import RULES, lint_mission
 from thymio_bt.cli import main
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.lint import RULES, lint_mission
 from thymio_bt.run.runner import Run
 
 ROOT = Path(__file__).resolve().parent.parent

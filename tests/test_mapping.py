@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from thymio_bt.behaviours.cellmap import CellMap, GridFrame, centre_cells
+from thymio_bt.maze.cellmap import CellMap, GridFrame, centre_cells
 from thymio_bt.maze.generate import contest_maze
 from thymio_bt.maze.micromouse import maze_from_cells, parse_micromouse, to_text
 from thymio_bt.mission import load_mission
@@ -171,7 +171,7 @@ o---o---o---o---o
 
 
 def test_the_side_bias_is_a_median_that_a_few_wild_readings_do_not_move():
-    from thymio_bt.behaviours.cellmap import RunningMedian
+    from thymio_bt.maze.cellmap import RunningMedian
 
     bias = RunningMedian(window=5)
     for value in (0.007, 0.0069, 0.03, 0.0071, -0.02, 0.007):

@@ -10,9 +10,11 @@ import importlib
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import pytest
 
+import thymio_bt
 from thymio_bt._moved import MOVED, new_name
 
 
@@ -85,3 +87,11 @@ def test_names_that_did_not_move_are_left_to_the_other_finders():
     assert new_name("json") is None
     assert new_name("thymio_bt.simulation") is None  # a prefix of a moved name is not the name
     assert new_name("thymio_bt.sim.world.inner") == "thymio_bt.backends.sim.world.inner"
+
+
+@pytest.mark.parametrize("old", sorted(MOVED))
+def test_no_old_name_is_a_module_of_the_package_again(old: str):
+    """The finder comes first on sys.meta_path: an old name that is a module again (``thymio_bt.btcpp``,
+    an alias of the 0.1 layout, is the BT.CPP package now) would hide that module behind the alias."""
+    path = Path(thymio_bt.__file__).parent.joinpath(*old.split(".")[1:])
+    assert not path.with_suffix(".py").exists() and not (path / "__init__.py").exists(), old

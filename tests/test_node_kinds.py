@@ -10,13 +10,13 @@ import py_trees
 import pytest
 from py_trees.common import Status
 
+from thymio_bt.analysis.schema import mission_schema
+from thymio_bt.analysis.tree_rules import TreeRules
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
-from thymio_bt.behaviours.control_node import SWAP, ControlNode, F, S
-from thymio_bt.mission.btcpp import mission_xml
+from thymio_bt.behaviours.flow.node import SWAP, ControlNode, F, S
+from thymio_bt.btcpp.export import mission_xml
 from thymio_bt.mission.loader import load_mission
-from thymio_bt.mission.registry import default_registry
-from thymio_bt.mission.schema import mission_schema
-from thymio_bt.mission.tree_rules import TreeRules
+from thymio_bt.plan.registry import default_registry
 from thymio_bt.run.coverage import Coverage
 from thymio_bt.viz.terminal import coverage_text, plan_dot
 

@@ -7,11 +7,11 @@ import py_trees
 import pytest
 from click.testing import CliRunner
 
+from thymio_bt.analysis.schema import mission_schema
 from thymio_bt.behaviours import CONTROL, ControlNode
 from thymio_bt.cli import main
 from thymio_bt.errors import UserError
 from thymio_bt.mission import default_registry, load_mission
-from thymio_bt.mission.schema import mission_schema
 from thymio_bt.run.runner import Run
 
 
@@ -101,7 +101,7 @@ def test_control_node_parameters_are_checked_where_they_are_written(tmp_path, tr
 
 
 def test_control_node_base_is_not_a_py_trees_behaviour_but_can_be():
-    from thymio_bt.behaviours.decorators import Delay, Invert
+    from thymio_bt.behaviours.flow.decorators import Delay, Invert
 
     assert issubclass(Delay, py_trees.decorators.Decorator) and issubclass(Delay, ControlNode)
     assert not issubclass(Invert, py_trees.behaviour.Behaviour)

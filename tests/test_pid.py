@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from thymio_bt.behaviours.pid import PID
+from thymio_bt.robot.pid import PID
 
 
 def simulate(pid, setpoint=1.0, steps=300, dt=0.05, gain=1.0, tau=0.5, disturbance=0.0):

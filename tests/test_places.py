@@ -11,8 +11,8 @@ from pydantic import ValidationError
 
 from thymio_bt.backends.sim import Simulation
 from thymio_bt.behaviours.base import Context
+from thymio_bt.behaviours.flow.ticking import tick
 from thymio_bt.behaviours.places import InRegion, InRegionParams, OutsideMaze, OutsideMazeParams
-from thymio_bt.behaviours.ticking import tick
 from thymio_bt.errors import UserError
 from thymio_bt.maze import Maze
 from thymio_bt.maze.generate import perfect_maze

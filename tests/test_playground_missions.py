@@ -25,10 +25,10 @@ import pytest
 from thymio_bt.behaviours.maze import turns_decided
 from thymio_bt.logs.recording import Recorder
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI
 from thymio_bt.run.runner import Run
+from thymio_bt.run.verdict import front_gap
 
 MISSIONS = Path(__file__).resolve().parent.parent / "missions"
 pytestmark = pytest.mark.slow

@@ -330,7 +330,7 @@ UNFOLLOWABLE = [
 
 @pytest.mark.parametrize("params", UNFOLLOWABLE, ids=["extra", "unknown base", "alias", "not a class"])
 def test_a_plugin_whose_parameters_cannot_be_read_from_its_source_is_left_unchecked(tmp_path, params):
-    from thymio_bt.mission.unrun_plugins import plugin_nodes
+    from thymio_bt.plan.unrun_plugins import plugin_nodes
 
     plugin = tmp_path / "p.py"
     plugin.write_text(params + "class Spin(RobotBehaviour):\n    Params = P\n")
@@ -341,7 +341,7 @@ def test_a_plugin_whose_parameters_cannot_be_read_from_its_source_is_left_unchec
 
 
 def test_parameter_names_are_followed_through_the_files_own_bases_and_the_built_ins(tmp_path):
-    from thymio_bt.mission.unrun_plugins import plugin_nodes
+    from thymio_bt.plan.unrun_plugins import plugin_nodes
 
     plugin = tmp_path / "p.py"
     plugin.write_text(
@@ -366,7 +366,7 @@ def test_parameter_names_are_followed_through_the_files_own_bases_and_the_built_
 
 
 def test_a_hostile_plugins_cycles_and_diamonds_of_params_are_read_once(tmp_path):
-    from thymio_bt.mission.unrun_plugins import plugin_nodes
+    from thymio_bt.plan.unrun_plugins import plugin_nodes
 
     chain = "".join(f"class P{i}(P{i + 1}, P{i + 1}, P{i + 1}):\n    f{i}: int = 0\n" for i in range(200))
     plugin = tmp_path / "p.py"

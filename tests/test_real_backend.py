@@ -18,9 +18,9 @@ from thymio_bt.backends.real.thymio import TdmAddress
 from thymio_bt.behaviours import Context
 from thymio_bt.behaviours.motion import MoveUntilWall
 from thymio_bt.errors import UserError
-from thymio_bt.robot.calibration import metres_to_raw
 from thymio_bt.robot.interface import SENSOR_NAMES, Entities, Pose, RequestState, Robot
 from thymio_bt.robot.model import COURSE, ENKI, REAL
+from thymio_bt.sensor_tables import metres_to_raw
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -413,7 +413,7 @@ def test_without_tdmclient_the_adapter_says_how_to_install_it(monkeypatch):
 
 def test_the_backend_imports_without_tdmclient():
     code = (
-        "import sys; sys.modules['tdmclient'] = None; import thymio_bt.backends.real, thymio_bt.robot.calibration; "
+        "import sys; sys.modules['tdmclient'] = None; import thymio_bt.backends.real, thymio_bt.sensor_tables; "
         "print('ok')"
     )
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "ok"

@@ -108,8 +108,8 @@ def parse_btlog(data: bytes):
 
 
 def test_the_groot2_log_holds_one_record_per_status_change(part1_2, tmp_path):
+    from thymio_bt.btcpp.export import btcpp_tree
     from thymio_bt.mission import default_registry
-    from thymio_bt.mission.btcpp import btcpp_tree
 
     folder, _ = part1_2
     done = thymio_bt("export", folder / "run.jsonl", "--btlog", tmp_path / "run.btlog")
@@ -158,8 +158,8 @@ def test_every_mission_exports_to_xml_that_behaviortree_cpp_accepts(mission, tmp
 
 @pytest.mark.parametrize("mission", MISSIONS, ids=[m.stem for m in MISSIONS])
 def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_path):
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.mission import load_mission
-    from thymio_bt.mission.btcpp import mission_xml
     from thymio_bt.run.runner import Run
 
     xml = tmp_path / f"{mission.stem}.xml"
@@ -185,8 +185,8 @@ def test_a_mission_exported_to_xml_runs_to_the_identical_report(mission, tmp_pat
     ],
 )
 def test_xml_mission_errors_have_file_line_and_column(tmp_path, change, message, hint):
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.mission import load_mission
-    from thymio_bt.mission.btcpp import mission_xml
 
     text = mission_xml(load_mission(f"{ROOT}/missions/maze_bonus.yaml"), tmp_path / "m.xml")
     old, new = change
@@ -301,9 +301,9 @@ def _require_program_in_venv(name):
 
 
 def test_subtrees_are_their_own_behaviortrees_and_read_back(tmp_path):
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.errors import UserError
     from thymio_bt.mission import load_mission
-    from thymio_bt.mission.btcpp import mission_xml
 
     xml = mission_xml(load_mission(f"{ROOT}/missions/course_full.yaml"))
     assert re.findall(r'<BehaviorTree ID="([^"]+)"', xml) == [

@@ -17,10 +17,10 @@ import pytest
 import yaml
 from click.testing import CliRunner
 
+from thymio_bt.analysis.schema import mission_schema
 from thymio_bt.cli import main
 from thymio_bt.mission import load_mission
 from thymio_bt.mission.assemble import INCLUDE_KEYS
-from thymio_bt.mission.schema import mission_schema
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA_FILE = ROOT / "schema" / "mission.schema.json"

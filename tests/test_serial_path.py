@@ -25,9 +25,9 @@ import pytest
 from _waiting import ticks_logged, wait_until
 
 from thymio_bt.mission import load_mission
-from thymio_bt.mission.expect import front_gap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import ENKI
+from thymio_bt.run.verdict import front_gap
 
 ROOT = Path(__file__).resolve().parent.parent
 PROMPT = re.compile(r"place the Thymio .*? at x=(-?[\d.]+) m, y=(-?[\d.]+) m, facing (-?\d+) deg")

@@ -1,4 +1,4 @@
-"""The runner's direct tick (thymio_bt.behaviours.ticking) against py_trees' generator tick: every
+"""The runner's direct tick (thymio_bt.behaviours.flow.ticking) against py_trees' generator tick: every
 mission, with noise, ends in the same report both ways; and each node kind alone behaves alike."""
 
 from pathlib import Path
@@ -7,7 +7,7 @@ import py_trees
 import pytest
 from py_trees.common import ParallelPolicy, Status
 
-from thymio_bt.behaviours.ticking import tick
+from thymio_bt.behaviours.flow.ticking import tick
 from thymio_bt.mission import load_mission
 from thymio_bt.run import runner
 from thymio_bt.run.runner import Run

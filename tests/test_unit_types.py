@@ -17,8 +17,8 @@ from thymio_bt.inputs import fields
 from thymio_bt.inputs.validation import problems_from
 from thymio_bt.maze import model as maze_model
 from thymio_bt.maze.model import Spawn
-from thymio_bt.mission import expect
 from thymio_bt.mission.loader import load_mission
+from thymio_bt.run import verdict as expect
 
 
 def test_each_unit_type_is_declared_once():

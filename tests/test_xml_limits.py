@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
+from thymio_bt.btcpp.xml_tree import MAX_JSON_NESTING, MAX_SUBTREE_DEPTH, MAX_TEXT
 from thymio_bt.errors import UserError
-from thymio_bt.mission.planner import MAX_DEPTH, MAX_NODES
-from thymio_bt.mission.xml_tree import MAX_JSON_NESTING, MAX_SUBTREE_DEPTH, MAX_TEXT
+from thymio_bt.plan.model import MAX_DEPTH, MAX_NODES
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -131,7 +131,7 @@ def test_json_nested_five_thousand_deep_is_refused_where_it_is_written(where, tm
 
 def test_json_as_deep_as_allowed_is_read(tmp_path):
     deep = "[" * MAX_JSON_NESTING + "]" * MAX_JSON_NESTING
-    from thymio_bt.mission.xml_reader import read_xml_mission
+    from thymio_bt.btcpp.xml_reader import read_xml_mission
 
     body = read_xml_mission(_mission(tmp_path, f'<FollowWaypoints waypoints="{deep}"/>'))["tree"]["FollowWaypoints"]
     assert isinstance(body["waypoints"], list)

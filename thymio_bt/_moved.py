@@ -1,4 +1,4 @@
-"""Old module names (before the 0.2 layout) still import, with a DeprecationWarning naming the new one.
+"""Old module names (of the layouts before this one) still import, with a DeprecationWarning naming the new one.
 
 ``import thymio_bt.robot_model`` gives the very module ``thymio_bt.robot.model`` (the same object, so
 its classes are the same classes), through a finder on :data:`sys.meta_path` that only answers for
@@ -22,7 +22,7 @@ MOVED: dict[str, str] = {
     for old, new in {
         "robot_model": "robot.model",
         "robot_profile": "robot.profile",
-        "calibration": "robot.calibration",
+        "calibration": "sensor_tables",
         "calibrate": "robot.calibrate",
         "placement": "robot.placement",
         "sim": "backends.sim",
@@ -36,33 +36,70 @@ MOVED: dict[str, str] = {
         "matrix": "run.matrix",
         "distributed": "run.distributed",
         "recording": "logs.recording",
-        "expect": "mission.expect",
-        "btcpp": "mission.btcpp",
-        "docs": "mission.node_docs",
-        "pid": "behaviours.pid",
-        "groot2": "viz.groot2",
+        "expect": "run.verdict",
+        "docs": "analysis.node_docs",
+        "pid": "robot.pid",
+        "groot2": "btcpp.groot2",
         "yamlio": "inputs.yamlio",
         "reading": "inputs.reading",
         "units": "inputs.units",
         "fields": "inputs.fields",
         "validation": "inputs.validation",
+        "behaviours.btcpp_nodes": "btcpp.runtime.nodes",
+        "behaviours.btcpp_control": "btcpp.runtime.control",
+        "behaviours.btcpp_decorators": "btcpp.runtime.decorators",
+        "behaviours.btcpp_scripted": "btcpp.runtime.scripted",
+        "behaviours.btcpp_script": "btcpp.runtime.script",
+        "behaviours.btcpp_values": "btcpp.runtime.values",
+        "mission.btcpp": "btcpp.export",
+        "mission.xml_reader": "btcpp.xml_reader",
+        "mission.xml_tree": "btcpp.xml_tree",
+        "mission.xml_scope": "btcpp.xml_scope",
+        "logs.btlog": "btcpp.btlog",
+        "viz.groot2": "btcpp.groot2",
+        "behaviours.control_node": "behaviours.flow.node",
+        "behaviours.control": "behaviours.flow.primitives",
+        "behaviours.composites": "behaviours.flow.composites",
+        "behaviours.decorators": "behaviours.flow.decorators",
+        "behaviours.ticking": "behaviours.flow.ticking",
+        "behaviours.cellmap": "maze.cellmap",
+        "behaviours.corridor": "robot.corridor",
+        "behaviours.pid": "robot.pid",
+        "mission.lint": "analysis.lint",
+        "mission.tree_rules": "analysis.tree_rules",
+        "mission.schema": "analysis.schema",
+        "mission.node_docs": "analysis.node_docs",
+        "mission.plan": "plan.model",
+        "mission.registry": "plan.registry",
+        "mission.unrun_plugins": "plan.unrun_plugins",
+        "mission.checker": "mission.pass_base",
+        "logs.records": "logs.entries",
+        "robot.calibration": "sensor_tables",
+        "cli.calibration": "cli.calibrating",
+        "mission.expect": "run.verdict",
     }.items()
 }
 
 
 def new_name(name: str) -> str | None:
-    """The module's name in the new layout, or None when ``name`` did not move.
+    """The module's name in the new layout, or None when ``name`` did not move (the longest moved
+    name it starts with decides).
 
     >>> new_name("thymio_bt.sim.world")
     'thymio_bt.backends.sim.world'
-    >>> new_name("thymio_bt.mission") is None
-    True
+    >>> new_name("thymio_bt.behaviours.btcpp_nodes")
+    'thymio_bt.btcpp.runtime.nodes'
+    >>> new_name("thymio_bt.mission") is None, new_name("thymio_bt.behaviours.base") is None
+    (True, True)
     """
     if not name.startswith("thymio_bt."):
         return None
-    head, dot, rest = name.partition(".")[2].partition(".")
-    new = MOVED.get(f"thymio_bt.{head}")
-    return None if new is None else new + dot + rest
+    parts = name.split(".")
+    for end in range(len(parts), 1, -1):
+        new = MOVED.get(".".join(parts[:end]))
+        if new is not None:
+            return ".".join([new, *parts[end:]])
+    return None
 
 
 class _Alias(importlib.abc.Loader):

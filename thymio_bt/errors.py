@@ -70,6 +70,13 @@ class UserError(ThymioBtError):
         super().__init__("\n".join(str(p) for p in self.problems))
 
 
+class StopRun(ThymioBtError):
+    """Raised by a tick hook (:mod:`thymio_bt.run.runner`) to end the run there (e.g. the user closed
+    the viewer): the run ends as a FAILURE with code STOPPED and the message as its reason, with its
+    report and log intact. Here, at the bottom, so that a hook of a lower room (the log's
+    :class:`~thymio_bt.logs.recording.Recorder`) may raise it."""
+
+
 def did_you_mean(word: str, choices: Iterable[str]) -> str:
     """A 'did you mean X?' hint for a misspelt name, or a list of the valid names."""
     options = sorted(set(choices))

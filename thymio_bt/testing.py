@@ -50,7 +50,7 @@ from thymio_bt.maze import Maze, maze_from_grid
 from thymio_bt.run.runner import Run, RunResult
 
 if TYPE_CHECKING:
-    from thymio_bt.mission.registry import Registry
+    from thymio_bt.plan.registry import Registry
 
 #: a plugin as :func:`run_tree` takes it: a ``.py`` path, ``"package.module:Class"``, or the class
 Plugin = str | Path | type
@@ -209,7 +209,7 @@ def _caller() -> _Call:
 def _plugins(plugins: Sequence[Plugin], folder: Path) -> tuple[Registry | None, list[str]]:
     """A registry with the plugin classes among ``plugins`` (None: none), and the others as a
     mission's ``plugins:`` entries, a relative ``.py`` path made absolute from ``folder``."""
-    from thymio_bt.mission.registry import default_registry
+    from thymio_bt.plan.registry import default_registry
 
     registry, refs = None, []
     for plugin in plugins:

@@ -1,12 +1,12 @@
 """The built-in nodes: robot behaviours, one family per module (motion, maze, entities, navigation, mapping),
-and the composites and decorators that arrange them."""
+and the composites and decorators that arrange them (:mod:`.flow`), re-exported here."""
 
 from thymio_bt.behaviours.base import Context, EventLog, FailureCode, RobotBehaviour
-from thymio_bt.behaviours.composites import COMPOSITES
-from thymio_bt.behaviours.control import RepeatUntil, ScriptedStub, SimTimeout
-from thymio_bt.behaviours.control_node import ControlNode
-from thymio_bt.behaviours.decorators import DECORATORS
 from thymio_bt.behaviours.entities import DeleteEntity, SpawnEntity
+from thymio_bt.behaviours.flow.composites import COMPOSITES
+from thymio_bt.behaviours.flow.decorators import DECORATORS
+from thymio_bt.behaviours.flow.node import ControlNode
+from thymio_bt.behaviours.flow.primitives import RepeatUntil, ScriptedStub, SimTimeout
 from thymio_bt.behaviours.mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
 from thymio_bt.behaviours.maze import ChooseTurn, IsDeadEnd, LookAround, SideOpen, WallAhead, WallFollow
 from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait

@@ -18,7 +18,7 @@ Example::
     ...         self.robot.drive(0.01, 0.0)
     ...         return Status.RUNNING
     >>> from thymio_bt.backends.sim import Simulation
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> from thymio_bt.testing import world
     >>> sim = Simulation(world("corridor"), spawn=Pose(0.1, 0.1, 0.0))
     >>> ctx = Context(robot=sim, entities=sim)
@@ -39,7 +39,6 @@ import signal
 import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from enum import Enum
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -47,62 +46,12 @@ import py_trees
 from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from thymio_bt.enums import FailureCode
 from thymio_bt.inputs.fields import IN_SI, Duration
 from thymio_bt.robot.interface import Entities, Pose, Robot
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
 RUNNING = Status.RUNNING
-
-
-class TextEnum(str, Enum):
-    """A ``str`` enum that reads as its text (Python 3.11's ``StrEnum``; 3.10 lacks it): it equals,
-    prints, formats and is written to JSON as the string it stands for, so a report or a message is
-    the same whether it holds the member or the text.
-
-    >>> f"[{FailureCode.TIMEOUT}]", str(FailureCode.TIMEOUT), FailureCode.TIMEOUT == "TIMEOUT"
-    ('[TIMEOUT]', 'TIMEOUT', True)
-    """
-
-    def __str__(self) -> str:
-        return str.__str__(self)
-
-    def __format__(self, spec: str) -> str:
-        return str.__format__(self, spec)
-
-
-class FailureCode(TextEnum):
-    """Why a behaviour, or a run, failed, in the style of Nav2's error codes.
-
-    These are the built-in codes; a plugin behaviour may fail with a code of its own, any
-    UPPER_SNAKE_CASE string (``self.fail("LINE_LOST", "...")``): reports carry codes as their text.
-    """
-
-    TIMEOUT = "TIMEOUT"
-    COLLISION = "COLLISION"
-    NO_ROBOT = "NO_ROBOT"
-    NO_WALL = "NO_WALL"
-    INVALID_INPUT = "INVALID_INPUT"
-    ENTITY_ERROR = "ENTITY_ERROR"
-    #: not an error: the way is blocked, and the tree is expected to react (e.g. avoidance turns away)
-    BLOCKED = "BLOCKED"
-    FAILED = "FAILED"
-    #: the robot moves but gets no closer to its goal (e.g. circling a goal tighter than it can hold)
-    NO_PROGRESS = "NO_PROGRESS"
-    #: the map leaves no way to the target
-    NO_PATH = "NO_PATH"
-    #: the behaviour's code raised an exception (or called sys.exit): a bug, reported with its place
-    EXCEPTION = "EXCEPTION"
-    # the run's own codes: a run cut short (thymio_bt.run.result.Ending), or judged when it ended
-    #: a real robot stopped answering (:class:`~thymio_bt.robot.interface.RobotLost`)
-    ROBOT_LOST = "ROBOT_LOST"
-    #: the backend raised: a bug of the backend (a plugin's, say)
-    BACKEND_ERROR = "BACKEND_ERROR"
-    #: a signal (Ctrl-C, SIGTERM) ended the run
-    INTERRUPTED = "INTERRUPTED"
-    #: a tick hook raised :class:`~thymio_bt.run.runner.StopRun` (the viewer was closed, say)
-    STOPPED = "STOPPED"
-    #: the tree succeeded but the mission's ``expect:`` criteria did not all hold
-    EXPECTATION = "EXPECTATION"
 
 
 def describe(exc: BaseException) -> str:
@@ -279,7 +228,7 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
 
     def tick_direct(self) -> None:
         """py_trees' ``Behaviour.tick`` without its per-tick debug string and status list, nor a
-        generator: the same initialise → update → stop sequence (see :mod:`.ticking`)."""
+        generator: the same initialise → update → stop sequence (see :mod:`.flow.ticking`)."""
         try:
             if self.status is not RUNNING:
                 self.initialise()
@@ -472,7 +421,7 @@ class ConditionBehaviour(RobotBehaviour):
 
 class UnrunPlugin(RobotBehaviour):
     """The base of the stand-ins for plugin nodes whose code was not imported
-    (:func:`thymio_bt.mission.unrun_plugins.stand_in`): validate, tree and lint read their names and
+    (:func:`thymio_bt.plan.unrun_plugins.stand_in`): validate, tree and lint read their names and
     parameters, and know nothing of what they do; they are never ticked."""
 
 

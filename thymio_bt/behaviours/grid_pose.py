@@ -22,8 +22,8 @@ from py_trees.common import Status
 from pydantic import BaseModel, Field
 
 from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
-from thymio_bt.behaviours.cellmap import Cell, CellMap, centre_cells
 from thymio_bt.inputs.fields import Length
+from thymio_bt.maze.cellmap import Cell, CellMap, centre_cells
 from thymio_bt.robot.interface import wrap_angle
 from thymio_bt.robot.model import RobotModel
 

@@ -1,6 +1,6 @@
 """Mapping and planning in mazes of square cells: what a micromouse does, as behaviours.
 
-The robot keeps a :class:`~thymio_bt.behaviours.cellmap.CellMap` on the blackboard: the walls
+The robot keeps a :class:`~thymio_bt.maze.cellmap.CellMap` on the blackboard: the walls
 seen so far, the cells visited, and where the maze's grid lies in the odometry frame.
 
 - ``MapWalls`` looks at the side of its cell it faces (a few stationary readings; more when they
@@ -41,7 +41,6 @@ from py_trees.common import Access, Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import ConditionBehaviour, FailureCode
-from thymio_bt.behaviours.cellmap import STEPS, Cell
 from thymio_bt.behaviours.grid_pose import (
     HEADING,
     LEFT_OF,
@@ -55,6 +54,7 @@ from thymio_bt.behaviours.grid_pose import (
     Target,
 )
 from thymio_bt.behaviours.move_cells import MoveCells, MoveCellsParams
+from thymio_bt.maze.cellmap import STEPS, Cell
 from thymio_bt.robot.interface import wrap_angle
 
 __all__ = [

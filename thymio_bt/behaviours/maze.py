@@ -7,7 +7,7 @@ an opening is found by its edge and then reached by odometry.
 
 This module holds the conditions (``WallAhead``, ``SideOpen``, ``IsDeadEnd``) and ``ChooseTurn``;
 ``WallFollow`` lives in :mod:`thymio_bt.behaviours.wall_follow` (its name still imports from here)
-and the corridor's geometry in :mod:`thymio_bt.behaviours.corridor`.
+and the corridor's geometry in :mod:`thymio_bt.robot.corridor`.
 
 Example::
 
@@ -37,10 +37,10 @@ from thymio_bt.behaviours.base import (
     RobotBehaviour,
     current_pose,
 )
-from thymio_bt.behaviours.corridor import FRONT_SENSORS, RANGE_MAX, Side, side_ray
 from thymio_bt.behaviours.motion import Turn
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
 from thymio_bt.inputs.fields import AngularSpeed, SensedLength
+from thymio_bt.robot.corridor import FRONT_SENSORS, RANGE_MAX, Side, side_ray
 from thymio_bt.robot.interface import wrap_angle
 from thymio_bt.robot.model import WIDEST_RANGE, RobotModel
 

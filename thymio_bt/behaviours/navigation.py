@@ -25,9 +25,9 @@ from thymio_bt.behaviours.base import (
     current_pose,
 )
 from thymio_bt.behaviours.motion import approach_speed
-from thymio_bt.behaviours.pid import PID
 from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, Point, Speed
 from thymio_bt.robot.interface import Pose, Scan, wrap_angle
+from thymio_bt.robot.pid import PID
 
 FRONT = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")
 #: The report's simulation thresholds for the 5 front sensors (Table 2), metres.

@@ -4,7 +4,7 @@ The robot drives along a corridor holding its heading (re-taken from the side wa
 squarely ahead or behind, since odometry's heading drifts), turns into an opening once it has driven
 to its middle, and turns away from its side at a wall ahead. Where it is in the maze is kept from
 the distance covered along each corridor, in quarter turns from the start heading. The corridor's
-geometry (sensor pairs, glints, the wall-line fit) is in :mod:`thymio_bt.behaviours.corridor`.
+geometry (sensor pairs, glints, the wall-line fit) is in :mod:`thymio_bt.robot.corridor`.
 
 Example::
 
@@ -31,7 +31,9 @@ from py_trees.common import Status
 from pydantic import Field, model_validator
 
 from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
-from thymio_bt.behaviours.corridor import (
+from thymio_bt.behaviours.motion import MIN_TURN_RATE, approach_speed, late_gain
+from thymio_bt.inputs.fields import AngularSpeed, Duration, Length, Speed
+from thymio_bt.robot.corridor import (
     FRONT_PAIR,
     FRONT_SENSORS,
     GLINT_BELOW,
@@ -47,8 +49,6 @@ from thymio_bt.behaviours.corridor import (
     line_direction,
     side_ray,
 )
-from thymio_bt.behaviours.motion import MIN_TURN_RATE, approach_speed, late_gain
-from thymio_bt.inputs.fields import AngularSpeed, Duration, Length, Speed
 from thymio_bt.robot.interface import Pose, wrap_angle
 
 

@@ -9,7 +9,7 @@ so that ``thymio-bt run`` does not load the grader or asyncio:
 :mod:`~thymio_bt.cli.comparing` (``compare``),
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
 ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
-``maze export``), :mod:`~thymio_bt.cli.calibration` (``calibrate``), :mod:`~thymio_bt.cli.grading`
+``maze export``), :mod:`~thymio_bt.cli.calibrating` (``calibrate``), :mod:`~thymio_bt.cli.grading`
 (``grade``), :mod:`~thymio_bt.cli.linting` (``lint``), :mod:`~thymio_bt.cli.serving` (``serve ros2``),
 :mod:`~thymio_bt.cli.viewing` (``view``) and :mod:`~thymio_bt.cli.checking` (``check``). The
 commands' functions below are read from their modules the same way, when first read.
@@ -33,7 +33,7 @@ _FROM: dict[str, str] = {
     "PICTURE_SUFFIXES": "pictures",
     "backends_command": "inspection",
     "behaviours": "inspection",
-    "calibrate_command": "calibration",
+    "calibrate_command": "calibrating",
     "check": "checking",
     "compare": "comparing",
     "export": "logs",

@@ -93,6 +93,18 @@ def pose_text(pose: dict[str, float] | None) -> str:
     return f"x={pose['x']:.4f} m  y={pose['y']:.4f} m  yaw={math.degrees(pose['yaw']):.2f} deg"
 
 
+def clearance_text(gap: float | None) -> str:
+    """The summary's min clearance: in metres to 0.1 mm, a gap under that (not contact) to 1 µm, so
+    that 0 means contact (a collision) and nothing else.
+
+    >>> clearance_text(0.01537), clearance_text(3e-05), clearance_text(0.0), clearance_text(None)
+    ('0.0154 m', '0.000030 m', '0.0000 m', 'n/a')
+    """
+    if gap is None:
+        return "n/a"
+    return f"{gap:.6f} m" if 0.0 < gap < 5e-5 else f"{gap:.4f} m"
+
+
 def json_text(data: Any) -> str:
     """``data`` as the JSON the commands write: indented, strict (no NaN), with a final newline.
 
@@ -199,7 +211,7 @@ def viewer_options(command: F) -> F:
 COMMANDS: dict[str, str] = {
     "backends": "inspection",
     "behaviours": "inspection",
-    "calibrate": "calibration",
+    "calibrate": "calibrating",
     "check": "checking",
     "compare": "comparing",
     "export": "logs",

@@ -219,8 +219,8 @@ def tree(
 
 def _write_btcpp(mission: Path, btcpp: Path, plugins: bool) -> None:
     """``tree --btcpp``: the mission's tree as BehaviorTree.CPP v4 XML."""
+    from thymio_bt.btcpp.export import mission_xml
     from thymio_bt.mission import load_mission
-    from thymio_bt.mission.btcpp import mission_xml
 
     out = Output(btcpp, "--btcpp")
     out.write_text(mission_xml(load_mission(mission, run_plugins=plugins), btcpp))
@@ -261,9 +261,9 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
 def _coverage_of(report: Path, mission: Path, plugins: bool) -> tuple[dict[str, Any], set[str], Any]:
     """The coverage ``report`` holds, checked to be of ``mission``'s tree, the mission's condition
     names and its node registry."""
+    from thymio_bt.analysis.tree_rules import condition_names
     from thymio_bt.inputs.reading import read_text
     from thymio_bt.mission import load_mission
-    from thymio_bt.mission.tree_rules import condition_names
     from thymio_bt.run.coverage import plan_paths
 
     text = read_text(report, "report")
@@ -296,7 +296,7 @@ def _coverage_of(report: Path, mission: Path, plugins: bool) -> tuple[dict[str, 
 def palette(output: Path | None, mission: Path | None) -> None:
     """Write the Groot2 palette: a TreeNodesModel of every robot behaviour and condition, to import in
     Groot2 beside its own built-ins (docs/btcpp.md)."""
-    from thymio_bt.mission.btcpp import palette_xml
+    from thymio_bt.btcpp.export import palette_xml
 
     try:
         out = Output(output if output is not None else Path("-"), "--output")
@@ -320,7 +320,7 @@ def _registry(mission: Path | None) -> Registry:
 @path_option("--mission", help="Include the behaviours of this mission's plugins (runs their code).")
 def behaviours(name: str | None, mission: Path | None) -> None:
     """List the behaviours, or document one (its parameters, units, defaults, ranges)."""
-    from thymio_bt.mission.node_docs import behaviour_help, behaviour_list, parameter_rows
+    from thymio_bt.analysis.node_docs import behaviour_help, behaviour_list, parameter_rows
 
     try:
         registry = _registry(mission)
@@ -344,7 +344,7 @@ def _terminal_width() -> int:
 
 
 def fit_help(text: str, rows: Sequence[tuple[str, ...]], width: int) -> str:
-    r"""A node's help (:func:`~thymio_bt.mission.node_docs.behaviour_help`) fitted to ``width``
+    r"""A node's help (:func:`~thymio_bt.analysis.node_docs.behaviour_help`) fitted to ``width``
     columns: its parameter table (``rows``) laid out again with the type and description wrapped in
     their columns, its prose wrapped as paragraphs; the indented examples as they are.
 
@@ -454,7 +454,7 @@ def backends_command() -> None:
 def schema(output: Path, mission: Path | None, assignment: bool) -> None:
     """Print the JSON Schema of mission files, or of assignment files (for editors with
     yaml-language-server)."""
-    from thymio_bt.mission.schema import mission_schema
+    from thymio_bt.analysis.schema import mission_schema
 
     try:
         out = Output(output, "--output")

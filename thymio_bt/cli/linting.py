@@ -1,4 +1,4 @@
-"""``thymio-bt lint``: the teaching lint of a mission (:mod:`thymio_bt.mission.lint`), one finding per
+"""``thymio-bt lint``: the teaching lint of a mission (:mod:`thymio_bt.analysis.lint`), one finding per
 line as ``file:line: [rule-id] message (hint: ...)`` on standard output; the count on standard error.
 
 With ``--assignment``, the mission also runs once in each variant's world of the assignment, noise
@@ -27,8 +27,8 @@ from thymio_bt.cli.app import fail, main, path_option
 from thymio_bt.errors import UserError
 
 if TYPE_CHECKING:
+    from thymio_bt.analysis.lint import Finding
     from thymio_bt.mission import Mission
-    from thymio_bt.mission.lint import Finding
 
 
 @main.command()
@@ -48,7 +48,7 @@ def lint(mission: Path, assignment: Path | None, plugins: bool) -> None:
     """Find what makes MISSION's tree not do what it seems to (unreachable nodes, reactive restarts,
     endless loops, a way ahead checked once before a longer drive, unused subtrees and parameters,
     values at the edge of their range)."""
-    from thymio_bt.mission.lint import lint_mission
+    from thymio_bt.analysis.lint import lint_mission
 
     try:
         findings = lint_mission(mission, run_plugins=plugins)
@@ -66,7 +66,7 @@ def lint(mission: Path, assignment: Path | None, plugins: bool) -> None:
 def assignment_findings(mission: Path, assignment: Path) -> list[Finding]:
     """``never-true`` and ``never-ticked``: the coverage of one noise-free run of ``mission`` in each
     variant of ``assignment``."""
-    from thymio_bt.mission.lint import coverage_findings
+    from thymio_bt.analysis.lint import coverage_findings
 
     spec, coverage = assignment_coverage(mission, assignment)
     return coverage_findings(spec, coverage)

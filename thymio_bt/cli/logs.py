@@ -31,8 +31,8 @@ from thymio_bt.errors import UserError
 from thymio_bt.outputs import STDOUT, Output, check_writable
 
 if TYPE_CHECKING:
+    from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
     from thymio_bt.logs.recording import Recording
-    from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
     from thymio_bt.run.whatif import WhatIf
 
 

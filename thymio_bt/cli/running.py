@@ -33,6 +33,7 @@ import click
 from thymio_bt.cli.app import (
     POSITIVE,
     backend_options,
+    clearance_text,
     coverage_options,
     fail,
     json_text,
@@ -51,11 +52,11 @@ from thymio_bt.outputs import STDOUT, Output, check_writable
 from thymio_bt.run.interrupts import Interrupts
 
 if TYPE_CHECKING:
+    from thymio_bt.btcpp.groot2 import Groot2Server
     from thymio_bt.logs.recording import Recorder, Recording
     from thymio_bt.mission import Mission
     from thymio_bt.robot.interface import Backend
     from thymio_bt.run.runner import Run, RunResult
-    from thymio_bt.viz.groot2 import Groot2Server
     from thymio_bt.viz.live import LiveServer
     from thymio_bt.viz.window import LiveView
 
@@ -225,7 +226,7 @@ def run(
         )
         result, interrupts = hooks.watch(runner, realtime)
         if covered is not None:
-            from thymio_bt.mission.tree_rules import condition_names
+            from thymio_bt.analysis.tree_rules import condition_names
             from thymio_bt.run.coverage import Coverage
 
             counts = Coverage.of(spec.tree).add(result.node_stats).to_json()
@@ -345,7 +346,7 @@ class _Hooks:
             self.window = live_hook(runner, view)
             self.extra.append(self.window)
         if groot2 is not None:
-            from thymio_bt.viz.groot2 import Groot2Server
+            from thymio_bt.btcpp.groot2 import Groot2Server
 
             self.monitor = Groot2Server(groot2)
             self.extra.append(self.monitor)
@@ -462,18 +463,6 @@ class _Progress:
         """Blank the line, if anything was shown."""
         if self.shown:
             click.echo("\r" + " " * 60 + "\r", err=True, nl=False)
-
-
-def clearance_text(gap: float | None) -> str:
-    """The summary's min clearance: in metres to 0.1 mm, a gap under that (not contact) to 1 µm, so
-    that 0 means contact (a collision) and nothing else.
-
-    >>> clearance_text(0.01537), clearance_text(3e-05), clearance_text(0.0), clearance_text(None)
-    ('0.0154 m', '0.000030 m', '0.0000 m', 'n/a')
-    """
-    if gap is None:
-        return "n/a"
-    return f"{gap:.6f} m" if 0.0 < gap < 5e-5 else f"{gap:.4f} m"
 
 
 def _summary(result: RunResult, err: bool = False) -> None:

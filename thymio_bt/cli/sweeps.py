@@ -144,8 +144,8 @@ def sweep(
 
 def _conditions(request: _Request) -> set[str]:
     """The names of the conditions the sweep's mission can use (its plugins read, not run again)."""
+    from thymio_bt.analysis.tree_rules import condition_names
     from thymio_bt.mission import load_mission
-    from thymio_bt.mission.tree_rules import condition_names
 
     spec = load_mission(
         request.mission, parse_overrides(request.sets), request.maze_ref, request.start, run_plugins=False

@@ -74,7 +74,7 @@ def view(logs: tuple[Path, ...], out: Path | None, partial: bool, poses: Path | 
         check_writable(target, "-o")
         recordings = [read_log(log, partial) for log in logs]
         if poses is not None:
-            from thymio_bt.logs.btlog import with_poses
+            from thymio_bt.btcpp.btlog import with_poses
 
             if len(logs) != 1 or format_for(logs[0], reading=True).name != "btlog":
                 raise UserError("--poses goes with one .btlog log (hint: view run.btlog --poses run.jsonl)")

@@ -446,7 +446,7 @@ def _criterion_problems(
 
 def _palette_problems(data: Any, file: str) -> list[Problem]:
     """The palette's node names must be node types (a misspelt ``forbid`` would forbid nothing)."""
-    from thymio_bt.mission.registry import default_registry
+    from thymio_bt.plan.registry import default_registry
 
     palette = data.get("palette") if isinstance(data, dict) else None
     if not isinstance(palette, dict):

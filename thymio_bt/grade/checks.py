@@ -34,8 +34,8 @@ from dataclasses import dataclass
 
 from thymio_bt.grade.assignment import Criterion, GoalDisc
 from thymio_bt.grade.facts import RunFacts, cruise_speed, turns_taken
-from thymio_bt.mission.expect import stop_problem
 from thymio_bt.run.result import RunStatus
+from thymio_bt.run.verdict import stop_problem
 
 #: at a dead end a side wall is at most this many grid pitches from base_link (3/4: the cell's half
 #: and room for a robot off its centre line; an open side's ray reaches the next cell's far wall,

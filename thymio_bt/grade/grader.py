@@ -249,7 +249,7 @@ def _confinement(assignment: Assignment, entries: list[Entry]) -> str:
 def _has_plugins(mission: Any) -> bool:
     """Whether a mission (read without running its plugins) names any plugin: its tree's code is then
     the student's, run in a confined process of its own."""
-    from thymio_bt.mission.unrun_plugins import UncheckedParams
+    from thymio_bt.plan.unrun_plugins import UncheckedParams
 
     stand_ins = any(cls.Params is UncheckedParams for _, cls in mission.registry.items())
     return stand_ins or any(p.suffix == ".py" for p in mission.sources)

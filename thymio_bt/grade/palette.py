@@ -22,7 +22,7 @@ from typing import Any
 
 from thymio_bt.data import MISSIONS
 from thymio_bt.grade.assignment import Palette
-from thymio_bt.mission.plan import Mission, NodePlan
+from thymio_bt.plan.model import Mission, NodePlan
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ from thymio_bt.errors import ThymioBtError
 from thymio_bt.grade.isolation import Limits, RunLimit
 from thymio_bt.grade.sandboxes import Sandbox
 from thymio_bt.grade.wire import MAX_DRIVES, Deadline, WireError, is_json, observation_frame, read_json, read_reply
-from thymio_bt.logs.records import STATUS_LETTER
+from thymio_bt.logs.entries import STATUS_LETTER
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Request, RequestState
 from thymio_bt.run.result import EndKind, RunResult, RunStatus, Verdict
 from thymio_bt.run.runner import Run

@@ -95,7 +95,7 @@ def _warm() -> None:
     """Import what every run needs, before any connection: each forked process starts warm."""
     import py_trees  # noqa: F401
 
-    from thymio_bt.behaviours.ticking import tick  # noqa: F401
+    from thymio_bt.behaviours.flow.ticking import tick  # noqa: F401
     from thymio_bt.mission import build_tree, load_mission  # noqa: F401
     from thymio_bt.run.coverage import NodeStats  # noqa: F401
     from thymio_bt.run.result import failing_branch  # noqa: F401
@@ -212,7 +212,7 @@ class _Statuses:
 
     def changed(self) -> dict[str, str]:
         """The nodes whose status changed since the last call: path -> status letter (as logs write it)."""
-        from thymio_bt.logs.records import STATUS_LETTER
+        from thymio_bt.logs.entries import STATUS_LETTER
 
         now = {path: STATUS_LETTER[node.status.name] for path, node in self.nodes}
         changed = {path: letter for path, letter in now.items() if self.last.get(path) != letter}
@@ -262,7 +262,7 @@ SLOW = 0.5
 def _tick(root: Any) -> tuple[str, dict[str, Any]]:
     """One tick of the tree: its status, and where and why it failed (or why the tick raised)."""
     from thymio_bt.behaviours.base import describe, is_fault
-    from thymio_bt.behaviours.ticking import tick
+    from thymio_bt.behaviours.flow.ticking import tick
     from thymio_bt.run.result import failing_branch
 
     try:

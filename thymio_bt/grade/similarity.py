@@ -4,7 +4,7 @@ values (a copy with its numbers and names changed is still a copy). For the TA o
 
 Example::
 
-    >>> from thymio_bt.mission.plan import NodePlan
+    >>> from thymio_bt.plan.model import NodePlan
     >>> def tree(name, speed):
     ...     leaf = NodePlan("behaviour", f"{name} leaf", f"{name}/leaf", behaviour="MoveUntilWall",
     ...                     options={"speed": speed})
@@ -21,7 +21,7 @@ from __future__ import annotations
 import hashlib
 from typing import Any
 
-from thymio_bt.mission.plan import NodePlan
+from thymio_bt.plan.model import NodePlan
 
 
 def tree_shape(plan: NodePlan) -> str:

@@ -275,7 +275,7 @@ def parse_value(
 
 def _raw_reading(reading: float) -> Quantity:
     """The distance at which a real Thymio's sensor gives ``reading`` (Webots' Thymio II table)."""
-    from thymio_bt.robot.calibration import WEBOTS_THYMIO2 as table
+    from thymio_bt.sensor_tables import WEBOTS_THYMIO2 as table
 
     if not 0 < reading <= table.max_reading:
         raise UnitError(

@@ -31,8 +31,8 @@ from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import check_regular
 
 if TYPE_CHECKING:
+    from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
     from thymio_bt.logs.recording import Recording
-    from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 
 ENTRY_POINT_GROUP = "thymio_bt.log_formats"
 
@@ -96,8 +96,8 @@ BUILTIN: tuple[LogFormat, ...] = (
         "btlog",
         "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes, no robot)",
         (".btlog",),
-        "thymio_bt.logs.btlog:BtlogWriter",
-        "thymio_bt.logs.btlog:read_btlog",
+        "thymio_bt.btcpp.btlog:BtlogWriter",
+        "thymio_bt.btcpp.btlog:read_btlog",
     ),
 )
 

@@ -41,8 +41,8 @@ from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError,
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_text
 from thymio_bt.inputs.validation import Wording, problems_from, validate
+from thymio_bt.logs.entries import STATUS_LETTER, LogEnd, LogHeader, TickRecord
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import STATUS_LETTER, LogEnd, LogHeader, TickRecord
 from thymio_bt.maze import Maze
 
 

@@ -1,7 +1,7 @@
 """Record a run tick by tick: in memory for plots and replays, and in a log of any format.
 
 The :class:`Recorder` is an ``on_tick`` hook: each tick it makes one
-:class:`~thymio_bt.logs.records.TickRecord` (time, pose, command, velocity, proximity, running
+:class:`~thymio_bt.logs.entries.TickRecord` (time, pose, command, velocity, proximity, running
 nodes, the status of every node, blackboard values that changed), keeps it for plots, and hands it
 to the log writer that ``--log FILE``'s suffix picks (:mod:`thymio_bt.logs`). ``thymio-bt replay``
 redraws plots from a log without re-running.
@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
     from thymio_bt.logs import LogWriter
-    from thymio_bt.logs.records import LogEnd, TickRecord
+    from thymio_bt.logs.entries import LogEnd, TickRecord
     from thymio_bt.robot.model import RobotModel
     from thymio_bt.run.runner import Run, RunResult
 
@@ -47,7 +47,7 @@ if TYPE_CHECKING:
 @dataclass
 class Recording:
     """What a run (or a log) holds for plots and replays: ``header`` is the log header (mission,
-    rates, the tree), ``samples`` one :class:`~thymio_bt.logs.records.TickRecord` per tick."""
+    rates, the tree), ``samples`` one :class:`~thymio_bt.logs.entries.TickRecord` per tick."""
 
     maze: Maze
     mission: str = ""
@@ -86,7 +86,7 @@ class Recorder:
             self._open(run)
 
     def _open(self, run: Run) -> None:
-        from thymio_bt.logs.records import LogHeader, tree_nodes
+        from thymio_bt.logs.entries import LogHeader, tree_nodes
 
         self._run = run
         mission = run.mission
@@ -111,8 +111,8 @@ class Recorder:
 
     def __call__(self, run: Run) -> None:
         """Record the tick ``run`` just made (the first call writes the log's header); a log that cannot
-        be written any more ends the run with :class:`~thymio_bt.run.runner.StopRun`."""
-        from thymio_bt.logs.records import STATUS_LETTER, jsonable
+        be written any more ends the run with :class:`~thymio_bt.errors.StopRun`."""
+        from thymio_bt.logs.entries import STATUS_LETTER, jsonable
 
         if self._run is None:
             self._open(run)
@@ -144,7 +144,7 @@ class Recorder:
             try:
                 self._writer.tick(record)
             except OSError as exc:  # a full disk, a file size limit: end the run, keep the report
-                from thymio_bt.run.runner import StopRun
+                from thymio_bt.errors import StopRun
 
                 self._abandon()
                 raise StopRun(f"cannot write the log {self._path}: {exc.strerror or exc}") from None

@@ -26,8 +26,8 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
 from thymio_bt.robot.interface import SENSOR_NAMES
 
 _INSTALL = "pip install 'thymio-bt[rosbag]'"

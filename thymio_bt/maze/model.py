@@ -34,8 +34,8 @@ from typing import Annotated, Any
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.geometry import Pose
 from thymio_bt.inputs.fields import Angle, Length, Point, hinted_error
-from thymio_bt.robot.interface import Pose
 
 
 class Wall(BaseModel):
@@ -145,7 +145,7 @@ class Spawn(BaseModel):
         return value
 
     def pose(self) -> Pose:
-        """The spawn as a :class:`~thymio_bt.robot.interface.Pose`."""
+        """The spawn as a :class:`~thymio_bt.geometry.Pose`."""
         return Pose(self.x, self.y, self.yaw)
 
 

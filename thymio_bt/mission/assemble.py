@@ -4,7 +4,7 @@ From the YAML read with marks, it loads plugins, includes (recursively), paramet
 settings (tick rate, time limit, seed, noise, sensor model, robot, backend, and ``--set``
 overrides: :mod:`thymio_bt.mission.settings`), then the maze and the start pose. What comes out, an
 :class:`Assembly`, is what the planning pass needs to turn the ``tree:`` into a
-:class:`~thymio_bt.mission.plan.NodePlan`.
+:class:`~thymio_bt.plan.model.NodePlan`.
 
 Example::
 
@@ -29,9 +29,9 @@ from typing import Any
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
 from thymio_bt.maze import Maze, load_maze, resolve_maze
-from thymio_bt.mission.checker import Scope, Where
-from thymio_bt.mission.registry import Registry, default_registry
+from thymio_bt.mission.pass_base import Scope, Where
 from thymio_bt.mission.settings import MAX_SEED, SENSOR_MODELS, SETTING_RANGES, SettingsReader
+from thymio_bt.plan.registry import Registry, default_registry
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import placement_problem

@@ -23,8 +23,8 @@ from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours import Context, ControlNode, ScriptedStub
 from thymio_bt.errors import UserError, did_you_mean
-from thymio_bt.mission.plan import NodePlan
-from thymio_bt.mission.registry import Registry, default_registry
+from thymio_bt.plan.model import NodePlan
+from thymio_bt.plan.registry import Registry, default_registry
 
 
 def build_tree(

@@ -1,7 +1,7 @@
-"""Load a mission file into a validated :class:`~thymio_bt.mission.plan.Mission`, in passes:
+"""Load a mission file into a validated :class:`~thymio_bt.plan.model.Mission`, in passes:
 
 1. **read** — the YAML with the place of every key and value (:func:`thymio_bt.inputs.yamlio.load_yaml`), or
-   a BehaviorTree.CPP XML mission into the same form (:mod:`thymio_bt.mission.xml_reader`);
+   a BehaviorTree.CPP XML mission into the same form (:mod:`thymio_bt.btcpp.xml_reader`);
 2. **assemble** — includes, plugins, parameters, subtrees, settings and ``--set``, the maze and the
    start pose (:mod:`thymio_bt.mission.assemble`);
 3. **validate and plan** — each node of the tree by its registered class and parameter model
@@ -32,9 +32,9 @@ from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.units import Quantity
 from thymio_bt.inputs.yamlio import load_yaml
 from thymio_bt.mission.assemble import Assembler
-from thymio_bt.mission.plan import Mission
 from thymio_bt.mission.planner import TreePlanner
-from thymio_bt.mission.registry import Registry
+from thymio_bt.plan.model import Mission
+from thymio_bt.plan.registry import Registry
 
 
 def resolve_mission(ref: str | Path) -> Path:
@@ -65,11 +65,11 @@ def load_mission(
 ) -> Mission:
     """Load and validate a mission file (or a shipped mission by name); raise :class:`UserError`
     listing every problem. ``run_plugins=False`` reads the mission's plugins without importing them
-    (see :mod:`thymio_bt.mission.unrun_plugins`): for tools that must not run a stranger's code."""
+    (see :mod:`thymio_bt.plan.unrun_plugins`): for tools that must not run a stranger's code."""
     path = resolve_mission(path)
     file = str(path)
     if path.suffix.lower() == ".xml":
-        from thymio_bt.mission.xml_reader import read_xml_mission  # BT.CPP XML: imported only for XML missions
+        from thymio_bt.btcpp.xml_reader import read_xml_mission  # BT.CPP XML: imported only for XML missions
 
         data = read_xml_mission(path)
     else:

@@ -43,7 +43,7 @@ from thymio_bt.inputs.units import Quantity, UnitError, parse_value
 from thymio_bt.inputs.validation import HintRule, Named, Wording, problems_from, range_hint
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.maze import Maze
-from thymio_bt.mission.checker import Checker, Scope, Where, _parameter_hint
+from thymio_bt.mission.pass_base import Checker, Scope, Where, _parameter_hint
 from thymio_bt.robot.model import ROBOTS, RobotModel
 
 #: what :meth:`ParameterReader.convert` returns for a value it reported a problem about

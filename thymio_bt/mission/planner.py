@@ -1,5 +1,5 @@
 """The validate-and-plan pass: the ``tree:`` of an assembled mission, node by node, into a
-:class:`~thymio_bt.mission.plan.NodePlan`.
+:class:`~thymio_bt.plan.model.NodePlan`.
 
 Each node's type is looked up in the registry (a behaviour, a composite, a decorator) or among the
 mission's subtrees; its parameters are read by their declared types (thymio_bt.inputs.fields: units,
@@ -30,15 +30,11 @@ from thymio_bt.errors import did_you_mean, type_name
 from thymio_bt.inputs.units import Quantity
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.assemble import Assembly, Subtree
-from thymio_bt.mission.checker import Scope, Where
 from thymio_bt.mission.parameters import ParameterReader, parse_value_kind
-from thymio_bt.mission.plan import NodePlan
+from thymio_bt.mission.pass_base import Scope, Where
+from thymio_bt.plan.model import MAX_DEPTH, MAX_NODES, NodePlan
 
 __all__ = ["MAX_DEPTH", "MAX_NODES", "TreePlanner", "parse_value_kind"]
-
-MAX_DEPTH = 64
-#: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
-MAX_NODES = 20_000
 
 
 @dataclass(frozen=True)
@@ -109,7 +105,7 @@ class TreePlanner(ParameterReader):
             return self._behaviour(kind, body, at)
         if kind in self.subtrees:
             return self._use_subtree(kind, body, at)
-        from thymio_bt.mission.btcpp import yaml_hint  # the BT.CPP export, for a misspelt node only
+        from thymio_bt.btcpp.export import yaml_hint  # the BT.CPP export, for a misspelt node only
 
         hint = yaml_hint(kind) or did_you_mean(kind, [*self.registry, *self.subtrees])
         self.problem(f"unknown node type '{kind}'", where, node_path, hint)

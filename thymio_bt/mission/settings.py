@@ -28,9 +28,9 @@ from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.units import Quantity, check_kind, resolver_from
 from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
-from thymio_bt.mission.checker import Checker, Scope, Where
-from thymio_bt.mission.expect import Expect
 from thymio_bt.mission.parameters import SetValue
+from thymio_bt.mission.pass_base import Checker, Scope, Where
+from thymio_bt.plan.expect import Expect
 from thymio_bt.robot.model import ROBOTS, robot_model
 from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.robot.profile import is_profile_path

@@ -44,11 +44,11 @@ from itertools import pairwise
 
 from thymio_bt.errors import ThymioBtError
 from thymio_bt.maze import Maze
-from thymio_bt.robot.calibration import CalibrationTable
 from thymio_bt.robot.interface import Backend, Pose
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import ray_distance
 from thymio_bt.robot.profile import Profile, TableRows
+from thymio_bt.sensor_tables import CalibrationTable
 
 TICK = 0.1
 #: the corridor: 0.2 m wide, its end wall's face at x = END (m), the robot 0.45 m from it

@@ -30,6 +30,7 @@ from enum import Enum
 from typing import TYPE_CHECKING
 
 from thymio_bt.errors import ThymioBtError
+from thymio_bt.geometry import Pose, new_pose, wrap_angle
 
 if TYPE_CHECKING:
     from thymio_bt.robot.model import RobotModel
@@ -49,48 +50,8 @@ SENSOR_NAMES: tuple[str, ...] = (
 ROBOT_ENTITY = "thymio"
 
 
-def wrap_angle(angle: float) -> float:
-    """Normalise an angle to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
-
-
 class RobotLost(ThymioBtError):
     """Raised by a backend whose robot stopped answering: the run ends as FAILURE ``ROBOT_LOST``."""
-
-
-@dataclass(frozen=True, slots=True)
-class Pose:
-    """A planar pose: position in metres, yaw in radians (counter-clockwise from +x)."""
-
-    x: float
-    y: float
-    yaw: float
-
-    def as_dict(self) -> dict[str, float]:
-        """The pose as ``{"x", "y", "yaw"}``, as events and reports write it."""
-        return {"x": self.x, "y": self.y, "yaw": self.yaw}
-
-    def as_tuple(self) -> tuple[float, float, float]:
-        """The pose as ``(x, y, yaw)``, for unpacking."""
-        return (self.x, self.y, self.yaw)
-
-    def distance_to(self, other: Pose) -> float:
-        """The straight-line distance in metres between the two positions (headings aside)."""
-        return math.hypot(other.x - self.x, other.y - self.y)
-
-
-# the slots' member descriptors (``vars`` reaches them without reading them as fields)
-_set_x, _set_y, _set_yaw = (vars(Pose)[name].__set__ for name in ("x", "y", "yaw"))
-
-
-def new_pose(x: float, y: float, yaw: float) -> Pose:
-    """``Pose(x, y, yaw)``, its slots filled directly: a frozen dataclass's ``__init__`` sets each
-    field through ``object.__setattr__``, twice the cost (a simulation makes one per sensor refresh)."""
-    pose = object.__new__(Pose)
-    _set_x(pose, x)
-    _set_y(pose, y)
-    _set_yaw(pose, yaw)
-    return pose
 
 
 @dataclass(frozen=True, slots=True)

@@ -26,8 +26,8 @@ import math
 from dataclasses import dataclass, replace
 from typing import Literal, TypeGuard
 
-from thymio_bt.robot.calibration import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
+from thymio_bt.sensor_tables import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
 
 #: how a robot's own readings are made (:attr:`RobotModel.sensor_model`)
 SensorModelName = Literal["rays", "raw", "cone"]

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
-from thymio_bt.robot.calibration import CalibrationTable
+from thymio_bt.sensor_tables import CalibrationTable
 
 if TYPE_CHECKING:
     from thymio_bt.robot.model import RobotModel  # which imports this module when a profile is named

@@ -29,8 +29,8 @@ from typing import Any
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.units import UnitError, parse_value
+from thymio_bt.logs.entries import checked_events, finite
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import checked_events, finite
 from thymio_bt.run.divergence import Divergence, first_divergence
 
 #: the unit kind each tolerance takes, and which phase values it bounds

@@ -3,7 +3,7 @@ ended each composite, and which nodes never ran, over one run or many.
 
 Two halves. :class:`NodeStats` watches one run (``Run(mission, seed, node_stats=True)``): every node
 of the built tree, a guard's condition too, counts its own ticks however it is ticked (py_trees'
-generators, the direct tick of :mod:`thymio_bt.behaviours.ticking`, BT.CPP's ``executeTick``), and
+generators, the direct tick of :mod:`thymio_bt.behaviours.flow.ticking`, BT.CPP's ``executeTick``), and
 its table is the run's ``node_stats``. :class:`Coverage` holds the counts of every node of the
 mission's plan (so a node never ticked is there too), adds runs' tables and merges other coverages:
 its JSON is the ``coverage`` of the run report (``run --coverage``), the sweep JSON and ``grade``.
@@ -36,10 +36,10 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours import ticking
 from thymio_bt.behaviours.base import node_path
-from thymio_bt.behaviours.btcpp_nodes import BtNode
-from thymio_bt.mission.plan import NodePlan
+from thymio_bt.behaviours.flow import ticking
+from thymio_bt.btcpp.runtime.nodes import BtNode
+from thymio_bt.plan.model import NodePlan
 
 SUCCESS, FAILURE, RUNNING = Status.SUCCESS, Status.FAILURE, Status.RUNNING
 
@@ -266,7 +266,7 @@ _COUNTED: set[type] = set()
 
 def _counting(cls: type) -> type:
     """``cls`` with every way it is ticked counted: py_trees' ``tick`` generator, the direct tick of
-    :mod:`~thymio_bt.behaviours.ticking` (``tick_direct``: the class's own, or the one that module
+    :mod:`~thymio_bt.behaviours.flow.ticking` (``tick_direct``: the class's own, or the one that module
     has for its kind, so that counting keeps the direct tick) and BT.CPP's ``execute_tick``; same
     name, same behaviour."""
     made = _COUNTING.get(cls)
@@ -380,7 +380,7 @@ class NodeStats(py_trees.visitors.VisitorBase):
 
 def _hidden_children(node: Behaviour) -> list[Behaviour]:
     """Nodes ``node`` ticks that are not its py_trees children: a guard's condition, which py_trees'
-    ``EternalGuard`` calls through a function (:class:`~thymio_bt.behaviours.decorators.Guard`)."""
+    ``EternalGuard`` calls through a function (:class:`~thymio_bt.behaviours.flow.decorators.Guard`)."""
     check = getattr(node, "condition", None)
     cells = getattr(check, "__closure__", None) or ()
     found = []

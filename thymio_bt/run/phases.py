@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from thymio_bt.mission.plan import NodePlan
+from thymio_bt.plan.model import NodePlan
 
 
 def subtree_uses(plan: NodePlan, parent: str = "") -> Iterator[tuple[str, NodePlan]]:

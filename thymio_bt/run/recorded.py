@@ -27,8 +27,8 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from thymio_bt.logs.entries import checked_events, finite
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import checked_events, finite
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Request, Scan, Twist, new_pose, wrap_angle
 from thymio_bt.robot.model import RobotModel, robot_model
 

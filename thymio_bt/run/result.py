@@ -25,10 +25,11 @@ from py_trees.behaviour import Behaviour
 from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import FailureCode, RobotBehaviour, TextEnum, node_path
-from thymio_bt.behaviours.cellmap import CellMap
-from thymio_bt.behaviours.control import SimTimeout
+from thymio_bt.behaviours.base import RobotBehaviour, node_path
+from thymio_bt.behaviours.flow.primitives import SimTimeout
 from thymio_bt.behaviours.mapping import MazeMapParams
+from thymio_bt.enums import FailureCode, TextEnum
+from thymio_bt.maze.cellmap import CellMap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.run.phases import Phase
 
@@ -143,7 +144,7 @@ class EndKind(Enum):
     TIMEOUT = "timeout"
     #: a signal (Ctrl-C, SIGTERM) noted in the run's :class:`~thymio_bt.run.interrupts.Interrupts`
     INTERRUPTED = "interrupted"
-    #: a tick hook raised :class:`~thymio_bt.run.runner.StopRun`
+    #: a tick hook raised :class:`~thymio_bt.errors.StopRun`
     STOPPED = "stopped"
     #: the robot could not start, was lost, or the backend raised
     CRASHED = "crashed"

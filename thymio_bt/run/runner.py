@@ -33,8 +33,8 @@ from py_trees.common import Status
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
 from thymio_bt.behaviours.base import FailureCode, describe, is_fault, node_path, snapshot
-from thymio_bt.behaviours.ticking import tick
-from thymio_bt.errors import Problem, ThymioBtError, UserError
+from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.errors import Problem, StopRun, UserError
 from thymio_bt.mission import Mission, build_tree
 from thymio_bt.robot.interface import Backend, Collision, Pose, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
@@ -60,11 +60,6 @@ CONTACT = 1e-6
 
 #: the longest wait (s) of ``--realtime`` pacing before it looks for a signal again
 PACE_SLICE = 0.1
-
-
-class StopRun(ThymioBtError):
-    """Raised by a tick hook to end the run there (e.g. the user closed the viewer): the run ends
-    as a FAILURE with code STOPPED and the message as its reason, with its report and log intact."""
 
 
 class Run:
@@ -373,7 +368,7 @@ class Run:
     def _check_expectations(self, result: RunResult, places: bool) -> None:
         """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
         With nodes substituted (a test of part of a mission), where it ends is not checked."""
-        from thymio_bt.mission.expect import check
+        from thymio_bt.run.verdict import check
 
         expect = self.mission.expect if places else self.mission.expect.without_places()
         # the robot that ran (a calibrated profile, a backend's own), not only the one the mission names

@@ -38,15 +38,15 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
-from thymio_bt.errors import Problem, UserError
+from thymio_bt.errors import Problem, StopRun, UserError
+from thymio_bt.logs.entries import STATUS_LETTER, finite
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import STATUS_LETTER, finite
 from thymio_bt.mission import Mission
 from thymio_bt.robot.interface import Backend, new_pose
 from thymio_bt.robot.model import ROBOTS
 from thymio_bt.run.divergence import pose_source
 from thymio_bt.run.recorded import ENTITY_EVENTS, RecordedRobot
-from thymio_bt.run.runner import Run, RunResult, StopRun
+from thymio_bt.run.runner import Run, RunResult
 
 #: how far a command may be from the recorded one and still be the same (m/s, rad/s): JSON-lines
 #: logs keep exact numbers; one written before they named their backend keeps 6 decimals, a rosbag2

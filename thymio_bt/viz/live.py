@@ -36,8 +36,8 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qs, urlsplit
 
 from thymio_bt.errors import UserError
+from thymio_bt.logs.entries import tree_nodes
 from thymio_bt.logs.recording import Recorder, Recording, robot_shape
-from thymio_bt.logs.records import tree_nodes
 from thymio_bt.viz.page import page_html
 from thymio_bt.viz.page_data import event_rows, page_data
 

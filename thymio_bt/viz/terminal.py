@@ -37,10 +37,10 @@ from thymio_bt.errors import UserError
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
-    from thymio_bt.behaviours.control_node import ControlNode
-    from thymio_bt.mission.plan import NodePlan
-    from thymio_bt.mission.registry import Registry
+    from thymio_bt.behaviours.flow.node import ControlNode
     from thymio_bt.outputs import Output
+    from thymio_bt.plan.model import NodePlan
+    from thymio_bt.plan.registry import Registry
     from thymio_bt.run.runner import Run
 
 
@@ -130,8 +130,8 @@ def write_graph(source: str, out: Output, fmt: str, instead: str) -> None:
 def _kind(kind: str, registry: Registry | None) -> type[ControlNode]:
     """The class of a composite or decorator ``kind`` of ``registry``, whose ``symbol`` and ``family``
     say how it is drawn (a kind it lacks: :class:`ControlNode`'s, a decorator's)."""
-    from thymio_bt.behaviours.control_node import ControlNode
-    from thymio_bt.mission.registry import control_kind
+    from thymio_bt.behaviours.flow.node import ControlNode
+    from thymio_bt.plan.registry import control_kind
 
     return control_kind(kind, registry) or ControlNode
 

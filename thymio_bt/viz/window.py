@@ -8,7 +8,7 @@ only reads the simulation, so a run with a window ends exactly as one without. W
 
 Keys: SPACE pause/resume, N or RIGHT one tick (and pause), + / - double/halve the speed-up,
 Q or ESC close. Closing the window of a live run raises :class:`ViewerClosed`, a
-:class:`thymio_bt.run.runner.StopRun`: the run ends there as a FAILURE with code STOPPED, and its
+:class:`thymio_bt.errors.StopRun`: the run ends there as a FAILURE with code STOPPED, and its
 report, log and pictures are written as for any other ending.
 
 Example (offscreen; ``replay(read_log("run.jsonl"), speedup=10)`` shows a log the same way):
@@ -35,14 +35,14 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.behaviours.base import node_path
-from thymio_bt.behaviours.cellmap import CellMap
-from thymio_bt.errors import UserError
+from thymio_bt.errors import StopRun, UserError
+from thymio_bt.logs.entries import number
 from thymio_bt.logs.recording import Recording
-from thymio_bt.logs.records import number
 from thymio_bt.maze import Maze
+from thymio_bt.maze.cellmap import CellMap
 from thymio_bt.robot.model import COURSE
 from thymio_bt.run.result import RunResult, learnt_map
-from thymio_bt.run.runner import Run, StopRun
+from thymio_bt.run.runner import Run
 from thymio_bt.viz.display import INSTALL_HINT
 from thymio_bt.viz.plots import outline, rays
 
@@ -90,7 +90,7 @@ class Frame:
     pose: dict[str, float] | None
     prox: dict[str, float | None]
     node: str = ""
-    #: the mapping behaviours' map (:class:`~thymio_bt.behaviours.cellmap.CellMap`), if the run has one
+    #: the mapping behaviours' map (:class:`~thymio_bt.maze.cellmap.CellMap`), if the run has one
     cells: CellMap | None = None
 
 

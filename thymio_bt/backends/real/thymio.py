@@ -9,7 +9,7 @@ What the backend does with them:
 
 - ``drive(v, ω)``: wheel speeds as the diff-drive plugin computes them, both scaled down together
   when one exceeds the limit (the turn radius is kept), converted to motor units and written at once;
-- ``proximity()``: the 7 readings converted to metres through :mod:`thymio_bt.robot.calibration`
+- ``proximity()``: the 7 readings converted to metres through :mod:`thymio_bt.sensor_tables`
   (0, nothing seen, is ``math.inf``), refreshed at every :meth:`ThymioRobot.advance`;
 - ``pose()``: odometry, integrated from the measured wheel speeds (``motor.*.speed``) at every
   :meth:`ThymioRobot.advance`; it drifts, and there is no ground truth;

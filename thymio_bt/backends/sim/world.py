@@ -45,10 +45,10 @@ from thymio_bt.backends.sim.fastpath import (
 from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
 from thymio_bt.maze import Maze
-from thymio_bt.robot.calibration import RawProximityModel, raw_scan_to_metres
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose, wrap_angle
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
 from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
+from thymio_bt.sensor_tables import RawProximityModel, raw_scan_to_metres
 
 _ROBOT_TYPE = 1
 _WALL_TYPE = 2

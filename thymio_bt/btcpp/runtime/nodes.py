@@ -13,8 +13,8 @@ again from its root within the same tick. Here the topmost BT.CPP node of the tr
 Example (BT.CPP's Sequence restarts after a failure; SequenceWithMemory resumes at the failed child)::
 
     >>> from py_trees.behaviours import Failure, Success
-    >>> from thymio_bt.behaviours.btcpp_decorators import RetryUntilSuccessful
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.btcpp.runtime.decorators import RetryUntilSuccessful
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> seq = SequenceWithMemory("memory", [Success("a"), Failure("b")])
     >>> retry = RetryUntilSuccessful("retry", seq, 2)
     >>> tick(retry); retry.status, seq.index
@@ -31,7 +31,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from thymio_bt.behaviours.base import RobotBehaviour
-from thymio_bt.behaviours.ticking import tick
+from thymio_bt.behaviours.flow.ticking import tick
 from thymio_bt.errors import ThymioBtError
 
 IDLE, RUNNING, SUCCESS, FAILURE = Status.INVALID, Status.RUNNING, Status.SUCCESS, Status.FAILURE

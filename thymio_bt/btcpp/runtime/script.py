@@ -45,7 +45,7 @@ import re
 from collections.abc import Callable, MutableMapping
 from typing import Any
 
-from thymio_bt.behaviours.btcpp_values import (
+from thymio_bt.btcpp.runtime.values import (
     INT64,
     ScriptError,
     arith,

@@ -20,7 +20,7 @@ from typing import Any
 
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.inputs.fields import unit_of
-from thymio_bt.mission.registry import Registry, default_registry
+from thymio_bt.plan.registry import Registry, default_registry
 from thymio_bt.robot.model import ROBOTS
 from thymio_bt.robot.noise import NoiseConfig
 
@@ -111,7 +111,7 @@ def control_schema(cls: type[ControlNode], node_ref: dict[str, Any]) -> dict[str
     return {**long_form, "description": _summary(cls)}
 
 
-#: ``expect:`` (thymio_bt.mission.expect): what counts as success besides the tree's status
+#: ``expect:`` (thymio_bt.plan.expect): what counts as success besides the tree's status
 _EXPECT = {
     "type": "object",
     "additionalProperties": False,

@@ -1,5 +1,5 @@
 """BT.CPP 4's nodes that read and write the blackboard with its script language
-(:mod:`thymio_bt.behaviours.btcpp_script`): ``Script``, ``ScriptCondition``, ``Precondition``,
+(:mod:`thymio_bt.btcpp.runtime.script`): ``Script``, ``ScriptCondition``, ``Precondition``,
 ``SetBlackboard``, ``UnsetBlackboard``, ``Switch2``..``Switch6``, and the pre/post-condition
 attributes (``_skipIf``, ``_successIf``, ``_failureIf``, ``_while``, ``_onSuccess``,
 ``_onFailure``, ``_onHalted``, ``_post``) as a :class:`Conditioned` node around the node they are on.
@@ -7,7 +7,7 @@ The blackboard is the run's (py_trees'): ``x`` in a script is ``bb:x`` in a miss
 
 Example::
 
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> from py_trees.blackboard import Blackboard
     >>> from types import SimpleNamespace
     >>> robot = SimpleNamespace(exists=lambda: False)
@@ -32,13 +32,13 @@ from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 from pydantic import AfterValidator, Field
 
-from thymio_bt.behaviours import btcpp_decorators as bd
-from thymio_bt.behaviours import btcpp_nodes as bn
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
-from thymio_bt.behaviours.btcpp_script import Script as Code_
-from thymio_bt.behaviours.btcpp_script import ScriptError, parse
-from thymio_bt.behaviours.btcpp_values import truth
-from thymio_bt.behaviours.control_node import refuse
+from thymio_bt.behaviours.flow.node import refuse
+from thymio_bt.btcpp.runtime import decorators as bd
+from thymio_bt.btcpp.runtime import nodes as bn
+from thymio_bt.btcpp.runtime.script import Script as Code_
+from thymio_bt.btcpp.runtime.script import ScriptError, parse
+from thymio_bt.btcpp.runtime.values import truth
 
 
 class RunBoard(MutableMapping[str, Any]):

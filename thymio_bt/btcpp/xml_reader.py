@@ -5,16 +5,16 @@ The read pass for ``.xml`` files: the ``<BehaviorTree>`` named by ``main_tree_to
 only one) is the tree, ``<ThymioMission>`` holds the settings (``maze``, ``start``, ``tick_hz``,
 ``noise.wheel``...), ``<TreeNodesModel>`` gives only the defaults of subtrees' ports. BT.CPP's
 built-ins map back to thymio-bt's composites and decorators (each marked element by its kind's
-``btcpp_id``, :class:`~thymio_bt.behaviours.control_node.ControlNode`),
+``btcpp_id``, :class:`~thymio_bt.behaviours.flow.node.ControlNode`),
 ``{key}`` ports to ``bb:key``; each ``<SubTree>`` is a copy of its tree with a blackboard scope of its
-own, as in BT.CPP (:mod:`thymio_bt.mission.xml_tree`, :mod:`thymio_bt.mission.xml_scope`). Elements
+own, as in BT.CPP (:mod:`thymio_bt.btcpp.xml_tree`, :mod:`thymio_bt.btcpp.xml_scope`). Elements
 and their attributes carry the element's line and column. The file is parsed with expat, with no
 DTD: entities are refused, so nothing is expanded or fetched.
 
 Example::
 
     >>> import tempfile
-    >>> from thymio_bt.mission.btcpp import mission_xml
+    >>> from thymio_bt.btcpp.export import mission_xml
     >>> from thymio_bt.mission.loader import load_mission
     >>> with tempfile.TemporaryDirectory() as folder:
     ...     xml = Path(folder) / "bonus.xml"
@@ -32,11 +32,11 @@ import json
 from pathlib import Path
 from typing import Any
 
+from thymio_bt.btcpp.export import MISSION_TAG
+from thymio_bt.btcpp.xml_tree import Element, TreeReader, check_json, element_roots, marked, port_value
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import read_bytes
 from thymio_bt.inputs.yamlio import MarkedDict
-from thymio_bt.mission.btcpp import MISSION_TAG
-from thymio_bt.mission.xml_tree import Element, TreeReader, check_json, element_roots, marked, port_value
 
 
 def _parse(path: Path) -> Element:

@@ -34,8 +34,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache, lru_cache
 
-from thymio_bt.behaviours.btcpp_control import CONDITION_ATTRS
-from thymio_bt.behaviours.btcpp_script import _TOKEN, ScriptError, parse
+from thymio_bt.btcpp.runtime.control import CONDITION_ATTRS
+from thymio_bt.btcpp.runtime.script import _TOKEN, ScriptError, parse
 from thymio_bt.errors import Problem, UserError
 
 Where = tuple[str, int, int]

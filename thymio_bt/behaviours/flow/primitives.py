@@ -15,7 +15,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from thymio_bt.behaviours.base import FailureCode
-from thymio_bt.behaviours.ticking import tick
+from thymio_bt.behaviours.flow.ticking import tick
 
 
 class SimTimeout(py_trees.decorators.Decorator):

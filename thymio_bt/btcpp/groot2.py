@@ -42,7 +42,7 @@ import uuid
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.logs.records import jsonable
+from thymio_bt.logs.entries import jsonable
 
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
@@ -96,8 +96,8 @@ class Groot2Server:
         """Take the tree's statuses and the blackboard after a tick (the first call maps the tree's
         nodes to their BT.CPP uids and starts serving)."""
         if not self.uids:
-            from thymio_bt.logs.records import walk
-            from thymio_bt.mission.btcpp import mission_btcpp, mission_nodes
+            from thymio_bt.btcpp.export import mission_btcpp, mission_nodes
+            from thymio_bt.logs.entries import walk
 
             tree = mission_btcpp(run.mission)  # as `tree --btcpp` writes it: ports, settings, BT.CPP's uids
             self.xml = tree.xml

@@ -22,7 +22,7 @@ import py_trees
 from py_trees.common import ParallelPolicy
 from pydantic import Field, field_validator
 
-from thymio_bt.behaviours.control_node import ControlNode, ControlParams, F, S, refuse
+from thymio_bt.behaviours.flow.node import ControlNode, ControlParams, F, S, refuse
 
 
 class _Memory(ControlNode):

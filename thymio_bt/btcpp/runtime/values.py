@@ -1,6 +1,6 @@
 """The values of BT.CPP 4's script language and how they combine, as BT.CPP 4.8's ``Any`` does:
 whole numbers (int64), doubles, strings; arithmetic in doubles, a string beside a number read as
-one where BT.CPP reads it so, an error where BT.CPP refuses (:mod:`thymio_bt.behaviours.btcpp_script`
+one where BT.CPP reads it so, an error where BT.CPP refuses (:mod:`thymio_bt.btcpp.runtime.script`
 parses the scripts that use them).
 
 Example::
@@ -10,7 +10,7 @@ Example::
     >>> arith("+", "3", 1)
     Traceback (most recent call last):
     ...
-    thymio_bt.behaviours.btcpp_values.ScriptError: '+' of the string '3' and 1 is not permitted
+    thymio_bt.btcpp.runtime.values.ScriptError: '+' of the string '3' and 1 is not permitted
 """
 
 from __future__ import annotations

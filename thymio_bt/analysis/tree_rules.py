@@ -1,4 +1,4 @@
-"""The structural rules of the teaching lint (:mod:`thymio_bt.mission.lint`): what each node of a
+"""The structural rules of the teaching lint (:mod:`thymio_bt.analysis.lint`): what each node of a
 tree can end with, and what that makes of its siblings and of the loops above it: ``unreachable``,
 ``reactive-restart``, ``forever`` and ``checked-once``; and what a finding is.
 
@@ -26,8 +26,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
-from thymio_bt.behaviours.control_node import BOTH, SWAP, ControlNode, F, S
-from thymio_bt.mission.plan import Mission, NodePlan
+from thymio_bt.behaviours.flow.node import BOTH, SWAP, ControlNode, F, S
+from thymio_bt.plan.model import Mission, NodePlan
 
 #: conditions that, inverted, say the way ahead is clear, with the distance (m) they vouch for
 CLEAR_AHEAD = {

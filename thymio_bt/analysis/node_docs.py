@@ -2,7 +2,7 @@
 
 Example::
 
-    >>> from thymio_bt.mission.registry import default_registry
+    >>> from thymio_bt.plan.registry import default_registry
     >>> parameter_rows(default_registry()["Wait"])[1]
     ('seconds', 'float', 's', 'required', '>= 0 <= 3600', 'how long to wait')
     >>> print(behaviour_help(default_registry()["Wait"]).splitlines()[0])

@@ -27,8 +27,8 @@ from types import ModuleType
 from typing import Any
 
 from thymio_bt.behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
-from thymio_bt.behaviours.btcpp_control import BTCPP_CONTROL, BTCPP_SCRIPTED
-from thymio_bt.behaviours.btcpp_scripted import BTCPP_LEAVES
+from thymio_bt.btcpp.runtime.control import BTCPP_CONTROL, BTCPP_SCRIPTED
+from thymio_bt.btcpp.runtime.scripted import BTCPP_LEAVES
 from thymio_bt.errors import Problem, UserError
 
 ENTRY_POINT_GROUP = "thymio_bt.behaviours"
@@ -155,7 +155,7 @@ class Registry:
     def _declare_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int]) -> None:
         """Stand-ins for the nodes of plugin ``ref``, found by reading its source, not running it."""
         from thymio_bt.behaviours.base import BehaviourParams
-        from thymio_bt.mission.unrun_plugins import plugin_nodes, stand_in
+        from thymio_bt.plan.unrun_plugins import plugin_nodes, stand_in
 
         target, _, attr = ref.partition(":")
         nodes: dict[str, list[str] | None] = {attr: None}

@@ -1,7 +1,7 @@
 """A teaching lint for missions (``thymio-bt lint``): trees that load and run but cannot do what
 their author meant, each finding at its file:line with a hint.
 
-The rules, by id (the first four, on the tree's structure, are :mod:`thymio_bt.mission.tree_rules`):
+The rules, by id (the first four, on the tree's structure, are :mod:`thymio_bt.analysis.tree_rules`):
 
 - ``unreachable``: a child that can never run: after a child that never succeeds in a sequence
   (it always fails, or never ends: a ``repeat: forever``), after one that never fails in a selector
@@ -57,10 +57,10 @@ from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from thymio_bt.analysis.tree_rules import Finding, TreeRules, condition_names, finding_at, is_condition
 from thymio_bt.inputs.fields import within_sensor_range
 from thymio_bt.inputs.yamlio import MarkedDict
-from thymio_bt.mission.plan import Mission, NodePlan
-from thymio_bt.mission.tree_rules import Finding, TreeRules, condition_names, finding_at, is_condition
+from thymio_bt.plan.model import Mission, NodePlan
 from thymio_bt.robot.model import robot_model
 
 #: the rule ids, with what each finds (docs/lint.md has an example of each)
@@ -92,7 +92,7 @@ def lint_mission(path: str | Path, run_plugins: bool = False) -> list[Finding]:
     mission = load_mission(path, run_plugins=run_plugins)
     source = resolve_mission(path)
     if source.suffix.lower() == ".xml":
-        from thymio_bt.mission.xml_reader import read_xml_mission
+        from thymio_bt.btcpp.xml_reader import read_xml_mission
 
         data = read_xml_mission(source)
     else:

@@ -1,10 +1,10 @@
 """The tree of a BehaviorTree.CPP 4 XML mission, read into the YAML form (``{Type: body}`` nodes):
 BT.CPP's elements as nodes, each ``<SubTree>`` replaced by a copy of its ``<BehaviorTree>`` whose
-blackboard keys are renamed for that instance (:mod:`thymio_bt.mission.xml_scope`).
+blackboard keys are renamed for that instance (:mod:`thymio_bt.btcpp.xml_scope`).
 
 Hostile files are bounded: subtrees nest :data:`MAX_SUBTREE_DEPTH` deep at most, the expanded tree
-holds at most :data:`~thymio_bt.mission.planner.MAX_NODES` nodes, nests at most
-:data:`~thymio_bt.mission.planner.MAX_DEPTH` levels and holds at most :data:`MAX_TEXT` characters of
+holds at most :data:`~thymio_bt.plan.model.MAX_NODES` nodes, nests at most
+:data:`~thymio_bt.plan.model.MAX_DEPTH` levels and holds at most :data:`MAX_TEXT` characters of
 attributes (a subtree used twice by a subtree used twice... doubles at each level), and a port's JSON
 nests :data:`MAX_JSON_NESTING` deep at most; past any of them the file is a located error.
 
@@ -24,15 +24,15 @@ from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
 
-from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
-from thymio_bt.behaviours.control_node import ControlNode
+from thymio_bt.behaviours.flow.node import ControlNode
+from thymio_bt.btcpp.export import KIND_ATTR, RESERVED
+from thymio_bt.btcpp.runtime.control import BTCPP_IDS, CONDITION_ATTRS
+from thymio_bt.btcpp.xml_scope import Literal, Ports, Scope, pointer, rename_script, subtree_ports
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MAX_NESTING, MarkedDict, MarkedList
-from thymio_bt.mission.btcpp import KIND_ATTR, RESERVED
-from thymio_bt.mission.planner import MAX_DEPTH, MAX_NODES
-from thymio_bt.mission.registry import control_kind
-from thymio_bt.mission.xml_scope import Literal, Ports, Scope, pointer, rename_script, subtree_ports
+from thymio_bt.plan.model import MAX_DEPTH, MAX_NODES
+from thymio_bt.plan.registry import control_kind
 
 #: the deepest nesting of subtrees (a subtree using a subtree ... ): far beyond any mission
 MAX_SUBTREE_DEPTH = 64
@@ -158,7 +158,7 @@ def marked(mapping: dict[str, Any], element: Element) -> MarkedDict:
 @cache
 def _key_params(kind: str) -> frozenset[str]:
     """The parameters of thymio-bt's leaf ``kind`` that name a blackboard entry (``key``, ...)."""
-    from thymio_bt.mission.registry import default_registry
+    from thymio_bt.plan.registry import default_registry
 
     cls = default_registry().get(kind)
     fields = None if cls is None else cls.Params
@@ -269,7 +269,7 @@ class TreeReader:
         return node
 
     def _script(self, text: str, scope: Scope, where: tuple[str, int, int]) -> str:
-        """:func:`~thymio_bt.mission.xml_scope.rename_script`, counting the characters it adds."""
+        """:func:`~thymio_bt.btcpp.xml_scope.rename_script`, counting the characters it adds."""
         renamed = rename_script(text, scope, where)
         self.text += len(renamed) - len(text)
         return renamed
@@ -432,9 +432,9 @@ def _chain(stack: tuple[tuple[str, Element], ...], word: str) -> str:
 
 
 def _mark(element: Element) -> tuple[str, bool]:
-    """The node kind ``element``'s :data:`~thymio_bt.mission.btcpp.KIND_ATTR` names ("" when it names
+    """The node kind ``element``'s :data:`~thymio_bt.btcpp.export.KIND_ATTR` names ("" when it names
     none, or not the kind an export writes as this element), and whether the element is the
-    do-while loop an export writes for it (:func:`~thymio_bt.mission.btcpp.repeat_until_elements`)."""
+    do-while loop an export writes for it (:func:`~thymio_bt.btcpp.export.repeat_until_elements`)."""
     mark = element.attrs.get(KIND_ATTR, "")
     cls = control_kind(mark) if mark else None
     if cls is None or cls.btcpp_native:
@@ -444,7 +444,7 @@ def _mark(element: Element) -> tuple[str, bool]:
 
 
 def _repeat_until(element: Element, file: str) -> Element:
-    """The do-while loop an export writes (:func:`~thymio_bt.mission.btcpp.repeat_until_elements`)
+    """The do-while loop an export writes (:func:`~thymio_bt.btcpp.export.repeat_until_elements`)
     as one ``RepeatUntil`` element of two children: the body, then the condition."""
     try:
         script, fallback = element.children

@@ -43,12 +43,12 @@ from typing import Any
 
 from thymio_bt.behaviours import ControlNode
 from thymio_bt.behaviours.base import ConditionBehaviour, UnrunPlugin
-from thymio_bt.behaviours.btcpp_control import BTCPP_IDS, CONDITION_ATTRS
+from thymio_bt.btcpp.runtime.control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.inputs.fields import unit_of
-from thymio_bt.logs.records import TreeNode
+from thymio_bt.logs.entries import TreeNode
 from thymio_bt.maze.files import maze_reference
-from thymio_bt.mission.plan import Mission, NodePlan
-from thymio_bt.mission.registry import Registry, control_kind, default_registry
+from thymio_bt.plan.model import Mission, NodePlan
+from thymio_bt.plan.registry import Registry, control_kind, default_registry
 
 #: the attribute that marks an exported element as thymio-bt's node kind (BT.CPP skips ``_`` attributes)
 KIND_ATTR = "_thymio"
@@ -93,7 +93,7 @@ def _port_value(value: Any) -> str:
 
 def _ports(kind: str, cls: type[ControlNode] | None, params: Mapping[str, Any], children: int) -> dict[str, str]:
     """A node's parameters as the ports of its BT.CPP element (a composite's or decorator's as its
-    kind says, :meth:`~thymio_bt.behaviours.control_node.ControlNode.to_btcpp`)."""
+    kind says, :meth:`~thymio_bt.behaviours.flow.node.ControlNode.to_btcpp`)."""
     if _do_while(cls, children):
         return {}  # a do-while loop: it ends by its condition, not a count
     if kind in _BT_ID:  # BT.CPP's own node: its ports, without the time limit every behaviour has
@@ -160,7 +160,7 @@ def btcpp_tree(
     settings: Mapping[str, str] | None = None,
     subtrees: Mapping[int, str] | None = None,
 ) -> BtcppTree:
-    """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.records.tree_nodes`
+    """BT.CPP v4 XML of a tree given in pre-order (as :func:`~thymio_bt.logs.entries.tree_nodes`
     lists it), with each node's parameters (by uid) as ports and a complete TreeNodesModel.
     ``subtrees`` maps the uid of a subtree instance's root to a BehaviorTree ID: that part of the
     tree becomes its own ``<BehaviorTree>``, used through a ``<SubTree>`` node."""

@@ -26,8 +26,8 @@ from py_trees.common import OneShotPolicy, Status
 from py_trees.decorators import FailureIsSuccess, Inverter, SuccessIsFailure
 from pydantic import Field, field_validator
 
-from thymio_bt.behaviours.control import RepeatUntil, SimTimeout
-from thymio_bt.behaviours.control_node import SAME, SWAP, ControlNode, ControlParams, F, S, refuse, whole
+from thymio_bt.behaviours.flow.node import SAME, SWAP, ControlNode, ControlParams, F, S, refuse, whole
+from thymio_bt.behaviours.flow.primitives import RepeatUntil, SimTimeout
 from thymio_bt.inputs.fields import Duration
 
 _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"

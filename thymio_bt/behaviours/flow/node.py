@@ -13,7 +13,7 @@ makes of its children's outcomes (:meth:`ControlNode.ends`), whether it may stop
 ports for an export and a read back, its symbol in the terminal tree. A new kind, from the package or
 a plugin, is one class: nothing else to write.
 
-Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for real ones)::
+Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.flow.decorators` for real ones)::
 
     >>> import py_trees
     >>> class Invert(ControlNode):
@@ -30,7 +30,7 @@ Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.decorators` for 
     >>> Invert.keys()
     ('do',)
     >>> node = Invert.build("not", Invert.Params(), [py_trees.behaviours.Success("ok")], None)
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> tick(node)
     >>> node.status
     <Status.FAILURE: 'FAILURE'>

@@ -1,5 +1,5 @@
 """BT.CPP 4's built-in nodes as node kinds of the mission language: ``bt_<name>``, tick for tick as
-in BT.CPP (:mod:`thymio_bt.behaviours.btcpp_nodes`). An XML mission's ``<Sequence>``,
+in BT.CPP (:mod:`thymio_bt.btcpp.runtime.nodes`). An XML mission's ``<Sequence>``,
 ``<Fallback>``, ``<Repeat num_cycles="3">``... are these; in YAML they are written
 ``bt_sequence: [...]``, ``bt_repeat: {num_cycles: 3, do: ...}``, with BT.CPP's port names.
 ``Timeout``, ``Delay`` and ``Sleep`` count milliseconds of simulated time (a run has no other clock).
@@ -21,10 +21,10 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 from pydantic import Field, create_model
 
-from thymio_bt.behaviours import btcpp_decorators as bd
-from thymio_bt.behaviours import btcpp_nodes as bn
-from thymio_bt.behaviours import btcpp_scripted as bs
-from thymio_bt.behaviours.control_node import SAME, ControlNode, ControlParams, F, S
+from thymio_bt.behaviours.flow.node import SAME, ControlNode, ControlParams, F, S
+from thymio_bt.btcpp.runtime import decorators as bd
+from thymio_bt.btcpp.runtime import nodes as bn
+from thymio_bt.btcpp.runtime import scripted as bs
 
 #: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
 _PRE = ("failure_if", "success_if", "skip_if", "while_true")

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from thymio_bt.errors import Problem, UserError
-from thymio_bt.logs.records import LogEnd, LogHeader, TickRecord
+from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
 
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
@@ -60,8 +60,8 @@ class BtlogWriter:
     def header(self, header: LogHeader) -> None:
         """Write the file's head: the magic, the protocol and the tree as BT.CPP XML (its nodes numbered as
         BT.CPP numbers them: the records name those uids)."""
-        from thymio_bt.mission import default_registry
-        from thymio_bt.mission.btcpp import btcpp_tree
+        from thymio_bt.btcpp.export import btcpp_tree
+        from thymio_bt.plan.registry import default_registry
 
         assert self._file is not None
         nodes = header["tree"]
@@ -186,8 +186,8 @@ def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
     unnamed elements inside a ``_thymio="repeat"``) is no node; a ``<SubTree>`` is the root of its
     ``<BehaviorTree>``, whose nodes follow it; an element with BT.CPP's pre/post-conditions is under a
     ``bt_conditions`` node of its name, as ``thymio-bt run mission.xml`` builds it."""
-    from thymio_bt.behaviours.btcpp_control import CONDITION_ATTRS
-    from thymio_bt.mission.xml_tree import Element, element_roots
+    from thymio_bt.btcpp.runtime.control import CONDITION_ATTRS
+    from thymio_bt.btcpp.xml_tree import Element, element_roots
 
     roots = element_roots(xml, file, "log", hint="the log's tree is damaged")
     trees = {t.attrs.get("ID"): t for t in (roots[0].children if roots else []) if t.tag == "BehaviorTree"}

@@ -25,6 +25,10 @@ from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.noise import NoiseConfig
 
+MAX_DEPTH = 64
+#: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
+MAX_NODES = 20_000
+
 
 @dataclass
 class NodePlan:
@@ -68,7 +72,7 @@ class Mission:
     seed: int
     noise: NoiseConfig
     parameters: dict[str, Any]
-    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.robot.calibration)
+    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.sensor_tables)
     sensor_model: str
     tree: NodePlan
     registry: Any = None
@@ -83,5 +87,5 @@ class Mission:
     sources: tuple[Path, ...] = ()
     #: each included file and where it was included (file, line, column)
     included_at: dict[Path, tuple[str, int, int]] = field(default_factory=dict)
-    #: what counts as success besides the tree's status (:mod:`thymio_bt.mission.expect`), or None
+    #: what counts as success besides the tree's status (:mod:`thymio_bt.plan.expect`), or None
     expect: Any = None

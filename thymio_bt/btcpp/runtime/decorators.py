@@ -1,11 +1,11 @@
 """BT.CPP 4's decorators with BT.CPP's own semantics (``src/decorators`` of BT.CPP 4.8): Inverter,
 ForceSuccess, ForceFailure, KeepRunningUntilFailure, Repeat, RetryUntilSuccessful, RunOnce, and the
-constant leaves AlwaysSuccess/AlwaysFailure as BT.CPP nodes (see :mod:`.btcpp_nodes` for the rules).
+constant leaves AlwaysSuccess/AlwaysFailure as BT.CPP nodes (see :mod:`.nodes` for the rules).
 
 Example (Repeat goes on within the tick after a child that completed at once, as BT.CPP does)::
 
     >>> from py_trees.behaviours import Success
-    >>> from thymio_bt.behaviours.ticking import tick
+    >>> from thymio_bt.behaviours.flow.ticking import tick
     >>> loop = Repeat("three", Success("leg"), 3)
     >>> tick(loop); loop.status
     <Status.SUCCESS: 'SUCCESS'>
@@ -18,8 +18,8 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours import btcpp_nodes as bn
-from thymio_bt.behaviours.btcpp_nodes import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS
+from thymio_bt.btcpp.runtime import nodes as bn
+from thymio_bt.btcpp.runtime.nodes import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS
 
 
 class BtDecorator(bn.BtNode):

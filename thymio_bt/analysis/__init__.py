@@ -1,0 +1,1 @@
+"""What is said of a mission without running it: the lint, the JSON Schema, the node help."""

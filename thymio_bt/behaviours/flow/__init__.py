@@ -1,0 +1,1 @@
+"""thymio-bt's control-flow nodes: composites, decorators, their contract, and ticking a tree."""
