@@ -18,7 +18,7 @@ from thymio_bt.inputs.validation import problems_from
 from thymio_bt.maze import model as maze_model
 from thymio_bt.maze.model import Spawn
 from thymio_bt.mission.loader import load_mission
-from thymio_bt.run import verdict as expect
+from thymio_bt.plan import expect
 
 
 def test_each_unit_type_is_declared_once():
