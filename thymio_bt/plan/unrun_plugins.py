@@ -69,10 +69,7 @@ def plugin_nodes(
         if params is None:  # inherited: from the first base that is a node class
             params = next((nodes[b] for b in map(_base_name, cls.bases) if b in nodes), "")
         nodes[cls.name] = params
-        try:
-            fields = _fields(params, models, known_params, memo) if params else None
-        except RecursionError:  # models deriving from models thousands deep: not followed
-            fields = None
+        fields = _fields(params, models, known_params, memo) if params else None
         found[name] = sorted(fields) if fields is not None else None
     return found
 
@@ -98,18 +95,27 @@ def _node_classes(tree: ast.Module, known: Collection[str]) -> list[tuple[str, a
     return found
 
 
+#: how many bases deep a parameter model is followed: deeper, it is not (a hostile file's chain of
+#: thousands, which would otherwise follow Python's recursion limit, which a test runner may raise)
+MAX_BASES = 500
+
+
 def _fields(
     name: str,
     models: Mapping[str, ast.ClassDef],
     known: Mapping[str, Collection[str]],
     memo: dict[str, set[str] | None],
+    depth: int = 0,
 ) -> set[str] | None:
     """The field names of the parameter model ``name``: a known model's, or a class of the file's own
     fields and its bases'; None when something cannot be followed (a base neither known nor the
     file's, a ``model_config`` that may take extra keys, an alias: the YAML keys are then others).
-    ``memo``: the models followed so far, each once (a hostile file's cycles and diamonds included)."""
+    ``memo``: the models followed so far, each once (a hostile file's cycles and diamonds included);
+    a model more than :data:`MAX_BASES` bases deep is not followed (whatever the recursion limit)."""
     if name in memo:
         return memo[name]
+    if depth > MAX_BASES:
+        return None
     memo[name] = None  # while it is followed: a cycle back to it cannot be followed
     cls = models.get(name)
     if cls is None:
@@ -127,7 +133,7 @@ def _fields(
         and "ClassVar" not in ast.unparse(s.annotation)
     }
     for base in map(_base_name, cls.bases):
-        inherited = set() if base == "BaseModel" else _fields(base, models, known, memo)
+        inherited = set() if base == "BaseModel" else _fields(base, models, known, memo, depth + 1)
         if inherited is None:
             return None
         own |= inherited
