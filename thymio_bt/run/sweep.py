@@ -22,6 +22,7 @@ import os
 import shlex
 import signal
 import statistics
+import threading
 from collections.abc import Callable, Iterable, Iterator
 from contextvars import ContextVar
 from dataclasses import dataclass, field
@@ -204,8 +205,7 @@ class LocalPool:
                             raise WorkerDied(dead.exitcode) from None
                 yield from done
         finally:
-            pool.terminate()
-            pool.join()
+            _end_pool(pool, workers)
 
 
 class WorkerDied(RuntimeError, ThymioBtError):
@@ -214,6 +214,25 @@ class WorkerDied(RuntimeError, ThymioBtError):
     def __init__(self, exitcode: int | None) -> None:
         how = f"killed by {signal.Signals(-exitcode).name}" if exitcode and exitcode < 0 else f"exit code {exitcode}"
         super().__init__(f"a worker process died ({how})")
+
+
+def _end_pool(pool: Any, workers: list[Any]) -> None:
+    """Terminate ``pool`` and join its workers, within :data:`END_WITHIN` s. multiprocessing's own
+    terminate drains the task queue under its read lock first, which a worker that died (or one
+    blocked reading it) may hold for ever: then the workers are killed instead, and the command ends
+    rather than hangs (the stuck terminate is left in a daemon thread; the pool's finalizer is spent)."""
+    ender = threading.Thread(target=lambda: (pool.terminate(), pool.join()), daemon=True)
+    ender.start()
+    ender.join(END_WITHIN)  # realtime: bounding the pool's own clean-up, outside any run
+    if ender.is_alive():
+        for worker in {*workers, *pool._pool}:
+            if worker.exitcode is None:
+                worker.kill()
+                worker.join(1.0)
+
+
+#: seconds a sweep's pool has to end before its workers are killed (see :func:`_end_pool`)
+END_WITHIN = 5.0
 
 
 def _map_chunk(fn: Callable[[Job], SweepRow], jobs: list[Job]) -> list[SweepRow]:
