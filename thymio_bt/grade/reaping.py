@@ -6,8 +6,8 @@ start: ``RLIMIT_NPROC`` does not bind root); then killed.
 Example (a process that forks a sleeper)::
 
     >>> import subprocess, sys, time
-    >>> code = "import os, time\\nos.fork()\\ntime.sleep(60)"
-    >>> parent = subprocess.Popen([sys.executable, "-c", code]); time.sleep(0.5)
+    >>> code = "import os, time\\nos.fork()\\ntime.sleep(60)"  # realtime: a child that waits to be killed
+    >>> parent = subprocess.Popen([sys.executable, "-c", code]); time.sleep(0.5)  # realtime: it forks
     >>> len(descendants(parent.pid))
     1
     >>> kill_tree(parent.pid), parent.wait()
