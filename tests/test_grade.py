@@ -99,7 +99,7 @@ def graded(tmp_path_factory: pytest.TempPathFactory) -> dict:
         },
     )
     (tmp / "subs" / "empty").mkdir()
-    return grade(PART12, [*folders, tmp / "subs" / "empty"], workers=2, worlds=tmp / "worlds")
+    return grade(PART12, [*folders, tmp / "subs" / "empty"], workers=2, worlds=tmp / "worlds").to_json()
 
 
 def test_correct_submissions_get_full_marks_however_written(graded):
@@ -213,7 +213,7 @@ def test_hanging_crashing_exiting_and_greedy_submissions_fail_their_own_runs(tmp
             "spawns": "import subprocess; subprocess.Popen(['sleep', '1000'], start_new_session=False)",
         },
     )
-    results = _by_name(grade(assignment, folders, workers=2))
+    results = _by_name(grade(assignment, folders, workers=2).to_json())
     reasons = {name: results[name]["runs"][0]["reason"] for name in ("hangs", "sleeps", "crashes", "exits", "greedy")}
     assert reasons["hangs"] in (  # the CPU limit, unless a loaded machine gave it less than 1 s in 3
         "the run used more than its CPU time limit of 1 s, in 'sequence/Bad'",
@@ -236,7 +236,7 @@ def test_hanging_crashing_exiting_and_greedy_submissions_fail_their_own_runs(tmp
 
 def test_plugins_are_refused_where_the_assignment_forbids_them(tmp_path):
     _, folders = _plugin_class(tmp_path, {"sneaky": "pass"})
-    results = _by_name(grade(PART12, folders[:1], workers=1))
+    results = _by_name(grade(PART12, folders[:1], workers=1).to_json())
     student = results["sneaky"]
     assert student["status"] == "invalid" and student["runs"] == []
     assert "plugins are not allowed in this assignment (nodes.py)" in student["messages"][0]
@@ -248,7 +248,7 @@ def test_a_module_plugin_is_refused_where_the_assignment_forbids_plugins(tmp_pat
     _, folders = _plugin_class(tmp_path, {"modular": "pass"})
     mission = folders[0] / "m.yaml"
     mission.write_text(mission.read_text().replace("plugins: [nodes.py]", "plugins:\n  - nodes:Bad"))
-    student = _by_name(grade(PART12, folders[:1], workers=1))["modular"]
+    student = _by_name(grade(PART12, folders[:1], workers=1).to_json())["modular"]
     assert student["status"] == "invalid" and student["runs"] == []
     assert student["messages"][0].startswith(f"{mission}:4")
     assert "plugins are not allowed in this assignment (nodes:Bad)" in student["messages"][0]
@@ -366,7 +366,7 @@ def test_a_shipped_assignment_is_found_by_name():
     ],
 )
 def test_the_shipped_solutions_pass_every_criterion_of_the_shipped_assignments(assignment, solution, penalty):
-    (student,) = grade(assignment, [ROOT / solution], workers=2)["students"]
+    (student,) = grade(assignment, [ROOT / solution], workers=2).to_json()["students"]
     assert student["status"] == "graded"
     assert not _missed(student), [c["feedback"] for c in student["criteria"] if not c["passed"]]
     assert student["score"] == student["max"] - penalty
@@ -426,12 +426,14 @@ def _children(pid: int) -> list[int]:
 
 def test_the_progress_line_says_students_runs_rate_and_time_left(monkeypatch, capsys):
     from thymio_bt.cli.grading import _Progress
+    from thymio_bt.grade.results import RunMessage
 
     progress = _Progress()
     progress.enabled = True
     progress.start({"ada": 2, "bob": 2})
+    run = RunMessage(index=0, variant="course", seed=0, robot="course", status="SUCCESS", criteria={})
     for student in ("ada", "ada", "bob", "bob"):
-        progress(student, {"kind": "run"})
+        progress(student, run)
     line = capsys.readouterr().err.split("\r")[-1]
     assert line.startswith("graded 2/2 students, 4/4 runs, ") and " runs/s, 0 s left" in line
 
@@ -443,7 +445,7 @@ def test_a_gap_after_a_node_is_measured_when_that_node_ended(tmp_path):
         "  - {name: first stop, points: 1, gap: {after: MoveUntilWall, distance: 5cm}}\n"
         "  - {name: part 1, points: 1, gap: {after: mission/part 1, distance: 5cm}}\n"
     )
-    students = _by_name(grade(assignment, [CLASS / "ada", CLASS / "dana"], workers=1))
+    students = _by_name(grade(assignment, [CLASS / "ada", CLASS / "dana"], workers=1).to_json())
     assert students["ada"]["score"] == 2 and students["dana"]["score"] == 0
     assert students["dana"]["criteria"][1]["where"].endswith("dana/part1_2.yaml:10")
     bad = tmp_path / "b.yaml"
@@ -477,7 +479,7 @@ def test_generated_corridors_of_another_pitch_grade_the_route_not_the_looks(tmp_
         "criteria:\n  - {name: turns, points: 1, turns: true}\n"
         "  - {name: dead end, points: 1, dead_end: {distance: 5cm, tolerance: 5mm}}\n"
     )
-    (student,) = grade(assignment, [ROOT / "missions" / "maze_bonus.yaml"])["students"]
+    (student,) = grade(assignment, [ROOT / "missions" / "maze_bonus.yaml"]).to_json()["students"]
     assert student["score"] == 2, [c["feedback"] for c in student["criteria"]]
 
 

@@ -17,6 +17,7 @@ from test_grade_site import Page
 from thymio_bt.cli import main
 from thymio_bt.grade.confine import plan
 from thymio_bt.grade.grader import grade
+from thymio_bt.grade.results import RunMessage
 from thymio_bt.grade.site_replay import failing_moment, went_wrong
 from thymio_bt.grade.student import StudentTask, grade_runs
 from thymio_bt.grade.worlds import load_worlds
@@ -65,16 +66,21 @@ def test_only_the_first_run_of_each_mistake_is_recorded_and_only_when_asked(tmp_
         sent[asked] = [m for m in _messages(task) if m["kind"] == "run"]
     assert all("replay" not in m for m in sent[False])  # no --html: nothing recorded
     first, second = sent[True]
-    assert went_wrong(first) and went_wrong(second) == went_wrong(first)  # the same mistakes twice
+    assert went_wrong(_run(first)) and went_wrong(_run(second)) == went_wrong(_run(first))  # the same mistakes twice
     assert "replay" in first and "replay" not in second
     replay = first["replay"]
-    assert replay["failing"] == round(failing_moment(first), 3)
+    assert replay["failing"] == round(failing_moment(_run(first)), 3)
     verdicts = [e for e in replay["events"] if e["kind"] == "verdict"]
-    assert [e["name"] for e in verdicts] == [m for m in went_wrong(first) if m != "ended"]
+    assert [e["name"] for e in verdicts] == [m for m in went_wrong(_run(first)) if m != "ended"]
     # the replay is the graded run: it ends where the graded run ended
     assert replay["end"]["final_pose"] == first["final_pose"] and replay["t"][-1] == pytest.approx(first["sim_time"])
     without = {k: v for k, v in first.items() if k != "replay"}
     assert without == sent[False][0]  # recording changes nothing of the graded run
+
+
+def _run(message: dict[str, Any]) -> RunMessage:
+    """A run's message (or a run of results.json) read back."""
+    return RunMessage.from_json({k: v for k, v in message.items() if k != "kind"})
 
 
 def _messages(task: StudentTask) -> list[dict[str, Any]]:
@@ -94,8 +100,8 @@ def test_a_failed_run_links_to_its_replay_at_the_failing_moment(browser, tmp_pat
     assert tab.problems() == []
     href = tab.evaluate("document.querySelector('a.replay').href")
     tab.close()
-    first = next(r for r in runs.values() if went_wrong(r))  # the first failed run is the first link
-    moment = failing_moment(first)
+    first = next(r for r in runs.values() if went_wrong(_run(r)))  # the first failed run is the first link
+    moment = failing_moment(_run(first))
     assert href.endswith(f"#t={moment:g}") and f"dana_{first['variant']}_seed{first['seed']}" in href
     replay = browser.open(href)
     shown = replay.evaluate(
@@ -106,7 +112,7 @@ def test_a_failed_run_links_to_its_replay_at_the_failing_moment(browser, tmp_pat
     assert replay.problems() == []
     replay.close()
     assert moment - 0.1 < shown["time"] <= moment + 1e-6  # the tick at (or just before) the failing moment
-    missed = [m for m in went_wrong(first) if m != "ended"]
+    missed = [m for m in went_wrong(_run(first)) if m != "ended"]
     assert len(shown["verdicts"]) == len(missed) and all(
         any(name in text for text in shown["verdicts"]) for name in missed
     )
@@ -117,7 +123,7 @@ def test_a_site_for_students_never_replays_a_hidden_variant(browser, tmp_path, m
     assignment = _hidden(tmp_path)
     ta_site, ta = _grade(tmp_path / "ta", assignment)
     by_variant = {r["variant"]: r for r in ta["students"][0]["runs"]}
-    assert went_wrong(by_variant["secret_box"]) and went_wrong(by_variant["course"])  # both failed
+    assert went_wrong(_run(by_variant["secret_box"])) and went_wrong(_run(by_variant["course"]))  # both failed
     assert sorted(p.name for p in (ta_site / "replays").iterdir()) == [
         "dana_course_seed0.html",
         "dana_secret_box_seed0.html",
@@ -144,15 +150,15 @@ def test_a_confined_submissions_replay_is_made_again_in_its_confined_process(tmp
     assignment.write_text(HIDDEN.split("  - {name: secret_box")[0] + CRITERIA + "palette: {plugins: true}\n")
     (sub := tmp_path / "subs" / "dana").mkdir(parents=True)
     (sub / "part1_2.yaml").write_text(DANA.read_text())
-    results = grade(assignment, [sub], workers=1, sandbox="always", replays="all")
+    results = grade(assignment, [sub], workers=1, sandbox="always", replays="all").to_json()
     assert results["summary"]["confinement"].startswith("confined")
     first, *_ = results["students"][0]["runs"]
-    assert "replay" in first and went_wrong(first)
+    assert "replay" in first and went_wrong(_run(first))
     assert first["replay"]["end"]["final_pose"] == first["final_pose"]
-    assert first["replay"]["failing"] == round(failing_moment(first), 3)
+    assert first["replay"]["failing"] == round(failing_moment(_run(first)), 3)
     # the tree as it ticked in the confined process, node by node, as in a run ticked in the grader
     # (before: one node, the grader's stand-in root, and no statuses of the submission's tree)
-    (here,) = grade(assignment, [sub], workers=1, replays="all")["students"][0]["runs"][:1]
+    (here,) = grade(assignment, [sub], workers=1, replays="all").to_json()["students"][0]["runs"][:1]
     assert len(first["replay"]["tree"]) == len(here["replay"]["tree"]) == 15
     assert first["replay"]["tree"] == here["replay"]["tree"]
     assert first["replay"]["status"] == here["replay"]["status"]

@@ -59,7 +59,7 @@ def gamed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, dict]:
         tmp_path_factory.mktemp("gamed"),
         {"one_node": ONE_NODE, "spawn_first": spawn_first, "twice_as_fast": ADA.replace("10cm/s", "20cm/s")},
     )
-    return {s["name"]: s for s in grade(PART12, folders, workers=2)["students"]}
+    return {s["name"]: s for s in grade(PART12, folders, workers=2).to_json()["students"]}
 
 
 PART_1 = {"part 1 stops 5 cm from the wall", "part 1 drives at 10 cm/s"}
@@ -114,7 +114,7 @@ def _two_worlds(tmp_path: Path, credit: str) -> Path:
 @pytest.mark.parametrize(("credit", "earned", "course"), [("shared", 1.0, 1.0), ("all", 0.0, 0.0)])
 def test_credit_is_shared_over_variants_unless_all_or_nothing_is_asked(tmp_path, credit, earned, course):
     blind = CLASS / "bob"  # drives part 1 by odometry: right on the course's maze only
-    (student,) = grade(_two_worlds(tmp_path, credit), [blind], workers=1)["students"]
+    (student,) = grade(_two_worlds(tmp_path, credit), [blind], workers=1).to_json()["students"]
     (criterion,) = student["criteria"]
     assert criterion["earned"] == student["score"] == earned
     assert [(v["name"], v["passed"], v["earned"]) for v in criterion["variants"]] == [
@@ -142,10 +142,11 @@ def test_a_misspelt_palette_name_is_refused_with_did_you_mean_and_its_place(tmp_
 
 
 def test_a_penalty_is_its_own_csv_column_and_junit_testcase_with_each_finding():
-    results = grade(PART12, [CLASS / "chen"], workers=2)  # uses WallFollow, forbidden at 4 points
+    graded = grade(PART12, [CLASS / "chen"], workers=2)  # uses WallFollow, forbidden at 4 points
+    results = graded.to_json()
     (student,) = results["students"]
     assert student["penalty"] == -4 and student["score"] == sum(c["earned"] for c in student["criteria"]) - 4
-    (row,) = csv.DictReader(io.StringIO(gradebook_csv(results)))
+    (row,) = csv.DictReader(io.StringIO(gradebook_csv(graded)))
     names = [c["name"] for c in results["assignment"]["criteria"]]
     assert float(row["penalty"]) == -4
     assert sum(float(row[n]) for n in names) + float(row["penalty"]) == float(row["score"])
@@ -153,7 +154,7 @@ def test_a_penalty_is_its_own_csv_column_and_junit_testcase_with_each_finding():
         "WallFollow is not allowed in this assignment (at " in row["palette"] and "chen/part1_2.yaml:" in row["palette"]
     )
     assert float(row["part 2 turns left at each wall @ course"]) == 0
-    suite = ET.fromstring(junit_xml(results)).find("testsuite")
+    suite = ET.fromstring(junit_xml(graded)).find("testsuite")
     assert suite is not None
     palette = next(c for c in suite.findall("testcase") if c.get("name") == "palette")
     failure = palette.find("failure")
@@ -215,7 +216,7 @@ def test_a_stop_is_blamed_on_the_move_that_set_the_distance_not_the_turn_after_i
         "      - MoveUntilWall: {name: centre the axle, distance: 1.5cm}\n"
         "      - TurnAngle: {angle: 360deg}\n"  # on the spot: base_link swings, the axle stays
     )
-    (student,) = grade(assignment, [mission], workers=1)["students"]
+    (student,) = grade(assignment, [mission], workers=1).to_json()["students"]
     (criterion,) = student["criteria"]
     assert criterion["feedback"].startswith("stopped 1.5 cm from the wall, wanted 5.0 +- 0.5 cm")
     assert criterion["where"] == f"{mission}:6"  # the MoveUntilWall, not the TurnAngle on line 7
@@ -411,7 +412,7 @@ def test_a_run_that_never_deletes_the_robot_is_judged_where_it_first_stopped(tmp
     mission = tmp_path / "m.yaml"
     body = "".join(f"      - {child}\n" for child in children)
     mission.write_text(f"maze: two_parts_maze\nstart: part1\ntree:\n  sequence:\n    children:\n{body}")
-    (student,) = grade(assignment, [mission], workers=1)["students"]
+    (student,) = grade(assignment, [mission], workers=1).to_json()["students"]
     (criterion,) = student["criteria"]
     assert criterion["passed"] is passed, criterion["feedback"]
     if not passed:

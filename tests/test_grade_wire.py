@@ -85,8 +85,8 @@ def test_confined_grading_gives_the_example_class_the_same_grades_bit_for_bit(tm
     text = text.replace("maze: worlds/", f"maze: {ROOT}/assignments/worlds/")
     allowed = tmp_path / "allowed.yaml"
     allowed.write_text(text)
-    inside = grade(allowed, sorted(subs.iterdir()), workers=2, worlds=tmp_path / "w", sandbox="always")
-    outside = grade(allowed, sorted(subs.iterdir()), workers=2, worlds=tmp_path / "w")
+    inside = grade(allowed, sorted(subs.iterdir()), workers=2, worlds=tmp_path / "w", sandbox="always").to_json()
+    outside = grade(allowed, sorted(subs.iterdir()), workers=2, worlds=tmp_path / "w").to_json()
     assert inside["summary"]["confinement"].startswith("confined")
     assert sum(len(runs) for _, runs in _runs(inside).values()) > 40
     assert _runs(inside) == _runs(outside)

@@ -22,12 +22,15 @@ from __future__ import annotations
 import sys
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import click
 
 from thymio_bt.cli.app import fail, main, path_option
 from thymio_bt.errors import Problem, UserError, did_you_mean
+
+if TYPE_CHECKING:
+    from thymio_bt.grade.results import ClassResults, StudentResult
 
 
 @main.command()
@@ -44,6 +47,7 @@ def check(
     import os
 
     from thymio_bt.grade.grader import grade
+    from thymio_bt.grade.results import StudentStatus
     from thymio_bt.grade.worlds import World, course_secret
 
     def select(worlds: list[World]) -> list[World]:
@@ -62,51 +66,54 @@ def check(
         )
     except UserError as exc:
         fail(exc)
-    (student,) = results["students"]
+    (student,) = results.students
     click.echo(_heading(results, variant, seed))
     click.echo(report(student))
-    passed = student["status"] == "graded" and all(c["passed"] for c in student["criteria"]) and not student["palette"]
+    passed = student.status == StudentStatus.GRADED and all(c.passed for c in student.criteria) and not student.palette
     sys.exit(0 if passed else 1)
 
 
-def _heading(results: dict[str, Any], variant: str | None, seed: int | None) -> str:
+def _heading(results: ClassResults, variant: str | None, seed: int | None) -> str:
     from thymio_bt.grade.checks import count
 
-    variants = results["assignment"]["variants"]
-    runs = results["summary"]["runs"]
-    name = results["assignment"]["name"]
+    variants = results.assignment.variants
+    runs = results.summary.runs
+    name = results.assignment.name
     if variant is not None:
         seeds = f", seed {seed}" if seed is not None else ""
         return f"{name}: variant {variant}{seeds} ({count(runs, 'run')})"
-    listed = ", ".join(v["name"] for v in variants)
+    listed = ", ".join(v.name for v in variants)
     return f"{name}: {count(len(variants), 'public variant')} ({listed}), {count(runs, 'run')}"
 
 
-def report(student: dict[str, Any]) -> str:
+def report(student: StudentResult) -> str:
     """What ``check`` prints of a student's results: each criterion passed or not, with the
     grader's words and the place to look, the palette's findings, the score.
 
-    >>> print(report({"status": "graded", "score": 1.0, "max": 3.0, "messages": [], "palette": [],
-    ...     "criteria": [{"name": "stops", "passed": False, "earned": 1.0, "points": 2.0,
-    ...                   "feedback": "stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm", "where": "m.yaml:10"},
-    ...                  {"name": "ends", "passed": True, "earned": 1.0, "points": 1.0}]}))
+    >>> from thymio_bt.grade.results import CriterionScore, StudentResult
+    >>> print(report(StudentResult(name="ada", status="graded", score=1.0, max=3.0, criteria=[
+    ...     CriterionScore(name="stops", earned=1.0, points=2.0, where="m.yaml:10",
+    ...                    feedback="stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm"),
+    ...     CriterionScore(name="ends", passed=True, earned=1.0, points=1.0)])))
     FAIL  stops  1 / 2
           stopped 7.0 cm from the wall, wanted 5.0 +- 0.5 cm
           at m.yaml:10
     pass  ends  1 / 1
     score here: 1 / 3
     """
-    if student["status"] != "graded":
-        return "\n".join([f"not graded: the submission is {student['status']}", *student["messages"]])
+    from thymio_bt.grade.results import StudentStatus
+
+    if student.status != StudentStatus.GRADED:
+        return "\n".join([f"not graded: the submission is {student.status.value}", *student.messages])
     lines = []
-    for c in student["criteria"]:
-        lines.append(f"{'pass' if c['passed'] else 'FAIL'}  {c['name']}  {c['earned']:g} / {c['points']:g}")
-        if not c["passed"]:
-            lines.append(f"      {c['feedback']}")
-            if c.get("where"):
-                lines.append(f"      at {c['where']}")
-    for finding in student["palette"]:
-        where = f"{finding['where']}: " if finding.get("where") else ""
-        lines.append(f"FAIL  palette: {where}{finding['message']} (-{finding['points']:g})")
-    lines.append(f"score here: {student['score']:g} / {student['max']:g}")
+    for c in student.criteria:
+        lines.append(f"{'pass' if c.passed else 'FAIL'}  {c.name}  {c.earned:g} / {c.points:g}")
+        if not c.passed:
+            lines.append(f"      {c.feedback}")
+            if c.where:
+                lines.append(f"      at {c.where}")
+    for finding in student.palette:
+        where = f"{finding.where}: " if finding.where else ""
+        lines.append(f"FAIL  palette: {where}{finding.message} (-{finding.points:g})")
+    lines.append(f"score here: {student.score:g} / {student.max:g}")
     return "\n".join(lines)

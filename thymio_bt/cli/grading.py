@@ -18,7 +18,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -26,6 +26,9 @@ from thymio_bt.cli.app import fail, json_text, main, path_option, workers_or_das
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
 from thymio_bt.run.interrupts import Interrupts
+
+if TYPE_CHECKING:
+    from thymio_bt.grade.results import ClassResults, RunMessage
 
 
 @main.command()
@@ -88,7 +91,7 @@ def grade(
         site = _checked_options(submissions, gradescope, html, for_students, workers, dask, require_confinement)
         results, interrupts = _graded(assignment, submissions, out or update, html, for_students, secret, workers, dask)
         if previous is not None:
-            from thymio_bt.grade.grader import update as updated
+            from thymio_bt.grade.scoring import update as updated
 
             results = updated(previous, results)
         from thymio_bt.grade.site_replay import take_replays
@@ -145,7 +148,7 @@ def _graded(
     secret: Path | None,
     workers: int | None,
     dask: str | None,
-) -> tuple[dict[str, Any], Interrupts]:
+) -> tuple[ClassResults, Interrupts]:
     """The class graded (on a local pool or a Dask cluster, with progress on stderr), and the
     interrupts that may have stopped it."""
     import os
@@ -176,65 +179,74 @@ def _graded(
     return results, interrupts
 
 
-def _write_reports(outputs: dict[str, Output], results: dict[str, Any]) -> None:
+def _write_reports(outputs: dict[str, Output], results: ClassResults) -> None:
     """Each report asked for, written in this order: results JSON, gradebook CSV, JUnit, Gradescope."""
     from thymio_bt.grade.reports import gradebook_csv, junit_xml
 
-    writers = {"out": json_text, "csv": gradebook_csv, "junit": junit_xml, "gradescope": _gradescope_text}
+    writers = {"out": _results_text, "csv": gradebook_csv, "junit": junit_xml, "gradescope": _gradescope_text}
     for name, text in writers.items():
         if name in outputs:
             outputs[name].write_text(text(results))
 
 
-def _gradescope_text(results: dict[str, Any]) -> str:
+def _results_text(results: ClassResults) -> str:
+    """results.json."""
+    return json_text(results.to_json())
+
+
+def _gradescope_text(results: ClassResults) -> str:
     """Gradescope's results.json of the one student graded."""
     from thymio_bt.grade.reports import gradescope_json
 
-    if len(results["students"]) != 1:
-        count = len(results["students"])
+    if len(results.students) != 1:
+        count = len(results.students)
         raise UserError(f"--gradescope: grades one submission, got {count} (hint: Gradescope runs one at a time)")
     return json_text(gradescope_json(results))
 
 
 def _write_site(
-    results: dict[str, Any], site: Path, replays: dict[tuple[str, int], dict[str, Any]], for_students: bool
+    results: ClassResults, site: Path, replays: dict[tuple[str, int], dict[str, Any]], for_students: bool
 ) -> None:
-    """The ``--html`` site: the class page and a page per student (redacted for the students)."""
+    """The ``--html`` site, from results.json's content: the class page and a page per student
+    (redacted for the students)."""
     from thymio_bt.grade.redact import for_students as redacted
     from thymio_bt.grade.site import write_site
 
-    pages = write_site(redacted(results) if for_students else results, site, replays, for_students)
+    data = results.to_json()
+    pages = write_site(redacted(data) if for_students else data, site, replays, for_students)
     click.echo(f"wrote the site: {pages[0]} ({len(pages)} pages)", err=True)
 
 
-def _exit(
-    results: dict[str, Any], outputs: dict[str, Output], interrupts: Interrupts, fail_under: float | None
-) -> None:
+def _exit(results: ClassResults, outputs: dict[str, Output], interrupts: Interrupts, fail_under: float | None) -> None:
     """The summary table, then the exit: the interrupt's code, 1 for a score under ``--fail-under``
     or a submission the grader could not grade, else 0."""
     from thymio_bt.grade.reports import summary_table
+    from thymio_bt.grade.results import StudentStatus
 
     to_stderr = any(o.is_stdout for o in outputs.values())
     click.echo(summary_table(results), err=to_stderr)
-    click.echo(results["summary"]["confinement"], err=to_stderr)
+    click.echo(results.summary.confinement, err=to_stderr)
     if interrupts.signal:
         sys.exit(interrupts.exit_code)
-    students = results["students"]
-    below = fail_under is not None and any(s["score"] < fail_under - 1e-9 for s in students)
-    sys.exit(1 if below or any(s["status"] == "error" for s in students) else 0)
+    students = results.students
+    below = fail_under is not None and any(s.score < fail_under - 1e-9 for s in students)
+    sys.exit(1 if below or any(s.status == StudentStatus.ERROR for s in students) else 0)
 
 
-def _previous(path: Path) -> dict[str, Any]:
+def _previous(path: Path) -> ClassResults:
     """The results ``--update`` regrades into."""
     import json
+
+    from thymio_bt.grade.results import ClassResults
 
     try:
         data = json.loads(path.read_text())
     except (OSError, ValueError) as exc:
         raise UserError(f"--update {path}: cannot read results from it: {exc}") from None
-    if not isinstance(data, dict) or not isinstance(data.get("students"), list):
-        raise UserError(f"--update {path}: not the results.json of thymio-bt grade (hint: give grade's --out file)")
-    return data
+    try:
+        return ClassResults.from_json(data)
+    except ValueError as exc:
+        raise UserError(f"--update {path}: {exc} (hint: give the --out file of thymio-bt grade)") from None
 
 
 def _check_confinement() -> None:
@@ -278,10 +290,6 @@ def _worlds_folder(out: Path | None, html: Path | None) -> Path | None:
     return None
 
 
-#: the codes of runs a submission's code broke (limits, crashes, exceptions): counted in the progress lines
-_BROKEN = ("LIMIT", "CRASH", "EXCEPTION")
-
-
 class _Progress:
     """Students done / total, runs per second and the time left, on one line of a terminal; elsewhere
     (a log) a line per student graded."""
@@ -310,10 +318,10 @@ class _Progress:
         self.total_runs = sum(runs_per_student.values())
         self.began = time.perf_counter()
 
-    def __call__(self, student: str, message: dict[str, Any]) -> None:
+    def __call__(self, student: str, run: RunMessage) -> None:
         self.runs += 1
         self.done[student] = self.done.get(student, 0) + 1
-        self.failed[student] = self.failed.get(student, 0) + (message.get("code") in _BROKEN)
+        self.failed[student] = self.failed.get(student, 0) + run.broken
         if self.done[student] == self.wanted.get(student):
             self.students += 1
             if not self.enabled:  # a log (CI, a pipe): a line per student graded

@@ -3,14 +3,15 @@
 The grader reads each submission without running its code (its plan, its palette), then runs it
 in child processes of its own (:mod:`.isolation`), locally or on a Dask cluster, and scores each
 criterion on the share of its runs that passed. It writes nothing itself: :func:`grade` returns
-the results (the ``results.json`` contract of docs/grading.md).
+the results (:class:`~.results.ClassResults`: the ``results.json`` contract of docs/grading.md),
+scored by :mod:`.scoring`.
 
 Example::
 
     >>> results = grade("assignments/course_part1_2.yaml", ["examples/class/ada", "examples/class/chen"])
-    >>> [(s["name"], s["status"], s["score"], s["max"]) for s in results["students"]]
-    [('ada', 'graded', 11.0, 11.0), ('chen', 'graded', 2.0, 11.0)]
-    >>> [p["message"] for p in results["students"][1]["palette"]], results["summary"]["runs"]
+    >>> [(s.name, s.status, s.score, s.max) for s in results.students]
+    [('ada', <StudentStatus.GRADED: 'graded'>, 11.0, 11.0), ('chen', <StudentStatus.GRADED: 'graded'>, 2.0, 11.0)]
+    >>> [p.message for p in results.students[1].palette], results.summary.runs
     (['WallFollow is not allowed in this assignment'], 24)
 """
 
@@ -18,39 +19,27 @@ from __future__ import annotations
 
 import contextlib
 import os
-import shlex
 import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import UserError
-from thymio_bt.grade.assignment import Assignment, Criterion, resolve_assignment
+from thymio_bt.grade.assignment import Assignment, resolve_assignment
 from thymio_bt.grade.isolation import ForkPool, Limits
-from thymio_bt.grade.palette import Finding, check_palette
-from thymio_bt.grade.redact import feedback_line
-from thymio_bt.grade.similarity import similar_groups, tree_shape
-from thymio_bt.grade.student import StudentTask, died_message, grade_runs
+from thymio_bt.grade.palette import check_palette
+from thymio_bt.grade.results import ClassResults, RunMessage, StudentStatus
+from thymio_bt.grade.scoring import Entry, class_results
+from thymio_bt.grade.student import StudentTask, grade_runs, read_message
 from thymio_bt.grade.submissions import Submission, find_submissions
 from thymio_bt.grade.worlds import World, load_worlds
 
-#: called with (student, message) as each run ends, in the grader's process
-Progress = Callable[[str, dict[str, Any]], None]
+if TYPE_CHECKING:
+    from thymio_bt.mission import Mission
 
-
-@dataclass
-class Entry:
-    """One student as the grader goes: their submission, the plan read from it, their runs."""
-
-    submission: Submission
-    status: str = "graded"
-    messages: list[str] = field(default_factory=list)
-    findings: list[Finding] = field(default_factory=list)
-    plan: Any = None
-    task: StudentTask | None = None
-    runs: list[dict[str, Any]] = field(default_factory=list)
+#: called with (student, its run) as each run ends, in the grader's process
+Progress = Callable[[str, RunMessage], None]
 
 
 def grade(
@@ -68,8 +57,8 @@ def grade(
     hidden_worlds: Path | None = None,
     sandbox: str = "plugins",
     replays: str | None = None,
-) -> dict[str, Any]:
-    """Grade ``submissions`` (files or folders) on the assignment; the results as JSON data.
+) -> ClassResults:
+    """Grade ``submissions`` (files or folders) on the assignment: the class's results.
     Generated mazes go to ``worlds`` (a new temporary folder when None). ``executor``: an object
     with ``imap_unordered`` (:class:`~thymio_bt.run.distributed.DaskExecutor`) to run the
     students on a cluster instead of ``workers`` local processes. ``started`` is told how many
@@ -99,11 +88,10 @@ def grade(
         started({t.name: t.runs for t in tasks})
 
     def heard(task: StudentTask, message: dict[str, Any]) -> None:
-        if message["kind"] == "died":
-            message = died_message(task, message)
-        by_name[task.name].runs.append(message)
+        run = read_message(task, message)
+        by_name[task.name].runs.append(run)
         if progress is not None:
-            progress(task.name, message)
+            progress(task.name, run)
 
     if executor is None:
         _run_here(tasks, workers, _limits(assignment), heard, stop)
@@ -111,7 +99,8 @@ def grade(
         _run_on_cluster(executor, tasks, heard, stop)
     if stop():  # a signal: the students whose runs were not all made say so
         _interrupted(entries)
-    return results(assignment, path, made, entries, time.perf_counter() - began, relative_to)
+    wall = time.perf_counter() - began
+    return class_results(assignment, path, made, entries, wall, relative_to, _confinement(assignment, entries))
 
 
 def _replayed(worlds: list[World], replays: str | None) -> list[str]:
@@ -154,8 +143,8 @@ def _run_on_cluster(
 def _interrupted(entries: list[Entry]) -> None:
     """After a signal: the students graded whose runs were not all made are ``interrupted``."""
     for entry in entries:
-        if entry.task is not None and len(entry.runs) < entry.task.runs and entry.status == "graded":
-            entry.status = "interrupted"
+        if entry.task is not None and len(entry.runs) < entry.task.runs and entry.status == StudentStatus.GRADED:
+            entry.status = StudentStatus.INTERRUPTED
             entry.messages.append(f"interrupted after {len(entry.runs)} of {entry.task.runs} runs")
 
 
@@ -208,17 +197,17 @@ def _read(submission: Submission, assignment: Assignment, worlds: list[World]) -
 
     entry = Entry(submission)
     if submission.file is None:
-        entry.status, entry.messages = "invalid", [submission.problem or "nothing handed in"]
+        entry.status, entry.messages = StudentStatus.INVALID, [submission.problem or "nothing handed in"]
         return entry
     try:
         mission = load_mission(submission.file, run_plugins=False)
     except UserError as exc:
-        entry.status, entry.messages = "invalid", [str(p) for p in exc.problems]
+        entry.status, entry.messages = StudentStatus.INVALID, [str(p) for p in exc.problems]
         return entry
     entry.plan = mission.tree
     entry.findings = check_palette(mission, assignment.palette)
     if any(f.rule == "plugins" for f in entry.findings):
-        entry.status = "invalid"
+        entry.status = StudentStatus.INVALID
         entry.messages = [f"{f.where}: {f.message}" for f in entry.findings if f.rule == "plugins"]
         return entry
     entry.task = StudentTask(
@@ -246,249 +235,10 @@ def _confinement(assignment: Assignment, entries: list[Entry]) -> str:
     return plan().summary()
 
 
-def _has_plugins(mission: Any) -> bool:
+def _has_plugins(mission: Mission) -> bool:
     """Whether a mission (read without running its plugins) names any plugin: its tree's code is then
     the student's, run in a confined process of its own."""
     from thymio_bt.plan.unrun_plugins import UncheckedParams
 
     stand_ins = any(cls.Params is UncheckedParams for _, cls in mission.registry.items())
     return stand_ins or any(p.suffix == ".py" for p in mission.sources)
-
-
-def results(
-    assignment: Assignment,
-    path: Path,
-    worlds: list[World],
-    entries: list[Entry],
-    wall: float,
-    relative_to: Path | None = None,
-    hidden_worlds: Path | None = None,
-) -> dict[str, Any]:
-    """The results.json data."""
-    commands = Commands(assignment, path, relative_to)
-    students = [_student(assignment, worlds, e, commands) for e in entries]
-    return {
-        "assignment": {
-            "name": assignment.name,
-            "title": assignment.title,
-            "file": str(path),
-            "max": assignment.max_points,
-            "criteria": [
-                {
-                    "name": c.name,
-                    "points": c.points,
-                    "variants": c.variants or [w.name for w in worlds],
-                    "pass_rate": c.pass_rate,
-                    "credit": c.credit,
-                    "check": c.check,
-                }
-                for c in assignment.criteria
-            ],
-            "palette": assignment.palette.model_dump(),
-            "variants": [
-                {
-                    "name": w.name,
-                    "maze": str(w.maze_file) if w.maze_file else None,
-                    "start": w.start,
-                    "robot": w.robot,
-                    "seeds": w.seeds,
-                    "noise": w.settings.get("noise.wheel", "0") != "0",
-                    "visibility": w.visibility,
-                }
-                for w in worlds
-            ],
-        },
-        "students": students,
-        "summary": summary(students, [c.name for c in assignment.criteria], wall)
-        | {"confinement": _confinement(assignment, entries)},
-        "similar": similar_groups(students),
-    }
-
-
-#: a student's ``status`` in results.json, each counted in its summary
-STATUSES = ("graded", "invalid", "error", "interrupted")
-
-
-def summary(students: list[dict[str, Any]], criteria: list[str], wall: float) -> dict[str, Any]:
-    """results.json's ``summary`` of ``students``: counts, runs, the mean score, each criterion's
-    pass rate over the graded students."""
-    graded = [s for s in students if s["status"] == "graded"]
-    return {
-        "students": len(students),
-        **{status: sum(s["status"] == status for s in students) for status in STATUSES},
-        "runs": sum(len(s["runs"]) for s in students),
-        "wall_time": round(wall, 3),
-        "mean_score": round(sum(s["score"] for s in students) / len(students), 3) if students else None,
-        "criteria": [
-            {
-                "name": name,
-                "pass_rate": round(
-                    sum(sc["passed"] for s in graded for sc in s["criteria"] if sc["name"] == name) / len(graded), 3
-                )
-                if graded
-                else None,
-            }
-            for name in criteria
-        ],
-    }
-
-
-def update(old: dict[str, Any], new: dict[str, Any]) -> dict[str, Any]:
-    """``old`` results with the students of ``new`` (a regrade of some of them) in their place, the
-    others kept; the summary and the similar groups made again over everyone."""
-    if old.get("assignment", {}).get("name") != new["assignment"]["name"]:
-        raise UserError(
-            f"--update: those results are of assignment '{old.get('assignment', {}).get('name')}', "
-            f"not '{new['assignment']['name']}' (hint: give the results of the same assignment)"
-        )
-    regraded = {s["name"]: s for s in new["students"]}
-    students = [regraded.pop(s["name"], s) for s in old.get("students", [])] + list(regraded.values())
-    wall = old.get("summary", {}).get("wall_time", 0.0) + new["summary"]["wall_time"]
-    criteria = [c["name"] for c in new["assignment"]["criteria"]]
-    return new | {
-        "students": students,
-        "summary": summary(students, criteria, wall) | {"confinement": new["summary"].get("confinement")},
-        "similar": similar_groups(students),
-    }
-
-
-def _student(assignment: Assignment, worlds: list[World], entry: Entry, commands: Commands) -> dict[str, Any]:
-    """One student's entry of results.json."""
-    submission = entry.submission
-    runs = sorted(entry.runs, key=lambda r: r["index"])
-    task = entry.task
-    if task is not None and len(runs) < task.runs and entry.status == "graded":
-        entry.status = "error"
-        entry.messages.append(f"only {len(runs)} of {task.runs} runs were made (the grade was stopped)")
-    world_of = {w.name: w for w in worlds}
-    for run in runs:
-        run["reproduce"] = commands.run(str(submission.file), world_of[run["variant"]], run["seed"])
-        run["check"] = commands.check(str(submission.file), run["variant"], run["seed"])
-    criteria: list[dict[str, Any]] = (
-        [_criterion(c, runs) for c in assignment.criteria]
-        if entry.status == "graded"
-        else [
-            {
-                "name": c.name,
-                "points": c.points,
-                "earned": 0.0,
-                "passed": False,
-                "runs": 0,
-                "passed_runs": 0,
-                "variants": [],
-                "feedback": f"not graded: the submission is {entry.status} (see its messages)",
-                "where": None,
-            }
-            for c in assignment.criteria
-        ]
-    )
-    earned = sum(c["earned"] for c in criteria)
-    score = round(max(0.0, earned - sum(f.points for f in entry.findings)), 3) if entry.status == "graded" else 0.0
-    return {
-        "name": submission.name,
-        "file": str(submission.file) if submission.file else None,
-        "status": entry.status,
-        "score": score,
-        "max": assignment.max_points,
-        "penalty": round(score - earned, 3) if entry.status == "graded" else 0.0,
-        "messages": entry.messages,
-        "criteria": criteria,
-        "palette": [f.to_json() for f in entry.findings],
-        "coverage": _coverage(entry.plan, runs),
-        "shape": tree_shape(entry.plan) if entry.plan is not None else None,
-        "runs": [{k: v for k, v in r.items() if k not in ("kind", "node_stats")} for r in runs],
-    }
-
-
-@dataclass
-class Commands:
-    """The commands a results file gives to run a submission again: ``thymio-bt run`` to watch a
-    run, ``thymio-bt check`` to judge it as the grader did; files named relative to the results'
-    folder (a shipped maze or assignment by its name), never by the grader's absolute paths."""
-
-    assignment: Assignment
-    path: Path
-    relative_to: Path | None = None
-
-    def _ref(self, file: str | Path) -> str:
-        return os.path.relpath(Path(file).resolve(), (self.relative_to or Path.cwd()).resolve())
-
-    def run(self, file: str, world: World, seed: int) -> str:
-        """The ``thymio-bt run`` command of one run."""
-        args = ["thymio-bt", "run", self._ref(file), *world.run_arguments(self.relative_to), "--seed", str(seed)]
-        if self.assignment.time_limit is not None:
-            args += ["--set", f"time_limit={self.assignment.time_limit:g}"]
-        return shlex.join(args)
-
-    def check(self, file: str, variant: str, seed: int) -> str:
-        """The ``thymio-bt check`` command that runs and judges one run as the grader did."""
-        from thymio_bt.data import ASSIGNMENTS
-
-        shipped = ASSIGNMENTS / self.path.name
-        assignment = (
-            self.path.stem if shipped.is_file() and shipped.resolve() == self.path.resolve() else self._ref(self.path)
-        )
-        return shlex.join(
-            ["thymio-bt", "check", assignment, self._ref(file), "--variant", variant, "--seed", str(seed)]
-        )
-
-
-def _criterion(criterion: Criterion, runs: list[dict[str, Any]]) -> dict[str, Any]:
-    """A criterion's line for one student. A variant passes when at least ``pass_rate`` of its
-    runs passed; shared credit gives each passed variant its share of the points, ``credit: all``
-    the points only when every variant passed."""
-    judged = [(r, r["criteria"][criterion.name]) for r in runs if criterion.name in r["criteria"]]
-    variants = _variants(criterion, judged)
-    passed = bool(variants) and all(v["passed"] for v in variants)
-    counts = criterion.credit == "shared" or passed
-    for v in variants:
-        v["earned"] = round(criterion.points / len(variants), 3) if v["passed"] and counts else 0.0
-    earned = criterion.points if passed else round(sum(v["earned"] for v in variants), 3)
-    feedback, where = _first_failure(judged)
-    return {
-        "name": criterion.name,
-        "points": criterion.points,
-        "earned": earned,
-        "passed": passed,
-        "runs": len(judged),
-        "passed_runs": sum(j["passed"] for _, j in judged),
-        "variants": variants,
-        "feedback": feedback,
-        "where": where,
-    }
-
-
-def _variants(criterion: Criterion, judged: list[tuple[dict[str, Any], dict[str, Any]]]) -> list[dict[str, Any]]:
-    """A criterion's line for each variant of the (run, judgement) pairs, in the order they ran."""
-    variants = []
-    for name in dict.fromkeys(r["variant"] for r, _ in judged):
-        mine = [j for r, j in judged if r["variant"] == name]
-        passed_runs = sum(j["passed"] for j in mine)
-        passed = passed_runs >= criterion.pass_rate * len(mine) - 1e-9
-        feedback = next((j["feedback"] for j in mine if not j["passed"]), None)
-        variants.append(
-            {"name": name, "runs": len(mine), "passed_runs": passed_runs, "passed": passed, "feedback": feedback}
-        )
-    return variants
-
-
-def _first_failure(judged: list[tuple[dict[str, Any], dict[str, Any]]]) -> tuple[str | None, Any]:
-    """The feedback line and the place in the tree of a criterion's first failed run; None, None if none failed."""
-    failed = [(r, j) for r, j in judged if not j["passed"]]
-    if not failed:
-        return None, None
-    run, first = failed[0]
-    return feedback_line(run, first["feedback"], len(failed), len(judged)), first["where"] or run.get("where")
-
-
-def _coverage(plan: Any, runs: list[dict[str, Any]]) -> dict[str, Any] | None:
-    """The tree's coverage over the student's runs (None when nothing was read)."""
-    if plan is None:
-        return None
-    from thymio_bt.run.coverage import Coverage
-
-    coverage = Coverage.of(plan)
-    for run in runs:
-        if run.get("node_stats"):
-            coverage.add(run["node_stats"])
-    return coverage.to_json()

@@ -177,9 +177,11 @@ class ForkPool(Generic[T]):
         child.buffer += data
         *lines, child.buffer = child.buffer.split(b"\n")
         for line in lines:
-            message = json.loads(line)
+            message = _message(line)
+            if message is None:  # not a message: the run it is in counts as died, if it never ends
+                continue
             if message.get("kind") == "start":
-                child.current = message["index"]
+                child.current = message.get("index")
                 continue
             if message.get("kind") == "run":
                 child.done += 1
@@ -213,6 +215,19 @@ class ForkPool(Generic[T]):
             self.progress(child.task, died)
         if child.done + 1 < child.runs:
             waiting.append((index, child.done + 1))
+
+
+def _message(line: bytes) -> dict[str, Any] | None:
+    """A line of a child's pipe as a JSON object; None if it is not one.
+
+    >>> _message(b'{"kind": "start", "index": 0}'), _message(b"[1, 2]"), _message(b"\\xff{")
+    ({'kind': 'start', 'index': 0}, None, None)
+    """
+    try:
+        message = json.loads(line)
+    except ValueError:
+        return None
+    return message if isinstance(message, dict) else None
 
 
 def _kill(pid: int) -> None:

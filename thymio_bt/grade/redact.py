@@ -118,18 +118,28 @@ def _feedback(criterion: dict[str, Any], runs: list[dict[str, Any]], names: dict
     if not failed:
         return
     run, first = failed[0]
-    hidden = run["variant"] in names.values()
-    criterion["feedback"] = feedback_line(run, first.get("feedback"), len(failed), len(judged), hidden)
+    variant = run["variant"]
+    if variant in names.values():
+        criterion["feedback"] = feedback_line(variant, None, None, first.get("feedback"), len(failed), len(judged))
+    else:
+        said = first.get("feedback")
+        criterion["feedback"] = feedback_line(
+            variant, run.get("seed"), run.get("robot"), said, len(failed), len(judged)
+        )
 
 
-def feedback_line(run: dict[str, Any], feedback: str | None, failed: int, runs: int, hidden: bool = False) -> str:
-    """A criterion's feedback: its first failed run's, where it failed, and how many failed.
+def feedback_line(
+    variant: str, seed: int | None, robot: str | None, feedback: str | None, failed: int, runs: int
+) -> str:
+    """A criterion's feedback: its first failed run's, where it failed (its ``variant``, ``seed`` and
+    ``robot``; a hidden world's by its name alone, ``seed`` and ``robot`` None), and how many failed.
 
-    >>> run = {"variant": "course", "seed": 0, "robot": "course"}
-    >>> feedback_line(run, "took no turn, wanted 4 left turns", 3, 12)
+    >>> feedback_line("course", 0, "course", "took no turn, wanted 4 left turns", 3, 12)
     'took no turn, wanted 4 left turns (variant course, seed 0, robot course; failed 3 of 12 runs)'
+    >>> feedback_line("hidden world 1", None, None, "took no turn, wanted 4 left turns", 3, 12)
+    'hidden world 1: took no turn, wanted 4 left turns (failed 3 of 12 runs)'
     """
     count = f"failed {failed} of {runs} runs"
-    if hidden:
-        return f"{run['variant']}: {feedback} ({count})"
-    return f"{feedback} (variant {run['variant']}, seed {run.get('seed')}, robot {run.get('robot')}; {count})"
+    if seed is None and robot is None:
+        return f"{variant}: {feedback} ({count})"
+    return f"{feedback} (variant {variant}, seed {seed}, robot {robot}; {count})"

@@ -11,15 +11,14 @@ Example::
     ...     return NodePlan("sequence", name, name, children=[leaf, NodePlan("behaviour", "t", "t", behaviour="Stop")])
     >>> tree_shape(tree("ada", 0.1)) == tree_shape(tree("bob", 0.2))
     True
-    >>> similar_groups([{"name": "ada", "shape": tree_shape(tree("a", 1))}, {"name": "bob", "shape": "other"},
-    ...                 {"name": "chen", "shape": tree_shape(tree("c", 2))}, {"name": "eve", "shape": None}])
+    >>> similar_groups([("ada", tree_shape(tree("a", 1))), ("bob", "other"), ("chen", tree_shape(tree("c", 2))),
+    ...                 ("eve", None)])
     [['ada', 'chen']]
 """
 
 from __future__ import annotations
 
 import hashlib
-from typing import Any
 
 from thymio_bt.plan.model import NodePlan
 
@@ -34,11 +33,12 @@ def tree_shape(plan: NodePlan) -> str:
     return hashlib.sha256(shape(plan).encode()).hexdigest()[:16]
 
 
-def similar_groups(students: list[dict[str, Any]]) -> list[list[str]]:
-    """The groups of two or more students whose trees have the same shape, each group's names in
-    the results' order, the groups by their first student."""
+def similar_groups(shapes: list[tuple[str, str | None]]) -> list[list[str]]:
+    """The groups of two or more students whose trees have the same shape (of each student's name and
+    :func:`tree_shape`, None when no tree was read), each group's names in the results' order, the
+    groups by their first student."""
     groups: dict[str, list[str]] = {}
-    for student in students:
-        if student.get("shape"):
-            groups.setdefault(student["shape"], []).append(student["name"])
+    for name, shape in shapes:
+        if shape:
+            groups.setdefault(shape, []).append(name)
     return [names for names in groups.values() if len(names) > 1]

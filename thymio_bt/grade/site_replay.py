@@ -12,13 +12,16 @@ for students never has a hidden variant's replay.
 
 Example (what a failed run is replayed for, and its failing moment):
 
->>> run = {"status": "SUCCESS", "sim_time": 30.0, "criteria": {
-...     "stops 5 cm from the wall": {"passed": False, "feedback": "stopped 7.0 cm", "moment": {"t": 12.34}},
-...     "no collision": {"passed": True}}}
+>>> from thymio_bt.grade.results import Judged, RunRecord
+>>> from thymio_bt.run.result import RunStatus
+>>> run = RunRecord(index=0, variant="course", seed=0, robot="course", status=RunStatus.SUCCESS, sim_time=30.0,
+...     criteria={"stops 5 cm from the wall": Judged(passed=False, feedback="stopped 7.0 cm", moment={"t": 12.34}),
+...               "no collision": Judged(passed=True)})
 >>> went_wrong(run), failing_moment(run)
 (['stops 5 cm from the wall'], 12.34)
->>> went_wrong(run | {"status": "TIMEOUT"}), failing_moment({"status": "FAILURE", "sim_time": 8.0})
-(['stops 5 cm from the wall', 'ended'], 8.0)
+>>> timeout = run.model_copy(update={"status": RunStatus.TIMEOUT, "criteria": {}, "sim_time": 8.0})
+>>> went_wrong(timeout), failing_moment(timeout)
+(['ended'], 8.0)
 """
 
 from __future__ import annotations
@@ -28,8 +31,10 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 from thymio_bt.grade.site_page import as_dict, as_list, safe_name
+from thymio_bt.run.result import RunStatus
 
 if TYPE_CHECKING:
+    from thymio_bt.grade.results import ClassResults, Judged, RunRecord
     from thymio_bt.logs.recording import Recording
 
 REPLAYS = "replays"  # the folder of the replay pages, inside DIR
@@ -37,49 +42,49 @@ REPLAYS = "replays"  # the folder of the replay pages, inside DIR
 ENDED = "ended"
 
 
-def went_wrong(run: dict[str, Any]) -> list[str]:
-    """What ``run`` (a ``run`` message) went wrong in: the criteria it missed, and :data:`ENDED`
-    when it did not end in SUCCESS."""
-    missed = [name for name, v in as_dict(run.get("criteria")).items() if as_dict(v).get("passed") is False]
-    return missed + ([ENDED] if run.get("status") != "SUCCESS" else [])
+def went_wrong(run: RunRecord) -> list[str]:
+    """What ``run`` went wrong in: the criteria it missed, and :data:`ENDED` when it did not end in
+    SUCCESS."""
+    missed = [name for name, v in run.criteria.items() if not v.passed]
+    return missed + ([ENDED] if run.status != RunStatus.SUCCESS else [])
 
 
-def _moment(verdict: dict[str, Any], run: dict[str, Any]) -> float:
-    moment = as_dict(verdict.get("moment")).get("t")
-    return float(moment) if isinstance(moment, int | float) else float(run.get("sim_time") or 0.0)
+def _moment(verdict: Judged, run: RunRecord) -> float:
+    moment = (verdict.moment or {}).get("t")
+    return moment if moment is not None else run.sim_time
 
 
-def failing_moment(run: dict[str, Any]) -> float:
+def failing_moment(run: RunRecord) -> float:
     """The simulated time the replay opens at: the first missed criterion's moment, else the run's end."""
-    criteria = as_dict(run.get("criteria"))
-    missed = [as_dict(criteria[name]) for name in went_wrong(run) if name != ENDED]
-    timed = [m for m in missed if isinstance(as_dict(m.get("moment")).get("t"), int | float)]
-    return _moment(timed[0], run) if timed else float(run.get("sim_time") or 0.0)
+    missed = [run.criteria[name] for name in went_wrong(run) if name != ENDED]
+    timed = [m for m in missed if (m.moment or {}).get("t") is not None]
+    return _moment(timed[0], run) if timed else run.sim_time
 
 
-def replay_data(recording: Recording, run: dict[str, Any]) -> dict[str, Any]:
-    """The page data of ``recording`` (the run of the message ``run``), each missed criterion's verdict
-    an event at its moment (the run's end when it has none), and the moment to open at."""
+def replay_data(recording: Recording, run: RunRecord) -> dict[str, Any]:
+    """The page data of ``recording`` (the viewer's JSON, of the run ``run``), each missed criterion's
+    verdict an event at its moment (the run's end when it has none), and the moment to open at."""
     from thymio_bt.viz.page_data import page_data
 
-    data = page_data(recording, f"{run['variant']} seed {run['seed']}")
+    data = page_data(recording, f"{run.variant} seed {run.seed}")
     verdicts = [
-        {"t": round(_moment(as_dict(v), run), 3), "kind": "verdict", "name": name, "reason": as_dict(v).get("feedback")}
-        for name, v in as_dict(run.get("criteria")).items()
-        if as_dict(v).get("passed") is False
+        {"t": round(_moment(v, run), 3), "kind": "verdict", "name": name, "reason": v.feedback}
+        for name, v in run.criteria.items()
+        if not v.passed
     ]
     data["events"] = sorted(data["events"] + verdicts, key=lambda e: float(e["t"]))
     data["failing"] = round(failing_moment(run), 3)
     return data
 
 
-def take_replays(results: dict[str, Any]) -> dict[tuple[str, int], dict[str, Any]]:
+def take_replays(results: ClassResults) -> dict[tuple[str, int], dict[str, Any]]:
     """Take the replays out of ``results``' runs (they are not results.json's): by student and run index."""
     taken = {}
-    for student in as_list(results.get("students")):
-        for run in as_list(as_dict(student).get("runs")):
-            if isinstance(run, dict) and "replay" in run:
-                taken[(str(student.get("name")), int(run.get("index", -1)))] = run.pop("replay")
+    for student in results.students:
+        for run in student.runs:
+            if run.replay is not None:
+                taken[(student.name, run.index)] = run.replay
+                run.replay = None
     return taken
 
 

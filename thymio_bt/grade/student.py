@@ -2,7 +2,8 @@
 assignment with each of its seeds, each run judged by every criterion that applies to its world.
 
 The messages sent back are small: the run's outcome, each criterion's judgement, the node
-statistics (for coverage) and, for the first seed of each world, the trajectory (for pictures).
+statistics (for coverage) and, for the first seed of each world, the trajectory (for pictures):
+a :class:`~.results.RunMessage` as JSON, read back in the grader by :func:`read_message`.
 
 Example (in this process; the grader runs it in a child)::
 
@@ -14,9 +15,9 @@ Example (in this process; the grader runs it in a child)::
     ...     Criterion(name="stops 5 cm from the wall", points=2, gap={"at": "delete", "distance": "5cm"})])
     >>> messages = []
     >>> grade_runs(task, messages.append)
-    >>> run = messages[-1]
-    >>> run["variant"], run["status"], run["criteria"]["stops 5 cm from the wall"], len(run["trajectory"]) > 10
-    ('course', <RunStatus.SUCCESS: 'SUCCESS'>, {'passed': True, 'feedback': None, 'moment': None, 'where': None}, True)
+    >>> run = read_message(task, messages[-1])
+    >>> run.variant, run.status, run.criteria["stops 5 cm from the wall"], len(run.trajectory or []) > 10
+    ('course', <RunStatus.SUCCESS: 'SUCCESS'>, Judged(passed=True, feedback=None, moment=None, where=None), True)
 """
 
 from __future__ import annotations
@@ -25,12 +26,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from thymio_bt.behaviours.base import FailureCode
+from thymio_bt.enums import FailureCode
 from thymio_bt.errors import ThymioBtError, UserError
 from thymio_bt.grade.assignment import Criterion
 from thymio_bt.grade.checks import Judgement, RunFacts, judge
 from thymio_bt.grade.isolation import Limits, RunLimit, Send, run_limited
 from thymio_bt.grade.palette import wheres
+from thymio_bt.grade.results import GraderCode, Judged, RunCode, RunMessage
 from thymio_bt.grade.site_replay import replay_data, went_wrong
 from thymio_bt.grade.worlds import World
 from thymio_bt.run.result import RunResult, RunStatus
@@ -70,6 +72,10 @@ class StudentTask:
         """Each run's world and seed, in order."""
         return [(world, seed) for world in self.worlds for seed in world.seeds]
 
+    def criteria_of(self, world: World) -> list[Criterion]:
+        """The criteria that judge the runs of ``world``."""
+        return [c for c in self.criteria if c.variants is None or world.name in c.variants]
+
 
 def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
     """Run ``task``'s runs but the first ``skip``, sending a ``start`` then a ``run`` message each.
@@ -77,7 +83,7 @@ def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
     missions: dict[str, Mission | str] = {}
     pictured: set[str] = set()
     replayed: set[tuple[str, str]] = set()  # (variant, what went wrong) with a replay already
-    overran: list[dict[str, Any]] = []
+    overran: list[RunMessage] = []
     outside = _Outside(task)
     try:
         for index, (world, seed) in enumerate(task.plan()):
@@ -98,9 +104,9 @@ def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
                 message = _skipped(task, index, world, seed, overran)
             else:
                 message = run_message(task, index, world, seed, mission, picture, outside, replayed)
-                if message.get("code") == "LIMIT" and "time limit" in str(message.get("reason")):
+                if message.code == GraderCode.LIMIT and "time limit" in (message.reason or ""):
                     overran.append(message)
-            send(message)
+            send({"kind": "run", **message.to_json()})
     finally:
         outside.close()
 
@@ -109,12 +115,11 @@ def grade_runs(task: StudentTask, send: Send, skip: int = 0) -> None:
 OVERRUNS = 2
 
 
-def _skipped(task: StudentTask, index: int, world: World, seed: int, overran: list[dict[str, Any]]) -> dict[str, Any]:
+def _skipped(task: StudentTask, index: int, world: World, seed: int, overran: list[RunMessage]) -> RunMessage:
     """A run not made: the student's runs already went over the time limit :data:`OVERRUNS` times."""
-    criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
-    head = {"kind": "run", "index": index, "variant": world.name, "seed": seed, "robot": world.robot}
-    said = "; ".join(f"run {m['index'] + 1}: {m['reason']}" for m in overran)
-    return head | _broken("LIMIT", f"skipped: {len(overran)} runs went over the time limit ({said})", criteria)
+    said = "; ".join(f"run {m.index + 1}: {m.reason}" for m in overran)
+    reason = f"skipped: {len(overran)} runs went over the time limit ({said})"
+    return _broken(task, index, world, seed, GraderCode.LIMIT, reason)
 
 
 class _Outside:
@@ -152,27 +157,25 @@ def run_message(
     picture: bool,
     outside: _Outside | None = None,
     replayed: set[tuple[str, str]] | None = None,
-) -> dict[str, Any]:
+) -> RunMessage:
     """Run ``mission`` in ``world`` with ``seed`` and judge it: the ``run`` message. A run of a world
     of the task's ``replays`` that makes a mistake not yet in ``replayed`` carries its ``replay``
     (:mod:`.site_replay`)."""
-    head: dict[str, Any] = {"kind": "run", "index": index, "variant": world.name, "seed": seed, "robot": world.robot}
-    criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
     if isinstance(mission, str):
-        return head | _broken("WORLD_ERROR", mission, criteria)
+        return _broken(task, index, world, seed, GraderCode.WORLD_ERROR, mission)
     try:
         result = _graded_run(task, mission, seed, world, outside)
     except _Broken as exc:
-        return head | _broken(exc.code, exc.reason, criteria)
-    message = head | _judged(mission, world, result, criteria)
+        return _broken(task, index, world, seed, exc.code, exc.reason)
+    message = _judged(task, index, world, seed, mission, result)
     new = {(world.name, what) for what in went_wrong(message)} - (replayed or set())
     if replayed is not None and world.name in task.replays and new:
         recording = _recorded(task, mission, seed, world, outside, result)
         if recording is not None:
-            message["replay"] = replay_data(recording, message)
+            message.replay = replay_data(recording, message)
             replayed |= new
     if picture:
-        message["trajectory"] = _picture(result.trajectory)
+        message.trajectory = _picture(result.trajectory)
     return message
 
 
@@ -196,15 +199,15 @@ def _graded_run(task: StudentTask, mission: Mission, seed: int, world: World, ou
         return _run(task, mission, seed, world, outside)
     except RunLimit as exc:
         _close(outside)
-        raise _Broken("LIMIT", str(exc)) from None
+        raise _Broken(GraderCode.LIMIT, str(exc)) from None
     except _Broken:
         _close(outside)
         raise
     except MemoryError:
         memory = (task.limits or Limits()).memory_mib
-        raise _Broken("LIMIT", f"the run used more than its memory ({memory} MiB)") from None
+        raise _Broken(GraderCode.LIMIT, f"the run used more than its memory ({memory} MiB)") from None
     except UserError as exc:
-        raise _Broken("WORLD_ERROR", f"the mission cannot run in this world: {exc}") from None
+        raise _Broken(GraderCode.WORLD_ERROR, f"the mission cannot run in this world: {exc}") from None
     except SystemExit as exc:
         raise _Broken(FailureCode.EXCEPTION, f"the submission called sys.exit({exc.code!r})") from None
     except Exception as exc:
@@ -217,27 +220,31 @@ def _close(outside: _Outside | None) -> None:
         outside.close()
 
 
-def _judged(mission: Mission, world: World, result: Any, criteria: list[Criterion]) -> dict[str, Any]:
-    """The run message's outcome of a run that ended: how it ended, and each criterion's judgement."""
+def _judged(task: StudentTask, index: int, world: World, seed: int, mission: Mission, result: RunResult) -> RunMessage:
+    """The run message of a run that ended: how it ended, and each criterion's judgement."""
     from thymio_bt.robot.model import robot_model
 
     places = wheres(mission.tree)
     facts = RunFacts(
         result, mission.maze, robot_model(mission.robot), mission.time_limit, world.goal, world.turns, world.cell
     )
-    return {
-        "status": result.status,
-        "code": result.code,
-        "reason": result.reason,
-        "failed_path": result.failed_path,
-        "where": places.get(result.failed_path or ""),
-        "sim_time": round(result.sim_time, 3),
-        "final_pose": result.final_pose_json,
-        "collisions": result.collisions,
-        "spawns": [e["t"] for e in result.events if e["kind"] == "spawn_entity"],  # the path's jumps
-        "criteria": {c.name: _judgement(judge(c, facts), places) for c in criteria},
-        "node_stats": _rows(result.node_stats),
-    }
+    return RunMessage(
+        index=index,
+        variant=world.name,
+        seed=seed,
+        robot=world.robot,
+        status=result.status,
+        code=result.code,
+        reason=result.reason,
+        failed_path=result.failed_path,
+        where=places.get(result.failed_path or ""),
+        sim_time=round(result.sim_time, 3),
+        final_pose=result.final_pose_json,
+        collisions=result.collisions,
+        spawns=[e["t"] for e in result.events if e["kind"] == "spawn_entity"],  # the path's jumps
+        criteria={c.name: _judgement(judge(c, facts), places) for c in task.criteria_of(world)},
+        node_stats=_rows(result.node_stats),
+    )
 
 
 def _picture(trajectory: list[tuple[float, float, float, float]]) -> list[list[float]]:
@@ -268,7 +275,7 @@ def _recorded(
 class _Broken(ThymioBtError):
     """A run the submission's process broke: its code and reason."""
 
-    def __init__(self, code: FailureCode | str, reason: str) -> None:
+    def __init__(self, code: RunCode, reason: str) -> None:
         super().__init__(reason)
         self.code, self.reason = code, reason
 
@@ -283,9 +290,9 @@ def _outside_run(
     try:
         sandbox = outside.get(mission)
     except (WireError, OSError) as exc:
-        raise _Broken("CRASH", f"the submission's process could not start: {exc}") from None
+        raise _Broken(GraderCode.CRASH, f"the submission's process could not start: {exc}") from None
     if sandbox.error:
-        raise _Broken("CRASH", sandbox.error)
+        raise _Broken(GraderCode.CRASH, sandbox.error)
     home = Path(outside.task.home) if outside.task.home else None
     spec = {
         "mission": {
@@ -309,7 +316,7 @@ def _outside_run(
         raise _Broken(FailureCode.EXCEPTION, str(exc)) from None
     except WireError as exc:
         said = f"os._exit, a crash, or its memory limit of {limits.memory_mib} MiB"
-        raise _Broken("CRASH", f"{exc} during the run ({said})") from None
+        raise _Broken(GraderCode.CRASH, f"{exc} during the run ({said})") from None
 
 
 def _rows(stats: dict[str, dict[str, float]] | None) -> dict[str, Any]:
@@ -319,39 +326,60 @@ def _rows(stats: dict[str, dict[str, float]] | None) -> dict[str, Any]:
     return stats.rows() if isinstance(stats, NodeTable) else dict(stats or {})
 
 
-def _judgement(judgement: Judgement, places: dict[str, str | None]) -> dict[str, Any]:
-    return {
-        "passed": judgement.passed,
-        "feedback": judgement.feedback,
-        "moment": judgement.moment,
-        "where": places.get(judgement.path or ""),
-    }
+def _judgement(judgement: Judgement, places: dict[str, str | None]) -> Judged:
+    return Judged(
+        passed=judgement.passed,
+        feedback=judgement.feedback,
+        moment=judgement.moment,
+        where=places.get(judgement.path or ""),
+    )
 
 
-def _broken(code: FailureCode | str, reason: str, criteria: list[Criterion]) -> dict[str, Any]:
+def _broken(task: StudentTask, index: int, world: World, seed: int, code: RunCode, reason: str) -> RunMessage:
     """A run that could not run or was stopped: every criterion fails with its reason (``code``: the
-    run's :class:`FailureCode`, or the grader's own ``LIMIT``, ``CRASH``, ``WORLD_ERROR``)."""
-    judged = {c.name: {"passed": False, "feedback": reason, "moment": None, "where": None} for c in criteria}
-    return {
-        "status": RunStatus.FAILURE,
-        "code": code,
-        "reason": reason,
-        "failed_path": None,
-        "where": None,
-        "sim_time": 0.0,
-        "final_pose": None,
-        "collisions": 0,
-        "criteria": judged,
-        "node_stats": {},
-    }
+    run's :class:`FailureCode`, or the grader's own :class:`~.results.GraderCode`)."""
+    return RunMessage(
+        index=index,
+        variant=world.name,
+        seed=seed,
+        robot=world.robot,
+        status=RunStatus.FAILURE,
+        code=code,
+        reason=reason,
+        criteria={c.name: Judged(passed=False, feedback=reason) for c in task.criteria_of(world)},
+    )
 
 
-def died_message(task: StudentTask, message: dict[str, Any]) -> dict[str, Any]:
-    """The ``run`` message of a run whose process died (a :mod:`.isolation` ``died`` message)."""
-    world, seed = task.plan()[message["index"]]
-    criteria = [c for c in task.criteria if c.variants is None or world.name in c.variants]
-    head = {"kind": "run", "index": message["index"], "variant": world.name, "seed": seed, "robot": world.robot}
-    return head | _broken("CRASH", message["reason"], criteria)
+def died_message(task: StudentTask, index: int, reason: str) -> RunMessage:
+    """The ``run`` message of the run ``index`` whose process died (a :mod:`.isolation` ``died`` message)."""
+    world, seed = task.plan()[index]
+    return _broken(task, index, world, seed, GraderCode.CRASH, reason)
 
 
-__all__ = ["StudentTask", "died_message", "grade_runs", "run_message"]
+def read_message(task: StudentTask, message: dict[str, Any]) -> RunMessage:
+    """A run's message from the child process that made it (JSON, through a pipe), checked: a ``died``
+    message is the run's crash; a ``run`` message must be the contract's and name a run of the task,
+    with the judgement of each of its world's criteria and nothing else. A message that is not is
+    the run's crash too, never an error of the grader nor a judgement the grader did not make."""
+    plan = task.plan()
+    if not isinstance(message, dict):
+        return died_message(task, 0, "the run's process sent what no run sends (not a JSON object)")
+    index = message.get("index")
+    if not isinstance(index, int) or isinstance(index, bool) or not 0 <= index < len(plan):
+        index = 0
+    if message.get("kind") == "died":
+        return died_message(task, index, str(message.get("reason")))
+    world, seed = plan[index]
+    try:
+        run = RunMessage.from_json({k: v for k, v in message.items() if k != "kind"})
+    except ValueError as exc:
+        return died_message(task, index, f"the run's process sent what no run sends ({exc})")
+    wanted = {c.name for c in task.criteria_of(world)}
+    if message.get("kind") != "run" or (run.variant, run.seed, run.robot) != (world.name, seed, world.robot):
+        return died_message(task, index, "the run's process sent a run of another world or seed")
+    if set(run.criteria) != wanted:
+        return died_message(task, index, "the run's process sent judgements of other criteria")
+    return run
+
+
+__all__ = ["StudentTask", "died_message", "grade_runs", "read_message", "run_message"]
