@@ -80,14 +80,14 @@ def main() -> None:
             lambda: grade("assignments/course_part1_2.yaml", subs, workers=workers, worlds=Path(tmp) / "w"),
             args.repeats,
         )
-    summary = results["summary"]
-    runs = summary["runs"]
+    summary = results.summary
+    runs = summary.runs
     rows = [
         ("students x runs", f"{args.students} x 12 = {runs}"),
         ("workers", str(workers)),
         ("wall (median)", f"{wall:.2f} s ({', '.join(f'{s:.2f}' for s in samples)})"),
         ("runs per second", f"{runs / wall:.1f}"),
-        ("mean score", f"{summary['mean_score']:.2f} / 10"),
+        ("mean score", f"{summary.mean_score or 0:.2f} / 10"),
     ]
     data = {
         "students": args.students,

@@ -105,7 +105,7 @@ def main() -> None:
     os.chdir(ROOT)
     times: dict[str, list[float]] = {name: [] for name in chosen}
     cpu: dict[str, list[float]] = {name: [] for name in chosen}
-    scores: dict[str, float] = {}
+    scores: dict[str, float | None] = {}
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         (root / "y").mkdir()
@@ -127,8 +127,8 @@ def main() -> None:
                 results = way()
                 times[name].append(time.perf_counter() - began)
                 cpu[name].append(_cpu_seconds() - used)
-                scores[name] = results["summary"]["mean_score"]
-                print(f"{name}: {times[name][-1]:.2f} s, {results['summary']['confinement']}", flush=True)
+                scores[name] = results.summary.mean_score
+                print(f"{name}: {times[name][-1]:.2f} s, {results.summary.confinement}", flush=True)
     others = [name for name in chosen if name != "yaml"]
     ratios = {name: [t / y for t, y in zip(times[name], times["yaml"], strict=True)] for name in others}
     cpu_ratios = {name: [t / y for t, y in zip(cpu[name], cpu["yaml"], strict=True)] for name in others}
