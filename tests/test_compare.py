@@ -123,8 +123,8 @@ def test_angles_are_compared_around_the_circle(logs):
     found = compare(a, b)
     assert found.divergence is None or found.divergence.time != west["t"]  # under 1 degree apart, not 359
     for phase in found.phases:
-        if phase["a"]["time"] == west["t"]:
-            assert abs(phase["diff"]["yaw_deg"]) == pytest.approx(turned, abs=1e-3)
+        if phase.a is not None and phase.diff is not None and phase.a["time"] == west["t"]:
+            assert abs(float(phase.diff["yaw_deg"])) == pytest.approx(turned, abs=1e-3)
 
 
 def test_a_log_with_junk_events_is_compared_without_a_traceback(logs, tmp_path):

@@ -42,8 +42,8 @@ def test_two_seeds_diverge_at_the_first_differing_tick(noisy):
     differs = sa["nodes"] != sb["nodes"] or math.dist(sa["pose"].values(), sb["pose"].values()) > 0.01
     assert differs
     assert found.time == sa["t"]
-    assert found.a["pose"] == sa["pose"] and found.b["pose"] == sb["pose"]
-    assert found.a["pose_source"] == found.b["pose_source"] == "ground truth"
+    assert found.a.pose == sa["pose"] and found.b.pose == sb["pose"]
+    assert found.a.pose_source == found.b.pose_source == "ground truth"
 
 
 def test_a_changed_stop_distance_names_the_node_that_stopped_first():
@@ -51,8 +51,10 @@ def test_a_changed_stop_distance_names_the_node_that_stopped_first():
     assert found is not None
     assert (found.time, found.tick) == (4.2, 43)
     assert found.reason.startswith("course/part 1: RUNNING in A, SUCCESS in B")
-    assert found.a["running"] == ["course/part 1"] and found.b["running"] == ["course/DeleteEntity"]
-    assert found.to_json() == {"time": 4.2, "tick": 43, "reason": found.reason, "a": found.a, "b": found.b}
+    assert found.a.running == ["course/part 1"] and found.b.running == ["course/DeleteEntity"]
+    ends = {"a": found.a.to_json(), "b": found.b.to_json()}
+    assert found.to_json() == {"time": 4.2, "tick": 43, "reason": found.reason, **ends}
+    assert list(ends["a"]) == ["tick", "time", "running", "pose", "pose_source", "cmd"]  # compare --json's order
 
 
 def test_poses_past_the_tolerance_diverge_and_the_tolerance_is_configurable():
@@ -74,7 +76,7 @@ def test_a_run_that_ends_first_diverges_where_it_ended():
     found = first_divergence(a, cut)
     assert found is not None
     assert found.time == a.samples[100]["t"]  # the first tick B does not have
-    assert found.b["time"] == a.samples[99]["t"]
+    assert found.b.time == a.samples[99]["t"]
     assert found.reason == f"run B ended at {a.samples[99]['t']:.1f} s (INCOMPLETE), run A went on"
 
 

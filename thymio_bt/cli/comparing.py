@@ -164,10 +164,13 @@ def _print(result: Comparison, names: tuple[str, str]) -> None:
     click.echo(f"    {'value':<11} {'A':>13} {'B':>13} {'B - A':>11}")
     exceeded = set(result.exceeded)
     for phase in result.phases:
-        a, b, diff = phase["a"] or {}, phase["b"] or {}, phase["diff"] or {}
-        named = f"{phase['node']} #{phase['occurrence']}"
-        if phase["diff"] is None:
-            click.echo(f"{named} ({a.get('kind') or b.get('kind')}): only in {'A' if phase['b'] is None else 'B'}  !")
+        # the table prints any value by its key: the ends as plain mappings
+        a: dict[str, Any] = dict(phase.a or {})
+        b: dict[str, Any] = dict(phase.b or {})
+        diff = phase.diff or {}
+        named = f"{phase.node} #{phase.occurrence}"
+        if phase.diff is None:
+            click.echo(f"{named} ({a.get('kind') or b.get('kind')}): only in {'A' if phase.b is None else 'B'}  !")
             continue
         click.echo(f"{named} ({a.get('kind')})")
         for key in [k for k in diff if k not in ("x", "y")]:
@@ -186,13 +189,13 @@ def _print(result: Comparison, names: tuple[str, str]) -> None:
     else:
         click.echo(f"first divergence at {found.time:g} s (tick {found.tick}): {found.reason}")
         for name, doing in (("A", found.a), ("B", found.b)):
-            pose = doing["pose"]
+            pose = doing.pose
             where = (
                 "no robot"
                 if pose is None
                 else f"({pose['x']:.4f}, {pose['y']:.4f}, {math.degrees(pose['yaw']):.1f} deg)"
             )
-            click.echo(f"  {name}: running {', '.join(doing['running']) or 'nothing'}; pose {where}")
+            click.echo(f"  {name}: running {', '.join(doing.running) or 'nothing'}; pose {where}")
     if result.agree:
         click.echo("the runs agree within the tolerances")
     else:
@@ -227,8 +230,8 @@ def plot_comparison(a: Recording, b: Recording, result: Comparison, names: tuple
         if found is not None:
             signal_ax.axvline(found.time, color="red", linestyle="--", label=f"divergence {found.time:g} s")
             for doing in (found.a, found.b):
-                if doing["pose"] is not None:
-                    maze_ax.plot(doing["pose"]["x"], doing["pose"]["y"], "x", color="red", markersize=10)
+                if doing.pose is not None:
+                    maze_ax.plot(doing.pose["x"], doing.pose["y"], "x", color="red", markersize=10)
         maze_ax.set_aspect("equal")
         maze_ax.set_title("paths (ground truth where logged)")
         maze_ax.legend(loc="best", fontsize=8)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import bisect
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypedDict
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.units import UnitError, parse_value
@@ -83,11 +83,47 @@ class Tolerances:
         return None
 
 
+class PhaseEnd(TypedDict, total=False):
+    """One behaviour end of a run: what ended and how, when, where (the logged pose, yaw in degrees),
+    and the gaps the behaviour was about, those it has (lengths in m, angles in degrees)."""
+
+    kind: str
+    status: str
+    time: float
+    x: float
+    y: float
+    yaw_deg: float
+    front: float
+    turned_deg: float
+    left: float
+    right: float
+
+
+#: B's values minus A's (``position``: how far apart; ``status``: ``"SUCCESS -> FAILURE"`` when they differ)
+Difference = dict[str, float | str]
+
+
+@dataclass(frozen=True)
+class Phase:
+    """A behaviour end matched between the runs: its node path and occurrence (from 1), its end in
+    each run (None: not in that one) and their difference (None unless in both)."""
+
+    node: str
+    occurrence: int
+    a: PhaseEnd | None
+    b: PhaseEnd | None
+    diff: Difference | None
+
+    def to_json(self) -> dict[str, Any]:
+        """A row of ``compare --json``'s ``phases``."""
+        return {"node": self.node, "occurrence": self.occurrence, "a": self.a, "b": self.b, "diff": self.diff}
+
+
 @dataclass
 class Comparison:
     """The phase table of two runs, their first divergence, and the phases past the tolerances."""
 
-    phases: list[dict[str, Any]]
+    phases: list[Phase]
     divergence: Divergence | None
     #: "node #occurrence: key" of each value past its tolerance, or "node #n: only in A"
     exceeded: list[str] = field(default_factory=list)
@@ -99,7 +135,8 @@ class Comparison:
 
     def to_json(self) -> dict[str, Any]:
         """``compare --json``: ``{"phases": [...], "divergence": {...} | null}``."""
-        return {"phases": self.phases, "divergence": None if self.divergence is None else self.divergence.to_json()}
+        divergence = None if self.divergence is None else self.divergence.to_json()
+        return {"phases": [p.to_json() for p in self.phases], "divergence": divergence}
 
 
 def compare(a: Recording, b: Recording, tolerances: Tolerances | None = None) -> Comparison:
@@ -111,26 +148,26 @@ def compare(a: Recording, b: Recording, tolerances: Tolerances | None = None) ->
     for node, occurrence in keys:
         va, vb = ends_a.get((node, occurrence)), ends_b.get((node, occurrence))
         diff = None if va is None or vb is None else _difference(va, vb)
-        phases.append({"node": node, "occurrence": occurrence, "a": va, "b": vb, "diff": diff})
+        phases.append(Phase(node, occurrence, va, vb, diff))
         if diff is None:
             exceeded.append(f"{node} #{occurrence}: only in {'A' if vb is None else 'B'}")
             continue
         if "status" in diff:
             exceeded.append(f"{node} #{occurrence}: status")
         for key, value in diff.items():
-            limit = tolerances.limit(key) if key != "status" else None
-            if value is not None and limit is not None and abs(value) > limit + 1e-9:
+            limit = tolerances.limit(key)
+            if isinstance(value, float | int) and limit is not None and abs(value) > limit + 1e-9:
                 exceeded.append(f"{node} #{occurrence}: {key}")
     found = first_divergence(a, b, distance=tolerances.position, angle=tolerances.angle)
     return Comparison(phases, found, exceeded)
 
 
-def phase_values(recording: Recording) -> dict[tuple[str, int], dict[str, Any]]:
+def phase_values(recording: Recording) -> dict[tuple[str, int], PhaseEnd]:
     """Each behaviour end of a run by (node path, occurrence from 1), in the order they ended."""
     times = [s["t"] for s in recording.samples]
     started: dict[str, float] = {}
     seen: dict[str, int] = {}
-    out: dict[tuple[str, int], dict[str, Any]] = {}
+    out: dict[tuple[str, int], PhaseEnd] = {}
     for event in checked_events(recording.events):
         path = str(event.get("path", ""))
         if event.get("kind") == "behaviour_start":
@@ -138,14 +175,10 @@ def phase_values(recording: Recording) -> dict[tuple[str, int], dict[str, Any]]:
         if event.get("kind") != "behaviour_end":
             continue
         seen[path] = seen.get(path, 0) + 1
-        values: dict[str, Any] = {
-            "kind": str(event.get("name")),
-            "status": str(event.get("status")),
-            "time": event["t"],
-        }
+        values: PhaseEnd = {"kind": str(event.get("name")), "status": str(event.get("status")), "time": event["t"]}
         pose = _pose_at(recording, times, event["t"]) or event.get("pose")  # ground truth where logged
         if pose:
-            values.update(x=pose["x"], y=pose["y"], yaw_deg=round(math.degrees(pose["yaw"]), 4))
+            values["x"], values["y"], values["yaw_deg"] = pose["x"], pose["y"], round(math.degrees(pose["yaw"]), 4)
         if event.get("range") is not None:
             values["front"] = event["range"]
         if event.get("angle") is not None and pose and path in started:
@@ -157,7 +190,7 @@ def phase_values(recording: Recording) -> dict[tuple[str, int], dict[str, Any]]:
         prox = prox if isinstance(prox, dict) else {}
         left, right = finite(prox.get("front_left")), finite(prox.get("front_right"))
         if "turned_deg" not in values and left is not None and right is not None:
-            values.update(left=left, right=right)
+            values["left"], values["right"] = left, right
         out[(path, seen[path])] = values
     return out
 
@@ -173,18 +206,19 @@ def _pose_at(recording: Recording, times: list[float], t: float) -> dict[str, fl
     return recording.samples[i].get("pose") if i >= 0 else None
 
 
-def _difference(a: dict[str, Any], b: dict[str, Any]) -> dict[str, Any]:
+def _difference(a: PhaseEnd, b: PhaseEnd) -> Difference:
     """B's values minus A's, for the numbers both have (``position``: how far apart the poses are;
     angles wrapped to ±180 degrees); a status that differs is ``"status": "SUCCESS -> FAILURE"``."""
-    diff: dict[str, Any] = {}
+    diff: Difference = {}
     for key, va in a.items():
         vb = b.get(key)
         if isinstance(va, (int, float)) and isinstance(vb, (int, float)):
             d = vb - va
             # not wrap_angle: these are degrees (and math.remainder is exact where wrap_angle rounds)
             diff[key] = round(math.remainder(d, 360.0) if key.endswith("_deg") else d, 6)
-    if "x" in diff and "y" in diff:
-        diff["position"] = round(math.hypot(diff["x"], diff["y"]), 6)
+    dx, dy = diff.get("x"), diff.get("y")
+    if isinstance(dx, float | int) and isinstance(dy, float | int):
+        diff["position"] = round(math.hypot(dx, dy), 6)
     if a.get("status") != b.get("status"):
         diff["status"] = f"{a.get('status')} -> {b.get('status')}"
     return diff

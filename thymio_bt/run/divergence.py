@@ -21,15 +21,17 @@ True
 >>> found = first_divergence(one, record(2))
 >>> found.time, found.reason
 (8.6, 'course/part 2/leg/approach/MoveUntilWall: RUNNING in A, SUCCESS in B (and 3 more)')
->>> found.a["running"], found.b["running"]
+>>> found.a.running, found.b.running
 (['course/part 2/leg/approach/MoveUntilWall'], ['course/part 2/leg/stop or turn/turn/centre axle'])
+>>> list(found.to_json()["a"])
+['tick', 'time', 'running', 'pose', 'pose_source', 'cmd']
 """
 
 from __future__ import annotations
 
 import bisect
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from thymio_bt.logs.recording import Recording
@@ -41,20 +43,43 @@ GROUND_TRUTH = frozenset({"sim", "playground"})
 
 
 @dataclass(frozen=True)
+class RunAt:
+    """What one run's tree and robot were doing at a tick: its own ``tick`` and ``time``, the
+    running node paths, the logged pose (None: no robot) and what it is (``pose_source``), the
+    command (``[linear, angular]``, None where the log has none)."""
+
+    tick: int
+    time: float
+    running: list[str]
+    pose: dict[str, float] | None
+    pose_source: str
+    cmd: list[float] | None
+
+    def to_json(self) -> dict[str, Any]:
+        """As ``compare --json`` writes it (the fields, in their order)."""
+        return asdict(self)
+
+
+@dataclass(frozen=True)
 class Divergence:
     """The first tick two runs differ: ``time`` (simulated s) and ``tick`` of run A there, ``reason``
-    in words, and what each run's tree and robot were doing (``a``, ``b``: running node paths,
-    pose and its source, command, its own tick and time)."""
+    in words, and what each run's tree and robot were doing (``a``, ``b``)."""
 
     time: float
     tick: int
     reason: str
-    a: dict[str, Any]
-    b: dict[str, Any]
+    a: RunAt
+    b: RunAt
 
     def to_json(self) -> dict[str, Any]:
         """The ``divergence`` object of ``compare --json``: ``time``, ``tick``, ``reason``, ``a``, ``b``."""
-        return {"time": self.time, "tick": self.tick, "reason": self.reason, "a": self.a, "b": self.b}
+        return {
+            "time": self.time,
+            "tick": self.tick,
+            "reason": self.reason,
+            "a": self.a.to_json(),
+            "b": self.b.to_json(),
+        }
 
 
 def pose_source(recording: Recording) -> str:
@@ -163,13 +188,6 @@ def _divergence(sa: dict[str, Any], sb: dict[str, Any], reason: str, sources: tu
     return Divergence(sa["t"], sa["tick"], reason, _doing(sa, sources[0]), _doing(sb, sources[1]))
 
 
-def _doing(sample: dict[str, Any], source: str) -> dict[str, Any]:
-    """What a run's tree and robot were doing at one tick, as the divergence shows it."""
-    return {
-        "tick": sample["tick"],
-        "time": sample["t"],
-        "running": running_paths(sample),
-        "pose": sample.get("pose"),
-        "pose_source": source,
-        "cmd": sample.get("cmd"),
-    }
+def _doing(sample: dict[str, Any], source: str) -> RunAt:
+    """What a run's tree and robot were doing at one tick (a log's tick record), as the divergence shows it."""
+    return RunAt(sample["tick"], sample["t"], running_paths(sample), sample.get("pose"), source, sample.get("cmd"))
