@@ -55,6 +55,7 @@ def test_a_changed_stop_distance_names_the_node_that_stopped_first():
     ends = {"a": found.a.to_json(), "b": found.b.to_json()}
     assert found.to_json() == {"time": 4.2, "tick": 43, "reason": found.reason, **ends}
     assert list(ends["a"]) == ["tick", "time", "running", "pose", "pose_source", "cmd"]  # compare --json's order
+    assert found.mark() == {"time": 4.2, "tick": 43, "reason": found.reason}  # what view and the notebook mark
 
 
 def test_poses_past_the_tolerance_diverge_and_the_tolerance_is_configurable():

@@ -137,7 +137,7 @@ def run(
 def compare(a: NotebookRun, b: NotebookRun) -> Comparison:
     """``a`` and ``b`` side by side (shown as one page), with where they first part ways."""
     found = first_divergence(a.recording, b.recording)
-    divergence = None if found is None else {"time": found.time, "tick": found.tick, "reason": found.reason}
+    divergence = None if found is None else found.mark()
     return Comparison(a, b, divergence)
 
 

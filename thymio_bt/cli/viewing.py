@@ -49,7 +49,7 @@ def divergence_json(a: Recording, b: Recording) -> dict[str, Any] | None:
 
 def page_divergence(found: Divergence | None) -> dict[str, Any] | None:
     """A divergence (``view``'s, ``compare``'s with its tolerances) as the page marks it, or None."""
-    return None if found is None else {"time": found.time, "tick": found.tick, "reason": found.reason}
+    return None if found is None else found.mark()
 
 
 @main.command()

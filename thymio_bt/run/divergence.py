@@ -71,6 +71,10 @@ class Divergence:
     a: RunAt
     b: RunAt
 
+    def mark(self) -> dict[str, Any]:
+        """What a run's page marks of it (:mod:`thymio_bt.viz.page`): ``time``, ``tick``, ``reason``."""
+        return {"time": self.time, "tick": self.tick, "reason": self.reason}
+
     def to_json(self) -> dict[str, Any]:
         """The ``divergence`` object of ``compare --json``: ``time``, ``tick``, ``reason``, ``a``, ``b``."""
         return {
