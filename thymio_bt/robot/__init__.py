@@ -29,10 +29,6 @@ from thymio_bt.robot.interface import (
     new_pose,
     wrap_angle,
 )
-from thymio_bt.robot.model import COURSE
-
-#: a backend that does not say which robot it drives (sets no ``model``) drives the course's
-Robot.model = COURSE
 
 __all__ = [
     "ROBOT_ENTITY",

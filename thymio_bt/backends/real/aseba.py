@@ -58,8 +58,7 @@ from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.interface import RobotLost
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import AsebaOptions
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import AsebaOptions, MissionWorld
 
 #: A robot silent for this long (s) is lost; thymiodirect alone would wait 3 s and then say nothing.
 LOST_AFTER = 0.8
@@ -470,7 +469,7 @@ def _finish(loop: asyncio.AbstractEventLoop) -> None:
     loop.close()
 
 
-def create_aseba(mission: Mission, seed: int, options: AsebaOptions) -> ThymioRobot:
+def create_aseba(mission: MissionWorld, seed: int, options: AsebaOptions) -> ThymioRobot:
     """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model (``real``
     unless it names another than the course's)."""
     from thymio_bt.backends import robot_for

@@ -57,8 +57,7 @@ from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose,
 from thymio_bt.robot.model import REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import TdmOptions
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import MissionWorld, TdmOptions
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
 #: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.
@@ -433,7 +432,7 @@ class ThymioRobot(Backend):
         return None
 
 
-def create_tdm(mission: Mission, seed: int, options: TdmOptions) -> ThymioRobot:
+def create_tdm(mission: MissionWorld, seed: int, options: TdmOptions) -> ThymioRobot:
     """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's
     robot model (``real`` unless it names another than the course's)."""
     from thymio_bt.backends import robot_for

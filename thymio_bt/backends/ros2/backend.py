@@ -56,8 +56,7 @@ from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import ContactTracker
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import Ros2Options
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import MissionWorld, Ros2Options
 
 
 #: how long (wall s) to wait for a first message: Fast DDS's discovery took up to 3.3 s here (its
@@ -428,7 +427,7 @@ class Ros2Robot(EntitySteps):
             )
 
 
-def create_ros2(mission: Mission, seed: int, options: Ros2Options) -> Ros2Robot:
+def create_ros2(mission: MissionWorld, seed: int, options: Ros2Options) -> Ros2Robot:
     """The ``ros2`` backend kind: the mission's robot behind the topic map of ``options.topics``."""
     from thymio_bt.backends.ros2.topics import COURSE_TOPICS, load_topics
 
