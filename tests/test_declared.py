@@ -147,5 +147,21 @@ def test_built_in_leaves_declare_their_way_ahead_facts():
     assert GoToPose.drives_forward(None) == math.inf and TurnAngle.drives_forward(None) == 0
 
 
+def test_no_class_of_the_package_is_a_bare_node():
+    """``Node`` meant an Aseba device, a node class and an rclpy node: the devices are ``AsebaDevice``s
+    (``TdmDevice``, ``AsebaNode``), rclpy's is a ``SpunRosNode``'s ``ros_node``."""
+    from thymio_bt.backends.real import AsebaDevice, TdmDevice
+    from thymio_bt.backends.real.aseba import AsebaNode
+
+    assert issubclass(TdmDevice, AsebaDevice) and issubclass(AsebaNode, AsebaDevice)
+    classes = {
+        node.name: path
+        for path, text in SOURCES.items()
+        for node in ast.walk(ast.parse(text))
+        if isinstance(node, ast.ClassDef)
+    }
+    assert "Node" not in classes and "SpunNode" not in classes and classes["SpunRosNode"] == "backends/ros2/node.py"
+
+
 def _required(motion: type[RobotBehaviour]) -> dict[str, float]:
     return {"distance": 0.1} if motion is MoveDistance else {"angle": 1.0} if motion is TurnAngle else {}

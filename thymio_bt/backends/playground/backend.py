@@ -91,7 +91,7 @@ class PlaygroundRobot(ThymioRobot):
         self._contacts.update(self, self._truth())  # RobotLost when the Playground is gone: the run ends there
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
-        self.node.set_motors(0, 0)
+        self.device.set_motors(0, 0)
         x, y, yaw = self.model.axle_of(pose)
         self.enki.place(*self.world.to_enki(x, y), yaw)
         self._sleep(SETTLE)  # the robot's readings are from before the teleport until then

@@ -1,6 +1,6 @@
 """A Thymio over its own protocol (Aseba): a real robot on USB serial, or a simulated one on TCP.
 
-:class:`AsebaNode` implements the backend's :class:`~thymio_bt.backends.real.thymio.Node` with
+:class:`AsebaNode` implements the backend's :class:`~thymio_bt.backends.real.thymio.AsebaDevice` with
 thymiodirect's :class:`Connection` (optional extra ``thymio-bt[aseba]``), avoiding the traps
 measured with thymiodirect 0.1.2 on the Aseba Playground 1.6.99:
 
@@ -51,7 +51,7 @@ from thymio_bt.backends.real.thymio import (
     PROX_VARIABLE,
     SPEED_VARIABLES,
     TARGET_VARIABLES,
-    Node,
+    AsebaDevice,
     ThymioRobot,
 )
 from thymio_bt.errors import Problem, UserError, optional_module
@@ -282,7 +282,7 @@ def _only_serial_port(Connection: Any) -> str:
     return str(ports[0])
 
 
-class AsebaNode(Node):
+class AsebaNode(AsebaDevice):
     """One Thymio on an Aseba connection (see the module docstring)."""
 
     def __init__(
