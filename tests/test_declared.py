@@ -163,5 +163,18 @@ def test_no_class_of_the_package_is_a_bare_node():
     assert "Node" not in classes and "SpunNode" not in classes and classes["SpunRosNode"] == "backends/ros2/node.py"
 
 
+def test_no_public_name_list_is_a_copy_of_another():
+    """A package that re-exports a module's names takes its ``__all__`` (``robot`` once copied the
+    interface's, name for name)."""
+    lists: dict[tuple[str, ...], list[str]] = {}
+    for path, text in SOURCES.items():
+        for node in ast.parse(text).body:
+            named = isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets)
+            value = node.value if isinstance(node, ast.Assign) else None
+            if named and isinstance(value, ast.List) and all(isinstance(e, ast.Constant) for e in value.elts):
+                lists.setdefault(tuple(sorted(e.value for e in value.elts)), []).append(path)
+    assert [paths for paths in lists.values() if len(paths) > 1] == []
+
+
 def _required(motion: type[RobotBehaviour]) -> dict[str, float]:
     return {"distance": 0.1} if motion is MoveDistance else {"angle": 1.0} if motion is TurnAngle else {}
