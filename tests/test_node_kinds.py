@@ -174,6 +174,8 @@ def test_lint_reads_the_way_ahead_facts_a_plugin_s_leaves_declare(tmp_path):
     assert finding.rule == "checked-once"
     assert finding.message.startswith("'Bumper' (inverted: nothing within 0.07 m ahead) is checked once, then 'Crawl'")
     assert "drives with no bound" in finding.message
+    xml = mission_xml(mission, tmp_path / "leaves.xml")
+    assert '<Condition ID="Bumper">' in xml and '<Action ID="Crawl"' in xml  # Groot2's palette reads it too
 
 
 def test_lint_knows_a_new_decorator_cannot_stop_an_endless_loop(tmp_path):
