@@ -10,7 +10,7 @@ import _require
 import pytest
 
 from thymio_bt.backends import backend_kind, robot_for
-from thymio_bt.backends.real import Node, ThymioRobot
+from thymio_bt.backends.real import AsebaDevice, ThymioRobot
 from thymio_bt.backends.real.aseba import AsebaNode
 from thymio_bt.mission import load_mission
 from thymio_bt.robot.interface import Pose, RequestState
@@ -19,7 +19,7 @@ from thymio_bt.robot.model import ENKI, REAL
 ROOT = Path(__file__).resolve().parents[1]
 
 
-class StillNode(Node):
+class StillNode(AsebaDevice):
     """A robot standing still, 5 cm from a wall by Webots' table."""
 
     def __init__(self):

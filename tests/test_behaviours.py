@@ -5,7 +5,7 @@ import math
 import pytest
 
 from thymio_bt.maze.generate import perfect_maze
-from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 from thymio_bt.robot.model import COURSE
 from thymio_bt.testing import run_tree, world
 
@@ -285,15 +285,7 @@ def test_stop_and_events_carry_pose_and_proximity():
     result = run_tree({"sequence": [{"MoveDistance": {"distance": 0.1}}, {"Stop": {}}]}, world("arena"), seconds=5)
     end = ends(result, "Stop")[0]
     assert end["status"] == "SUCCESS" and set(end["pose"]) == {"x", "y", "yaw"}
-    assert set(end["proximity"]) == {
-        "front_left",
-        "front_center_left",
-        "front_center",
-        "front_center_right",
-        "front_right",
-        "rear_left",
-        "rear_right",
-    }
+    assert set(end["proximity"]) == set(SENSOR_NAMES) and len(SENSOR_NAMES) == 7  # every sensor's reading
     starts = [e for e in result.events if e["kind"] == "behaviour_start"]
     assert [e["name"] for e in starts] == ["MoveDistance", "Stop"]
 

@@ -208,3 +208,14 @@ def test_tree_draws_every_shipped_mission(mission):
 def test_options_that_exclude_each_other_are_refused_not_one_quietly_dropped(args):
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 2 and "exclude each other (hint: " in result.output, result.output
+
+
+def test_the_package_hands_out_every_command_s_function():
+    """``thymio_bt.cli``'s names are read from the group's table (``app.COMMANDS``): every command
+    is one of them (``palette`` was missing from a table of its own)."""
+    import thymio_bt.cli as cli
+    from thymio_bt.cli.app import COMMANDS
+
+    handed = {id(getattr(cli, name)) for name in cli.__all__}
+    commands = {name: main.get_command(None, name) for name in COMMANDS}
+    assert [name for name, command in commands.items() if id(command) not in handed] == []

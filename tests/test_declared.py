@@ -7,6 +7,7 @@ reason in :data:`FOREIGN`."""
 from __future__ import annotations
 
 import ast
+import math
 import re
 from pathlib import Path
 
@@ -16,6 +17,7 @@ import thymio_bt
 from thymio_bt.backends.sim import Simulation
 from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
 from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle
+from thymio_bt.plan.registry import default_registry
 from thymio_bt.plan.unrun_plugins import stand_in
 from thymio_bt.robot.calibrate import START, arena, calibrate
 from thymio_bt.robot.interface import Robot
@@ -45,7 +47,6 @@ FOREIGN = {
     ("run.result", "children"): "py_trees' nodes and plugins' duck-typed ones",
     ("run.whatif", "children"): "py_trees' nodes and plugins' duck-typed ones",
     ("logs.entries", "yaml_name"): "a tree also holds py_trees' own nodes, which have no kind name",
-    ("analysis.tree_rules", "yaml_name"): "any class, py_trees' own included",
     ("run.whatif", "yaml_name"): "a tree also holds py_trees' own nodes, which have no kind name",
     ("analysis.node_docs", "__name__"): "typing's annotations",
     ("analysis.node_docs", "UnionType"): "the types module of the running Python",
@@ -109,6 +110,70 @@ def test_node_kinds_declare_what_tools_used_to_probe():
         node.params = params
         assert node.keeps_moving()
     assert not Stop.keeps_moving(Stop.__new__(Stop))
+
+
+def test_the_analyses_name_no_leaf_the_facts_are_on_the_classes():
+    """The lint's rules read what a leaf is and does from its class (``condition``, ``clear_ahead``,
+    ``drives_forward``...), not from tables of names: no string in ``analysis/`` (docstrings aside)
+    names a behaviour of the package."""
+    names = {name for name, _ in default_registry().behaviours()}
+    named = []
+    for path in (PACKAGE / "analysis").glob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        docs = {
+            id(node.body[0].value)
+            for node in ast.walk(tree)
+            if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef)
+            and node.body
+            and isinstance(node.body[0], ast.Expr)
+        }
+        named += [
+            (path.name, node.value)
+            for node in ast.walk(tree)
+            if isinstance(node, ast.Constant) and node.value in names and id(node) not in docs
+        ]
+    assert not named, named
+
+
+def test_built_in_leaves_declare_their_way_ahead_facts():
+    from thymio_bt.behaviours.maze import SideOpen, WallAhead
+    from thymio_bt.behaviours.navigation import GoToPose, ObstacleAhead
+    from thymio_bt.btcpp.runtime.scripted import Script, ScriptCondition
+
+    assert ScriptCondition.condition and WallAhead.condition and not Script.condition
+    assert WallAhead.clear_ahead(WallAhead.Params(distance=0.08)) == 0.08 and SideOpen.clear_ahead(None) is None
+    assert ObstacleAhead.clear_ahead(ObstacleAhead.Params()) == 0.03
+    assert MoveDistance.drives_forward(MoveDistance.Params(distance=0.3)) == 0.3
+    assert GoToPose.drives_forward(None) == math.inf and TurnAngle.drives_forward(None) == 0
+
+
+def test_no_class_of_the_package_is_a_bare_node():
+    """``Node`` meant an Aseba device, a node class and an rclpy node: the devices are ``AsebaDevice``s
+    (``TdmDevice``, ``AsebaNode``), rclpy's is a ``SpunRosNode``'s ``ros_node``."""
+    from thymio_bt.backends.real import AsebaDevice, TdmDevice
+    from thymio_bt.backends.real.aseba import AsebaNode
+
+    assert issubclass(TdmDevice, AsebaDevice) and issubclass(AsebaNode, AsebaDevice)
+    classes = {
+        node.name: path
+        for path, text in SOURCES.items()
+        for node in ast.walk(ast.parse(text))
+        if isinstance(node, ast.ClassDef)
+    }
+    assert "Node" not in classes and "SpunNode" not in classes and classes["SpunRosNode"] == "backends/ros2/node.py"
+
+
+def test_no_public_name_list_is_a_copy_of_another():
+    """A package that re-exports a module's names takes its ``__all__`` (``robot`` once copied the
+    interface's, name for name)."""
+    lists: dict[tuple[str, ...], list[str]] = {}
+    for path, text in SOURCES.items():
+        for node in ast.parse(text).body:
+            named = isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "__all__" for t in node.targets)
+            value = node.value if isinstance(node, ast.Assign) else None
+            if named and isinstance(value, ast.List) and all(isinstance(e, ast.Constant) for e in value.elts):
+                lists.setdefault(tuple(sorted(e.value for e in value.elts)), []).append(path)
+    assert [paths for paths in lists.values() if len(paths) > 1] == []
 
 
 def _required(motion: type[RobotBehaviour]) -> dict[str, float]:

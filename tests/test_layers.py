@@ -1,6 +1,7 @@
 """The layers: docs/architecture.md's rooms import only the rooms below them (every import, those
-inside functions too), no two modules import each other, the mission language and the behaviours
-never load the physics engine, and no command pays at start-up for libraries only some commands need."""
+inside functions and under ``if TYPE_CHECKING:`` too), no two modules import each other, the
+mission language and the behaviours never load the physics engine, and no command pays at start-up
+for libraries only some commands need."""
 
 import ast
 import re
@@ -104,8 +105,9 @@ class Import:
 
 
 def _import_graph(root: Path = ROOT) -> tuple[dict[str, Path], dict[str, list[Import]]]:
-    """thymio_bt's modules under ``root`` and what each imports, anywhere in the module (inside
-    functions too), ``if TYPE_CHECKING:`` blocks aside: they never run."""
+    """thymio_bt's modules under ``root`` and what each imports, anywhere in the module: inside
+    functions, and under ``if TYPE_CHECKING:`` (never run, but a type named from a room above is an
+    edge upward all the same: mypy, the docs and the reader follow it)."""
     files = {
         ".".join(p.relative_to(root).with_suffix("").parts).removesuffix(".__init__"): p
         for p in (root / "thymio_bt").rglob("*.py")
@@ -114,18 +116,10 @@ def _import_graph(root: Path = ROOT) -> tuple[dict[str, Path], dict[str, list[Im
     graph = {}
     for module, path in files.items():
         tree = ast.parse(path.read_text())
-        hidden = {
-            id(n)
-            for node in ast.walk(tree)
-            if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test)
-            for n in ast.walk(node)
-        }
         package = module.split(".") if path.name == "__init__.py" else module.split(".")[:-1]
         where = str(path.relative_to(root))
         imported = []
         for node in ast.walk(tree):
-            if id(node) in hidden:
-                continue
             if isinstance(node, ast.Import):
                 imported += [Import(a.name, where, node.lineno) for a in node.names]
             elif isinstance(node, ast.ImportFrom):
@@ -225,7 +219,7 @@ def _plant(root: Path, files: dict[str, str]) -> None:
 
 def test_an_upward_import_inside_a_function_is_reported_with_its_place(tmp_path: Path):
     """A synthetic package: ``low`` below ``high``; low imports high in a function (reported, at its
-    line), under TYPE_CHECKING (exempt), and high imports low (downward: fine)."""
+    line), and high imports low (downward: fine)."""
     _plant(
         tmp_path,
         {
@@ -233,18 +227,14 @@ def test_an_upward_import_inside_a_function_is_reported_with_its_place(tmp_path:
             "thymio_bt/high/__init__.py": "from thymio_bt.low import a\n",
             "thymio_bt/high/b.py": "X = 1\n",
             "thymio_bt/low/__init__.py": "",
-            "thymio_bt/low/a.py": (
-                "from typing import TYPE_CHECKING\n"
-                "if TYPE_CHECKING:\n    from thymio_bt.high.b import X\n\n"
-                "def f():\n    from thymio_bt.high.b import X\n    return X\n"
-            ),
+            "thymio_bt/low/a.py": "X = 0\n\n\ndef f():\n    from thymio_bt.high.b import X\n    return X\n",
         },
     )
     files, graph = _import_graph(tmp_path)
     found = layer_violations(files, graph, ["thymio_bt.high", "thymio_bt.low", "thymio_bt"])
     assert (
         found[0]
-        == "thymio_bt/low/a.py:6: thymio_bt.low.a imports thymio_bt.high.b (thymio_bt.high is above thymio_bt.low)"
+        == "thymio_bt/low/a.py:5: thymio_bt.low.a imports thymio_bt.high.b (thymio_bt.high is above thymio_bt.low)"
     )
     assert found[1:] == ["a circle between rooms: thymio_bt.high -> thymio_bt.low -> thymio_bt.high"]
     assert layer_violations(files, graph, ["thymio_bt.low", "thymio_bt.high", "thymio_bt"])[:1] == [
@@ -267,6 +257,29 @@ def test_an_upward_import_planted_in_a_copy_of_the_package_is_reported(tmp_path:
         "(thymio_bt.cli is above thymio_bt.geometry)"
     )
     assert found[1].startswith("a circle between rooms: ") and len(found) == 2
+
+
+def test_an_import_for_types_only_is_held_to_the_order_too(tmp_path: Path):
+    """A type named from a room above under ``if TYPE_CHECKING:`` is an edge upward (backends once
+    named the mission's ``Mission`` so), and two modules naming each other's types are a circle
+    (robot's interface, model and profile once were)."""
+    planted = "from typing import TYPE_CHECKING\n\nif TYPE_CHECKING:\n    from thymio_bt.high.b import X\n"
+    _plant(
+        tmp_path,
+        {
+            "thymio_bt/__init__.py": "",
+            "thymio_bt/high/__init__.py": "",
+            "thymio_bt/high/b.py": "from thymio_bt.low.a import Y\n\nX = Y\n",
+            "thymio_bt/low/__init__.py": "",
+            "thymio_bt/low/a.py": planted + "\nY = 1\n",
+        },
+    )
+    files, graph = _import_graph(tmp_path)
+    assert layer_violations(files, graph, ["thymio_bt.high", "thymio_bt.low", "thymio_bt"])[0] == (
+        "thymio_bt/low/a.py:4: thymio_bt.low.a imports thymio_bt.high.b (thymio_bt.high is above thymio_bt.low)"
+    )
+    edges = {m: {i.name for i in deps if i.name in files and i.name != m} for m, deps in graph.items()}
+    assert _cycle(edges) == ["thymio_bt.high.b", "thymio_bt.low.a", "thymio_bt.high.b"]
 
 
 def test_only_the_simulator_imports_pymunk():

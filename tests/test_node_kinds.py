@@ -6,12 +6,14 @@ mission's ``plugins: [module:Class]``); lint's rules, the BT.CPP export and read
 Schema and the terminal tree find them without any change to the package.
 """
 
+import math
+
 import py_trees
 import pytest
 from py_trees.common import Status
 
 from thymio_bt.analysis.schema import mission_schema
-from thymio_bt.analysis.tree_rules import TreeRules
+from thymio_bt.analysis.tree_rules import TreeRules, is_condition
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
 from thymio_bt.behaviours.flow.node import SWAP, ControlNode, F, S
 from thymio_bt.btcpp.export import mission_xml
@@ -73,6 +75,45 @@ class Refuse(RobotBehaviour):
         return Status.FAILURE
 
 
+class BumperParams(BehaviourParams):
+    """How far the plugin's bumper feels."""
+
+    reach: float = 0.05
+
+
+class Bumper(RobotBehaviour):
+    """A plugin's condition that, inverted, says the way ahead is clear to its ``reach``."""
+
+    Params = BumperParams
+    condition = True
+
+    @classmethod
+    def clear_ahead(cls, params):
+        """Inverted, nothing within ``reach``."""
+        return params.reach
+
+    def step(self):
+        """Nothing felt."""
+        return Status.FAILURE
+
+
+class Crawl(RobotBehaviour):
+    """A plugin's action that drives forward for ever without looking."""
+
+    Params = BehaviourParams
+    moves = True
+
+    @classmethod
+    def drives_forward(cls, params):
+        """No bound."""
+        return math.inf
+
+    def step(self):
+        """Forward."""
+        self.robot.drive(0.05, 0.0)
+        return Status.RUNNING
+
+
 def _mission(tmp_path, tree: str):
     """A mission with this module's decorators as plugins, loaded (their code run)."""
     path = tmp_path / "kinds.yaml"
@@ -119,6 +160,22 @@ def test_lint_takes_a_new_inverter_for_one(tmp_path):
     tree = "  sequence:\n    - negate: {WallAhead: {distance: 8cm}}\n    - MoveDistance: {distance: 1m}\n"
     [finding] = TreeRules(_mission(tmp_path, tree)).findings()
     assert finding.rule == "checked-once" and "inverted: nothing within 0.08 m ahead" in finding.message
+
+
+def test_lint_reads_the_way_ahead_facts_a_plugin_s_leaves_declare(tmp_path):
+    """checked-once reads what a condition vouches for and how far an action drives from their
+    classes: a plugin's pair is found as WallAhead and MoveDistance are, its fact read with its values."""
+    path = tmp_path / "leaves.yaml"
+    tree = "{sequence: [{invert: {Bumper: {reach: 0.07}}}, Crawl]}"
+    path.write_text(f"maze: arena\nstart: centre\nplugins: [{__name__}:Bumper, {__name__}:Crawl]\ntree: {tree}\n")
+    mission = load_mission(path, run_plugins=True)
+    assert "Bumper" not in default_registry() and is_condition(mission.registry.get("Bumper"))
+    [finding] = TreeRules(mission).findings()
+    assert finding.rule == "checked-once"
+    assert finding.message.startswith("'Bumper' (inverted: nothing within 0.07 m ahead) is checked once, then 'Crawl'")
+    assert "drives with no bound" in finding.message
+    xml = mission_xml(mission, tmp_path / "leaves.xml")
+    assert '<Condition ID="Bumper">' in xml and '<Action ID="Crawl"' in xml  # Groot2's palette reads it too
 
 
 def test_lint_knows_a_new_decorator_cannot_stop_an_endless_loop(tmp_path):

@@ -13,7 +13,7 @@ import _require
 import pytest
 from py_trees.common import Status
 
-from thymio_bt.backends.real import PROX_INDEX, Node, TdmNode, ThymioRobot, import_tdmclient
+from thymio_bt.backends.real import PROX_INDEX, AsebaDevice, TdmDevice, ThymioRobot, import_tdmclient
 from thymio_bt.backends.real.thymio import TdmAddress
 from thymio_bt.behaviours import Context
 from thymio_bt.behaviours.motion import MoveUntilWall
@@ -30,7 +30,7 @@ SENSORS = tuple((s.name, s.x, s.y, s.yaw) for s in COURSE.sensors)
 START = Pose(0.1, 0.1, 0.0)
 
 
-class FakeNode(Node):
+class FakeNode(AsebaDevice):
     """Records motor writes; serves scripted readings, one per read, repeating the last one."""
 
     def __init__(self, prox=None, wheels=None):
@@ -179,10 +179,10 @@ def test_a_speed_scale_stretches_the_units_but_not_the_model():
     robot, node, *_ = make(FakeNode(wheels=[(500, 500)]), model=ENKI)
     scaled = ThymioRobot(FakeNode(wheels=[(500, 500)]), spawn=START, model=ENKI, speed_scale=0.985)
     scaled.drive(0.1, 0.0)
-    assert scaled.node.writes[-1] == (round(0.1 / (0.166 / 500 * 0.985)), 306)
+    assert scaled.device.writes[-1] == (round(0.1 / (0.166 / 500 * 0.985)), 306)
     robot.drive(0.2, 0.0)
     scaled.drive(0.2, 0.0)
-    assert node.writes[-1] == scaled.node.writes[-1] == (500, 500)
+    assert node.writes[-1] == scaled.device.writes[-1] == (500, 500)
     assert scaled.velocity().linear == pytest.approx(0.985 * robot.velocity().linear) == 0.985 * 0.166
     assert scaled.model is ENKI
 
@@ -457,7 +457,7 @@ def test_connect_locks_the_robot_and_waits_for_the_variables(monkeypatch):
     fake = FakeTdm()
     fake.node = fake
     monkeypatch.setitem(sys.modules, "tdmclient", fake.module)
-    node = TdmNode.connect()
+    node = TdmDevice.connect()
     assert node.node is fake
     assert fake.waited_for == {
         "prox.horizontal",
@@ -479,14 +479,14 @@ def test_connect_locks_the_robot_and_waits_for_the_variables(monkeypatch):
 def test_connect_failures_are_user_errors_with_hints(monkeypatch, fake, message):
     monkeypatch.setitem(sys.modules, "tdmclient", fake.module)
     with pytest.raises(UserError) as error:
-        TdmNode.connect()
+        TdmDevice.connect()
     assert message in str(error.value) and "hint:" in str(error.value)
 
 
 def test_connect_names_the_address_and_robot_it_was_given(monkeypatch):
     monkeypatch.setitem(sys.modules, "tdmclient", FakeTdm(refuse=True).module)
     with pytest.raises(UserError, match="at 10.0.0.2:9000"):
-        TdmNode.connect(TdmAddress("10.0.0.2", 9000))
+        TdmDevice.connect(TdmAddress("10.0.0.2", 9000))
     monkeypatch.setitem(sys.modules, "tdmclient", FakeTdm(node=None).module)
     with pytest.raises(UserError, match="no Thymio named 'bob' appeared within 2 s"):
         ThymioRobot.connect(TdmAddress(robot_name="bob", timeout=2.0))
@@ -544,7 +544,7 @@ def test_tdm_node_on_tdmclients_cache_node():
             "motor.right.target": [0],
         },
     )
-    node = TdmNode(client, cache)
+    node = TdmDevice(client, cache)
     robot = ThymioRobot(node, spawn=START, clock=FakeClock(), sleep=lambda s: None)
     assert sent_variables(tdmclient, client.packets[-1]) == {"motor.left.target": [0], "motor.right.target": [0]}
     robot.drive(0.1, 1.0)

@@ -50,6 +50,7 @@ from thymio_bt.maze import Maze, maze_from_grid
 from thymio_bt.run.runner import Run, RunResult
 
 if TYPE_CHECKING:
+    from thymio_bt.logs.entries import Recording
     from thymio_bt.plan.registry import Registry
 
 #: a plugin as :func:`run_tree` takes it: a ``.py`` path, ``"package.module:Class"``, or the class
@@ -255,6 +256,21 @@ def run_mission_file(
     return Run(mission, seed, substitutions=substitute, node_stats=True).run()
 
 
+def recorded(mission: str | Path = "square", log_path: str | Path | None = None) -> Recording:
+    """A mission run and recorded tick by tick (and logged to ``log_path``, its suffix the format):
+    what plots, animations and log readers are shown and tested with.
+
+    >>> recording = recorded("square")
+    >>> len(recording.samples), recording.end["status"]
+    (228, <RunStatus.SUCCESS: 'SUCCESS'>)
+    """
+    from thymio_bt.logs.recording import Recorder
+    from thymio_bt.mission import load_mission
+
+    recorder = Recorder(log_path=log_path)
+    return recorder.finish(Run(load_mission(mission)).run(on_tick=recorder))
+
+
 def clear_blackboard() -> Iterator[None]:
     """A fixture body: clear py_trees' global blackboard before and after a test."""
     py_trees.blackboard.Blackboard.clear()
@@ -262,4 +278,4 @@ def clear_blackboard() -> Iterator[None]:
     py_trees.blackboard.Blackboard.clear()
 
 
-__all__ = ["PRESETS", "Plugin", "clear_blackboard", "mission_text", "run_mission_file", "run_tree", "world"]
+__all__ = ["PRESETS", "Plugin", "clear_blackboard", "mission_text", "recorded", "run_mission_file", "run_tree", "world"]

@@ -25,22 +25,9 @@ from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from thymio_bt.behaviours.base import ConditionBehaviour, RobotBehaviour, UnrunPlugin
+from thymio_bt.behaviours.base import RobotBehaviour, UnrunPlugin
 from thymio_bt.behaviours.flow.node import BOTH, SWAP, ControlNode, F, S
 from thymio_bt.plan.model import Mission, NodePlan
-
-#: conditions that, inverted, say the way ahead is clear, with the distance (m) they vouch for
-CLEAR_AHEAD = {
-    "WallAhead": lambda params: params.distance,
-    "ObstacleAhead": lambda params: max(params.thresholds),
-}
-#: long actions that drive forward without looking ahead themselves, with how far (m; inf: no bound)
-FORWARD_DRIVES = {
-    "MoveDistance": lambda params: params.distance,
-    "MoveCells": lambda params: params.distance,
-    "GoToPose": lambda params: math.inf,
-    "FollowWaypoints": lambda params: math.inf,
-}
 
 
 class _Unknown(ControlNode):
@@ -62,10 +49,9 @@ class Finding:
 
 
 def is_condition(cls: Any) -> bool:
-    """Whether a node class is a condition: it answers at once, true (SUCCESS) or false (FAILURE)."""
-    return isinstance(cls, type) and (
-        issubclass(cls, ConditionBehaviour) or getattr(cls, "yaml_name", "") == "bt_script_condition"
-    )
+    """Whether a node class is a condition: it answers at once, true (SUCCESS) or false (FAILURE), as
+    its class declares (:attr:`RobotBehaviour.condition`)."""
+    return isinstance(cls, type) and issubclass(cls, RobotBehaviour) and cls.condition
 
 
 def condition_names(registry: Any) -> set[str]:
@@ -313,22 +299,27 @@ class TreeRules:
 
     def _clearance(self, node: NodePlan) -> tuple[NodePlan, float] | None:
         """The condition under ``node`` that says the way ahead is clear (an odd number of inverters
-        over a :data:`CLEAR_AHEAD` condition), with the distance it vouches for; None otherwise."""
+        over a condition whose class declares :meth:`~RobotBehaviour.clear_ahead`), with the distance
+        it vouches for; None otherwise."""
         inverted = False
         while self.kind(node).outcome == SWAP and node.children:
             inverted, node = not inverted, node.children[0]
-        how_far = CLEAR_AHEAD.get(node.behaviour or "")
-        if how_far is None or not inverted or not self._known(node):
+        cls = self._class(node)
+        if not inverted or not self._known(node) or self.nature(node) != "condition":
             return None
-        return node, how_far(node.params)
+        how_far = cls.clear_ahead(node.params)
+        return None if how_far is None else (node, how_far)
 
     def _first_drive(self, node: NodePlan) -> tuple[NodePlan, float] | None:
         """The forward drive ``node`` starts with, and how far it goes (inf: no bound); None when it
         starts with something else, or under a node that may watch it (reactive, guard, parallel)."""
         kind, kids = node.kind, node.children
         if kind == "behaviour":
-            how_far = FORWARD_DRIVES.get(node.behaviour or "")
-            far = how_far(node.params) if how_far is not None and self._known(node) else 0.0
+            far = (
+                self._class(node).drives_forward(node.params)
+                if self.nature(node) == "long" and self._known(node)
+                else 0.0
+            )
             return (node, far) if far > 0 else None
         if self._family(node, "sequence", "selector", reactive=False):
             first = next((k for k in kids if self.may_run(k)), None)

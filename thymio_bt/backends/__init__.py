@@ -23,18 +23,57 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from importlib import import_module
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
 
 if TYPE_CHECKING:
-    from thymio_bt.mission import Mission
-    from thymio_bt.robot.interface import Backend
+    from pathlib import Path
+
+    from thymio_bt.maze import Maze
+    from thymio_bt.robot.interface import Backend, Pose
     from thymio_bt.robot.model import RobotModel
+    from thymio_bt.robot.noise import NoiseConfig
 
 ENTRY_POINT_GROUP = "thymio_bt.backends"
+
+
+class MissionWorld(Protocol):
+    """What a backend is made from: the parts of a mission it reads. A
+    :class:`~thymio_bt.plan.model.Mission` is one; the backends, below the mission in the layers,
+    name only these."""
+
+    @property
+    def maze(self) -> Maze:
+        """The maze the robot is in."""
+        ...
+
+    @property
+    def maze_file(self) -> Path | None:
+        """The file the maze was read from (None: a maze given as data)."""
+        ...
+
+    @property
+    def start(self) -> Pose:
+        """Where the robot starts (base_link, world frame)."""
+        ...
+
+    @property
+    def robot(self) -> str:
+        """The robot model's name, or a profile file."""
+        ...
+
+    @property
+    def sensor_model(self) -> str:
+        """How a simulation turns a range into a reading."""
+        ...
+
+    @property
+    def noise(self) -> NoiseConfig:
+        """The simulation's noise settings."""
+        ...
 
 
 class BackendOptions(BaseModel):
@@ -49,7 +88,7 @@ class BackendKind:
 
     name: str
     summary: str
-    factory: str | Callable[[Mission, int, Any], Backend]
+    factory: str | Callable[[MissionWorld, int, Any], Backend]
     options: type[BackendOptions] = BackendOptions
     #: whether runs on it take real time (a real robot, a real-time simulator)
     realtime: bool = False
@@ -74,7 +113,7 @@ class BackendKind:
                 problems = [replace(p, hint=f"backend '{self.name}' takes no options") for p in problems]
             raise UserError(problems) from None
 
-    def create(self, mission: Mission, seed: int, options: Mapping[str, Any] | None = None) -> Backend:
+    def create(self, mission: MissionWorld, seed: int, options: Mapping[str, Any] | None = None) -> Backend:
         """A backend of this kind for ``mission``, with ``options`` validated first."""
         parsed = self.parse_options(options or {})
         factory = self.factory
@@ -247,7 +286,7 @@ def backend_kind(name: str) -> BackendKind:
     return kinds[name]
 
 
-def robot_for(mission: Mission, backend: str, say: Callable[[str], None] | None = None) -> RobotModel:
+def robot_for(mission: MissionWorld, backend: str, say: Callable[[str], None] | None = None) -> RobotModel:
     """The robot model backend ``backend`` drives ``mission`` with: the mission's, unless that is the
     course's (the default, which is the simulator's Gazebo robot and describes no other backend's):
     then the backend's own (:attr:`BackendKind.robot`), and ``say`` (standard error by default) tells

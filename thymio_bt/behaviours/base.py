@@ -172,6 +172,8 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     #: in that tick although it is an action (``Stop``, ``PlanMove``), not a condition
     always: ClassVar[str] = ""
     instant: ClassVar[bool] = False
+    #: Whether it is a condition: it answers at once, SUCCESS (true) or FAILURE (false)
+    condition: ClassVar[bool] = False
 
     #: behaviours made in this process: the pytest plugin clears the blackboard after tests that made some
     created = 0
@@ -207,6 +209,18 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
         self._collisions_at_start = 0
         self._path: str | None = None
         self.prepare()
+
+    @classmethod
+    def clear_ahead(cls, params: Any) -> float | None:
+        """For the lint's ``checked-once``: how far (m) the way ahead is clear when this condition,
+        with ``params``, is false (``invert: WallAhead``); None (the default): it says nothing of it."""
+        return None
+
+    @classmethod
+    def drives_forward(cls, params: Any) -> float:
+        """For the lint's ``checked-once``: how far (m; ``math.inf``: no bound) this action, with
+        ``params``, drives forward without looking ahead itself; 0 (the default): it does not."""
+        return 0.0
 
     # ---------------------------------------------------------------- hooks
     def prepare(self) -> None:
@@ -417,6 +431,7 @@ class ConditionBehaviour(RobotBehaviour):
     emits_events = False
     fails_on_collision = False
     bt_sync = True  # BT.CPP ticks a condition every time
+    condition = True
 
 
 class UnrunPlugin(RobotBehaviour):

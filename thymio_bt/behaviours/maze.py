@@ -81,6 +81,11 @@ class WallAhead(ConditionBehaviour):
 
     Params = WallAheadParams
 
+    @classmethod
+    def clear_ahead(cls, params: WallAheadParams) -> float:
+        """Inverted, it says nothing is within ``distance`` ahead."""
+        return params.distance
+
     def step(self) -> Status:
         """Compare the sensor's reading with ``distance``."""
         scan = self.robot.proximity()

@@ -266,6 +266,11 @@ class MoveDistance(Motion):
     Params = MoveDistanceParams
     moves = True
 
+    @classmethod
+    def drives_forward(cls, params: MoveDistanceParams) -> float:
+        """It drives ``distance`` blind (backwards: not forward)."""
+        return params.distance
+
     def start(self) -> None:
         """Measure from here, along the current heading."""
         self.origin = current_pose(self.robot)

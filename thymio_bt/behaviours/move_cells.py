@@ -76,6 +76,11 @@ class MoveCells(Sensing):
     Params = MoveCellsParams
     moves = True
 
+    @classmethod
+    def drives_forward(cls, params: MoveCellsParams) -> float:
+        """It drives ``distance`` along its grid line: its sensors correct its pose, they do not stop it."""
+        return params.distance
+
     def start(self) -> None:
         """Take the goal on the grid line the robot faces, and forget what the last move saw."""
         self.side = self.facing()

@@ -120,6 +120,11 @@ class GoToPose(RobotBehaviour):
     Params = GoToPoseParams
     moves = True
 
+    @classmethod
+    def drives_forward(cls, params: GoToPoseParams) -> float:
+        """It drives to its goal, as far as that is, without looking ahead."""
+        return math.inf
+
     def start(self) -> None:
         """A fresh controller (its PIDs start from zero)."""
         self.nav = _Navigator(self.params)
@@ -159,6 +164,11 @@ class FollowWaypoints(RobotBehaviour):
 
     Params = FollowWaypointsParams
     moves = True
+
+    @classmethod
+    def drives_forward(cls, params: FollowWaypointsParams) -> float:
+        """It drives to its goal, as far as that is, without looking ahead."""
+        return math.inf
 
     def prepare(self) -> None:
         """The progress keys."""
@@ -254,6 +264,11 @@ class ObstacleAhead(ConditionBehaviour):
     """
 
     Params = ObstacleAheadParams
+
+    @classmethod
+    def clear_ahead(cls, params: ObstacleAheadParams) -> float:
+        """Inverted, it says nothing is within its largest threshold ahead."""
+        return max(params.thresholds)
 
     def step(self) -> Status:
         """Compare the front readings with the thresholds; the feedback says the nearest one."""

@@ -11,12 +11,9 @@ Example:
 
 >>> import tempfile
 >>> from pathlib import Path
->>> from thymio_bt.logs.recording import Recorder
->>> from thymio_bt.mission import load_mission
->>> from thymio_bt.run.runner import Run
+>>> from thymio_bt.testing import recorded
 >>> with tempfile.TemporaryDirectory() as folder:
-...     recorder = Recorder(log_path=f"{folder}/run.btlog")
-...     _ = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+...     _ = recorded("square", log_path=f"{folder}/run.btlog")
 ...     data = Path(f"{folder}/run.btlog").read_bytes()
 >>> data[: len(MAGIC)], data[len(MAGIC)]
 (b'BTCPP4-FileLogger2', 1)
@@ -110,12 +107,9 @@ def read_btlog(path: Path) -> Recording:
     is read up to its last whole record (``header["damaged_at"]``: the byte where reading stopped).
 
     >>> import tempfile
-    >>> from thymio_bt.logs.recording import Recorder
-    >>> from thymio_bt.mission import load_mission
-    >>> from thymio_bt.run.runner import Run
+    >>> from thymio_bt.testing import recorded
     >>> with tempfile.TemporaryDirectory() as folder:
-    ...     recorder = Recorder(log_path=f"{folder}/run.btlog")
-    ...     _ = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+    ...     _ = recorded("square", log_path=f"{folder}/run.btlog")
     ...     recording = read_btlog(Path(f"{folder}/run.btlog"))
     >>> first = recording.samples[0]
     >>> first["t"], first["tick"], first["pose"], first["nodes"]["four sides/side/MoveDistance"]

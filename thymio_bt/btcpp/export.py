@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.behaviours import ControlNode
-from thymio_bt.behaviours.base import ConditionBehaviour, UnrunPlugin
+from thymio_bt.behaviours.base import RobotBehaviour, UnrunPlugin
 from thymio_bt.btcpp.runtime.control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.inputs.fields import unit_of
 from thymio_bt.logs.entries import TreeNode
@@ -290,7 +290,7 @@ def _category(cls: Any) -> str:
         return "Control"
     if isinstance(cls, type) and issubclass(cls, ControlNode):
         return "Decorator"
-    if isinstance(cls, type) and issubclass(cls, ConditionBehaviour):
+    if isinstance(cls, type) and issubclass(cls, RobotBehaviour) and cls.condition:
         return "Condition"
     return "Action"
 

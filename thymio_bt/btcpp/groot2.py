@@ -47,7 +47,7 @@ from thymio_bt.logs.entries import jsonable
 if TYPE_CHECKING:
     from py_trees.behaviour import Behaviour
 
-    from thymio_bt.run.runner import Run
+    from thymio_bt.logs.recording import WatchedRun
 
 PROTOCOL = 2
 DEFAULT_PORT = 1667
@@ -92,7 +92,7 @@ class Groot2Server:
         self.running = True
         self.thread = threading.Thread(target=self._serve, name="groot2", daemon=True)
 
-    def __call__(self, run: Run) -> None:
+    def __call__(self, run: WatchedRun) -> None:
         """Take the tree's statuses and the blackboard after a tick (the first call maps the tree's
         nodes to their BT.CPP uids and starts serving)."""
         if not self.uids:

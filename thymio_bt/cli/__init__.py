@@ -26,32 +26,15 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from thymio_bt.cli.app import POSITIVE, main
+from thymio_bt.cli.app import COMMANDS, POSITIVE, main
 
-#: the module of each command function (and constant) this package hands out, read when first asked for
-_FROM: dict[str, str] = {
-    "PICTURE_SUFFIXES": "pictures",
-    "backends_command": "inspection",
-    "behaviours": "inspection",
-    "calibrate_command": "calibrating",
-    "check": "checking",
-    "compare": "comparing",
-    "export": "logs",
-    "grade": "grading",
-    "lint": "linting",
-    "maze": "mazes",
-    "maze_export": "mazes",
-    "maze_import": "mazes",
-    "replay": "logs",
-    "run": "running",
-    "schema": "inspection",
-    "serve": "serving",
-    "serve_ros2": "serving",
-    "sweep": "sweeps",
-    "tree": "inspection",
-    "validate": "inspection",
-    "view": "viewing",
-}
+#: the command functions not named as their command (``thymio-bt backends`` is ``backends_command``)
+_RENAMED = {"backends": "backends_command", "calibrate": "calibrate_command"}
+#: what else the package hands out: sub-commands and a constant, with their modules
+_ALSO = {"PICTURE_SUFFIXES": "pictures", "maze_export": "mazes", "maze_import": "mazes", "serve_ros2": "serving"}
+#: the module of each name the package hands out, read when first asked for: every command's
+#: function, in its module of :data:`~thymio_bt.cli.app.COMMANDS`, and the names above
+_FROM: dict[str, str] = {_RENAMED.get(command, command): module for command, module in COMMANDS.items()} | _ALSO
 
 
 def __getattr__(name: str) -> Any:
@@ -61,31 +44,8 @@ def __getattr__(name: str) -> Any:
     return getattr(importlib.import_module(f"{__name__}.{_FROM[name]}"), name)
 
 
-__all__ = [
-    "PICTURE_SUFFIXES",
-    "POSITIVE",
-    "backends_command",
-    "behaviours",
-    "calibrate_command",
-    "check",
-    "compare",
-    "export",
-    "grade",
-    "lint",
-    "main",
-    "maze",
-    "maze_export",
-    "maze_import",
-    "replay",
-    "run",
-    "schema",
-    "serve",
-    "serve_ros2",
-    "sweep",
-    "tree",
-    "validate",
-    "view",
-]
+__all__ = ["POSITIVE", "main"]
+__all__ += sorted(_FROM)  # the names of the table above
 
 if __name__ == "__main__":
     main()

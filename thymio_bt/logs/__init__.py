@@ -7,7 +7,7 @@ BT.CPP's Groot2 log (``.btlog``: node statuses only, no robot). Plugins add form
 ``thymio_bt.log_formats`` entry-point group, whose entries point to a :class:`LogFormat`.
 
 A :class:`LogWriter` gets ``header()``, then ``tick()`` per tick, ``end()`` and ``close()``;
-:func:`read_log` gives a :class:`~thymio_bt.logs.recording.Recording` back, for plots and replays
+:func:`read_log` gives a :class:`~thymio_bt.logs.entries.Recording` back, for plots and replays
 (:mod:`thymio_bt.logs.recording` writes and reads one).
 
 Example:
@@ -31,8 +31,7 @@ from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import check_regular
 
 if TYPE_CHECKING:
-    from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
-    from thymio_bt.logs.recording import Recording
+    from thymio_bt.logs.entries import LogEnd, LogHeader, Recording, TickRecord
 
 ENTRY_POINT_GROUP = "thymio_bt.log_formats"
 

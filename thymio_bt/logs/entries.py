@@ -19,11 +19,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from typing import Any, TypedDict
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, TypedDict
 
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
+
+if TYPE_CHECKING:
+    from thymio_bt.maze import Maze
 
 #: a node status in one letter, as logs store it
 STATUS_LETTER = {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}
@@ -90,6 +94,24 @@ class LogEnd(TypedDict, total=False):
     final_pose: dict[str, float] | None
     collisions: int
     events: list[dict[str, Any]]
+
+
+@dataclass
+class Recording:
+    """What a run (or a log) holds for plots and replays: ``header`` is the log header (mission,
+    rates, the tree), ``samples`` one :class:`~thymio_bt.logs.entries.TickRecord` per tick."""
+
+    maze: Maze
+    mission: str = ""
+    samples: list[dict[str, Any]] = field(default_factory=list)
+    events: list[dict[str, Any]] = field(default_factory=list)
+    end: dict[str, Any] = field(default_factory=dict)
+    header: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def final_pose(self) -> dict[str, float] | None:
+        """base_link's pose when the run ended (None: no robot then, or a log without an end)."""
+        return self.end.get("final_pose")
 
 
 def walk(root: Behaviour) -> Iterator[Behaviour]:

@@ -25,14 +25,14 @@ Example (a log written, then read back as it was recorded):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import py_trees
 
 from thymio_bt.behaviours.base import node_path
 from thymio_bt.errors import UserError
+from thymio_bt.logs.entries import Recording
 from thymio_bt.maze import Maze
 
 if TYPE_CHECKING:
@@ -40,26 +40,98 @@ if TYPE_CHECKING:
 
     from thymio_bt.logs import LogWriter
     from thymio_bt.logs.entries import LogEnd, TickRecord
+    from thymio_bt.plan.model import Mission
+    from thymio_bt.robot.interface import Backend
     from thymio_bt.robot.model import RobotModel
-    from thymio_bt.run.runner import Run, RunResult
 
 
-@dataclass
-class Recording:
-    """What a run (or a log) holds for plots and replays: ``header`` is the log header (mission,
-    rates, the tree), ``samples`` one :class:`~thymio_bt.logs.entries.TickRecord` per tick."""
-
-    maze: Maze
-    mission: str = ""
-    samples: list[dict[str, Any]] = field(default_factory=list)
-    events: list[dict[str, Any]] = field(default_factory=list)
-    end: dict[str, Any] = field(default_factory=dict)
-    header: dict[str, Any] = field(default_factory=dict)
+class WatchedRun(Protocol):
+    """What a tick hook (the :class:`Recorder`, Groot2's monitor) reads of the run it watches. A
+    :class:`~thymio_bt.run.runner.Run` is one; the hooks, below the run in the layers, name only these."""
 
     @property
-    def final_pose(self) -> dict[str, float] | None:
-        """base_link's pose when the run ended (None: no robot then, or a log without an end)."""
-        return self.end.get("final_pose")
+    def mission(self) -> Mission:
+        """The mission run."""
+        ...
+
+    @property
+    def seed(self) -> int:
+        """The run's seed."""
+        ...
+
+    @property
+    def backend(self) -> Backend:
+        """The robot it drives."""
+        ...
+
+    @property
+    def ticks(self) -> int:
+        """The ticks done."""
+        ...
+
+    @property
+    def root(self) -> Behaviour:
+        """The tree ticked."""
+        ...
+
+    def shown_tree(self) -> Behaviour:
+        """The tree as the mission wrote it (the tree ticked, or the one it wraps)."""
+        ...
+
+
+class EndedRun(Protocol):
+    """What :meth:`Recorder.finish` reads of a run's result. A :class:`~thymio_bt.run.result.RunResult`
+    is one."""
+
+    @property
+    def mission(self) -> str:
+        """The mission's name."""
+        ...
+
+    @property
+    def status(self) -> str:
+        """How the run ended (SUCCESS, FAILURE, ...)."""
+        ...
+
+    @property
+    def reason(self) -> str | None:
+        """Why, in words."""
+        ...
+
+    @property
+    def code(self) -> str | None:
+        """Why, as a failure code."""
+        ...
+
+    @property
+    def failed_path(self) -> str | None:
+        """The node that failed."""
+        ...
+
+    @property
+    def sim_time(self) -> float:
+        """Its simulated seconds."""
+        ...
+
+    @property
+    def collisions(self) -> int:
+        """Its collisions."""
+        ...
+
+    @property
+    def events(self) -> list[dict[str, Any]]:
+        """Its events."""
+        ...
+
+    @property
+    def maze_map(self) -> dict[str, Any] | None:
+        """The map its mapping behaviours learnt, if any."""
+        ...
+
+    @property
+    def final_pose_json(self) -> dict[str, float] | None:
+        """base_link's pose at the end, as a log writes it."""
+        ...
 
 
 class Recorder:
@@ -75,17 +147,17 @@ class Recorder:
         self._path = Path(log_path) if log_path else None
         self._writer: LogWriter | None = None
         self._blackboard: dict[str, Any] = {}
-        self._run: Run | None = None
+        self._run: WatchedRun | None = None
         self._header: dict[str, Any] = {}
 
-    def begin(self, run: Run) -> None:
+    def begin(self, run: WatchedRun) -> None:
         """Open the log and write its header for ``run`` before its first tick, so that a run whose
         first tick never ends (a plugin stuck in it, then Ctrl-C) still leaves a whole log; the
         first tick does it otherwise. Once only."""
         if self._run is None:
             self._open(run)
 
-    def _open(self, run: Run) -> None:
+    def _open(self, run: WatchedRun) -> None:
         from thymio_bt.logs.entries import LogHeader, tree_nodes
 
         self._run = run
@@ -109,7 +181,7 @@ class Recorder:
             self._writer = open_writer(self._path)
             self._writer.header(header)
 
-    def __call__(self, run: Run) -> None:
+    def __call__(self, run: WatchedRun) -> None:
         """Record the tick ``run`` just made (the first call writes the log's header); a log that cannot
         be written any more ends the run with :class:`~thymio_bt.errors.StopRun`."""
         from thymio_bt.logs.entries import STATUS_LETTER, jsonable
@@ -151,7 +223,7 @@ class Recorder:
         if self.keep:
             self.samples.append(dict(record))
 
-    def finish(self, result: RunResult) -> Recording:
+    def finish(self, result: EndedRun) -> Recording:
         """Write the log's end and close it; return the in-memory recording."""
         end: LogEnd = {
             "status": result.status,

@@ -13,40 +13,6 @@ Example::
     ('course', 0.0)
 """
 
-from thymio_bt.robot.interface import (
-    ROBOT_ENTITY,
-    SENSOR_NAMES,
-    Backend,
-    Collision,
-    Entities,
-    Pose,
-    Request,
-    RequestState,
-    Robot,
-    RobotLost,
-    Scan,
-    Twist,
-    new_pose,
-    wrap_angle,
-)
-from thymio_bt.robot.model import COURSE
-
-#: a backend that does not say which robot it drives (sets no ``model``) drives the course's
-Robot.model = COURSE
-
-__all__ = [
-    "ROBOT_ENTITY",
-    "SENSOR_NAMES",
-    "Backend",
-    "Collision",
-    "Entities",
-    "Pose",
-    "Request",
-    "RequestState",
-    "Robot",
-    "RobotLost",
-    "Scan",
-    "Twist",
-    "new_pose",
-    "wrap_angle",
-]
+# the interface's names, as its __all__ declares them (one list, not a copy to keep in step)
+from thymio_bt.robot.interface import *  # noqa: F403
+from thymio_bt.robot.interface import __all__ as __all__

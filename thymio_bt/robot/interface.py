@@ -27,24 +27,10 @@ from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
-from typing import TYPE_CHECKING
 
 from thymio_bt.errors import ThymioBtError
 from thymio_bt.geometry import Pose, new_pose, wrap_angle
-
-if TYPE_CHECKING:
-    from thymio_bt.robot.model import RobotModel
-
-#: The 7 proximity sensors, front (left to right) then rear, as in the course URDF.
-SENSOR_NAMES: tuple[str, ...] = (
-    "front_left",
-    "front_center_left",
-    "front_center",
-    "front_center_right",
-    "front_right",
-    "rear_left",
-    "rear_right",
-)
+from thymio_bt.robot.model import COURSE, SENSOR_NAMES, RobotModel
 
 #: The entity name of the robot, as in the course's spawn service calls.
 ROBOT_ENTITY = "thymio"
@@ -81,9 +67,8 @@ class Robot(ABC):
     """A differential-drive robot with 7 proximity sensors and odometry."""
 
     #: what the robot is (sensor poses, geometry, speed limits): behaviours that depend on where its
-    #: sensors look read it here. A backend that does not set it drives the course's robot: that
-    #: default is set by :mod:`thymio_bt.robot` (the models import this module, not the reverse)
-    model: RobotModel
+    #: sensors look read it here. A backend that does not set it drives the course's robot
+    model: RobotModel = COURSE
     #: seconds from the world a reading shows to the moment a command sent now takes effect
     #: (sensing, transport, motors): behaviours that stop on a reading or an angle lead by it.
     #: 0 for the simulation, whose behaviours see the world of this tick.

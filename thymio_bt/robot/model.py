@@ -24,10 +24,22 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from typing import Literal, TypeGuard
 
-from thymio_bt.robot.interface import SENSOR_NAMES, Pose
+from thymio_bt.geometry import Pose
 from thymio_bt.sensor_tables import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
+
+#: The 7 proximity sensors, front (left to right) then rear, as in the course URDF.
+SENSOR_NAMES: tuple[str, ...] = (
+    "front_left",
+    "front_center_left",
+    "front_center",
+    "front_center_right",
+    "front_right",
+    "rear_left",
+    "rear_right",
+)
 
 #: how a robot's own readings are made (:attr:`RobotModel.sensor_model`)
 SensorModelName = Literal["rays", "raw", "cone"]
@@ -60,7 +72,7 @@ class RobotModel:
     """A Thymio II variant: everything that differs between robots, in metres, seconds and radians.
 
     - ``hull``: the collision outline in base_link, counter-clockwise.
-    - ``sensors``: the seven horizontal proximity sensors in :data:`~thymio_bt.robot.interface.SENSOR_NAMES` order.
+    - ``sensors``: the seven horizontal proximity sensors in :data:`SENSOR_NAMES` order.
     - ``range_min`` / ``range_max``: what a proximity sensor can report, in metres.
     - ``metres_per_unit`` / ``max_units``: Aseba motor units (``motor.left.target``) to wheel speed
       (:meth:`wheel_speed_of`, :meth:`motor_targets`); ``max_wheel_speed`` is ``max_units`` of them.
@@ -162,7 +174,7 @@ class RobotModel:
         return [(pose.x + x * cos - y * sin, pose.y + x * sin + y * cos) for x, y in self.hull]
 
     def sensor(self, name: str) -> SensorPose:
-        """The sensor called ``name`` (a :data:`~thymio_bt.robot.interface.SENSOR_NAMES` entry)."""
+        """The sensor called ``name`` (a :data:`SENSOR_NAMES` entry)."""
         return self.sensors[SENSOR_NAMES.index(name)]
 
 
@@ -224,7 +236,7 @@ COURSE = RobotModel(
 
 
 def _from_axle(*poses: tuple[float, float, float]) -> tuple[SensorPose, ...]:
-    """The seven sensors, given in :data:`~thymio_bt.robot.interface.SENSOR_NAMES` order in Enki's
+    """The seven sensors, given in :data:`SENSOR_NAMES` order in Enki's
     frame (x, y in cm about the wheel axle; yaw), in base_link metres."""
     return tuple(
         SensorPose(name, x_cm / 100 + COURSE.axle_x, y_cm / 100, yaw)
@@ -286,7 +298,6 @@ REAL = replace(
 ROBOTS: dict[str, RobotModel] = {m.name: m for m in (COURSE, ENKI, REAL)}
 #: the furthest any built-in robot's proximity sensors read (m): a sensed length's bound before the robot is known
 WIDEST_RANGE = max(m.range_max for m in ROBOTS.values())
-_MODELS = tuple(ROBOTS.items())  # hashable, for the profile cache
 
 
 def robot_model(name: str) -> RobotModel:
@@ -294,8 +305,17 @@ def robot_model(name: str) -> RobotModel:
     ``thymio-bt calibrate``); ``KeyError`` with the known names otherwise."""
     if name in ROBOTS:
         return ROBOTS[name]
-    from thymio_bt.robot.profile import is_profile_path, read_profile
+    from thymio_bt.robot.profile import is_profile_path
 
     if is_profile_path(name):
-        return read_profile(name, _MODELS)
+        return _profiled(name)
     raise KeyError(f"no robot model named '{name}' (known: {', '.join(ROBOTS)}, or a profile file .yaml)")
+
+
+@lru_cache(maxsize=16)
+def _profiled(path: str) -> RobotModel:
+    """The model the profile file at ``path`` describes: its base with the numbers it measured."""
+    from thymio_bt.robot.profile import read_profile
+
+    base, changes = read_profile(path, ROBOTS)
+    return replace(ROBOTS[base], **changes)

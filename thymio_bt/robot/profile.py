@@ -26,18 +26,14 @@ Example::
 
 from __future__ import annotations
 
-from dataclasses import replace
-from functools import lru_cache
+from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.sensor_tables import CalibrationTable
-
-if TYPE_CHECKING:
-    from thymio_bt.robot.model import RobotModel  # which imports this module when a profile is named
 
 #: the suffixes that make a ``--robot`` value a profile file rather than a model's name
 PROFILE_SUFFIXES = (".yaml", ".yml")
@@ -77,15 +73,27 @@ def is_profile_path(name: str) -> bool:
     return name.lower().endswith(PROFILE_SUFFIXES)
 
 
-@lru_cache(maxsize=16)
-def read_profile(path: str, models: tuple[tuple[str, RobotModel], ...]) -> RobotModel:
-    """The :class:`~thymio_bt.robot.model.RobotModel` a profile file describes, on the base it names
-    among ``models`` ((name, model) pairs); a located :class:`UserError` when the file is missing or
-    wrong. Use :func:`thymio_bt.robot.model.robot_model`, which passes the built-in models."""
+class Base(Protocol):
+    """What a profile reads of the built-in model it starts from (a
+    :class:`~thymio_bt.robot.model.RobotModel` is one; the models import this module, not the reverse)."""
+
+    @property
+    def max_units(self) -> int:
+        """Its wheels' fastest target, in Aseba motor units."""
+        ...
+
+    @property
+    def calibration(self) -> CalibrationTable:
+        """Its sensors' table, whose floor a measured table without one keeps."""
+        ...
+
+
+def read_profile(path: str, named: Mapping[str, Base]) -> tuple[str, dict[str, Any]]:
+    """The base a profile file names among ``named`` (models by name) and the fields it changes of
+    that model; a located :class:`UserError` when the file is missing or wrong. Use
+    :func:`thymio_bt.robot.model.robot_model`, which passes the built-in models and makes the model."""
     from thymio_bt.inputs.validation import problems_from
     from thymio_bt.inputs.yamlio import MarkedDict, load_yaml
-
-    named = dict(models)
 
     data = load_yaml(path, "include")
     if not isinstance(data, dict):
@@ -129,7 +137,7 @@ def read_profile(path: str, models: tuple[tuple[str, RobotModel], ...]) -> Robot
             )
         except ValueError as exc:
             raise UserError(Problem(f"'calibration': {exc}", str(path), *marks.get("calibration", (1, 1)))) from None
-    return replace(base, **changes)
+    return profile.base, changes
 
 
 def profile_text(profile: Profile) -> str:

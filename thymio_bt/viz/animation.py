@@ -11,11 +11,8 @@ Example:
 
 >>> import tempfile
 >>> from PIL import Image
->>> from thymio_bt.logs.recording import Recorder
->>> from thymio_bt.mission import load_mission
->>> from thymio_bt.run.runner import Run
->>> recorder = Recorder()
->>> recording = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+>>> from thymio_bt.testing import recorded
+>>> recording = recorded("square")
 >>> with tempfile.TemporaryDirectory() as folder:
 ...     gif = Image.open(animate(recording, Path(folder) / "run.gif", speedup=8))
 ...     gif.size, gif.n_frames > 10

@@ -9,11 +9,8 @@ plots work headless and a run that asks for none pays nothing.
 Example:
 
 >>> import tempfile
->>> from thymio_bt.logs.recording import Recorder
->>> from thymio_bt.mission import load_mission
->>> from thymio_bt.run.runner import Run
->>> recorder = Recorder()
->>> recording = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
+>>> from thymio_bt.testing import recorded
+>>> recording = recorded("square")
 >>> with tempfile.TemporaryDirectory() as folder:
 ...     path = plot_run(recording, Path(folder) / "run.png")
 ...     path.name, path.read_bytes()[:4]

@@ -30,8 +30,7 @@ from thymio_bt.robot.model import ROBOTS, RobotModel
 from thymio_bt.robot.placement import ContactTracker, placement_problem
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import PlaygroundOptions
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import MissionWorld, PlaygroundOptions
 
 #: the Playground's Thymio covers this fraction of what its motor units say (Enki's 16.6 cm/s at 500):
 #: against its ground truth, 2.9 s straight read 0.983, 2.1 s turning 0.985, thymio-bt calibrate 0.986
@@ -92,7 +91,7 @@ class PlaygroundRobot(ThymioRobot):
         self._contacts.update(self, self._truth())  # RobotLost when the Playground is gone: the run ends there
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
-        self.node.set_motors(0, 0)
+        self.device.set_motors(0, 0)
         x, y, yaw = self.model.axle_of(pose)
         self.enki.place(*self.world.to_enki(x, y), yaw)
         self._sleep(SETTLE)  # the robot's readings are from before the teleport until then
@@ -131,7 +130,7 @@ def _enki_fix() -> Path | None:
     return library
 
 
-def create_playground(mission: Mission, seed: int, options: PlaygroundOptions) -> PlaygroundRobot:
+def create_playground(mission: MissionWorld, seed: int, options: PlaygroundOptions) -> PlaygroundRobot:
     """The ``playground`` backend kind: start a Playground on the mission's maze, connect to its
     Thymio; its model is ``enki`` unless the mission names another than the course's."""
     from thymio_bt.backends import robot_for

@@ -1,6 +1,6 @@
 """A Thymio over its own protocol (Aseba): a real robot on USB serial, or a simulated one on TCP.
 
-:class:`AsebaNode` implements the backend's :class:`~thymio_bt.backends.real.thymio.Node` with
+:class:`AsebaNode` implements the backend's :class:`~thymio_bt.backends.real.thymio.AsebaDevice` with
 thymiodirect's :class:`Connection` (optional extra ``thymio-bt[aseba]``), avoiding the traps
 measured with thymiodirect 0.1.2 on the Aseba Playground 1.6.99:
 
@@ -51,15 +51,14 @@ from thymio_bt.backends.real.thymio import (
     PROX_VARIABLE,
     SPEED_VARIABLES,
     TARGET_VARIABLES,
-    Node,
+    AsebaDevice,
     ThymioRobot,
 )
 from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.interface import RobotLost
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import AsebaOptions
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import AsebaOptions, MissionWorld
 
 #: A robot silent for this long (s) is lost; thymiodirect alone would wait 3 s and then say nothing.
 LOST_AFTER = 0.8
@@ -283,7 +282,7 @@ def _only_serial_port(Connection: Any) -> str:
     return str(ports[0])
 
 
-class AsebaNode(Node):
+class AsebaNode(AsebaDevice):
     """One Thymio on an Aseba connection (see the module docstring)."""
 
     def __init__(
@@ -470,7 +469,7 @@ def _finish(loop: asyncio.AbstractEventLoop) -> None:
     loop.close()
 
 
-def create_aseba(mission: Mission, seed: int, options: AsebaOptions) -> ThymioRobot:
+def create_aseba(mission: MissionWorld, seed: int, options: AsebaOptions) -> ThymioRobot:
     """The ``aseba`` backend kind: a Thymio on ``device`` with the mission's robot model (``real``
     unless it names another than the course's)."""
     from thymio_bt.backends import robot_for

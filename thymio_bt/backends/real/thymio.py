@@ -1,9 +1,9 @@
 """A real Thymio II (or Thymio Suite's simulated one) behind the :class:`Robot` and :class:`Entities`
 interfaces, so a mission written for the simulator drives it unchanged.
 
-The robot is reached through a small :class:`Node` protocol: motor targets, ``prox.horizontal`` and
-the measured wheel speeds. :class:`TdmNode` implements it with tdmclient (the Thymio Device Manager
-of Thymio Suite, optional extra ``thymio-bt[thymio]``); tests use a fake node.
+The robot is reached through a small :class:`AsebaDevice` protocol: motor targets, ``prox.horizontal`` and
+the measured wheel speeds. :class:`TdmDevice` implements it with tdmclient (the Thymio Device Manager
+of Thymio Suite, optional extra ``thymio-bt[thymio]``); tests use a fake device.
 
 What the backend does with them:
 
@@ -29,16 +29,16 @@ With Thymio Suite running and a robot connected::
         for _ in range(10):
             robot.advance(0.1)                   # 1 s later: about 0.1 m further
 
-Example (a node that stands still, 5 cm from a wall, and a clock that never moves)::
+Example (a device that stands still, 5 cm from a wall, and a clock that never moves)::
 
-    >>> class Still(Node):
+    >>> class Still(AsebaDevice):
     ...     def set_motors(self, left, right): self.sent = (left, right)
     ...     def read_prox(self): return [0, 0, 2570, 0, 0, 0, 0]
     ...     def read_wheel_speeds(self): return 0, 0
-    >>> node = Still()
-    >>> robot = ThymioRobot(node, spawn=Pose(0.1, 0.1, 0.0), clock=lambda: 0.0, sleep=lambda s: None)
+    >>> device = Still()
+    >>> robot = ThymioRobot(device, spawn=Pose(0.1, 0.1, 0.0), clock=lambda: 0.0, sleep=lambda s: None)
     >>> robot.drive(0.1, 0.0)
-    >>> node.sent, robot.proximity()["front_center"], robot.proximity()["front_left"]   # units; metres
+    >>> device.sent, robot.proximity()["front_center"], robot.proximity()["front_left"]   # units; metres
     ((250, 250), 0.05, inf)
 """
 
@@ -57,8 +57,7 @@ from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose,
 from thymio_bt.robot.model import REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import TdmOptions
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import MissionWorld, TdmOptions
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
 #: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.
@@ -72,8 +71,8 @@ TARGET_VARIABLES = ("motor.left.target", "motor.right.target")
 _INSTALL_HINT = "pip install 'thymio-bt[thymio]'"
 
 
-class Node(ABC):
-    """The few robot variables the backend uses, in Thymio units."""
+class AsebaDevice(ABC):
+    """A Thymio as an Aseba device: the few variables of it the backend uses, in Thymio units."""
 
     @abstractmethod
     def set_motors(self, left: int, right: int) -> None:
@@ -88,13 +87,13 @@ class Node(ABC):
         """The latest measured ``motor.left.speed`` and ``motor.right.speed`` (units)."""
 
     def read_wheel_travel(self) -> tuple[float, float] | None:
-        """How far each wheel has turned since the node connected (units x s), integrated at every
-        set of variables the robot sent; None for a node that only has the latest speeds (the
+        """How far each wheel has turned since the device connected (units x s), integrated at every
+        set of variables the robot sent; None for a device that only has the latest speeds (the
         backend then integrates those at its ticks)."""
         return None
 
-    def close(self) -> None:  # noqa: B027 (an optional hook: a node that holds nothing has nothing to do)
-        """Release the robot (the default node holds nothing)."""
+    def close(self) -> None:  # noqa: B027 (an optional hook: a device that holds nothing has nothing to do)
+        """Release the robot (the default device holds nothing)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,7 +116,7 @@ def import_tdmclient() -> ModuleType:
     return optional_module("tdmclient", "the 'tdm' backend", _INSTALL_HINT)
 
 
-class TdmNode(Node):
+class TdmDevice(AsebaDevice):
     """A robot reached through the Thymio Device Manager with tdmclient's cached variables.
 
     Reads come from the node's variable cache, which the TDM refreshes about every 100 ms while we
@@ -131,7 +130,7 @@ class TdmNode(Node):
         self.node = node
 
     @classmethod
-    def connect(cls, address: TdmAddress = LOCAL_TDM) -> TdmNode:
+    def connect(cls, address: TdmAddress = LOCAL_TDM) -> TdmDevice:
         """Connect to the TDM at ``address``, lock its robot and wait for the variables. Raises
         :class:`UserError` with a hint when any of it is impossible."""
         tdmclient = import_tdmclient()
@@ -213,7 +212,7 @@ class ThymioRobot(Backend):
 
     def __init__(
         self,
-        node: Node,
+        device: AsebaDevice,
         spawn: Pose | None = None,
         robot_name: str = ROBOT_ENTITY,
         clock: Callable[[], float] = time.monotonic,
@@ -225,7 +224,7 @@ class ThymioRobot(Backend):
         placed: bool = False,
     ) -> None:
         super().__init__()
-        self.node = node
+        self.device = device
         self.model = model
         self.speed_scale = speed_scale
         self._placed = placed  # the first spawn needs nobody: the robot stands there already
@@ -241,11 +240,11 @@ class ThymioRobot(Backend):
         self._raw: dict[str, int] | None = None
         self._scan: dict[str, float] | None = None
         self._wheels = (0.0, 0.0)  # latest measured wheel speeds, m/s
-        self._travel: tuple[float, float] | None = None  # the node's wheel travel at the last reading
+        self._travel: tuple[float, float] | None = None  # the device's wheel travel at the last reading
         self._read_at = 0.0  # backend time of that measurement
         self._axle = (0.0, 0.0, 0.0)  # odometry of the axle centre: x, y, yaw
         # no bumper: collisions stay empty (COLLISION never fires); no ground truth: min_clearance stays inf
-        node.set_motors(0, 0)
+        device.set_motors(0, 0)
         if spawn is not None:
             self._place(spawn)
 
@@ -253,7 +252,7 @@ class ThymioRobot(Backend):
     def connect(cls, address: TdmAddress = LOCAL_TDM, **kwargs: Any) -> ThymioRobot:
         """A backend over the first robot the local (or given) Thymio Device Manager knows;
         ``kwargs`` go to the constructor."""
-        return cls(TdmNode.connect(address), **kwargs)
+        return cls(TdmDevice.connect(address), **kwargs)
 
     def __enter__(self) -> ThymioRobot:
         return self
@@ -266,8 +265,8 @@ class ThymioRobot(Backend):
         if self._closed:
             return
         self._closed = True
-        self.node.set_motors(0, 0)
-        self.node.close()
+        self.device.set_motors(0, 0)
+        self.device.close()
 
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
@@ -275,7 +274,7 @@ class ThymioRobot(Backend):
         if not self._present:
             return
         self._cmd = Twist(float(linear), float(angular))
-        self.node.set_motors(*self.motor_targets(self._cmd.linear, self._cmd.angular))
+        self.device.set_motors(*self.motor_targets(self._cmd.linear, self._cmd.angular))
 
     def motor_targets(self, linear: float, angular: float) -> tuple[int, int]:
         """Motor units for a body velocity: limited as in the simulator (turn radius kept), rounded."""
@@ -346,8 +345,8 @@ class ThymioRobot(Backend):
         trapezoid rule), along the exact arc for that constant speed pair."""
         previous = self._wheels
         now = self._read_wheels()
-        travel = self.node.read_wheel_travel()
-        if travel is not None and self._travel is not None:  # the node's own, finer integral
+        travel = self.device.read_wheel_travel()
+        if travel is not None and self._travel is not None:  # the device's own, finer integral
             self._integrate(self._speed(travel[0] - self._travel[0]), self._speed(travel[1] - self._travel[1]), 1.0)
         else:
             left, right = (previous[0] + self._wheels[0]) / 2.0, (previous[1] + self._wheels[1]) / 2.0
@@ -358,7 +357,7 @@ class ThymioRobot(Backend):
 
     def _read_wheels(self) -> float:
         """Take the measured wheel speeds (m/s) and return the backend time they were read at."""
-        left_u, right_u = self.node.read_wheel_speeds()
+        left_u, right_u = self.device.read_wheel_speeds()
         self._wheels = (self._speed(left_u), self._speed(right_u))
         return self.time()
 
@@ -367,7 +366,7 @@ class ThymioRobot(Backend):
         return self.model.wheel_speed_of(units, self.speed_scale)
 
     def _read_prox(self) -> None:
-        values = self.node.read_prox()
+        values = self.device.read_prox()
         if len(values) != len(SENSOR_NAMES):
             raise ValueError(f"prox.horizontal has {len(values)} values, a Thymio II has {len(SENSOR_NAMES)}")
         self._raw = {name: int(values[i]) for name, i in PROX_INDEX.items()}
@@ -382,13 +381,13 @@ class ThymioRobot(Backend):
         self._cmd = Twist()
         self._present = True
         self._read_at = self._read_wheels()
-        self._travel = self.node.read_wheel_travel()
+        self._travel = self.device.read_wheel_travel()
         self._read_prox()
 
     def _remove(self, name: str) -> str | None:
         if name != self.robot_name or not self._present:
             return f"no entity named '{name}' (existing: {self.robot_name if self._present else 'none'})"
-        self.node.set_motors(0, 0)
+        self.device.set_motors(0, 0)
         self._present, self._cmd = False, Twist()
         self._say(f"[thymio-bt] '{name}' deleted: motors stopped, the robot may stay where it is")
         return None
@@ -433,7 +432,7 @@ class ThymioRobot(Backend):
         return None
 
 
-def create_tdm(mission: Mission, seed: int, options: TdmOptions) -> ThymioRobot:
+def create_tdm(mission: MissionWorld, seed: int, options: TdmOptions) -> ThymioRobot:
     """The ``tdm`` backend kind: the first Thymio of a Thymio Device Manager, with the mission's
     robot model (``real`` unless it names another than the course's)."""
     from thymio_bt.backends import robot_for

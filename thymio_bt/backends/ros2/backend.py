@@ -38,7 +38,7 @@ from thymio_bt.backends.ros2 import import_rclpy
 from thymio_bt.backends.ros2.entities import POLL, EntitySteps
 from thymio_bt.backends.ros2.lockstep import Lateness, WorldLink
 from thymio_bt.backends.ros2.messages import odometry_of, reading_of, stamp_ns
-from thymio_bt.backends.ros2.node import SpunNode
+from thymio_bt.backends.ros2.node import SpunRosNode
 from thymio_bt.backends.ros2.topics import TopicMap
 from thymio_bt.backends.ros2.world import maze_problem
 from thymio_bt.errors import UserError
@@ -56,8 +56,7 @@ from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import ContactTracker
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import Ros2Options
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import MissionWorld, Ros2Options
 
 
 #: how long (wall s) to wait for a first message: Fast DDS's discovery took up to 3.3 s here (its
@@ -90,8 +89,8 @@ class Ros2Robot(EntitySteps):
         self.topics, self.maze, self.model, self._maze_file = topics, maze, model, maze_file or maze.name
         self.timeout, self.latency, self.robot_name = timeout, latency, ROBOT_ENTITY
         self._TwistMsg = TwistMsg
-        self._ros = SpunNode(node_name)
-        self._node = self._ros.node
+        self._ros = SpunRosNode(node_name)
+        self._ros_node = self._ros.ros_node
         self._cond = threading.Condition()
         self._clock_ns: int | None = None  # latest /clock
         self._clock_wall = 0.0  # wall time it came
@@ -107,18 +106,18 @@ class Ros2Robot(EntitySteps):
         self._steps = []
         self._closed = False
         self._contacts = ContactTracker(maze, model)
-        node = self._node
-        node.create_subscription(Clock, topics.clock, self._on_clock, qos_profile_sensor_data)
+        ros_node = self._ros_node
+        ros_node.create_subscription(Clock, topics.clock, self._on_clock, qos_profile_sensor_data)
         self._subscribe_readings(qos_profile_sensor_data)
         if robot_xml is None and topics.robot_description:
             latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
-            node.create_subscription(String, topics.robot_description, self._on_description, latched)
-        self._cmd_pub = node.create_publisher(TwistMsg, topics.cmd_vel, 10)
+            ros_node.create_subscription(String, topics.robot_description, self._on_description, latched)
+        self._cmd_pub = ros_node.create_publisher(TwistMsg, topics.cmd_vel, 10)
         from gazebo_msgs.srv import DeleteEntity, SpawnEntity
 
-        self._spawn_client = node.create_client(SpawnEntity, topics.spawn) if topics.spawn else None
-        self._delete_client = node.create_client(DeleteEntity, topics.delete) if topics.delete else None
-        self._link = WorldLink(node, self._cond)
+        self._spawn_client = ros_node.create_client(SpawnEntity, topics.spawn) if topics.spawn else None
+        self._delete_client = ros_node.create_client(DeleteEntity, topics.delete) if topics.delete else None
+        self._link = WorldLink(ros_node, self._cond)
         self._late = Lateness(round(1e9 / topics.sensor_rate))
         self._ros.start("thymio-bt-ros2")
         self._wall_start = time.monotonic()
@@ -137,9 +136,9 @@ class Ros2Robot(EntitySteps):
             from sensor_msgs.msg import LaserScan as SensorMsg
         else:
             from sensor_msgs.msg import Range as SensorMsg
-        self._node.create_subscription(Odometry, self.topics.odom, self._on_odom, qos)
+        self._ros_node.create_subscription(Odometry, self.topics.odom, self._on_odom, qos)
         for name, topic in self.topics.sensors.items():
-            self._node.create_subscription(SensorMsg, topic, self._on_sensor(name), qos)
+            self._ros_node.create_subscription(SensorMsg, topic, self._on_sensor(name), qos)
 
     # ------------------------------------------------------------ callbacks (executor thread)
     def _on_clock(self, msg: Any) -> None:
@@ -428,7 +427,7 @@ class Ros2Robot(EntitySteps):
             )
 
 
-def create_ros2(mission: Mission, seed: int, options: Ros2Options) -> Ros2Robot:
+def create_ros2(mission: MissionWorld, seed: int, options: Ros2Options) -> Ros2Robot:
     """The ``ros2`` backend kind: the mission's robot behind the topic map of ``options.topics``."""
     from thymio_bt.backends.ros2.topics import COURSE_TOPICS, load_topics
 

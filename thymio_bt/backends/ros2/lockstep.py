@@ -63,23 +63,23 @@ class Lateness:
 
 
 class WorldLink:
-    """The world topic heard, the step topic published and the held topic heard, on ``node``;
-    ``cond`` is notified when something comes (the backend's condition)."""
+    """The world topic heard, the step topic published and the held topic heard, on the rclpy node
+    ``ros_node``; ``cond`` is notified when something comes (the backend's condition)."""
 
-    def __init__(self, node: Any, cond: threading.Condition) -> None:
+    def __init__(self, ros_node: Any, cond: threading.Condition) -> None:
         from geometry_msgs.msg import TwistStamped
         from rclpy.qos import QoSDurabilityPolicy, QoSProfile
         from std_msgs.msg import Header, String
 
-        self._node, self._cond, self._TwistStamped = node, cond, TwistStamped
+        self._ros_node, self._cond, self._TwistStamped = ros_node, cond, TwistStamped
         self.world: WorldInfo | None = None
         self.engaged = False  # stepping the world in lock
         self._held_ns: int | None = None  # where the world holds (as last said)
         self._held_robot = False  # and whether the robot is in it there
         latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
-        node.create_subscription(String, WORLD_TOPIC, self._on_world, latched)
-        node.create_subscription(Header, HELD_TOPIC, self._on_held, 10)
-        self._step_pub = node.create_publisher(TwistStamped, STEP_TOPIC, 10)
+        ros_node.create_subscription(String, WORLD_TOPIC, self._on_world, latched)
+        ros_node.create_subscription(Header, HELD_TOPIC, self._on_held, 10)
+        self._step_pub = ros_node.create_publisher(TwistStamped, STEP_TOPIC, 10)
 
     def _on_world(self, msg: Any) -> None:
         with self._cond:
@@ -108,7 +108,7 @@ class WorldLink:
                 waited = time.monotonic() - start
                 if waited > timeout:
                     break
-                if not self._node.count_publishers(WORLD_TOPIC) and (later() or waited > WORLD_GRACE):
+                if not self._ros_node.count_publishers(WORLD_TOPIC) and (later() or waited > WORLD_GRACE):
                     break
                 self._cond.wait(0.05)
         return self.world

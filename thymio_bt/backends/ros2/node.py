@@ -7,8 +7,8 @@ imported when a node is made, never when this module is.
 
 With ROS 2::
 
-    ros = SpunNode("thymio_bt")
-    ros.node.create_subscription(...)          # subscriptions, publishers, services
+    ros = SpunRosNode("thymio_bt")
+    ros.ros_node.create_subscription(...)      # subscriptions, publishers, services
     ros.start("thymio-bt-ros2")                # callbacks now run in a daemon thread
     ros.close()
 """
@@ -22,7 +22,7 @@ from typing import Any
 from thymio_bt.backends.ros2 import import_rclpy
 
 
-class SpunNode:
+class SpunRosNode:
     """An rclpy node in its own context; :meth:`start` spins it in a daemon thread, :meth:`close` ends it all."""
 
     def __init__(self, name: str) -> None:
@@ -31,7 +31,7 @@ class SpunNode:
 
         self.context = rclpy.Context()
         rclpy.init(args=[], context=self.context, signal_handler_options=SignalHandlerOptions.NO)
-        self.node = rclpy.create_node(name, context=self.context)
+        self.ros_node = rclpy.create_node(name, context=self.context)
         self._executor: Any = None
         self._spinner: threading.Thread
 
@@ -40,7 +40,7 @@ class SpunNode:
         from rclpy.executors import SingleThreadedExecutor
 
         self._executor = SingleThreadedExecutor(context=self.context)
-        self._executor.add_node(self.node)
+        self._executor.add_node(self.ros_node)
         self._spinner = threading.Thread(target=self._spin, name=thread_name, daemon=True)
         self._spinner.start()
 
@@ -51,6 +51,6 @@ class SpunNode:
     def close(self) -> None:
         """Stop spinning, destroy the node, shut its context down and wait for the spinner thread."""
         self._executor.shutdown(timeout_sec=1.0)
-        self.node.destroy_node()
+        self.ros_node.destroy_node()
         self.context.try_shutdown()
         self._spinner.join(timeout=2.0)

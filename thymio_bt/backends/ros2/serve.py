@@ -37,7 +37,7 @@ from typing import Any
 
 from thymio_bt.backends.ros2 import import_rclpy
 from thymio_bt.backends.ros2.messages import quaternion_of, stamp_ns, stamp_parts, yaw_of
-from thymio_bt.backends.ros2.node import SpunNode
+from thymio_bt.backends.ros2.node import SpunRosNode
 from thymio_bt.backends.ros2.topics import COURSE_TOPICS, PREFIXES, TopicMap
 from thymio_bt.backends.ros2.world import HELD_TOPIC, HOLD_TIMEOUT, RELEASE, STEP_TOPIC, WORLD_TOPIC, WorldInfo
 from thymio_bt.backends.sim.world import SimConfig, Simulation
@@ -151,25 +151,25 @@ class GazeboStandIn:
             "Header": Header,
         }
         with found_quickly():
-            self._ros = SpunNode("gazebo")
-        node = self._ros.node
+            self._ros = SpunRosNode("gazebo")
+        ros_node = self._ros.ros_node
         latched = QoSProfile(depth=1, durability=QoSDurabilityPolicy.TRANSIENT_LOCAL)
-        self._clock_pub = node.create_publisher(Clock, topics.clock, 10)
-        self._odom_pub = node.create_publisher(Odometry, topics.odom, 10)
-        self._tf_pub = node.create_publisher(TFMessage, "/tf", 10)
+        self._clock_pub = ros_node.create_publisher(Clock, topics.clock, 10)
+        self._odom_pub = ros_node.create_publisher(Odometry, topics.odom, 10)
+        self._tf_pub = ros_node.create_publisher(TFMessage, "/tf", 10)
         self._scan_pubs = {
-            name: node.create_publisher(LaserScan, topic, 10)  # reliable, as Gazebo's
+            name: ros_node.create_publisher(LaserScan, topic, 10)  # reliable, as Gazebo's
             for name, topic in topics.sensors.items()
         }
-        node.create_publisher(TFMessage, "/tf_static", latched).publish(TFMessage(transforms=self._static_tf()))
-        node.create_publisher(String, topics.robot_description, latched).publish(String(data=robot_urdf(model)))
-        node.create_publisher(String, WORLD_TOPIC, latched).publish(String(data=self.world.to_json()))
-        node.create_subscription(Twist, topics.cmd_vel, self._on_cmd_vel, 1)
-        node.create_subscription(TwistStamped, STEP_TOPIC, self._on_step, 10)
-        self._held_pub = node.create_publisher(Header, HELD_TOPIC, 10)
+        ros_node.create_publisher(TFMessage, "/tf_static", latched).publish(TFMessage(transforms=self._static_tf()))
+        ros_node.create_publisher(String, topics.robot_description, latched).publish(String(data=robot_urdf(model)))
+        ros_node.create_publisher(String, WORLD_TOPIC, latched).publish(String(data=self.world.to_json()))
+        ros_node.create_subscription(Twist, topics.cmd_vel, self._on_cmd_vel, 1)
+        ros_node.create_subscription(TwistStamped, STEP_TOPIC, self._on_step, 10)
+        self._held_pub = ros_node.create_publisher(Header, HELD_TOPIC, 10)
         # the services last: a client that sees them knows it would have seen the world topic (WorldLink)
-        node.create_service(SpawnEntity, topics.spawn, self._on_spawn)
-        node.create_service(DeleteEntity, topics.delete, self._on_delete)
+        ros_node.create_service(SpawnEntity, topics.spawn, self._on_spawn)
+        ros_node.create_service(DeleteEntity, topics.delete, self._on_delete)
         self._ros.start("thymio-bt-serve")
 
     # ------------------------------------------------------------ requests (executor thread)
@@ -326,7 +326,7 @@ class GazeboStandIn:
             now = round(self.sim.time() * 1e9)
             if self._until_ns is None or now < self._until_ns:
                 return False
-            gone = not self._ros.node.count_publishers(STEP_TOPIC)
+            gone = not self._ros.ros_node.count_publishers(STEP_TOPIC)
             if gone or time.monotonic() - self._step_wall > HOLD_TIMEOUT:
                 self._until_ns = None  # the client went away: run freely, as Gazebo would
                 return False

@@ -17,11 +17,10 @@ from thymio_bt.backends.sim.world import SimConfig, Simulation
 from thymio_bt.robot.model import is_sim_sensor_model, robot_model
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import SimOptions
-    from thymio_bt.mission import Mission
+    from thymio_bt.backends import MissionWorld, SimOptions
 
 
-def create(mission: Mission, seed: int, options: SimOptions) -> Simulation:
+def create(mission: MissionWorld, seed: int, options: SimOptions) -> Simulation:
     """The simulation of ``mission``'s maze with its robot model, noise and sensor model."""
     if not is_sim_sensor_model(mission.sensor_model):  # a checked mission's never is
         raise ValueError(f"no sensor model named {mission.sensor_model!r}")

@@ -133,6 +133,7 @@ class ScriptCondition(Script):
     """BT.CPP's ``ScriptCondition``: SUCCESS if ``code`` is true, else FAILURE."""
 
     always = ""  # true or false
+    condition = True
 
     def step(self) -> Status:
         """The script's truth; the feedback (a failure's reason) says which script and what it gave."""
