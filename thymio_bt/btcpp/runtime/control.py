@@ -22,6 +22,7 @@ from py_trees.common import Status
 from pydantic import Field, create_model
 
 from thymio_bt.behaviours.flow.node import SAME, ControlNode, ControlParams, F, S
+from thymio_bt.behaviours.flow.primitives import SimTimer
 from thymio_bt.btcpp.runtime import decorators as bd
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime import scripted as bs
@@ -42,60 +43,57 @@ CONDITION_ATTRS = {
 }
 
 
-class Timeout(bd.BtDecorator):
-    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (simulated)."""
+class _Timed(bd.BtDecorator):
+    """Timeout and Delay: a :class:`~thymio_bt.behaviours.flow.primitives.SimTimer` of ``msec``
+    (simulated), started at the node's first tick, forgotten when the child completes or the node is
+    halted (BT.CPP's ``TimeoutNode`` and ``DelayNode``: the next tick starts it again)."""
 
     def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
         super().__init__(name, child)
-        self.msec, self.clock = msec, clock
-        self.deadline: float | None = None
+        self.timer = SimTimer(msec / 1000.0, clock)
+
+    def started(self) -> SimTimer:
+        """The timer, started (and the node RUNNING) if this is the node's first tick."""
+        if self.timer.end is None:
+            self.timer.start()
+            self.status = Status.RUNNING
+        return self.timer
+
+    def child(self) -> Any:
+        """The child's tick; once it completes, the timer forgotten and the child reset."""
+        status = bn.execute(self.decorated)
+        if status in bn.COMPLETED:
+            self.timer.forget()
+            bn.reset(self.decorated)
+        return status
+
+    def halt(self) -> None:
+        """The timer forgotten, the child reset."""
+        self.timer.forget()
+        super().halt()
+
+
+class Timeout(_Timed):
+    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (0: no limit).
+    BT.CPP's timer fires between ticks, so the deadline is checked before the child's tick
+    (``timeout``'s :class:`~thymio_bt.behaviours.flow.primitives.SimTimeout` checks it after)."""
 
     def bt_tick(self) -> Any:
         """The child, unless the time is up while it runs."""
-        if self.deadline is None:
-            self.deadline = self.clock() + self.msec / 1000.0
-            self.status = Status.RUNNING
-        if self.msec > 0 and self.decorated.status is Status.RUNNING and self.clock() >= self.deadline - 1e-9:
+        timer = self.started()
+        if timer.seconds > 0 and self.decorated.status is Status.RUNNING and timer.over():
             bn.reset(self.decorated)
-            self.deadline = None
+            timer.forget()
             return Status.FAILURE
-        status = bn.execute(self.decorated)
-        if status in (Status.SUCCESS, Status.FAILURE):
-            self.deadline = None
-            bn.reset(self.decorated)
-        return status
-
-    def halt(self) -> None:
-        """The timer stopped, the child reset."""
-        self.deadline = None
-        super().halt()
+        return self.child()
 
 
-class Delay(bd.BtDecorator):
-    """BT.CPP's ``Delay``: RUNNING for ``delay_msec`` (simulated), then the child."""
-
-    def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
-        super().__init__(name, child)
-        self.msec, self.clock = msec, clock
-        self.until: float | None = None
+class Delay(_Timed):
+    """BT.CPP's ``Delay``: RUNNING for ``delay_msec``, then the child (``delay`` in BT.CPP's protocol)."""
 
     def bt_tick(self) -> Any:
         """RUNNING until the delay is over, then the child's status."""
-        if self.until is None:
-            self.until = self.clock() + self.msec / 1000.0
-            self.status = Status.RUNNING
-        if self.clock() < self.until - 1e-9:
-            return Status.RUNNING
-        status = bn.execute(self.decorated)
-        if status in (Status.SUCCESS, Status.FAILURE):
-            self.until = None
-            bn.reset(self.decorated)
-        return status
-
-    def halt(self) -> None:
-        """The delay forgotten, the child reset."""
-        self.until = None
-        super().halt()
+        return self.child() if self.started().over() else Status.RUNNING
 
 
 class BtControl(ControlNode):
