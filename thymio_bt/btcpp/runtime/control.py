@@ -203,6 +203,15 @@ def _loop(ident: str, yaml: str, like: type[ControlNode], count: str, again: str
     return _kind(ident, yaml, "decorator", make, doc, like, facts, _Loop, **{count: (int, ..., what)})
 
 
+def _timed(node: type[_Timed], yaml: str, port: str, like: type[ControlNode]) -> type:
+    """The kind of BT.CPP's ``Timeout`` or ``Delay`` (``node``): ``port`` milliseconds on the run's clock."""
+    make = lambda name, children, ports, ctx: node(name, children[0], ports[port], ctx.now)  # noqa: E731
+    doc = f"BT.CPP's {node.__name__}, in milliseconds of simulated time."
+    return _kind(
+        node.__name__, yaml, "decorator", make, doc, like, **{port: (int, ..., "milliseconds of simulated time")}
+    )
+
+
 BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
     _kind(
         "Sequence",
@@ -289,24 +298,8 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         decorators.OneShot,
         then_skip=(bool, True, "after the first run: skipped (true) or the same status (false)"),
     ),
-    _kind(
-        "Timeout",
-        "bt_timeout",
-        "decorator",
-        lambda name, children, ports, ctx: Timeout(name, children[0], ports["msec"], ctx.now),
-        "BT.CPP's Timeout, in milliseconds of simulated time.",
-        decorators.Timeout,
-        msec=(int, ..., "milliseconds of simulated time"),
-    ),
-    _kind(
-        "Delay",
-        "bt_delay",
-        "decorator",
-        lambda name, children, ports, ctx: Delay(name, children[0], ports["delay_msec"], ctx.now),
-        "BT.CPP's Delay, in milliseconds of simulated time.",
-        decorators.Delay,
-        delay_msec=(int, ..., "milliseconds of simulated time"),
-    ),
+    _timed(Timeout, "bt_timeout", "msec", decorators.Timeout),
+    _timed(Delay, "bt_delay", "delay_msec", decorators.Delay),
 )
 #: BT.CPP node ID -> its node kind here
 BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}
