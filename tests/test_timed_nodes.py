@@ -12,7 +12,7 @@ from py_trees.common import Status
 from thymio_bt.behaviours.flow.decorators import Delay
 from thymio_bt.behaviours.flow.primitives import SimTimeout, SimTimer
 from thymio_bt.behaviours.flow.ticking import tick
-from thymio_bt.btcpp.runtime import control
+from thymio_bt.btcpp.runtime import decorators as bd
 from thymio_bt.btcpp.runtime.scripted import Sleep
 
 PERIOD = 0.1  # ten ticks of it add up to 0.9999999999999999 s, not 1 s
@@ -44,8 +44,8 @@ def _nodes(clock: Clock) -> dict[str, object]:
     return {
         "timeout": SimTimeout("timeout", Running("run"), duration=1.0, clock=clock),
         "delay": Delay("delay", Success("go"), 1.0, clock),
-        "bt_timeout": control.Timeout("bt_timeout", Running("run"), 1000, clock),
-        "bt_delay": control.Delay("bt_delay", Success("go"), 1000, clock),
+        "bt_timeout": bd.Timeout("bt_timeout", Running("run"), 1000, clock),
+        "bt_delay": bd.Delay("bt_delay", Success("go"), 1000, clock),
         "bt_sleep": Sleep("bt_sleep", Sleep.Params(msec=1000), ctx),
     }
 

@@ -23,7 +23,6 @@ from pydantic import Field, create_model
 
 from thymio_bt.behaviours.flow import composites, decorators
 from thymio_bt.behaviours.flow.node import ControlNode, ControlParams, F, S
-from thymio_bt.behaviours.flow.primitives import SimTimer
 from thymio_bt.btcpp.runtime import decorators as bd
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime import scripted as bs
@@ -42,59 +41,6 @@ CONDITION_ATTRS = {
     "_onSuccess": "on_success",
     "_post": "post",
 }
-
-
-class _Timed(bd.BtDecorator):
-    """Timeout and Delay: a :class:`~thymio_bt.behaviours.flow.primitives.SimTimer` of ``msec``
-    (simulated), started at the node's first tick, forgotten when the child completes or the node is
-    halted (BT.CPP's ``TimeoutNode`` and ``DelayNode``: the next tick starts it again)."""
-
-    def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
-        super().__init__(name, child)
-        self.timer = SimTimer(msec / 1000.0, clock)
-
-    def started(self) -> SimTimer:
-        """The timer, started (and the node RUNNING) if this is the node's first tick."""
-        if self.timer.end is None:
-            self.timer.start()
-            self.status = Status.RUNNING
-        return self.timer
-
-    def child(self) -> Any:
-        """The child's tick; once it completes, the timer forgotten and the child reset."""
-        status = bn.execute(self.decorated)
-        if status in bn.COMPLETED:
-            self.timer.forget()
-            bn.reset(self.decorated)
-        return status
-
-    def halt(self) -> None:
-        """The timer forgotten, the child reset."""
-        self.timer.forget()
-        super().halt()
-
-
-class Timeout(_Timed):
-    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (0: no limit).
-    BT.CPP's timer fires between ticks, so the deadline is checked before the child's tick
-    (``timeout``'s :class:`~thymio_bt.behaviours.flow.primitives.SimTimeout` checks it after)."""
-
-    def bt_tick(self) -> Any:
-        """The child, unless the time is up while it runs."""
-        timer = self.started()
-        if timer.seconds > 0 and self.decorated.status is Status.RUNNING and timer.over():
-            bn.reset(self.decorated)
-            timer.forget()
-            return Status.FAILURE
-        return self.child()
-
-
-class Delay(_Timed):
-    """BT.CPP's ``Delay``: RUNNING for ``delay_msec``, then the child (``delay`` in BT.CPP's protocol)."""
-
-    def bt_tick(self) -> Any:
-        """RUNNING until the delay is over, then the child's status."""
-        return self.child() if self.started().over() else Status.RUNNING
 
 
 class BtControl(ControlNode):
@@ -203,7 +149,7 @@ def _loop(ident: str, yaml: str, like: type[ControlNode], count: str, again: str
     return _kind(ident, yaml, "decorator", make, doc, like, facts, _Loop, **{count: (int, ..., what)})
 
 
-def _timed(node: type[_Timed], yaml: str, port: str, like: type[ControlNode]) -> type:
+def _timed(node: type[bd.Timed], yaml: str, port: str, like: type[ControlNode]) -> type:
     """The kind of BT.CPP's ``Timeout`` or ``Delay`` (``node``): ``port`` milliseconds on the run's clock."""
     make = lambda name, children, ports, ctx: node(name, children[0], ports[port], ctx.now)  # noqa: E731
     doc = f"BT.CPP's {node.__name__}, in milliseconds of simulated time."
@@ -298,8 +244,8 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         decorators.OneShot,
         then_skip=(bool, True, "after the first run: skipped (true) or the same status (false)"),
     ),
-    _timed(Timeout, "bt_timeout", "msec", decorators.Timeout),
-    _timed(Delay, "bt_delay", "delay_msec", decorators.Delay),
+    _timed(bd.Timeout, "bt_timeout", "msec", decorators.Timeout),
+    _timed(bd.Delay, "bt_delay", "delay_msec", decorators.Delay),
 )
 #: BT.CPP node ID -> its node kind here
 BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}
