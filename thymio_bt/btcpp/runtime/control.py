@@ -27,9 +27,6 @@ from thymio_bt.btcpp.runtime import decorators as bd
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime import scripted as bs
 
-#: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
-_PRE = ("failure_if", "success_if", "skip_if", "while_true")
-_POST = ("on_halted", "on_failure", "on_success", "post")
 #: XML attribute -> its name here
 CONDITION_ATTRS = {
     "_failureIf": "failure_if",
@@ -299,7 +296,7 @@ BTCPP_SCRIPTED: tuple[type[ControlNode], ...] = (
         "decorator",
         _scripted("conditions"),
         "BT.CPP's pre/post-condition attributes (_skipIf=... on a node in XML) on the node under do.",
-        **{key: (bs.OptionalCode, None, f"BT.CPP's _{key}") for key in (*_PRE, *_POST)},
+        **{key: (bs.OptionalCode, None, f"BT.CPP's _{key}") for key in (*bs.PRE, *bs.POST)},
     ),
 )
 BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in BTCPP_SCRIPTED if c.btcpp_id != "conditions"})
