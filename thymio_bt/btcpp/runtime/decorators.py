@@ -167,7 +167,7 @@ class Timed(BtDecorator):
             self.status = RUNNING
         return self.timer
 
-    def child(self) -> Any:
+    def tick_child(self) -> Any:
         """The child's tick; once it completes, the timer forgotten and the child reset."""
         status = bn.execute(self.decorated)
         if status in bn.COMPLETED:
@@ -193,7 +193,7 @@ class Timeout(Timed):
             bn.reset(self.decorated)
             timer.forget()
             return FAILURE
-        return self.child()
+        return self.tick_child()
 
 
 class Delay(Timed):
@@ -201,7 +201,7 @@ class Delay(Timed):
 
     def bt_tick(self) -> Any:
         """RUNNING until the delay is over, then the child's status."""
-        return self.child() if self.started().over() else RUNNING
+        return self.tick_child() if self.started().over() else RUNNING
 
 
 class Constant(bn.BtNode):
