@@ -7,6 +7,8 @@ Schema and the terminal tree find them without any change to the package.
 """
 
 import math
+import re
+from pathlib import Path
 
 import py_trees
 import pytest
@@ -239,3 +241,61 @@ def test_a_node_named_as_any_bt_cpp_built_in_is_exported_apart_and_read_back_as_
     (tmp_path / "named.xml").write_text(xml)
     again = load_mission(tmp_path / "named.xml", run_plugins=True)
     assert [c.behaviour for c in again.tree.children] == ["Repeat", "Stop"]
+
+
+def _btcpp_kinds():
+    from thymio_bt.btcpp.runtime.control import BTCPP_CONTROL
+
+    return {cls.yaml_name: cls for cls in BTCPP_CONTROL}
+
+
+def test_a_btcpp_kind_with_a_yaml_twin_has_its_facts_from_the_twin_s_class():
+    """BT.CPP's Sequence is the lint's and the pictures' sequence: its family, symbol, outcome...
+    are declared once, on the YAML kind, and a change there reaches both."""
+    from thymio_bt.btcpp.runtime.control import TWIN_FACTS
+
+    kinds = _btcpp_kinds()
+    twins = {name: cls.like.yaml_name for name, cls in kinds.items() if cls.like is not None}
+    assert twins == {
+        **dict.fromkeys(("bt_sequence", "bt_sequence_with_memory"), "sequence"),
+        "bt_reactive_sequence": "reactive_sequence",
+        "bt_fallback": "selector",
+        "bt_reactive_fallback": "reactive_selector",
+        **dict.fromkeys(("bt_parallel", "bt_parallel_all"), "parallel"),
+        "bt_inverter": "invert",
+        "bt_force_success": "force_success",
+        "bt_force_failure": "force_failure",
+        "bt_repeat": "repeat",
+        "bt_retry_until_successful": "retry",
+        "bt_run_once": "one_shot",
+        "bt_timeout": "timeout",
+        "bt_delay": "delay",
+    }
+    for name, cls in kinds.items():
+        if cls.like is not None:  # the mapped decorators' outcome is read from their tick's map: the same
+            assert {f: getattr(cls, f) for f in TWIN_FACTS} == {f: getattr(cls.like, f) for f in TWIN_FACTS}, name
+    plain = [cls for cls in kinds.values() if cls.like is None]
+    assert all("like" in cls.__dict__ for cls in plain)  # declared none, not forgotten
+
+    class Dotted(kinds["bt_sequence"]):  # a twin's fact changed on the twin reaches the BT.CPP kind
+        like = type("Drawn", (kinds["bt_sequence"].like,), {"symbol": "{.}"})
+
+    assert Dotted.symbol == "{.}" and Dotted.family == "sequence"
+
+
+def test_docs_btcpp_names_each_twin_as_the_nearest_yaml_node():
+    """docs/btcpp.md's table says, for each BT.CPP node, the nearest YAML node: the class's twin."""
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "btcpp.md").read_text()
+    kinds = _btcpp_kinds()
+    seen = set()
+    for row in doc.splitlines():
+        cells = row.split(" | ")
+        if len(cells) != 4 or "bt_" not in cells[1]:
+            continue
+        nearest = [re.split(r"[: ]", name)[0] for name in re.findall(r"`([^`]+)`", cells[3])]
+        for i, name in enumerate(re.findall(r"`(bt_\w+)`", cells[1])):
+            cls = kinds.get(name)
+            if cls is not None and cls.like is not None:
+                assert nearest[i : i + 1] == [cls.like.yaml_name], row
+                seen.add(name)
+    assert seen == {name for name, cls in kinds.items() if cls.like is not None}

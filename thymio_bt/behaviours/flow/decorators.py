@@ -27,7 +27,7 @@ from py_trees.decorators import FailureIsSuccess, Inverter, SuccessIsFailure
 from pydantic import Field, field_validator
 
 from thymio_bt.behaviours.flow.node import SAME, SWAP, ControlNode, ControlParams, F, S, refuse, whole
-from thymio_bt.behaviours.flow.primitives import RepeatUntil, SimTimeout
+from thymio_bt.behaviours.flow.primitives import RepeatUntil, SimTimeout, SimTimer
 from thymio_bt.inputs.fields import Duration
 
 _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"
@@ -214,8 +214,7 @@ class Delay(py_trees.decorators.Decorator, ControlNode):
 
     def __init__(self, name: str, child: Behaviour, seconds: float, clock: Any) -> None:
         super().__init__(name=name, child=child)
-        self.seconds, self.clock = seconds, clock
-        self.start = 0.0
+        self.timer = SimTimer(seconds, clock)
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -224,15 +223,15 @@ class Delay(py_trees.decorators.Decorator, ControlNode):
 
     def initialise(self) -> None:
         """py_trees' start hook: the wait starts now."""
-        self.start = self.clock()
+        self.timer.start()
 
     def tick(self) -> Iterator[Behaviour]:
         """Tick the child only once the delay is over (a Decorator ticks its child first otherwise)."""
         if self.status != Status.RUNNING:
             self.initialise()
-        if self.clock() - self.start < self.seconds - 1e-9:
+        if not self.timer.over():
             self.status = Status.RUNNING
-            self.feedback_message = f"{self.seconds - (self.clock() - self.start):.1f} s to wait"
+            self.feedback_message = f"{self.timer.left():.1f} s to wait"
             yield self
             return
         yield from super().tick()

@@ -2,6 +2,8 @@
 
 py_trees' own ``Timeout`` and ``Timer`` read the wall clock, which is wrong when the simulation
 runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock instead.
+:class:`SimTimer` is the one rule of a span of simulated time, which every timed node of both
+vocabularies follows (``timeout``, ``delay``, BT.CPP's ``Timeout``, ``Delay`` and ``Sleep``).
 :class:`RepeatUntil` is a do-while loop: run the body, and after each success check a condition.
 """
 
@@ -16,6 +18,50 @@ from py_trees.common import Status
 
 from thymio_bt.behaviours.base import FailureCode
 from thymio_bt.behaviours.flow.ticking import tick
+
+#: how close to its end a span of simulated time counts as over: a tick's time is a sum of float
+#: periods (ten ticks of 0.1 s end at 0.9999999999999999 s)
+SLACK = 1e-9
+
+
+class SimTimer:
+    """A span of ``seconds`` on the run's simulated ``clock``, from :meth:`start`: over once the clock
+    reaches its end (to :data:`SLACK`). ``end`` is None while it is not started.
+
+    Example::
+
+        >>> now = [0.0]
+        >>> timer = SimTimer(1.0, lambda: now[0])
+        >>> timer.start(); now[0] = sum([0.1] * 10)
+        >>> timer.over(), now[0]
+        (True, 0.9999999999999999)
+        >>> now[0] = 0.25; timer.over(), timer.left()
+        (False, 0.75)
+    """
+
+    __slots__ = ("clock", "end", "seconds")
+
+    def __init__(self, seconds: float, clock: Callable[[], float]) -> None:
+        self.seconds, self.clock = seconds, clock
+        self.end: float | None = None
+
+    def start(self) -> None:
+        """The span starts now."""
+        self.end = self.clock() + self.seconds
+
+    def forget(self) -> None:
+        """Not started (a BT.CPP node starts it again at its next tick)."""
+        self.end = None
+
+    def over(self) -> bool:
+        """Whether the span (started) has passed."""
+        assert self.end is not None, "a timer read before it started"
+        return self.clock() >= self.end - SLACK
+
+    def left(self) -> float:
+        """The seconds to its end (started)."""
+        assert self.end is not None, "a timer read before it started"
+        return self.end - self.clock()
 
 
 class SimTimeout(py_trees.decorators.Decorator):
@@ -35,27 +81,26 @@ class SimTimeout(py_trees.decorators.Decorator):
 
     def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
         super().__init__(name=name, child=child)
-        self.duration = duration
-        self.clock = clock
-        self.finish_time = 0.0
+        self.timer = SimTimer(duration, clock)
         self.failure: tuple[FailureCode, str] | None = None
 
     def initialise(self) -> None:
         """py_trees' start hook: the time limit runs from now."""
-        self.finish_time = self.clock() + self.duration
+        self.timer.start()
         self.feedback_message = ""
         self.failure = None
 
     def update(self) -> Status:
-        """The child's status, or FAILURE (and the child halted) once the time is up."""
-        now = self.clock()
-        if self.decorated.status == Status.RUNNING and now >= self.finish_time - 1e-9:
+        """The child's status, or FAILURE (and the child halted) once the time is up (checked after
+        the child's tick: BT.CPP's ``Timeout`` checks before it)."""
+        if self.decorated.status == Status.RUNNING and self.timer.over():
             self.decorated.stop(Status.INVALID)
-            self.failure = (FailureCode.TIMEOUT, f"'{self.decorated.name}' did not finish within {self.duration:g} s")
+            limit = self.timer.seconds
+            self.failure = (FailureCode.TIMEOUT, f"'{self.decorated.name}' did not finish within {limit:g} s")
             self.feedback_message = f"TIMEOUT: {self.failure[1]}"
             return Status.FAILURE
         if self.decorated.status == Status.RUNNING:
-            self.feedback_message = f"{self.finish_time - now:.1f} s left"
+            self.feedback_message = f"{self.timer.left():.1f} s left"
         return self.decorated.status
 
 

@@ -21,14 +21,12 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 from pydantic import Field, create_model
 
-from thymio_bt.behaviours.flow.node import SAME, ControlNode, ControlParams, F, S
+from thymio_bt.behaviours.flow import composites, decorators
+from thymio_bt.behaviours.flow.node import ControlNode, ControlParams, F, S
 from thymio_bt.btcpp.runtime import decorators as bd
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime import scripted as bs
 
-#: the names of BT.CPP's pre- and post-condition attributes here (XML: _failureIf, ..., _post)
-_PRE = ("failure_if", "success_if", "skip_if", "while_true")
-_POST = ("on_halted", "on_failure", "on_success", "post")
 #: XML attribute -> its name here
 CONDITION_ATTRS = {
     "_failureIf": "failure_if",
@@ -42,67 +40,25 @@ CONDITION_ATTRS = {
 }
 
 
-class Timeout(bd.BtDecorator):
-    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (simulated)."""
-
-    def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
-        super().__init__(name, child)
-        self.msec, self.clock = msec, clock
-        self.deadline: float | None = None
-
-    def bt_tick(self) -> Any:
-        """The child, unless the time is up while it runs."""
-        if self.deadline is None:
-            self.deadline = self.clock() + self.msec / 1000.0
-            self.status = Status.RUNNING
-        if self.msec > 0 and self.decorated.status is Status.RUNNING and self.clock() >= self.deadline - 1e-9:
-            bn.reset(self.decorated)
-            self.deadline = None
-            return Status.FAILURE
-        status = bn.execute(self.decorated)
-        if status in (Status.SUCCESS, Status.FAILURE):
-            self.deadline = None
-            bn.reset(self.decorated)
-        return status
-
-    def halt(self) -> None:
-        """The timer stopped, the child reset."""
-        self.deadline = None
-        super().halt()
-
-
-class Delay(bd.BtDecorator):
-    """BT.CPP's ``Delay``: RUNNING for ``delay_msec`` (simulated), then the child."""
-
-    def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
-        super().__init__(name, child)
-        self.msec, self.clock = msec, clock
-        self.until: float | None = None
-
-    def bt_tick(self) -> Any:
-        """RUNNING until the delay is over, then the child's status."""
-        if self.until is None:
-            self.until = self.clock() + self.msec / 1000.0
-            self.status = Status.RUNNING
-        if self.clock() < self.until - 1e-9:
-            return Status.RUNNING
-        status = bn.execute(self.decorated)
-        if status in (Status.SUCCESS, Status.FAILURE):
-            self.until = None
-            bn.reset(self.decorated)
-        return status
-
-    def halt(self) -> None:
-        """The delay forgotten, the child reset."""
-        self.until = None
-        super().halt()
-
-
 class BtControl(ControlNode):
-    """A BT.CPP built-in as a node kind: its BT.CPP ID and how it is built."""
+    """A BT.CPP built-in as a node kind: its BT.CPP ID and how it is built.
+
+    A BT.CPP node with a twin among the YAML kinds (``like``: ``Sequence``'s is ``sequence``) has
+    that kind's facts (:data:`TWIN_FACTS`: its family, its symbol, what it makes of its child's
+    outcomes...), declared there once; its body declares only how it differs."""
 
     btcpp_native = True
     make: ClassVar[Callable[..., Behaviour]]
+    #: the YAML kind nearest to it, whose facts it has (docs/btcpp.md's "nearest YAML node")
+    like: ClassVar[type[ControlNode] | None] = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        """Take the twin's facts that the class's body does not declare."""
+        super().__init_subclass__(**kwargs)
+        if cls.like is not None:
+            for fact in TWIN_FACTS:
+                if fact not in cls.__dict__:
+                    setattr(cls, fact, getattr(cls.like, fact))
 
     @classmethod
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
@@ -110,11 +66,15 @@ class BtControl(ControlNode):
         return cls.make(name, children, params.model_dump(), ctx)
 
 
+#: the facts a BT.CPP kind takes from its YAML twin: those the lint and the pictures read
+TWIN_FACTS = ("family", "reactive", "symbol", "outcome", "fails_alone", "halts", "passes_on", "once")
+
+
 class _Loop(BtControl):
     """``Repeat`` and ``RetryUntilSuccessful``: the child again after a SUCCESS (Repeat) or a FAILURE
-    (Retry), for ever when the count (``num_cycles``, ``num_attempts``) is -1."""
+    (Retry), for ever when the count (``num_cycles``, ``num_attempts``) is -1 (``repeat`` and
+    ``retry`` have no count of -1: what it makes of the child's outcomes is declared here)."""
 
-    outcome, halts, passes_on = SAME, False, True
     #: the port that counts, and the child's result that runs it again
     count: ClassVar[str]
     again: ClassVar[str]
@@ -137,13 +97,15 @@ def _kind(
     category: str,
     make: Callable[..., Behaviour],
     doc: str,
+    like: type[ControlNode] | None = None,
     facts: Mapping[str, Any] | None = None,
     base: type[BtControl] = BtControl,
     /,
     **ports: Any,
 ) -> type:
-    """A subclass of ``base`` for BT.CPP's ``ident`` with its ``ports`` (name: (type, default)) and
-    its ``facts`` (:class:`ControlNode`'s class attributes: family, outcome, symbol...)."""
+    """A subclass of ``base`` for BT.CPP's ``ident`` with its ``ports`` (name: (type, default)), the
+    YAML kind it is ``like`` (its facts) and its own ``facts`` (:class:`ControlNode`'s class
+    attributes: family, outcome, symbol...)."""
     fields: dict[str, Any] = {k: (t, Field(d, description=desc)) for k, (t, d, desc) in ports.items()}
     params = create_model(f"{ident}Params", __base__=ControlParams, **fields) if fields else ControlParams
     given = "".join(f"{k}: ..., " for k, (_, d, _) in ports.items() if d is ...)
@@ -152,7 +114,7 @@ def _kind(
     )
     attrs = {"__doc__": doc, "yaml_name": yaml, "category": category, "Params": params, "btcpp_id": ident}
     attrs.update(make=staticmethod(make), example=example, short_form=category == "decorator" and not ports)
-    return type(f"Bt{ident}", (base,), {**attrs, **(facts or {})})
+    return type(f"Bt{ident}", (base,), {**attrs, "like": like, **(facts or {})})
 
 
 def _composite(cls: type[bn.BtNode]) -> Callable[..., Behaviour]:
@@ -165,22 +127,32 @@ def _decorator(cls: type[bd.BtDecorator]) -> Callable[..., Behaviour]:
     return lambda name, children, ports, ctx: cls(name, children[0])
 
 
-_COUNT = (int, -1, "how many; -1: all (Parallel) or for ever")
-#: the facts of each family of BT.CPP's control nodes
-_SEQUENCE = {"family": "sequence", "symbol": "{-}"}
-_SELECTOR = {"family": "selector", "symbol": "{o}"}
-_PARALLEL = {"family": "parallel", "symbol": "/_/"}
-#: a decorator that returns its child's result (or none) and starts it when it starts
-_MAPS = {"halts": False, "passes_on": True}
-
-
-def _mapping(yaml: str, cls: type[bd._Mapped]) -> type:
+def _mapping(yaml: str, cls: type[bd._Mapped], like: type[ControlNode] | None) -> type:
     """The kind of BT.CPP's decorator ``cls``, which maps its child's result: the ``outcome`` the
-    lint reads is the map its tick uses (a result mapped to RUNNING runs the child again)."""
+    lint reads is the map its tick uses (a result mapped to RUNNING runs the child again), the other
+    facts its twin's (without one: it never halts its child, and starts it when it starts)."""
     letter = {Status.SUCCESS: S, Status.FAILURE: F}
     outcome = {letter[got]: letter[to] for got, to in cls.outcome.items() if to in letter}
-    name = cls.__name__
-    return _kind(name, yaml, "decorator", _decorator(cls), f"BT.CPP's {name}.", {**_MAPS, "outcome": outcome})
+    facts = {"outcome": outcome} if like else {"outcome": outcome, "halts": False, "passes_on": True}
+    return _kind(cls.__name__, yaml, "decorator", _decorator(cls), f"BT.CPP's {cls.__name__}.", like, facts)
+
+
+def _loop(ident: str, yaml: str, like: type[ControlNode], count: str, again: str, doc: str, what: str) -> type:
+    """The kind of BT.CPP's ``Repeat`` or ``RetryUntilSuccessful`` (``bd``'s class ``ident``), which
+    runs its child again after the result ``again``, ``count`` (a port: ``what``) times."""
+    loop = getattr(bd, ident)
+    make = lambda name, children, ports, ctx: loop(name, children[0], ports[count])  # noqa: E731
+    facts = {"count": count, "again": again}
+    return _kind(ident, yaml, "decorator", make, doc, like, facts, _Loop, **{count: (int, ..., what)})
+
+
+def _timed(node: type[bd.Timed], yaml: str, port: str, like: type[ControlNode]) -> type:
+    """The kind of BT.CPP's ``Timeout`` or ``Delay`` (``node``): ``port`` milliseconds on the run's clock."""
+    make = lambda name, children, ports, ctx: node(name, children[0], ports[port], ctx.now)  # noqa: E731
+    doc = f"BT.CPP's {node.__name__}, in milliseconds of simulated time."
+    return _kind(
+        node.__name__, yaml, "decorator", make, doc, like, **{port: (int, ..., "milliseconds of simulated time")}
+    )
 
 
 BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
@@ -190,7 +162,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         _composite(bn.Sequence),
         "BT.CPP's Sequence: restarts after a failure.",
-        _SEQUENCE,
+        composites.Sequence,
     ),
     _kind(
         "SequenceWithMemory",
@@ -198,7 +170,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         _composite(bn.SequenceWithMemory),
         "BT.CPP's SequenceWithMemory: after a failure, resumes at the failed child.",
-        _SEQUENCE,
+        composites.Sequence,
     ),
     _kind(
         "ReactiveSequence",
@@ -206,16 +178,16 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         _composite(bn.ReactiveSequence),
         "BT.CPP's ReactiveSequence: every child from the first, every tick.",
-        {**_SEQUENCE, "reactive": True, "symbol": "[-]"},
+        composites.ReactiveSequence,
     ),
-    _kind("Fallback", "bt_fallback", "composite", _composite(bn.Fallback), "BT.CPP's Fallback.", _SELECTOR),
+    _kind("Fallback", "bt_fallback", "composite", _composite(bn.Fallback), "BT.CPP's Fallback.", composites.Selector),
     _kind(
         "ReactiveFallback",
         "bt_reactive_fallback",
         "composite",
         _composite(bn.ReactiveFallback),
         "BT.CPP's ReactiveFallback.",
-        {**_SELECTOR, "reactive": True, "symbol": "[o]"},
+        composites.ReactiveSelector,
     ),
     _kind(
         "Parallel",
@@ -223,7 +195,7 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         lambda name, children, ports, ctx: bn.Parallel(name, children, ports["success_count"], ports["failure_count"]),
         "BT.CPP's Parallel: success_count successes succeed it, failure_count failures fail it.",
-        _PARALLEL,
+        composites.Parallel,
         success_count=(int, -1, "successes that end it with SUCCESS (-1: all)"),
         failure_count=(int, 1, "failures that end it with FAILURE (-1: all)"),
     ),
@@ -233,34 +205,32 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "composite",
         lambda name, children, ports, ctx: bn.ParallelAll(name, children, ports["max_failures"]),
         "BT.CPP's ParallelAll: every child to completion; FAILURE if max_failures failed.",
-        _PARALLEL,
+        composites.Parallel,
         max_failures=(int, 1, "failures that make it fail (-1: all)"),
     ),
     _kind("IfThenElse", "bt_if_then_else", "composite", _composite(bn.IfThenElse), "BT.CPP's IfThenElse."),
     _kind("WhileDoElse", "bt_while_do_else", "composite", _composite(bn.WhileDoElse), "BT.CPP's WhileDoElse."),
-    _mapping("bt_inverter", bd.Inverter),
-    _mapping("bt_force_success", bd.ForceSuccess),
-    _mapping("bt_force_failure", bd.ForceFailure),
-    _mapping("bt_keep_running_until_failure", bd.KeepRunningUntilFailure),
-    _kind(
+    _mapping("bt_inverter", bd.Inverter, decorators.Invert),
+    _mapping("bt_force_success", bd.ForceSuccess, decorators.ForceSuccess),
+    _mapping("bt_force_failure", bd.ForceFailure, decorators.ForceFailure),
+    _mapping("bt_keep_running_until_failure", bd.KeepRunningUntilFailure, None),
+    _loop(
         "Repeat",
         "bt_repeat",
-        "decorator",
-        lambda name, children, ports, ctx: bd.Repeat(name, children[0], ports["num_cycles"]),
+        decorators.Repeat,
+        "num_cycles",
+        S,
         "BT.CPP's Repeat: the child num_cycles times, going on within the tick after a child done at once.",
-        {"count": "num_cycles", "again": S},
-        _Loop,
-        num_cycles=(int, ..., "how many successes (-1: for ever)"),
+        "how many successes (-1: for ever)",
     ),
-    _kind(
+    _loop(
         "RetryUntilSuccessful",
         "bt_retry_until_successful",
-        "decorator",
-        lambda name, children, ports, ctx: bd.RetryUntilSuccessful(name, children[0], ports["num_attempts"]),
+        decorators.Retry,
+        "num_attempts",
+        F,
         "BT.CPP's RetryUntilSuccessful.",
-        {"count": "num_attempts", "again": F},
-        _Loop,
-        num_attempts=(int, ..., "how many tries (-1: for ever)"),
+        "how many tries (-1: for ever)",
     ),
     _kind(
         "RunOnce",
@@ -268,27 +238,11 @@ BTCPP_CONTROL: tuple[type[ControlNode], ...] = (
         "decorator",
         lambda name, children, ports, ctx: bd.RunOnce(name, children[0], ports["then_skip"]),
         "BT.CPP's RunOnce.",
-        {**_MAPS, "outcome": SAME, "once": True},
+        decorators.OneShot,
         then_skip=(bool, True, "after the first run: skipped (true) or the same status (false)"),
     ),
-    _kind(
-        "Timeout",
-        "bt_timeout",
-        "decorator",
-        lambda name, children, ports, ctx: Timeout(name, children[0], ports["msec"], ctx.now),
-        "BT.CPP's Timeout, in milliseconds of simulated time.",
-        {"outcome": SAME, "fails_alone": True, "passes_on": True},
-        msec=(int, ..., "milliseconds of simulated time"),
-    ),
-    _kind(
-        "Delay",
-        "bt_delay",
-        "decorator",
-        lambda name, children, ports, ctx: Delay(name, children[0], ports["delay_msec"], ctx.now),
-        "BT.CPP's Delay, in milliseconds of simulated time.",
-        {**_MAPS, "outcome": SAME},
-        delay_msec=(int, ..., "milliseconds of simulated time"),
-    ),
+    _timed(bd.Timeout, "bt_timeout", "msec", decorators.Timeout),
+    _timed(bd.Delay, "bt_delay", "delay_msec", decorators.Delay),
 )
 #: BT.CPP node ID -> its node kind here
 BTCPP_IDS: dict[str, str] = {cls.btcpp_id: cls.yaml_name for cls in BTCPP_CONTROL}
@@ -342,7 +296,7 @@ BTCPP_SCRIPTED: tuple[type[ControlNode], ...] = (
         "decorator",
         _scripted("conditions"),
         "BT.CPP's pre/post-condition attributes (_skipIf=... on a node in XML) on the node under do.",
-        **{key: (bs.OptionalCode, None, f"BT.CPP's _{key}") for key in (*_PRE, *_POST)},
+        **{key: (bs.OptionalCode, None, f"BT.CPP's _{key}") for key in (*bs.PRE, *bs.POST)},
     ),
 )
 BTCPP_IDS.update({c.btcpp_id: c.yaml_name for c in BTCPP_SCRIPTED if c.btcpp_id != "conditions"})

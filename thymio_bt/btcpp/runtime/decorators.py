@@ -1,6 +1,7 @@
 """BT.CPP 4's decorators with BT.CPP's own semantics (``src/decorators`` of BT.CPP 4.8): Inverter,
-ForceSuccess, ForceFailure, KeepRunningUntilFailure, Repeat, RetryUntilSuccessful, RunOnce, and the
-constant leaves AlwaysSuccess/AlwaysFailure as BT.CPP nodes (see :mod:`.nodes` for the rules).
+ForceSuccess, ForceFailure, KeepRunningUntilFailure, Repeat, RetryUntilSuccessful, RunOnce, Timeout
+and Delay (in simulated time), and the constant leaves AlwaysSuccess/AlwaysFailure as BT.CPP nodes
+(see :mod:`.nodes` for the rules).
 
 Example (Repeat goes on within the tick after a child that completed at once, as BT.CPP does)::
 
@@ -13,11 +14,13 @@ Example (Repeat goes on within the tick after a child that completed at once, as
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from thymio_bt.behaviours.flow.primitives import SimTimer
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime.nodes import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS
 
@@ -146,6 +149,59 @@ class RunOnce(BtDecorator):
             self.done = status
             bn.reset(self.decorated)
         return status
+
+
+class Timed(BtDecorator):
+    """Timeout and Delay: a :class:`~thymio_bt.behaviours.flow.primitives.SimTimer` of ``msec``
+    (simulated), started at the node's first tick, forgotten when the child completes or the node is
+    halted (BT.CPP's ``TimeoutNode`` and ``DelayNode``: the next tick starts it again)."""
+
+    def __init__(self, name: str, child: Behaviour, msec: int, clock: Callable[[], float]) -> None:
+        super().__init__(name, child)
+        self.timer = SimTimer(msec / 1000.0, clock)
+
+    def started(self) -> SimTimer:
+        """The timer, started (and the node RUNNING) if this is the node's first tick."""
+        if self.timer.end is None:
+            self.timer.start()
+            self.status = RUNNING
+        return self.timer
+
+    def tick_child(self) -> Any:
+        """The child's tick; once it completes, the timer forgotten and the child reset."""
+        status = bn.execute(self.decorated)
+        if status in bn.COMPLETED:
+            self.timer.forget()
+            bn.reset(self.decorated)
+        return status
+
+    def halt(self) -> None:
+        """The timer forgotten, the child reset."""
+        self.timer.forget()
+        super().halt()
+
+
+class Timeout(Timed):
+    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (0: no limit).
+    BT.CPP's timer fires between ticks, so the deadline is checked before the child's tick
+    (``timeout``'s :class:`~thymio_bt.behaviours.flow.primitives.SimTimeout` checks it after)."""
+
+    def bt_tick(self) -> Any:
+        """The child, unless the time is up while it runs."""
+        timer = self.started()
+        if timer.seconds > 0 and self.decorated.status is RUNNING and timer.over():
+            bn.reset(self.decorated)
+            timer.forget()
+            return FAILURE
+        return self.tick_child()
+
+
+class Delay(Timed):
+    """BT.CPP's ``Delay``: RUNNING for ``delay_msec``, then the child (``delay`` in BT.CPP's protocol)."""
+
+    def bt_tick(self) -> Any:
+        """RUNNING until the delay is over, then the child's status."""
+        return self.tick_child() if self.started().over() else RUNNING
 
 
 class Constant(bn.BtNode):

@@ -215,11 +215,7 @@ class _Parser:
         return lambda b: then(b) if ternary_truth(condition(b)) else other(b)
 
     def logical(self) -> Script:
-        left = self.comparison()
-        while (op := self.accept("&&", "||")) is not None:
-            right = self.comparison()
-            left = (lambda lf, rt, o: lambda b: logic(o, lf(b), rt(b)))(left, right, op)
-        return left
+        return self.left_to_right(("&&", "||"), self.comparison, logic)
 
     def comparison(self) -> Script:
         """``a < b <= c``: each pair compared in turn, stopping at the first that fails."""
@@ -243,42 +239,38 @@ class _Parser:
         return chain
 
     def bitwise_or(self) -> Script:
-        left = self.bitwise_and()
-        while (op := self.accept("|", "^")) is not None:
-            right = self.bitwise_and()
-            left = (lambda lf, rt, o: lambda b: bits(o, lf(b), rt(b)))(left, right, op)
-        return left
+        return self.left_to_right(("|", "^"), self.bitwise_and, bits)
 
     def bitwise_and(self) -> Script:
-        left = self.concatenation()
-        while self.accept("&") is not None:
-            right = self.concatenation()
-            left = (lambda lf, rt: lambda b: bits("&", lf(b), rt(b)))(left, right)
-        return left
+        return self.left_to_right(("&",), self.concatenation, bits)
 
     def concatenation(self) -> Script:
-        left = self.sum()
-        while self.accept("..") is not None:
-            right = self.sum()
-            left = (lambda lf, rt: lambda b: concat(lf(b), rt(b)))(left, right)
+        return self.left_to_right(("..",), self.sum, lambda op, left, right: concat(left, right))
+
+    def left_to_right(self, ops: tuple[str, ...], operand: Callable[[], Script], apply: Callable[..., Any]) -> Script:
+        """``operand`` (op ``operand``)*, the operators ``ops`` grouped from the left, each
+        evaluated as ``apply(op, left, right)``."""
+        left = operand()
+        while (op := self.accept(*ops)) is not None:
+            right = operand()
+            left = (lambda lf, rt, o: lambda b: apply(o, lf(b), rt(b)))(left, right, op)
         return left
 
     def sum(self) -> Script:
         """``+ -``, evaluated right to left as BT.CPP does: ``a - b + c`` is ``a - (b + c)``."""
-        left = self.product()
-        op = self.accept("+", "-")
-        if op is None:
-            return left
-        right = self.sum()
-        return lambda b: arith(op, left(b), right(b))
+        return self.right_to_left(("+", "-"), self.product)
 
     def product(self) -> Script:
         """``* /``, right to left too."""
-        left = self.unary()
-        op = self.accept("*", "/")
+        return self.right_to_left(("*", "/"), self.unary)
+
+    def right_to_left(self, ops: tuple[str, ...], operand: Callable[[], Script]) -> Script:
+        """``operand`` (op ``operand``)*, the operators ``ops`` grouped from the right."""
+        left = operand()
+        op = self.accept(*ops)
         if op is None:
             return left
-        right = self.product()
+        right = self.right_to_left(ops, operand)
         return lambda b: arith(op, left(b), right(b))
 
     def unary(self) -> Script:

@@ -34,6 +34,7 @@ from pydantic import AfterValidator, Field
 
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour
 from thymio_bt.behaviours.flow.node import refuse
+from thymio_bt.behaviours.flow.primitives import SimTimer
 from thymio_bt.btcpp.runtime import decorators as bd
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime.script import Script as Code_
@@ -214,12 +215,13 @@ class Sleep(BtLeaf):
     Params = MsecParams
 
     def start(self) -> None:
-        """The wait starts now."""
-        self.until = self.ctx.now() + self.params.msec / 1000.0
+        """The wait starts now (``msec`` as resolved: it may come from the blackboard)."""
+        self.timer = SimTimer(self.params.msec / 1000.0, self.ctx.now)
+        self.timer.start()
 
     def step(self) -> Status:
         """RUNNING until the time is over."""
-        return Status.RUNNING if self.ctx.now() < self.until - 1e-9 else Status.SUCCESS
+        return Status.SUCCESS if self.timer.over() else Status.RUNNING
 
 
 #: BT.CPP's leaves, as robot behaviours of the mission language
