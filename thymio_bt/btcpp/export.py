@@ -308,7 +308,7 @@ def mission_settings(mission: Mission, folder: Path) -> dict[str, str]:
         "time_limit": repr(mission.time_limit),
         "seed": str(mission.seed),
         "sensor_model": mission.sensor_model,
-        "robot": mission.robot,
+        **({"robot": mission.robot} if mission.robot is not None else {}),
         **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()},
     }
     if mission.backend != "sim" or mission.backend_options:

@@ -80,7 +80,7 @@ class SettingsReader(Checker):
                 self.problems.extend(exc.problems)
         self._noise(noise_raw, data, file, values)
         if "sensor_model" not in values:  # the robot's own: the course's rays, Enki's cones, a real robot's readings
-            values["sensor_model"] = _SIM_SENSOR_MODEL[robot_model(values.get("robot", "course")).sensor_model]
+            values["sensor_model"] = _SIM_SENSOR_MODEL[robot_model(values.get("robot")).sensor_model]
         return values
 
     def _file_settings(self, data: MarkedDict, file: str, values: dict[str, Any]) -> dict[str, Any]:
@@ -138,7 +138,7 @@ class SettingsReader(Checker):
     def _noise(self, noise_raw: dict[str, Any], data: MarkedDict, file: str, values: dict[str, Any]) -> None:
         """``values["noise"]``: the levels given, with the robot's own motor noise unless a wheel
         noise is given (Enki's cannot be switched off)."""
-        motor_noise = robot_model(values.get("robot", "course")).motor_noise
+        motor_noise = robot_model(values.get("robot")).motor_noise
         if motor_noise and "wheel" not in noise_raw:
             noise_raw["wheel"] = motor_noise
         try:

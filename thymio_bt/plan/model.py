@@ -76,8 +76,9 @@ class Mission:
     sensor_model: str
     tree: NodePlan
     registry: Any = None
-    #: the robot model's name (:data:`thymio_bt.robot.model.ROBOTS`)
-    robot: str = "course"
+    #: the robot model's name (:data:`thymio_bt.robot.model.ROBOTS`) or profile file, None when the
+    #: mission names none (then :func:`thymio_bt.backends.robot_for` picks the backend's own)
+    robot: str | None = None
     #: the backend kind's name (:mod:`thymio_bt.backends`) and its settings, as written
     backend: str = "sim"
     backend_options: dict[str, Any] = field(default_factory=dict)

@@ -284,14 +284,19 @@ REAL = replace(
 
 #: The robot models a run can name, by name.
 ROBOTS: dict[str, RobotModel] = {m.name: m for m in (COURSE, ENKI, REAL)}
+#: the robot a mission runs with when it names none (and no backend has its own): the course's
+DEFAULT_ROBOT = COURSE.name
 #: the furthest any built-in robot's proximity sensors read (m): a sensed length's bound before the robot is known
 WIDEST_RANGE = max(m.range_max for m in ROBOTS.values())
 _MODELS = tuple(ROBOTS.items())  # hashable, for the profile cache
 
 
-def robot_model(name: str) -> RobotModel:
+def robot_model(name: str | None = None) -> RobotModel:
     """The robot model called ``name``, or the profile file ``name`` (``.yaml``, written by
-    ``thymio-bt calibrate``); ``KeyError`` with the known names otherwise."""
+    ``thymio-bt calibrate``), or :data:`DEFAULT_ROBOT` for None (a mission that names no robot);
+    ``KeyError`` with the known names otherwise."""
+    if name is None:
+        return ROBOTS[DEFAULT_ROBOT]
     if name in ROBOTS:
         return ROBOTS[name]
     from thymio_bt.robot.profile import is_profile_path, read_profile
