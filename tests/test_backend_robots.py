@@ -48,7 +48,9 @@ def _aseba(monkeypatch, overrides, options=None):
     return backend_kind("aseba").create(mission, 0, options or {}), node
 
 
-@pytest.mark.parametrize("robot, expected", [(None, "real"), ("course", "course"), ("enki", "enki"), ("profile", "mine")])
+@pytest.mark.parametrize(
+    "robot, expected", [(None, "real"), ("course", "course"), ("enki", "enki"), ("profile", "mine")]
+)
 def test_the_aseba_backend_drives_the_model_chosen_and_real_by_default(monkeypatch, tmp_path, capsys, robot, expected):
     """ThymioRobot set no model: behaviours (which read robot.model) drove a real Thymio with the
     course robot's sensor poses, and the conversions used the course's numbers."""
