@@ -113,3 +113,27 @@ def test_node_kinds_declare_what_tools_used_to_probe():
 
 def _required(motion: type[RobotBehaviour]) -> dict[str, float]:
     return {"distance": 0.1} if motion is MoveDistance else {"angle": 1.0} if motion is TurnAngle else {}
+
+
+def test_the_sensor_model_names_are_declared_once():
+    """The simulator's sensor models and the robot models' names for them live in robot/model.py
+    alone: the mission settings had their own tuple and their own ``rays`` -> ``metres`` table."""
+    from typing import get_args
+
+    from thymio_bt.mission import load_mission
+    from thymio_bt.plan.model import Mission
+    from thymio_bt.robot.model import ROBOTS, SIM_SENSOR_MODEL, SIM_SENSOR_MODELS, SimSensorModel
+
+    spelt = re.compile(r"\"metres\",\s*\"raw\",\s*\"cone\"")
+    assert [path for path, text in SOURCES.items() for _ in spelt.finditer(text)] == ["robot/model.py"]
+    assert get_args(SimSensorModel) == SIM_SENSOR_MODELS == tuple(SIM_SENSOR_MODEL.values())
+    for name, robot in ROBOTS.items():  # a mission's default is its robot's own, in the simulator's name
+        assert load_mission("square", {"robot": name}).sensor_model == SIM_SENSOR_MODEL[robot.sensor_model]
+    for written in (*SIM_SENSOR_MODEL, *SIM_SENSOR_MODELS):
+        assert load_mission("square", {"sensor_model": written}).sensor_model in SIM_SENSOR_MODELS
+    hints = Mission.__annotations__  # named, not Any: mypy checks their readers
+    assert (hints["sensor_model"], hints["registry"], hints["expect"]) == (
+        "SimSensorModel",
+        "Registry",
+        "Expect | None",
+    )

@@ -147,15 +147,19 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> tupl
 
     spec = load_mission(path, overrides, run_plugins=plugins)  # checks the start pose against the maze too
     nodes = sum(1 for _ in spec.tree.walk())
-    unchecked = [n for n in spec.tree.walk() if n.behaviour and issubclass(spec.registry[n.behaviour], UnrunPlugin)]
+    unchecked = [
+        (n, plugin)
+        for n in spec.tree.walk()
+        if n.behaviour and issubclass(plugin := spec.registry[n.behaviour], UnrunPlugin)
+    ]
     summary = f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
     if not unchecked:
         return summary, ""
     # 'ok' must not read as 'run will accept it': a misspelt parameter of a plugin node is only found
     # once its plugin is imported, so say which nodes were not checked and the command that checks them
-    shown = ", ".join(f"{n.behaviour} (line {n.where[1]})" for n in unchecked[:5]) + ", ..." * (len(unchecked) > 5)
+    shown = ", ".join(f"{n.behaviour} (line {n.where[1]})" for n, _ in unchecked[:5]) + ", ..." * (len(unchecked) > 5)
     # a plugin whose source says its parameters' names had them checked, not their values
-    names_read = all(spec.registry[n.behaviour].Params.model_config.get("extra") == "forbid" for n in unchecked)
+    names_read = all(plugin.Params.model_config.get("extra") == "forbid" for _, plugin in unchecked)
     what = "parameter values" if names_read else "parameters"
     return summary, (
         f"not checked: the {what} of {len(unchecked)} plugin node{'s' * (len(unchecked) != 1)}, {shown}: "

@@ -30,7 +30,7 @@ from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
 from thymio_bt.maze import Maze, load_maze, resolve_maze
 from thymio_bt.mission.pass_base import Scope, Where
-from thymio_bt.mission.settings import MAX_SEED, SENSOR_MODELS, SETTING_RANGES, SettingsReader
+from thymio_bt.mission.settings import MAX_SEED, SETTING_RANGES, SettingsReader
 from thymio_bt.plan.registry import Registry, default_registry
 from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import DEFAULT_ROBOT, RobotModel, robot_model
@@ -39,7 +39,6 @@ from thymio_bt.robot.placement import placement_problem
 __all__ = [
     "INCLUDE_KEYS",
     "MAX_SEED",
-    "SENSOR_MODELS",
     "SETTING_RANGES",
     "TOP_KEYS",
     "Assembler",

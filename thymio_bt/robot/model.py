@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Literal, TypeGuard
+from typing import Literal, TypeGuard, get_args
 
 from thymio_bt.robot.interface import SENSOR_NAMES, Pose
 from thymio_bt.sensor_tables import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
@@ -33,7 +33,9 @@ from thymio_bt.sensor_tables import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTab
 SensorModelName = Literal["rays", "raw", "cone"]
 #: how the simulator makes a run's readings (a mission's ``sensor_model``): ``metres`` is ``rays``
 SimSensorModel = Literal["metres", "raw", "cone"]
-SIM_SENSOR_MODELS: tuple[SimSensorModel, ...] = ("metres", "raw", "cone")
+SIM_SENSOR_MODELS: tuple[SimSensorModel, ...] = get_args(SimSensorModel)
+#: a robot model's sensor model as the simulator names it (``rays``: the course's exact rays, in metres)
+SIM_SENSOR_MODEL: dict[SensorModelName, SimSensorModel] = {"rays": "metres", "raw": "raw", "cone": "cone"}
 
 
 def is_sim_sensor_model(name: str) -> TypeGuard[SimSensorModel]:
