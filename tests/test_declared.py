@@ -137,3 +137,24 @@ def test_the_sensor_model_names_are_declared_once():
         "Registry",
         "Expect | None",
     )
+
+
+def test_node_status_encodings_are_derived_from_one_declaration():
+    """A node status's log letter, BT.CPP/Groot2 number and wire code were five tables in five
+    modules; now enums.py declares them and the others derive theirs, each format unchanged."""
+    from py_trees.common import Status
+
+    from thymio_bt.btcpp import btlog, groot2
+    from thymio_bt.enums import NODE_STATUSES, STATUS_LETTER
+    from thymio_bt.grade import wire
+    from thymio_bt.logs import entries
+    from thymio_bt.run import divergence
+
+    assert STATUS_LETTER == {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}  # the logs' letters
+    assert set(NODE_STATUSES) == {s.name for s in Status} and entries.STATUS_LETTER is STATUS_LETTER
+    assert groot2._STATUS == {"INVALID": 0, "RUNNING": 1, "SUCCESS": 2, "FAILURE": 3}  # BT.CPP's NodeStatus
+    assert wire.STATUSES == NODE_STATUSES and btlog.LETTER == {0: "-", 1: "R", 2: "S", 3: "F", 4: "-"}
+    assert btlog.ENDED == {"S": "SUCCESS", "F": "FAILURE"}
+    assert divergence.STATUS_WORD == {"S": "SUCCESS", "F": "FAILURE", "R": "RUNNING", "-": "INVALID"}
+    table = re.compile(r"\"(SUCCESS|FAILURE|RUNNING|INVALID)\":\s*(\"[SFR-]\"|\d)|\"[SFR-]\":\s*\"(SUCCESS|FAILURE)")
+    assert [path for path, text in SOURCES.items() if table.search(text)] == []

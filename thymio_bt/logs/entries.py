@@ -24,9 +24,7 @@ from typing import Any, TypedDict
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
-
-#: a node status in one letter, as logs store it
-STATUS_LETTER = {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}
+from thymio_bt.enums import STATUS_LETTER as STATUS_LETTER  # a node status as logs store it
 
 
 class TreeNode(TypedDict):
