@@ -158,3 +158,17 @@ def test_node_status_encodings_are_derived_from_one_declaration():
     assert divergence.STATUS_WORD == {"S": "SUCCESS", "F": "FAILURE", "R": "RUNNING", "-": "INVALID"}
     table = re.compile(r"\"(SUCCESS|FAILURE|RUNNING|INVALID)\":\s*(\"[SFR-]\"|\d)|\"[SFR-]\":\s*\"(SUCCESS|FAILURE)")
     assert [path for path, text in SOURCES.items() if table.search(text)] == []
+
+
+def test_no_angle_is_wrapped_through_atan2():
+    """``atan2(sin(a), cos(a))`` was a third wrap with a third range ((-pi, pi]); the Playground's
+    truth now has the simulator's range (``wrap_angle``), a mirrored spawn the range of a start
+    pose as written (``math.remainder``, exact, which each such place says why it needs)."""
+    atan2_wrap = re.compile(r"atan2\(\s*math\.sin\((?P<a>[^()]*(\([^()]*\))?[^()]*)\),\s*math\.cos\((?P=a)\)\)")
+    assert [path for path, text in SOURCES.items() if atan2_wrap.search(text)] == []
+    for path, text in SOURCES.items():
+        lines = text.splitlines()
+        for number, line in enumerate(lines):
+            if re.search(r"math\.remainder\([^\n]*math\.tau\)", line):
+                said = "\n".join(lines[max(0, number - 3) : number + 1])
+                assert "not wrap_angle" in said, f"{path}:{number + 1}: a wrap that does not say why"
