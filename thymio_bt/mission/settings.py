@@ -29,7 +29,7 @@ from thymio_bt.inputs.units import Quantity, check_kind, resolver_from
 from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.parameters import SetValue
-from thymio_bt.mission.pass_base import Checker, Scope, Where
+from thymio_bt.mission.pass_base import LoaderPass, Scope, Where
 from thymio_bt.plan.expect import Expect
 from thymio_bt.robot.model import ROBOTS, SIM_SENSOR_MODEL, SIM_SENSOR_MODELS, robot_model
 from thymio_bt.robot.noise import NoiseConfig
@@ -54,7 +54,7 @@ _OVERRIDE: Where = ("--set", 0, 0)
 ROBOT_OPTION = "--robot"
 
 
-class SettingsReader(Checker):
+class SettingsReader(LoaderPass):
     """Reads a mission's settings, and applies ``--set`` to them and to its parameters."""
 
     #: whether the robot asked for was refused (said already): checks that need it are skipped, not
