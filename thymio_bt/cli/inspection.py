@@ -235,7 +235,9 @@ def _write_btcpp(mission: Path, btcpp: Path, plugins: bool) -> None:
 def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: bool, report: Path | None) -> None:
     """``tree``: print the tree and, with a format (a flag, or ``output``'s suffix), write it as
     .dot/.svg/.png; with a ``report``, the tree with the coverage it holds."""
-    from thymio_bt.viz.terminal import coverage_text, export_tree, tree_text
+    from thymio_bt.mission import load_mission
+    from thymio_bt.viz.graph import coverage_dot, plan_dot, write_graph
+    from thymio_bt.viz.terminal import coverage_text, tree_text
 
     if fmt is None and output is not None:
         fmt = output.suffix.lower().lstrip(".")
@@ -247,7 +249,14 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
     coverage, conditions, registry = (
         _coverage_of(report, mission, plugins) if report is not None else (None, set(), None)
     )
-    text = tree_text(mission, plugins) if coverage is None else coverage_text(coverage, conditions, registry)
+    if coverage is None:
+        loaded = load_mission(mission, run_plugins=plugins)
+        text, source = tree_text(loaded), lambda: plan_dot(loaded.tree, loaded.registry)
+    else:
+        text, source = (
+            coverage_text(coverage, conditions, registry),
+            lambda: coverage_dot(coverage, conditions, registry),
+        )
     if fmt is None:
         click.echo(text)
         return
@@ -257,7 +266,7 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
         out = Output(output, "--output")
     if not out.is_stdout:
         click.echo(text)
-    export_tree(mission, out, fmt, plugins, coverage, conditions, registry)
+    write_graph(source(), out, fmt, f"thymio-bt tree {mission} --dot -o {Path(str(out)).stem}.dot")
     if not out.is_stdout:
         click.echo(f"wrote {out}", err=True)
 

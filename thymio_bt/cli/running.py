@@ -437,7 +437,8 @@ class CoverageRequest:
     def done(self, conditions: set[str], data: dict[str, Any], registry: Any = None) -> None:
         """Keep the coverage JSON ``data`` and its text (``conditions``: the names of the nodes to show
         as true and false; ``registry``: the mission's nodes); draw it to the file."""
-        from thymio_bt.viz.terminal import coverage_dot, coverage_text, write_graph
+        from thymio_bt.viz.graph import coverage_dot, write_graph
+        from thymio_bt.viz.terminal import coverage_text
 
         self.data, self.text = data, coverage_text(data, conditions, registry)
         if self.out is not None:
