@@ -227,3 +227,17 @@ def test_tree_draws_every_shipped_mission(mission):
 def test_options_that_exclude_each_other_are_refused_not_one_quietly_dropped(args):
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 2 and "exclude each other (hint: " in result.output, result.output
+
+
+def test_commands_that_choose_a_backend_do_not_import_the_run_command():
+    """calibrate and compare imported cli/running.py (the whole run command) for ``backend_for``, and
+    sweep for ``CoverageRequest``: both live in cli/option_values.py, which they share with run."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, thymio_bt.cli.calibrating, thymio_bt.cli.comparing, thymio_bt.cli.sweeps\n"
+        "print('thymio_bt.cli.running' in sys.modules)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "False"
