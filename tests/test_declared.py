@@ -172,3 +172,18 @@ def test_no_angle_is_wrapped_through_atan2():
             if re.search(r"math\.remainder\([^\n]*math\.tau\)", line):
                 said = "\n".join(lines[max(0, number - 3) : number + 1])
                 assert "not wrap_angle" in said, f"{path}:{number + 1}: a wrap that does not say why"
+
+
+def test_what_other_rooms_import_from_the_behaviours_base_is_declared_public():
+    """The runner, the recording and the grader import ``snapshot``, ``node_path``, ``describe``,
+    ``is_fault`` and ``EventLog`` from behaviours/base.py: its ``__all__`` must say so."""
+    from thymio_bt.behaviours import base
+
+    imported = {
+        (path, alias.name)
+        for path, text in SOURCES.items()
+        for node in ast.walk(ast.parse(text))
+        if isinstance(node, ast.ImportFrom) and node.module == "thymio_bt.behaviours.base"
+        for alias in node.names
+    }
+    assert {(path, name) for path, name in imported if name not in base.__all__} == set()
