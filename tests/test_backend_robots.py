@@ -1,6 +1,6 @@
 """Each backend drives its own robot: a real Thymio (aseba, tdm) is ``real`` and the Playground's is
-``enki`` when the mission names no robot (or the course's, the simulator's Gazebo robot), and the
-model chosen (a name or a measured profile) is the one behaviours read as ``robot.model``. Also the
+``enki`` when the mission names no robot (an explicit ``robot: course`` or ``--robot course`` is
+kept), and the model chosen (a name or a measured profile) is the one behaviours read as ``robot.model``. Also the
 ``placed`` option, for a run with nobody to place the robot."""
 
 import math
@@ -48,7 +48,9 @@ def _aseba(monkeypatch, overrides, options=None):
     return backend_kind("aseba").create(mission, 0, options or {}), node
 
 
-@pytest.mark.parametrize("robot, expected", [(None, "real"), ("course", "real"), ("enki", "enki"), ("profile", "mine")])
+@pytest.mark.parametrize(
+    "robot, expected", [(None, "real"), ("course", "course"), ("enki", "enki"), ("profile", "mine")]
+)
 def test_the_aseba_backend_drives_the_model_chosen_and_real_by_default(monkeypatch, tmp_path, capsys, robot, expected):
     """ThymioRobot set no model: behaviours (which read robot.model) drove a real Thymio with the
     course robot's sensor poses, and the conversions used the course's numbers."""
@@ -58,7 +60,7 @@ def test_the_aseba_backend_drives_the_model_chosen_and_real_by_default(monkeypat
         assert backend.model.name == expected
         assert backend.speed_scale == 1.0  # every number from the model: no copies to disagree with it
     said = capsys.readouterr().err
-    assert ("robot model 'real'" in said) == (robot in (None, "course"))
+    assert ("robot model 'real'" in said) == (robot is None)
     if expected == "mine":
         assert backend.model.wheel_separation == 0.0921 and backend.model.sensors == REAL.sensors
 
@@ -97,6 +99,24 @@ def test_robot_for_keeps_a_named_robot_and_replaces_the_course_on_other_robots()
     assert robot_for(mission, "playground", said.append) is ENKI and "--backend playground" in said[0]
     enki = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     assert robot_for(enki, "aseba", said.append) is ENKI and len(said) == 1
+
+
+def test_an_explicit_course_robot_is_kept_on_another_backend(tmp_path):
+    """``--robot course`` (or ``robot: course``) is a choice, not the absence of one: the Playground
+    drives the course's model then, and says nothing; a mission naming none gets Enki's."""
+    from thymio_bt.btcpp.export import mission_settings
+
+    square = f"{ROOT}/missions/square.yaml"
+    written = tmp_path / "m.yaml"
+    written.write_text("maze: arena\nstart: [0.6, 0.6, 0]\nrobot: course\ntree: {Wait: {seconds: 1}}\n")
+    for mission in (load_mission(square, {"--robot": "course"}), load_mission(square, {"robot": "course"})):
+        said: list[str] = []
+        assert mission.robot == "course" and robot_for(mission, "playground", said.append).name == "course"
+        assert said == [] and mission_settings(mission, tmp_path)["robot"] == "course"
+    assert robot_for(load_mission(written), "playground", print).name == "course"
+    unnamed = load_mission(square)
+    assert unnamed.robot is None and "robot" not in mission_settings(unnamed, tmp_path)
+    assert robot_for(unnamed, "playground", lambda _: None) is ENKI
 
 
 def test_placed_skips_the_first_prompt_only_and_says_how_without_an_operator():

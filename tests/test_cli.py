@@ -154,6 +154,25 @@ def test_tree_draws_to_the_mission_file_s_name_as_documented(tmp_path, monkeypat
     assert "the MISSION file's name" in " ".join(invoke("tree", "--help").output.split())
 
 
+def test_tree_reads_the_mission_once_and_the_terminal_tree_loads_none(tmp_path, monkeypatch):
+    """viz/terminal.py loaded the mission itself (and ``tree --dot`` loaded it twice: once for the
+    text, once for the picture); now the command loads it, the terminal draws it, viz/graph exports it."""
+    import thymio_bt.mission as mission_package
+    import thymio_bt.viz.terminal as terminal
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.yaml").write_text("maze: arena\nstart: centre\ntree: Stop\n")
+    loads = []
+    real = mission_package.load_mission
+    monkeypatch.setattr(mission_package, "load_mission", lambda *a, **k: loads.append(a) or real(*a, **k))
+    result = invoke("tree", "m.yaml", "--dot")
+    assert (
+        result.exit_code == 0 and "--> Stop" in result.output and (tmp_path / "m.dot").read_text().startswith("digraph")
+    )
+    assert len(loads) == 1
+    assert terminal.tree_text.__annotations__ == {"mission": "Mission", "return": "str"}  # a loaded mission
+
+
 @pytest.mark.parametrize("flag", ["--dot", "--png"])
 def test_a_default_output_name_never_replaces_a_file(tmp_path, monkeypatch, flag):
     """issue 46 item 11: 'tree bonus.yaml --png' wrote bonus.png over the --plot bonus.png just made.
@@ -219,3 +238,17 @@ def test_the_package_hands_out_every_command_s_function():
     handed = {id(getattr(cli, name)) for name in cli.__all__}
     commands = {name: main.get_command(None, name) for name in COMMANDS}
     assert [name for name, command in commands.items() if id(command) not in handed] == []
+
+
+def test_commands_that_choose_a_backend_do_not_import_the_run_command():
+    """calibrate and compare imported cli/running.py (the whole run command) for ``backend_for``, and
+    sweep for ``CoverageRequest``: both live in cli/option_values.py, which they share with run."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, thymio_bt.cli.calibrating, thymio_bt.cli.comparing, thymio_bt.cli.sweeps\n"
+        "print('thymio_bt.cli.running' in sys.modules)"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "False"

@@ -15,7 +15,8 @@ from thymio_bt.mission import load_mission
 from thymio_bt.run.coverage import Coverage, NodeTable, plan_paths
 from thymio_bt.run.runner import Run
 from thymio_bt.run.sweep import Job, LocalPool, run_job, sweep
-from thymio_bt.viz.terminal import coverage_dot, coverage_text
+from thymio_bt.viz.graph import coverage_dot
+from thymio_bt.viz.terminal import coverage_text
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -178,3 +178,77 @@ def test_no_public_name_list_is_a_copy_of_another():
 
 def _required(motion: type[RobotBehaviour]) -> dict[str, float]:
     return {"distance": 0.1} if motion is MoveDistance else {"angle": 1.0} if motion is TurnAngle else {}
+
+
+def test_the_sensor_model_names_are_declared_once():
+    """The simulator's sensor models and the robot models' names for them live in robot/model.py
+    alone: the mission settings had their own tuple and their own ``rays`` -> ``metres`` table."""
+    from typing import get_args
+
+    from thymio_bt.mission import load_mission
+    from thymio_bt.plan.model import Mission
+    from thymio_bt.robot.model import ROBOTS, SIM_SENSOR_MODEL, SIM_SENSOR_MODELS, SimSensorModel
+
+    spelt = re.compile(r"\"metres\",\s*\"raw\",\s*\"cone\"")
+    assert [path for path, text in SOURCES.items() for _ in spelt.finditer(text)] == ["robot/model.py"]
+    assert get_args(SimSensorModel) == SIM_SENSOR_MODELS == tuple(SIM_SENSOR_MODEL.values())
+    for name, robot in ROBOTS.items():  # a mission's default is its robot's own, in the simulator's name
+        assert load_mission("square", {"robot": name}).sensor_model == SIM_SENSOR_MODEL[robot.sensor_model]
+    for written in (*SIM_SENSOR_MODEL, *SIM_SENSOR_MODELS):
+        assert load_mission("square", {"sensor_model": written}).sensor_model in SIM_SENSOR_MODELS
+    hints = Mission.__annotations__  # named, not Any: mypy checks their readers
+    assert (hints["sensor_model"], hints["registry"], hints["expect"]) == (
+        "SimSensorModel",
+        "Registry",
+        "Expect | None",
+    )
+
+
+def test_node_status_encodings_are_derived_from_one_declaration():
+    """A node status's log letter, BT.CPP/Groot2 number and wire code were five tables in five
+    modules; now enums.py declares them and the others derive theirs, each format unchanged."""
+    from py_trees.common import Status
+
+    from thymio_bt.btcpp import btlog, groot2
+    from thymio_bt.enums import NODE_STATUSES, STATUS_LETTER
+    from thymio_bt.grade import wire
+    from thymio_bt.logs import entries
+    from thymio_bt.run import divergence
+
+    assert STATUS_LETTER == {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}  # the logs' letters
+    assert set(NODE_STATUSES) == {s.name for s in Status} and entries.STATUS_LETTER is STATUS_LETTER
+    assert groot2._STATUS == {"INVALID": 0, "RUNNING": 1, "SUCCESS": 2, "FAILURE": 3}  # BT.CPP's NodeStatus
+    assert wire.STATUSES == NODE_STATUSES and btlog.LETTER == {0: "-", 1: "R", 2: "S", 3: "F", 4: "-"}
+    assert btlog.ENDED == {"S": "SUCCESS", "F": "FAILURE"}
+    assert divergence.STATUS_WORD == {"S": "SUCCESS", "F": "FAILURE", "R": "RUNNING", "-": "INVALID"}
+    table = re.compile(r"\"(SUCCESS|FAILURE|RUNNING|INVALID)\":\s*(\"[SFR-]\"|\d)|\"[SFR-]\":\s*\"(SUCCESS|FAILURE)")
+    assert [path for path, text in SOURCES.items() if table.search(text)] == []
+
+
+def test_no_angle_is_wrapped_through_atan2():
+    """``atan2(sin(a), cos(a))`` was a third wrap with a third range ((-pi, pi]); the Playground's
+    truth now has the simulator's range (``wrap_angle``), a mirrored spawn the range of a start
+    pose as written (``math.remainder``, exact, which each such place says why it needs)."""
+    atan2_wrap = re.compile(r"atan2\(\s*math\.sin\((?P<a>[^()]*(\([^()]*\))?[^()]*)\),\s*math\.cos\((?P=a)\)\)")
+    assert [path for path, text in SOURCES.items() if atan2_wrap.search(text)] == []
+    for path, text in SOURCES.items():
+        lines = text.splitlines()
+        for number, line in enumerate(lines):
+            if re.search(r"math\.remainder\([^\n]*math\.tau\)", line):
+                said = "\n".join(lines[max(0, number - 3) : number + 1])
+                assert "not wrap_angle" in said, f"{path}:{number + 1}: a wrap that does not say why"
+
+
+def test_what_other_rooms_import_from_the_behaviours_base_is_declared_public():
+    """The runner, the recording and the grader import ``snapshot``, ``node_path``, ``describe``,
+    ``is_fault`` and ``EventLog`` from behaviours/base.py: its ``__all__`` must say so."""
+    from thymio_bt.behaviours import base
+
+    imported = {
+        (path, alias.name)
+        for path, text in SOURCES.items()
+        for node in ast.walk(ast.parse(text))
+        if isinstance(node, ast.ImportFrom) and node.module == "thymio_bt.behaviours.base"
+        for alias in node.names
+    }
+    assert {(path, name) for path, name in imported if name not in base.__all__} == set()

@@ -15,13 +15,13 @@ from pathlib import Path
 import pytest
 
 import thymio_bt
-from thymio_bt._moved import MOVED, new_name
+from thymio_bt._moved import MOVED, SPLIT, new_name
 
 
 def _forget_old_names(monkeypatch: pytest.MonkeyPatch) -> None:
     """Remove every old name (and its submodules) from ``sys.modules``, for this test only."""
     for name in list(sys.modules):
-        if new_name(name) is not None:
+        if new_name(name) is not None or name in SPLIT:
             monkeypatch.delitem(sys.modules, name)
 
 
@@ -89,9 +89,36 @@ def test_names_that_did_not_move_are_left_to_the_other_finders():
     assert new_name("thymio_bt.sim.world.inner") == "thymio_bt.backends.sim.world.inner"
 
 
-@pytest.mark.parametrize("old", sorted(MOVED))
+@pytest.mark.parametrize("old", sorted(SPLIT))
+def test_an_old_module_split_in_two_imports_the_names_of_both(old: str, monkeypatch: pytest.MonkeyPatch):
+    """``mission.expect`` held what a mission expects (now ``plan.expect``) and the verdict on a run
+    (now ``run.verdict``): both still import from the old name, the same objects, with one warning."""
+    from thymio_bt.plan.expect import GoalRegion
+    from thymio_bt.run.verdict import check
+
+    _forget_old_names(monkeypatch)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        module = importlib.import_module(old)
+    assert module.GoalRegion is GoalRegion and module.check is check
+    assert module.__all__ == [name for new in SPLIT[old] for name in importlib.import_module(new).__all__]
+    assert [str(w.message) for w in caught] == [
+        f"{old} moved to thymio_bt.plan.expect and thymio_bt.run.verdict: import it from there"
+    ]
+
+
+@pytest.mark.parametrize("old", sorted({*MOVED, *SPLIT}))
 def test_no_old_name_is_a_module_of_the_package_again(old: str):
     """The finder comes first on sys.meta_path: an old name that is a module again (``thymio_bt.btcpp``,
     an alias of the 0.1 layout, is the BT.CPP package now) would hide that module behind the alias."""
     path = Path(thymio_bt.__file__).parent.joinpath(*old.split(".")[1:])
     assert not path.with_suffix(".py").exists() and not (path / "__init__.py").exists(), old
+
+
+def test_the_exception_root_is_public_api():
+    """CHANGELOG.md and docs/architecture.md document ``ThymioBtError`` and ``StopRun`` as the
+    exceptions to catch: ``from thymio_bt.errors import *`` and the API reference need them declared."""
+    import thymio_bt.errors as errors
+
+    assert {"ThymioBtError", "StopRun", "UserError", "Problem"} <= set(errors.__all__)
+    assert all(issubclass(getattr(errors, name), errors.ThymioBtError) for name in ("StopRun", "UserError"))

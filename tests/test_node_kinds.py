@@ -22,7 +22,8 @@ from thymio_bt.btcpp.export import mission_xml
 from thymio_bt.mission.loader import load_mission
 from thymio_bt.plan.registry import default_registry
 from thymio_bt.run.coverage import Coverage
-from thymio_bt.viz.terminal import coverage_text, plan_dot
+from thymio_bt.viz.graph import plan_dot
+from thymio_bt.viz.terminal import coverage_text
 
 
 class Veto(ControlNode):

@@ -139,3 +139,19 @@ def test_a_bad_matrix_value_is_said_at_matrix_and_nothing_comes_before_an_error(
     assert bad.exit_code == 2 and bad.output.startswith("error: --matrix: robot must be one of"), bad.output
     missing = CliRunner().invoke(main, ["sweep", str(tmp_path / "none.yaml"), "--runs", "2"])
     assert missing.exit_code == 2 and missing.output.startswith("error: ") and "runs" not in missing.output
+
+
+def test_the_first_stop_error_is_read_from_what_a_behaviour_reports_not_its_name(tmp_path):
+    """first_stop_error matched ``name == "MoveUntilWall"``: a plugin's stop at a wall under a name of
+    its own (a subclass, which reports what its base reports) was not counted."""
+    from thymio_bt.run.sweep import Job
+
+    (tmp_path / "stops.py").write_text(
+        "from thymio_bt.behaviours.motion import MoveUntilWall\n\n\n"
+        "class StopAtWall(MoveUntilWall):\n    'MoveUntilWall under a name of its own.'\n"
+    )
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: [stops.py]\ntree: {StopAtWall: {distance: 5cm}}\n")
+    summary = run_job(Job(str(mission), 0))
+    assert summary["status"] == "SUCCESS" and summary["first_stop_error"] is not None
+    assert summary["first_stop_error"] < 0.01

@@ -2,7 +2,9 @@
 
 ``import thymio_bt.robot_model`` gives the very module ``thymio_bt.robot.model`` (the same object, so
 its classes are the same classes), through a finder on :data:`sys.meta_path` that only answers for
-the names in :data:`MOVED` and their submodules.
+the names in :data:`MOVED` and their submodules, and :data:`SPLIT`. An old module whose contents went
+to several new ones (:data:`SPLIT`) is a module of its own holding their public names (the same
+objects).
 """
 
 from __future__ import annotations
@@ -36,7 +38,6 @@ MOVED: dict[str, str] = {
         "matrix": "run.matrix",
         "distributed": "run.distributed",
         "recording": "logs.recording",
-        "expect": "run.verdict",
         "docs": "analysis.node_docs",
         "pid": "robot.pid",
         "groot2": "btcpp.groot2",
@@ -76,7 +77,14 @@ MOVED: dict[str, str] = {
         "logs.records": "logs.entries",
         "robot.calibration": "sensor_tables",
         "cli.calibration": "cli.calibrating",
-        "mission.expect": "run.verdict",
+    }.items()
+}
+#: Old module name -> the new modules its contents went to (what a mission expects, the verdict on a run).
+SPLIT: dict[str, tuple[str, ...]] = {
+    f"thymio_bt.{old}": tuple(f"thymio_bt.{new}" for new in news)
+    for old, news in {
+        "expect": ("plan.expect", "run.verdict"),
+        "mission.expect": ("plan.expect", "run.verdict"),
     }.items()
 }
 
@@ -120,13 +128,39 @@ class _Alias(importlib.abc.Loader):
         module.__spec__ = self.spec
 
 
+class _Merged(importlib.abc.Loader):
+    """Loads an old name as a module of its own holding the public names (``__all__``) of each new
+    module it was split into (the same objects: a class from the old name is the new module's class)."""
+
+    def __init__(self, targets: tuple[str, ...]) -> None:
+        self.targets = targets
+
+    def create_module(self, spec: ModuleSpec) -> ModuleType:
+        warnings.warn(
+            f"{spec.name} moved to {' and '.join(self.targets)}: import it from there",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return ModuleType(spec.name, f"The names of {', '.join(self.targets)} (moved from {spec.name}).")
+
+    def exec_module(self, module: ModuleType) -> None:
+        names: list[str] = []
+        for target in self.targets:
+            new = importlib.import_module(target)
+            module.__dict__.update({name: new.__dict__[name] for name in new.__all__})
+            names.extend(new.__all__)
+        module.__all__ = names  # type: ignore[attr-defined]
+
+
 class MovedFinder(importlib.abc.MetaPathFinder):
     """Finds old module names and loads them as their new modules."""
 
     def find_spec(
         self, fullname: str, path: Sequence[str] | None, target: ModuleType | None = None
     ) -> ModuleSpec | None:
-        """A spec for an old name (:data:`MOVED`), None for every other module."""
+        """A spec for an old name (:data:`MOVED`, :data:`SPLIT`), None for every other module."""
+        if fullname in SPLIT:
+            return importlib.util.spec_from_loader(fullname, _Merged(SPLIT[fullname]))
         target_name = new_name(fullname)
         if target_name is None:
             return None

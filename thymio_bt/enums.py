@@ -1,13 +1,23 @@
 """The ``str`` enums every room shares: :class:`TextEnum`, and :class:`FailureCode`, why a behaviour
-or a run failed. At the bottom of the package (it imports nothing of it), so that a behaviour, a run,
-a grade or a log can name a code without importing the behaviours' base.
+or a run failed; and a tree node's status in each encoding a file or a wire gives it
+(:data:`NODE_STATUSES`, :data:`STATUS_LETTER`). At the bottom of the package (it imports nothing of
+it), so that a behaviour, a run, a grade or a log can name a code without importing the behaviours' base.
+
+>>> STATUS_LETTER["SUCCESS"], NODE_STATUSES.index("FAILURE")  # a log's letter, BT.CPP's number
+('S', 3)
 """
 
 from __future__ import annotations
 
 from enum import Enum
 
-__all__ = ["FailureCode", "TextEnum"]
+__all__ = ["NODE_STATUSES", "STATUS_LETTER", "FailureCode", "TextEnum"]
+
+#: a tree node's statuses (py_trees' ``Status`` names), each at its number in BT.CPP's ``NodeStatus``
+#: (IDLE 0, RUNNING 1, SUCCESS 2, FAILURE 3), the number Groot2 and the grader's wire send
+NODE_STATUSES = ("INVALID", "RUNNING", "SUCCESS", "FAILURE")
+#: a node status in one letter, as logs store it
+STATUS_LETTER = dict(zip(NODE_STATUSES, "-RSF", strict=True))
 
 
 class TextEnum(str, Enum):

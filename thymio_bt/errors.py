@@ -122,4 +122,4 @@ def optional_module(name: str, needed_by: str, hint: str) -> ModuleType:
         ) from None
 
 
-__all__ = ["Problem", "UserError", "did_you_mean", "optional_module", "type_name"]
+__all__ = ["Problem", "StopRun", "ThymioBtError", "UserError", "did_you_mean", "optional_module", "type_name"]

@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.robot.model import DEFAULT_ROBOT
 
 if TYPE_CHECKING:
     from pathlib import Path
@@ -61,8 +62,8 @@ class MissionWorld(Protocol):
         ...
 
     @property
-    def robot(self) -> str:
-        """The robot model's name, or a profile file."""
+    def robot(self) -> str | None:
+        """The robot model's name, or a profile file (None: the mission names none)."""
         ...
 
     @property
@@ -92,9 +93,9 @@ class BackendKind:
     options: type[BackendOptions] = BackendOptions
     #: whether runs on it take real time (a real robot, a real-time simulator)
     realtime: bool = False
-    #: the robot model it drives when the mission names none (or the course's, which is the
-    #: simulator's Gazebo robot): a real Thymio is ``real``, the Playground's is ``enki``
-    robot: str = "course"
+    #: the robot model it drives when the mission names none: the course's (the simulator's Gazebo
+    #: robot), a real Thymio's ``real``, the Playground's ``enki``
+    robot: str = DEFAULT_ROBOT
 
     def parse_options(self, raw: Mapping[str, Any], where: tuple[str, int, int] = ("--backend-opt", 0, 0)) -> Any:
         """Validate ``raw`` settings against :attr:`options`; :class:`UserError` says what is wrong."""
@@ -287,27 +288,29 @@ def backend_kind(name: str) -> BackendKind:
 
 
 def robot_for(mission: MissionWorld, backend: str, say: Callable[[str], None] | None = None) -> RobotModel:
-    """The robot model backend ``backend`` drives ``mission`` with: the mission's, unless that is the
-    course's (the default, which is the simulator's Gazebo robot and describes no other backend's):
-    then the backend's own (:attr:`BackendKind.robot`), and ``say`` (standard error by default) tells
-    the user. A wrong model is no small matter: the course's sensor model on Enki's robot took a wall
-    it was pushing for open space and reported SUCCESS.
+    """The robot model backend ``backend`` drives ``mission`` with: the mission's (its ``robot:``
+    or ``--robot``), or when it names none the backend's own (:attr:`BackendKind.robot`), and
+    ``say`` (standard error by default) tells the user if that is not the course's. A wrong model
+    is no small matter: the course's sensor model on Enki's robot took a wall it was pushing for
+    open space and reported SUCCESS.
 
     >>> from thymio_bt.mission import load_mission
     >>> robot_for(load_mission("maze_part1_2"), "sim").name
     'course'
     >>> robot_for(load_mission("maze_part1_2"), "playground", say=print).name
-    [thymio-bt] --backend playground: robot model 'enki' (Enki's Thymio), not the course's (--robot chooses)
+    [thymio-bt] --backend playground: robot model 'enki', not the course's (--robot chooses): Enki's Thymio2 ...
     'enki'
+    >>> robot_for(load_mission("maze_part1_2", overrides={"--robot": "course"}), "playground").name
+    'course'
     """
-    from thymio_bt.robot.model import ROBOTS, robot_model
+    from thymio_bt.robot.model import robot_model
 
     own = backend_kind(backend).robot
-    if mission.robot != "course" or own == "course":
+    if mission.robot is not None or own == DEFAULT_ROBOT:
         return robot_model(mission.robot)
+    model = robot_model(own)
     text = (
-        f"[thymio-bt] --backend {backend}: robot model '{own}' ({_ROBOT_WORDS.get(own, own)}), "
-        "not the course's (--robot chooses)"
+        f"[thymio-bt] --backend {backend}: robot model '{own}', not the course's (--robot chooses): {model.description}"
     )
     if say is None:
         import sys
@@ -315,7 +318,4 @@ def robot_for(mission: MissionWorld, backend: str, say: Callable[[str], None] | 
         print(text, file=sys.stderr)
     else:
         say(text)
-    return ROBOTS[own]
-
-
-_ROBOT_WORDS = {"enki": "Enki's Thymio", "real": "a real Thymio"}
+    return model

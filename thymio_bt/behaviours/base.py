@@ -40,7 +40,7 @@ import traceback
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 import py_trees
 from py_trees.common import Access, Status
@@ -168,6 +168,10 @@ class RobotBehaviour(py_trees.behaviour.Behaviour):
     #: Whether a BT.CPP control node ticks it again once it completed (BT.CPP's SyncActionNode, as
     #: every condition); otherwise it keeps its result until reset, as a StatefulActionNode.
     bt_sync: ClassVar[bool] = False
+    #: What its behaviour_end event reports for the tools that read a run: "stop" (it stopped at a
+    #: wall: ``range``, the reading then, against ``distance``, the stop asked; a sweep's
+    #: ``first_stop_error``), "turn" (it turned in place: ``angle``; the path plot outlines the robot)
+    reports: ClassVar[Literal["stop", "turn"] | None] = None
     #: For the lint: "S" (or "F") when it always ends so, in the tick it starts; and whether it ends
     #: in that tick although it is an action (``Stop``, ``PlanMove``), not a condition
     always: ClassVar[str] = ""
@@ -459,8 +463,14 @@ __all__ = [
     "BehaviourParams",
     "ConditionBehaviour",
     "Context",
+    "EventLog",
     "FailureCode",
     "Reading",
     "RobotBehaviour",
+    "UnrunPlugin",
     "current_pose",
+    "describe",
+    "is_fault",
+    "node_path",
+    "snapshot",
 ]

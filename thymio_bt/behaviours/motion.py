@@ -135,6 +135,7 @@ class MoveUntilWall(Motion):
 
     Params = MoveUntilWallParams
     moves = True
+    reports = "stop"
 
     def start(self) -> None:
         """Hold the current heading; no wall seen yet."""
@@ -355,6 +356,7 @@ class TurnAngle(Motion):
 
     Params = TurnAngleParams
     moves = True
+    reports = "turn"
     FINE_WINDOW = math.radians(10.0)
 
     def start(self) -> None:

@@ -29,6 +29,7 @@ import struct
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
+from thymio_bt.enums import NODE_STATUSES, STATUS_LETTER
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
 
@@ -90,9 +91,9 @@ class BtlogWriter:
 
 
 #: BT.CPP's NodeStatus -> a log's status letter (4, SKIPPED, is shown as IDLE: the node did not run)
-LETTER = {0: "-", 1: "R", 2: "S", 3: "F", 4: "-"}
+LETTER = {**{code: STATUS_LETTER[name] for code, name in enumerate(NODE_STATUSES)}, 4: STATUS_LETTER["INVALID"]}
 #: the root's last status letter -> how the run ended (RUNNING or IDLE: the log does not say)
-ENDED = {"S": "SUCCESS", "F": "FAILURE"}
+ENDED = {STATUS_LETTER[name]: name for name in ("SUCCESS", "FAILURE")}
 #: the tick rate a Groot2 log's record times are numbered at (thymio-bt's: it does not store one)
 TICK_HZ = 10
 RECORD = 9

@@ -308,7 +308,7 @@ def mission_settings(mission: Mission, folder: Path) -> dict[str, str]:
         "time_limit": repr(mission.time_limit),
         "seed": str(mission.seed),
         "sensor_model": mission.sensor_model,
-        "robot": mission.robot,
+        **({"robot": mission.robot} if mission.robot is not None else {}),
         **{f"noise.{k}": repr(v) for k, v in mission.noise.model_dump().items()},
     }
     if mission.backend != "sim" or mission.backend_options:
@@ -326,10 +326,7 @@ def mission_plugins(mission: Mission, folder: Path) -> list[str]:
     ``folder``, then ``module:Class`` for each imported plugin node from an installed module that
     is not an entry point's (those load by themselves)."""
     registry = mission.registry
-    files = list(dict.fromkeys(registry.plugin_files if registry is not None else []))
-    refs = [os.path.relpath(path, folder) for path in files]
-    if registry is None:
-        return refs
+    refs = [os.path.relpath(path, folder) for path in dict.fromkeys(registry.plugin_files)]
     defaults = set(default_registry())
     for name, cls in registry.items():
         module = cls.__module__

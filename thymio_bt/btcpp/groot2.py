@@ -41,6 +41,7 @@ import threading
 import uuid
 from typing import TYPE_CHECKING, Any
 
+from thymio_bt.enums import NODE_STATUSES
 from thymio_bt.errors import UserError
 from thymio_bt.logs.entries import jsonable
 
@@ -51,7 +52,7 @@ if TYPE_CHECKING:
 
 PROTOCOL = 2
 DEFAULT_PORT = 1667
-_STATUS = {"INVALID": 0, "RUNNING": 1, "SUCCESS": 2, "FAILURE": 3}
+_STATUS = {name: code for code, name in enumerate(NODE_STATUSES)}
 
 
 def _zmq() -> tuple[Any, Any]:

@@ -8,11 +8,14 @@ so that ``thymio-bt run`` does not load the grader or asyncio:
 :mod:`~thymio_bt.cli.running` (``run``), :mod:`~thymio_bt.cli.logs` (``replay``, ``export``),
 :mod:`~thymio_bt.cli.comparing` (``compare``),
 :mod:`~thymio_bt.cli.sweeps` (``sweep``), :mod:`~thymio_bt.cli.inspection` (``validate``, ``tree``,
-``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
+``palette``, ``behaviours``, ``backends``, ``schema``), :mod:`~thymio_bt.cli.mazes` (``maze import``,
 ``maze export``), :mod:`~thymio_bt.cli.calibrating` (``calibrate``), :mod:`~thymio_bt.cli.grading`
 (``grade``), :mod:`~thymio_bt.cli.linting` (``lint``), :mod:`~thymio_bt.cli.serving` (``serve ros2``),
-:mod:`~thymio_bt.cli.viewing` (``view``) and :mod:`~thymio_bt.cli.checking` (``check``). The
-commands' functions below are read from their modules the same way, when first read.
+:mod:`~thymio_bt.cli.viewing` (``view``) and :mod:`~thymio_bt.cli.checking` (``check``). What
+several commands share has modules of its own: :mod:`~thymio_bt.cli.pictures` (the plots and
+animations of ``run`` and ``replay``) and :mod:`~thymio_bt.cli.option_values` (the backend and the
+coverage that shared options ask for). The commands' functions below are read from their modules
+the same way, when first read.
 
 Example::
 

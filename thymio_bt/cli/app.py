@@ -1,7 +1,8 @@
 """The ``thymio-bt`` command group and what its commands share: the error exit, option types and parsers.
 
-The commands themselves live in the modules of :mod:`thymio_bt.cli` named for what they do; importing
-:mod:`thymio_bt.cli` registers them all on :func:`main`. Heavy imports stay inside the commands.
+The commands themselves live in the modules of :mod:`thymio_bt.cli` named for what they do; a
+command's module is imported, and registers its commands on :func:`main`, only when one of them is
+asked for (:data:`COMMANDS`). Heavy imports stay inside the commands.
 
 Example::
 

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, NoReturn
 import click
 
 from thymio_bt.cli.app import backend_options, fail, main
-from thymio_bt.cli.running import backend_for
+from thymio_bt.cli.option_values import backend_for
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
 from thymio_bt.run.interrupts import Interrupts

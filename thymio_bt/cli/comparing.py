@@ -131,7 +131,7 @@ def read_whole(path: Path) -> Recording:
 
 def _run_on(mission: Path, backend: str, seed: int | None, sets: tuple[str, ...]) -> Recording:
     """Run ``mission`` on ``backend``, recorded with every node's status."""
-    from thymio_bt.cli.running import backend_for
+    from thymio_bt.cli.option_values import backend_for
     from thymio_bt.logs.recording import Recorder
     from thymio_bt.mission import load_mission
     from thymio_bt.run.runner import Run

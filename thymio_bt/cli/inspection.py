@@ -147,15 +147,19 @@ def _check_mission(path: Path, overrides: dict[str, str], plugins: bool) -> tupl
 
     spec = load_mission(path, overrides, run_plugins=plugins)  # checks the start pose against the maze too
     nodes = sum(1 for _ in spec.tree.walk())
-    unchecked = [n for n in spec.tree.walk() if n.behaviour and issubclass(spec.registry[n.behaviour], UnrunPlugin)]
+    unchecked = [
+        (n, plugin)
+        for n in spec.tree.walk()
+        if n.behaviour and issubclass(plugin := spec.registry[n.behaviour], UnrunPlugin)
+    ]
     summary = f"{nodes} node{'s' * (nodes != 1)}, maze {spec.maze.name}"
     if not unchecked:
         return summary, ""
     # 'ok' must not read as 'run will accept it': a misspelt parameter of a plugin node is only found
     # once its plugin is imported, so say which nodes were not checked and the command that checks them
-    shown = ", ".join(f"{n.behaviour} (line {n.where[1]})" for n in unchecked[:5]) + ", ..." * (len(unchecked) > 5)
+    shown = ", ".join(f"{n.behaviour} (line {n.where[1]})" for n, _ in unchecked[:5]) + ", ..." * (len(unchecked) > 5)
     # a plugin whose source says its parameters' names had them checked, not their values
-    names_read = all(spec.registry[n.behaviour].Params.model_config.get("extra") == "forbid" for n in unchecked)
+    names_read = all(plugin.Params.model_config.get("extra") == "forbid" for _, plugin in unchecked)
     what = "parameter values" if names_read else "parameters"
     return summary, (
         f"not checked: the {what} of {len(unchecked)} plugin node{'s' * (len(unchecked) != 1)}, {shown}: "
@@ -231,7 +235,9 @@ def _write_btcpp(mission: Path, btcpp: Path, plugins: bool) -> None:
 def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: bool, report: Path | None) -> None:
     """``tree``: print the tree and, with a format (a flag, or ``output``'s suffix), write it as
     .dot/.svg/.png; with a ``report``, the tree with the coverage it holds."""
-    from thymio_bt.viz.terminal import coverage_text, export_tree, tree_text
+    from thymio_bt.mission import load_mission
+    from thymio_bt.viz.graph import coverage_dot, plan_dot, write_graph
+    from thymio_bt.viz.terminal import coverage_text, tree_text
 
     if fmt is None and output is not None:
         fmt = output.suffix.lower().lstrip(".")
@@ -243,7 +249,14 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
     coverage, conditions, registry = (
         _coverage_of(report, mission, plugins) if report is not None else (None, set(), None)
     )
-    text = tree_text(mission, plugins) if coverage is None else coverage_text(coverage, conditions, registry)
+    if coverage is None:
+        loaded = load_mission(mission, run_plugins=plugins)
+        text, source = tree_text(loaded), lambda: plan_dot(loaded.tree, loaded.registry)
+    else:
+        text, source = (
+            coverage_text(coverage, conditions, registry),
+            lambda: coverage_dot(coverage, conditions, registry),
+        )
     if fmt is None:
         click.echo(text)
         return
@@ -253,7 +266,7 @@ def _draw_tree(mission: Path, fmt: str | None, output: Path | None, plugins: boo
         out = Output(output, "--output")
     if not out.is_stdout:
         click.echo(text)
-    export_tree(mission, out, fmt, plugins, coverage, conditions, registry)
+    write_graph(source(), out, fmt, f"thymio-bt tree {mission} --dot -o {Path(str(out)).stem}.dot")
     if not out.is_stdout:
         click.echo(f"wrote {out}", err=True)
 

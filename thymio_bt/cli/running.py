@@ -1,22 +1,10 @@
 """``thymio-bt run``: one run of a mission, in named steps.
 
 The steps: check the outputs before anything runs (report, log, pictures), load the mission, connect
-the backend (:func:`backend_for`) and prepare the run, attach the hooks that watch it tick by tick
-(progress line, recorder, live tree, window, Groot2 server), run it, then write the report and the
-pictures and print the summary. Exit codes: 0 SUCCESS, 1 any other end, 2 a user error, and the
+the backend (:func:`~thymio_bt.cli.option_values.backend_for`) and prepare the run, attach the hooks
+that watch it tick by tick (progress line, recorder, live tree, window, Groot2 server), run it, then
+write the report and the pictures and print the summary. Exit codes: 0 SUCCESS, 1 any other end, 2 a user error, and the
 signal's code (130 for Ctrl-C) when interrupted.
-
-Example::
-
-    >>> from thymio_bt.mission import load_mission
-    >>> device = backend_for(load_mission("square"), seed=None, name=None, opts=())  # the mission's: sim
-    >>> type(device).__name__, device.time()
-    ('Simulation', 0.0)
-    >>> device.close()
-    >>> backend_for(load_mission("square"), seed=None, name="sim", opts=("device",))
-    Traceback (most recent call last):
-    ...
-    thymio_bt.errors.UserError: --backend-opt expects NAME=VALUE, got 'device' (hint: --backend-opt device=/dev/ttyACM0)
 """
 
 from __future__ import annotations
@@ -41,11 +29,11 @@ from thymio_bt.cli.app import (
     mission_options,
     not_both,
     parse_overrides,
-    parse_pairs,
     path_option,
     pose_text,
     viewer_options,
 )
+from thymio_bt.cli.option_values import CoverageRequest, backend_for
 from thymio_bt.cli.pictures import Pictures
 from thymio_bt.errors import UserError
 from thymio_bt.outputs import STDOUT, Output, check_writable
@@ -55,7 +43,6 @@ if TYPE_CHECKING:
     from thymio_bt.btcpp.groot2 import Groot2Server
     from thymio_bt.logs.recording import Recorder, Recording
     from thymio_bt.mission import Mission
-    from thymio_bt.robot.interface import Backend
     from thymio_bt.run.runner import Run, RunResult
     from thymio_bt.viz.live import LiveServer
     from thymio_bt.viz.window import LiveView
@@ -269,20 +256,6 @@ def _check_outputs(report: Path | None, pictures: Pictures, log: Path | None) ->
     return report_out
 
 
-def backend_for(spec: Mission, seed: int | None, name: str | None, opts: tuple[str, ...]) -> Backend:
-    """The backend the run asked for (``--backend`` over the mission's), connected and ready.
-
-    ``opts`` are the ``--backend-opt KEY=VALUE`` options; they add to the mission's ``backend:``
-    options when ``name`` is the mission's backend, and replace them otherwise.
-    """
-    from thymio_bt.backends import backend_kind
-
-    options = dict(spec.backend_options) if name is None or name == spec.backend else {}
-    options.update(parse_pairs(opts, "--backend-opt", "device=/dev/ttyACM0"))
-    kind = backend_kind(spec.backend if name is None else name)  # --backend '' is no backend, not the default
-    return kind.create(spec, spec.seed if seed is None else seed, options)
-
-
 def _prepare(
     spec: Mission, seed: int | None, backend: str | None, backend_opts: tuple[str, ...], node_stats: bool = False
 ) -> Run:
@@ -409,39 +382,6 @@ def _conclude(
     code = 0 if result.status is RunStatus.SUCCESS else 1
     end_despite_threads(code)  # a plugin's thread left running must not keep the process alive
     sys.exit(code)
-
-
-class CoverageRequest:
-    """What ``--coverage`` and ``--coverage-tree FILE`` ask of ``run`` and ``sweep``: the coverage
-    printed as a tree after the summary (:attr:`text`) and drawn to the file when one is named."""
-
-    def __init__(self, out: Output | None, fmt: str) -> None:
-        self.out, self.fmt = out, fmt
-        #: the coverage JSON and its tree as text, once :meth:`done`
-        self.data: dict[str, Any] = {}
-        self.text: str | None = None
-
-    @classmethod
-    def checked(cls, tree: Path | None) -> CoverageRequest:
-        """The request, its file (``tree``) checked before anything runs: writable, a known suffix."""
-        if tree is None:
-            return cls(None, "")
-        fmt = tree.suffix.lower().lstrip(".")
-        if fmt not in ("dot", "svg", "png"):
-            raise UserError(
-                f"--coverage-tree {tree}: cannot tell the format from '{tree.suffix or 'no extension'}' "
-                "(hint: end the name with .dot, .svg or .png)"
-            )
-        return cls(Output(tree, "--coverage-tree"), fmt)
-
-    def done(self, conditions: set[str], data: dict[str, Any], registry: Any = None) -> None:
-        """Keep the coverage JSON ``data`` and its text (``conditions``: the names of the nodes to show
-        as true and false; ``registry``: the mission's nodes); draw it to the file."""
-        from thymio_bt.viz.terminal import coverage_dot, coverage_text, write_graph
-
-        self.data, self.text = data, coverage_text(data, conditions, registry)
-        if self.out is not None:
-            write_graph(coverage_dot(data, conditions, registry), self.out, self.fmt, "--coverage-tree coverage.dot")
 
 
 class _Progress:

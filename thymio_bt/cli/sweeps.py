@@ -95,7 +95,7 @@ def sweep(
     html: Path | None,
 ) -> None:
     """Run MISSION many times with seeds S, S+1, ... and the noise models on; print the statistics."""
-    from thymio_bt.cli.running import CoverageRequest
+    from thymio_bt.cli.option_values import CoverageRequest
     from thymio_bt.run.sweep import sweep as run_sweep
 
     covered: CoverageRequest | None = None

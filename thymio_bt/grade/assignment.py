@@ -26,7 +26,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -36,6 +36,7 @@ from thymio_bt.inputs.fields import Angle, Duration, Length, Memory, Point, Spee
 from thymio_bt.inputs.validation import locate, validate
 from thymio_bt.inputs.yamlio import load_yaml
 from thymio_bt.maze.model import Spawn
+from thymio_bt.robot.model import DEFAULT_ROBOT, ROBOTS
 
 EXAMPLE = """\
 name: stop_at_wall
@@ -80,6 +81,14 @@ class GoalDisc(BaseModel):
     radius: Length = Field(0.05, gt=0, le=10, description="how far from the centre still counts")
 
 
+if TYPE_CHECKING:
+    BuiltinRobot = str
+else:
+    #: a built-in robot model's name: a ``Literal`` of :data:`~thymio_bt.robot.model.ROBOTS`' keys,
+    #: so that the assignment schema lists them (mypy sees a ``str``: a type cannot be computed)
+    BuiltinRobot = Literal[tuple(ROBOTS)]
+
+
 class Variant(BaseModel):
     """One world a submission runs in: a maze (a file, a shipped name or generated), a start, a
     robot profile and noise seeds; what the criteria compare with (``goal``, ``turns``)."""
@@ -97,7 +106,7 @@ class Variant(BaseModel):
         description="public: students may see and run it (thymio-bt check); hidden: its maze, path, start "
         "and reproducing command never reach a student-facing output",
     )
-    robot: Literal["course", "enki", "real"] = Field("course", description="the robot profile")
+    robot: BuiltinRobot = Field(DEFAULT_ROBOT, description="the robot profile")
     seeds: int | list[int] = Field(1, description="how many noise seeds (0, 1, ...) or the list of seeds")
     noise: Literal["realistic", "off"] = Field("realistic", description="the noise models, on or off")
     set: dict[str, str | int | float] = Field(default_factory=dict, description="other --set NAME=VALUE settings")

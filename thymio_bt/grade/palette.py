@@ -88,7 +88,7 @@ def check_palette(mission: Mission, palette: Palette) -> list[Finding]:
     depth = max(depth_of.values())
     if palette.max_depth is not None and depth > palette.max_depth:
         add("max_depth", None, where(mission.tree), f"the tree is {depth} deep, at most {palette.max_depth} allowed")
-    if not palette.plugins and mission.registry is not None:
+    if not palette.plugins:
         for ref, (file, line, _) in mission.registry.plugins:  # files and modules alike: both run code
             name = Path(ref).name if ref.endswith(".py") else ref
             add("plugins", ref, f"{file}:{line}", f"plugins are not allowed in this assignment ({name})")

@@ -46,6 +46,7 @@ import threading
 import time
 from typing import Any
 
+from thymio_bt.enums import NODE_STATUSES
 from thymio_bt.errors import ThymioBtError
 
 #: the largest message either side may send (bytes): a tick's is ~200, a run's last (its node
@@ -63,7 +64,7 @@ REPLY = struct.Struct("<cBH")
 DRIVE = struct.Struct("<2d")
 #: at most this many drive commands a tick (each is applied, as a tree in the grader's process would)
 MAX_DRIVES = 16
-STATUSES = ("INVALID", "RUNNING", "SUCCESS", "FAILURE")
+STATUSES = NODE_STATUSES
 _STATUS_CODES = {name: code for code, name in enumerate(STATUSES)}
 
 

@@ -25,12 +25,10 @@ from typing import TYPE_CHECKING, Any, TypedDict
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
+from thymio_bt.enums import STATUS_LETTER as STATUS_LETTER  # a node status as logs store it
 
 if TYPE_CHECKING:
     from thymio_bt.maze import Maze
-
-#: a node status in one letter, as logs store it
-STATUS_LETTER = {"SUCCESS": "S", "FAILURE": "F", "RUNNING": "R", "INVALID": "-"}
 
 
 class TreeNode(TypedDict):

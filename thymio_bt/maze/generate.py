@@ -186,8 +186,8 @@ def mirrored(maze: Maze, axis_x: float) -> Maze:
         k: Spawn(
             x=round(2 * axis_x - s.x, 9),
             y=s.y,
-            # not wrap_angle: atan2(sin, cos) keeps pi where wrap_angle gives -pi (kept: the same bits as before)
-            yaw=math.atan2(math.sin(math.pi - s.yaw), math.cos(math.pi - s.yaw)),
+            # not wrap_angle: a spawn's yaw is a start as written (mission/pass_base.py: exact, pi kept)
+            yaw=math.remainder(math.pi - s.yaw, math.tau),
         )
         for k, s in maze.spawns.items()
     }

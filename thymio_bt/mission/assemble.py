@@ -30,16 +30,15 @@ from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
 from thymio_bt.maze import Maze, load_maze, resolve_maze
 from thymio_bt.mission.pass_base import Scope, Where
-from thymio_bt.mission.settings import MAX_SEED, SENSOR_MODELS, SETTING_RANGES, SettingsReader
+from thymio_bt.mission.settings import MAX_SEED, SETTING_RANGES, SettingsReader
 from thymio_bt.plan.registry import Registry, default_registry
 from thymio_bt.robot.interface import Pose
-from thymio_bt.robot.model import RobotModel, robot_model
+from thymio_bt.robot.model import DEFAULT_ROBOT, RobotModel, robot_model
 from thymio_bt.robot.placement import placement_problem
 
 __all__ = [
     "INCLUDE_KEYS",
     "MAX_SEED",
-    "SENSOR_MODELS",
     "SETTING_RANGES",
     "TOP_KEYS",
     "Assembler",
@@ -103,7 +102,7 @@ class Assembly:
     @property
     def robot(self) -> RobotModel | None:
         """The mission's robot model (None when the one asked for was refused)."""
-        return None if self.robot_refused else robot_model(self.settings.get("robot", "course"))
+        return None if self.robot_refused else robot_model(self.settings.get("robot"))
 
 
 class Assembler(SettingsReader):
@@ -147,7 +146,7 @@ class Assembler(SettingsReader):
         self._subtrees(data, file)
         maze, maze_file = self._maze(data, path, maze_override)
         start = self._start(
-            data, file, maze, start_override, None if self.robot_refused else settings.get("robot", "course")
+            data, file, maze, start_override, None if self.robot_refused else settings.get("robot", DEFAULT_ROBOT)
         )
         start_where = ("--start", 0, 0) if start_override is not None else self.where_value(data, "start", file)
         if settings.get("expect") is not None and (maze_override is not None or start_override is not None):

@@ -43,7 +43,7 @@ from thymio_bt.inputs.units import Quantity, UnitError, parse_value
 from thymio_bt.inputs.validation import HintRule, Named, Wording, problems_from, range_hint
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.maze import Maze
-from thymio_bt.mission.pass_base import Checker, Scope, Where, _parameter_hint
+from thymio_bt.mission.pass_base import LoaderPass, Scope, Where, _parameter_hint
 from thymio_bt.robot.model import ROBOTS, RobotModel
 
 #: what :meth:`ParameterReader.convert` returns for a value it reported a problem about
@@ -110,8 +110,8 @@ class _Reading:
         return self.model.model_fields
 
 
-class ParameterReader(Checker):
-    """Reads nodes' parameters into their models; the planning pass's :class:`Checker` for values."""
+class ParameterReader(LoaderPass):
+    """Reads nodes' parameters into their models; the planning pass's :class:`LoaderPass` for values."""
 
     #: the mission's maze, for spawn names written where a pose goes (None: names are not checked)
     maze: Maze | None = None

@@ -6,12 +6,12 @@ records a :class:`Problem` and goes on (see :mod:`thymio_bt.mission.loader`).
 
 Example::
 
-    >>> checker = Checker([])
-    >>> checker.quantity("$side * 2", Scope({"side": Quantity(0.25, "length")}), ("m.yaml", 3, 9), "d", "length")
+    >>> loader_pass = LoaderPass([])
+    >>> loader_pass.quantity("$side * 2", Scope({"side": Quantity(0.25, "length")}), ("m.yaml", 3, 9), "d", "length")
     0.5
-    >>> checker.quantity("5cm", Scope({}), ("m.yaml", 4, 9), "angle", "angle") is None
+    >>> loader_pass.quantity("5cm", Scope({}), ("m.yaml", 4, 9), "angle", "angle") is None
     True
-    >>> print(checker.problems[0])
+    >>> print(loader_pass.problems[0])
     m.yaml:4:9: expected an angle (in rad), got a length [at angle] (hint: write an angle: 90deg, pi/2 or 1.57 rad)
 """
 
@@ -52,8 +52,9 @@ class Scope:
         return set(self.values) | (self.parent.names() if self.parent else set())
 
 
-class Checker:
-    """Collects :class:`Problem` s for one mission load and reads values where they were written."""
+class LoaderPass:
+    """The base of each pass of the mission loader: collects :class:`Problem` s for one mission load
+    and reads values where they were written."""
 
     def __init__(self, problems: list[Problem]) -> None:
         self.problems = problems
@@ -206,7 +207,9 @@ class Checker:
                 "give a heading such as 90deg, pi/2 or -45deg",
             )
             return None
-        # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
+        # not wrap_angle: a yaw already in range must reach the robot as written, and wrap_angle is not
+        # the identity there (it gives 0.2999999999999998 for 0.3, and -pi for a west-facing pi, whose
+        # sine has the other sign); math.remainder is exact, into [-pi, pi]
         return Pose(pose.x, pose.y, math.remainder(pose.yaw, math.tau))
 
 

@@ -29,18 +29,15 @@ from thymio_bt.inputs.units import Quantity, check_kind, resolver_from
 from thymio_bt.inputs.validation import problems_from, validate
 from thymio_bt.inputs.yamlio import MarkedDict
 from thymio_bt.mission.parameters import SetValue
-from thymio_bt.mission.pass_base import Checker, Scope, Where
+from thymio_bt.mission.pass_base import LoaderPass, Scope, Where
 from thymio_bt.plan.expect import Expect
-from thymio_bt.robot.model import ROBOTS, robot_model
+from thymio_bt.robot.model import ROBOTS, SIM_SENSOR_MODEL, SIM_SENSOR_MODELS, robot_model
 from thymio_bt.robot.noise import NoiseConfig
 from thymio_bt.robot.profile import is_profile_path
 
 #: the settings that are numbers: their kind and range, however they are given
 SETTING_RANGES = {"tick_hz": ("frequency", 1.0, 100.0), "time_limit": ("time", 0.1, 36000.0)}
 MAX_SEED = 2**63 - 1
-SENSOR_MODELS = ("metres", "raw", "cone")
-#: a robot model's sensor model as the simulator calls it ("rays": the course's exact rays, in metres)
-_SIM_SENSOR_MODEL = {"rays": "metres", "raw": "raw", "cone": "cone"}
 #: the settings ``--set`` takes besides the mission's parameters
 OVERRIDABLE = (
     "tick_hz",
@@ -57,7 +54,7 @@ _OVERRIDE: Where = ("--set", 0, 0)
 ROBOT_OPTION = "--robot"
 
 
-class SettingsReader(Checker):
+class SettingsReader(LoaderPass):
     """Reads a mission's settings, and applies ``--set`` to them and to its parameters."""
 
     #: whether the robot asked for was refused (said already): checks that need it are skipped, not
@@ -80,7 +77,7 @@ class SettingsReader(Checker):
                 self.problems.extend(exc.problems)
         self._noise(noise_raw, data, file, values)
         if "sensor_model" not in values:  # the robot's own: the course's rays, Enki's cones, a real robot's readings
-            values["sensor_model"] = _SIM_SENSOR_MODEL[robot_model(values.get("robot", "course")).sensor_model]
+            values["sensor_model"] = SIM_SENSOR_MODEL[robot_model(values.get("robot")).sensor_model]
         return values
 
     def _file_settings(self, data: MarkedDict, file: str, values: dict[str, Any]) -> dict[str, Any]:
@@ -138,7 +135,7 @@ class SettingsReader(Checker):
     def _noise(self, noise_raw: dict[str, Any], data: MarkedDict, file: str, values: dict[str, Any]) -> None:
         """``values["noise"]``: the levels given, with the robot's own motor noise unless a wheel
         noise is given (Enki's cannot be switched off)."""
-        motor_noise = robot_model(values.get("robot", "course")).motor_noise
+        motor_noise = robot_model(values.get("robot")).motor_noise
         if motor_noise and "wheel" not in noise_raw:
             noise_raw["wheel"] = motor_noise
         try:
@@ -176,14 +173,15 @@ class SettingsReader(Checker):
             values[key] = value
 
     def _sensor_model(self, value: Any, where: Where, values: dict[str, Any]) -> None:
-        """``sensor_model``: one of :data:`SENSOR_MODELS` (``rays`` is ``metres``)."""
-        if value == "rays":  # the robot models' name for the course's exact rays
-            value = "metres"
-        if value in SENSOR_MODELS:
+        """``sensor_model``: one of :data:`~thymio_bt.robot.model.SIM_SENSOR_MODELS`, or a robot
+        model's name of one (``rays`` is ``metres``: :data:`~thymio_bt.robot.model.SIM_SENSOR_MODEL`)."""
+        if isinstance(value, str) and value in SIM_SENSOR_MODEL:  # a list or mapping is no key
+            value = SIM_SENSOR_MODEL[value]
+        if value in SIM_SENSOR_MODELS:
             values["sensor_model"] = value
         else:
             self.problem(
-                f"sensor_model must be one of rays, {', '.join(SENSOR_MODELS)}, got {value!r}",
+                f"sensor_model must be one of rays, {', '.join(SIM_SENSOR_MODELS)}, got {value!r}",
                 where,
                 "sensor_model",
                 "rays (or metres): the course's exact rays; raw: a real Thymio's integer readings through its "

@@ -17,13 +17,18 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
 from thymio_bt.maze import Maze
+from thymio_bt.plan.expect import Expect
 from thymio_bt.robot.interface import Pose
+from thymio_bt.robot.model import SimSensorModel
 from thymio_bt.robot.noise import NoiseConfig
+
+if TYPE_CHECKING:  # the registry imports every behaviour, which a plan never needs to
+    from thymio_bt.plan.registry import Registry
 
 MAX_DEPTH = 64
 #: Most nodes one mission may expand to (subtrees calling subtrees twice each multiply).
@@ -72,12 +77,15 @@ class Mission:
     seed: int
     noise: NoiseConfig
     parameters: dict[str, Any]
-    #: "metres" (the course's ideal rays) or "raw" (a real Thymio's readings, see thymio_bt.sensor_tables)
-    sensor_model: str
+    #: how the simulator makes the readings: "metres" (the course's exact rays), "raw" (a real
+    #: Thymio's readings, see thymio_bt.sensor_tables) or "cone" (Enki's three-ray cones)
+    sensor_model: SimSensorModel
     tree: NodePlan
-    registry: Any = None
-    #: the robot model's name (:data:`thymio_bt.robot.model.ROBOTS`)
-    robot: str = "course"
+    #: the node kinds the mission was planned with (its plugins' included)
+    registry: Registry
+    #: the robot model's name (:data:`thymio_bt.robot.model.ROBOTS`) or profile file, None when the
+    #: mission names none (then :func:`thymio_bt.backends.robot_for` picks the backend's own)
+    robot: str | None = None
     #: the backend kind's name (:mod:`thymio_bt.backends`) and its settings, as written
     backend: str = "sim"
     backend_options: dict[str, Any] = field(default_factory=dict)
@@ -88,4 +96,4 @@ class Mission:
     #: each included file and where it was included (file, line, column)
     included_at: dict[Path, tuple[str, int, int]] = field(default_factory=dict)
     #: what counts as success besides the tree's status (:mod:`thymio_bt.plan.expect`), or None
-    expect: Any = None
+    expect: Expect | None = None

@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 
 from thymio_bt.errors import ThymioBtError
+from thymio_bt.geometry import wrap_angle
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Backend, Pose
 from thymio_bt.robot.model import RobotModel
@@ -262,8 +263,7 @@ def calibrate(
     run_for(2.0, -0.05, 0.0)
     spin_wheel = model.wheel_speed_of(SPIN_UNITS)
     track = run_for(3.0, 0.0, 2 * spin_wheel / model.wheel_separation)[5:]
-    # not wrap_angle: math.remainder is exact where wrap_angle rounds (kept: the same bits as before)
-    turned = sum(math.remainder(b.yaw - a.yaw, math.tau) for (_, a), (_, b) in pairwise(track))
+    turned = sum(wrap_angle(b.yaw - a.yaw) for (_, a), (_, b) in pairwise(track))
     rate = turned / (track[-1][0] - track[0][0])
     wheel_separation = 2 * SPIN_UNITS * metres_per_unit / rate
     result = Calibration(model, metres_per_unit, wheel_separation, samples)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Literal, TypeGuard
+from typing import Literal, TypeGuard, get_args
 
 from thymio_bt.geometry import Pose
 from thymio_bt.sensor_tables import ENKI_THYMIO2, WEBOTS_THYMIO2, CalibrationTable
@@ -45,7 +45,9 @@ SENSOR_NAMES: tuple[str, ...] = (
 SensorModelName = Literal["rays", "raw", "cone"]
 #: how the simulator makes a run's readings (a mission's ``sensor_model``): ``metres`` is ``rays``
 SimSensorModel = Literal["metres", "raw", "cone"]
-SIM_SENSOR_MODELS: tuple[SimSensorModel, ...] = ("metres", "raw", "cone")
+SIM_SENSOR_MODELS: tuple[SimSensorModel, ...] = get_args(SimSensorModel)
+#: a robot model's sensor model as the simulator names it (``rays``: the course's exact rays, in metres)
+SIM_SENSOR_MODEL: dict[SensorModelName, SimSensorModel] = {"rays": "metres", "raw": "raw", "cone": "cone"}
 
 
 def is_sim_sensor_model(name: str) -> TypeGuard[SimSensorModel]:
@@ -296,13 +298,18 @@ REAL = replace(
 
 #: The robot models a run can name, by name.
 ROBOTS: dict[str, RobotModel] = {m.name: m for m in (COURSE, ENKI, REAL)}
+#: the robot a mission runs with when it names none (and no backend has its own): the course's
+DEFAULT_ROBOT = COURSE.name
 #: the furthest any built-in robot's proximity sensors read (m): a sensed length's bound before the robot is known
 WIDEST_RANGE = max(m.range_max for m in ROBOTS.values())
 
 
-def robot_model(name: str) -> RobotModel:
+def robot_model(name: str | None = None) -> RobotModel:
     """The robot model called ``name``, or the profile file ``name`` (``.yaml``, written by
-    ``thymio-bt calibrate``); ``KeyError`` with the known names otherwise."""
+    ``thymio-bt calibrate``), or :data:`DEFAULT_ROBOT` for None (a mission that names no robot);
+    ``KeyError`` with the known names otherwise."""
+    if name is None:
+        return ROBOTS[DEFAULT_ROBOT]
     if name in ROBOTS:
         return ROBOTS[name]
     from thymio_bt.robot.profile import is_profile_path

@@ -34,10 +34,11 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from thymio_bt.enums import STATUS_LETTER
 from thymio_bt.logs.recording import Recording
 
-#: the status letters of logs (records.STATUS_LETTER) in words
-STATUS_WORD = {"S": "SUCCESS", "F": "FAILURE", "R": "RUNNING", "-": "INVALID"}
+#: the status letters of logs (:data:`~thymio_bt.enums.STATUS_LETTER`) in words
+STATUS_WORD = {letter: word for word, letter in STATUS_LETTER.items()}
 #: backends whose logged pose is the ground truth; any other logs its odometry there
 GROUND_TRUTH = frozenset({"sim", "playground"})
 

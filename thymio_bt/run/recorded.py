@@ -30,7 +30,7 @@ from typing import Any
 from thymio_bt.logs.entries import checked_events, finite
 from thymio_bt.logs.recording import Recording
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Request, Scan, Twist, new_pose, wrap_angle
-from thymio_bt.robot.model import RobotModel, robot_model
+from thymio_bt.robot.model import DEFAULT_ROBOT, RobotModel, robot_model
 
 #: the entity events a recorded run's deletes and spawns left, by the request kind
 ENTITY_EVENTS = {"delete_entity": "delete", "spawn_entity": "spawn"}
@@ -44,7 +44,7 @@ class RecordedRobot(Backend):
     def __init__(self, recording: Recording, model: RobotModel | None = None, latency: float | None = None) -> None:
         super().__init__()
         self.samples = recording.samples
-        self.model = model or robot_model("course")
+        self.model = model or robot_model(DEFAULT_ROBOT)
         self.latency = (finite(recording.header.get("latency")) or 0.0) if latency is None else latency
         #: the recorded tick now served (0: the first tick)
         self.index = 0

@@ -36,6 +36,7 @@ from thymio_bt.behaviours.base import FailureCode, describe, is_fault, node_path
 from thymio_bt.behaviours.flow.ticking import tick
 from thymio_bt.errors import Problem, StopRun, UserError
 from thymio_bt.mission import Mission, build_tree
+from thymio_bt.plan.expect import Expect
 from thymio_bt.robot.interface import Backend, Collision, Pose, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
 from thymio_bt.run.coverage import NodeStats
@@ -355,7 +356,7 @@ class Run:
             reached = next((t for t, x, y, _ in self.trajectory if self.mission.maze.in_goal(x, y)), None)
             result.goal = GoalReached(reached is not None, reached)
         if self.mission.expect is not None:
-            self._check_expectations(result, places=not self.substituted)
+            self._check_expectations(result, self.mission.expect, places=not self.substituted)
         return result
 
     @property
@@ -365,12 +366,12 @@ class Run:
             self._final_tree = py_trees.display.unicode_tree(self.root, show_status=True)
         return self._final_tree
 
-    def _check_expectations(self, result: RunResult, places: bool) -> None:
+    def _check_expectations(self, result: RunResult, expect: Expect, places: bool) -> None:
         """A tree that succeeded without meeting the mission's ``expect:`` makes the run a FAILURE.
         With nodes substituted (a test of part of a mission), where it ends is not checked."""
         from thymio_bt.run.verdict import check
 
-        expect = self.mission.expect if places else self.mission.expect.without_places()
+        expect = expect if places else expect.without_places()
         # the robot that ran (a calibrated profile, a backend's own), not only the one the mission names
         result.expectations = check(expect, result, self.mission.maze, self.backend.model)
         if result.status is RunStatus.SUCCESS and result.expectations:

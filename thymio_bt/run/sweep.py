@@ -121,11 +121,12 @@ def run_job(job: Job) -> SweepRow:
             "first_stop_error": None,
             "wall_time": 0.0,
         }
+    stoppers = {name for name, cls in mission.registry.behaviours() if cls.reports == "stop"}
     stops = [
         abs(e["range"] - e["distance"])
         for e in result.events
         if e["kind"] == "behaviour_end"
-        and e["name"] == "MoveUntilWall"
+        and e["name"] in stoppers
         and e["status"] == "SUCCESS"
         and e.get("range") is not None
     ]

@@ -39,6 +39,8 @@ from thymio_bt.robot.placement import ray_distance
 if TYPE_CHECKING:
     from thymio_bt.run.result import RunResult
 
+__all__ = ["check", "front_gap", "open_side", "stop_problem"]
+
 
 def check(expect: Expect, result: RunResult, maze: Maze, model: RobotModel) -> list[str]:
     """The expectations ``result`` does not meet."""

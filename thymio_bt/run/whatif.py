@@ -153,7 +153,7 @@ def what_if(
     return WhatIf(result, watch.divergence, watch.replayed, watch.simulated, watch.notes, tolerance)
 
 
-def _robot_name(mission: Mission, recording: Recording) -> str:
+def _robot_name(mission: Mission, recording: Recording) -> str | None:
     """The built-in robot the log says ran (its header's ``robot``), else the mission's: the changed
     tree is re-ticked, and simulated on with ``--continue sim``, as that robot."""
     ran = recording.header.get("robot")

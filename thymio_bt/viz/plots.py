@@ -194,9 +194,13 @@ class _EventMarks:
     """Draws a run's events on its maze, each kind its own mark, each label once in the legend."""
 
     def __init__(self, ax: Any) -> None:
+        from thymio_bt.plan.registry import default_registry
+
         self.ax = ax
         self.labelled: set[str] = set()
         self.turns: list[tuple[float, float]] = []  # where an outline after a turn is drawn: one per place
+        #: the behaviours whose end is a turn (:attr:`~thymio_bt.behaviours.base.RobotBehaviour.reports`)
+        self.turners = {name for name, cls in default_registry().behaviours() if cls.reports == "turn"}
 
     def draw(self, event: dict[str, Any]) -> None:
         """The mark of ``event``, if its kind has one."""
@@ -224,7 +228,7 @@ class _EventMarks:
         """The robot's outline after a turn that succeeded; a dot where an outline is drawn already
         (a cell-by-cell run turns in each cell up to four times): not outlines piled up."""
         pose = event.get("pose")
-        if event.get("name") != "TurnAngle" or event.get("status") != "SUCCESS" or not pose:
+        if event.get("name") not in self.turners or event.get("status") != "SUCCESS" or not pose:
             return
         if any(math.dist(place, (pose["x"], pose["y"])) < ROBOT_SPAN for place in self.turns):
             self.ax.plot(pose["x"], pose["y"], ".", color="tab:orange", ms=4)

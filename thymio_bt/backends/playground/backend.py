@@ -13,7 +13,6 @@ From the shell (the Playground installed)::
 
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,6 +23,7 @@ from thymio_bt.backends.playground.process import Playground, free_port
 from thymio_bt.backends.playground.world import PlaygroundWorld, playground_world
 from thymio_bt.backends.real.aseba import AsebaNode
 from thymio_bt.backends.real.thymio import ThymioRobot
+from thymio_bt.geometry import wrap_angle
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import Pose, RobotLost
 from thymio_bt.robot.model import ROBOTS, RobotModel
@@ -76,8 +76,7 @@ class PlaygroundRobot(ThymioRobot):
         x_cm, y_cm, angle = self.enki.pose()
         x, y = self.world.from_enki(x_cm, y_cm)
         base = self.model.base_of(x, y, angle)
-        # not wrap_angle: atan2(sin, cos) keeps pi where wrap_angle gives -pi (kept: the same bits as before)
-        return Pose(base.x, base.y, math.atan2(math.sin(angle), math.cos(angle)))
+        return Pose(base.x, base.y, wrap_angle(angle))  # the range of the simulator's ground truth
 
     def spawn_problem(self, name: str, pose: Pose) -> str | None:
         """Why the robot cannot stand at ``pose``: a real robot's reasons, then the maze's geometry."""
