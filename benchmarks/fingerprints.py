@@ -5,7 +5,8 @@ contract, so the script outlives any internal API) on three robot models (course
 the noise off and with the sweep's noise on for three seeds. A fingerprint is the SHA-256 of the
 run report without its wall-clock fields, and of every tick line of the run's JSON-lines log
 (unrounded poses, readings, tree statuses). The log header (mission, maze, tree shape) is hashed
-apart, so a changed header is told from a changed trajectory.
+apart, so a changed header is told from a changed trajectory; the checkout's folder in it (a maze
+file's absolute path) is replaced by ``<checkout>``, so that two clones of one commit agree.
 
 Usage (from a checkout whose package the interpreter imports)::
 
@@ -47,6 +48,7 @@ def fingerprint(mission: Path, robot: str, seed: int, overrides: tuple[str, ...]
         for key in WALL_CLOCK:
             data.pop(key, None)
         header, *ticks = log.read_text().splitlines()
+        header = header.replace(str(ROOT), "<checkout>")  # the same run from any clone hashes the same
         return {
             "report": hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest(),
             "header": hashlib.sha256(header.encode()).hexdigest(),
