@@ -191,7 +191,8 @@ class MoveUntilWall(Motion):
         speed = (
             p.speed if infinite else approach_speed(remaining, p.speed, self.gain, p.min_speed, self.ctx.tick_period)
         )
-        left, right = scan["front_left"], scan["front_right"]
+        # the side rays read only to centre: a scan cast when read (the simulation's) casts no ray else
+        left, right = (scan["front_left"], scan["front_right"]) if p.centre else (math.inf, math.inf)
         if (
             p.centre
             and math.isfinite(left)
