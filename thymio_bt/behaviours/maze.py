@@ -261,8 +261,13 @@ class ChooseTurn(RobotBehaviour):
         """A new leg: the side walls are not seen yet. The robot's sensor poses and reach."""
         model = self.robot.model
         self.reach = {side: lateral_reach(model, side) for side in SIDES}
-        self.rays = {side: model.sensor(side_ray(side)) for side in SIDES}
-        self.front = model.sensor("front_center")
+        front = model.sensor("front_center").x
+        #: per side: the ray's x + reading * cos(yaw) beyond front.x + ahead - 1 cm met the wall ahead;
+        #: |y| + reading * |sin(yaw)| is how far from the centre line it met a side wall
+        self.rays = {
+            side: (ray.x, math.cos(ray.yaw), front, abs(ray.y), abs(math.sin(ray.yaw)))
+            for side, ray in ((side, model.sensor(side_ray(side))) for side in SIDES)
+        }
         self.edge = model.range_max - SATURATED
         self.beside: dict[str, float | None] = {side: None for side in SIDES}
 
@@ -270,10 +275,17 @@ class ChooseTurn(RobotBehaviour):
         """Wait for the wall ahead, watching the side walls, then decide and write the decision."""
         scan = self.robot.proximity()
         assert scan is not None
-        ahead = scan["front_center"]
-        offsets: dict[Side, float | None] = {side: self._offset(scan[side_ray(side)], side, ahead) for side in SIDES}
+        ahead, left, right = scan["front_center"], scan["front_left"], scan["front_right"]
+        offsets: dict[Side, float | None] = {
+            "left": self._offset(left, "left", ahead),
+            "right": self._offset(right, "right", ahead),
+        }
         # how far the side walls are, where the readings say it (not at the edge of the range)
-        measured = {side: offsets[side] if scan[side_ray(side)] < self.edge else None for side in SIDES}
+        edge = self.edge
+        measured: dict[Side, float | None] = {
+            "left": offsets["left"] if left < edge else None,
+            "right": offsets["right"] if right < edge else None,
+        }
         if measured["left"] is not None and measured["right"] is not None:
             self.width = measured["left"] + measured["right"]
         if math.isinf(ahead):
@@ -297,10 +309,10 @@ class ChooseTurn(RobotBehaviour):
         (or met the wall ahead: within 1 cm of where ``front_center`` meets it)."""
         if math.isinf(reading):
             return None
-        ray, front = self.rays[side], self.front
-        if ray.x + reading * math.cos(ray.yaw) >= front.x + ahead - 0.01:
+        x, cos, front, y, sin = self.rays[side]
+        if x + reading * cos >= front + ahead - 0.01:
             return None
-        return abs(ray.y) + reading * abs(math.sin(ray.yaw))
+        return y + reading * sin
 
     def _surely_open(self, side: Side, measured: dict[Side, float | None]) -> bool:
         """Whether ``side``'s empty reading is an opening: a wall there would be within its ray's
