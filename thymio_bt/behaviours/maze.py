@@ -30,6 +30,9 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import (
+    FAILURE,
+    RUNNING,
+    SUCCESS,
     BehaviourParams,
     ConditionBehaviour,
     FailureCode,
@@ -92,7 +95,7 @@ class WallAhead(ConditionBehaviour):
             Reading(reading),
             self.params.distance,
         )
-        return Status.SUCCESS if reading <= self.params.distance else Status.FAILURE
+        return SUCCESS if reading <= self.params.distance else FAILURE
 
 
 class SideOpenParams(BehaviourParams):
@@ -117,7 +120,7 @@ class SideOpen(ConditionBehaviour):
         assert scan is not None
         ray = side_ray(self.params.side)
         self.say("{} reads {}", ray, Reading(scan[ray]))
-        return Status.SUCCESS if math.isinf(scan[ray]) else Status.FAILURE
+        return SUCCESS if math.isinf(scan[ray]) else FAILURE
 
 
 class IsDeadEndParams(BehaviourParams):
@@ -145,10 +148,10 @@ class IsDeadEnd(ConditionBehaviour):
         """Read the decision (FAILURE while there is none)."""
         if not self.board.exists(self.params.key):
             self.feedback_message = "no decision yet"
-            return Status.FAILURE
+            return FAILURE
         decision = self.board.get(self.params.key)
         self.feedback_message = f"decision: {decision}"
-        return Status.SUCCESS if decision == "dead_end" else Status.FAILURE
+        return SUCCESS if decision == "dead_end" else FAILURE
 
 
 # ---------------------------------------------------------------- ChooseTurn
@@ -292,7 +295,7 @@ class ChooseTurn(RobotBehaviour):
             for side in SIDES:
                 self.beside[side] = offsets[side] if offsets[side] is not None else self.beside[side]
             self.feedback_message = "waiting for the wall ahead to come into range"
-            return Status.RUNNING
+            return RUNNING
         prefer: Side = self.params.prefer
         # a side is closed where its ray met a side wall; a ray that met the wall ahead tells nothing
         candidates = [s for s in (prefer, _other(prefer)) if offsets[s] is None]
@@ -302,7 +305,7 @@ class ChooseTurn(RobotBehaviour):
         write_decision(self.board, self.params.key, decision, certain)
         self.extra = {"decision": decision, "certain": certain}
         self.feedback_message = f"decided {decision}" + ("" if certain else " (not sure: look)")
-        return Status.SUCCESS
+        return SUCCESS
 
     def _offset(self, reading: float, side: Side, ahead: float) -> float | None:
         """How far from the centre line the ray on ``side`` met a side wall; None when it met none
@@ -384,14 +387,14 @@ class LookAround(RobotBehaviour):
             return self.fail(FailureCode.INVALID_INPUT, f"no decision '{self.keys[0]}' to check: run ChooseTurn first")
         if self.first is None:
             self.feedback_message = "ChooseTurn was sure: nothing to look at"
-            return Status.SUCCESS
+            return SUCCESS
         scan = self.robot.proximity()
         assert scan is not None
         ahead = scan["front_center"]
         if self.facing is not None:  # stopped, facing a side: read it
             self.readings.append(ahead)
             if len(self.readings) < LOOK_READINGS:
-                return Status.RUNNING
+                return RUNNING
             self._seen(self.facing, sorted(self.readings)[LOOK_READINGS // 2])
         if self.turn is None:
             if not self.looks:
@@ -404,16 +407,16 @@ class LookAround(RobotBehaviour):
             self.robot.drive(0.0, 0.0)  # turning on would touch that side's wall
             self.turn = None
             self._seen(self.target, 0.0)
-            return Status.RUNNING
+            return RUNNING
         if not self.turn.drive(self.turn.error()):
             self.say("turning to look {}", self.target or "ahead")
-            return Status.RUNNING
+            return RUNNING
         self.turn, self.facing = None, self.target
-        return Status.RUNNING if self.facing is not None or self.looks else self._decide()
+        return RUNNING if self.facing is not None or self.looks else self._decide()
 
     def terminate(self, new_status: Status) -> None:
         """Stop the robot if it ends (or is halted) mid-turn, then log the end."""
-        if self.status == Status.RUNNING and self.turn is not None and self.robot.exists():
+        if self.status == RUNNING and self.turn is not None and self.robot.exists():
             self.robot.drive(0.0, 0.0)
         super().terminate(new_status)
 
@@ -431,4 +434,4 @@ class LookAround(RobotBehaviour):
         write_decision(self.board, self.params.key, decision, True)
         self.extra = {"decision": decision, "looked": sorted(self.open)}
         self.feedback_message = f"looked: {decision}"
-        return Status.SUCCESS
+        return SUCCESS

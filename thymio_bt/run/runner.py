@@ -61,6 +61,9 @@ CONTACT = 1e-6
 #: the longest wait (s) of ``--realtime`` pacing before it looks for a signal again
 PACE_SLICE = 0.1
 
+#: the statuses that end a run, read once (an Enum class's attribute costs ~1 k instructions a read)
+_ENDED = (Status.SUCCESS, Status.FAILURE)
+
 
 class Run:
     """One prepared run of a mission on a backend (by default the pymunk simulation)."""
@@ -231,7 +234,7 @@ class Run:
                 on_tick(self)
             except StopRun as stop:
                 return Ending(EndKind.STOPPED, FailureCode.STOPPED, str(stop) or "stopped by a tick hook")
-        if self.root.status in (Status.SUCCESS, Status.FAILURE):
+        if self.root.status in _ENDED:
             return Ending(EndKind.FINISHED)
         if interrupts.signal:
             return Ending(EndKind.INTERRUPTED, FailureCode.INTERRUPTED)
