@@ -214,7 +214,9 @@ class Run:
         self.ticks += 1
         ending = self._after_tick(on_tick, interrupts)
         if ending is None:
-            self._collisions_seen = self._emit_collisions(self._collisions_seen)
+            backend = self.backend
+            if len(backend.collisions) > self._collisions_seen or backend.min_clearance <= CONTACT:
+                self._collisions_seen = self._emit_collisions(self._collisions_seen)  # rare: a contact
             self._record()
         return ending
 
