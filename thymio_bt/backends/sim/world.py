@@ -84,7 +84,8 @@ class Simulation(Backend):
         self._raw_model = raw_model(self.config.seed, self.model) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
         self._entities: dict[str, RobotBody] = {}
-        self._pose_read: tuple[int, RobotBody | None, Pose | None] = (-1, None, None)  # (step, entity, its pose)
+        #: the robot's true pose at this physics step once read (None: not read since the last step)
+        self._pose_now: Pose | None = None
         #: the held command (linear, angular) as floats; command() makes it a Twist when asked
         self._cmd = (0.0, 0.0)
         #: the last drive() arguments and their floats: a behaviour cruising passes the same float
@@ -183,14 +184,13 @@ class Simulation(Backend):
 
     def true_pose(self) -> Pose | None:
         """The ground-truth pose (equal to :meth:`pose` unless odometry drift is on). Read once per
-        physics step and entity: behaviours ask for it several times a tick."""
-        entity = self._entities.get(self.robot_name)
-        if entity is None:
-            return None
-        step, body, pose = self._pose_read
-        if step != self._steps or body is not entity:
-            pose = entity.pose()
-            self._pose_read = (self._steps, entity, pose)
+        physics step: behaviours ask for it several times a tick."""
+        pose = self._pose_now
+        if pose is None:
+            entity = self._entities.get(self.robot_name)
+            if entity is None:
+                return None
+            pose = self._pose_now = entity.pose()
         return pose
 
     def velocity(self) -> Twist:
@@ -241,6 +241,7 @@ class Simulation(Backend):
     def _run_steps(self, entity: RobotBody | None, steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
         (step, space), dt = self._step, self._dt
+        self._pose_now = None  # the robot moves
         if entity is None:
             for _ in range(steps):
                 step(space, dt)
@@ -320,7 +321,7 @@ class Simulation(Backend):
     def _refresh_sensors(self, entity: RobotBody) -> None:
         """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
         bx, by, angle = entity.read()
-        self._pose_read = (self._steps, entity, pose_of(bx, by, angle))
+        self._pose_now = pose_of(bx, by, angle)
         cos, sin = math.cos(angle), math.sin(angle)
         if self._cone is not None:
             self._raw = self._cone.measure(self._ray, entity.filter, bx, by, cos, sin)
@@ -369,7 +370,7 @@ class Simulation(Backend):
             return f"no entity named '{name}' (existing: {', '.join(sorted(self._entities)) or 'none'})"
         entity.remove(self.space)
         if name == self.robot_name:
-            self._scan, self._cmd, self._contacts = None, (0.0, 0.0), 0
+            self._scan, self._cmd, self._contacts, self._pose_now = None, (0.0, 0.0), 0, None
         return None
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
