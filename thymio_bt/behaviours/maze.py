@@ -30,6 +30,9 @@ from py_trees.common import Status
 from pydantic import Field
 
 from thymio_bt.behaviours.base import (
+    FAILURE,
+    RUNNING,
+    SUCCESS,
     BehaviourParams,
     ConditionBehaviour,
     FailureCode,
@@ -97,7 +100,7 @@ class WallAhead(ConditionBehaviour):
             Reading(reading),
             self.params.distance,
         )
-        return Status.SUCCESS if reading <= self.params.distance else Status.FAILURE
+        return SUCCESS if reading <= self.params.distance else FAILURE
 
 
 class SideOpenParams(BehaviourParams):
@@ -122,7 +125,7 @@ class SideOpen(ConditionBehaviour):
         assert scan is not None
         ray = side_ray(self.params.side)
         self.say("{} reads {}", ray, Reading(scan[ray]))
-        return Status.SUCCESS if math.isinf(scan[ray]) else Status.FAILURE
+        return SUCCESS if math.isinf(scan[ray]) else FAILURE
 
 
 class IsDeadEndParams(BehaviourParams):
@@ -150,10 +153,10 @@ class IsDeadEnd(ConditionBehaviour):
         """Read the decision (FAILURE while there is none)."""
         if not self.board.exists(self.params.key):
             self.feedback_message = "no decision yet"
-            return Status.FAILURE
+            return FAILURE
         decision = self.board.get(self.params.key)
         self.feedback_message = f"decision: {decision}"
-        return Status.SUCCESS if decision == "dead_end" else Status.FAILURE
+        return SUCCESS if decision == "dead_end" else FAILURE
 
 
 # ---------------------------------------------------------------- ChooseTurn
@@ -266,8 +269,13 @@ class ChooseTurn(RobotBehaviour):
         """A new leg: the side walls are not seen yet. The robot's sensor poses and reach."""
         model = self.robot.model
         self.reach = {side: lateral_reach(model, side) for side in SIDES}
-        self.rays = {side: model.sensor(side_ray(side)) for side in SIDES}
-        self.front = model.sensor("front_center")
+        front = model.sensor("front_center").x
+        #: per side: the ray's x + reading * cos(yaw) beyond front.x + ahead - 1 cm met the wall ahead;
+        #: |y| + reading * |sin(yaw)| is how far from the centre line it met a side wall
+        self.rays = {
+            side: (ray.x, math.cos(ray.yaw), front, abs(ray.y), abs(math.sin(ray.yaw)))
+            for side, ray in ((side, model.sensor(side_ray(side))) for side in SIDES)
+        }
         self.edge = model.range_max - SATURATED
         self.beside: dict[str, float | None] = {side: None for side in SIDES}
 
@@ -275,17 +283,24 @@ class ChooseTurn(RobotBehaviour):
         """Wait for the wall ahead, watching the side walls, then decide and write the decision."""
         scan = self.robot.proximity()
         assert scan is not None
-        ahead = scan["front_center"]
-        offsets: dict[Side, float | None] = {side: self._offset(scan[side_ray(side)], side, ahead) for side in SIDES}
+        ahead, left, right = scan["front_center"], scan["front_left"], scan["front_right"]
+        offsets: dict[Side, float | None] = {
+            "left": self._offset(left, "left", ahead),
+            "right": self._offset(right, "right", ahead),
+        }
         # how far the side walls are, where the readings say it (not at the edge of the range)
-        measured = {side: offsets[side] if scan[side_ray(side)] < self.edge else None for side in SIDES}
+        edge = self.edge
+        measured: dict[Side, float | None] = {
+            "left": offsets["left"] if left < edge else None,
+            "right": offsets["right"] if right < edge else None,
+        }
         if measured["left"] is not None and measured["right"] is not None:
             self.width = measured["left"] + measured["right"]
         if math.isinf(ahead):
             for side in SIDES:
                 self.beside[side] = offsets[side] if offsets[side] is not None else self.beside[side]
             self.feedback_message = "waiting for the wall ahead to come into range"
-            return Status.RUNNING
+            return RUNNING
         prefer: Side = self.params.prefer
         # a side is closed where its ray met a side wall; a ray that met the wall ahead tells nothing
         candidates = [s for s in (prefer, _other(prefer)) if offsets[s] is None]
@@ -295,17 +310,17 @@ class ChooseTurn(RobotBehaviour):
         write_decision(self.board, self.params.key, decision, certain)
         self.extra = {"decision": decision, "certain": certain}
         self.feedback_message = f"decided {decision}" + ("" if certain else " (not sure: look)")
-        return Status.SUCCESS
+        return SUCCESS
 
     def _offset(self, reading: float, side: Side, ahead: float) -> float | None:
         """How far from the centre line the ray on ``side`` met a side wall; None when it met none
         (or met the wall ahead: within 1 cm of where ``front_center`` meets it)."""
         if math.isinf(reading):
             return None
-        ray, front = self.rays[side], self.front
-        if ray.x + reading * math.cos(ray.yaw) >= front.x + ahead - 0.01:
+        x, cos, front, y, sin = self.rays[side]
+        if x + reading * cos >= front + ahead - 0.01:
             return None
-        return abs(ray.y) + reading * abs(math.sin(ray.yaw))
+        return y + reading * sin
 
     def _surely_open(self, side: Side, measured: dict[Side, float | None]) -> bool:
         """Whether ``side``'s empty reading is an opening: a wall there would be within its ray's
@@ -377,14 +392,14 @@ class LookAround(RobotBehaviour):
             return self.fail(FailureCode.INVALID_INPUT, f"no decision '{self.keys[0]}' to check: run ChooseTurn first")
         if self.first is None:
             self.feedback_message = "ChooseTurn was sure: nothing to look at"
-            return Status.SUCCESS
+            return SUCCESS
         scan = self.robot.proximity()
         assert scan is not None
         ahead = scan["front_center"]
         if self.facing is not None:  # stopped, facing a side: read it
             self.readings.append(ahead)
             if len(self.readings) < LOOK_READINGS:
-                return Status.RUNNING
+                return RUNNING
             self._seen(self.facing, sorted(self.readings)[LOOK_READINGS // 2])
         if self.turn is None:
             if not self.looks:
@@ -397,16 +412,16 @@ class LookAround(RobotBehaviour):
             self.robot.drive(0.0, 0.0)  # turning on would touch that side's wall
             self.turn = None
             self._seen(self.target, 0.0)
-            return Status.RUNNING
+            return RUNNING
         if not self.turn.drive(self.turn.error()):
             self.say("turning to look {}", self.target or "ahead")
-            return Status.RUNNING
+            return RUNNING
         self.turn, self.facing = None, self.target
-        return Status.RUNNING if self.facing is not None or self.looks else self._decide()
+        return RUNNING if self.facing is not None or self.looks else self._decide()
 
     def terminate(self, new_status: Status) -> None:
         """Stop the robot if it ends (or is halted) mid-turn, then log the end."""
-        if self.status == Status.RUNNING and self.turn is not None and self.robot.exists():
+        if self.status == RUNNING and self.turn is not None and self.robot.exists():
             self.robot.drive(0.0, 0.0)
         super().terminate(new_status)
 
@@ -424,4 +439,4 @@ class LookAround(RobotBehaviour):
         write_decision(self.board, self.params.key, decision, True)
         self.extra = {"decision": decision, "looked": sorted(self.open)}
         self.feedback_message = f"looked: {decision}"
-        return Status.SUCCESS
+        return SUCCESS

@@ -15,7 +15,7 @@ from typing import Literal, get_args
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.base import RUNNING, SUCCESS, BehaviourParams, FailureCode, RobotBehaviour, current_pose
 from thymio_bt.inputs.fields import (
     Angle,
     AngularSpeed,
@@ -171,7 +171,7 @@ class MoveUntilWall(Motion):
             self.robot.drive(0.0, 0.0)
             self.speed = 0.0
             self.say("{} jumped to {:.4f} m: checking", p.sensor, reading)
-            return Status.RUNNING
+            return RUNNING
         self.saw_nothing = infinite
         if finite:
             self.wall_seen = True
@@ -188,11 +188,12 @@ class MoveUntilWall(Motion):
         if remaining <= p.tolerance:
             self.robot.drive(0.0, 0.0)
             self.say("stopped at {:.4f} m", reading)
-            return Status.SUCCESS
+            return SUCCESS
         speed = (
             p.speed if infinite else approach_speed(remaining, p.speed, self.gain, p.min_speed, self.ctx.tick_period)
         )
-        left, right = scan["front_left"], scan["front_right"]
+        # the side rays read only to centre: a scan cast when read (the simulation's) casts no ray else
+        left, right = (scan["front_left"], scan["front_right"]) if p.centre else (math.inf, math.inf)
         if (
             p.centre
             and math.isfinite(left)
@@ -210,7 +211,7 @@ class MoveUntilWall(Motion):
             self.feedback_message = "no wall in range"
         else:
             self.say("{} {:.4f} m, {:.3f} m/s", p.sensor, reading, speed)
-        return Status.RUNNING
+        return RUNNING
 
     def _end_fields(self) -> dict[str, float | None]:
         """The behaviour_end fields: the last range read and the stop distance."""
@@ -290,11 +291,11 @@ class MoveDistance(Motion):
         self.done, self.extra = done, self._end_fields
         if abs(remaining) <= p.tolerance:
             self.robot.drive(0.0, 0.0)
-            return Status.SUCCESS
+            return SUCCESS
         speed = approach_speed(abs(remaining), p.speed, p.approach_gain, p.min_speed, self.ctx.tick_period)
         self.robot.drive(math.copysign(speed, remaining), heading_hold(pose.yaw, self.origin.yaw))
         self.say("{:.3f} of {:.3f} m", done, p.distance)
-        return Status.RUNNING
+        return RUNNING
 
     def _end_fields(self) -> dict[str, float]:
         """The behaviour_end fields: the distance driven."""
@@ -379,9 +380,9 @@ class TurnAngle(Motion):
             error = math.atan2(left - right, REAR_SENSOR_SPACING)
         if turn.drive(error, self.params.pivot):
             self.say("turned {:.2f} deg", math.degrees(turn.turned))
-            return Status.SUCCESS
+            return SUCCESS
         self.say("{:.2f} deg to go", math.degrees(error))
-        return Status.RUNNING
+        return RUNNING
 
     def _end_fields(self) -> dict[str, float]:
         """The behaviour_end fields: the angle turned."""
@@ -462,7 +463,7 @@ class Stop(RobotBehaviour):
     def step(self) -> Status:
         """Stop the motors."""
         self.robot.drive(0.0, 0.0)
-        return Status.SUCCESS
+        return SUCCESS
 
 
 class WaitParams(BehaviourParams):
@@ -487,6 +488,6 @@ class Wait(RobotBehaviour):
     def step(self) -> Status:
         """SUCCESS once the time has passed."""
         if self.elapsed() >= self.params.seconds - 1e-9:
-            return Status.SUCCESS
+            return SUCCESS
         self.say("{:.1f} s left", self.params.seconds - self.elapsed())
-        return Status.RUNNING
+        return RUNNING

@@ -1,14 +1,8 @@
 """The pymunk backend: the course's Thymio in a maze, implementing :class:`Robot` and :class:`Entities`.
 
-Physics, in metres:
-
-- walls are static boxes (``Wall.corners``), the robot a dynamic convex hull (``RobotModel.hull``)
-  whose centre of gravity sits on the wheel axle, so spinning keeps the axle fixed;
-- the robot is pulled by a kinematic control body through a pivot joint at the axle and a gear
-  joint (pymunk's top-down "tank" recipe): it follows (v, ω) exactly in free space, while walls
-  push back instead of being tunnelled (a kinematic robot, or a dynamic one whose velocity is
-  overwritten every step, goes through walls);
-- ``collision_slop`` is 0.2 mm (pymunk's default 0.1 would be 10 cm in metres).
+The physics (walls, the robot's bodies and joints) is built by :mod:`.space`; this module steps it,
+drives the robot, refreshes its sensors (:mod:`.readings`, :mod:`.sensor_models`) and clearance,
+and spawns and deletes entities.
 
 Example::
 
@@ -30,71 +24,16 @@ from types import MappingProxyType
 
 import pymunk
 
-from thymio_bt.backends.sim.clearance import ClearanceTracker
-from thymio_bt.backends.sim.cone import APERTURE, ConeResponse
-from thymio_bt.backends.sim.fastpath import (
-    NearShapes,
-    RayCaster,
-    RayReader,
-    body_driver,
-    body_reader,
-    control_aimer,
-    spinner,
-    stepper,
-)
+from thymio_bt.backends.sim.fastpath import RayCaster, RayReader, stepper
 from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
+from thymio_bt.backends.sim.sensor_models import ConeSensors, raw_model
+from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody, pose_of
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, new_pose, wrap_angle
+from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, wrap_angle
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
-from thymio_bt.robot.placement import MazeShapes, convex_overlap, placement_problem
-from thymio_bt.sensor_tables import RawProximityModel, raw_scan_to_metres
-
-_ROBOT_TYPE = 1
-_WALL_TYPE = 2
-#: shape categories: readings cast when read see walls (and obstacles) only
-_WALLS, _ROBOTS = 0b01, 0b10
-
-
-def _pose_of(x: float, y: float, angle: float) -> Pose:
-    """A body's pose, its angle wrapped to [-pi, pi)."""
-    return new_pose(x, y, wrap_angle(angle))
-
-
-def _raw_model(seed: int, model: RobotModel) -> RawProximityModel:
-    """Noisy integer readings through ``model``'s calibration (a profile's measured table included)."""
-    import numpy as np  # only raw mode needs it: keeps ~50 ms off every start-up
-
-    return RawProximityModel(np.random.default_rng((seed, 1)), model.calibration)
-
-
-class _ConeSensors:
-    """The seven sensors as Enki's cones (:mod:`thymio_bt.backends.sim.cone`): 21 rays, noisy integer readings."""
-
-    def __init__(self, model: RobotModel, seed: int) -> None:
-        import numpy as np
-
-        self.response = ConeResponse()
-        reach = self.response.range
-        self.names = [s.name for s in model.sensors]
-        #: each sensor's three rays in turn, (start, end) in the body frame
-        self.rays = [
-            (s.x, s.y, s.x + reach * math.cos(s.yaw + a), s.y + reach * math.sin(s.yaw + a))
-            for s in model.sensors
-            for a in (APERTURE, 0.0, -APERTURE)
-        ]
-        self.rng = np.random.default_rng((seed, 2))
-
-    def measure(self, rays: RayCaster, entity: _Body, bx: float, by: float, cos: float, sin: float) -> dict[str, int]:
-        """The readings of ``entity`` at (bx, by), heading with this cosine and sine."""
-        alphas = rays.fan(self.rays, bx, by, cos, sin, entity.filter)
-        reach, response = self.response.range, self.response
-        draws = self.rng.standard_normal(len(self.names))
-        readings = {}
-        for i, (name, z) in enumerate(zip(self.names, draws, strict=True)):
-            hits = [None if alpha is None else alpha * reach for alpha in alphas[3 * i : 3 * i + 3]]
-            readings[name] = response.reading(response.value(*hits), float(z))
-        return readings
+from thymio_bt.robot.placement import convex_overlap, placement_problem
+from thymio_bt.sensor_tables import raw_scan_to_metres
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,43 +51,6 @@ class SimConfig:
     #: through the calibration table, to 9.33 cm), converted back to metres as the real backend does;
     #: "cone": Enki's three-ray cones (:mod:`thymio_bt.backends.sim.cone`), read through the robot's calibration
     sensor_model: SimSensorModel = "metres"
-
-
-class _Body:
-    """One robot entity in the space: the hull body, its control body and joints."""
-
-    def __init__(self, space: pymunk.Space, pose: Pose, group: int, model: RobotModel) -> None:
-        self.body = pymunk.Body(model.mass, pymunk.moment_for_poly(model.mass, model.hull))
-        self.body.center_of_gravity = (model.axle_x, 0.0)
-        self.shape = pymunk.Poly(self.body, model.hull)
-        self.shape.friction = 0.1  # the skid's mu in the URDF
-        self.shape.collision_type = _ROBOT_TYPE
-        self.filter = pymunk.ShapeFilter(group=group)  # rays and queries skip the robot's own shape
-        self.shape.filter = pymunk.ShapeFilter(group=group, categories=_ROBOTS)
-        self.control = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-        pivot = pymunk.PivotJoint(self.control, self.body, (0.0, 0.0), (model.axle_x, 0.0))
-        pivot.max_bias = 0.0  # a pure velocity constraint: drift is not corrected
-        pivot.max_force = 10.0  # traction: walls win against the wheels
-        gear = pymunk.GearJoint(self.control, self.body, 0.0, 1.0)
-        gear.max_bias = 0.0
-        gear.max_force = 0.1
-        self.joints = (pivot, gear)
-        self.near = NearShapes(space, self.body, model.hull, self.filter)  # for the clearance tracker
-        self.body.angle = pose.yaw
-        self.body.position = (pose.x, pose.y)
-        self.control.position = self.body.local_to_world((model.axle_x, 0.0))
-        self.control.angle = pose.yaw
-        space.add(self.body, self.shape, self.control, *self.joints)
-        self.read = body_reader(self.body)  # (x, y, angle), the hot path's way to read the body
-        self.aim = control_aimer(self.body, self.control)
-        self.spin = spinner(self.control)
-        self.drive = body_driver(self.body, self.control)
-
-    def remove(self, space: pymunk.Space) -> None:
-        space.remove(self.body, self.shape, self.control, *self.joints)
-
-    def pose(self) -> Pose:
-        return _pose_of(*self.read())
 
 
 class Simulation(Backend):
@@ -179,10 +81,11 @@ class Simulation(Backend):
         self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
         #: noise-free metres are cast only when read (noise draws from streams whose order must hold)
         self._lazy_scan = self.config.sensor_model == "metres" and not self._range_noise
-        self._raw_model = _raw_model(self.config.seed, self.model) if self.config.sensor_model == "raw" else None
+        self._raw_model = raw_model(self.config.seed, self.model) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
-        self._entities: dict[str, _Body] = {}
-        self._pose_read: tuple[int, _Body | None, Pose | None] = (-1, None, None)  # (step, entity, its pose)
+        self._entities: dict[str, RobotBody] = {}
+        #: the robot's true pose at this physics step once read (None: not read since the last step)
+        self._pose_now: Pose | None = None
         #: the held command (linear, angular) as floats; command() makes it a Twist when asked
         self._cmd = (0.0, 0.0)
         #: the last drive() arguments and their floats: a behaviour cruising passes the same float
@@ -202,7 +105,7 @@ class Simulation(Backend):
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)  # (_odo, its pose)
         self._contacts = 0
         self._build_sensors()
-        self.space.on_collision(_ROBOT_TYPE, _WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
+        self.space.on_collision(ROBOT_TYPE, WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
         if spawn is not None:
             problem = self.spawn_problem(robot_name, spawn)
             if problem:
@@ -210,23 +113,14 @@ class Simulation(Backend):
             self._add_robot(robot_name, spawn)
 
     def _build_space(self, maze: Maze) -> None:
-        """The physics: walls and obstacles (obstacles first) as static shapes, a clearance tracker over them."""
-        self.space = pymunk.Space()
-        self.space.collision_slop = 0.0002
-        self.space.iterations = 10
-        self._shapes = MazeShapes.of(maze)  # walls, then obstacles: polygons and boxes
-        tracked = []
-        walled = len(maze.walls)
-        for index in (*range(walled, len(self._shapes.polygons)), *range(walled)):  # obstacles first
-            corners = self._shapes.polygons[index]
-            shape = pymunk.Poly(self.space.static_body, corners)
-            shape.collision_type = _WALL_TYPE
-            shape.filter = pymunk.ShapeFilter(categories=_WALLS)
-            shape.friction = 1.0
-            self.space.add(shape)
-            tracked.append((shape, maze.walls[index] if index < walled else None, corners, self._shapes.boxes[index]))
-        self.bounds = self._shapes.bounds
-        self._clearance = ClearanceTracker(self.model, tracked, self.bounds)
+        """The physics (:class:`~.space.MazeSpace`): the maze's static shapes and a clearance tracker over them."""
+        built = MazeSpace(maze, self.model)
+        self.space, self._shapes, self.bounds, self._clearance = (
+            built.space,
+            built.shapes,
+            built.bounds,
+            built.clearance,
+        )
         self._dt = 1.0 / self.config.physics_hz
         self._step = stepper(self.space)
         self._ray = RayCaster(self.space)
@@ -246,9 +140,9 @@ class Simulation(Backend):
             dict(zip(self._ray_names, self._rays, strict=True)),
             reach,
             self._range_min,
-            pymunk.ShapeFilter(mask=_WALLS),
+            pymunk.ShapeFilter(mask=WALLS),
         )
-        self._cone = _ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
+        self._cone = ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
 
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
@@ -290,14 +184,13 @@ class Simulation(Backend):
 
     def true_pose(self) -> Pose | None:
         """The ground-truth pose (equal to :meth:`pose` unless odometry drift is on). Read once per
-        physics step and entity: behaviours ask for it several times a tick."""
-        entity = self._entities.get(self.robot_name)
-        if entity is None:
-            return None
-        step, body, pose = self._pose_read
-        if step != self._steps or body is not entity:
-            pose = entity.pose()
-            self._pose_read = (self._steps, entity, pose)
+        physics step: behaviours ask for it several times a tick."""
+        pose = self._pose_now
+        if pose is None:
+            entity = self._entities.get(self.robot_name)
+            if entity is None:
+                return None
+            pose = self._pose_now = entity.pose()
         return pose
 
     def velocity(self) -> Twist:
@@ -345,9 +238,10 @@ class Simulation(Backend):
         if self._requests:
             self.serve_requests()
 
-    def _run_steps(self, entity: _Body | None, steps: int) -> None:
+    def _run_steps(self, entity: RobotBody | None, steps: int) -> None:
         """``steps`` physics steps with the applied command, refreshing the sensors at their rate."""
         (step, space), dt = self._step, self._dt
+        self._pose_now = None  # the robot moves
         if entity is None:
             for _ in range(steps):
                 step(space, dt)
@@ -419,18 +313,18 @@ class Simulation(Backend):
             self._odo_pose = (self._odo, pose)
         return pose
 
-    def _update_clearance(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> None:
+    def _update_clearance(self, entity: RobotBody, bx: float, by: float, cos: float, sin: float) -> None:
         gap = self._clearance.below(self.min_clearance, entity.near, entity.shape, bx, by, cos, sin)
         if gap < self.min_clearance:
             self.min_clearance = max(gap, 0.0)
 
-    def _refresh_sensors(self, entity: _Body) -> None:
+    def _refresh_sensors(self, entity: RobotBody) -> None:
         """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
         bx, by, angle = entity.read()
-        self._pose_read = (self._steps, entity, _pose_of(bx, by, angle))
+        self._pose_now = pose_of(bx, by, angle)
         cos, sin = math.cos(angle), math.sin(angle)
         if self._cone is not None:
-            self._raw = self._cone.measure(self._ray, entity, bx, by, cos, sin)
+            self._raw = self._cone.measure(self._ray, entity.filter, bx, by, cos, sin)
             self._scan = MappingProxyType(raw_scan_to_metres(self._raw, self.model.calibration))
         elif self._lazy_scan and len(self._entities) == 1:
             # noise-free metres alone in the maze depend on nothing but this pose and the walls: each
@@ -441,7 +335,7 @@ class Simulation(Backend):
             self._scan = MappingProxyType(self._cast(entity, bx, by, cos, sin))
         self._update_clearance(entity, bx, by, cos, sin)
 
-    def _cast(self, entity: _Body, bx: float, by: float, cos: float, sin: float) -> dict[str, float]:
+    def _cast(self, entity: RobotBody, bx: float, by: float, cos: float, sin: float) -> dict[str, float]:
         """The seven rays' readings of ``entity`` at (bx, by), heading with this cosine and sine."""
         alphas = self._ray.fan(self._rays, bx, by, cos, sin, entity.filter)
         noise, raw, noisy = self._noise, self._raw_model, self._range_noise
@@ -462,7 +356,7 @@ class Simulation(Backend):
 
     # -------------------------------------------------------------- entities
     def _add_robot(self, name: str, pose: Pose) -> None:
-        entity = _Body(self.space, pose, group=1 + len(self._entities), model=self.model)
+        entity = RobotBody(self.space, pose, group=1 + len(self._entities), model=self.model)
         self._entities[name] = entity
         if name == self.robot_name:
             self._odo = self.model.axle_of(pose)
@@ -476,7 +370,7 @@ class Simulation(Backend):
             return f"no entity named '{name}' (existing: {', '.join(sorted(self._entities)) or 'none'})"
         entity.remove(self.space)
         if name == self.robot_name:
-            self._scan, self._cmd, self._contacts = None, (0.0, 0.0), 0
+            self._scan, self._cmd, self._contacts, self._pose_now = None, (0.0, 0.0), 0, None
         return None
 
     def _place_entity(self, name: str, pose: Pose) -> str | None:
