@@ -64,6 +64,14 @@ RUN_DOES_NOT_LOAD = (
     "thymio_bt.grade",
     "thymio_bt.btcpp.export",
     "xml.etree.ElementTree",
+    # node families the mission names none of: the registry imports a family when a node of it is named
+    "thymio_bt.behaviours.mapping",
+    "thymio_bt.behaviours.move_cells",
+    "thymio_bt.behaviours.navigation",
+    "thymio_bt.behaviours.places",
+    "thymio_bt.btcpp.runtime.control",
+    "thymio_bt.btcpp.runtime.scripted",
+    "thymio_bt.maze.cellmap",
 )
 
 
