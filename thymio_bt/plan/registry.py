@@ -163,9 +163,12 @@ class Registry:
         from thymio_bt.plan.unrun_plugins import plugin_nodes, stand_in
 
         target, _, attr = ref.partition(":")
-        nodes: dict[str, list[str] | None] = {attr: None}
-        if not attr:
-            path = self._plugin_file(target, base_dir, where) if target.endswith(".py") else _source(ref, where)
+        if target.endswith(".py"):
+            path: Path | None = self._plugin_file(target, base_dir, where)
+        else:
+            path = _source(ref, where, needed=not attr)
+        nodes: dict[str, list[str] | None] = {}
+        if path is not None:
             classes = [cls for _, cls in self.items()]
             models = {c.Params.__name__: list(c.Params.model_fields) for c in classes}
             try:
@@ -173,12 +176,15 @@ class Registry:
                     path,
                     {**models, "BehaviourParams": list(BehaviourParams.model_fields)},
                     {c.__name__: c.Params.__name__ for c in classes},
+                    only=attr or None,
                 )
             except SyntaxError as exc:
                 raise UserError(
                     Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0, exc.offset or 0)
                 ) from None
-        for name, params in nodes.items():
+        # a class the source does not show as a node (imported from elsewhere, made at run time):
+        # its class name, its parameters unchecked
+        for name, params in (nodes or {attr: None}).items():
             if name not in self._classes:
                 self._classes[name] = stand_in(name, params)
 
@@ -226,12 +232,15 @@ def _import_file(path: Path) -> ModuleType:
     return module
 
 
-def _source(ref: str, where: tuple[str, int, int]) -> Path:
-    """The ``.py`` file of the plugin module ``ref``, found without importing it (a top-level module only)."""
+def _source(ref: str, where: tuple[str, int, int], needed: bool = True) -> Path | None:
+    """The ``.py`` file of the plugin module ``ref``, found without importing it (a top-level module
+    only); None when it cannot be and is not ``needed`` (a ``module:Class`` names its class)."""
     target = ref.partition(":")[0]
     spec = importlib.util.find_spec(target) if "." not in target else None
     if spec and spec.origin and spec.origin.endswith(".py"):
         return Path(spec.origin)
+    if not needed:
+        return None
     raise UserError(
         Problem(
             f"cannot find plugin '{ref}' without importing it",
