@@ -127,3 +127,22 @@ def test_the_package_still_hands_out_every_behaviour_class_it_lists():
     with pytest.raises(AttributeError):
         _ = thymio_bt.behaviours.NoSuchBehaviour
     assert not issubclass(default_registry()["Stop"], UnrunPlugin)
+
+
+def test_import_all_hands_out_every_node_imported():
+    registry = Registry(lazy={"Stop": "thymio_bt.behaviours.motion:Stop", "MapWalls": BUILTIN_NODES["MapWalls"]})
+    registry.import_all()
+    assert all(isinstance(value, type) for value in registry._classes.values())
+
+
+@pytest.mark.parametrize("module", ["thymio_bt.grade.sandbox", "thymio_bt.grade.grader"])
+def test_the_processes_that_fork_students_runs_import_every_family_first(tmp_path, module):
+    """The grader and its sandboxes' zygote fork a child per student, whose mission may name any node:
+    each family is imported before the fork (as when the registry imported all), not once per child."""
+    code = (
+        f"import sys\nimport {module} as m\nm._warm()\n"
+        "print(all(m in sys.modules for m in ('thymio_bt.behaviours.mapping', 'thymio_bt.btcpp.runtime.control')))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "True"

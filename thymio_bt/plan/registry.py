@@ -97,7 +97,14 @@ class Registry:
 
     def items(self) -> Iterator[tuple[str, Node]]:
         """(YAML name, node class) of every node, in the order they were registered (all imported)."""
-        return ((name, self[name]) for name in list(self._classes))
+        self.import_all()
+        return iter(self._classes.items())  # type: ignore[arg-type]  # every value a class now
+
+    def import_all(self) -> None:
+        """Import every node's module now: a process about to fork children whose missions may name
+        any node (the grader, its sandboxes' zygote) hands each child all of them warm."""
+        for name in list(self._classes):
+            self.get(name)
 
     def behaviours(self) -> Iterator[tuple[str, type[RobotBehaviour]]]:
         """The robot behaviours and conditions (no composites or decorators)."""
