@@ -8,7 +8,9 @@ import pytest
 from click.testing import CliRunner
 
 from thymio_bt.analysis.schema import mission_schema
-from thymio_bt.behaviours import CONTROL, ControlNode
+from thymio_bt.behaviours import ControlNode
+from thymio_bt.behaviours.flow.composites import COMPOSITES
+from thymio_bt.behaviours.flow.decorators import DECORATORS
 from thymio_bt.cli import main
 from thymio_bt.errors import UserError
 from thymio_bt.mission import default_registry, load_mission
@@ -17,7 +19,7 @@ from thymio_bt.run.runner import Run
 
 def test_every_composite_and_decorator_is_in_the_registry():
     registry = default_registry()
-    for cls in CONTROL:
+    for cls in (*COMPOSITES, *DECORATORS):
         assert registry[cls.yaml_name] is cls
     composites = {n for n, _ in registry.control("composite")}
     assert {n for n in composites if not n.startswith("bt_")} == {

@@ -389,3 +389,32 @@ def test_a_hostile_plugins_cycles_and_diamonds_of_params_are_read_once(tmp_path)
         assert plugin_nodes(plugin, {"BehaviourParams": ["timeout"]}) == {"Deeper": None}
     finally:
         sys.setrecursionlimit(limit)
+
+
+@pytest.mark.parametrize("ref", ["spin_plugin_by_name.py:Spin", "spin_plugin_by_name:Spin"])
+def test_a_named_plugin_class_not_imported_is_known_by_its_yaml_name(tmp_path, monkeypatch, ref):
+    """``plugins: [module:Class]`` under validate, tree and lint: the class's ``yaml_name``, as an
+    imported one is registered, with its parameters read from the source; never its class name."""
+    (tmp_path / "spin_plugin_by_name.py").write_text(
+        "import os\nos.abort()\n"
+        "class SpinParams(BehaviourParams):\n    rate: float = 1\n"
+        "class Spin(RobotBehaviour):\n    yaml_name = 'SpinInPlace'\n    Params = SpinParams\n"
+        "class Other(RobotBehaviour):\n    pass\n"
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    mission = tmp_path / "m.yaml"
+    mission.write_text(f"maze: arena\nstart: centre\nplugins: ['{ref}']\ntree:\n  SpinInPlace: {{rat: 2}}\n")
+    with pytest.raises(UserError) as err:
+        load_mission(mission, run_plugins=False)
+    assert [(p.message, p.hint) for p in err.value.problems] == [
+        ("SpinInPlace has no parameter 'rat'", "did you mean 'rate'?")
+    ]
+    mission.write_text(f"maze: arena\nstart: centre\nplugins: ['{ref}']\ntree:\n  SpinInPlace: {{rate: 2}}\n")
+    registry = load_mission(mission, run_plugins=False).registry
+    assert "SpinInPlace" in registry and "Spin" not in registry and "Other" not in registry
+
+
+def test_a_named_plugin_class_whose_source_cannot_be_read_keeps_its_class_name(tmp_path):
+    mission = tmp_path / "m.yaml"
+    mission.write_text("maze: arena\nstart: centre\nplugins: ['no_such_pkg.nodes:Spin']\ntree:\n  Spin: {any: 1}\n")
+    assert load_mission(mission, run_plugins=False).tree.behaviour == "Spin"

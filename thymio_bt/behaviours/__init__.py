@@ -1,63 +1,39 @@
 """The built-in nodes: robot behaviours, one family per module (motion, maze, entities, navigation, mapping),
-and the composites and decorators that arrange them (:mod:`.flow`), re-exported here."""
+and the composites and decorators that arrange them (:mod:`.flow`).
+
+The families are imported when first asked for: ``from thymio_bt.behaviours import WallFollow`` still
+works, but importing this package (as the base of every node does) loads none of them, so a run
+creates only its own nodes' classes (the registry finds each in :mod:`thymio_bt.plan.builtin_nodes`).
+
+    >>> from thymio_bt.behaviours import WallFollow
+    >>> WallFollow.__module__
+    'thymio_bt.behaviours.wall_follow'
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 from thymio_bt.behaviours.base import Context, EventLog, FailureCode, RobotBehaviour
-from thymio_bt.behaviours.entities import DeleteEntity, SpawnEntity
-from thymio_bt.behaviours.flow.composites import COMPOSITES
-from thymio_bt.behaviours.flow.decorators import DECORATORS
 from thymio_bt.behaviours.flow.node import ControlNode
 from thymio_bt.behaviours.flow.primitives import RepeatUntil, ScriptedStub, SimTimeout
-from thymio_bt.behaviours.mapping import AtTarget, MapWalls, MoveCells, PlanMove, WallMapped
-from thymio_bt.behaviours.maze import ChooseTurn, IsDeadEnd, LookAround, SideOpen, WallAhead, WallFollow
-from thymio_bt.behaviours.motion import MoveDistance, MoveUntilWall, Stop, TurnAngle, Wait
-from thymio_bt.behaviours.navigation import (
-    FollowWaypoints,
-    GoToPose,
-    ObstacleAhead,
-    SetBlackboard,
-    TurnBack,
-    TurnUntilClear,
-    WaypointsDone,
-)
-from thymio_bt.behaviours.places import InRegion, OutsideMaze
 
-#: Every built-in robot behaviour, in the order ``thymio-bt behaviours`` lists them.
-BUILTIN: tuple[type[RobotBehaviour], ...] = (
-    MoveUntilWall,
-    MoveDistance,
-    TurnAngle,
-    Stop,
-    Wait,
-    DeleteEntity,
-    SpawnEntity,
-    ChooseTurn,
-    LookAround,
-    WallAhead,
-    SideOpen,
-    IsDeadEnd,
-    WallFollow,
-    GoToPose,
-    FollowWaypoints,
-    WaypointsDone,
-    ObstacleAhead,
-    TurnUntilClear,
-    TurnBack,
-    SetBlackboard,
-    MapWalls,
-    PlanMove,
-    MoveCells,
-    WallMapped,
-    AtTarget,
-    OutsideMaze,
-    InRegion,
-)
+#: the robot behaviours' family modules, where :func:`__getattr__` looks for a name
+FAMILIES = ("motion", "entities", "maze", "wall_follow", "navigation", "mapping", "move_cells", "places")
 
-#: Every built-in composite and decorator.
-CONTROL: tuple[type[ControlNode], ...] = (*COMPOSITES, *DECORATORS)
+
+def __getattr__(name: str) -> Any:
+    """A robot behaviour class of one of the families, its module imported now (PEP 562)."""
+    for family in FAMILIES:
+        module = importlib.import_module(f"{__name__}.{family}")
+        cls = getattr(module, name, None)
+        if isinstance(cls, type) and issubclass(cls, RobotBehaviour) and cls.__module__ == module.__name__:
+            return cls
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
-    "BUILTIN",
-    "CONTROL",
     "ControlNode",
     "Context",
     "EventLog",
@@ -66,5 +42,31 @@ __all__ = [
     "RepeatUntil",
     "ScriptedStub",
     "SimTimeout",
-    *(cls.__name__ for cls in BUILTIN),
+    "MoveUntilWall",
+    "MoveDistance",
+    "TurnAngle",
+    "Stop",
+    "Wait",
+    "DeleteEntity",
+    "SpawnEntity",
+    "ChooseTurn",
+    "LookAround",
+    "WallAhead",
+    "SideOpen",
+    "IsDeadEnd",
+    "WallFollow",
+    "GoToPose",
+    "FollowWaypoints",
+    "WaypointsDone",
+    "ObstacleAhead",
+    "TurnUntilClear",
+    "TurnBack",
+    "SetBlackboard",
+    "MapWalls",
+    "PlanMove",
+    "MoveCells",
+    "WallMapped",
+    "AtTarget",
+    "OutsideMaze",
+    "InRegion",
 ]

@@ -9,6 +9,7 @@ signal's code (130 for Ctrl-C) when interrupted.
 
 from __future__ import annotations
 
+import gc
 import sys
 import time
 from collections.abc import Callable
@@ -198,6 +199,10 @@ def run(
             covered = CoverageRequest.checked(coverage_tree)
         spec = load_mission(mission, overrides, maze=maze, start=start)
         runner = _prepare(spec, seed, backend, backend_opts, node_stats=covered is not None)
+        # the modules, the mission and the world live until the process ends: the garbage collector's
+        # passes leave them out from here on (a tenth of the start-up's and the run's instructions went
+        # to walking them again and again, benchmarks/README.md, "The registry imports ...")
+        gc.freeze()
         if web is not None and realtime is None:
             realtime = 1.0  # a run watched live goes at the speed of the robot
         hooks = _Hooks(_Progress(spec.time_limit, enabled=not quiet and sys.stderr.isatty()))

@@ -1,7 +1,9 @@
 """The node registry: YAML name → node class and its pydantic parameter model.
 
 Robot behaviours, conditions, composites and decorators are all registered here, so validation,
-``thymio-bt behaviours``, the JSON Schema and the docs read from one place. Users add their own
+``thymio-bt behaviours``, the JSON Schema and the docs read from one place. A built-in node's module
+is imported when a mission first names it (:data:`~thymio_bt.plan.builtin_nodes.BUILTIN_NODES` says
+where each is), so a run imports only its own nodes; what lists every node imports them all. Users add their own
 nodes (a :class:`RobotBehaviour` or a :class:`ControlNode`) through the ``thymio_bt.behaviours``
 entry-point group, or a ``plugins:`` list in a mission (``module:Class``, or a ``.py`` file path
 relative to the mission).
@@ -13,6 +15,8 @@ Example::
     0.05
     >>> registry["sequence"].category, "NoSuchNode" in registry
     ('composite', False)
+    >>> Registry(lazy={"Stop": "thymio_bt.behaviours.motion:Stop"}).get("Stop").__name__   # imported now
+    'Stop'
 """
 
 from __future__ import annotations
@@ -21,15 +25,14 @@ import importlib
 import importlib.util
 import inspect
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-from thymio_bt.behaviours import BUILTIN, CONTROL, ControlNode, RobotBehaviour
-from thymio_bt.btcpp.runtime.control import BTCPP_CONTROL, BTCPP_SCRIPTED
-from thymio_bt.btcpp.runtime.scripted import BTCPP_LEAVES
+from thymio_bt.behaviours import ControlNode, RobotBehaviour
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.plan.builtin_nodes import BUILTIN_NODES
 
 ENTRY_POINT_GROUP = "thymio_bt.behaviours"
 
@@ -43,10 +46,12 @@ def is_node(cls: Any) -> bool:
 
 
 class Registry:
-    """A mapping from YAML names to node classes."""
+    """A mapping from YAML names to node classes; ``lazy``: nodes known by name and ``"module:attr"``
+    (see :mod:`thymio_bt.plan.builtin_nodes`), imported when first looked up."""
 
-    def __init__(self, classes: tuple[Node, ...] = ()) -> None:
-        self._classes: dict[str, Node] = {}
+    def __init__(self, classes: tuple[Node, ...] = (), lazy: Mapping[str, str] | None = None) -> None:
+        #: YAML name -> its class, or where it is while not yet imported
+        self._classes: dict[str, Node | str] = dict(lazy or {})
         #: the .py plugin files loaded (a mission's sources, e.g. for a sweep's cache key)
         self.plugin_files: list[Path] = []
         #: every plugin a mission named (``module:Class``, ``module`` or ``file.py``) and where, loaded or not
@@ -56,15 +61,8 @@ class Registry:
 
     def register(self, cls: Node) -> None:
         """Add a node class; its ``yaml_name`` (or class name) is the YAML name."""
-        if not is_node(cls):
-            raise TypeError(f"{cls!r} is not a RobotBehaviour or ControlNode subclass")
-        name = cls.yaml_name or cls.__name__
-        if "name" in cls.Params.model_fields:
-            raise ValueError(
-                f"node '{name}' has a parameter called 'name', which a mission can never set: 'name:' is the "
-                "node's label in the tree; call it what it names (e.g. entity, as DeleteEntity does)"
-            )
-        existing = self._classes.get(name)
+        name = _checked_name(cls)
+        existing = self.get(name)
         if existing is not None and existing is not cls:
             raise ValueError(f"two nodes are named '{name}': {existing.__module__} and {cls.__module__}")
         self._classes[name] = cls
@@ -78,29 +76,43 @@ class Registry:
         return other
 
     def __getitem__(self, name: str) -> Node:
-        return self._classes[name]
+        cls = self.get(name)
+        if cls is None:
+            raise KeyError(name)
+        return cls
 
     def get(self, name: str) -> Node | None:
-        """The node class called ``name``, None when there is none."""
-        return self._classes.get(name)
+        """The node class called ``name`` (its module imported now if it was not), None when there is none."""
+        found = self._classes.get(name)
+        if isinstance(found, str):
+            found = self._classes[name] = _imported(name, found)
+        return found
 
     def __contains__(self, name: object) -> bool:
         return name in self._classes
 
     def __iter__(self) -> Iterator[str]:
+        """The YAML names, none of their modules imported."""
         return iter(self._classes)
 
     def items(self) -> Iterator[tuple[str, Node]]:
-        """(YAML name, node class) of every node, in the order they were registered."""
-        return iter(self._classes.items())
+        """(YAML name, node class) of every node, in the order they were registered (all imported)."""
+        self.import_all()
+        return iter(self._classes.items())  # type: ignore[arg-type]  # every value a class now
+
+    def import_all(self) -> None:
+        """Import every node's module now: a process about to fork children whose missions may name
+        any node (the grader, its sandboxes' zygote) hands each child all of them warm."""
+        for name in list(self._classes):
+            self.get(name)
 
     def behaviours(self) -> Iterator[tuple[str, type[RobotBehaviour]]]:
         """The robot behaviours and conditions (no composites or decorators)."""
-        return ((n, c) for n, c in self._classes.items() if issubclass(c, RobotBehaviour))
+        return ((n, c) for n, c in self.items() if issubclass(c, RobotBehaviour))
 
     def control(self, category: str) -> Iterator[tuple[str, type[ControlNode]]]:
         """The composites (``category="composite"``) or decorators."""
-        return ((n, c) for n, c in self._classes.items() if issubclass(c, ControlNode) and c.category == category)
+        return ((n, c) for n, c in self.items() if issubclass(c, ControlNode) and c.category == category)
 
     def load_plugin(self, ref: str, base_dir: Path, where: tuple[str, int, int], run: bool = True) -> None:
         """Import ``module:Class``, ``module`` or ``file.py`` and register its behaviours; with
@@ -158,24 +170,54 @@ class Registry:
         from thymio_bt.plan.unrun_plugins import plugin_nodes, stand_in
 
         target, _, attr = ref.partition(":")
-        nodes: dict[str, list[str] | None] = {attr: None}
-        if not attr:
-            path = self._plugin_file(target, base_dir, where) if target.endswith(".py") else _source(ref, where)
-            classes = list(self._classes.values())
+        if target.endswith(".py"):
+            path: Path | None = self._plugin_file(target, base_dir, where)
+        else:
+            path = _source(ref, where, needed=not attr)
+        nodes: dict[str, list[str] | None] = {}
+        if path is not None:
+            classes = [cls for _, cls in self.items()]
             models = {c.Params.__name__: list(c.Params.model_fields) for c in classes}
             try:
                 nodes = plugin_nodes(
                     path,
                     {**models, "BehaviourParams": list(BehaviourParams.model_fields)},
                     {c.__name__: c.Params.__name__ for c in classes},
+                    only=attr or None,
                 )
             except SyntaxError as exc:
                 raise UserError(
                     Problem(f"plugin {target}: invalid Python: {exc.msg}", str(path), exc.lineno or 0, exc.offset or 0)
                 ) from None
-        for name, params in nodes.items():
+        # a class the source does not show as a node (imported from elsewhere, made at run time):
+        # its class name, its parameters unchecked
+        for name, params in (nodes or {attr: None}).items():
             if name not in self._classes:
                 self._classes[name] = stand_in(name, params)
+
+
+def _checked_name(cls: Any) -> str:
+    """The YAML name of node class ``cls`` (its ``yaml_name``, or class name), once it is checked to be one."""
+    if not is_node(cls):
+        raise TypeError(f"{cls!r} is not a RobotBehaviour or ControlNode subclass")
+    name: str = cls.yaml_name or cls.__name__
+    if "name" in cls.Params.model_fields:
+        raise ValueError(
+            f"node '{name}' has a parameter called 'name', which a mission can never set: 'name:' is the "
+            "node's label in the tree; call it what it names (e.g. entity, as DeleteEntity does)"
+        )
+    return name
+
+
+def _imported(name: str, where: str) -> Node:
+    """The node class called ``name``, imported from ``where`` (``"module:attr"``: the class, or a tuple
+    of classes holding it); a table that says otherwise than the class is a ``LookupError``."""
+    module, _, attr = where.partition(":")
+    found = getattr(importlib.import_module(module), attr)
+    for cls in found if isinstance(found, tuple) else (found,):
+        if _checked_name(cls) == name:
+            return cls
+    raise LookupError(f"no node called '{name}' in {where}")
 
 
 def _import_file(path: Path) -> ModuleType:
@@ -197,12 +239,15 @@ def _import_file(path: Path) -> ModuleType:
     return module
 
 
-def _source(ref: str, where: tuple[str, int, int]) -> Path:
-    """The ``.py`` file of the plugin module ``ref``, found without importing it (a top-level module only)."""
+def _source(ref: str, where: tuple[str, int, int], needed: bool = True) -> Path | None:
+    """The ``.py`` file of the plugin module ``ref``, found without importing it (a top-level module
+    only); None when it cannot be and is not ``needed`` (a ``module:Class`` names its class)."""
     target = ref.partition(":")[0]
     spec = importlib.util.find_spec(target) if "." not in target else None
     if spec and spec.origin and spec.origin.endswith(".py"):
         return Path(spec.origin)
+    if not needed:
+        return None
     raise UserError(
         Problem(
             f"cannot find plugin '{ref}' without importing it",
@@ -259,7 +304,7 @@ def default_registry() -> Registry:
     """The built-in behaviours plus those installed through the entry-point group."""
     global _DEFAULT
     if _DEFAULT is None:
-        registry = Registry((*BUILTIN, *CONTROL, *BTCPP_CONTROL, *BTCPP_SCRIPTED, *BTCPP_LEAVES))
+        registry = Registry(lazy=BUILTIN_NODES)
         for cls in _entry_point_classes():
             try:
                 registry.register(cls)

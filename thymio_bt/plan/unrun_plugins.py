@@ -24,6 +24,11 @@ Example::
     ...     _ = plugin.write_text(source)
     ...     plugin_nodes(plugin, {"BehaviourParams": ["timeout"]})   # the names its Params declares
     {'Spin': ['rate', 'timeout']}
+    >>> with tempfile.TemporaryDirectory() as folder:                   # plugins: [spin.py:Spin]
+    ...     plugin = Path(folder) / "spin.py"
+    ...     _ = plugin.write_text(source + "\nclass Fast(Spin):\n    yaml_name = 'FastSpin'")
+    ...     plugin_nodes(plugin, {"BehaviourParams": []}, only="Fast")   # by its YAML name
+    {'FastSpin': ['rate']}
     >>> sorted(stand_in("Spin", ["rate", "timeout"]).Params.model_fields)
     ['rate', 'timeout']
 """
@@ -53,12 +58,16 @@ class UncheckedParams(BaseModel):
 
 
 def plugin_nodes(
-    path: Path, known_params: Mapping[str, Collection[str]], known_nodes: Mapping[str, str] | None = None
+    path: Path,
+    known_params: Mapping[str, Collection[str]],
+    known_nodes: Mapping[str, str] | None = None,
+    only: str | None = None,
 ) -> dict[str, list[str] | None]:
     """The node classes of a plugin file, read from its syntax tree, never run: YAML name -> its
     parameter names, None when its ``Params`` cannot be followed in the source. ``known_params``:
     the fields of the models the file may derive from (``BehaviourParams``, a built-in's);
-    ``known_nodes``: node classes the file may derive from -> the name of their ``Params``."""
+    ``known_nodes``: node classes the file may derive from -> the name of their ``Params``;
+    ``only``: the class a ``module:Class`` plugin names, the only one given (by its YAML name)."""
     tree = _parse(path)
     nodes = {"RobotBehaviour": "BehaviourParams", "ConditionBehaviour": "BehaviourParams", **(known_nodes or {})}
     models = {c.name: c for c in ast.walk(tree) if isinstance(c, ast.ClassDef)}
@@ -69,8 +78,9 @@ def plugin_nodes(
         if params is None:  # inherited: from the first base that is a node class
             params = next((nodes[b] for b in map(_base_name, cls.bases) if b in nodes), "")
         nodes[cls.name] = params
-        fields = _fields(params, models, known_params, memo) if params else None
-        found[name] = sorted(fields) if fields is not None else None
+        if only is None or cls.name == only:
+            fields = _fields(params, models, known_params, memo) if params else None
+            found[name] = sorted(fields) if fields is not None else None
     return found
 
 

@@ -34,14 +34,11 @@ from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
-from py_trees.common import Status
 
-from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.base import FAILURE, RUNNING, SUCCESS, node_path
 from thymio_bt.behaviours.flow import ticking
 from thymio_bt.btcpp.runtime.nodes import BtNode
 from thymio_bt.plan.model import NodePlan
-
-SUCCESS, FAILURE, RUNNING = Status.SUCCESS, Status.FAILURE, Status.RUNNING
 
 
 def plan_paths(plan: NodePlan) -> Iterator[tuple[NodePlan, str, int]]:

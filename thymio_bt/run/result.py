@@ -17,9 +17,10 @@ True
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from py_trees.behaviour import Behaviour
 from py_trees.blackboard import Blackboard
@@ -27,11 +28,12 @@ from py_trees.common import Status
 
 from thymio_bt.behaviours.base import RobotBehaviour, node_path
 from thymio_bt.behaviours.flow.primitives import SimTimeout
-from thymio_bt.behaviours.mapping import MazeMapParams
 from thymio_bt.enums import FailureCode, TextEnum
-from thymio_bt.maze.cellmap import CellMap
 from thymio_bt.robot.interface import Pose
 from thymio_bt.run.phases import Phase
+
+if TYPE_CHECKING:
+    from thymio_bt.maze.cellmap import CellMap
 
 
 class RunStatus(TextEnum):
@@ -185,7 +187,14 @@ class Verdict:
 
 def learnt_map(root: Behaviour) -> CellMap | None:
     """The maze map the tree's mapping behaviours keep on the blackboard, at the ``key`` of their
-    parameters (:class:`~thymio_bt.behaviours.mapping.MazeMapParams`); None when none made one."""
+    parameters (:class:`~thymio_bt.behaviours.mapping.MazeMapParams`); None when none made one.
+    A tree without them never imported their module (the registry imports a node's module when a
+    mission names it), and the run does not import it either."""
+    if "thymio_bt.behaviours.mapping" not in sys.modules:
+        return None
+    from thymio_bt.behaviours.mapping import MazeMapParams
+    from thymio_bt.maze.cellmap import CellMap
+
     for node in root.iterate():
         params = node.params if isinstance(node, RobotBehaviour) else None
         if isinstance(params, MazeMapParams) and Blackboard.exists(params.key):

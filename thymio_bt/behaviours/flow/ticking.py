@@ -31,7 +31,8 @@ from py_trees.common import ParallelPolicy, Status
 from py_trees.composites import Parallel, Selector, Sequence
 from py_trees.decorators import Decorator
 
-RUNNING, SUCCESS, FAILURE, INVALID = Status.RUNNING, Status.SUCCESS, Status.FAILURE, Status.INVALID
+from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS
+
 _STATUSES = frozenset(Status)
 _SUCCESS_ON_ALL, _SUCCESS_ON_ONE = ParallelPolicy.SuccessOnAll, ParallelPolicy.SuccessOnOne
 
