@@ -1,5 +1,6 @@
 """Backends by name (--backend NAME, --backend-opt, a mission's backend: block) and robot models (--robot)."""
 
+import dataclasses
 import math
 import subprocess
 import sys
@@ -168,3 +169,21 @@ def test_a_backend_that_raises_ends_the_run_failure_with_its_reason():
     assert (result.status, result.code) == ("FAILURE", "BACKEND_ERROR")
     assert result.reason.startswith("the backend raised OSError: serial port vanished (at test_backends.py:")
     assert result.sim_time == pytest.approx(1.0) and result.failed_path
+
+
+@pytest.mark.parametrize("given", [True, False], ids=["given", "made by the run"])
+def test_a_run_that_cannot_be_prepared_closes_its_backend(given, monkeypatch):
+    """An impossible start raises from ``Run(...)``, before any ``run()`` could close the backend: the
+    constructor closes it, given or made (a Playground process or a real robot's motors would stay on)."""
+    from thymio_bt.backends.sim import Simulation
+
+    closed: list[Simulation] = []
+    monkeypatch.setattr(Simulation, "close", lambda self: closed.append(self))
+    from thymio_bt.geometry import Pose
+
+    # the loader refuses this start itself: a mission made in code is checked by the run
+    mission = dataclasses.replace(load_mission("maze_part1_2"), start=Pose(0.3, 0.2, 0.0))
+    backend = Simulation(mission.maze) if given else None
+    with pytest.raises(UserError, match="impossible start pose"):
+        Run(mission, backend=backend)
+    assert len(closed) == 1 and (closed[0] is backend or not given)

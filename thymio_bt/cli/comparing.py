@@ -137,12 +137,7 @@ def _run_on(mission: Path, backend: str, seed: int | None, sets: tuple[str, ...]
     from thymio_bt.run.runner import Run
 
     spec = load_mission(mission, parse_overrides(sets))
-    device = backend_for(spec, seed, backend, ())
-    try:
-        runner = Run(spec, seed, backend=device)
-    except BaseException:
-        device.close()
-        raise
+    runner = Run(spec, seed, backend=backend_for(spec, seed, backend, ()))  # closed by the run, even unprepared
     recorder = Recorder(statuses=True)
     recorder.begin(runner)
     recording = recorder.finish(runner.run(on_tick=recorder))

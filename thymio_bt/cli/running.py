@@ -265,15 +265,10 @@ def _prepare(
     spec: Mission, seed: int | None, backend: str | None, backend_opts: tuple[str, ...], node_stats: bool = False
 ) -> Run:
     """The run of ``spec`` on its backend (its nodes counting their ticks when ``node_stats``); the
-    backend is released if the run cannot be prepared."""
+    backend is released if the run cannot be prepared (by :class:`~thymio_bt.run.runner.Run`)."""
     from thymio_bt.run.runner import Run
 
-    device = backend_for(spec, seed, backend, backend_opts)
-    try:
-        return Run(spec, seed, node_stats=node_stats, backend=device)
-    except BaseException:
-        device.close()  # the run never started: release the robot now
-        raise
+    return Run(spec, seed, node_stats=node_stats, backend=backend_for(spec, seed, backend, backend_opts))
 
 
 class _Hooks:

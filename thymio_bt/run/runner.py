@@ -78,12 +78,25 @@ class Run:
         backend: Backend | None = None,
     ) -> None:
         """``backend`` defaults to the one the mission names (:mod:`thymio_bt.backends`; the pymunk
-        simulation of its maze unless it says otherwise); the robot is spawned at the mission's start."""
+        simulation of its maze unless it says otherwise); the robot is spawned at the mission's start.
+        The backend is the run's, given or not: :meth:`run` closes it however the run ends, and so does
+        this constructor if the run cannot be prepared (an impossible start, a bad substitution), so
+        that no caller has to guard it (a Playground process or a real robot's motors stay running
+        otherwise)."""
         self.mission = mission
         self.seed = mission.seed if seed is None else seed
         self.backend: Backend = backend or backend_kind(mission.backend).create(
             mission, self.seed, mission.backend_options
         )
+        try:
+            self._prepare(substitutions, node_stats)
+        except BaseException:
+            self.backend.close()
+            raise
+
+    def _prepare(self, substitutions: dict[str, Any] | None, node_stats: bool) -> None:
+        """The robot spawned at the start, the context and the tree built."""
+        mission = self.mission
         problem = self.backend.spawn_problem(self.backend.robot_name, mission.start)
         if problem:
             raise UserError(
