@@ -384,3 +384,12 @@ def test_raw_readings_are_seeded():
         return out
 
     assert readings(1) == readings(1) != readings(2)
+
+
+@pytest.mark.parametrize("sensor_model", ["metres", "raw", "cone"])
+def test_raw_readings_says_whether_proximity_raw_gives_integers(sensor_model):
+    """``raw_readings`` is what a calibration checks before sampling: a metres simulation said True
+    (a class-wide claim) and calibrate failed two steps later asking whether the robot faced the wall."""
+    sim = Simulation(world("arena"), spawn=Pose(0.6, 0.6, 0.0), config=SimConfig(sensor_model=sensor_model))
+    sim.advance(0.1)
+    assert sim.raw_readings == (sim.proximity_raw() is not None) == (sensor_model != "metres")

@@ -56,8 +56,6 @@ class SimConfig:
 class Simulation(Backend):
     """A 2D simulation of one Thymio in a maze; advance it with :meth:`advance`."""
 
-    raw_readings = True  # with sensor_model raw or cone (:meth:`proximity_raw` is None otherwise)
-
     def __init__(
         self, maze: Maze, spawn: Pose | None = None, config: SimConfig | None = None, robot_name: str = ROBOT_ENTITY
     ) -> None:
@@ -83,6 +81,8 @@ class Simulation(Backend):
         self._lazy_scan = self.config.sensor_model == "metres" and not self._range_noise
         self._raw_model = raw_model(self.config.seed, self.model) if self.config.sensor_model == "raw" else None
         self._raw: dict[str, int] | None = None
+        #: integers to read (:meth:`proximity_raw`) only with the raw and cone sensor models
+        self.raw_readings = self.config.sensor_model in ("raw", "cone")
         self._entities: dict[str, RobotBody] = {}
         #: the robot's true pose at this physics step once read (None: not read since the last step)
         self._pose_now: Pose | None = None
