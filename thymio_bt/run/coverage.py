@@ -37,6 +37,7 @@ from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import FAILURE, RUNNING, SUCCESS, node_path
 from thymio_bt.behaviours.flow import ticking
+from thymio_bt.behaviours.flow.primitives import NodeGuard
 from thymio_bt.btcpp.runtime.nodes import BtNode
 from thymio_bt.plan.model import NodePlan
 
@@ -376,19 +377,8 @@ class NodeStats(py_trees.visitors.VisitorBase):
 
 
 def _hidden_children(node: Behaviour) -> list[Behaviour]:
-    """Nodes ``node`` ticks that are not its py_trees children: a guard's condition, which py_trees'
-    ``EternalGuard`` calls through a function (:class:`~thymio_bt.behaviours.flow.decorators.Guard`)."""
-    check = getattr(node, "condition", None)
-    cells = getattr(check, "__closure__", None) or ()
-    found = []
-    for cell in cells:
-        try:
-            value = cell.cell_contents
-        except ValueError:  # an empty cell
-            continue
-        if isinstance(value, Behaviour) and value not in node.children:
-            found.append(value)
-    return found
+    """Nodes ``node`` ticks that are not its py_trees children: a guard's condition node."""
+    return [node.condition_node] if isinstance(node, NodeGuard) else []
 
 
 __all__ = ["Coverage", "NodeCoverage", "NodeStats", "NodeTable", "plan_paths"]

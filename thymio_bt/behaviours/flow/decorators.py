@@ -27,7 +27,7 @@ from py_trees.decorators import FailureIsSuccess, Inverter, SuccessIsFailure
 from pydantic import Field, field_validator
 
 from thymio_bt.behaviours.flow.node import SAME, SWAP, ControlNode, ControlParams, F, S, refuse, whole
-from thymio_bt.behaviours.flow.primitives import RepeatUntil, SimTimeout, SimTimer
+from thymio_bt.behaviours.flow.primitives import NodeGuard, RepeatUntil, SimTimeout, SimTimer
 from thymio_bt.inputs.fields import Duration
 
 _REPEAT_EXAMPLE = "e.g. 'repeat: {times: 4, do: {TurnAngle: {angle: 90deg}}}' or 'repeat: {until: IsDeadEnd, do: ...}'"
@@ -356,13 +356,7 @@ class Guard(ControlNode):
     def build(cls, name: str, params: Any, children: list, ctx: Any) -> Behaviour:
         """A py_trees ``EternalGuard`` of the child, ``condition`` ticked as its check."""
         child, condition = children
-
-        def check() -> bool:
-            for _ in condition.tick():
-                pass
-            return condition.status == Status.SUCCESS
-
-        return py_trees.decorators.EternalGuard(name=name, child=child, condition=check)
+        return NodeGuard(name, child, condition)
 
 
 class OneShotParams(ControlParams):

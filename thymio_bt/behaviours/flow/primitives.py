@@ -5,6 +5,8 @@ runs 1000x faster than real time; :class:`SimTimeout` reads the robot's clock in
 :class:`SimTimer` is the one rule of a span of simulated time, which every timed node of both
 vocabularies follows (``timeout``, ``delay``, BT.CPP's ``Timeout``, ``Delay`` and ``Sleep``).
 :class:`RepeatUntil` is a do-while loop: run the body, and after each success check a condition.
+:class:`NodeGuard` is py_trees' ``EternalGuard`` whose condition is a node, kept where a walk of the
+tree (coverage) finds it.
 """
 
 from __future__ import annotations
@@ -170,6 +172,39 @@ class RepeatUntil(py_trees.composites.Composite):
             self.status = Status.RUNNING
             self.feedback_message = f"iteration {self.iterations + 1}"
         return None
+
+
+class NodeGuard(py_trees.decorators.EternalGuard):
+    """py_trees' ``EternalGuard`` with a node as its condition, ticked before the child every tick.
+
+    py_trees calls the condition through a function; the node is :attr:`condition_node`, declared,
+    since it is ticked without being one of :attr:`children` (coverage counts it under the guard).
+
+    Example::
+
+        >>> from types import SimpleNamespace
+        >>> clock = SimpleNamespace(now=lambda: 0.0)
+        >>> for result in ("success", "failure"):
+        ...     ok = ScriptedStub("ok", result, clock)
+        ...     guard = NodeGuard("g", ScriptedStub("go", "running", clock), ok)
+        ...     tick(guard)
+        ...     print(guard.status.name, ok.status.name)
+        RUNNING SUCCESS
+        FAILURE FAILURE
+        >>> guard.condition_node is ok
+        True
+    """
+
+    def __init__(self, name: str, child: Behaviour, condition: Behaviour) -> None:
+        #: the condition's node, ticked by :meth:`check`
+        self.condition_node = condition
+        super().__init__(name=name, child=child, condition=self.check)
+
+    def check(self) -> bool:
+        """Tick the condition node; whether it succeeded."""
+        for _ in self.condition_node.tick():
+            pass
+        return self.condition_node.status == Status.SUCCESS
 
 
 class ScriptedStub(Behaviour):
