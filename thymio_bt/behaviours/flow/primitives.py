@@ -18,7 +18,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import FailureCode
+from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, FailureCode
 from thymio_bt.behaviours.flow.ticking import tick
 
 #: how close to its end a span of simulated time counts as over: a tick's time is a sum of float
@@ -75,10 +75,10 @@ class SimTimeout(py_trees.decorators.Decorator):
         >>> clock = [0.0]
         >>> limit = SimTimeout("limit", Running("forever"), duration=30.0, clock=lambda: clock[0])
         >>> tick(limit); limit.status
-        <Status.RUNNING: 'RUNNING'>
+        <RUNNING: 'RUNNING'>
         >>> clock[0] = 30.0
         >>> tick(limit); limit.status, limit.decorated.status, limit.failure[0]
-        (<Status.FAILURE: 'FAILURE'>, <Status.INVALID: 'INVALID'>, <FailureCode.TIMEOUT: 'TIMEOUT'>)
+        (<FAILURE: 'FAILURE'>, <INVALID: 'INVALID'>, <FailureCode.TIMEOUT: 'TIMEOUT'>)
     """
 
     def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
@@ -95,13 +95,13 @@ class SimTimeout(py_trees.decorators.Decorator):
     def update(self) -> Status:
         """The child's status, or FAILURE (and the child halted) once the time is up (checked after
         the child's tick: BT.CPP's ``Timeout`` checks before it)."""
-        if self.decorated.status == Status.RUNNING and self.timer.over():
-            self.decorated.stop(Status.INVALID)
+        if self.decorated.status == RUNNING and self.timer.over():
+            self.decorated.stop(INVALID)
             limit = self.timer.seconds
             self.failure = (FailureCode.TIMEOUT, f"'{self.decorated.name}' did not finish within {limit:g} s")
             self.feedback_message = f"TIMEOUT: {self.failure[1]}"
-            return Status.FAILURE
-        if self.decorated.status == Status.RUNNING:
+            return FAILURE
+        if self.decorated.status == RUNNING:
             self.feedback_message = f"{self.timer.left():.1f} s left"
         return self.decorated.status
 
@@ -118,7 +118,7 @@ class RepeatUntil(py_trees.composites.Composite):
         >>> for _ in range(3):
         ...     tick(loop)
         >>> loop.status, loop.iterations
-        (<Status.SUCCESS: 'SUCCESS'>, 3)
+        (<SUCCESS: 'SUCCESS'>, 3)
     """
 
     def __init__(self, name: str, body: Behaviour, condition: Behaviour) -> None:
@@ -142,10 +142,10 @@ class RepeatUntil(py_trees.composites.Composite):
 
     def _begin(self) -> Behaviour | None:
         """Start the loop if it is not running; the child to tick first."""
-        if self.status is not Status.RUNNING:
+        if self.status is not RUNNING:
             for child in self.children:
-                if child.status is not Status.INVALID:
-                    child.stop(Status.INVALID)
+                if child.status is not INVALID:
+                    child.stop(INVALID)
             self.current_child = self.children[0]
             self.iterations = 0
             self.initialise()
@@ -155,21 +155,21 @@ class RepeatUntil(py_trees.composites.Composite):
         """Act on ``child``'s status once it has ticked; the child to tick next in this tick, or None."""
         body, condition = self.children
         if child is body:
-            if body.status is Status.RUNNING:
-                self.status = Status.RUNNING
+            if body.status is RUNNING:
+                self.status = RUNNING
                 return None
-            if body.status is Status.FAILURE:
-                self.stop(Status.FAILURE)
+            if body.status is FAILURE:
+                self.stop(FAILURE)
                 return None
             self.iterations += 1
             self.current_child = condition
             return condition
-        if condition.status is Status.SUCCESS:
-            self.stop(Status.SUCCESS)
+        if condition.status is SUCCESS:
+            self.stop(SUCCESS)
         else:
-            if condition.status is Status.FAILURE:
+            if condition.status is FAILURE:
                 self.current_child = body
-            self.status = Status.RUNNING
+            self.status = RUNNING
             self.feedback_message = f"iteration {self.iterations + 1}"
         return None
 
@@ -204,7 +204,7 @@ class NodeGuard(py_trees.decorators.EternalGuard):
         """Tick the condition node; whether it succeeded."""
         for _ in self.condition_node.tick():
             pass
-        return self.condition_node.status == Status.SUCCESS
+        return self.condition_node.status == SUCCESS
 
 
 class ScriptedStub(Behaviour):
@@ -249,7 +249,7 @@ class ScriptedStub(Behaviour):
         """The script's next status (RUNNING while its ``seconds`` last)."""
         if self.ctx.now() - self.started < self.seconds - 1e-9:
             self.feedback_message = "scripted: running"
-            return Status.RUNNING
+            return RUNNING
         status = self.queue[min(self.index, len(self.queue) - 1)]
         self.index += 1
         self.feedback_message = f"scripted: {status.name.lower()}"
