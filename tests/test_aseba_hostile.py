@@ -30,7 +30,7 @@ from _fake_aseba import (
     words,
 )
 
-from thymio_bt.backends.playground.process import _GUARD, PlaygroundInterrupted
+from thymio_bt.backends.playground.process import _GUARD, PlaygroundInterrupted, listening_ports
 from thymio_bt.backends.real.aseba import tcp_address
 from thymio_bt.errors import UserError
 
@@ -219,11 +219,7 @@ def _reached(tmp: Path, moment: str) -> bool:
         return bool(folders)
     if moment == "bus":
         return (folders[0] / "bus").exists()
-    world = folders[0] / "world.playground"
-    port = re.search(r'port="(\d+)"', world.read_text() if world.exists() else "")  # written a moment ago
-    from thymio_bt.backends.playground.process import listening
-
-    return port is not None and listening(int(port.group(1)))
+    return any(listening_ports(pid) for pid, line in _ours(tmp).items() if "asebaplayground" in line)
 
 
 @pytest.mark.parametrize("moment", ["folder", "bus", "port"])
@@ -290,6 +286,29 @@ def test_a_signal_while_a_playground_runs_stops_it_then_ends_the_command():
         assert signal.getsignal(signal.SIGTERM) == signal.SIG_DFL  # the last one stopped: the default again
     finally:
         playground.stop()
+
+
+def test_a_signal_as_the_playground_s_folder_is_made_is_held_until_it_is_recorded(monkeypatch, tmp_path):
+    """Before: a signal between making the folder and recording the Playground found the default
+    handler, and the folder was left behind (the 'folder' moment above, a race: it failed under load)."""
+    _require.program("asebaplayground")
+    _require.program("dbus-daemon")
+    from thymio_bt.backends.playground import process
+
+    made = []
+
+    def mkdtemp(prefix: str, dir: str) -> str:  # the folder made, then the signal, before it is returned
+        made.append(tmp_path / f"{prefix}1")
+        made[-1].mkdir()
+        signal.raise_signal(signal.SIGINT)
+        return str(made[-1])
+
+    monkeypatch.setattr(process.tempfile, "mkdtemp", mkdtemp)
+    with pytest.raises(KeyboardInterrupt) as info:
+        process.Playground.start("")
+    assert type(info.value) is PlaygroundInterrupted and info.value.exit_code == 130
+    assert len(made) == 1 and not made[0].exists() and not _GUARD.alive
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # the handler put back
 
 
 def test_a_signal_while_a_process_is_started_waits_until_it_is_recorded():

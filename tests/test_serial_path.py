@@ -48,13 +48,12 @@ class Bridge:
 
     def __init__(self, mission_file: Path, folder: Path) -> None:
         from thymio_bt.backends.playground.enki import EnkiRobot
-        from thymio_bt.backends.playground.process import Playground, free_port
+        from thymio_bt.backends.playground.process import Playground
         from thymio_bt.backends.playground.world import playground_world
 
         mission = load_mission(mission_file, {"robot": "enki"})
-        port = free_port()
-        self.world = playground_world(mission.maze, Pose(*ENKI.axle_of(mission.start)), port)
-        self.playground = Playground.start(self.world.text, port, preload=_require.enki_fix())
+        self.world = playground_world(mission.maze, Pose(*ENKI.axle_of(mission.start)), port=0)
+        self.playground = Playground.start(self.world.text, preload=_require.enki_fix())
         try:
             self.enki = EnkiRobot.find(self.playground.bus)
         except BaseException:
@@ -62,7 +61,7 @@ class Bridge:
             raise
         self.tty = folder / "thymio-tty"
         self.socat = subprocess.Popen(
-            ["socat", f"PTY,link={self.tty},raw,echo=0", f"TCP:127.0.0.1:{port}"],
+            ["socat", f"PTY,link={self.tty},raw,echo=0", f"TCP:127.0.0.1:{self.playground.port}"],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
         )
