@@ -12,6 +12,7 @@ from pathlib import Path
 
 import _require
 import pytest
+from _ports import free_port_pair
 from click.testing import CliRunner
 
 from thymio_bt.cli import main
@@ -210,14 +211,26 @@ def test_a_dask_address_without_a_port_is_a_message(address):
     assert f"--dask {address}" in result.output
 
 
+def _groot2_server():
+    """A Groot2 server on a free pair of ports (N, N+1), and N: a port taken between its choice and
+    the server's bind (under pytest -n 2) makes it try another pair."""
+    from thymio_bt.btcpp.groot2 import Groot2Server
+    from thymio_bt.errors import UserError
+
+    for _ in range(5):
+        port = free_port_pair()
+        try:
+            return Groot2Server(port), port
+        except UserError as exc:
+            assert "cannot serve Groot2" in str(exc), exc
+    raise AssertionError("five pairs of free ports were taken before the server could bind them")
+
+
 def test_the_groot2_server_survives_a_names_frame_that_is_not_utf8():
     zmq = _require.module("zmq")
-    from thymio_bt.btcpp.groot2 import PROTOCOL, Groot2Server
+    from thymio_bt.btcpp.groot2 import PROTOCOL
 
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    server = Groot2Server(port)
+    server, port = _groot2_server()
     server.thread.start()  # a run's first tick starts it
     context = zmq.Context()
     try:

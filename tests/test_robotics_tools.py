@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from _ports import free_port_pair
 from _require import module
 from _waiting import wait_until
 
@@ -270,7 +271,7 @@ def _serving_groot2(zmq, mission: Path, folder: Path) -> tuple[subprocess.Popen,
     (the server starts with the first tick). A pair another program took between its choice and the
     run's bind ends the run with "cannot serve Groot2": another pair is tried."""
     for _ in range(5):
-        port = _free_port_pair()
+        port = free_port_pair()
         command = [sys.executable, "-m", "thymio_bt.cli", "run", str(mission), "--realtime", "2", "-q"]
         run = subprocess.Popen([*command, "--groot2", str(port)], cwd=folder, stderr=subprocess.PIPE, text=True)
         try:
@@ -303,22 +304,6 @@ def _answers(zmq, port: int) -> list[bytes]:
         return _groot2_request(zmq, port, "T")
     except zmq.Again:
         return []
-
-
-def _free_port_pair():
-    """A loopback port N with N+1 free too (Groot2 serves on both)."""
-    import socket
-
-    for _ in range(50):
-        with socket.socket() as first, socket.socket() as second:
-            first.bind(("127.0.0.1", 0))
-            port = first.getsockname()[1]
-            try:
-                second.bind(("127.0.0.1", port + 1))
-            except OSError:
-                continue
-            return port
-    raise AssertionError("no two consecutive free ports on 127.0.0.1")
 
 
 def _require_program_in_venv(name):
