@@ -35,12 +35,21 @@ def text(value: str | bytes) -> bytes:
     return bytes([len(data)]) + data
 
 
+def conn_open(conn: socket.socket) -> bool:
+    """Read what ``conn`` has (waiting at most its timeout); False once the peer closed it."""
+    try:
+        return conn.recv(4096) != b""
+    except TimeoutError:
+        return True
+
+
 class FakeThymio:
     """A Thymio II on a free loopback port. It answers LIST_NODES, GET_NODE_DESCRIPTION (unless
     ``describe`` is false) and GET_VARIABLES (its wheels turn at their targets), and sends
-    ``hostile`` once, after answering ``after`` requests for variables (0: at once, in the handshake;
-    the link asks every 30 ms: 10 is about 0.3 s into the run, counted, not timed). ``then`` says
-    what it does next: ``serve`` on, fall ``silent`` (the connection kept open), or ``close``.
+    ``hostile`` once, after the link set ``after`` motor targets (0: at once, in the handshake; 1:
+    once connected, since the link stops the motors as its connection's last step and a run or a
+    calibration begins: an event, not a time). ``then`` says what it does next: ``serve`` on, fall
+    ``silent`` (the connection kept open), or ``close``.
 
     :attr:`log` records in order every pair of motor targets the link set, and the marks a test puts
     in between (:meth:`mark`): what the robot was told before and after something the test did."""
@@ -48,7 +57,7 @@ class FakeThymio:
     def __init__(
         self,
         hostile: bytes = b"",
-        after: int = 10,
+        after: int = 1,
         then: str = "serve",
         variables: tuple[tuple[str, int], ...] = THYMIO,
         describe: bool = True,
@@ -82,12 +91,16 @@ class FakeThymio:
                 return
 
     def _talk(self, conn: socket.socket) -> None:
-        buffer, answered = b"", 0
+        buffer = b""
         while True:
-            if self.hostile and answered >= self.after and not self.sent_hostile.is_set():
+            told = sum(kind == "targets" for kind, _, _ in self.log)
+            if self.hostile and told >= self.after and not self.sent_hostile.is_set():
                 conn.sendall(self.hostile)
                 self.sent_hostile.set()
                 if self.then == "close":
+                    conn.shutdown(socket.SHUT_WR)  # the link reads the end of the stream...
+                    while conn_open(conn):  # ...and what it still sends is read: no reset instead
+                        pass
                     return
             try:
                 data = conn.recv(4096)
@@ -102,7 +115,6 @@ class FakeThymio:
                     break
                 payload, buffer = buffer[6 : 6 + length], buffer[6 + length :]
                 replies = list(self._answer(message_id, payload))
-                answered += message_id == GET_VARIABLES
                 if not (self.then == "silent" and self.sent_hostile.is_set()):
                     conn.sendall(b"".join(replies))
 

@@ -14,6 +14,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import _require
@@ -152,6 +153,27 @@ def test_a_peer_that_sends_what_no_thymio_sends_loses_the_robot_with_the_reason(
     assert (report["status"], report["code"]) == ("FAILURE", "ROBOT_LOST"), report["reason"]
     assert reason in report["reason"] and reason in done.stderr
     assert report["sim_time"] < 1.5  # before the Wait ended
+
+
+def test_a_robot_silent_in_the_middle_of_a_message_cut_it_short_whichever_timer_ends_first():
+    """Both timers are 0.8 s: the reader's (a message begun, nothing more) and the run's (nothing
+    whole from the robot). Before, under load the run's could end first and say 'stopped answering'
+    (test_a_peer_that_sends..., 'a message cut short, then silence', failed so once)."""
+    from types import SimpleNamespace
+
+    from thymio_bt.backends.real.aseba import AsebaNode
+    from thymio_bt.robot.interface import RobotLost
+
+    link = SimpleNamespace(failed=None, midway=True)  # the reader has not given up on the message yet
+    remote = SimpleNamespace(last_msg_time=time.time() - 1.0)
+    connection = SimpleNamespace(io=link, comm_error=None, input_thread=SimpleNamespace(comm_error=None))
+    connection.remote_nodes = {1: remote}
+    node = AsebaNode(connection, 1, None, "tcp:127.0.0.1:1", None)
+    with pytest.raises(RobotLost, match="failed: a message was cut short: nothing more for 0.8 s"):
+        node.read_prox()
+    link.midway = False  # between messages: silence
+    with pytest.raises(RobotLost, match=r"stopped answering \(nothing for 0.8 s\)"):
+        node.read_prox()
 
 
 @pytest.mark.parametrize("case", IGNORED)

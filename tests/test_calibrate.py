@@ -207,7 +207,7 @@ def test_a_robot_lost_while_calibrating_is_a_message_not_a_traceback(tmp_path):
     _require.module("thymiodirect")
     from _fake_aseba import VARIABLES, FakeThymio, frame, words
 
-    robot = FakeThymio(frame(VARIABLES, words(60000, 1)), after=33)  # variables past its memory, ~1 s in
+    robot = FakeThymio(frame(VARIABLES, words(60000, 1)))  # variables past its memory, once connected
     out = tmp_path / "p.yaml"
     args = ["--backend", "aseba", "--backend-opt", f"device={robot.device}", "--backend-opt", "placed=true"]
     done = thymio_bt("calibrate", *args, "-o", str(out))
