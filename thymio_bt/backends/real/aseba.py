@@ -371,7 +371,7 @@ class AsebaNode(Node):
         if error is not None and not isinstance(error, TimeoutError):
             raise RobotLost(f"the connection to the Thymio on {self.device or 'USB'} failed: {error}")
         if remote is None or time.time() - remote.last_msg_time > LOST_AFTER:
-            if getattr(connection.io, "midway", False):  # the reader's timer, as long, may not have ended yet
+            if connection.io.midway:  # our _Link: the reader's timer, as long, may not have ended yet
                 raise RobotLost(f"the connection to the Thymio on {self.device or 'USB'} failed: {_CUT}")
             raise RobotLost(f"the Thymio on {self.device or 'USB'} stopped answering (nothing for {LOST_AFTER:g} s)")
         return remote
