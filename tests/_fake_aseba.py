@@ -4,7 +4,6 @@
 import socket
 import struct
 import threading
-import time
 
 NODE = 1
 LIST_NODES, GET_NODE_DESCRIPTION, GET_VARIABLES, SET_VARIABLES = 0xA011, 0xA010, 0xA00B, 0xA00C
@@ -36,17 +35,29 @@ def text(value: str | bytes) -> bytes:
     return bytes([len(data)]) + data
 
 
+def conn_open(conn: socket.socket) -> bool:
+    """Read what ``conn`` has (waiting at most its timeout); False once the peer closed it."""
+    try:
+        return conn.recv(4096) != b""
+    except TimeoutError:
+        return True
+
+
 class FakeThymio:
     """A Thymio II on a free loopback port. It answers LIST_NODES, GET_NODE_DESCRIPTION (unless
     ``describe`` is false) and GET_VARIABLES (its wheels turn at their targets), and sends
-    ``hostile`` once, ``after`` s after the link first asked for variables (0: at once, in the
-    handshake). ``then`` says what it does next: ``serve`` on, fall ``silent`` (the connection kept
-    open), or ``close``."""
+    ``hostile`` once, after the link set ``after`` motor targets (0: at once, in the handshake; 1:
+    once connected, since the link stops the motors as its connection's last step and a run or a
+    calibration begins: an event, not a time). ``then`` says what it does next: ``serve`` on, fall
+    ``silent`` (the connection kept open), or ``close``.
+
+    :attr:`log` records in order every pair of motor targets the link set, and the marks a test puts
+    in between (:meth:`mark`): what the robot was told before and after something the test did."""
 
     def __init__(
         self,
         hostile: bytes = b"",
-        after: float = 0.3,
+        after: int = 1,
         then: str = "serve",
         variables: tuple[tuple[str, int], ...] = THYMIO,
         describe: bool = True,
@@ -57,8 +68,7 @@ class FakeThymio:
         self.server = socket.create_server(("127.0.0.1", 0))
         self.port = self.server.getsockname()[1]
         self.sent_hostile = threading.Event()
-        self.moved_at: float | None = None  # when a motor target first became non-zero (monotonic)
-        self.stopped_at: float | None = None  # when both became 0 again after that
+        self.log: list[tuple[str, int, int]] = []  # ("targets", left, right) or (mark, 0, 0), in order
         self.thread = threading.Thread(target=self._serve, daemon=True)
         self.thread.start()
 
@@ -81,13 +91,16 @@ class FakeThymio:
                 return
 
     def _talk(self, conn: socket.socket) -> None:
-        buffer, asked = b"", None
+        buffer = b""
         while True:
-            due = self.after == 0 or (asked is not None and time.monotonic() - asked >= self.after)
-            if self.hostile and due and not self.sent_hostile.is_set():
+            told = sum(kind == "targets" for kind, _, _ in self.log)
+            if self.hostile and told >= self.after and not self.sent_hostile.is_set():
                 conn.sendall(self.hostile)
                 self.sent_hostile.set()
                 if self.then == "close":
+                    conn.shutdown(socket.SHUT_WR)  # the link reads the end of the stream...
+                    while conn_open(conn):  # ...and what it still sends is read: no reset instead
+                        pass
                     return
             try:
                 data = conn.recv(4096)
@@ -101,8 +114,6 @@ class FakeThymio:
                 if len(buffer) < 6 + length:
                     break
                 payload, buffer = buffer[6 : 6 + length], buffer[6 + length :]
-                if message_id == GET_VARIABLES and asked is None:
-                    asked = time.monotonic()
                 replies = list(self._answer(message_id, payload))
                 if not (self.then == "silent" and self.sent_hostile.is_set()):
                     conn.sendall(b"".join(replies))
@@ -118,22 +129,14 @@ class FakeThymio:
         elif message_id == SET_VARIABLES:  # recorded even when silent: what the link last told the robot
             _, offset, *values = struct.unpack(f"<{len(payload) // 2}H", payload)
             self.memory[offset : offset + len(values)] = values
-            self._note_motion()
+            if self._has("motor.left.target") and self._has("motor.right.target"):
+                self.log.append(("targets", self.target("left"), self.target("right")))
             for side in ("left", "right"):
                 if self._has(f"motor.{side}.target") and self._has(f"motor.{side}.speed"):
                     self.memory[self._offset(f"motor.{side}.speed")] = self.memory[self._offset(f"motor.{side}.target")]
         elif message_id == GET_VARIABLES:
             _, offset, count = struct.unpack("<3H", payload)
             yield frame(VARIABLES, words(offset, *self.memory[offset : offset + count]))
-
-    def _note_motion(self) -> None:
-        if not (self._has("motor.left.target") and self._has("motor.right.target")):
-            return
-        moving = self.target("left") != 0 or self.target("right") != 0
-        if moving and self.moved_at is None:
-            self.moved_at = time.monotonic()
-        elif not moving and self.moved_at is not None and self.stopped_at is None:
-            self.stopped_at = time.monotonic()
 
     def _has(self, name: str) -> bool:
         return any(other == name for other, _ in self.variables)
@@ -151,9 +154,18 @@ class FakeThymio:
         word = self.memory[self._offset(f"motor.{side}.target")]
         return word - 0x10000 if word >= 0x8000 else word
 
+    def mark(self, label: str) -> None:
+        """Put ``label`` in :attr:`log` here: what the link sets from now on comes after it."""
+        self.log.append((label, 0, 0))
+
+    def targets_since(self, label: str) -> list[tuple[int, int]]:
+        """The motor targets (left, right) the link set after the mark ``label``, in order."""
+        at = self.log.index((label, 0, 0))
+        return [(left, right) for kind, left, right in self.log[at + 1 :] if kind == "targets"]
+
     def close(self) -> None:
         """Stop listening and let the connection's thread read what the link sent before it hung up,
-        so what this robot recorded (targets, ``stopped_at``) is final once the link's process ended:
+        so what this robot recorded (targets, :attr:`log`) is final once the link's process ended:
         without the wait, a stop sent just before exiting could still sit unread in the socket."""
         self.server.close()
         self.thread.join(timeout=10)

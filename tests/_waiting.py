@@ -9,12 +9,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 
-def wait_until(condition: Callable[[], bool], what: str, timeout: float = 60.0) -> None:
-    """Return once ``condition()`` holds; fail the test saying ``what`` was awaited after ``timeout`` s."""
+def wait_until(condition: Callable[[], bool], what: str, timeout: float = 60.0, every: float = 0.02) -> None:
+    """Return once ``condition()`` holds, asked ``every`` s; fail the test saying ``what`` was awaited
+    after ``timeout`` s (a safety net against a hang, never the claim: make it generous)."""
     deadline = time.monotonic() + timeout
     while not condition():
         assert time.monotonic() < deadline, f"waited {timeout} s for {what}"
-        time.sleep(0.02)  # realtime: polling another process
+        time.sleep(every)  # realtime: polling another process
 
 
 def ticks_logged(path: Path) -> int:

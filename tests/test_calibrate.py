@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import _require
@@ -173,8 +172,12 @@ def _started_calibrating(process, step="1/3 speed"):
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
-def test_a_signal_stops_calibrate_on_a_robot_within_a_second_writing_nothing(tmp_path, signum):
-    """Before: calibrate ignored Ctrl-C and SIGTERM, measured on for 20 s and wrote the profile, exit 0."""
+def test_a_signal_stops_calibrate_and_its_robot_in_the_measure_it_cut_short_writing_nothing(tmp_path, signum):
+    """Before: calibrate ignored Ctrl-C and SIGTERM, measured on for 20 s and wrote the profile, exit 0.
+    The robot's own record says it was told to stop after the signal, and nothing after that; the
+    message names the measure the signal came in (it did not go on to the next). That the stop is
+    asked every tick is test_calibrate_stops_at_the_tick_it_is_asked_to_with_the_motors_stopped's,
+    in simulated time."""
     _require.module("thymiodirect")
     from _fake_aseba import FakeThymio
 
@@ -187,13 +190,13 @@ def test_a_signal_stops_calibrate_on_a_robot_within_a_second_writing_nothing(tmp
     said = _started_calibrating(process)
     wait_until(lambda: robot.target("left") > 0, "the robot driving")
     assert robot.target("left") == robot.target("right") > 0
-    sent = time.monotonic()
+    robot.mark("signal")
     process.send_signal(signum)
-    rest = process.communicate(timeout=10)[1]
+    rest = process.communicate(timeout=60)[1]  # only against a hang
     robot.close()
     assert process.returncode == 128 + signum, rest
-    assert robot.stopped_at is not None and robot.stopped_at - sent < 1.0  # the motors, within a second
-    assert robot.target("left") == robot.target("right") == 0
+    told = robot.targets_since("signal")
+    assert (0, 0) in told and told[-1] == (0, 0), told  # the stop came after the signal, and was the last word
     name = signal.Signals(signum).name
     assert f"calibrate: interrupted by {name}, stopped during 1/3 speed: {out} not written" in rest
     assert "Traceback" not in "".join(said) + rest
@@ -204,7 +207,7 @@ def test_a_robot_lost_while_calibrating_is_a_message_not_a_traceback(tmp_path):
     _require.module("thymiodirect")
     from _fake_aseba import VARIABLES, FakeThymio, frame, words
 
-    robot = FakeThymio(frame(VARIABLES, words(60000, 1)), after=1.0)  # variables past its memory
+    robot = FakeThymio(frame(VARIABLES, words(60000, 1)))  # variables past its memory, once connected
     out = tmp_path / "p.yaml"
     args = ["--backend", "aseba", "--backend-opt", f"device={robot.device}", "--backend-opt", "placed=true"]
     done = thymio_bt("calibrate", *args, "-o", str(out))
@@ -228,18 +231,19 @@ def _playground_calibrate(tmp: Path, out: Path) -> subprocess.Popen:
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
-def test_a_signal_stops_calibrate_on_the_playground_within_a_second_and_stops_the_playground(tmp_path, signum):
+def test_a_signal_stops_calibrate_on_the_playground_in_the_measure_it_cut_short_and_stops_the_playground(
+    tmp_path, signum
+):
+    """The measure the signal came in is the one named (it did not go on to the next), and the
+    Playground, its bus and its folder are gone once the command ended."""
     tmp = Path(tempfile.mkdtemp(prefix="tbt-", dir="/tmp"))  # short: the Playground's bus socket is in it
     try:
         process = _playground_calibrate(tmp, tmp_path / "p.yaml")
         _started_calibrating(process, "2/3 proximity")
-        sent = time.monotonic()
         process.send_signal(signum)
-        rest = process.communicate(timeout=10)[1]
-        took = time.monotonic() - sent
+        rest = process.communicate(timeout=60)[1]  # only against a hang
         assert process.returncode == 128 + signum, rest
         assert "stopped during 2/3 proximity" in rest and "Traceback" not in rest
-        assert took < 1.5  # measured 0.2-0.45 s: a tick, the robot's link, the Playground stopped
         assert list(tmp.iterdir()) == [] and not (tmp_path / "p.yaml").exists()
         assert _left_in(tmp) == []
     finally:
@@ -250,9 +254,7 @@ def test_a_sigterm_while_calibrates_playground_starts_leaves_nothing_behind(tmp_
     tmp = Path(tempfile.mkdtemp(prefix="tbt-", dir="/tmp"))
     try:
         process = _playground_calibrate(tmp, tmp_path / "p.yaml")
-        deadline = time.monotonic() + 20
-        while not list(tmp.glob("*/bus")) and time.monotonic() < deadline:
-            time.sleep(0.002)
+        wait_until(lambda: bool(list(tmp.glob("*/bus"))), "the Playground's bus", every=0.002)  # then at once
         process.send_signal(signal.SIGTERM)
         rest = process.communicate(timeout=10)[1]
         assert process.returncode == 143 and "Traceback" not in rest, rest

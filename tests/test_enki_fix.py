@@ -9,7 +9,7 @@ import _require
 import pytest
 
 from thymio_bt.backends.playground import enki_fix as fix
-from thymio_bt.backends.playground.process import Playground, free_port
+from thymio_bt.backends.playground.process import Playground
 from thymio_bt.backends.playground.world import playground_world
 from thymio_bt.maze import load_maze, resolve_maze
 from thymio_bt.robot.interface import Pose
@@ -55,9 +55,8 @@ def test_the_playground_runs_with_the_correction_loaded():
     _require.program("asebaplayground")
     _require.program("dbus-daemon")
     library = _require.enki_fix()
-    port = free_port()
-    world = playground_world(load_maze(resolve_maze("arena")), Pose(0.5, 0.5, 0.0), port)
-    with Playground.start(world.text, port, preload=library) as pg:
+    world = playground_world(load_maze(resolve_maze("arena")), Pose(0.5, 0.5, 0.0), port=0)
+    with Playground.start(world.text, preload=library) as pg:
         maps = [Path(f"/proc/{p.pid}/maps") for p in pg.processes]
         loaded = [m.read_text() for m in maps if m.exists()]
     assert any(str(library) in text for text in loaded), "no Playground process has the library mapped"

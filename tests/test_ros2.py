@@ -189,11 +189,11 @@ def serving(env: Path, *args: str, speedup: float = SPEEDUP) -> Iterator[int]:
         env=_environment(domain),
     )
     try:
-        deadline = time.monotonic() + 30
+        deadline = time.monotonic() + 120  # only against a hang: a loaded machine's ROS 2 starts slowly
         line = ""
         while "serving" not in line:
             assert proc.poll() is None, f"serve ended: {proc.stderr.read() if proc.stderr else ''}"
-            assert time.monotonic() < deadline, "serve did not start within 30 s"
+            assert time.monotonic() < deadline, "serve did not start within 120 s"
             if select.select([proc.stderr], [], [], 0.5)[0]:
                 line = proc.stderr.readline()  # type: ignore[union-attr]
         yield domain
@@ -284,10 +284,11 @@ def test_the_course_students_node_runs_against_serve(ros2_env):
 
 
 def test_nothing_to_drive_fails_quickly_with_a_reason(ros2_env, tmp_path):
-    start = time.monotonic()
+    """Quickly: after its 5 s wait for a first message, before any tick (the report's own record),
+    not at the mission's time limit."""
     code, report = _run(ros2_env, "maze_part1_2", next(_domains), tmp_path)
-    assert time.monotonic() - start < 20
     assert code == 1 and report["status"] == "FAILURE" and report["code"] == "ROBOT_LOST"
+    assert report["ticks"] == 0, report
     reason = report["reason"]  # what was waited for, how long, and how to start a server
     assert reason.startswith("nothing answered: no message on /clock or /odom and no /spawn_entity")
     waited = re.search(r" within (\d+\.\d) s \(ROS_DOMAIN_ID=", reason)  # the wall time it waited: 5.0 s or a bit more
@@ -311,7 +312,7 @@ def _ros_python(env: Path, domain: int, script: str) -> str:
         [str(env / "bin" / "python"), "-c", script],
         capture_output=True,
         text=True,
-        timeout=60,
+        timeout=180,  # only against a hang: a new node's discovery and a held world's 10 s, under load
         env=_environment(domain),
     )
     assert result.returncode == 0, result.stderr
@@ -374,11 +375,11 @@ def test_a_run_stopped_while_driving_stops_the_robot(ros2_env, tmp_path):
             env=_environment(domain),
         )
         try:
-            deadline = time.monotonic() + 30
+            deadline = time.monotonic() + 120  # only against a hang: each probe is a new ROS 2 process
             while _probe_speed(ros2_env, domain) == 0.0:
                 assert time.monotonic() < deadline, "the robot never moved"
             run.send_signal(signal.SIGTERM)
-            assert run.wait(timeout=20) == 143
+            assert run.wait(timeout=60) == 143
         finally:
             if run.poll() is None:
                 run.kill()

@@ -48,13 +48,12 @@ class Bridge:
 
     def __init__(self, mission_file: Path, folder: Path) -> None:
         from thymio_bt.backends.playground.enki import EnkiRobot
-        from thymio_bt.backends.playground.process import Playground, free_port
+        from thymio_bt.backends.playground.process import Playground
         from thymio_bt.backends.playground.world import playground_world
 
         mission = load_mission(mission_file, {"robot": "enki"})
-        port = free_port()
-        self.world = playground_world(mission.maze, Pose(*ENKI.axle_of(mission.start)), port)
-        self.playground = Playground.start(self.world.text, port, preload=_require.enki_fix())
+        self.world = playground_world(mission.maze, Pose(*ENKI.axle_of(mission.start)), port=0)
+        self.playground = Playground.start(self.world.text, preload=_require.enki_fix())
         try:
             self.enki = EnkiRobot.find(self.playground.bus)
         except BaseException:
@@ -62,16 +61,16 @@ class Bridge:
             raise
         self.tty = folder / "thymio-tty"
         self.socat = subprocess.Popen(
-            ["socat", f"PTY,link={self.tty},raw,echo=0", f"TCP:127.0.0.1:{port}"],
+            ["socat", f"PTY,link={self.tty},raw,echo=0", f"TCP:127.0.0.1:{self.playground.port}"],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
         )
-        deadline = time.monotonic() + 5
-        while not self.tty.exists() and time.monotonic() < deadline:
-            time.sleep(0.05)
-        if not self.tty.exists():
+        try:
+            wait_until(lambda: self.tty.exists() or self.socat.poll() is not None, "socat's pty")
+            assert self.tty.exists(), f"socat made no pty: {self.socat.stderr.read() if self.socat.stderr else ''}"
+        except BaseException:
             self.close()
-            pytest.fail("socat made no pty")
+            raise
 
     def place(self, pose: Pose) -> None:
         """What an operator does at a prompt: put the robot at ``pose`` (base_link)."""
@@ -148,7 +147,7 @@ class Operator(threading.Thread):
                 self.found.append(self.bridge.true_pose())
                 self.bridge.place(pose)
                 self.placed.append(pose)
-                time.sleep(0.3)  # the robot's readings from its new place
+                time.sleep(0.3)  # realtime: the robot's readings from its new place (as an operator waits)
                 self.process.stdin.write(b"\n")
                 self.process.stdin.flush()
 
@@ -224,17 +223,15 @@ def test_a_robot_lost_mid_run_ends_it_failure_with_everything_written(bridge, tm
     wait_until(lambda: ticks_logged(tmp_path / "run.jsonl") >= 3 or process.poll() is not None, "3 ticks logged")
     assert process.poll() is None, process.stderr.read().decode()
     b.socat.kill()
-    killed = time.monotonic()
-    out, err = process.communicate(timeout=15)
-    took = time.monotonic() - killed
+    out, err = process.communicate(timeout=60)  # only against a hang
     stderr = err.decode()
     assert process.returncode == 1, stderr
     assert "Traceback" not in stderr and "Exception" not in stderr, stderr
     report = json.loads((tmp_path / "report.json").read_text())
     assert report["status"] == "FAILURE" and report["code"] == "ROBOT_LOST", report
+    assert report["sim_time"] < 30  # ended by the loss, not by its Wait's end
     assert re.search(r"stopped answering|connection .* failed|lost", report["reason"]), report["reason"]
     assert _log_ends(tmp_path / "run.jsonl")
-    assert took < 5.0  # a second to notice, the rest to write the report and close
     assert not b.tty.exists()  # socat is gone, and so is its pty
 
 

@@ -2,7 +2,6 @@
 
 import json
 import sys
-import time
 from pathlib import Path
 
 import _require
@@ -65,13 +64,30 @@ def test_a_live_view_draws_every_tick_and_leaves_the_run_unchanged(pg, tmp_path)
     assert len(colours) > 5 and {window.WALL, window.ROBOT_FILL, window.TRAIL} <= colours
 
 
-def test_frames_come_no_earlier_than_their_time_divided_by_the_speedup(pg):
+class _Clock:
+    """The viewer's wall clock, faked: ``sleep`` moves it on at once."""
+
+    def __init__(self) -> None:
+        self.now = 1000.0
+
+    def perf_counter(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        assert seconds > 0
+        self.now += seconds
+
+
+def test_frames_come_no_earlier_than_their_time_divided_by_the_speedup(pg, monkeypatch):
+    clock = _Clock()
+    monkeypatch.setattr(window, "time", clock)
     with_view = Viewer(Maze(), speedup=20, max_fps=None)
-    began = time.perf_counter()
+    shown_at = []
     for tick in range(6):
         with_view.show(Frame(tick * 0.1, {"x": 0.0, "y": 0.0, "yaw": 0.0}, {}))
+        shown_at.append(clock.now - 1000.0)
     with_view.close()
-    assert 0.5 / 20 <= time.perf_counter() - began < 1.0
+    assert shown_at == pytest.approx([tick * 0.1 / 20 for tick in range(6)])  # each at its time, no earlier
 
 
 def test_rays_are_drawn_at_the_pose_hit_ones_in_red_with_y_up(pg, tmp_path):
@@ -113,9 +129,8 @@ def test_pause_waits_and_single_step_advances_one_tick(pg):
     viewer.show(Frame(0.1, pose, {}))  # RIGHT steps past this one
     assert viewer.paused and viewer.shown == 2
     pg.time.set_timer(pg.event.Event(pg.KEYDOWN, key=pg.K_SPACE), 150, 1)
-    began = time.perf_counter()
     viewer.show(Frame(0.2, pose, {}))  # no key queued: waits, paused, until SPACE resumes
-    assert time.perf_counter() - began >= 0.1 and not viewer.paused
+    assert not viewer.paused  # it returned only once SPACE (150 ms later) had come
     viewer.close()
 
 

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 
 from thymio_bt.backends.playground.enki import EnkiRobot
 from thymio_bt.backends.playground.enki_fix import HINT, enki_fix
-from thymio_bt.backends.playground.process import Playground, free_port
+from thymio_bt.backends.playground.process import Playground
 from thymio_bt.backends.playground.world import PlaygroundWorld, playground_world
 from thymio_bt.backends.real.aseba import AsebaNode
 from thymio_bt.backends.real.thymio import ThymioRobot
@@ -135,11 +135,10 @@ def create_playground(mission: MissionWorld, seed: int, options: PlaygroundOptio
     from thymio_bt.backends import robot_for
 
     model = robot_for(mission, "playground")
-    port = free_port()
-    world = playground_world(mission.maze, Pose(*model.axle_of(mission.start)), port)
-    playground = Playground.start(world.text, port, options.timeout, _enki_fix() if options.enki_fix else None)
+    world = playground_world(mission.maze, Pose(*model.axle_of(mission.start)), port=0)  # its own pick
+    playground = Playground.start(world.text, options.timeout, _enki_fix() if options.enki_fix else None)
     try:
-        node = AsebaNode.connect(f"tcp:127.0.0.1:{port}", options.timeout)
+        node = AsebaNode.connect(f"tcp:127.0.0.1:{playground.port}", options.timeout)
         enki = EnkiRobot.find(playground.bus, options.timeout)
     except BaseException:
         playground.stop()

@@ -3,7 +3,10 @@
 Traps measured on the Playground 1.6.99 and avoided here: the Playground needs a writable ``HOME``
 (it writes a simulated SD card) and, for its D-Bus interface, a session bus of its own; a TCP
 connect to probe its port can crash it, so readiness is read from ``/proc/net/tcp`` (the port in
-LISTEN); it binds every interface, so the port is a free one.
+LISTEN). The world's port is best 0: the Playground then binds a port the kernel picks, and
+:attr:`Playground.port` is read from its own listening socket. A port chosen beforehand could be
+taken by another program in the meantime, and the Playground, failing to bind it, runs on silently
+with no port at all while the other program's socket looks like its own.
 
 Nothing it starts outlives a Ctrl-C or a SIGTERM. While a Playground runs, either signal, when
 nobody else handles it (a run's own handler does, from its first tick to its last), stops every
@@ -16,14 +19,19 @@ thread, the programs also get SIGTERM from the kernel when thymio-bt dies any ot
 
 With the Playground installed (``apt-get install aseba dbus``)::
 
-    with Playground.start(world_text, port) as pg:      # a private bus, a temporary HOME
-        pg.bus                                           # "unix:path=/tmp/.../bus"
+    with Playground.start(world_text) as pg:      # a private bus, a temporary HOME
+        pg.bus, pg.port                            # "unix:path=/tmp/.../bus", the robot's port
 
-Example (the port it is given, and how its readiness is seen)::
+Example (how readiness is seen: a socket that listens, and the process it belongs to)::
 
-    >>> port = free_port()
-    >>> 1024 <= port < 65536, listening(port)
-    (True, False)
+    >>> import socket
+    >>> server = socket.create_server(("127.0.0.1", 0))
+    >>> port = server.getsockname()[1]
+    >>> listening(port), port in listening_ports(os.getpid())
+    (True, True)
+    >>> server.close()
+    >>> listening(port), port in listening_ports(os.getpid())
+    (False, False)
 """
 
 from __future__ import annotations
@@ -32,7 +40,6 @@ import contextlib
 import os
 import shutil
 import signal
-import socket
 import subprocess
 import tempfile
 import threading
@@ -48,24 +55,35 @@ PLAYGROUND, DBUS = "asebaplayground", "dbus-daemon"
 _INSTALL_HINT = "install the Playground: sudo apt-get install aseba dbus (Debian/Ubuntu)"
 
 
-def free_port() -> int:
-    """A TCP port nobody listens on now (the Playground binds it a moment later)."""
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
-
-
-def listening(port: int) -> bool:
-    """Whether a socket listens on ``port`` (read from /proc/net/tcp*: connecting could crash the Playground)."""
-    want = f":{port:04X}"
+def _listeners() -> Iterator[tuple[int, str]]:
+    """The TCP sockets in LISTEN, as (port, socket inode), from /proc/net/tcp*: connecting to probe
+    them could crash the Playground."""
     for table in ("/proc/net/tcp", "/proc/net/tcp6"):
         try:
             rows = Path(table).read_text().splitlines()[1:]
         except OSError:
             continue
-        if any(row.split()[1].endswith(want) and row.split()[3] == "0A" for row in rows):
-            return True
-    return False
+        for row in rows:
+            fields = row.split()
+            if fields[3] == "0A":
+                yield int(fields[1].rsplit(":", 1)[1], 16), fields[9]
+
+
+def listening(port: int) -> bool:
+    """Whether a socket listens on ``port``."""
+    return any(found == port for found, _ in _listeners())
+
+
+def listening_ports(pid: int) -> list[int]:
+    """The TCP ports the process ``pid`` listens on (sorted; none once it ended)."""
+    inodes = set()
+    with contextlib.suppress(OSError):  # the process ended
+        for fd in Path(f"/proc/{pid}/fd").iterdir():
+            with contextlib.suppress(OSError):  # a file closed meanwhile
+                link = os.readlink(fd)
+                if link.startswith("socket:["):
+                    inodes.add(link[len("socket:[") : -1])
+    return sorted({port for port, inode in _listeners() if inode in inodes})
 
 
 class PlaygroundInterrupted(KeyboardInterrupt):
@@ -102,12 +120,12 @@ class _Guard:
 
     def handle(self, signum: int, frame: FrameType | None) -> None:
         """The signal handler: stop every Playground and raise, or hold the signal back."""
-        if not self.alive:  # all stopped; another handler put this one back on leaving: be the default
+        if self.holding:  # checked first: a Playground being started may not be recorded yet
+            self.pending = self.pending or signum
+        elif not self.alive:  # all stopped; another handler put this one back on leaving: be the default
             signal.signal(signum, _SIGNALS[signum])
             self.installed.discard(signum)
             signal.raise_signal(signum)
-        elif self.holding:
-            self.pending = self.pending or signum
         else:
             self._fire(signum)
 
@@ -133,8 +151,13 @@ class _Guard:
             self._fire(signum)
 
     def add(self, playground: Playground) -> None:
-        """A Playground starts: handle the signals left at their defaults (from the main thread only)."""
+        """A Playground starts: handle the signals left at their defaults (:meth:`arm`)."""
         self.alive.append(playground)
+        self.arm()
+
+    def arm(self) -> None:
+        """Handle the signals left at their defaults (from the main thread only): before a Playground's
+        folder is made, so that a signal from then on is held, not the default that left it behind."""
         if threading.current_thread() is threading.main_thread():
             for sig, default in _SIGNALS.items():
                 if signal.getsignal(sig) == default:
@@ -179,13 +202,15 @@ def _orphan_proof(command: list[str]) -> list[str]:
 class Playground:
     """A running Playground and its private session bus (see the module docstring)."""
 
-    def __init__(self, folder: Path, processes: list[subprocess.Popen[bytes]], bus: str, port: int) -> None:
-        self.folder, self.processes, self.bus, self.port = folder, processes, bus, port
+    def __init__(self, folder: Path, processes: list[subprocess.Popen[bytes]], bus: str) -> None:
+        self.folder, self.processes, self.bus = folder, processes, bus
+        self.port = 0  # the robot's port, once the Playground listens on it
 
     @classmethod
-    def start(cls, world_text: str, port: int, timeout: float = 10.0, preload: Path | None = None) -> Playground:
-        """Write the world, start a session bus and the Playground on it (with the library ``preload``
-        loaded into it: :mod:`.enki_fix`); wait for the robot's port."""
+    def start(cls, world_text: str, timeout: float = 10.0, preload: Path | None = None) -> Playground:
+        """Write the world (its robot's port best 0: see the module docstring), start a session bus and
+        the Playground on it (with the library ``preload`` loaded into it: :mod:`.enki_fix`); wait
+        until the Playground listens on a port, its robot's: :attr:`port`."""
         for program in (PLAYGROUND, DBUS):
             if shutil.which(program) is None:
                 raise UserError(
@@ -194,7 +219,8 @@ class Playground:
         playground = None
         try:
             with _GUARD.held():  # the folder made and recorded, or neither
-                playground = cls(Path(tempfile.mkdtemp(prefix="thymio-bt-playground-", dir=_short_tmp())), [], "", port)
+                _GUARD.arm()
+                playground = cls(Path(tempfile.mkdtemp(prefix="thymio-bt-playground-", dir=_short_tmp())), [], "")
                 playground.bus = f"unix:path={playground.folder / 'bus'}"
                 _GUARD.add(playground)
             playground._launch(world_text, timeout, preload)
@@ -224,7 +250,13 @@ class Playground:
             # the library is preloaded into the Playground only (``env`` sets it for the program it starts)
             lead = ["env", f"LD_PRELOAD={preload}"] if preload is not None else []
             self._spawn([*lead, PLAYGROUND, str(world)], log, env=env)
-        self._wait(lambda: listening(self.port), timeout, f"the robot's port {self.port}")
+        self._wait(self._listens, timeout, "the robot's port")
+
+    def _listens(self) -> bool:
+        """Whether the Playground (started last; ``setpriv`` and ``env`` exec it) listens: its port recorded."""
+        ports = listening_ports(self.processes[-1].pid)
+        self.port = ports[0] if ports else 0
+        return bool(ports)
 
     def _spawn(self, command: list[str], log: IO[bytes], env: dict[str, str] | None = None) -> None:
         """Start ``command`` in its own session (a Ctrl-C in the terminal is thymio-bt's to handle),

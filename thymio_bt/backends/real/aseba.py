@@ -66,6 +66,7 @@ LOST_AFTER = 0.8
 REFRESH, DISCOVER = 0.03, 0.1
 #: A message begun but not finished within this long (s) was cut short: the link has failed.
 CUT_SHORT = LOST_AFTER
+_CUT = f"a message was cut short: nothing more for {CUT_SHORT:g} s"
 #: The variables (name: words) the link reads and writes: a node without them is no Thymio II.
 REQUIRED = {PROX_VARIABLE: 7, **dict.fromkeys((*SPEED_VARIABLES, *TARGET_VARIABLES), 1)}
 _INSTALL_HINT = "pip install 'thymio-bt[aseba]'"
@@ -112,13 +113,15 @@ class _Link(io.RawIOBase):
     in thymiodirect's threads (which would end them with a traceback on the user's terminal).
 
     A failed link (a closed socket, a pulled cable, a message cut short or refused) is recorded in
-    ``failed``, which the node reports as RobotLost. Subclasses say how to receive (b"" when nothing
-    came in time), send and close."""
+    ``failed``, which the node reports as RobotLost; ``midway`` says a message has begun and not
+    ended, so that a robot silent since then is said to have cut it short, whichever timer ends
+    first. Subclasses say how to receive (b"" when nothing came in time), send and close."""
 
     def __init__(self) -> None:
         self.failed: BaseException | None = None
         self.gate = Gate(REQUIRED)
         self.stopping = False  # set on close: a message being received is given up
+        self.midway = False  # a message has begun and not ended: a silence now cuts it short
         self._ready = bytearray()  # whole messages the gate passed, not yet read
 
     def _receive(self, n: int) -> bytes:
@@ -160,6 +163,7 @@ class _Link(io.RawIOBase):
                 "the peer does not speak Aseba, or the line carries garbage"
             )
         payload = self._take(length, idle=False) if length else b""
+        self.midway = False
         if payload is not None and self.gate.admits(source, kind, payload):
             self._ready += header + payload
 
@@ -173,10 +177,11 @@ class _Link(io.RawIOBase):
             if chunk:
                 data += chunk
                 since = time.monotonic()
+                self.midway = True
             elif idle and not data:
                 return None
             elif time.monotonic() - since > CUT_SHORT:
-                raise LinkError(f"a message was cut short: nothing more for {CUT_SHORT:g} s")
+                raise LinkError(_CUT)
         return bytes(data) if len(data) == n else None
 
     def write(self, data: Any) -> int:
@@ -365,6 +370,8 @@ class AsebaNode(AsebaDevice):
         if error is not None and not isinstance(error, TimeoutError):
             raise RobotLost(f"the connection to the Thymio on {self.device or 'USB'} failed: {error}")
         if remote is None or time.time() - remote.last_msg_time > LOST_AFTER:
+            if connection.io.midway:  # our _Link: the reader's timer, as long, may not have ended yet
+                raise RobotLost(f"the connection to the Thymio on {self.device or 'USB'} failed: {_CUT}")
             raise RobotLost(f"the Thymio on {self.device or 'USB'} stopped answering (nothing for {LOST_AFTER:g} s)")
         return remote
 
