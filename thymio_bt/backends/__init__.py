@@ -33,8 +33,9 @@ from thymio_bt.robot.model import DEFAULT_ROBOT
 if TYPE_CHECKING:
     from pathlib import Path
 
+    from thymio_bt.geometry import Pose
     from thymio_bt.maze import Maze
-    from thymio_bt.robot.interface import Backend, Pose
+    from thymio_bt.robot.interface import Backend
     from thymio_bt.robot.model import RobotModel
     from thymio_bt.robot.noise import NoiseConfig
 

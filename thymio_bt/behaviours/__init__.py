@@ -15,9 +15,10 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from thymio_bt.behaviours.base import Context, EventLog, FailureCode, RobotBehaviour
+from thymio_bt.behaviours.base import Context, EventLog, RobotBehaviour
 from thymio_bt.behaviours.flow.node import ControlNode
 from thymio_bt.behaviours.flow.primitives import RepeatUntil, ScriptedStub, SimTimeout
+from thymio_bt.enums import FailureCode
 
 #: the robot behaviours' family modules, where :func:`__getattr__` looks for a name
 FAMILIES = ("motion", "entities", "maze", "wall_follow", "navigation", "mapping", "move_cells", "places")

@@ -47,8 +47,9 @@ from py_trees.common import Access, Status
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import Pose
 from thymio_bt.inputs.fields import IN_SI, Duration
-from thymio_bt.robot.interface import Entities, Pose, Robot
+from thymio_bt.robot.interface import Entities, Robot
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
 #: the statuses as module constants: ``Status.RUNNING`` is an attribute of an Enum class, which on

@@ -5,9 +5,11 @@ from __future__ import annotations
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, snapshot
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour, snapshot
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import Pose
 from thymio_bt.inputs.fields import Duration, EntityName, Pose2D
-from thymio_bt.robot.interface import ROBOT_ENTITY, Pose, Request, RequestState
+from thymio_bt.robot.interface import ROBOT_ENTITY, Request, RequestState
 
 
 class DeleteEntityParams(BehaviourParams):

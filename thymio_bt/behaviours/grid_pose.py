@@ -21,10 +21,11 @@ from typing import ClassVar, Literal
 from py_trees.common import Status
 from pydantic import BaseModel, Field
 
-from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour, current_pose
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import wrap_angle
 from thymio_bt.inputs.fields import Length
 from thymio_bt.maze.cellmap import Cell, CellMap, centre_cells
-from thymio_bt.robot.interface import wrap_angle
 from thymio_bt.robot.model import RobotModel
 
 Target = Literal["goal", "centre", "start"]

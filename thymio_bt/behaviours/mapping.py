@@ -40,7 +40,7 @@ import math
 from py_trees.common import Access, Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import ConditionBehaviour, FailureCode
+from thymio_bt.behaviours.base import ConditionBehaviour
 from thymio_bt.behaviours.grid_pose import (
     HEADING,
     LEFT_OF,
@@ -54,8 +54,9 @@ from thymio_bt.behaviours.grid_pose import (
     Target,
 )
 from thymio_bt.behaviours.move_cells import MoveCells, MoveCellsParams
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import wrap_angle
 from thymio_bt.maze.cellmap import STEPS, Cell
-from thymio_bt.robot.interface import wrap_angle
 
 __all__ = [
     "HEADING",

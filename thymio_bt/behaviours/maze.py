@@ -35,16 +35,16 @@ from thymio_bt.behaviours.base import (
     SUCCESS,
     BehaviourParams,
     ConditionBehaviour,
-    FailureCode,
     Reading,
     RobotBehaviour,
     current_pose,
 )
 from thymio_bt.behaviours.motion import Turn
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import wrap_angle
 from thymio_bt.inputs.fields import AngularSpeed, SensedLength
 from thymio_bt.robot.corridor import FRONT_SENSORS, RANGE_MAX, Side, side_ray
-from thymio_bt.robot.interface import wrap_angle
 from thymio_bt.robot.model import WIDEST_RANGE, RobotModel
 
 __all__ = [

@@ -15,7 +15,9 @@ from typing import Literal, get_args
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import RUNNING, SUCCESS, BehaviourParams, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.base import RUNNING, SUCCESS, BehaviourParams, RobotBehaviour, current_pose
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.inputs.fields import (
     Angle,
     AngularSpeed,
@@ -26,7 +28,7 @@ from thymio_bt.inputs.fields import (
     SensedLength,
     Speed,
 )
-from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Robot, wrap_angle
+from thymio_bt.robot.interface import SENSOR_NAMES, Robot
 from thymio_bt.robot.model import COURSE, WIDEST_RANGE
 
 SensorName = Literal[

@@ -22,9 +22,10 @@ from pydantic import Field
 
 from thymio_bt.behaviours.grid_pose import HEADING, LEFT_OF, RIGHT_OF, Sensing, SensingParams
 from thymio_bt.behaviours.motion import approach_speed
+from thymio_bt.geometry import wrap_angle
 from thymio_bt.inputs.fields import Length, Speed
 from thymio_bt.maze.cellmap import Cell
-from thymio_bt.robot.interface import Scan, wrap_angle
+from thymio_bt.robot.interface import Scan
 
 
 class MoveCellsParams(SensingParams):

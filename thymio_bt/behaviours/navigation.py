@@ -16,17 +16,12 @@ from typing import Literal
 from py_trees.common import Status
 from pydantic import Field
 
-from thymio_bt.behaviours.base import (
-    BehaviourParams,
-    ConditionBehaviour,
-    FailureCode,
-    Reading,
-    RobotBehaviour,
-    current_pose,
-)
+from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Reading, RobotBehaviour, current_pose
 from thymio_bt.behaviours.motion import approach_speed
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, Point, Speed
-from thymio_bt.robot.interface import Pose, Scan, wrap_angle
+from thymio_bt.robot.interface import Scan
 from thymio_bt.robot.pid import PID
 
 FRONT = ("front_left", "front_center_left", "front_center", "front_center_right", "front_right")

@@ -28,7 +28,8 @@ import math
 from py_trees.common import Status
 from pydantic import Field, model_validator
 
-from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, FailureCode, current_pose
+from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, current_pose
+from thymio_bt.enums import FailureCode
 from thymio_bt.inputs.fields import Length, Point
 
 __all__ = ["InRegion", "InRegionParams", "OutsideMaze", "OutsideMazeParams"]

@@ -30,8 +30,10 @@ from typing import Literal
 from py_trees.common import Status
 from pydantic import Field, model_validator
 
-from thymio_bt.behaviours.base import BehaviourParams, FailureCode, RobotBehaviour, current_pose
+from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour, current_pose
 from thymio_bt.behaviours.motion import MIN_TURN_RATE, approach_speed, late_gain
+from thymio_bt.enums import FailureCode
+from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.inputs.fields import AngularSpeed, Duration, Length, Speed
 from thymio_bt.robot.corridor import (
     FRONT_PAIR,
@@ -49,7 +51,6 @@ from thymio_bt.robot.corridor import (
     line_direction,
     side_ray,
 )
-from thymio_bt.robot.interface import Pose, wrap_angle
 
 
 class WallFollowParams(BehaviourParams):

@@ -29,7 +29,7 @@ from thymio_bt.outputs import Output
 from thymio_bt.run.interrupts import Interrupts
 
 if TYPE_CHECKING:
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
     from thymio_bt.robot.interface import Backend
 
 

@@ -28,7 +28,7 @@ from thymio_bt.errors import UserError
 
 if TYPE_CHECKING:
     from thymio_bt.analysis.lint import Finding
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
 
 
 @main.command()

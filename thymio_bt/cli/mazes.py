@@ -99,8 +99,8 @@ def _check_size(text: str, world: Path) -> None:
 def maze_export(maze_file: Path, playground: bool, spawn: str | None, robot: str, port: int, output: Path) -> None:
     """Write MAZE_FILE (.yaml, grid or .txt) as an Aseba Playground world with one Thymio."""
     from thymio_bt.backends.playground.world import playground_world
+    from thymio_bt.geometry import Pose
     from thymio_bt.maze.files import load_maze
-    from thymio_bt.robot.interface import Pose
     from thymio_bt.robot.model import robot_model
 
     try:

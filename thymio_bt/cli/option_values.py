@@ -26,7 +26,7 @@ from thymio_bt.errors import UserError
 from thymio_bt.outputs import Output
 
 if TYPE_CHECKING:
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
     from thymio_bt.robot.interface import Backend
 
 

@@ -43,7 +43,7 @@ from thymio_bt.run.interrupts import Interrupts
 if TYPE_CHECKING:
     from thymio_bt.btcpp.groot2 import Groot2Server
     from thymio_bt.logs.recording import Recorder, Recording
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
     from thymio_bt.run.runner import Run, RunResult
     from thymio_bt.viz.live import LiveServer
     from thymio_bt.viz.window import LiveView
@@ -407,7 +407,7 @@ class _Progress:
 
 def _summary(result: RunResult, err: bool = False) -> None:
     """The run's status, times, final pose and clearance; where and why it failed, on stderr."""
-    from thymio_bt.behaviours.base import FailureCode
+    from thymio_bt.enums import FailureCode
     from thymio_bt.run.result import RunStatus
 
     echo = partial(click.echo, err=err)

@@ -24,8 +24,8 @@ from thymio_bt.cli.app import POSITIVE, fail, main
 from thymio_bt.errors import UserError
 
 if TYPE_CHECKING:
+    from thymio_bt.geometry import Pose
     from thymio_bt.maze import Maze
-    from thymio_bt.robot.interface import Pose
     from thymio_bt.run.interrupts import Interrupted
 
 
@@ -60,8 +60,8 @@ def serve_ros2(maze_ref: str, start: str | None, speedup: float, robot: str, qui
     /delete_entity) runs against it unchanged; so does 'thymio-bt run MISSION --backend ros2'.
     Ctrl-C or SIGTERM stops it (exit 0); a step stuck 2 s after the signal is broken into (exit 130/143).
     """
+    from thymio_bt.geometry import Pose
     from thymio_bt.maze.files import load_maze, resolve_maze
-    from thymio_bt.robot.interface import Pose
     from thymio_bt.robot.model import robot_model
     from thymio_bt.robot.placement import placement_problem
     from thymio_bt.run.interrupts import Interrupted, Interrupts
@@ -120,8 +120,8 @@ def _broken_into(exc: Interrupted) -> NoReturn:
 
 def start_pose(world: Maze, start: str | None) -> Pose:
     """The start pose of ``serve``: ``X,Y,YAW``, a spawn of the maze, or the maze's first spawn."""
+    from thymio_bt.geometry import Pose
     from thymio_bt.inputs.units import UnitError, parse_pose
-    from thymio_bt.robot.interface import Pose
 
     if start is None or "," not in start:
         names = list(world.spawns)

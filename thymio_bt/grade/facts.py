@@ -30,9 +30,9 @@ from dataclasses import dataclass, field
 from fnmatch import fnmatchcase
 from typing import TYPE_CHECKING, Any
 
+from thymio_bt.geometry import Pose
 from thymio_bt.grade.assignment import GoalDisc
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import RobotModel
 
 if TYPE_CHECKING:

@@ -36,7 +36,7 @@ from thymio_bt.grade.submissions import Submission, find_submissions
 from thymio_bt.grade.worlds import World, load_worlds
 
 if TYPE_CHECKING:
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
 
 #: called with (student, its run) as each run ends, in the grader's process
 Progress = Callable[[str, RunMessage], None]

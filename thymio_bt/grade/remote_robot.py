@@ -34,16 +34,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from thymio_bt.robot.interface import (
-    SENSOR_NAMES,
-    Entities,
-    Pose,
-    Request,
-    RequestState,
-    Robot,
-    Scan,
-    Twist,
-)
+from thymio_bt.geometry import Pose
+from thymio_bt.robot.interface import SENSOR_NAMES, Entities, Request, RequestState, Robot, Scan, Twist
 from thymio_bt.robot.model import RobotModel
 
 

@@ -20,13 +20,15 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import FailureCode, node_path, snapshot
+from thymio_bt.behaviours.base import node_path, snapshot
+from thymio_bt.enums import FailureCode
 from thymio_bt.errors import ThymioBtError
+from thymio_bt.geometry import Pose
 from thymio_bt.grade.isolation import Limits, RunLimit
 from thymio_bt.grade.sandboxes import Sandbox
 from thymio_bt.grade.wire import MAX_DRIVES, Deadline, WireError, is_json, observation_frame, read_json, read_reply
 from thymio_bt.logs.entries import STATUS_LETTER
-from thymio_bt.robot.interface import SENSOR_NAMES, Pose, Request, RequestState
+from thymio_bt.robot.interface import SENSOR_NAMES, Request, RequestState
 from thymio_bt.run.result import EndKind, RunResult, RunStatus, Verdict
 from thymio_bt.run.runner import Run
 

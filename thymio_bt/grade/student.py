@@ -39,7 +39,7 @@ from thymio_bt.run.result import RunResult, RunStatus
 
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
 
 #: the most trajectory samples a run sends (for its picture)
 PICTURE_SAMPLES = 300

@@ -34,7 +34,7 @@ from thymio_bt.outputs import Output
 from thymio_bt.robot.noise import REALISTIC, NoiseConfig
 
 if TYPE_CHECKING:
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
 
 
 @dataclass
@@ -135,8 +135,8 @@ class World:
 
 def _check_start(name: str, maze: Maze, start: str, robot: str) -> None:
     """A variant's start must be a spawn of its maze, or a pose where its robot can stand."""
+    from thymio_bt.geometry import Pose
     from thymio_bt.inputs.units import UnitError, parse_pose
-    from thymio_bt.robot.interface import Pose
     from thymio_bt.robot.model import robot_model
     from thymio_bt.robot.placement import placement_problem
 

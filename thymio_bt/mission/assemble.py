@@ -27,12 +27,12 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.geometry import Pose
 from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
 from thymio_bt.maze import Maze, load_maze, resolve_maze
 from thymio_bt.mission.pass_base import Scope, Where
 from thymio_bt.mission.settings import MAX_SEED, SETTING_RANGES, SettingsReader
 from thymio_bt.plan.registry import Registry, default_registry
-from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import DEFAULT_ROBOT, RobotModel, robot_model
 from thymio_bt.robot.placement import placement_problem
 

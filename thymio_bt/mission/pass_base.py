@@ -23,11 +23,11 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from thymio_bt.errors import Problem, did_you_mean, type_name
+from thymio_bt.geometry import Pose
 from thymio_bt.inputs.fields import key_hint
 from thymio_bt.inputs.units import Quantity, UnitError, parse_kind, parse_pose, parse_value
 from thymio_bt.inputs.yamlio import MarkedDict, MarkedList, mark_of
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose
 
 Where = tuple[str, int, int]
 

@@ -21,9 +21,9 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
 from thymio_bt.plan.expect import Expect
-from thymio_bt.robot.interface import Pose
 from thymio_bt.robot.model import SimSensorModel
 from thymio_bt.robot.noise import NoiseConfig
 

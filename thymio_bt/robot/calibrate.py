@@ -43,9 +43,9 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 
 from thymio_bt.errors import ThymioBtError
-from thymio_bt.geometry import wrap_angle
+from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Backend, Pose
+from thymio_bt.robot.interface import Backend
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import ray_distance
 from thymio_bt.robot.profile import Profile, TableRows

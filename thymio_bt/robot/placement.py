@@ -26,9 +26,10 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
 from thymio_bt.maze.model import wall_corners
-from thymio_bt.robot.interface import Backend, Collision, Pose
+from thymio_bt.robot.interface import Backend, Collision
 from thymio_bt.robot.model import RobotModel
 
 Polygon = Sequence[tuple[float, float]]

@@ -29,7 +29,7 @@ from thymio_bt.errors import UserError
 from thymio_bt.run.sweep import SweepResult, SweepRow, sweep
 
 if TYPE_CHECKING:
-    from thymio_bt.robot.interface import Pose
+    from thymio_bt.geometry import Pose
 
 
 @dataclass

@@ -32,12 +32,15 @@ from py_trees.common import Status
 
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
-from thymio_bt.behaviours.base import FailureCode, describe, is_fault, node_path, snapshot
+from thymio_bt.behaviours.base import describe, is_fault, node_path, snapshot
 from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.enums import FailureCode
 from thymio_bt.errors import Problem, StopRun, UserError
-from thymio_bt.mission import Mission, build_tree
+from thymio_bt.geometry import Pose
+from thymio_bt.mission import build_tree
 from thymio_bt.plan.expect import Expect
-from thymio_bt.robot.interface import Backend, Collision, Pose, RequestState, RobotLost
+from thymio_bt.plan.model import Mission
+from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
 from thymio_bt.run.coverage import NodeStats
 from thymio_bt.run.interrupts import Interrupted, Interrupts

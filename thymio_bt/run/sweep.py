@@ -35,7 +35,7 @@ from thymio_bt.robot.noise import REALISTIC
 from thymio_bt.run.interrupts import Interrupted, Interrupts
 
 if TYPE_CHECKING:
-    from thymio_bt.mission import Mission
+    from thymio_bt.plan.model import Mission
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,8 @@ class SweepRow(_Row, total=False):
 def run_job(job: Job) -> SweepRow:
     """Run one job and summarise it (the function executors map); missions are loaded once per worker.
     With :attr:`Job.coverage`, the summary has the run's ``coverage`` JSON too."""
-    from thymio_bt.behaviours.base import FailureCode, describe
+    from thymio_bt.behaviours.base import describe
+    from thymio_bt.enums import FailureCode
     from thymio_bt.mission import load_mission
     from thymio_bt.run.coverage import Coverage
     from thymio_bt.run.runner import Run, RunStatus

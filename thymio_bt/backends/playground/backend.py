@@ -23,9 +23,9 @@ from thymio_bt.backends.playground.process import Playground
 from thymio_bt.backends.playground.world import PlaygroundWorld, playground_world
 from thymio_bt.backends.real.aseba import AsebaNode
 from thymio_bt.backends.real.thymio import ThymioRobot
-from thymio_bt.geometry import wrap_angle
+from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose, RobotLost
+from thymio_bt.robot.interface import RobotLost
 from thymio_bt.robot.model import ROBOTS, RobotModel
 from thymio_bt.robot.placement import ContactTracker, placement_problem
 

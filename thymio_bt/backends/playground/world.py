@@ -22,8 +22,8 @@ from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose
 
 #: room around the maze inside the arena, and the width of the parking bay on its right (m): a robot
 #: that leaves the maze (the 6x6 missions) must find open floor, beyond its sensors' 14 cm

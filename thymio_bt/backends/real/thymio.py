@@ -53,7 +53,8 @@ from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from thymio_bt.errors import Problem, UserError, optional_module
-from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Pose, Scan, Twist, wrap_angle
+from thymio_bt.geometry import Pose, wrap_angle
+from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Scan, Twist
 from thymio_bt.robot.model import REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:

@@ -42,16 +42,10 @@ from thymio_bt.backends.ros2.node import SpunRosNode
 from thymio_bt.backends.ros2.topics import TopicMap
 from thymio_bt.backends.ros2.world import maze_problem
 from thymio_bt.errors import UserError
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
 from thymio_bt.maze.files import maze_reference
-from thymio_bt.robot.interface import (
-    ROBOT_ENTITY,
-    SENSOR_NAMES,
-    Pose,
-    RobotLost,
-    Scan,
-    Twist,
-)
+from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, RobotLost, Scan, Twist
 from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import ContactTracker
 

@@ -16,8 +16,9 @@ from typing import Any
 from thymio_bt.backends.ros2.messages import Odometry, set_pose
 from thymio_bt.backends.ros2.services import call_service, fail
 from thymio_bt.backends.ros2.topics import TopicMap
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Backend, Pose, Request, RequestState, Twist
+from thymio_bt.robot.interface import Backend, Request, RequestState, Twist
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import placement_problem
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from typing import Any, Literal
 
-from thymio_bt.robot.interface import Pose
+from thymio_bt.geometry import Pose
 
 #: an odometry message as the backend keeps it: stamp (ns), x, y, yaw, linear and angular velocity
 Odometry = tuple[int, float, float, float, float, float]

@@ -41,8 +41,9 @@ from thymio_bt.backends.ros2.node import SpunRosNode
 from thymio_bt.backends.ros2.topics import COURSE_TOPICS, PREFIXES, TopicMap
 from thymio_bt.backends.ros2.world import HELD_TOPIC, HOLD_TIMEOUT, RELEASE, STEP_TOPIC, WORLD_TOPIC, WorldInfo
 from thymio_bt.backends.sim.world import SimConfig, Simulation
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import ROBOT_ENTITY, Pose
+from thymio_bt.robot.interface import ROBOT_ENTITY
 from thymio_bt.robot.model import RobotModel
 
 #: what the course's diff-drive plugin reports as its covariances (x, y, yaw)

@@ -37,8 +37,8 @@ import hashlib
 import json
 from dataclasses import asdict, dataclass
 
+from thymio_bt.geometry import Pose
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose
 
 #: the latched topic where ``serve ros2`` says what it serves
 WORLD_TOPIC = "/thymio_bt/world"

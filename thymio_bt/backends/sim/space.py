@@ -30,8 +30,8 @@ import pymunk
 
 from thymio_bt.backends.sim.clearance import ClearanceTracker
 from thymio_bt.backends.sim.fastpath import NearShapes, body_driver, body_reader, control_aimer, spinner
+from thymio_bt.geometry import Pose, new_pose, wrap_angle
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import Pose, new_pose, wrap_angle
 from thymio_bt.robot.model import RobotModel
 from thymio_bt.robot.placement import MazeShapes
 

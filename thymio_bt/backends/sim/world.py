@@ -29,8 +29,9 @@ from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
 from thymio_bt.backends.sim.sensor_models import ConeSensors, raw_model
 from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody, pose_of
+from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.maze import Maze
-from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Scan, Twist, wrap_angle
+from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Scan, Twist
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
 from thymio_bt.robot.placement import convex_overlap, placement_problem
 from thymio_bt.sensor_tables import raw_scan_to_metres

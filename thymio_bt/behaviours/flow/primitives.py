@@ -18,8 +18,9 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, FailureCode
+from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS
 from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.enums import FailureCode
 
 #: how close to its end a span of simulated time counts as over: a tick's time is a sum of float
 #: periods (ten ticks of 0.1 s end at 0.9999999999999999 s)
