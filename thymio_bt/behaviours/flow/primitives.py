@@ -76,10 +76,10 @@ class SimTimeout(py_trees.decorators.Decorator):
         >>> clock = [0.0]
         >>> limit = SimTimeout("limit", Running("forever"), duration=30.0, clock=lambda: clock[0])
         >>> tick(limit); limit.status
-        <RUNNING: 'RUNNING'>
+        <Status.RUNNING: 'RUNNING'>
         >>> clock[0] = 30.0
         >>> tick(limit); limit.status, limit.decorated.status, limit.failure[0]
-        (<FAILURE: 'FAILURE'>, <INVALID: 'INVALID'>, <FailureCode.TIMEOUT: 'TIMEOUT'>)
+        (<Status.FAILURE: 'FAILURE'>, <Status.INVALID: 'INVALID'>, <FailureCode.TIMEOUT: 'TIMEOUT'>)
     """
 
     def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
@@ -119,7 +119,7 @@ class RepeatUntil(py_trees.composites.Composite):
         >>> for _ in range(3):
         ...     tick(loop)
         >>> loop.status, loop.iterations
-        (<SUCCESS: 'SUCCESS'>, 3)
+        (<Status.SUCCESS: 'SUCCESS'>, 3)
     """
 
     def __init__(self, name: str, body: Behaviour, condition: Behaviour) -> None:
