@@ -25,6 +25,8 @@ from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from pydantic import BaseModel, ValidationError
+
 from thymio_bt.behaviours.base import RobotBehaviour, UnrunPlugin
 from thymio_bt.behaviours.flow.node import BOTH, SWAP, ControlNode, F, S
 from thymio_bt.plan.model import Mission, NodePlan
@@ -94,6 +96,16 @@ class TreeRules:
         """The class of a behaviour node (None when the registry lacks it)."""
         return self.registry.get(node.behaviour) if node.behaviour and self.registry is not None else None
 
+    def params(self, node: NodePlan) -> BaseModel:
+        """A composite or decorator node's validated parameters (a plan from a broken mission may lack
+        them: then its kind's defaults, or none)."""
+        if node.params is not None:
+            return node.params
+        try:
+            return self.kind(node).Params()
+        except ValidationError:
+            return BaseModel()
+
     def kind(self, node: NodePlan) -> type[ControlNode]:
         """The class of a composite or decorator node, whose facts the rules read."""
         cls = self.registry.get(node.kind) if self.registry is not None else None
@@ -129,7 +141,7 @@ class TreeRules:
             cls = self._class(node)
             known = cls.always if self.nature(node) != "unknown" else ""
             return {known} if known else set(BOTH)
-        return set(self.kind(node).ends(node.options, [self.outcomes(k) for k in node.children]))
+        return set(self.kind(node).ends(self.params(node), [self.outcomes(k) for k in node.children]))
 
     # --- the rules -----------------------------------------------------------------------------
 
@@ -260,7 +272,7 @@ class TreeRules:
 
     def _forever(self, node: NodePlan, above: tuple[NodePlan, ...]) -> Iterator[Finding]:
         """``forever``: a loop that never ends, with nothing above it that could stop it."""
-        endless = self.kind(node).endless(node.options, len(node.children))
+        endless = self.kind(node).endless(self.params(node), len(node.children))
         if not endless or self.outcomes(node) or self._way_out(node, above):
             return
         yield finding_at(
@@ -335,7 +347,7 @@ class TreeRules:
         parallel whose other child can end it, a reactive composite's earlier child that can preempt."""
         for parent, via in zip(reversed(above), (node, *reversed(above))[: len(above)], strict=True):
             kids = [self.outcomes(k) for k in parent.children]
-            if self.kind(parent).may_stop(parent.options, kids, parent.children.index(via)):
+            if self.kind(parent).may_stop(self.params(parent), kids, parent.children.index(via)):
                 return True
         return False
 

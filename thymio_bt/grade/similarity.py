@@ -4,14 +4,15 @@ values (a copy with its numbers and names changed is still a copy). For the TA o
 
 Example::
 
+    >>> from thymio_bt.behaviours.motion import MoveUntilWall
     >>> from thymio_bt.plan.model import NodePlan
     >>> def tree(name, speed):
     ...     leaf = NodePlan("behaviour", f"{name} leaf", f"{name}/leaf", behaviour="MoveUntilWall",
-    ...                     options={"speed": speed})
+    ...                     params=MoveUntilWall.Params(speed=speed))
     ...     return NodePlan("sequence", name, name, children=[leaf, NodePlan("behaviour", "t", "t", behaviour="Stop")])
     >>> tree_shape(tree("ada", 0.1)) == tree_shape(tree("bob", 0.2))
     True
-    >>> similar_groups([("ada", tree_shape(tree("a", 1))), ("bob", "other"), ("chen", tree_shape(tree("c", 2))),
+    >>> similar_groups([("ada", tree_shape(tree("a", 0.1))), ("bob", "other"), ("chen", tree_shape(tree("c", 0.12))),
     ...                 ("eve", None)])
     [['ada', 'chen']]
 """

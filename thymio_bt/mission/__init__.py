@@ -3,8 +3,8 @@
 Example::
 
     >>> mission = load_mission("square")                    # a shipped mission, by name
-    >>> mission.tree.kind, mission.tree.options, [child.behaviour for child in mission.tree.children[0].children]
-    ('repeat', {'times': 4}, ['MoveDistance', 'TurnAngle'])
+    >>> mission.tree.kind, mission.tree.params, [child.behaviour for child in mission.tree.children[0].children]
+    ('repeat', RepeatParams(times=4), ['MoveDistance', 'TurnAngle'])
 """
 
 from thymio_bt.mission.build import build_tree

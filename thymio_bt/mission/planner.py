@@ -238,7 +238,6 @@ class TreePlanner(ParameterReader):
             self._name(body, kind, at.file, at.path),
             at.path,
             params=params,
-            options=params.model_dump(),
             children=children,
             where=at.where,
         )

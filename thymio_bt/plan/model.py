@@ -49,7 +49,6 @@ class NodePlan:
     behaviour: str | None = None
     params: BaseModel | None = None
     blackboard_refs: dict[str, str] = field(default_factory=dict)
-    options: dict[str, Any] = field(default_factory=dict)
     children: list[NodePlan] = field(default_factory=list)
     where: tuple[str, int, int] = ("", 0, 0)
     #: the subtree (``subtrees:``) this node is the root of an instance of, or None

@@ -20,7 +20,7 @@ from typing import Any, ClassVar, Literal
 
 import py_trees
 from py_trees.common import ParallelPolicy
-from pydantic import Field, field_validator
+from pydantic import BaseModel, Field, field_validator
 
 from thymio_bt.behaviours.flow.node import ControlNode, ControlParams, F, S, refuse
 
@@ -114,6 +114,11 @@ class ParallelParams(ControlParams):
         return value
 
 
+def _on_one(params: BaseModel) -> bool:
+    """Whether a parallel's parameters say ``success_on_one``."""
+    return isinstance(params, ParallelParams) and params.policy == "success_on_one"
+
+
 class Parallel(ControlNode):
     """Tick every child each tick; succeed by the policy, fail as soon as one child fails."""
 
@@ -124,20 +129,18 @@ class Parallel(ControlNode):
     family, symbol, btcpp_id = "parallel", "/_/", "Parallel"
 
     @classmethod
-    def ends(cls, options: Mapping[str, Any], children: collections.abc.Sequence[frozenset[str]]) -> frozenset[str]:
+    def ends(cls, params: BaseModel, children: collections.abc.Sequence[frozenset[str]]) -> frozenset[str]:
         """SUCCESS when every child (``success_on_one``: one) can succeed; FAILURE when one can fail."""
-        win = all if options.get("policy", "success_on_all") == "success_on_all" else any
+        win = any if _on_one(params) else all
         return frozenset(
             ({S} if win(S in got for got in children) else set())
             | ({F} if any(F in got for got in children) else set())
         )
 
     @classmethod
-    def may_stop(
-        cls, options: Mapping[str, Any], children: collections.abc.Sequence[frozenset[str]], index: int
-    ) -> bool:
+    def may_stop(cls, params: BaseModel, children: collections.abc.Sequence[frozenset[str]], index: int) -> bool:
         """When another child can fail, or (``success_on_one``) succeed."""
-        one = options.get("policy") == "success_on_one"
+        one = _on_one(params)
         return any(F in got or (one and S in got) for i, got in enumerate(children) if i != index)
 
     @classmethod

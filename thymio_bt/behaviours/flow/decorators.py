@@ -24,7 +24,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import OneShotPolicy, Status
 from py_trees.decorators import FailureIsSuccess, Inverter, SuccessIsFailure
-from pydantic import Field, field_validator
+from pydantic import BaseModel, Field, field_validator
 
 from thymio_bt.behaviours.flow.node import SAME, SWAP, ControlNode, ControlParams, F, S, refuse, whole
 from thymio_bt.behaviours.flow.primitives import NodeGuard, RepeatUntil, SimTimeout, SimTimer
@@ -125,18 +125,18 @@ class Repeat(ControlNode):
     btcpp_id, btcpp_ports = "Repeat", {"times": "num_cycles"}
 
     @classmethod
-    def endless(cls, options: Mapping[str, Any], children: int) -> bool:
+    def endless(cls, params: BaseModel, children: int) -> bool:
         """``times: forever`` (without ``until``)."""
-        return options.get("times") == "forever" and children == 1
+        return isinstance(params, RepeatParams) and params.times == "forever" and children == 1
 
     @classmethod
-    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+    def ends(cls, params: BaseModel, children: Sequence[frozenset[str]]) -> frozenset[str]:
         """A failure of the body ends it; a success, with ``until`` if the condition succeeds after
         it, with ``times`` after the last one, never for ever."""
         body = children[0]
         if len(children) == 2:
             return (body & {F}) | ({S} if S in body and S in children[1] else frozenset())
-        return body & {F} if cls.endless(options, len(children)) else body
+        return body & {F} if cls.endless(params, len(children)) else body
 
     @classmethod
     def to_btcpp(cls, params: Mapping[str, Any]) -> dict[str, Any]:
@@ -319,9 +319,9 @@ class Until(ControlNode):
     halts, passes_on = False, True
 
     @classmethod
-    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+    def ends(cls, params: BaseModel, children: Sequence[frozenset[str]]) -> frozenset[str]:
         """SUCCESS once the child ends with ``status``; never if it cannot."""
-        wanted = S if options.get("status") == "success" else F
+        wanted = S if isinstance(params, UntilParams) and params.status == "success" else F
         return frozenset({S}) if wanted in children[0] else frozenset()
 
     @classmethod
@@ -341,14 +341,14 @@ class Guard(ControlNode):
     gate = "condition"
 
     @classmethod
-    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+    def ends(cls, params: BaseModel, children: Sequence[frozenset[str]]) -> frozenset[str]:
         """FAILURE when the condition or the child fails; SUCCESS when the child succeeds under it."""
         child, condition = children
         failure = {F} if F in condition or F in child else set()
         return frozenset(failure | ({S} if S in child and S in condition else set()))
 
     @classmethod
-    def may_stop(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]], index: int) -> bool:
+    def may_stop(cls, params: BaseModel, children: Sequence[frozenset[str]], index: int) -> bool:
         """It stops its child when the condition fails."""
         return index == 0 and F in children[1]
 

@@ -34,7 +34,8 @@ Example (a whole decorator kind: see :mod:`thymio_bt.behaviours.flow.decorators`
     >>> tick(node)
     >>> node.status
     <Status.FAILURE: 'FAILURE'>
-    >>> sorted(Invert.ends({}, [frozenset({S})])), Invert.may_stop({}, [BOTH], 0), Invert.symbol
+    >>> given = Invert.Params()
+    >>> sorted(Invert.ends(given, [frozenset({S})])), Invert.may_stop(given, [BOTH], 0), Invert.symbol
     (['F'], False, '-^-')
 """
 
@@ -138,9 +139,9 @@ class ControlNode:
         raise NotImplementedError
 
     @classmethod
-    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
-        """What a node of this kind with parameters ``options`` can end with, when its children (in
-        the plan's order) can end with ``children``: a sequence or selector by its family, a
+    def ends(cls, params: BaseModel, children: Sequence[frozenset[str]]) -> frozenset[str]:
+        """What a node of this kind with parameters ``params`` (its ``Params``, validated) can end
+        with, when its children (in the plan's order) can end with ``children``: a sequence or selector by its family, a
         decorator by its ``outcome``, anything else either way."""
         if cls.family in ("sequence", "selector"):
             go_on, stop = (S, F) if cls.family == "sequence" else (F, S)
@@ -156,7 +157,7 @@ class ControlNode:
         return BOTH
 
     @classmethod
-    def may_stop(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]], index: int) -> bool:
+    def may_stop(cls, params: BaseModel, children: Sequence[frozenset[str]], index: int) -> bool:
         """Whether a node of this kind may stop its child ``index`` while it runs (``children``: what
         each child can end with): a reactive composite when an earlier child can end it, a plain one
         never, another kind as ``halts`` says."""
@@ -166,8 +167,8 @@ class ControlNode:
         return cls.halts
 
     @classmethod
-    def endless(cls, options: Mapping[str, Any], children: int) -> bool:
-        """Whether a node of this kind with parameters ``options`` and that many children loops for
+    def endless(cls, params: BaseModel, children: int) -> bool:
+        """Whether a node of this kind with parameters ``params`` and that many children loops for
         ever over a child that never fails (a ``repeat: forever``)."""
         return False
 

@@ -19,7 +19,7 @@ from typing import Any, ClassVar, Literal
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
-from pydantic import Field, create_model
+from pydantic import BaseModel, Field, create_model
 
 from thymio_bt.behaviours.flow import composites, decorators
 from thymio_bt.behaviours.flow.node import ControlNode, ControlParams, F, S
@@ -80,15 +80,20 @@ class _Loop(BtControl):
     again: ClassVar[str]
 
     @classmethod
-    def endless(cls, options: Mapping[str, Any], children: int) -> bool:
+    def endless(cls, params: BaseModel, children: int) -> bool:
         """A Repeat of -1 cycles."""
-        return cls.again == S and options.get(cls.count) == -1
+        return cls.again == S and cls.for_ever(params)
 
     @classmethod
-    def ends(cls, options: Mapping[str, Any], children: Sequence[frozenset[str]]) -> frozenset[str]:
+    def ends(cls, params: BaseModel, children: Sequence[frozenset[str]]) -> frozenset[str]:
         """The child's results, but the one that runs it again when it goes on for ever."""
         child = children[0]
-        return child - {cls.again} if options.get(cls.count) == -1 else child
+        return child - {cls.again} if cls.for_ever(params) else child
+
+    @classmethod
+    def for_ever(cls, params: BaseModel) -> bool:
+        """Whether the count port is -1 (the kind's ``Params`` are made from its ports: the count is a field)."""
+        return bool(getattr(params, cls.count) == -1)
 
 
 def _kind(
