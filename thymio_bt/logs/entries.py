@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.flow.node import node_kind
 from thymio_bt.enums import STATUS_LETTER as STATUS_LETTER  # a node status as logs store it
 
 if TYPE_CHECKING:
@@ -115,7 +116,7 @@ class Recording:
 def walk(root: Behaviour) -> Iterator[Behaviour]:
     """The nodes of a py_trees tree in pre-order (BT.CPP's uid order)."""
     yield root
-    for child in getattr(root, "children", []):
+    for child in root.children:
         yield from walk(child)
 
 
@@ -126,8 +127,7 @@ def tree_nodes(root: Behaviour) -> list[TreeNode]:
     for uid, node in enumerate(walk(root), 1):
         uids[id(node)] = uid
         parent = uids.get(id(node.parent)) if node.parent is not None else None
-        kind = getattr(node, "yaml_name", "") or type(node).__name__
-        nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=kind, parent=parent))
+        nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=node_kind(node), parent=parent))
     return nodes
 
 

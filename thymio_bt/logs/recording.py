@@ -292,4 +292,4 @@ def backend_name(backend: object, default: str) -> str:
 
 def _running_leaves(root: Behaviour) -> list[Behaviour]:
     """The leaves RUNNING after the tick (a tree's running behaviours)."""
-    return [n for n in root.iterate() if not getattr(n, "children", None) and n.status.name == "RUNNING"]
+    return [n for n in root.iterate() if not n.children and n.status.name == "RUNNING"]

@@ -38,6 +38,7 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.flow.node import node_kind
 from thymio_bt.errors import Problem, StopRun, UserError
 from thymio_bt.logs.entries import STATUS_LETTER, finite
 from thymio_bt.logs.recording import Recording
@@ -249,11 +250,9 @@ class _Watch:
         logged = sample.get("nodes") or {}
         differ = [p for p, n in nodes.items() if p in logged and STATUS_LETTER[n.status.name] != logged[p]]
         deepest = [p for p in differ if not any(q.startswith(p + "/") for q in differ)]
-        running = [p for p, n in nodes.items() if not getattr(n, "children", None) and n.status.name == "RUNNING"]
+        running = [p for p, n in nodes.items() if not n.children and n.status.name == "RUNNING"]
         path = (deepest or running or [node_path(run.root)])[0]
-        node = nodes[path]
-        kind = getattr(node, "yaml_name", "") or type(node).__name__
-        return CommandDivergence(sample["t"], run.ticks, path, kind, recorded, new)
+        return CommandDivergence(sample["t"], run.ticks, path, node_kind(nodes[path]), recorded, new)
 
     def _diverged(self, run: Run) -> None:
         """Stop the replay at the divergence, or go on in the simulator from the recorded state."""
