@@ -54,7 +54,7 @@ def build_tree(
     assert kind is not None  # the planner names every behaviour node's behaviour
     cls = registry[kind]
     if issubclass(cls, ControlNode):
-        return cls.make(plan.name, plan.params, children, ctx)
+        return cls.instantiate(plan.name, plan.params, children, ctx)
     assert plan.params is not None
     return cls(plan.name, plan.params, ctx, blackboard_refs=plan.blackboard_refs)
 

@@ -42,7 +42,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, final
 from weakref import WeakKeyDictionary
 
 from py_trees.behaviour import Behaviour
@@ -139,10 +139,11 @@ class ControlNode:
         order (a composite: its children)."""
         raise NotImplementedError
 
+    @final
     @classmethod
-    def make(cls, name: str, params: Any, children: list[Behaviour], ctx: Context) -> Behaviour:
+    def instantiate(cls, name: str, params: Any, children: list[Behaviour], ctx: Context) -> Behaviour:
         """:meth:`build`'s node, remembered as one of this kind (:func:`node_kind`): what the tree
-        builder calls."""
+        builder calls (final: a kind overrides :meth:`build`)."""
         node = cls.build(name, params, children, ctx)
         _KINDS[node] = cls.yaml_name
         return node
@@ -200,7 +201,7 @@ _KINDS: WeakKeyDictionary[Behaviour, str] = WeakKeyDictionary()
 
 def node_kind(node: Behaviour) -> str:
     """The YAML kind of a node of a built tree, as logs and exports name it: the control kind that
-    made it (:meth:`ControlNode.make`), a robot behaviour's ``yaml_name``, else its class's name
+    made it (:meth:`ControlNode.instantiate`), a robot behaviour's ``yaml_name``, else its class's name
     (py_trees' own nodes, those a control node builds inside itself, a substitution's stub).
 
     >>> import py_trees
@@ -209,7 +210,7 @@ def node_kind(node: Behaviour) -> str:
     ...     @classmethod
     ...     def build(cls, name, params, children, ctx):
     ...         return py_trees.decorators.Inverter(name=name, child=children[0])
-    >>> node = Invert.make("not", None, [py_trees.behaviours.Success("ok")], None)
+    >>> node = Invert.instantiate("not", None, [py_trees.behaviours.Success("ok")], None)
     >>> node_kind(node), node_kind(node.children[0])
     ('invert', 'Success')
     """
