@@ -140,7 +140,7 @@ def test_log_has_a_header_one_line_per_tick_and_an_end(bonus_run):
 def test_replay_reproduces_the_final_pose_exactly(bonus_run):
     report = json.loads((bonus_run / "report.json").read_text())
     recording = read_log(bonus_run / "run.jsonl")
-    assert recording.final_pose == report["final_pose"]
+    assert recording.final_pose_json == report["final_pose"]
     # the log keeps the pose exactly (what a what-if replay feeds back), the report to 6 decimals
     assert {k: round(v, 6) for k, v in recording.samples[-1]["pose"].items()} == report["final_pose"]
     result = CliRunner().invoke(main, ["replay", str(bonus_run / "run.jsonl"), "--plot", str(bonus_run / "again.png")])

@@ -27,11 +27,11 @@ from __future__ import annotations
 
 import struct
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING
 
 from thymio_bt.enums import NODE_STATUSES, STATUS_LETTER
 from thymio_bt.errors import Problem, UserError
-from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
+from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord, TreeNode
 
 if TYPE_CHECKING:
     from thymio_bt.logs.recording import Recording
@@ -142,7 +142,7 @@ def read_btlog(path: Path) -> Recording:
     tree = btlog_tree(data[head : head + xml_length], str(path))
     paths = {node["uid"]: node["path"] for node in tree}
     statuses = dict.fromkeys(paths.values(), "-")
-    header: dict[str, Any] = {"mission": path.stem, "tick_hz": TICK_HZ, "tree": tree, "note": NO_POSES}
+    header = LogHeader(mission=path.stem, tick_hz=TICK_HZ, tree=tree, note=NO_POSES)
     recording = Recording(maze=Maze(), mission=path.stem, header=header)
     start = head + xml_length + 8
     whole = start + (len(data) - start) // RECORD * RECORD
@@ -164,17 +164,17 @@ def read_btlog(path: Path) -> Recording:
         header["damaged_at"] = whole
     last = recording.samples[-1] if recording.samples else {"t": 0.0, "tick": 0}
     root = ENDED.get(statuses[tree[0]["path"]], "UNKNOWN") if tree else "UNKNOWN"
-    recording.end = {
-        "status": "INCOMPLETE" if whole != len(data) else root,
-        "sim_time": last["t"],
-        "final_pose": None,
-        "ticks": last["tick"],  # the tick of the last record: a .btlog stores status changes, not ticks
-        "records": (whole - start) // RECORD,
-    }
+    recording.end = LogEnd(
+        status="INCOMPLETE" if whole != len(data) else root,
+        sim_time=last["t"],
+        final_pose=None,
+        ticks=last["tick"],  # the tick of the last record: a .btlog stores status changes, not ticks
+        records=(whole - start) // RECORD,
+    )
     return recording
 
 
-def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
+def btlog_tree(xml: bytes, file: str) -> list[TreeNode]:
     """The tree of a Groot2 log's XML as a log header's ``tree`` (pre-order, BT.CPP's ``_uid``s): each
     node's path is its ancestors' names and its own, as thymio-bt names a tree's nodes. An element
     without a ``name`` is named for its tag, as BT.CPP does, but a do-while loop's scaffolding (the
@@ -191,7 +191,7 @@ def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
         main = next(iter(trees), None)
     if main is None:
         raise UserError(Problem("the Groot2 log's tree has no <BehaviorTree>", file, hint="write the log again"))
-    nodes: list[dict[str, Any]] = []
+    nodes: list[TreeNode] = []
     visits: list[Element] = []
 
     def visit(element: Element, parent: int | None, prefix: str, scaffold: bool, depth: int) -> None:
@@ -213,7 +213,7 @@ def btlog_tree(xml: bytes, file: str) -> list[dict[str, Any]]:
             if any(k in CONDITION_ATTRS for k in element.attrs):
                 prefix = f"{prefix}/{name}" if prefix else name
             path, node = (f"{prefix}/{name}" if prefix else name), int(uid or 0)
-            nodes.append({"uid": node, "path": path, "name": name, "kind": element.tag, "parent": parent})
+            nodes.append(TreeNode(uid=node, path=path, name=name, kind=element.tag, parent=parent))
         inner = element.attrs.get("_thymio") == "repeat" or (scaffold and skipped)
         for child in children:
             visit(child, node, path, inner, depth + 1)
@@ -230,10 +230,11 @@ def with_poses(statuses: Recording, poses: Recording) -> Recording:
     from dataclasses import replace
 
     idle = dict.fromkeys((n["path"] for n in statuses.header["tree"]), "-")
-    samples, at = [], -1
+    samples: list[TickRecord] = []
+    at = -1
     for sample in poses.samples:
         while at + 1 < len(statuses.samples) and statuses.samples[at + 1]["t"] <= sample["t"] + 1e-9:
             at += 1
         samples.append({**sample, "nodes": statuses.samples[at]["nodes"] if at >= 0 else idle})
-    header = {**poses.header, "tree": statuses.header["tree"]}
+    header: LogHeader = {**poses.header, "tree": statuses.header["tree"]}
     return replace(poses, samples=samples, header=header)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, NoReturn, cast
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import click
 
@@ -31,7 +31,6 @@ from thymio_bt.errors import UserError
 from thymio_bt.outputs import STDOUT, Output, check_writable
 
 if TYPE_CHECKING:
-    from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
     from thymio_bt.logs.recording import Recording
     from thymio_bt.run.whatif import WhatIf
 
@@ -275,11 +274,11 @@ def _write_records(recording: Recording, target: Path) -> None:
 
     writer = open_writer(target)
     try:
-        # the records as read_log parsed them: the log formats' shapes, which a Recording keeps as plain dicts
-        writer.header(cast("LogHeader", recording.header))
+        # the records as read_log parsed them, in the log formats' shapes
+        writer.header(recording.header)
         for sample in recording.samples:
-            writer.tick(cast("TickRecord", sample))
-        writer.end(cast("LogEnd", {**recording.end, "events": recording.events}))
+            writer.tick(sample)
+        writer.end({**recording.end, "events": recording.events})
     finally:
         writer.close()
 

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any, TypedDict
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.flow.node import node_kind
 from thymio_bt.enums import STATUS_LETTER as STATUS_LETTER  # a node status as logs store it
 
 if TYPE_CHECKING:
@@ -41,8 +42,12 @@ class TreeNode(TypedDict):
     parent: int | None
 
 
-class _Header(TypedDict):
-    """What every log's header holds (:class:`LogHeader`)."""
+class LogHeader(TypedDict, total=False):
+    """A log's first record: what the run was (mission, rates, seed, start, the maze and the tree),
+    and since this field, the ``backend`` kind that ran it (``sim``, ``playground``...), which says
+    whether its ``pose`` is the ground truth (older logs lack it). A run writes every key up to
+    ``robot``; a log read back may lack any (a Groot2 log has no maze, no seed; a file is outside
+    input): readers ``get`` what its reader did not check."""
 
     version: int
     mission: str
@@ -51,18 +56,18 @@ class _Header(TypedDict):
     start: dict[str, float]
     maze: dict[str, Any]
     tree: list[TreeNode]
-
-
-class LogHeader(_Header, total=False):
-    """A log's first record: what the run was (mission, rates, seed, start, the maze and the tree),
-    and since this field, the ``backend`` kind that ran it (``sim``, ``playground``...), which says
-    whether its ``pose`` is the ground truth (older logs lack it)."""
-
     backend: str
     #: the backend's latency in seconds (:attr:`thymio_bt.robot.interface.Robot.latency`)
     latency: float
     #: the robot model that ran: name, outline, sensors and range (:func:`thymio_bt.logs.recording.robot_shape`)
     robot: dict[str, Any]
+    # --- what a reader adds -------------------------------------------------------------------
+    #: where a log read ``--partial`` is damaged: its line (JSON lines), its byte (a Groot2 log)
+    damaged_at: int
+    #: False: the numbers are not the tree's own (a bag's float32 scans), a what-if replay cannot re-tick them
+    exact: bool
+    #: what a log without poses lacks, shown with its pictures (a Groot2 log)
+    note: str
 
 
 class TickRecord(TypedDict, total=False):
@@ -91,7 +96,13 @@ class LogEnd(TypedDict, total=False):
     sim_time: float
     final_pose: dict[str, float] | None
     collisions: int
+    #: what the events were, in the log's file only (a :class:`Recording` keeps them apart)
     events: list[dict[str, Any]]
+    #: the map its mapping behaviours learnt (a run's recording, not its log)
+    map: dict[str, Any]
+    #: a Groot2 log's: the tick of its last record and how many status records it holds
+    ticks: int
+    records: int
 
 
 @dataclass
@@ -101,13 +112,13 @@ class Recording:
 
     maze: Maze
     mission: str = ""
-    samples: list[dict[str, Any]] = field(default_factory=list)
+    samples: list[TickRecord] = field(default_factory=list)
     events: list[dict[str, Any]] = field(default_factory=list)
-    end: dict[str, Any] = field(default_factory=dict)
-    header: dict[str, Any] = field(default_factory=dict)
+    end: LogEnd = field(default_factory=lambda: LogEnd())
+    header: LogHeader = field(default_factory=lambda: LogHeader())
 
     @property
-    def final_pose(self) -> dict[str, float] | None:
+    def final_pose_json(self) -> dict[str, float] | None:
         """base_link's pose when the run ended (None: no robot then, or a log without an end)."""
         return self.end.get("final_pose")
 
@@ -115,7 +126,7 @@ class Recording:
 def walk(root: Behaviour) -> Iterator[Behaviour]:
     """The nodes of a py_trees tree in pre-order (BT.CPP's uid order)."""
     yield root
-    for child in getattr(root, "children", []):
+    for child in root.children:
         yield from walk(child)
 
 
@@ -126,8 +137,7 @@ def tree_nodes(root: Behaviour) -> list[TreeNode]:
     for uid, node in enumerate(walk(root), 1):
         uids[id(node)] = uid
         parent = uids.get(id(node.parent)) if node.parent is not None else None
-        kind = getattr(node, "yaml_name", "") or type(node).__name__
-        nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=kind, parent=parent))
+        nodes.append(TreeNode(uid=uid, path=node_path(node), name=node.name, kind=node_kind(node), parent=parent))
     return nodes
 
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import IO, Annotated, Any, Literal
+from typing import IO, Annotated, Any, Literal, cast
 
 from pydantic import BaseModel, ConfigDict, Field, FiniteFloat, ValidationError, model_validator
 
@@ -226,15 +226,16 @@ def _damaged(path: Path, exc: ValueError, number: int, count: int, partial: bool
 def _added(recording: Recording | None, kind: str, obj: dict[str, Any], path: Path) -> Recording:
     """The recording with one more line read: a header starts it, a tick adds a sample, the end
     line its events and ending."""
+    # each line as written, JSON checked by its line model (_LINES): the log's shapes from here on
     if kind == "header":
-        header = {k: v for k, v in obj.items() if k != "kind"}
+        header = cast(LogHeader, {k: v for k, v in obj.items() if k != "kind"})
         return Recording(maze=validate(Maze, obj["maze"], str(path)), mission=obj.get("mission", ""), header=header)
     assert recording is not None
     if kind == "tick":
-        recording.samples.append({k: v for k, v in obj.items() if k != "kind"})
+        recording.samples.append(cast(TickRecord, {k: v for k, v in obj.items() if k != "kind"}))
     else:
         recording.events = obj.get("events", [])
-        recording.end = {k: v for k, v in obj.items() if k not in ("kind", "events")}
+        recording.end = cast(LogEnd, {k: v for k, v in obj.items() if k not in ("kind", "events")})
     return recording
 
 

@@ -16,7 +16,7 @@ Example (a log written, then read back as it was recorded):
 ...     recorder = Recorder(log_path=f"{folder}/run.jsonl")
 ...     recording = recorder.finish(Run(load_mission("square")).run(on_tick=recorder))
 ...     logged = read_log(f"{folder}/run.jsonl")
->>> len(recording.samples), recording.end["status"], recording.final_pose
+>>> len(recording.samples), recording.end["status"], recording.final_pose_json
 (228, <RunStatus.SUCCESS: 'SUCCESS'>, {'x': 0.45, 'y': 0.45, 'yaw': 0.0})
 >>> logged.samples == recording.samples, logged.end == recording.end
 (True, True)
@@ -32,7 +32,7 @@ import py_trees
 
 from thymio_bt.behaviours.base import node_path
 from thymio_bt.errors import UserError
-from thymio_bt.logs.entries import Recording
+from thymio_bt.logs.entries import LogHeader, Recording
 from thymio_bt.maze import Maze
 
 if TYPE_CHECKING:
@@ -143,12 +143,12 @@ class Recorder:
         comparing runs and for the run's page."""
         self.keep = keep
         self.statuses = statuses
-        self.samples: list[dict[str, Any]] = []
+        self.samples: list[TickRecord] = []
         self._path = Path(log_path) if log_path else None
         self._writer: LogWriter | None = None
         self._blackboard: dict[str, Any] = {}
         self._run: WatchedRun | None = None
-        self._header: dict[str, Any] = {}
+        self._header = LogHeader()
 
     def begin(self, run: WatchedRun) -> None:
         """Open the log and write its header for ``run`` before its first tick, so that a run whose
@@ -158,7 +158,7 @@ class Recorder:
             self._open(run)
 
     def _open(self, run: WatchedRun) -> None:
-        from thymio_bt.logs.entries import LogHeader, tree_nodes
+        from thymio_bt.logs.entries import tree_nodes
 
         self._run = run
         mission = run.mission
@@ -174,7 +174,7 @@ class Recorder:
             latency=run.backend.latency,
             robot=robot_shape(run.backend.model),
         )
-        self._header = dict(header)
+        self._header = header.copy()
         if self._path is not None:
             from thymio_bt.logs import open_writer
 
@@ -221,7 +221,7 @@ class Recorder:
                 self._abandon()
                 raise StopRun(f"cannot write the log {self._path}: {exc.strerror or exc}") from None
         if self.keep:
-            self.samples.append(dict(record))
+            self.samples.append(record.copy())
 
     def finish(self, result: EndedRun) -> Recording:
         """Write the log's end and close it; return the in-memory recording."""
@@ -248,7 +248,7 @@ class Recorder:
             mission=result.mission,
             samples=self.samples,
             events=result.events,
-            end={**end, **({"map": result.maze_map} if result.maze_map else {})},
+            end={**end, "map": result.maze_map} if result.maze_map else end,
             header=self._header,
         )
 
@@ -292,4 +292,4 @@ def backend_name(backend: object, default: str) -> str:
 
 def _running_leaves(root: Behaviour) -> list[Behaviour]:
     """The leaves RUNNING after the tick (a tree's running behaviours)."""
-    return [n for n in root.iterate() if not getattr(n, "children", None) and n.status.name == "RUNNING"]
+    return [n for n in root.iterate() if not n.children and n.status.name == "RUNNING"]

@@ -23,7 +23,7 @@ import math
 import shutil
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord
@@ -246,7 +246,7 @@ def read_rosbag(path: Path) -> Recording:
     )
 
 
-def _checked_header(header: Any, path: Path) -> dict[str, Any]:
+def _checked_header(header: Any, path: Path) -> LogHeader:
     """The bag's log header; a user error when it has none, or not one with a maze."""
     if not header:
         raise UserError(Problem("not a thymio-bt bag: no /thymio_bt/header message", str(path)))
@@ -258,7 +258,7 @@ def _checked_header(header: Any, path: Path) -> dict[str, Any]:
                 hint="bags are written by thymio-bt run --log FILE.mcap",
             )
         )
-    return header
+    return cast(LogHeader, header)  # the JSON of the bag's header message, its maze checked
 
 
 #: the sensor each proximity topic is of
@@ -273,7 +273,7 @@ class _BagContents:
         self.header: Any = {}
         self.ticks: dict[int, dict[str, Any]] = {}
         self.events: list[dict[str, Any]] = []
-        self.end: dict[str, Any] = {}
+        self.end = LogEnd()
 
     def add(self, topic: str, stamp: int, msg: Any) -> None:
         """One message (``Any``: rosbags makes message classes at run time from the bag's typestore)."""
@@ -282,12 +282,12 @@ class _BagContents:
         if read is not None:
             read(self, topic, sample, msg)
 
-    def samples(self) -> list[dict[str, Any]]:
+    def samples(self) -> list[TickRecord]:
         """The samples of the ticks, in time order (a tick without a reading: its ``prox`` None)."""
         samples = [s for _, s in sorted(self.ticks.items()) if "tick" in s]
         for s in samples:
             s["prox"] = s["prox"] or None
-        return samples
+        return cast(list[TickRecord], samples)  # each gathered from its messages as a tick record
 
     def _header(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
         self.header = json.loads(msg.data)
@@ -311,7 +311,7 @@ class _BagContents:
     def _event(self, topic: str, sample: dict[str, Any], msg: Any) -> None:
         event = json.loads(msg.data)
         if event.get("kind") == "end":
-            self.end = {k: v for k, v in event.items() if k not in ("t", "kind")}
+            self.end = cast(LogEnd, {k: v for k, v in event.items() if k not in ("t", "kind")})
         else:
             self.events.append(event)
 

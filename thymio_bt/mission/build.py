@@ -54,10 +54,7 @@ def build_tree(
     assert kind is not None  # the planner names every behaviour node's behaviour
     cls = registry[kind]
     if issubclass(cls, ControlNode):
-        node = cls.build(plan.name, plan.params, children, ctx)
-        # a tag on py_trees' node, which does not declare it: what logs and exports call the node
-        node.yaml_name = cls.yaml_name  # type: ignore[attr-defined]
-        return node
+        return cls.instantiate(plan.name, plan.params, children, ctx)
     assert plan.params is not None
     return cls(plan.name, plan.params, ctx, blackboard_refs=plan.blackboard_refs)
 

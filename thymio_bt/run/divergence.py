@@ -35,6 +35,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from thymio_bt.enums import STATUS_LETTER
+from thymio_bt.logs.entries import TickRecord
 from thymio_bt.logs.recording import Recording
 
 #: the status letters of logs (:data:`~thymio_bt.enums.STATUS_LETTER`) in words
@@ -118,7 +119,7 @@ def first_divergence(
     return _ending_difference(a, b, sources, note)
 
 
-def _nearest(samples: list[dict[str, Any]], times: list[float], t: float) -> dict[str, Any] | None:
+def _nearest(samples: list[TickRecord], times: list[float], t: float) -> TickRecord | None:
     """The sample of ``samples`` (sorted by ``times``) nearest ``t``, None past the last one."""
     if not samples or t > times[-1] + 1e-6:
         return None
@@ -128,7 +129,7 @@ def _nearest(samples: list[dict[str, Any]], times: list[float], t: float) -> dic
     return samples[i]
 
 
-def running_paths(sample: dict[str, Any]) -> list[str]:
+def running_paths(sample: TickRecord) -> list[str]:
     """The running leaves of a tick: full node paths where the log has every node's status, else
     the names it logged."""
     nodes: dict[str, str] = sample.get("nodes") or {}
@@ -138,7 +139,7 @@ def running_paths(sample: dict[str, Any]) -> list[str]:
     return [p for p in running if not any(q.startswith(p + "/") for q in running)]
 
 
-def _status_difference(sa: dict[str, Any], sb: dict[str, Any]) -> str | None:
+def _status_difference(sa: TickRecord, sb: TickRecord) -> str | None:
     """The deepest node whose status differs between two ticks, in words (the nodes both trees
     have; ticks without statuses compare their running leaves)."""
     na, nb = sa.get("nodes") or {}, sb.get("nodes") or {}
@@ -155,7 +156,7 @@ def _status_difference(sa: dict[str, Any], sb: dict[str, Any]) -> str | None:
 
 
 def _pose_difference(
-    sa: dict[str, Any], sb: dict[str, Any], sources: tuple[str, str], distance: float, angle: float
+    sa: TickRecord, sb: TickRecord, sources: tuple[str, str], distance: float, angle: float
 ) -> str | None:
     """How two ticks' poses differ past the tolerances, in words, or None."""
     pa, pb = sa.get("pose"), sb.get("pose")
@@ -188,11 +189,11 @@ def _ending_difference(a: Recording, b: Recording, sources: tuple[str, str], not
     return _divergence(sa, sb, reason, sources)
 
 
-def _divergence(sa: dict[str, Any], sb: dict[str, Any], reason: str, sources: tuple[str, str]) -> Divergence:
+def _divergence(sa: TickRecord, sb: TickRecord, reason: str, sources: tuple[str, str]) -> Divergence:
     """The divergence at the ticks ``sa`` of A and ``sb`` of B."""
     return Divergence(sa["t"], sa["tick"], reason, _doing(sa, sources[0]), _doing(sb, sources[1]))
 
 
-def _doing(sample: dict[str, Any], source: str) -> RunAt:
+def _doing(sample: TickRecord, source: str) -> RunAt:
     """What a run's tree and robot were doing at one tick (a log's tick record), as the divergence shows it."""
     return RunAt(sample["tick"], sample["t"], running_paths(sample), sample.get("pose"), source, sample.get("cmd"))

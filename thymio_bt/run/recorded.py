@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from thymio_bt.logs.entries import checked_events, finite
+from thymio_bt.logs.entries import TickRecord, checked_events, finite
 from thymio_bt.logs.recording import Recording
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Request, Scan, Twist, new_pose, wrap_angle
 from thymio_bt.robot.model import DEFAULT_ROBOT, RobotModel, robot_model
@@ -60,7 +60,7 @@ class RecordedRobot(Backend):
         self._frame = (0.0, 0.0, 0.0)  # live ground truth -> the recorded odometry's frame
 
     @property
-    def sample(self) -> dict[str, Any]:
+    def sample(self) -> TickRecord:
         """The recorded tick being served."""
         return self.samples[min(self.index, len(self.samples) - 1)]
 

@@ -213,7 +213,7 @@ def failing_branch(root: Behaviour) -> tuple[str, FailureCode | str, str]:
     """Follow FAILURE down from the root to the node that caused it: (path, code, reason)."""
     node = root
     while True:
-        failed = [c for c in getattr(node, "children", []) if c.status == Status.FAILURE]
+        failed = [c for c in node.children if c.status == Status.FAILURE]
         if not failed or _failure(node):
             break
         # prefer the child whose subtree recorded a reason (a condition may hold a stale FAILURE)

@@ -38,8 +38,9 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 
 from thymio_bt.behaviours.base import node_path
+from thymio_bt.behaviours.flow.node import node_kind
 from thymio_bt.errors import Problem, StopRun, UserError
-from thymio_bt.logs.entries import STATUS_LETTER, finite
+from thymio_bt.logs.entries import STATUS_LETTER, TickRecord, finite
 from thymio_bt.logs.recording import Recording
 from thymio_bt.mission import Mission
 from thymio_bt.robot.interface import Backend, new_pose
@@ -219,7 +220,7 @@ class _Watch:
         elif robot.index >= len(robot.samples) - 1 and run.root.status.name == "RUNNING" and not _last_tick(run):
             self._recording_ends(run)
 
-    def _difference(self, run: Run, sample: dict[str, Any]) -> CommandDivergence | None:
+    def _difference(self, run: Run, sample: TickRecord) -> CommandDivergence | None:
         """How this tick differs from the recorded one (the command, the entity requests), or None."""
         new = run.backend.command()
         recorded = sample.get("cmd") or [0.0, 0.0]
@@ -238,22 +239,20 @@ class _Watch:
             i = next(
                 (i for i, (m, e) in enumerate(zip(made, expected, strict=False)) if m != e), min(len(made), served)
             )
-            recorded = recorded_requests[i][1] if i < len(recorded_requests) else None
-            return self._divergence(run, sample, recorded, made[i] if i < len(made) else None)
+            asked = recorded_requests[i][1] if i < len(recorded_requests) else None
+            return self._divergence(run, sample, asked, made[i] if i < len(made) else None)
         return None
 
-    def _divergence(self, run: Run, sample: dict[str, Any], recorded: Any, new: Any) -> CommandDivergence:
+    def _divergence(self, run: Run, sample: TickRecord, recorded: Any, new: Any) -> CommandDivergence:
         """The divergence at this tick, naming the node that decided differently: the deepest node
         whose status differs from the recorded one, else the running leaf."""
         nodes = {node_path(n): n for n in run.root.iterate()}
         logged = sample.get("nodes") or {}
         differ = [p for p, n in nodes.items() if p in logged and STATUS_LETTER[n.status.name] != logged[p]]
         deepest = [p for p in differ if not any(q.startswith(p + "/") for q in differ)]
-        running = [p for p, n in nodes.items() if not getattr(n, "children", None) and n.status.name == "RUNNING"]
+        running = [p for p, n in nodes.items() if not n.children and n.status.name == "RUNNING"]
         path = (deepest or running or [node_path(run.root)])[0]
-        node = nodes[path]
-        kind = getattr(node, "yaml_name", "") or type(node).__name__
-        return CommandDivergence(sample["t"], run.ticks, path, kind, recorded, new)
+        return CommandDivergence(sample["t"], run.ticks, path, node_kind(nodes[path]), recorded, new)
 
     def _diverged(self, run: Run) -> None:
         """Stop the replay at the divergence, or go on in the simulator from the recorded state."""

@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from thymio_bt.errors import UserError
+from thymio_bt.logs.entries import TickRecord
 from thymio_bt.logs.recording import Recording
 from thymio_bt.outputs import Output
 from thymio_bt.robot.model import COURSE
@@ -146,7 +147,7 @@ class _Canvas:
             ImageDraw.Draw(image).text((12, 8), f"t = {sample['t']:5.1f} s   {running}", fill="black", font=self.font)
             yield image
 
-    def _extend_trail(self, piece: list[dict[str, Any]]) -> bool:
+    def _extend_trail(self, piece: list[TickRecord]) -> bool:
         """Draw the trail through ``piece`` (the samples since the last frame, the last one before
         them first) into the canvas, broken where the robot was deleted or moved; whether it drew."""
         drew = False
@@ -158,7 +159,7 @@ class _Canvas:
         return drew
 
 
-def _parts(samples: list[dict[str, Any]]) -> Iterator[list[dict[str, float]]]:
+def _parts(samples: list[TickRecord]) -> Iterator[list[dict[str, float]]]:
     """The poses of ``samples`` in runs without a gap: a sample without a robot, or a jump of more
     than 5 cm between two ticks (a respawn), ends one."""
     part: list[dict[str, float]] = []
@@ -235,7 +236,7 @@ def _write_mp4(frames: Iterable[Any], path: Path, fps: int, program: str, target
         raise UserError(f"cannot write {target}: ffmpeg failed: {error[-300:] or 'no message'}")
 
 
-def _rate(samples: list[dict[str, Any]]) -> float:
+def _rate(samples: list[TickRecord]) -> float:
     """Ticks per simulated second of the recording (10 when it cannot tell)."""
     if len(samples) < 2:
         return 10.0

@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import parse_qs, urlsplit
 
 from thymio_bt.errors import UserError
-from thymio_bt.logs.entries import tree_nodes
+from thymio_bt.logs.entries import LogHeader, tree_nodes
 from thymio_bt.logs.recording import Recorder, Recording, robot_shape
 from thymio_bt.viz.page import page_html
 from thymio_bt.viz.page_data import event_rows, page_data
@@ -79,8 +79,13 @@ class LiveServer:
     def begin(self, run: Run) -> None:
         """Make the page of ``run`` before its first tick: its maze, its tree, no tick yet."""
         mission = run.mission
-        header = {"mission": mission.name, "seed": run.seed, "tick_hz": mission.tick_hz, "tree": tree_nodes(run.root)}
-        header["robot"] = robot_shape(run.backend.model)
+        header = LogHeader(
+            mission=mission.name,
+            seed=run.seed,
+            tick_hz=mission.tick_hz,
+            tree=tree_nodes(run.root),
+            robot=robot_shape(run.backend.model),
+        )
         start = Recording(maze=mission.maze, mission=mission.name, header=header)
         with self._lock:
             self._page = page_html([page_data(start)], live=True).encode()

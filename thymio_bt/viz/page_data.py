@@ -23,8 +23,9 @@ from __future__ import annotations
 import math
 from bisect import bisect_right
 from itertools import accumulate
-from typing import Any
+from typing import Any, Literal
 
+from thymio_bt.logs.entries import TickRecord
 from thymio_bt.logs.recording import Recording, robot_shape
 from thymio_bt.robot.model import COURSE
 
@@ -48,7 +49,7 @@ def tree_paths(recording: Recording) -> list[list[Any]]:
     else (a log without one) the paths of the ticks' ``nodes``, parents made from the paths."""
     nodes = recording.header.get("tree") or []
     if nodes:
-        index = {node["uid"]: i for i, node in enumerate(nodes)}
+        index: dict[int | None, int] = {node["uid"]: i for i, node in enumerate(nodes)}
         return [[n["path"], n["name"], n["kind"], index.get(n["parent"], -1)] for n in nodes]
     paths: list[str] = []
     for sample in recording.samples:
@@ -61,7 +62,7 @@ def tree_paths(recording: Recording) -> list[list[Any]]:
     return rows
 
 
-def status_changes(samples: list[dict[str, Any]], paths: list[str]) -> list[list[Any]]:
+def status_changes(samples: list[TickRecord], paths: list[str]) -> list[list[Any]]:
     """For each path, ``[gaps, letters]``: the tick indices where its status changes (the first
     tick included), as gaps from the previous change, and its letter from then on (``-``: INVALID,
     also for a node a tick does not list)."""
@@ -89,7 +90,7 @@ def statuses_at(changes: list[list[Any]], index: int) -> list[str]:
     return out
 
 
-def blackboard_changes(samples: list[dict[str, Any]]) -> dict[str, list[list[Any]]]:
+def blackboard_changes(samples: list[TickRecord]) -> dict[str, list[list[Any]]]:
     """Each blackboard key's ``[tick index, value]`` at every tick where the log says it changed."""
     keys: dict[str, list[list[Any]]] = {}
     for i, sample in enumerate(samples):
@@ -197,17 +198,17 @@ def page_data(recording: Recording, label: str = "") -> dict[str, Any]:
     }
 
 
-def _pose_columns(samples: list[dict[str, Any]]) -> dict[str, list[float | None]]:
+def _pose_columns(samples: list[TickRecord]) -> dict[str, list[float | None]]:
     """The true pose as the columns ``x``, ``y`` and ``yaw`` (None where there was no robot)."""
     poses = [s.get("pose") for s in samples]
     return {axis: [None if p is None else _r(p[axis]) for p in poses] for axis in ("x", "y", "yaw")}
 
 
-def _speed_columns(samples: list[dict[str, Any]], key: str) -> list[list[float | None]]:
+def _speed_columns(samples: list[TickRecord], key: Literal["cmd", "vel"]) -> list[list[float | None]]:
     """A speed (``cmd`` or ``vel``) as two columns, linear and angular (0 where a sample has none)."""
     return [[_r((s.get(key) or NO_SPEED)[k]) for s in samples] for k in (0, 1)]
 
 
-def _prox_columns(samples: list[dict[str, Any]], names: list[str]) -> list[list[float | None]]:
+def _prox_columns(samples: list[TickRecord], names: list[str]) -> list[list[float | None]]:
     """A column of each proximity sensor's range in ``names`` (None where it saw nothing or was not read)."""
     return [[_r((s.get("prox") or {}).get(name)) for s in samples] for name in names]

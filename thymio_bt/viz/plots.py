@@ -144,23 +144,18 @@ def rays(
     return out
 
 
-def _segments(recording: Recording) -> list[list[dict[str, Any]]]:
-    """The trajectory split where the robot was deleted and respawned."""
-    parts: list[list[dict[str, Any]]] = [[]]
+def _segments(recording: Recording) -> list[list[dict[str, float]]]:
+    """The trajectory (base_link's poses) split where the robot was deleted and respawned."""
+    parts: list[list[dict[str, float]]] = [[]]
     for sample in recording.samples:
-        if sample["pose"] is None:
+        pose = sample["pose"]
+        if pose is None:
             if parts[-1]:
                 parts.append([])
             continue
-        if (
-            parts[-1]
-            and math.dist(
-                (parts[-1][-1]["pose"]["x"], parts[-1][-1]["pose"]["y"]), (sample["pose"]["x"], sample["pose"]["y"])
-            )
-            > 0.05
-        ):
+        if parts[-1] and math.dist((parts[-1][-1]["x"], parts[-1][-1]["y"]), (pose["x"], pose["y"])) > 0.05:
             parts.append([])
-        parts[-1].append(sample)
+        parts[-1].append(pose)
     return [p for p in parts if p]
 
 
@@ -173,8 +168,8 @@ def plot_run(recording: Recording, path: str | Path, title: str | None = None) -
         _draw_cell_map(ax, recording.end["map"])
     for i, part in enumerate(_segments(recording)):
         ax.plot(
-            [s["pose"]["x"] for s in part],
-            [s["pose"]["y"] for s in part],
+            [pose["x"] for pose in part],
+            [pose["y"] for pose in part],
             color="tab:blue",
             lw=1.4,
             label="trajectory (base_link)" if i == 0 else None,

@@ -43,14 +43,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar, Literal, final
+from weakref import WeakKeyDictionary
 
+from py_trees.behaviour import Behaviour
 from pydantic import BaseModel, ConfigDict
 from pydantic_core import PydanticCustomError
 
-if TYPE_CHECKING:
-    from py_trees.behaviour import Behaviour
+from thymio_bt.behaviours.base import RobotBehaviour
 
+if TYPE_CHECKING:
     from thymio_bt.behaviours.base import Context
 
 
@@ -138,6 +140,15 @@ class ControlNode:
         order (a composite: its children)."""
         raise NotImplementedError
 
+    @final
+    @classmethod
+    def instantiate(cls, name: str, params: Any, children: list[Behaviour], ctx: Context) -> Behaviour:
+        """:meth:`build`'s node, remembered as one of this kind (:func:`node_kind`): what the tree
+        builder calls (final: a kind overrides :meth:`build`)."""
+        node = cls.build(name, params, children, ctx)
+        _KINDS[node] = cls.yaml_name
+        return node
+
     @classmethod
     def ends(cls, params: BaseModel, children: Sequence[frozenset[str]]) -> frozenset[str]:
         """What a node of this kind with parameters ``params`` (its ``Params``, validated) can end
@@ -182,6 +193,32 @@ class ControlNode:
         """The ports of its BT.CPP node, read back as its parameters (:meth:`to_btcpp` undone)."""
         names = {port: name for name, port in cls.btcpp_ports.items()}
         return {names.get(k, k): v for k, v in ports.items()}
+
+
+#: the kind of each node a control kind made: py_trees' node classes have no room for it, and one
+#: class may serve several kinds (``sequence`` and ``bt_sequence``); weak, so a dropped tree is forgotten
+_KINDS: WeakKeyDictionary[Behaviour, str] = WeakKeyDictionary()
+
+
+def node_kind(node: Behaviour) -> str:
+    """The YAML kind of a node of a built tree, as logs and exports name it: the control kind that
+    made it (:meth:`ControlNode.instantiate`), a robot behaviour's ``yaml_name``, else its class's name
+    (py_trees' own nodes, those a control node builds inside itself, a substitution's stub).
+
+    >>> import py_trees
+    >>> class Invert(ControlNode):
+    ...     yaml_name = "invert"
+    ...     @classmethod
+    ...     def build(cls, name, params, children, ctx):
+    ...         return py_trees.decorators.Inverter(name=name, child=children[0])
+    >>> node = Invert.instantiate("not", None, [py_trees.behaviours.Success("ok")], None)
+    >>> node_kind(node), node_kind(node.children[0])
+    ('invert', 'Success')
+    """
+    kind = _KINDS.get(node)
+    if kind is not None:
+        return kind
+    return node.yaml_name if isinstance(node, RobotBehaviour) else type(node).__name__
 
 
 def refuse(message: str, hint: str = "") -> PydanticCustomError:
