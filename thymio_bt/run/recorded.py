@@ -27,9 +27,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from thymio_bt.geometry import Pose, new_pose, wrap_angle
 from thymio_bt.logs.entries import TickRecord, checked_events, finite
 from thymio_bt.logs.recording import Recording
-from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Pose, Request, Scan, Twist, new_pose, wrap_angle
+from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Request, Scan, Twist
 from thymio_bt.robot.model import DEFAULT_ROBOT, RobotModel, robot_model
 
 #: the entity events a recorded run's deletes and spawns left, by the request kind

@@ -29,7 +29,7 @@ from py_trees.common import Status
 from thymio_bt.behaviours.base import RobotBehaviour, node_path
 from thymio_bt.behaviours.flow.primitives import SimTimeout
 from thymio_bt.enums import FailureCode, TextEnum
-from thymio_bt.robot.interface import Pose
+from thymio_bt.geometry import Pose
 from thymio_bt.run.phases import Phase
 
 if TYPE_CHECKING:

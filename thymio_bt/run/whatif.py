@@ -40,10 +40,11 @@ from py_trees.behaviour import Behaviour
 from thymio_bt.behaviours.base import node_path
 from thymio_bt.behaviours.flow.node import node_kind
 from thymio_bt.errors import Problem, StopRun, UserError
+from thymio_bt.geometry import new_pose
 from thymio_bt.logs.entries import STATUS_LETTER, TickRecord, finite
 from thymio_bt.logs.recording import Recording
-from thymio_bt.mission import Mission
-from thymio_bt.robot.interface import Backend, new_pose
+from thymio_bt.plan.model import Mission
+from thymio_bt.robot.interface import Backend
 from thymio_bt.robot.model import ROBOTS
 from thymio_bt.run.divergence import pose_source
 from thymio_bt.run.recorded import ENTITY_EVENTS, RecordedRobot
