@@ -113,12 +113,19 @@ class Import:
     name: str
     file: str
     line: int
+    #: named in a ``"module:attribute"`` string: an edge between rooms, not an import at load time
+    named: bool = False
+
+
+#: a lazy import named as data: ``"thymio_bt.module:attribute"`` (the registries' tables)
+NAMED = re.compile(r"(thymio_bt(?:\.\w+)+):[\w.]+")
 
 
 def _import_graph(root: Path = ROOT) -> tuple[dict[str, Path], dict[str, list[Import]]]:
     """thymio_bt's modules under ``root`` and what each imports, anywhere in the module: inside
-    functions, and under ``if TYPE_CHECKING:`` (never run, but a type named from a room above is an
-    edge upward all the same: mypy, the docs and the reader follow it)."""
+    functions, under ``if TYPE_CHECKING:`` (never run, but a type named from a room above is an
+    edge upward all the same: mypy, the docs and the reader follow it), and named in a
+    ``"module:attribute"`` string that a registry imports when asked (an edge like any other)."""
     files = {
         ".".join(p.relative_to(root).with_suffix("").parts).removesuffix(".__init__"): p
         for p in (root / "thymio_bt").rglob("*.py")
@@ -133,6 +140,9 @@ def _import_graph(root: Path = ROOT) -> tuple[dict[str, Path], dict[str, list[Im
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
                 imported += [Import(a.name, where, node.lineno) for a in node.names]
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str) and module != "thymio_bt._moved":
+                if named := NAMED.fullmatch(node.value):
+                    imported.append(Import(named[1], where, node.lineno, named=True))
             elif isinstance(node, ast.ImportFrom):
                 base = node.module or ""
                 if node.level:
@@ -167,7 +177,7 @@ def _cycle(edges: dict[str, set[str]]) -> list[str] | None:
 
 def test_no_import_cycle_among_the_package_modules():
     files, graph = _import_graph()
-    edges = {m: {i.name for i in deps if i.name in files and i.name != m} for m, deps in graph.items()}
+    edges = {m: {i.name for i in deps if i.name in files and i.name != m and not i.named} for m, deps in graph.items()}
     cycle = _cycle(edges)
     assert cycle is None, "import cycle: " + " -> ".join(cycle or [])
 

@@ -31,6 +31,7 @@ from typing import IO, TYPE_CHECKING
 
 from thymio_bt.enums import NODE_STATUSES, STATUS_LETTER
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.logs import LogFormat
 from thymio_bt.logs.entries import LogEnd, LogHeader, TickRecord, TreeNode
 
 if TYPE_CHECKING:
@@ -38,6 +39,15 @@ if TYPE_CHECKING:
 
 MAGIC = b"BTCPP4-FileLogger2"
 PROTOCOL = 1
+#: the format, found through the ``thymio_bt.log_formats`` entry point (pyproject.toml) as any format
+#: from outside the package is: ``logs`` sits below BT.CPP's room and names none of it
+FORMAT = LogFormat(
+    "btlog",
+    "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes, no robot)",
+    (".btlog",),
+    "thymio_bt.btcpp.btlog:BtlogWriter",
+    "thymio_bt.btcpp.btlog:read_btlog",
+)
 #: a log's status letter -> BT.CPP's NodeStatus
 STATUS = {"-": 0, "R": 1, "S": 2, "F": 3}
 

@@ -91,13 +91,6 @@ BUILTIN: tuple[LogFormat, ...] = (
         "thymio_bt.logs.rosbag:read_rosbag",
         folder=True,
     ),
-    LogFormat(
-        "btlog",
-        "BT.CPP's FileLogger2 file, for Groot2's log replay (node status changes, no robot)",
-        (".btlog",),
-        "thymio_bt.btcpp.btlog:BtlogWriter",
-        "thymio_bt.btcpp.btlog:read_btlog",
-    ),
 )
 
 
