@@ -280,6 +280,27 @@ def test_an_upward_import_planted_in_a_copy_of_the_package_is_reported(tmp_path:
     assert found[1].startswith("a circle between rooms: ") and len(found) == 2
 
 
+def test_a_room_above_named_in_a_module_attr_string_is_an_edge_upward(tmp_path: Path):
+    """A registry's ``"module:attr"`` string is imported when asked: logs' format table named
+    ``thymio_bt.btcpp.btlog:read_btlog``, an edge up that no import statement showed."""
+    _plant(
+        tmp_path,
+        {
+            "thymio_bt/__init__.py": "",
+            "thymio_bt/logs/__init__.py": 'READERS = ("thymio_bt.btcpp.btlog:read_btlog",)\n',
+            "thymio_bt/btcpp/__init__.py": "",
+            "thymio_bt/btcpp/btlog.py": "import thymio_bt.logs\n",
+        },
+    )
+    files, graph = _import_graph(tmp_path)
+    found = layer_violations(files, graph, ["thymio_bt.btcpp", "thymio_bt.logs", "thymio_bt"])
+    assert found[0] == (
+        "thymio_bt/logs/__init__.py:1: thymio_bt.logs imports thymio_bt.btcpp.btlog "
+        "(thymio_bt.btcpp is above thymio_bt.logs)"
+    )
+    assert not [i for i in graph["thymio_bt.logs"] if not i.named]  # no import at load time: no module cycle
+
+
 def test_an_import_for_types_only_is_held_to_the_order_too(tmp_path: Path):
     """A type named from a room above under ``if TYPE_CHECKING:`` is an edge upward (backends once
     named the mission's ``Mission`` so), and two modules naming each other's types are a circle
