@@ -25,7 +25,7 @@ Example::
     >>> RunRecord.from_json(data | {"score": 10})
     Traceback (most recent call last):
     ...
-    ValueError: not a run of results.json: score: Extra inputs are not permitted
+    ValueError: not a run of results.json: score: unknown key 'score'
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from pydantic import BaseModel, ConfigDict, Field, SerializerFunctionWrapHandler
 from thymio_bt.enums import FailureCode, TextEnum
 from thymio_bt.grade.assignment import Palette
 from thymio_bt.grade.palette import Finding
+from thymio_bt.inputs.validation import problems_from
 from thymio_bt.run.result import RunStatus
 
 
@@ -105,10 +106,9 @@ class _Contract(BaseModel):
         try:
             return cls.model_validate_json(text, strict=True)
         except ValidationError as exc:
-            first = exc.errors()[0]
-            at = ".".join(str(p) for p in first["loc"])
-            more = f" (and {exc.error_count() - 1} more)" if exc.error_count() > 1 else ""
-            raise ValueError(f"not {cls.WHAT}: {at}: {first['msg']}{more}") from None
+            problems = problems_from(exc, data, "", cls)
+            more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+            raise ValueError(f"not {cls.WHAT}: {problems[0].path}: {problems[0].message}{more}") from None
 
 
 class Judged(_Contract):

@@ -207,9 +207,9 @@ class LoaderPass:
                 "give a heading such as 90deg, pi/2 or -45deg",
             )
             return None
-        # not wrap_angle: a yaw already in range must reach the robot as written, and wrap_angle is not
-        # the identity there (it gives 0.2999999999999998 for 0.3, and -pi for a west-facing pi, whose
-        # sine has the other sign); math.remainder is exact, into [-pi, pi]
+        # a yaw already in range must reach the robot as written, and wrap_angle is not the identity
+        # there (it gives 0.2999999999999998 for 0.3, and -pi for a west-facing pi, whose sine has the
+        # other sign); math.remainder is exact, into [-pi, pi]: so not wrap_angle
         return Pose(pose.x, pose.y, math.remainder(pose.yaw, math.tau))
 
 
