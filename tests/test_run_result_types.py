@@ -12,7 +12,7 @@ import pytest
 from thymio_bt.behaviours.base import FailureCode
 from thymio_bt.mission import load_mission
 from thymio_bt.robot.interface import Pose
-from thymio_bt.run.result import EndKind, RunStatus, Verdict
+from thymio_bt.run.result import EndKind, RunOutcome, RunStatus
 from thymio_bt.run.runner import Run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,4 +59,4 @@ def test_a_success_that_misses_its_expectations_is_a_failure_member(tmp_path):
 def test_verdicts_and_endings_speak_run_statuses():
     assert EndKind.TIMEOUT.report_status is RunStatus.TIMEOUT
     assert {kind.report_status for kind in EndKind if kind is not EndKind.TIMEOUT} == {RunStatus.FAILURE}
-    assert Verdict(RunStatus.SUCCESS).status is RunStatus.SUCCESS
+    assert RunOutcome(RunStatus.SUCCESS).status is RunStatus.SUCCESS

@@ -29,7 +29,7 @@ from thymio_bt.grade.sandboxes import Sandbox
 from thymio_bt.grade.wire import MAX_DRIVES, Deadline, WireError, is_json, observation_frame, read_json, read_reply
 from thymio_bt.logs.entries import STATUS_LETTER
 from thymio_bt.robot.interface import SENSOR_NAMES, Request, RequestState
-from thymio_bt.run.result import EndKind, RunResult, RunStatus, Verdict
+from thymio_bt.run.result import EndKind, RunOutcome, RunResult, RunStatus
 from thymio_bt.run.runner import Run
 
 #: events only the simulator says (a submission's of these kinds are dropped)
@@ -150,15 +150,15 @@ class RemoteRun(Run):
                     out[path] = {**counts, "ended_by": ended_by}
         return out
 
-    def _end_of_run(self, ending: Any, interrupts: Any) -> Verdict:
+    def _end_of_run(self, ending: Any, interrupts: Any) -> RunOutcome:
         remote: _Remote = self.root  # type: ignore[assignment]
         if ending.kind is EndKind.FINISHED:
             if remote.status is Status.FAILURE:
                 path, code, reason = remote.failure
-                return Verdict(RunStatus.FAILURE, reason, code, path)
-            return Verdict(RunStatus.SUCCESS)
+                return RunOutcome(RunStatus.FAILURE, reason, code, path)
+            return RunOutcome(RunStatus.SUCCESS)
         said = self._cut_short_reason(ending, interrupts)
-        return Verdict(ending.kind.report_status, said, ending.code, ending.failed_path or remote.tip_path)
+        return RunOutcome(ending.kind.report_status, said, ending.code, ending.failed_path or remote.tip_path)
 
 
 class _Remote(Behaviour):

@@ -1,5 +1,5 @@
 """What a run produced: its :class:`RunResult` (the run report of DESIGN.md, a contract), how its
-tick loop ended (:class:`EndKind`, :class:`Ending`) and the report's verdict on it (:class:`Verdict`),
+tick loop ended (:class:`EndKind`, :class:`Ending`) and the report's verdict on it (:class:`RunOutcome`),
 the failing node of a tree that failed (:func:`failing_branch`) and the map it learnt (:func:`learnt_map`).
 
 Example:
@@ -176,7 +176,7 @@ class Ending:
 
 
 @dataclass(frozen=True)
-class Verdict:
+class RunOutcome:
     """The report's status, reason, code and failing node's path (all None but the status on SUCCESS)."""
 
     status: RunStatus

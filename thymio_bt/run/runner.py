@@ -49,9 +49,9 @@ from thymio_bt.run.result import (
     Ending,
     EndKind,
     GoalReached,
+    RunOutcome,
     RunResult,
     RunStatus,
-    Verdict,
     failing_branch,
     learnt_map,
 )
@@ -312,18 +312,18 @@ class Run:
                 return
             time.sleep(min(lag, PACE_SLICE))  # realtime: pacing asked for with --realtime
 
-    def _end_of_run(self, ending: Ending, interrupts: Interrupts) -> Verdict:
+    def _end_of_run(self, ending: Ending, interrupts: Interrupts) -> RunOutcome:
         """The report's status, reason, code and failing node; a run cut short has its running
         behaviours stopped (their events written, the robot stopped) once the final tree is drawn."""
         self._final_tree = None  # drawn when read (the terminal viewer does)
         if ending.kind is EndKind.FINISHED:
             if self.root.status is Status.FAILURE:
                 failed_path, code, reason = failing_branch(self.root)
-                return Verdict(RunStatus.FAILURE, reason, code, failed_path)
-            return Verdict(RunStatus.SUCCESS)
+                return RunOutcome(RunStatus.FAILURE, reason, code, failed_path)
+            return RunOutcome(RunStatus.SUCCESS)
         self._final_tree = self.final_tree  # now: stopping the running behaviours changes it
         running = self.root.tip()
-        verdict = Verdict(
+        verdict = RunOutcome(
             ending.kind.report_status,
             self._cut_short_reason(ending, interrupts),
             ending.code,
@@ -351,7 +351,7 @@ class Run:
             return f"{said}: {ending.reason}" if ending.reason else said
         return ending.reason
 
-    def _result(self, verdict: Verdict, wall: float) -> RunResult:
+    def _result(self, verdict: RunOutcome, wall: float) -> RunResult:
         """The run's result: the verdict, the robot's final state, events, phases, the learnt map,
         whether it reached the maze's goal and whether the mission's ``expect:`` held."""
         sim = self.backend
@@ -441,18 +441,4 @@ def run_mission(mission: Mission, seed: int | None = None, **kwargs: Any) -> Run
     return Run(mission, seed).run(**kwargs)
 
 
-__all__ = [
-    "CONTACT",
-    "EndKind",
-    "Ending",
-    "NodeStats",
-    "Run",
-    "RunResult",
-    "RunStatus",
-    "StopRun",
-    "TickHook",
-    "Verdict",
-    "failing_branch",
-    "learnt_map",
-    "run_mission",
-]
+__all__ = ["CONTACT", "Run", "RunResult", "RunStatus", "TickHook", "run_mission"]
