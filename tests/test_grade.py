@@ -529,3 +529,28 @@ def test_a_dead_end_is_judged_on_the_maze_s_own_grid(cell):
 
     assert judged(stop, 1.5 * cell) == (True, None)
     assert judged(stop - cell, 0.5 * cell) == (False, "stopped where the left side is open: not a dead end")
+
+
+def test_a_confined_run_knows_its_maze_s_goal_region(tmp_path):
+    """A submission with plugins ticks its tree in a sandbox, which gets the maze's goal areas over
+    the wire (as JSON, made ``Area``s again): ``InRegion: {}`` reads them there as in a run of its
+    own. The micromouse maze's goal is its centre; the robot starts in a corner."""
+    assignment = tmp_path / "a.yaml"
+    assignment.write_text(
+        "name: goal\nvariants:\n  - {name: mouse, maze: micromouse_4x4, start: start, seeds: 1, noise: off}\n"
+        "criteria:\n  - {name: ends well, points: 1, finishes: true}\n"
+        "palette: {plugins: true}\nlimits: {cpu: 10s, wall: 600s, memory: 1024}\n"
+    )
+    folder = tmp_path / "mouse"
+    folder.mkdir()
+    (folder / "nodes.py").write_text(
+        "from py_trees.common import Status\nfrom thymio_bt.behaviours import RobotBehaviour\n"
+        "class Go(RobotBehaviour):\n    '''Always done.'''\n    def step(self):\n        return Status.SUCCESS\n"
+    )
+    (folder / "m.yaml").write_text(
+        "maze: micromouse_4x4\nstart: start\nplugins: [nodes.py]\ntree:\n  sequence:\n    children:\n"
+        "      - Go\n      - invert: {do: {InRegion: {}}}\n"
+    )
+    (student,) = grade(assignment, [folder], workers=1).to_json()["students"]
+    assert student["status"] == "graded", student["messages"]
+    assert [(run["status"], run["code"]) for run in student["runs"]] == [("SUCCESS", None)], student["runs"]

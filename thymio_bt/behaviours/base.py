@@ -49,6 +49,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from thymio_bt.enums import FailureCode
 from thymio_bt.geometry import Pose
 from thymio_bt.inputs.fields import IN_SI, Duration
+from thymio_bt.maze.model import Area
 from thymio_bt.robot.interface import Entities, Robot
 
 _CODE = re.compile(r"[A-Z][A-Z0-9_]*")
@@ -116,8 +117,9 @@ class Context:
     tick_period: float = 0.1
     #: (xmin, ymin, xmax, ymax) of the known map, for "leave the maze" stop conditions.
     bounds: tuple[float, float, float, float] | None = None
-    #: the maze's goal region, as (xmin, ymin, xmax, ymax) rectangles (e.g. a micromouse maze's centre)
-    goal: tuple[tuple[float, float, float, float], ...] = ()
+    #: the maze's goal region, its areas (e.g. a micromouse maze's centre): ``Area.contains`` says
+    #: whether a point is in one, as the run's report and ``expect:`` ask it
+    goal: tuple[Area, ...] = ()
     #: How many collisions the backend has counted so far (a backend without a bumper returns 0).
     collision_count: Callable[[], int] = lambda: 0
 

@@ -169,7 +169,7 @@ class OnGrid(RobotBehaviour):
                 self._goal = {
                     cell
                     for cell, (cx, cy) in centres.items()
-                    if any(x0 <= ox + cx <= x1 and y0 <= oy + cy <= y1 for x0, y0, x1, y1 in self.ctx.goal)
+                    if any(area.contains(ox + cx, oy + cy) for area in self.ctx.goal)
                 }
             cells.goal = self._goal
             return self._goal

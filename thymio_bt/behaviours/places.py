@@ -121,9 +121,12 @@ class InRegion(ConditionBehaviour):
             distance = math.hypot(pose.x - p.centre[0], pose.y - p.centre[1])
             self.say("{:.3f} m from the centre", distance)
             return Status.SUCCESS if distance <= p.radius else Status.FAILURE
-        regions = (p.rect,) if p.rect is not None else self.ctx.goal
-        if not regions:
+        if p.rect is not None:
+            x0, y0, x1, y1 = p.rect
+            inside = x0 <= pose.x <= x1 and y0 <= pose.y <= y1
+        elif self.ctx.goal:
+            inside = any(area.contains(pose.x, pose.y) for area in self.ctx.goal)
+        else:
             return self.fail(FailureCode.INVALID_INPUT, "the maze declares no goal region: give a rect or a centre")
-        inside = any(x0 <= pose.x <= x1 and y0 <= pose.y <= y1 for x0, y0, x1, y1 in regions)
         self.say("base_link at ({:.3f}, {:.3f}): {}", pose.x, pose.y, "inside" if inside else "outside")
         return Status.SUCCESS if inside else Status.FAILURE

@@ -149,6 +149,7 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Wat
     from thymio_bt.behaviours import Context, EventLog
     from thymio_bt.behaviours.base import describe, node_path
     from thymio_bt.errors import UserError
+    from thymio_bt.maze.model import Area
     from thymio_bt.mission import build_tree, load_mission
     from thymio_bt.robot.model import robot_model
     from thymio_bt.run.coverage import NodeStats
@@ -161,7 +162,8 @@ def _run(link: Link, spec: dict[str, Any], missions: dict[str, Any], watch: _Wat
         robot = RemoteRobot(robot_model(mission.robot))
         events = EventLog()
         bounds = tuple(spec["bounds"]) if spec["bounds"] else None
-        context = Context(robot, robot, events, spec["period"], bounds, tuple(map(tuple, spec["goal"])))
+        goal = tuple(Area.model_validate(area) for area in spec["goal"])  # {"from": [x, y], "to": [x, y]}
+        context = Context(robot, robot, events, spec["period"], bounds, goal)
         context.collision_count = lambda: robot.collisions
         py_trees.blackboard.Blackboard.clear()
         root = build_tree(mission.tree, context, mission.registry)

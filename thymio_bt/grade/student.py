@@ -303,10 +303,7 @@ def _outside_run(
         },
         "period": 1.0 / mission.tick_hz,
         "bounds": list(mission.maze.bounds()) if mission.maze.walls else None,
-        "goal": [
-            [min(a.start[0], a.end[0]), min(a.start[1], a.end[1]), max(a.start[0], a.end[0]), max(a.start[1], a.end[1])]
-            for a in mission.maze.goal
-        ],
+        "goal": [area.model_dump(mode="json", by_alias=True) for area in mission.maze.goal],
     }
     try:
         result = RemoteRun(mission, seed, sandbox, limits, spec).run(on_tick=recorder)

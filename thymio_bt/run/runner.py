@@ -129,15 +129,7 @@ class Run:
             events=self.events,
             tick_period=self.period,
             bounds=MazeShapes.of(mission.maze).bounds if mission.maze.walls else None,
-            goal=tuple(
-                (
-                    min(a.start[0], a.end[0]),
-                    min(a.start[1], a.end[1]),
-                    max(a.start[0], a.end[0]),
-                    max(a.start[1], a.end[1]),
-                )
-                for a in mission.maze.goal
-            ),
+            goal=tuple(mission.maze.goal),
             collision_count=lambda: len(self.backend.collisions),
         )
         py_trees.blackboard.Blackboard.clear()
