@@ -25,7 +25,7 @@ from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel
 
 from thymio_bt.behaviours.base import RobotBehaviour, UnrunPlugin
 from thymio_bt.behaviours.flow.node import BOTH, SWAP, ControlNode, F, S
@@ -97,14 +97,9 @@ class TreeRules:
         return self.registry.get(node.behaviour) if node.behaviour and self.registry is not None else None
 
     def params(self, node: NodePlan) -> BaseModel:
-        """A composite or decorator node's validated parameters (a plan from a broken mission may lack
-        them: then its kind's defaults, or none)."""
-        if node.params is not None:
-            return node.params
-        try:
-            return self.kind(node).Params()
-        except ValidationError:
-            return BaseModel()
+        """A composite or decorator node's validated parameters (the planner gives every node its own;
+        a plan made by hand without them counts as one that says nothing)."""
+        return node.params if node.params is not None else BaseModel()
 
     def kind(self, node: NodePlan) -> type[ControlNode]:
         """The class of a composite or decorator node, whose facts the rules read."""
