@@ -89,3 +89,26 @@ def test_an_edited_file_parses_or_fails_as_with_the_python_parser(path, cut, ins
     cut %= len(text) + 1
     fast, python = _both(text[:cut] + insert + text[cut + drop :], monkeypatch)
     assert fast == python
+
+
+def test_a_text_read_once_is_not_copied_and_one_read_again_is_kept_apart_from_its_callers(monkeypatch):
+    copies: list[object] = []
+    real_deepcopy = yamlio.copy.deepcopy
+    monkeypatch.setattr(yamlio.copy, "deepcopy", lambda data: copies.append(data) or real_deepcopy(data))
+    text = "root:\n  seq: [a, b]\n# a text no other test reads\n"
+    first = yamlio.loads_yaml(text, "once.yaml")
+    assert copies == []  # one read: the parse itself, never copied
+    first["root"]["seq"].append("changed by the first caller")
+    second = yamlio.loads_yaml(text, "once.yaml")
+    assert second == {"root": {"seq": ["a", "b"]}}
+    second["root"]["seq"].append("changed by the second caller")
+    third = yamlio.loads_yaml(text, "once.yaml")
+    assert third == {"root": {"seq": ["a", "b"]}} and len(copies) == 2
+    assert yamlio.loads_yaml(text, "other.yaml") == {"root": {"seq": ["a", "b"]}}  # its own file name
+
+
+def test_the_texts_read_are_remembered_by_hash_and_at_most_kept_texts_of_them():
+    for i in range(yamlio.KEPT_TEXTS + 5):
+        yamlio.loads_yaml(f"n: {i}\n", "many.yaml")
+    assert len(yamlio._READ_ONCE) <= yamlio.KEPT_TEXTS
+    assert all(isinstance(key, int) for key in yamlio._READ_ONCE)

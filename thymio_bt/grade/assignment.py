@@ -109,7 +109,7 @@ class Variant(BaseModel):
     robot: BuiltinRobot = Field(DEFAULT_ROBOT, description="the robot profile")
     seeds: int | list[int] = Field(1, description="how many noise seeds (0, 1, ...) or the list of seeds")
     noise: Literal["realistic", "off"] = Field("realistic", description="the noise models, on or off")
-    set: dict[str, str | int | float] = Field(default_factory=dict, description="other --set NAME=VALUE settings")
+    set: dict[str, str | int | float] = Field(default={}, description="other --set NAME=VALUE settings")
     goal: GoalDisc | None = Field(None, description="where a `goal` criterion wants the robot to end")
     turns: str | None = Field(None, pattern=r"^[LR]*$", description="the turns a `turns` criterion wants, e.g. LLRL")
 
@@ -284,7 +284,7 @@ class Palette(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
     allow: list[str] | None = Field(None, description="only these node types (behaviours, composites, decorators)")
-    forbid: list[str] = Field(default_factory=list, description="these node types are not allowed")
+    forbid: list[str] = Field(default=[], description="these node types are not allowed")
     plugins: bool = Field(False, description="whether a submission may bring Python plugins")
     include_library: bool = Field(True, description="whether it may include the shipped missions' library")
     max_nodes: int | None = Field(None, ge=1, le=100_000, description="the most nodes a tree may have")

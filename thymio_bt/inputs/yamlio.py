@@ -25,6 +25,7 @@ import copy
 import functools
 import re
 import sys
+from collections import OrderedDict
 from pathlib import Path
 from typing import Any
 
@@ -294,15 +295,25 @@ def _expanded_size(root: Node) -> tuple[int, int] | None:
 def loads_yaml(text: str, filename: str = "<input>") -> Any:
     """Parse YAML text safely; raise :class:`UserError` with file:line:col on any problem.
 
-    The same text read again (a grader loading a mission in four worlds, a sweep's workers) is
-    parsed once: a deep copy of the first parse is ten times quicker, and callers may change it."""
+    A text read a second time (a grader loading a mission in four worlds, a sweep's workers) is kept
+    parsed, and each later read gets a deep copy, ten times quicker than a parse (callers may change
+    what they get). A text read once, as by ``thymio-bt run``, is parsed and never copied."""
     if len(text) > CACHED_TEXT:
+        return _parse(text, filename)
+    key = hash((text, filename))
+    if key not in _READ_ONCE:
+        _READ_ONCE[key] = None
+        if len(_READ_ONCE) > KEPT_TEXTS:
+            _READ_ONCE.popitem(last=False)
         return _parse(text, filename)
     return copy.deepcopy(_parsed(text, filename))
 
 
-#: texts up to this many characters are kept parsed (at most 64 of them)
+#: texts up to this many characters are kept parsed once read twice (the last 64 of them)
 CACHED_TEXT = 256 * 1024
+KEPT_TEXTS = 64
+#: hashes of the texts read, oldest first (OrderedDict's popitem is one step under the GIL)
+_READ_ONCE: OrderedDict[int, None] = OrderedDict()
 
 
 def _parse(text: str, filename: str) -> Any:
@@ -392,7 +403,7 @@ def _plain_ascii(text: str) -> bool:
 _NON_PRINTABLE = yaml.reader.Reader.NON_PRINTABLE
 _EMPTY_IN_BRACKETS = re.compile(r":\s*[,\]}]")
 
-_parsed = functools.lru_cache(maxsize=64)(_parse)  # never changed: loads_yaml hands out copies
+_parsed = functools.lru_cache(maxsize=KEPT_TEXTS)(_parse)  # never changed: loads_yaml hands out copies
 
 
 def _syntax_problem(exc: yaml.MarkedYAMLError, filename: str) -> Problem:

@@ -200,7 +200,7 @@ class GridMazeFile(BaseModel):
     cell: Annotated[Length, Field(gt=0, le=10)] = 0.2
     origin: Point = (0.0, 0.0)
     thickness: Annotated[Length, Field(gt=0, le=1.0)] = 0.01
-    spawns: dict[str, Spawn] = Field(default_factory=dict)
+    spawns: dict[str, Spawn] = Field(default={})
 
 
 def maze_from_grid_file(header: GridMazeFile, mark: tuple[int, int], filename: str) -> Maze:

@@ -169,11 +169,11 @@ class Maze(BaseModel):
     name: str = "maze"
     description: str = ""
     source: str = ""
-    walls: list[Wall] = Field(default_factory=list)
-    obstacles: list[Obstacle] = Field(default_factory=list)
-    spawns: dict[str, Spawn] = Field(default_factory=dict)
+    walls: list[Wall] = Field(default=[])
+    obstacles: list[Obstacle] = Field(default=[])
+    spawns: dict[str, Spawn] = Field(default={})
     #: where the maze's goal is (e.g. a micromouse maze's centre cells): base_link inside any area
-    goal: list[Area] = Field(default_factory=list)
+    goal: list[Area] = Field(default=[])
 
     def in_goal(self, x: float, y: float) -> bool:
         """Whether (x, y) lies in one of the goal areas (never, for a maze without a goal)."""

@@ -69,7 +69,7 @@ class Expect(BaseModel):
     leaves_maze: bool = Field(False, description="base_link ends beyond the bounding box of the maze's walls")
     dead_end: DeadEnd | None = Field(None, description="the run ends in a dead end, this far from its wall")
     max_time: Duration | None = Field(None, gt=0, le=36000, description="the mission must end within this")
-    gaps: list[GapExpectation] = Field(default_factory=list, description="front gaps when nodes end")
+    gaps: list[GapExpectation] = Field(default=[], description="front gaps when nodes end")
 
     def without_places(self) -> Expect:
         """The criteria that hold anywhere (no goal, no gaps; ``leaves_maze`` and ``dead_end`` are

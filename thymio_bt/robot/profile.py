@@ -65,7 +65,7 @@ class Profile(BaseModel):
     wheel_separation: float | None = Field(None, gt=0.05, lt=0.15, description="wheel base (m)")
     calibration: TableRows | None = None
     #: what calibrate measured and how (kept for the record; not used by runs)
-    measured: dict[str, Any] = Field(default_factory=dict)
+    measured: dict[str, Any] = Field(default={})
 
 
 def is_profile_path(name: str) -> bool:
