@@ -31,6 +31,23 @@ def test_backend_options_are_validated_with_a_hint():
         backend_kind("sim").create(mission, 0, {"physics_hz": "5"})
 
 
+def test_each_kind_reads_its_options_model_from_its_own_backend_and_a_run_imports_only_its_own():
+    assert {name: kind.options_model().__module__ for name, kind in BUILTIN.items()} == {
+        "sim": "thymio_bt.backends.sim.options",
+        "tdm": "thymio_bt.backends.real.options",
+        "aseba": "thymio_bt.backends.real.options",
+        "playground": "thymio_bt.backends.playground.options",
+        "ros2": "thymio_bt.backends.ros2.options",
+    }
+    code = (
+        "import sys\nfrom thymio_bt.backends import backend_kind\nfrom thymio_bt.mission import load_mission\n"
+        "backend_kind('sim').create(load_mission('maze_part1_2'), seed=0, options={'physics_hz': '200'})\n"
+        "print(sorted(m for m in sys.modules if m.endswith('.options')))"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split() == ["['thymio_bt.backends.sim.options']"]
+
+
 def test_sim_backend_takes_physics_rate_and_robot_model():
     mission = load_mission(f"{ROOT}/missions/square.yaml", {"robot": "enki"})
     sim = backend_kind("sim").create(mission, 0, {"physics_hz": "200"})

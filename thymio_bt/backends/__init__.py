@@ -23,7 +23,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from importlib import import_module
-from typing import TYPE_CHECKING, Any, Literal, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -91,7 +91,9 @@ class BackendKind:
     name: str
     summary: str
     factory: str | Callable[[MissionWorld, int, Any], Backend]
-    options: type[BackendOptions] = BackendOptions
+    #: the settings' model, or where it is (``"module:attr"``, imported when first read: a run reads
+    #: only its own backend's)
+    options: str | type[BackendOptions] = BackendOptions
     #: whether runs on it take real time (a real robot, a real-time simulator)
     realtime: bool = False
     #: the robot model it drives when the mission names none: the course's (the simulator's Gazebo
@@ -102,37 +104,42 @@ class BackendKind:
         """Validate ``raw`` settings against :attr:`options`; :class:`UserError` says what is wrong."""
         from thymio_bt.inputs.validation import Wording, problems_from
 
+        options = self.options_model()
         try:
-            return self.options.model_validate(dict(raw))
+            return options.model_validate(dict(raw))
         except ValidationError as exc:
             wording = Wording(
                 unknown=f"backend '{self.name}' has no option '{{key}}'",
                 missing=f"backend '{self.name}' needs option '{{key}}'",
                 invalid=f"backend '{self.name}' option '{{path}}': {{msg}}",
             )
-            problems = problems_from(exc, dict(raw), where[0], self.options, at=where[1:], wording=wording)
-            if not self.options.model_fields:
+            problems = problems_from(exc, dict(raw), where[0], options, at=where[1:], wording=wording)
+            if not options.model_fields:
                 problems = [replace(p, hint=f"backend '{self.name}' takes no options") for p in problems]
             raise UserError(problems) from None
 
     def create(self, mission: MissionWorld, seed: int, options: Mapping[str, Any] | None = None) -> Backend:
         """A backend of this kind for ``mission``, with ``options`` validated first."""
         parsed = self.parse_options(options or {})
-        factory = self.factory
-        if isinstance(factory, str):
-            module, _, attr = factory.partition(":")
-            factory = getattr(import_module(module), attr)
+        factory: Callable[[MissionWorld, int, Any], Backend] = _named(self.factory)
         return factory(mission, seed, parsed)
 
+    def options_model(self) -> type[BackendOptions]:
+        """The model of this kind's settings (its module imported now if :attr:`options` names it)."""
+        model: type[BackendOptions] = _named(self.options)
+        return model
 
-class SimOptions(BackendOptions):
-    """The ``sim`` backend's settings: the physics sub-step rate."""
 
-    physics_hz: float = Field(100.0, ge=50.0, le=2000.0, description="physics sub-steps per simulated second")
+def _named(ref: Any) -> Any:
+    """``ref`` itself, or the object a ``"module:attr"`` string names, imported."""
+    if not isinstance(ref, str):
+        return ref
+    module, _, attr = ref.partition(":")
+    return getattr(import_module(module), attr)
 
 
-def _placed() -> Any:
-    """A ``placed`` option: the robot stands at the mission's start already."""
+def placed_option() -> Any:
+    """A ``placed`` option (for a backend's options model): the robot stands at the mission's start already."""
     return Field(
         False,
         description="the robot already stands at the mission's start: no operator is asked to place it "
@@ -140,77 +147,11 @@ def _placed() -> Any:
     )
 
 
-class TdmOptions(BackendOptions):
-    """The ``tdm`` backend's settings: where the Thymio Device Manager is."""
-
-    host: str | None = Field(None, description="Thymio Device Manager host (default: found on this machine)")
-    port: int | None = Field(None, ge=1, le=65535, description="Thymio Device Manager TCP port")
-    password: str | None = Field(None, description="Thymio Device Manager password, if it has one")
-    placed: bool = _placed()
-
-
-def _latency(default: float, more: str) -> Any:
-    """A ``latency`` option (s, 0 to 2), its description ending with ``more``."""
+def latency_option(default: float, more: str) -> Any:
+    """A ``latency`` option (s, 0 to 2) for a backend's options model, its description ending with ``more``."""
     return Field(
         default, ge=0, le=2, description="seconds from the world a reading shows to a new command acting" + more
     )
-
-
-class AsebaOptions(BackendOptions):
-    """The ``aseba`` backend's settings: the device, how long to wait, and the robot's latency."""
-
-    device: str = Field(
-        "", description="tcp:HOST:PORT, a serial port such as /dev/ttyACM0, or empty for the only Thymio plugged in"
-    )
-    timeout: float = Field(5.0, gt=0, le=60, description="how long to wait for the robot to answer (s)")
-    latency: float = _latency(
-        0.2, " (behaviours stop early by it); 0.2 was measured on the Playground, measure your robot's"
-    )
-    placed: bool = _placed()
-
-
-class PlaygroundOptions(BackendOptions):
-    """The ``playground`` backend's settings: start-up wait, latency, the speed calibration and Enki's sensor fix."""
-
-    timeout: float = Field(10.0, gt=0, le=60, description="how long to wait for the Playground to start (s)")
-    latency: float = _latency(
-        0.2,
-        ", for the behaviours (measured: readings 40-120 ms behind the true pose, a new motor target acting "
-        "~100 ms later)",
-    )
-    speed_scale: float | None = Field(
-        None,
-        gt=0.5,
-        le=2,
-        description="the Playground's Thymio's speed per motor "
-        "unit over the robot model's; default: 0.985 (measured against its ground "
-        "truth) for a built-in model, 1 for a profile measured by thymio-bt calibrate",
-    )
-    enki_fix: bool = Field(
-        True,
-        description="correct Enki 1.6.99's stale sensor rays (enki-community/enki#68) in the Playground "
-        "(needs g++ and libenki-dev; false runs Enki as installed)",
-    )
-
-
-class Ros2Options(BackendOptions):
-    """The ``ros2`` backend's settings: the topic map, the clock, the latency and the robot's URDF."""
-
-    topics: str = Field("", description="a YAML topic map (default: the course's Gazebo topics and services)")
-    timeout: float = Field(
-        5.0,
-        gt=0,
-        le=120,
-        description="how long a topic may stay silent, or a service "
-        "take to appear or answer, before the run fails (wall s)",
-    )
-    clock: Literal["auto", "sim", "wall"] = Field(
-        "auto",
-        description="the run's time: the /clock of a simulator (sim), the wall clock (wall), or sim "
-        "when someone publishes /clock (auto)",
-    )
-    latency: float = _latency(0.0, " (behaviours stop early by it); measure a real robot's")
-    robot_xml: str = Field("", description="URDF/SDF file sent when spawning (default: /robot_description)")
 
 
 #: The backends that come with thymio-bt.
@@ -221,14 +162,14 @@ BUILTIN: dict[str, BackendKind] = {
             "sim",
             "the pymunk simulation of the mission's maze (default; instant, deterministic)",
             "thymio_bt.backends.sim.backend:create",
-            SimOptions,
+            "thymio_bt.backends.sim.options:SimOptions",
         ),
         BackendKind(
             "tdm",
             "a Thymio through Thymio Suite's Thymio Device Manager (needs thymio-bt[thymio]; "
             "untested here: no registry has the Device Manager)",
             "thymio_bt.backends.real.thymio:create_tdm",
-            TdmOptions,
+            "thymio_bt.backends.real.options:TdmOptions",
             realtime=True,
             robot="real",
         ),
@@ -236,7 +177,7 @@ BUILTIN: dict[str, BackendKind] = {
             "aseba",
             "a Thymio over its own Aseba protocol: on USB, or a simulated one on TCP (needs thymio-bt[aseba])",
             "thymio_bt.backends.real.aseba:create_aseba",
-            AsebaOptions,
+            "thymio_bt.backends.real.options:AsebaOptions",
             realtime=True,
             robot="real",
         ),
@@ -245,7 +186,7 @@ BUILTIN: dict[str, BackendKind] = {
             "the Aseba Playground (Enki) started headless on the mission's maze, driven "
             "over Aseba like a real Thymio, in real time (needs the aseba package and thymio-bt[aseba])",
             "thymio_bt.backends.playground.backend:create_playground",
-            PlaygroundOptions,
+            "thymio_bt.backends.playground.options:PlaygroundOptions",
             realtime=True,
             robot="enki",
         ),
@@ -254,7 +195,7 @@ BUILTIN: dict[str, BackendKind] = {
             "a Thymio through ROS 2 topics and services: the course's Gazebo, 'thymio-bt serve ros2' "
             "or a robot's driver (needs rclpy: see scripts/ros2-env.sh)",
             "thymio_bt.backends.ros2.backend:create_ros2",
-            Ros2Options,
+            "thymio_bt.backends.ros2.options:Ros2Options",
             realtime=True,
         ),
     )

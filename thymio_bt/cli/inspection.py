@@ -451,7 +451,7 @@ def backends_command() -> None:
     click.echo("backends (--backend NAME --backend-opt KEY=VALUE):")
     for kind in kinds.values():
         click.echo(f"  {kind.name:10} {kind.summary}")
-        for key, field in kind.options.model_fields.items():
+        for key, field in kind.options_model().model_fields.items():
             default = "" if field.default is None else f" [default {field.default}]"
             click.echo(f"  {'':10}   {key}: {field.description}{default}")
     click.echo("robot models (--robot NAME):")

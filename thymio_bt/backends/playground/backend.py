@@ -30,7 +30,8 @@ from thymio_bt.robot.model import ROBOTS, RobotModel
 from thymio_bt.robot.placement import ContactTracker, placement_problem
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import MissionWorld, PlaygroundOptions
+    from thymio_bt.backends import MissionWorld
+    from thymio_bt.backends.playground.options import PlaygroundOptions
 
 #: the Playground's Thymio covers this fraction of what its motor units say (Enki's 16.6 cm/s at 500):
 #: against its ground truth, 2.9 s straight read 0.983, 2.1 s turning 0.985, thymio-bt calibrate 0.986

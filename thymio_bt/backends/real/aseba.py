@@ -58,7 +58,8 @@ from thymio_bt.errors import Problem, UserError, optional_module
 from thymio_bt.robot.interface import RobotLost
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import AsebaOptions, MissionWorld
+    from thymio_bt.backends import MissionWorld
+    from thymio_bt.backends.real.options import AsebaOptions
 
 #: A robot silent for this long (s) is lost; thymiodirect alone would wait 3 s and then say nothing.
 LOST_AFTER = 0.8

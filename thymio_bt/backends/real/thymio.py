@@ -58,7 +58,8 @@ from thymio_bt.robot.interface import ROBOT_ENTITY, SENSOR_NAMES, Backend, Scan,
 from thymio_bt.robot.model import REAL, RobotModel, integrate_arc
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import MissionWorld, TdmOptions
+    from thymio_bt.backends import MissionWorld
+    from thymio_bt.backends.real.options import TdmOptions
 
 #: ``prox.horizontal`` index of each sensor: 0-4 front from left to right, 5 rear left, 6 rear right
 #: (Mobsya's Thymio API doc, thymio-api.rst L35-41), the same order as :data:`SENSOR_NAMES`.

@@ -50,7 +50,8 @@ from thymio_bt.robot.model import RobotModel, robot_model
 from thymio_bt.robot.placement import ContactTracker
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import MissionWorld, Ros2Options
+    from thymio_bt.backends import MissionWorld
+    from thymio_bt.backends.ros2.options import Ros2Options
 
 
 #: how long (wall s) to wait for a first message: Fast DDS's discovery took up to 3.3 s here (its

@@ -2,7 +2,7 @@
 
 Example::
 
-    >>> from thymio_bt.backends import SimOptions
+    >>> from thymio_bt.backends.sim.options import SimOptions
     >>> from thymio_bt.mission import load_mission
     >>> sim = create(load_mission("maze_part1_2"), seed=0, options=SimOptions())
     >>> sim.model.name, sim.config.sensor_model, sim.config.physics_hz
@@ -17,7 +17,8 @@ from thymio_bt.backends.sim.world import SimConfig, Simulation
 from thymio_bt.robot.model import is_sim_sensor_model, robot_model
 
 if TYPE_CHECKING:
-    from thymio_bt.backends import MissionWorld, SimOptions
+    from thymio_bt.backends import MissionWorld
+    from thymio_bt.backends.sim.options import SimOptions
 
 
 def create(mission: MissionWorld, seed: int, options: SimOptions) -> Simulation:
