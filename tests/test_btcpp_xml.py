@@ -439,3 +439,24 @@ def test_subtree_ports_bt_cpp_refuses_are_refused_here(subtree, model, message, 
     if "no name" not in message:
         with pytest.raises(RuntimeError):
             module("behaviortreepy").BehaviorTreeFactory().create_tree_from_text(xml)
+
+
+def test_the_reader_takes_each_port_s_role_from_the_node_s_model_not_from_its_name():
+    from pydantic import BaseModel, Field
+
+    from thymio_bt.btcpp.runtime.scripted import Code
+    from thymio_bt.btcpp.xml_tree import _roles
+    from thymio_bt.inputs.fields import BlackboardKey, Entry, ScriptText, port_roles
+
+    assert _roles("bt_set_blackboard") == {"output_key": Entry()}
+    assert _roles("bt_unset_blackboard") == {"key": Entry("removed")}
+    assert _roles("bt_script") == {"code": ScriptText()} and _roles("bt_precondition") == {"if": ScriptText()}
+    assert _roles("ChooseTurn") == {"key": Entry()} and _roles("SetBlackboard") == {"key": Entry()}
+    assert _roles("MoveDistance") == {} and _roles("NoSuchNode") == {}
+
+    class Params(BaseModel):
+        entry: BlackboardKey = "x"
+        program: Code = "a := 1"
+        key: str = Field("k", description="a blackboard key, in words only")
+
+    assert port_roles(Params) == {"entry": Entry(), "program": ScriptText()}

@@ -24,7 +24,7 @@ from pydantic import BaseModel, Field
 from thymio_bt.behaviours.base import BehaviourParams, RobotBehaviour, current_pose
 from thymio_bt.enums import FailureCode
 from thymio_bt.geometry import wrap_angle
-from thymio_bt.inputs.fields import Length
+from thymio_bt.inputs.fields import BlackboardKey, Length
 from thymio_bt.maze.cellmap import Cell, CellMap, centre_cells
 from thymio_bt.robot.model import RobotModel
 
@@ -50,7 +50,7 @@ class MazeMapParams(BehaviourParams):
     wall: Length = Field(0.012, gt=0, le=0.05, description="wall thickness")
     cols: int | None = Field(None, ge=1, le=64, description="cells along x (default: from the maze's size)")
     rows: int | None = Field(None, ge=1, le=64, description="cells along y (default: from the maze's size)")
-    key: str = Field("maze_map", description="blackboard key of the map")
+    key: BlackboardKey = Field("maze_map", description="blackboard key of the map")
 
 
 class SensingParams(MazeMapParams):

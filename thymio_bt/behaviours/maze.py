@@ -43,7 +43,7 @@ from thymio_bt.behaviours.motion import Turn
 from thymio_bt.behaviours.wall_follow import WallFollow, WallFollowParams
 from thymio_bt.enums import FailureCode
 from thymio_bt.geometry import wrap_angle
-from thymio_bt.inputs.fields import AngularSpeed, SensedLength
+from thymio_bt.inputs.fields import AngularSpeed, BlackboardKey, SensedLength
 from thymio_bt.robot.corridor import FRONT_SENSORS, RANGE_MAX, Side, side_ray
 from thymio_bt.robot.model import WIDEST_RANGE, RobotModel
 
@@ -131,7 +131,7 @@ class SideOpen(ConditionBehaviour):
 class IsDeadEndParams(BehaviourParams):
     """Read ChooseTurn's decision."""
 
-    key: str = Field("turn", description="the blackboard key ChooseTurn wrote")
+    key: BlackboardKey = Field("turn", description="the blackboard key ChooseTurn wrote")
 
 
 class IsDeadEnd(ConditionBehaviour):
@@ -224,7 +224,7 @@ def lateral_reach(model: RobotModel, side: Side) -> float:
 class ChooseTurnParams(BehaviourParams):
     """Decide the turn at the next wall."""
 
-    key: str = Field(
+    key: BlackboardKey = Field(
         "turn",
         description="blackboard key for the decision; the angle goes to KEY_angle, whether it is sure to KEY_certain",
     )
@@ -336,7 +336,7 @@ class ChooseTurn(RobotBehaviour):
 class LookAroundParams(BehaviourParams):
     """Make sure of ChooseTurn's decision by looking."""
 
-    key: str = Field("turn", description="the blackboard key ChooseTurn wrote (and KEY_angle, KEY_certain)")
+    key: BlackboardKey = Field("turn", description="the blackboard key ChooseTurn wrote (and KEY_angle, KEY_certain)")
     speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="fastest turn rate")
 
 

@@ -20,7 +20,7 @@ from thymio_bt.behaviours.base import BehaviourParams, ConditionBehaviour, Readi
 from thymio_bt.behaviours.motion import approach_speed
 from thymio_bt.enums import FailureCode
 from thymio_bt.geometry import Pose, wrap_angle
-from thymio_bt.inputs.fields import Angle, AngularSpeed, Duration, Length, Point, Speed
+from thymio_bt.inputs.fields import Angle, AngularSpeed, BlackboardKey, Duration, Length, Point, Speed
 from thymio_bt.robot.interface import Scan
 from thymio_bt.robot.pid import PID
 
@@ -138,7 +138,7 @@ class FollowWaypointsParams(PIDGains):
     """Visit waypoints in order with the report's PID controllers."""
 
     waypoints: list[Point] = Field(min_length=1, description="the points [[x, y], ...] to visit")
-    key: str = Field(
+    key: BlackboardKey = Field(
         "waypoint",
         description="blackboard key holding the index of the next waypoint, so the "
         "behaviour resumes where it was after an interruption (e.g. by obstacle avoidance)",
@@ -212,7 +212,7 @@ class FollowWaypoints(RobotBehaviour):
 class WaypointsDoneParams(BehaviourParams):
     """Have all waypoints been visited?"""
 
-    key: str = Field("waypoint", description="the FollowWaypoints progress key")
+    key: BlackboardKey = Field("waypoint", description="the FollowWaypoints progress key")
 
 
 class WaypointsDone(ConditionBehaviour):
@@ -278,7 +278,7 @@ class _CounterParams(BehaviourParams):
     """What the Pledge counter's turns share: the obstacle thresholds, the counter key, the rate."""
 
     thresholds: Thresholds = Field(REPORT_THRESHOLDS, description="per front sensor, left to right")
-    counter: str = Field("avoid_turn", description="blackboard key of the angle turned since avoidance began")
+    counter: BlackboardKey = Field("avoid_turn", description="blackboard key of the angle turned since avoidance began")
     speed: AngularSpeed = Field(1.0, gt=0, le=4.3, description="turn rate")
 
 
@@ -396,7 +396,7 @@ class TurnBack(_CountingTurn):
 class SetBlackboardParams(BehaviourParams):
     """Write a value on the blackboard."""
 
-    key: str = Field(description="the key")
+    key: BlackboardKey = Field(description="the key")
     value: float | str | bool = Field(description="the value")
 
 

@@ -29,6 +29,7 @@ from thymio_bt.btcpp.export import KIND_ATTR, RESERVED
 from thymio_bt.btcpp.runtime.control import BTCPP_IDS, CONDITION_ATTRS
 from thymio_bt.btcpp.xml_scope import Literal, Ports, Scope, pointer, rename_script, subtree_ports
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.inputs.fields import Entry, ScriptText, port_roles
 from thymio_bt.inputs.xmlparse import parse_xml
 from thymio_bt.inputs.yamlio import MAX_NESTING, MarkedDict, MarkedList
 from thymio_bt.plan.model import MAX_DEPTH, MAX_NODES
@@ -45,7 +46,6 @@ MAX_JSON_NESTING = MAX_NESTING
 #: BT.CPP built-in -> the node kind of BT.CPP's semantics (an element without _thymio)
 _FROM_BUILTIN = dict(BTCPP_IDS)
 #: BT.CPP's nodes whose port is a script
-_SCRIPT_PORTS = {"bt_script": "code", "bt_script_condition": "code", "bt_precondition": "if"}
 
 
 @dataclass
@@ -156,19 +156,13 @@ def marked(mapping: dict[str, Any], element: Element) -> MarkedDict:
 
 
 @cache
-def _key_params(kind: str) -> frozenset[str]:
-    """The parameters of thymio-bt's leaf ``kind`` that name a blackboard entry (``key``, ...)."""
+def _roles(kind: str) -> dict[str, Entry | ScriptText]:
+    """The ports of node ``kind`` that name a blackboard entry or hold a script, as its parameter
+    model declares them (:func:`~thymio_bt.inputs.fields.port_roles`)."""
     from thymio_bt.plan.registry import default_registry
 
     cls = default_registry().get(kind)
-    fields = None if cls is None else cls.Params
-    if fields is None:
-        return frozenset()
-    return frozenset(
-        name
-        for name, info in fields.model_fields.items()
-        if name == "key" or "blackboard key" in (info.description or "")
-    )
+    return {} if cls is None or cls.Params is None else port_roles(cls.Params)
 
 
 class TreeReader:
@@ -302,7 +296,7 @@ class TreeReader:
                 else {"children": _list(children, element)}
             )
             return {**ports, **nodes}
-        keys = _key_params(kind) if not children else frozenset()
+        keys = {port for port, role in _roles(kind).items() if role == Entry()} if not children else set()
         # a port left empty is not given (Groot2 writes a port left blank in its editor as an empty text)
         values = {k: self._value(k, v, element, scope, k in keys) for k, v in attrs.items() if v.strip()}
         if cls is not None and cls.category == "composite":
@@ -332,18 +326,20 @@ class TreeReader:
 
     def _bt_ports(self, kind: str, attrs: dict[str, str], element: Element, scope: Scope) -> dict[str, str]:
         """The ports of BT.CPP's node ``kind`` as written, keys renamed for ``scope``: in scripts, in
-        ``{key}`` pointers, ``SetBlackboard``'s ``output_key`` and ``UnsetBlackboard``'s ``key``."""
+        ``{key}`` pointers and in the entries the node writes or removes (its model's port roles)."""
         where = self._where(element)
+        roles = _roles(kind)
         ports: dict[str, str] = {}
         for port, text in attrs.items():
-            if _SCRIPT_PORTS.get(kind) == port:
+            role = roles.get(port)
+            if isinstance(role, ScriptText):
                 ports[port] = self._script(text, scope, where)
-            elif (kind, port) == ("bt_set_blackboard", "output_key"):
+            elif role == Entry("removed"):
+                ports[port] = scope.local(text.strip("{}"), where)
+            elif role == Entry():
                 braced = pointer(text) is not None
                 new = scope.write(text.strip().strip("{}").strip(), where)
                 ports[port] = "{" + new + "}" if braced else new
-            elif (kind, port) == ("bt_unset_blackboard", "key"):
-                ports[port] = scope.local(text.strip("{}"), where)
             else:
                 key = port if text.strip() == "{=}" else pointer(text)
                 found = scope.read(key) if key is not None else text

@@ -120,6 +120,39 @@ class CalledName:
     in a mission ``name:`` labels the node, so one given without this field is refused, pointing here."""
 
 
+@dataclass(frozen=True, slots=True)
+class Entry:
+    """Metadata of a text field that names a blackboard entry: ``"entry"`` one the node reads or writes,
+    ``"removed"`` one it removes. Readers that rename entries read it (the BT.CPP XML reader makes the
+    name a subtree's own), as they read :class:`ScriptText` for a field that holds a script."""
+
+    role: str = "entry"
+
+
+@dataclass(frozen=True, slots=True)
+class ScriptText:
+    """Metadata of a text field that holds a script (BT.CPP's script language), whose entries a reader
+    renames as it renames a :class:`Entry`."""
+
+
+def port_roles(model: Any) -> dict[str, Entry | ScriptText]:
+    """The fields of a parameter model that name a blackboard entry or hold a script, by field name.
+
+    >>> from pydantic import BaseModel
+    >>> class P(BaseModel):
+    ...     key: BlackboardKey = "turn"
+    ...     distance: Length = 0.1
+    >>> port_roles(P)
+    {'key': Entry(role='entry')}
+    """
+    return {
+        name: marker
+        for name, f in model.model_fields.items()
+        for marker in f.metadata
+        if isinstance(marker, (Entry, ScriptText))
+    }
+
+
 def called_name(model: Any) -> str | None:
     """The field of a parameter model that other tools call ``name`` (:data:`EntityName`), if any.
 
@@ -192,6 +225,8 @@ Memory = Annotated[float, Unit("MiB")]
 """An amount of memory in MiB, written ``512MiB``, ``1GiB``, ``512MB`` or ``512``."""
 EntityName = Annotated[str, CalledName()]
 """The name of an entity of the world (the robot: ``thymio``), what Gazebo's services call ``name``."""
+BlackboardKey = Annotated[str, Entry()]
+"""The name of a blackboard entry the node reads or writes (a subtree read from BT.CPP XML makes it its own)."""
 
 
 def _pose_text(value: Any) -> Any:
@@ -248,14 +283,18 @@ def unit_of(field: Any) -> str:
 __all__ = [
     "Angle",
     "AngularSpeed",
+    "BlackboardKey",
     "Duration",
+    "Entry",
     "EntityName",
     "Length",
     "Memory",
     "PerSecond",
     "PerSecondPerMetre",
     "Point",
+    "ScriptText",
     "SensedLength",
     "Speed",
     "Unit",
+    "port_roles",
 ]

@@ -40,6 +40,7 @@ from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime.script import Script as Code_
 from thymio_bt.btcpp.runtime.script import ScriptError, parse
 from thymio_bt.btcpp.runtime.values import truth
+from thymio_bt.inputs.fields import BlackboardKey, Entry, ScriptText
 
 
 class RunBoard(MutableMapping[str, Any]):
@@ -84,8 +85,8 @@ def _code(text: Any) -> Any:
     return str(text)
 
 
-Code = Annotated[str, AfterValidator(_code)]
-OptionalCode = Annotated[str | None, AfterValidator(_code)]
+Code = Annotated[str, AfterValidator(_code), ScriptText()]
+OptionalCode = Annotated[str | None, AfterValidator(_code), ScriptText()]
 
 
 class BtLeaf(RobotBehaviour):
@@ -148,7 +149,7 @@ class SetParams(BehaviourParams):
     """BT.CPP's SetBlackboard ports."""
 
     value: str = Field(description="the text written, or {key}: that entry's value")
-    output_key: str = Field(description="the entry written")
+    output_key: BlackboardKey = Field(description="the entry written")
 
 
 class SetBlackboard(BtLeaf):
@@ -167,7 +168,7 @@ class SetBlackboard(BtLeaf):
 class KeyParams(BehaviourParams):
     """A blackboard entry."""
 
-    key: str = Field(description="the entry")
+    key: Annotated[str, Entry("removed")] = Field(description="the entry")
 
 
 class UnsetBlackboard(BtLeaf):
