@@ -35,3 +35,11 @@ def test_a_code_reads_and_is_written_as_its_text():
     assert json.dumps({"code": code}) == '{"code": "ROBOT_LOST"}'
     result = Run(load_mission("maze_part1_2", {"time_limit": "5"})).run()
     assert json.dumps(result.report()["code"]) == '"TIMEOUT"'
+
+
+def test_both_time_limits_say_why_their_child_failed_and_a_new_start_forgets_it():
+    slow = {"MoveDistance": {"distance": 0.3, "speed": "1cm/s", "name": "crawl"}}
+    yaml_limit = run_tree({"timeout": {"seconds": 2, "do": slow}}, world("arena"), seconds=10)
+    btcpp_limit = run_tree({"bt_timeout": {"msec": 2000, "do": slow}}, world("arena"), seconds=10)
+    assert (yaml_limit.code, yaml_limit.reason) == (FailureCode.TIMEOUT, "'crawl' did not finish within 2 s")
+    assert (btcpp_limit.code, btcpp_limit.reason) == (FailureCode.TIMEOUT, "'crawl' did not finish within 2000 ms")

@@ -81,3 +81,14 @@ def test_a_timer_reads_its_span_from_its_start() -> None:
     assert timer.over()
     timer.forget()
     assert timer.end is None
+
+
+def test_both_time_limits_keep_why_they_failed_until_they_start_again() -> None:
+    clock = Clock()
+    for name in ("timeout", "bt_timeout"):
+        clock.t = 0.0
+        node = _nodes(clock)[name]
+        _ticks_until(node, clock, lambda n: n.status is not Status.RUNNING)
+        assert node.status is Status.FAILURE and node.failure[0] == "TIMEOUT", name  # type: ignore[attr-defined]
+        tick(node)  # type: ignore[arg-type]  # started again: RUNNING, the old time-out forgotten
+        assert node.status is Status.RUNNING and node.failure is None, name  # type: ignore[attr-defined]

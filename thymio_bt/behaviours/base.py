@@ -157,7 +157,15 @@ def node_path(node: py_trees.behaviour.Behaviour) -> str:
     return "/".join(reversed(names))
 
 
-class RobotBehaviour(py_trees.behaviour.Behaviour):
+class Explains:
+    """A node that says why it failed: :attr:`failure` is (code, reason) once it has, else None. The
+    run's report follows a FAILURE down the tree to the node that explains it (robot behaviours, and
+    the time limits of both vocabularies: ``timeout`` and BT.CPP's ``Timeout``)."""
+
+    failure: tuple[FailureCode | str, str] | None = None
+
+
+class RobotBehaviour(Explains, py_trees.behaviour.Behaviour):
     """Base of the behaviours that act on or sense the robot."""
 
     #: The name used in mission YAML and in events: the class's name unless its body sets one.
@@ -471,6 +479,7 @@ __all__ = [
     "ConditionBehaviour",
     "Context",
     "EventLog",
+    "Explains",
     "FAILURE",
     "FailureCode",
     "INVALID",

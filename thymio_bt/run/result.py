@@ -26,8 +26,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.blackboard import Blackboard
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import RobotBehaviour, node_path
-from thymio_bt.behaviours.flow.primitives import SimTimeout
+from thymio_bt.behaviours.base import Explains, RobotBehaviour, node_path
 from thymio_bt.enums import FailureCode, TextEnum
 from thymio_bt.geometry import Pose
 from thymio_bt.run.phases import Phase
@@ -205,8 +204,8 @@ def learnt_map(root: Behaviour) -> CellMap | None:
 
 
 def _failure(node: Behaviour) -> tuple[FailureCode | str, str] | None:
-    """The (code, reason) a node recorded when it failed: a robot behaviour's, or a time limit's."""
-    return node.failure if isinstance(node, (RobotBehaviour, SimTimeout)) else None
+    """The (code, reason) a node recorded when it failed (:class:`~thymio_bt.behaviours.base.Explains`)."""
+    return node.failure if isinstance(node, Explains) else None
 
 
 def failing_branch(root: Behaviour) -> tuple[str, FailureCode | str, str]:

@@ -18,7 +18,7 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS
+from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, Explains
 from thymio_bt.behaviours.flow.ticking import tick
 from thymio_bt.enums import FailureCode
 
@@ -67,7 +67,7 @@ class SimTimer:
         return self.end - self.clock()
 
 
-class SimTimeout(py_trees.decorators.Decorator):
+class SimTimeout(Explains, py_trees.decorators.Decorator):
     """Fail (and stop the child) when the child runs longer than ``duration`` simulated seconds.
 
     Example::
@@ -85,7 +85,6 @@ class SimTimeout(py_trees.decorators.Decorator):
     def __init__(self, name: str, child: Behaviour, duration: float, clock: Callable[[], float]) -> None:
         super().__init__(name=name, child=child)
         self.timer = SimTimer(duration, clock)
-        self.failure: tuple[FailureCode, str] | None = None
 
     def initialise(self) -> None:
         """py_trees' start hook: the time limit runs from now."""

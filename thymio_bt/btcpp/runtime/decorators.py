@@ -20,9 +20,11 @@ from typing import Any
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from thymio_bt.behaviours.base import Explains
 from thymio_bt.behaviours.flow.primitives import SimTimer
 from thymio_bt.btcpp.runtime import nodes as bn
 from thymio_bt.btcpp.runtime.nodes import FAILURE, IDLE, RUNNING, SKIPPED, SUCCESS
+from thymio_bt.enums import FailureCode
 
 
 class BtDecorator(bn.BtNode):
@@ -181,10 +183,11 @@ class Timed(BtDecorator):
         super().halt()
 
 
-class Timeout(Timed):
-    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (0: no limit).
-    BT.CPP's timer fires between ticks, so the deadline is checked before the child's tick
-    (``timeout``'s :class:`~thymio_bt.behaviours.flow.primitives.SimTimeout` checks it after)."""
+class Timeout(Explains, Timed):
+    """BT.CPP's ``Timeout``: the child halted and FAILURE once it has run ``msec`` (0: no limit), the
+    report saying so as ``timeout``'s does. BT.CPP's timer fires between ticks, so the deadline is
+    checked before the child's tick (``timeout``'s
+    :class:`~thymio_bt.behaviours.flow.primitives.SimTimeout` checks it after)."""
 
     def bt_tick(self) -> Any:
         """The child, unless the time is up while it runs."""
@@ -192,8 +195,17 @@ class Timeout(Timed):
         if timer.seconds > 0 and self.decorated.status is RUNNING and timer.over():
             bn.reset(self.decorated)
             timer.forget()
+            limit = f"{timer.seconds * 1000:g} ms"
+            self.failure = (FailureCode.TIMEOUT, f"'{self.decorated.name}' did not finish within {limit}")
+            self.feedback_message = f"TIMEOUT: {self.failure[1]}"
             return FAILURE
         return self.tick_child()
+
+    def started(self) -> SimTimer:
+        """The timer, started at the node's first tick, when an earlier time-out is forgotten."""
+        if self.timer.end is None:
+            self.failure = None
+        return super().started()
 
 
 class Delay(Timed):
