@@ -15,7 +15,7 @@ Example::
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar, Literal, cast
 
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
@@ -107,7 +107,7 @@ def _kind(
     base: type[BtControl] = BtControl,
     /,
     **ports: Any,
-) -> type:
+) -> type[BtControl]:
     """A subclass of ``base`` for BT.CPP's ``ident`` with its ``ports`` (name: (type, default)), the
     YAML kind it is ``like`` (its facts) and its own ``facts`` (:class:`ControlNode`'s class
     attributes: family, outcome, symbol...)."""
@@ -119,7 +119,7 @@ def _kind(
     )
     attrs = {"__doc__": doc, "yaml_name": yaml, "category": category, "Params": params, "btcpp_id": ident}
     attrs.update(make=staticmethod(make), example=example, short_form=category == "decorator" and not ports)
-    return type(f"Bt{ident}", (base,), {**attrs, "like": like, **(facts or {})})
+    return cast(type[BtControl], type(f"Bt{ident}", (base,), {**attrs, "like": like, **(facts or {})}))
 
 
 def _composite(cls: type[bn.BtNode]) -> Callable[..., Behaviour]:
@@ -132,7 +132,7 @@ def _decorator(cls: type[bd.BtDecorator]) -> Callable[..., Behaviour]:
     return lambda name, children, ports, ctx: cls(name, children[0])
 
 
-def _mapping(yaml: str, cls: type[bd._Mapped], like: type[ControlNode] | None) -> type:
+def _mapping(yaml: str, cls: type[bd._Mapped], like: type[ControlNode] | None) -> type[BtControl]:
     """The kind of BT.CPP's decorator ``cls``, which maps its child's result: the ``outcome`` the
     lint reads is the map its tick uses (a result mapped to RUNNING runs the child again), the other
     facts its twin's (without one: it never halts its child, and starts it when it starts)."""
@@ -142,7 +142,9 @@ def _mapping(yaml: str, cls: type[bd._Mapped], like: type[ControlNode] | None) -
     return _kind(cls.__name__, yaml, "decorator", _decorator(cls), f"BT.CPP's {cls.__name__}.", like, facts)
 
 
-def _loop(ident: str, yaml: str, like: type[ControlNode], count: str, again: str, doc: str, what: str) -> type:
+def _loop(
+    ident: str, yaml: str, like: type[ControlNode], count: str, again: str, doc: str, what: str
+) -> type[BtControl]:
     """The kind of BT.CPP's ``Repeat`` or ``RetryUntilSuccessful`` (``bd``'s class ``ident``), which
     runs its child again after the result ``again``, ``count`` (a port: ``what``) times."""
     loop = getattr(bd, ident)
@@ -151,7 +153,7 @@ def _loop(ident: str, yaml: str, like: type[ControlNode], count: str, again: str
     return _kind(ident, yaml, "decorator", make, doc, like, facts, _Loop, **{count: (int, ..., what)})
 
 
-def _timed(node: type[bd.Timed], yaml: str, port: str, like: type[ControlNode]) -> type:
+def _timed(node: type[bd.Timed], yaml: str, port: str, like: type[ControlNode]) -> type[BtControl]:
     """The kind of BT.CPP's ``Timeout`` or ``Delay`` (``node``): ``port`` milliseconds on the run's clock."""
     make = lambda name, children, ports, ctx: node(name, children[0], ports[port], ctx.now)  # noqa: E731
     doc = f"BT.CPP's {node.__name__}, in milliseconds of simulated time."
