@@ -103,36 +103,66 @@ class Unit:
         return schema
 
 
-@dataclass(frozen=True, slots=True)
-class SpawnName:
+class Marker:
+    """Metadata that marks a field's type for the readers that look for it (``isinstance``), with an
+    optional ``role``; equal to a marker of its class and role. Not a dataclass: a frozen dataclass
+    costs about 3 M instructions to create, paid by every start of ``thymio-bt`` (benchmarks/README.md).
+
+    >>> Entry() == Entry("entry") != Entry("removed"), SpawnName()
+    (True, SpawnName())
+    """
+
+    __slots__ = ("role",)
+
+    def __init__(self, role: str = "") -> None:
+        self.role = role
+
+    def __eq__(self, other: object) -> bool:
+        return type(other) is type(self) and other.role == self.role
+
+    def __hash__(self) -> int:
+        return hash((type(self), self.role))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.role!r})" if self.role else f"{type(self).__name__}()"
+
+
+class SpawnName(Marker):
     """Metadata of a pose type: a named spawn of the mission's maze may be written instead of numbers."""
 
+    __slots__ = ()
 
-@dataclass(frozen=True, slots=True)
-class SensorRange:
+
+class SensorRange(Marker):
     """Metadata of a length a proximity sensor must read: the mission reader bounds it by the range
     of the mission's robot (the field's own ``le``, for the JSON Schema, is the widest robot's)."""
 
+    __slots__ = ()
 
-@dataclass(frozen=True, slots=True)
-class CalledName:
+
+class CalledName(Marker):
     """Metadata of a text field that other tools call ``name`` (Gazebo's services name the entity so):
     in a mission ``name:`` labels the node, so one given without this field is refused, pointing here."""
 
-
-@dataclass(frozen=True, slots=True)
-class Entry:
-    """Metadata of a text field that names a blackboard entry: ``"entry"`` one the node reads or writes,
-    ``"removed"`` one it removes. Readers that rename entries read it (the BT.CPP XML reader makes the
-    name a subtree's own), as they read :class:`ScriptText` for a field that holds a script."""
-
-    role: str = "entry"
+    __slots__ = ()
 
 
-@dataclass(frozen=True, slots=True)
-class ScriptText:
+class Entry(Marker):
+    """Metadata of a text field that names a blackboard entry: role ``"entry"`` one the node reads or
+    writes, ``"removed"`` one it removes. Readers that rename entries read it (the BT.CPP XML reader
+    makes the name a subtree's own), as they read :class:`ScriptText` for a field that holds a script."""
+
+    __slots__ = ()
+
+    def __init__(self, role: str = "entry") -> None:
+        super().__init__(role)
+
+
+class ScriptText(Marker):
     """Metadata of a text field that holds a script (BT.CPP's script language), whose entries a reader
-    renames as it renames a :class:`Entry`."""
+    renames as it renames an :class:`Entry`."""
+
+    __slots__ = ()
 
 
 def port_roles(model: Any) -> dict[str, Entry | ScriptText]:
@@ -143,7 +173,7 @@ def port_roles(model: Any) -> dict[str, Entry | ScriptText]:
     ...     key: BlackboardKey = "turn"
     ...     distance: Length = 0.1
     >>> port_roles(P)
-    {'key': Entry(role='entry')}
+    {'key': Entry('entry')}
     """
     return {
         name: marker
