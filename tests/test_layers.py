@@ -75,6 +75,12 @@ RUN_DOES_NOT_LOAD = (
     "thymio_bt.btcpp.runtime.control",
     "thymio_bt.btcpp.runtime.scripted",
     "thymio_bt.maze.cellmap",
+    # the other backends' settings, and the simulation's sensor models the course robot's metres need not
+    "thymio_bt.backends.real",
+    "thymio_bt.backends.playground",
+    "thymio_bt.backends.ros2",
+    "thymio_bt.backends.sim.cone",
+    "thymio_bt.backends.sim.sensor_models",
 )
 
 

@@ -21,20 +21,23 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 import pymunk
 
 from thymio_bt.backends.sim.fastpath import RayCaster, RayReader, stepper
 from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
-from thymio_bt.backends.sim.sensor_models import ConeSensors, raw_model
 from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody, pose_of
 from thymio_bt.geometry import Pose, wrap_angle
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Scan, Twist
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
 from thymio_bt.robot.placement import convex_overlap, placement_problem
-from thymio_bt.sensor_tables import raw_scan_to_metres
+from thymio_bt.sensor_tables import RawProximityModel, raw_scan_to_metres
+
+if TYPE_CHECKING:
+    from thymio_bt.backends.sim.sensor_models import ConeSensors
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,7 +83,11 @@ class Simulation(Backend):
         self._range_noise = bool(self.config.noise.range_sd) and self.config.sensor_model == "metres"
         #: noise-free metres are cast only when read (noise draws from streams whose order must hold)
         self._lazy_scan = self.config.sensor_model == "metres" and not self._range_noise
-        self._raw_model = raw_model(self.config.seed, self.model) if self.config.sensor_model == "raw" else None
+        self._raw_model: RawProximityModel | None = None
+        if self.config.sensor_model == "raw":
+            from thymio_bt.backends.sim.sensor_models import raw_model  # the metres model needs none of it
+
+            self._raw_model = raw_model(self.config.seed, self.model)
         self._raw: dict[str, int] | None = None
         #: integers to read (:meth:`proximity_raw`) only with the raw and cone sensor models
         self.raw_readings = self.config.sensor_model in ("raw", "cone")
@@ -143,7 +150,11 @@ class Simulation(Backend):
             self._range_min,
             pymunk.ShapeFilter(mask=WALLS),
         )
-        self._cone = ConeSensors(self.model, self.config.seed) if self.config.sensor_model == "cone" else None
+        self._cone: ConeSensors | None = None
+        if self.config.sensor_model == "cone":
+            from thymio_bt.backends.sim.sensor_models import ConeSensors
+
+            self._cone = ConeSensors(self.model, self.config.seed)
 
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
