@@ -81,6 +81,9 @@ RUN_DOES_NOT_LOAD = (
     "thymio_bt.backends.ros2",
     "thymio_bt.backends.sim.cone",
     "thymio_bt.backends.sim.sensor_models",
+    # a grid maze's reader, and a robot profile's models: the mission has a maze of walls and no robot:
+    "thymio_bt.maze.grid",
+    "thymio_bt.robot.profile",
 )
 
 

@@ -24,7 +24,6 @@ from thymio_bt.data import MAZES
 from thymio_bt.errors import Problem, UserError, did_you_mean
 from thymio_bt.inputs.validation import validate
 from thymio_bt.inputs.yamlio import MarkedDict, load_yaml, mark_of
-from thymio_bt.maze.grid import GridMazeFile, maze_from_grid_file
 from thymio_bt.maze.model import Maze
 
 
@@ -54,6 +53,8 @@ def load_maze(path: str | Path) -> Maze:
             )
         )
     if "grid" in data:
+        from thymio_bt.maze.grid import GridMazeFile, maze_from_grid_file  # a maze of walls needs neither
+
         header = validate(GridMazeFile, data, str(path))  # units and types, before the art is read
         return maze_from_grid_file(header, data.value_marks["grid"], str(path))
     return validate(Maze, data, str(path))

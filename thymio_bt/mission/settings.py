@@ -33,7 +33,6 @@ from thymio_bt.mission.pass_base import LoaderPass, Scope, Where
 from thymio_bt.plan.expect import Expect
 from thymio_bt.robot.model import ROBOTS, SIM_SENSOR_MODEL, SIM_SENSOR_MODELS, robot_model
 from thymio_bt.robot.noise import NoiseConfig
-from thymio_bt.robot.profile import is_profile_path
 
 #: the settings that are numbers: their kind and range, however they are given
 SETTING_RANGES = {"tick_hz": ("frequency", 1.0, 100.0), "time_limit": ("time", 0.1, 36000.0)}
@@ -190,6 +189,8 @@ class SettingsReader(LoaderPass):
 
     def _robot(self, value: Any, where: Where, values: dict[str, Any]) -> None:
         """``robot``: a robot model's name, or a profile file (checked by loading it)."""
+        from thymio_bt.robot.profile import is_profile_path  # its models load only for a mission naming a robot
+
         if value in ROBOTS:
             values["robot"] = value
         elif isinstance(value, str) and is_profile_path(value):
