@@ -28,8 +28,8 @@ from thymio_bt.backends.sim.fastpath import RayCaster, RayReader, stepper
 from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
 from thymio_bt.backends.sim.sensor_models import ConeSensors, raw_model
-from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody, pose_of
-from thymio_bt.geometry import Pose, wrap_angle
+from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody
+from thymio_bt.geometry import Pose, new_pose, wrap_angle
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Scan, Twist
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
@@ -148,7 +148,8 @@ class Simulation(Backend):
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
         """Hold (linear, angular); applied at once, or a few physics steps later with a command delay."""
-        if self.robot_name not in self._entities:
+        entity = self._entities.get(self.robot_name)
+        if entity is None:
             return
         last_linear, last_angular, cmd = self._drive_args
         if linear is not last_linear or angular is not last_angular:
@@ -158,7 +159,7 @@ class Simulation(Backend):
         if self._delay_steps:
             self._pending = True  # applied a few physics steps into the next advance (Enki: one)
         else:
-            self._apply_command()
+            self._apply_command(entity)
 
     def exists(self) -> bool:
         """Whether the robot entity exists (it does not between a delete and a spawn)."""
@@ -233,7 +234,7 @@ class Simulation(Backend):
             self._pending = False
             delay = min(self._delay_steps, steps)
             self._run_steps(entity, delay)  # the old command still drives (the robot's command delay)
-            self._apply_command()
+            self._apply_command(entity)
             steps -= delay
         self._run_steps(entity, steps)
         if self._requests:
@@ -268,8 +269,9 @@ class Simulation(Backend):
             if last == refresh:
                 self._refresh_sensors(entity)
 
-    def _apply_command(self) -> None:
-        """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
+    def _apply_command(self, entity: RobotBody | None) -> None:
+        """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity,
+        driving ``entity`` (the robot's, None while absent: looked up by the caller)."""
         model, cmd = self.model, self._cmd
         last, wheels = self._wheels_of_command
         linear, angular = cmd
@@ -284,7 +286,6 @@ class Simulation(Backend):
                 left, right = left * fl, right * fr
             self._velocity = model.body_velocity(left, right)
         v, w = self._applied = self._velocity
-        entity = self._entities.get(self.robot_name)
         if entity is not None:
             # Chipmunk moves bodies before solving joints: out of contact, the body's velocity is
             # seeded too, so motion starts now
@@ -314,15 +315,10 @@ class Simulation(Backend):
             self._odo_pose = (self._odo, pose)
         return pose
 
-    def _update_clearance(self, entity: RobotBody, bx: float, by: float, cos: float, sin: float) -> None:
-        gap = self._clearance.below(self.min_clearance, entity.near, entity.shape, bx, by, cos, sin)
-        if gap < self.min_clearance:
-            self.min_clearance = max(gap, 0.0)
-
     def _refresh_sensors(self, entity: RobotBody) -> None:
         """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
         bx, by, angle = entity.read()
-        self._pose_now = pose_of(bx, by, angle)
+        self._pose_now = new_pose(bx, by, wrap_angle(angle))  # space.pose_of, a call less a refresh
         cos, sin = math.cos(angle), math.sin(angle)
         if self._cone is not None:
             self._raw = self._cone.measure(self._ray, entity.filter, bx, by, cos, sin)
@@ -334,7 +330,10 @@ class Simulation(Backend):
             self._scan, self._sensed = None, (bx, by, cos, sin)
         else:  # noise (random streams in a fixed order) or other robots: now
             self._scan = MappingProxyType(self._cast(entity, bx, by, cos, sin))
-        self._update_clearance(entity, bx, by, cos, sin)
+        record = self.min_clearance
+        gap = self._clearance.below(record, entity.near, entity.shape, bx, by, cos, sin)
+        if gap < record:
+            self.min_clearance = max(gap, 0.0)
 
     def _cast(self, entity: RobotBody, bx: float, by: float, cos: float, sin: float) -> dict[str, float]:
         """The seven rays' readings of ``entity`` at (bx, by), heading with this cosine and sine."""
