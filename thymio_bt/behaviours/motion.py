@@ -27,6 +27,7 @@ from thymio_bt.inputs.fields import (
     PerSecondPerMetre,
     SensedLength,
     Speed,
+    plain_values,
 )
 from thymio_bt.robot.interface import SENSOR_NAMES, Robot
 from thymio_bt.robot.model import COURSE, WIDEST_RANGE
@@ -151,6 +152,7 @@ class MoveUntilWall(Motion):
         # a backend's latency and the approach gain it allows: fixed for the run
         self.latency = self.robot.latency
         self.gain = late_gain(self.params.approach_gain, self.latency, self.ctx.tick_period)
+        self.values = plain_values(self.params)  # step() reads ten parameters a tick
 
     def _travelled(self, pose: Pose) -> float:
         """How far ``pose`` is from the start along the held heading."""
@@ -158,7 +160,7 @@ class MoveUntilWall(Motion):
 
     def step(self) -> Status:
         """Approach the wall: cruise, slow down in range, stop at the distance (a glint holds it a tick)."""
-        p = self.params
+        p = self.values
         pose = current_pose(self.robot)  # read once: nothing moves the robot within a tick
         scan = self.robot.proximity()
         assert scan is not None

@@ -220,7 +220,7 @@ class Run:
         pose is recorded. One frame a tick: the checks were two more methods, called every tick."""
         # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
         # every tick for "full" visitors, which cost ~15 % of a run here and we have none
-        # tick(root) without its call: the direct tick, without generators where the node kinds allow it
+        # tick(self.root) without its call: the direct tick, without generators where the node kinds allow it
         root = self.root
         TICK_OF[root.__class__](root)
         self.ticks += 1
