@@ -138,7 +138,8 @@ class RepeatUntil(py_trees.composites.Composite):
 
     def tick_direct(self) -> None:
         """The same tick without generators (:mod:`.ticking`)."""
-        child: Behaviour | None = self._begin()
+        # running: resume at the current child (what _begin returns then), a call less a tick
+        child: Behaviour | None = self.current_child if self.status is RUNNING else self._begin()
         while child is not None:
             TICK_OF[child.__class__](child)  # tick(child), a call less
             child = self._after(child)
