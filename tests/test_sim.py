@@ -148,6 +148,28 @@ def test_delete_and_spawn_complete_over_ticks_and_names_are_checked():
     assert sim.pose() == Pose(0.5, 0.3, math.pi / 2)
 
 
+def test_a_pose_checked_twice_is_measured_once_and_told_apart_bit_for_bit(monkeypatch):
+    from thymio_bt.backends.sim import world as world_module
+    from thymio_bt.robot.placement import placement_problem
+
+    measured = []
+
+    def counting(shapes, model, pose):
+        measured.append(pose)
+        return placement_problem(shapes, model, pose)
+
+    monkeypatch.setattr(world_module, "placement_problem", counting)
+    sim = Simulation(COURSE)
+    start = Pose(0.1, 0.1, 0.0)
+    assert sim.spawn_problem("thymio", start) is None and sim.spawn_problem("thymio", start) is None
+    assert measured == [start]  # the runner's check, then the spawn request's: measured once
+    # a wall's overlap says the yaw: 0.0 and -0.0 are two poses, each with its own answer
+    for pose in (Pose(0.6, 0.1, 0.0), Pose(0.6, 0.1, -0.0), Pose(0.6, 0.1, 0.0)):
+        assert sim.spawn_problem("thymio", pose) == placement_problem(COURSE, thymio_model, pose)
+    assert "yaw -0.000" in sim.spawn_problem("thymio", Pose(0.6, 0.1, -0.0))
+    assert len(measured) == 5  # the last pose is remembered: each change of pose is measured
+
+
 def _trajectory(seed, noise):
     sim = Simulation(COURSE, spawn=Pose(0.1, 0.1, 0.0), config=SimConfig(noise=noise, seed=seed))
     out = []

@@ -21,9 +21,15 @@ from dataclasses import dataclass
 __all__ = ["Pose", "new_pose", "wrap_angle"]
 
 
+#: pi and 2 pi as module globals: a global is one dictionary read where ``math.pi`` is two (the
+#: simulation wraps an angle at every sensor refresh); 2.0 * pi is exact, so the bits are the same
+_PI = math.pi
+_TAU = 2.0 * math.pi
+
+
 def wrap_angle(angle: float) -> float:
     """Normalise an angle to [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+    return (angle + _PI) % _TAU - _PI
 
 
 @dataclass(frozen=True, slots=True)

@@ -27,6 +27,7 @@ from thymio_bt.inputs.fields import (
     PerSecondPerMetre,
     SensedLength,
     Speed,
+    plain_values,
 )
 from thymio_bt.robot.interface import SENSOR_NAMES, Robot
 from thymio_bt.robot.model import COURSE, WIDEST_RANGE
@@ -151,6 +152,7 @@ class MoveUntilWall(Motion):
         # a backend's latency and the approach gain it allows: fixed for the run
         self.latency = self.robot.latency
         self.gain = late_gain(self.params.approach_gain, self.latency, self.ctx.tick_period)
+        self.values = plain_values(self.params)  # step() reads ten parameters a tick
 
     def _travelled(self, pose: Pose) -> float:
         """How far ``pose`` is from the start along the held heading."""
@@ -158,7 +160,7 @@ class MoveUntilWall(Motion):
 
     def step(self) -> Status:
         """Approach the wall: cruise, slow down in range, stop at the distance (a glint holds it a tick)."""
-        p = self.params
+        p = self.values
         pose = current_pose(self.robot)  # read once: nothing moves the robot within a tick
         scan = self.robot.proximity()
         assert scan is not None
@@ -366,13 +368,14 @@ class TurnAngle(Motion):
         """The angle to turn (to the snapped heading, if any)."""
         p = self.params
         self.turn = Turn.begin(self, p.angle, p.speed, p.tolerance, p.snap)
+        self.values = plain_values(p)  # step() reads two a tick
 
     def step(self) -> Status:
         """Turn on towards the angle (by odometry, or squared by the rear sensors near the end)."""
         turn = self.turn
         error = turn.error()
         self.extra = self._end_fields
-        if self.params.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
+        if self.values.mode == "rear_sensors" and abs(error) < self.FINE_WINDOW:
             scan = self.robot.proximity()
             assert scan is not None
             left, right = scan["rear_left"], scan["rear_right"]
@@ -380,7 +383,7 @@ class TurnAngle(Motion):
                 return self.fail(FailureCode.NO_WALL, "the rear sensors see no wall behind the robot")
             # the rear-left sensor reads farther when the robot must still turn left to be square
             error = math.atan2(left - right, REAR_SENSOR_SPACING)
-        if turn.drive(error, self.params.pivot):
+        if turn.drive(error, self.values.pivot):
             self.say("turned {:.2f} deg", math.degrees(turn.turned))
             return SUCCESS
         self.say("{:.2f} deg to go", math.degrees(error))

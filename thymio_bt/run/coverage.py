@@ -289,7 +289,7 @@ def _counting(cls: type) -> type:
 
     namespace["tick"] = tick
     # the direct tick the ticking module dispatches to for this class (its table is keyed by class)
-    namespace["tick_direct"] = _counted(ticking._TICK[cls])
+    namespace["tick_direct"] = _counted(ticking.TICK_OF[cls])
     if issubclass(cls, BtNode):
         namespace["execute_tick"] = _counted(cls.execute_tick)  # BT.CPP nodes
     made = _COUNTING[cls] = type(cls.__name__, (cls,), namespace)

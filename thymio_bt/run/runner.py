@@ -33,7 +33,7 @@ from py_trees.common import Status
 from thymio_bt.backends import backend_kind
 from thymio_bt.behaviours import Context, EventLog
 from thymio_bt.behaviours.base import describe, is_fault, node_path, snapshot
-from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.behaviours.flow.ticking import TICK_OF
 from thymio_bt.enums import FailureCode
 from thymio_bt.errors import Problem, StopRun, UserError
 from thymio_bt.geometry import Pose
@@ -215,19 +215,37 @@ class Run:
 
     def _tick(self, on_tick: TickHook | None, interrupts: Interrupts) -> Ending | None:
         """One tick of the tree (its nodes count their own ticks when node statistics are kept), then
-        what ends the run (:meth:`_after_tick`); when nothing does, the collisions counted get their
-        events and the pose is recorded."""
+        what ends the run, in this order: the tick hook, the tree, a signal, the backend failing to
+        advance to the next tick. When nothing does, the collisions counted get their events and the
+        pose is recorded. One frame a tick: the checks were two more methods, called every tick."""
         # the root's own tick, not BehaviourTree.tick(): that walks the whole tree again after
         # every tick for "full" visitors, which cost ~15 % of a run here and we have none
-        tick(self.root)  # the direct tick, without generators where the node kinds allow it
+        # tick(self.root) without its call: the direct tick, without generators where the node kinds allow it
+        root = self.root
+        TICK_OF[root.__class__](root)
         self.ticks += 1
-        ending = self._after_tick(on_tick, interrupts)
-        if ending is None:
-            backend = self.backend
-            if len(backend.collisions) > self._collisions_seen or backend.min_clearance <= CONTACT:
-                self._collisions_seen = self._emit_collisions(self._collisions_seen)  # rare: a contact
-            self._record()
-        return ending
+        if on_tick is not None:
+            try:
+                on_tick(self)
+            except StopRun as stop:
+                return Ending(EndKind.STOPPED, FailureCode.STOPPED, str(stop) or "stopped by a tick hook")
+        if self.root.status in _ENDED:
+            return Ending(EndKind.FINISHED)
+        if interrupts.signal:
+            return Ending(EndKind.INTERRUPTED, FailureCode.INTERRUPTED)
+        backend = self.backend
+        try:  # advance by one tick period
+            backend.advance(self.period)
+        except RobotLost as exc:  # a real robot gone silent: its own code
+            return Ending(EndKind.CRASHED, FailureCode.ROBOT_LOST, str(exc))
+        except BaseException as exc:  # a backend's bug (a plugin's, say): end the run, say why
+            if not is_fault(exc):
+                raise
+            return Ending(EndKind.CRASHED, FailureCode.BACKEND_ERROR, f"the backend raised {describe(exc)}")
+        if len(backend.collisions) > self._collisions_seen or backend.min_clearance <= CONTACT:
+            self._collisions_seen = self._emit_collisions(self._collisions_seen)  # rare: a contact
+        self._record()
+        return None
 
     def _forced_ending(self, exc: Interrupted) -> Ending:
         """The ending of a run whose tick was broken into (a second signal, or none within the grace
@@ -243,32 +261,6 @@ class Run:
             where = node_path(stuck)
         reason = f"'{where}' never ended its tick; {exc.how}" if where else f"a tick never ended; {exc.how}"
         return Ending(EndKind.INTERRUPTED, FailureCode.INTERRUPTED, reason, failed_path=where, forced=True)
-
-    def _after_tick(self, on_tick: TickHook | None, interrupts: Interrupts) -> Ending | None:
-        """What ends the run after a tick, in this order: the tick hook, the tree, a signal, the backend
-        failing to advance to the next tick; None when the run goes on (the backend has advanced)."""
-        if on_tick is not None:
-            try:
-                on_tick(self)
-            except StopRun as stop:
-                return Ending(EndKind.STOPPED, FailureCode.STOPPED, str(stop) or "stopped by a tick hook")
-        if self.root.status in _ENDED:
-            return Ending(EndKind.FINISHED)
-        if interrupts.signal:
-            return Ending(EndKind.INTERRUPTED, FailureCode.INTERRUPTED)
-        return self._advance()
-
-    def _advance(self) -> Ending | None:
-        """Advance the backend by one tick period; the run's ending if it cannot."""
-        try:
-            self.backend.advance(self.period)
-        except RobotLost as exc:  # a real robot gone silent: its own code
-            return Ending(EndKind.CRASHED, FailureCode.ROBOT_LOST, str(exc))
-        except BaseException as exc:  # a backend's bug (a plugin's, say): end the run, say why
-            if not is_fault(exc):
-                raise
-            return Ending(EndKind.CRASHED, FailureCode.BACKEND_ERROR, f"the backend raised {describe(exc)}")
-        return None
 
     def _emit_collisions(self, seen: int) -> int:
         """A ``collision`` event for each collision the backend counted past the first ``seen``; how

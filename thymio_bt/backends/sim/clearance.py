@@ -63,8 +63,9 @@ TrackedWall = tuple[pymunk.Shape, "WallFrame | None", tuple[tuple[float, float],
 def wall_frame(wall: Wall) -> WallFrame:
     """A wall box's frame: centre, unit direction, half length and half thickness."""
     (x0, y0), (x1, y1) = wall.start, wall.end
-    ux, uy = (x1 - x0) / wall.length, (y1 - y0) / wall.length
-    return (x0 + x1) / 2, (y0 + y1) / 2, ux, uy, (wall.length + wall.thickness) / 2, wall.thickness / 2
+    length = wall.length  # a property that measures the segment: once, not three times
+    ux, uy = (x1 - x0) / length, (y1 - y0) / length
+    return (x0 + x1) / 2, (y0 + y1) / 2, ux, uy, (length + wall.thickness) / 2, wall.thickness / 2
 
 
 @dataclass(frozen=True, slots=True)

@@ -19,6 +19,7 @@ Example::
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING
@@ -28,8 +29,8 @@ import pymunk
 from thymio_bt.backends.sim.fastpath import RayCaster, RayReader, stepper
 from thymio_bt.backends.sim.noise import NoiseConfig, NoiseSource
 from thymio_bt.backends.sim.readings import lazy_scan
-from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody, pose_of
-from thymio_bt.geometry import Pose, wrap_angle
+from thymio_bt.backends.sim.space import ROBOT_TYPE, WALL_TYPE, WALLS, MazeSpace, RobotBody
+from thymio_bt.geometry import Pose, new_pose, wrap_angle
 from thymio_bt.maze import Maze
 from thymio_bt.robot.interface import ROBOT_ENTITY, Backend, Collision, Scan, Twist
 from thymio_bt.robot.model import COURSE, RobotModel, SimSensorModel, integrate_arc
@@ -38,6 +39,9 @@ from thymio_bt.sensor_tables import RawProximityModel, raw_scan_to_metres
 
 if TYPE_CHECKING:
     from thymio_bt.backends.sim.sensor_models import ConeSensors
+
+#: a pose's three floats as bytes: a key that tells 0.0 from -0.0 (as a placement message would)
+_POSE_BITS = struct.Struct("3d").pack
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +116,8 @@ class Simulation(Backend):
         self._odo = (0.0, 0.0, 0.0)  # dead-reckoned axle x, y and yaw (drift model only)
         self._odo_pose: tuple[tuple[float, float, float] | None, Pose | None] = (None, None)  # (_odo, its pose)
         self._contacts = 0
+        #: the last pose's bits asked of _placement_problem, and its answer
+        self._placed: tuple[bytes | None, str | None] = (None, None)
         self._build_sensors()
         self.space.on_collision(ROBOT_TYPE, WALL_TYPE, begin=self._on_begin, separate=self._on_separate)
         if spawn is not None:
@@ -159,7 +165,8 @@ class Simulation(Backend):
     # ----------------------------------------------------------------- Robot
     def drive(self, linear: float, angular: float) -> None:
         """Hold (linear, angular); applied at once, or a few physics steps later with a command delay."""
-        if self.robot_name not in self._entities:
+        entity = self._entities.get(self.robot_name)
+        if entity is None:
             return
         last_linear, last_angular, cmd = self._drive_args
         if linear is not last_linear or angular is not last_angular:
@@ -169,7 +176,7 @@ class Simulation(Backend):
         if self._delay_steps:
             self._pending = True  # applied a few physics steps into the next advance (Enki: one)
         else:
-            self._apply_command()
+            self._apply_command(entity)
 
     def exists(self) -> bool:
         """Whether the robot entity exists (it does not between a delete and a spawn)."""
@@ -227,13 +234,25 @@ class Simulation(Backend):
         (:func:`~thymio_bt.robot.placement.placement_problem`), then the robots already there."""
         if name in self._entities:
             return f"an entity named '{name}' already exists: delete it first"
-        problem = placement_problem(self._shapes, self.model, pose)
+        problem = self._placement_problem(pose)
         if problem:
             return problem
-        hull = self.model.hull_at(pose)
-        if any(convex_overlap(hull, self.model.hull_at(other.pose())) for other in self._entities.values()):
-            return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps another robot"
+        if self._entities:  # other robots: the hull against each
+            hull = self.model.hull_at(pose)
+            if any(convex_overlap(hull, self.model.hull_at(other.pose())) for other in self._entities.values()):
+                return f"pose ({pose.x:.3f}, {pose.y:.3f}, yaw {pose.yaw:.3f}) overlaps another robot"
         return None
+
+    def _placement_problem(self, pose: Pose) -> str | None:
+        """:func:`~thymio_bt.robot.placement.placement_problem` in this maze for this robot, a function
+        of the pose alone here: remembered for the last pose asked, bit for bit (the runner checks the
+        start, then serving the spawn request checks it again: 0.25 M instructions each)."""
+        key = _POSE_BITS(pose.x, pose.y, pose.yaw)  # the floats' bits: 0.0 and -0.0 differ
+        asked, problem = self._placed
+        if key != asked:
+            problem = placement_problem(self._shapes, self.model, pose)
+            self._placed = (key, problem)
+        return problem
 
     # ------------------------------------------------------------- stepping
     def advance(self, duration: float) -> None:
@@ -244,7 +263,7 @@ class Simulation(Backend):
             self._pending = False
             delay = min(self._delay_steps, steps)
             self._run_steps(entity, delay)  # the old command still drives (the robot's command delay)
-            self._apply_command()
+            self._apply_command(entity)
             steps -= delay
         self._run_steps(entity, steps)
         if self._requests:
@@ -279,8 +298,9 @@ class Simulation(Backend):
             if last == refresh:
                 self._refresh_sensors(entity)
 
-    def _apply_command(self) -> None:
-        """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity."""
+    def _apply_command(self, entity: RobotBody | None) -> None:
+        """Turn the held command into wheel speeds (limited, optionally noisy) and a body velocity,
+        driving ``entity`` (the robot's, None while absent: looked up by the caller)."""
         model, cmd = self.model, self._cmd
         last, wheels = self._wheels_of_command
         linear, angular = cmd
@@ -295,7 +315,6 @@ class Simulation(Backend):
                 left, right = left * fl, right * fr
             self._velocity = model.body_velocity(left, right)
         v, w = self._applied = self._velocity
-        entity = self._entities.get(self.robot_name)
         if entity is not None:
             # Chipmunk moves bodies before solving joints: out of contact, the body's velocity is
             # seeded too, so motion starts now
@@ -325,15 +344,10 @@ class Simulation(Backend):
             self._odo_pose = (self._odo, pose)
         return pose
 
-    def _update_clearance(self, entity: RobotBody, bx: float, by: float, cos: float, sin: float) -> None:
-        gap = self._clearance.below(self.min_clearance, entity.near, entity.shape, bx, by, cos, sin)
-        if gap < self.min_clearance:
-            self.min_clearance = max(gap, 0.0)
-
     def _refresh_sensors(self, entity: RobotBody) -> None:
         """The robot's readings and clearance, and its true pose for this step (one read of the body)."""
         bx, by, angle = entity.read()
-        self._pose_now = pose_of(bx, by, angle)
+        self._pose_now = new_pose(bx, by, wrap_angle(angle))  # space.pose_of, a call less a refresh
         cos, sin = math.cos(angle), math.sin(angle)
         if self._cone is not None:
             self._raw = self._cone.measure(self._ray, entity.filter, bx, by, cos, sin)
@@ -345,7 +359,10 @@ class Simulation(Backend):
             self._scan, self._sensed = None, (bx, by, cos, sin)
         else:  # noise (random streams in a fixed order) or other robots: now
             self._scan = MappingProxyType(self._cast(entity, bx, by, cos, sin))
-        self._update_clearance(entity, bx, by, cos, sin)
+        record = self.min_clearance
+        gap = self._clearance.below(record, entity.near, entity.shape, bx, by, cos, sin)
+        if gap < record:
+            self.min_clearance = max(gap, 0.0)
 
     def _cast(self, entity: RobotBody, bx: float, by: float, cos: float, sin: float) -> dict[str, float]:
         """The seven rays' readings of ``entity`` at (bx, by), heading with this cosine and sine."""

@@ -19,7 +19,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from thymio_bt.behaviours.base import FAILURE, INVALID, RUNNING, SUCCESS, Explains
-from thymio_bt.behaviours.flow.ticking import tick
+from thymio_bt.behaviours.flow.ticking import TICK_OF
 from thymio_bt.enums import FailureCode
 
 #: how close to its end a span of simulated time counts as over: a tick's time is a sum of float
@@ -73,6 +73,7 @@ class SimTimeout(Explains, py_trees.decorators.Decorator):
     Example::
 
         >>> from py_trees.behaviours import Running
+        >>> from thymio_bt.behaviours.flow.ticking import tick
         >>> clock = [0.0]
         >>> limit = SimTimeout("limit", Running("forever"), duration=30.0, clock=lambda: clock[0])
         >>> tick(limit); limit.status
@@ -114,6 +115,7 @@ class RepeatUntil(py_trees.composites.Composite):
     Example::
 
         >>> from py_trees.behaviours import Success, SuccessEveryN
+        >>> from thymio_bt.behaviours.flow.ticking import tick
         >>> loop = RepeatUntil("until the third", body=Success("leg"), condition=SuccessEveryN("third", 3))
         >>> for _ in range(3):
         ...     tick(loop)
@@ -135,9 +137,10 @@ class RepeatUntil(py_trees.composites.Composite):
 
     def tick_direct(self) -> None:
         """The same tick without generators (:mod:`.ticking`)."""
-        child: Behaviour | None = self._begin()
+        # running: resume at the current child (what _begin returns then), a call less a tick
+        child: Behaviour | None = self.current_child if self.status is RUNNING else self._begin()
         while child is not None:
-            tick(child)
+            TICK_OF[child.__class__](child)  # tick(child), a call less
             child = self._after(child)
 
     def _begin(self) -> Behaviour | None:
@@ -183,6 +186,7 @@ class NodeGuard(py_trees.decorators.EternalGuard):
     Example::
 
         >>> from types import SimpleNamespace
+        >>> from thymio_bt.behaviours.flow.ticking import tick
         >>> clock = SimpleNamespace(now=lambda: 0.0)
         >>> for result in ("success", "failure"):
         ...     ok = ScriptedStub("ok", result, clock)
@@ -216,6 +220,7 @@ class ScriptedStub(Behaviour):
     Example::
 
         >>> from types import SimpleNamespace
+        >>> from thymio_bt.behaviours.flow.ticking import tick
         >>> stub = ScriptedStub("fake delete", ["running", "success"], SimpleNamespace(now=lambda: 0.0))
         >>> for _ in range(3):
         ...     tick(stub)

@@ -40,7 +40,7 @@ _Tick = Callable[[Behaviour], None]
 
 
 class _TickByClass(dict):
-    """How each node class is ticked, found on first use: ``_TICK[node.__class__](node)`` is one
+    """How each node class is ticked, found on first use: ``TICK_OF[node.__class__](node)`` is one
     dict lookup and no Python call (composites tick their children that way: a call less per child)."""
 
     def __missing__(self, kind: type[Behaviour]) -> _Tick:
@@ -62,13 +62,15 @@ class _TickByClass(dict):
         return how
 
 
-#: the direct tick of each node class, or its generator when it has one of its own
-_TICK: dict[type, _Tick] = _TickByClass()
+#: the direct tick of each node class, or its generator when it has one of its own:
+#: ``TICK_OF[node.__class__](node)`` is :func:`tick` without its call (for the loops that tick a
+#: child on every tick: the runner's, the composites', RepeatUntil's)
+TICK_OF: dict[type, _Tick] = _TickByClass()
 
 
 def tick(node: Behaviour) -> None:
     """Give ``node`` (and its subtree) one tick, as ``node.tick_once()`` would."""
-    _TICK[node.__class__](node)
+    TICK_OF[node.__class__](node)
 
 
 def _generator(node: Behaviour) -> None:
@@ -103,7 +105,7 @@ def _sequence(seq: Sequence) -> None:
     last = len(children) - 1
     while index <= last:
         child = children[index]
-        _TICK[child.__class__](child)
+        TICK_OF[child.__class__](child)
         status = child.status
         if status is not SUCCESS:
             if not seq.memory:  # invalidate the rest: no dangling runners
@@ -138,7 +140,7 @@ def _selector(sel: Selector) -> None:
         index = 0
     previous = sel.current_child
     for child in children[index:]:
-        _TICK[child.__class__](child)
+        TICK_OF[child.__class__](child)
         status = child.status
         if status is RUNNING or status is SUCCESS:
             sel.current_child = child
@@ -177,7 +179,7 @@ def _parallel(par: Parallel) -> None:
     for child in children:
         if synchronise and child.status is SUCCESS:
             continue
-        _TICK[child.__class__](child)
+        TICK_OF[child.__class__](child)
     new_status = _parallel_status(par, policy.__class__ is _SUCCESS_ON_ALL)
     if new_status is not RUNNING:
         par.stop(new_status)
