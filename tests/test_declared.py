@@ -33,7 +33,9 @@ SOURCES = {p.relative_to(PACKAGE).as_posix(): p.read_text(encoding="utf-8") for 
 
 
 def test_the_angle_wrap_is_written_once():
-    inlined = re.compile(r"%\s*\(\s*2(\.0)?\s*\*\s*math\.pi\s*\)|while\s+[\w.]+\s*[<>]=?\s*-?math\.pi")
+    inlined = re.compile(
+        r"%\s*(\(\s*2(\.0)?\s*\*\s*math\.pi\s*\)|_?TAU\b|math\.tau\b)|while\s+[\w.]+\s*[<>]=?\s*-?math\.pi"
+    )
     places = [path for path, text in SOURCES.items() for _ in inlined.finditer(text)]
     assert places == ["geometry.py"]  # wrap_angle itself
 
