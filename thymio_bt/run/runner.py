@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -42,7 +42,6 @@ from thymio_bt.plan.expect import Expect
 from thymio_bt.plan.model import Mission
 from thymio_bt.robot.interface import Backend, Collision, RequestState, RobotLost
 from thymio_bt.robot.placement import MazeShapes
-from thymio_bt.run.coverage import NodeStats
 from thymio_bt.run.interrupts import Interrupted, Interrupts
 from thymio_bt.run.phases import phases
 from thymio_bt.run.result import (
@@ -55,6 +54,9 @@ from thymio_bt.run.result import (
     failing_branch,
     learnt_map,
 )
+
+if TYPE_CHECKING:
+    from thymio_bt.run.coverage import NodeStats
 
 TickHook = Callable[["Run"], None]
 
@@ -136,8 +138,11 @@ class Run:
         self.root = self._build(substitutions)
         self.substituted = bool(substitutions)
         #: per-node statistics, kept when ``node_stats`` (every node of the tree counts its ticks)
-        self.stats = NodeStats(self.period) if node_stats else None
-        if self.stats is not None:
+        self.stats: NodeStats | None = None
+        if node_stats:
+            from thymio_bt.run.coverage import NodeStats  # its counting (and BT.CPP's node types) only then
+
+            self.stats = NodeStats(self.period)
             self.stats.attach(self.root, self.mission.tree)
         self.ticks = 0
         self._collisions_seen = 0  # collisions that have had their event
