@@ -22,12 +22,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
-from importlib import import_module
 from typing import TYPE_CHECKING, Any, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from thymio_bt.errors import Problem, UserError, did_you_mean
+from thymio_bt.named import named
 from thymio_bt.robot.model import DEFAULT_ROBOT
 
 if TYPE_CHECKING:
@@ -121,21 +121,13 @@ class BackendKind:
     def create(self, mission: MissionWorld, seed: int, options: Mapping[str, Any] | None = None) -> Backend:
         """A backend of this kind for ``mission``, with ``options`` validated first."""
         parsed = self.parse_options(options or {})
-        factory: Callable[[MissionWorld, int, Any], Backend] = _named(self.factory)
+        factory: Callable[[MissionWorld, int, Any], Backend] = named(self.factory)
         return factory(mission, seed, parsed)
 
     def options_model(self) -> type[BackendOptions]:
         """The model of this kind's settings (its module imported now if :attr:`options` names it)."""
-        model: type[BackendOptions] = _named(self.options)
+        model: type[BackendOptions] = named(self.options)
         return model
-
-
-def _named(ref: Any) -> Any:
-    """``ref`` itself, or the object a ``"module:attr"`` string names, imported."""
-    if not isinstance(ref, str):
-        return ref
-    module, _, attr = ref.partition(":")
-    return getattr(import_module(module), attr)
 
 
 def placed_option() -> Any:

@@ -23,12 +23,12 @@ thymio_bt.errors.UserError: run.txt: no log format reads '.txt' files (hint: use
 from __future__ import annotations
 
 from dataclasses import dataclass
-from importlib import import_module
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
 
 from thymio_bt.errors import Problem, UserError
 from thymio_bt.inputs.reading import check_regular
+from thymio_bt.named import named
 
 if TYPE_CHECKING:
     from thymio_bt.logs.entries import LogEnd, LogHeader, Recording, TickRecord
@@ -69,8 +69,7 @@ class LogFormat:
 
     def load(self, attr: str) -> Any:
         """The object ``attr`` (``"module:name"``, :attr:`writer` or :attr:`reader`) names, imported now."""
-        module, _, name = attr.partition(":")
-        return getattr(import_module(module), name)
+        return named(attr)
 
 
 BUILTIN: tuple[LogFormat, ...] = (

@@ -32,6 +32,7 @@ from typing import Any
 
 from thymio_bt.behaviours import ControlNode, RobotBehaviour
 from thymio_bt.errors import Problem, UserError
+from thymio_bt.named import named
 from thymio_bt.plan.builtin_nodes import BUILTIN_NODES
 
 ENTRY_POINT_GROUP = "thymio_bt.behaviours"
@@ -212,8 +213,7 @@ def _checked_name(cls: Any) -> str:
 def _imported(name: str, where: str) -> Node:
     """The node class called ``name``, imported from ``where`` (``"module:attr"``: the class, or a tuple
     of classes holding it); a table that says otherwise than the class is a ``LookupError``."""
-    module, _, attr = where.partition(":")
-    found = getattr(importlib.import_module(module), attr)
+    found = named(where)
     for cls in found if isinstance(found, tuple) else (found,):
         if _checked_name(cls) == name:
             return cls
